@@ -1,0 +1,128 @@
+"""Batched forward kinematics and position Jacobians of serial arms.
+
+All functions take joint arrays of shape ``(..., n)`` (rad for revolute joints, the model's length
+unit for prismatic ones) and return arrays with the same leading batch shape. A single
+configuration is the batch of one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armpath.errors import InvalidInputError
+from armpath.model.serial_arm import JointKind, SerialArm
+
+FloatArray = NDArray[np.float64]
+
+
+def _as_joint_array(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    qa = np.asarray(q, dtype=np.float64)
+    if qa.ndim == 0 or qa.shape[-1] != arm.n_joints:
+        raise InvalidInputError(
+            f"model {arm.name!r} has {arm.n_joints} joints; got joint array of shape {qa.shape}"
+        )
+    if not np.all(np.isfinite(qa)):
+        raise InvalidInputError("joint values must be finite numbers (got NaN or inf)")
+    return qa
+
+
+def _joint_motion(axis: FloatArray, kind: JointKind, value: FloatArray) -> FloatArray:
+    """4x4 motion of one joint for a batch of values: rotation about / translation along axis."""
+    T = np.zeros((*value.shape, 4, 4))
+    T[..., 3, 3] = 1.0
+    if kind is JointKind.PRISMATIC:
+        T[..., 0, 0] = T[..., 1, 1] = T[..., 2, 2] = 1.0
+        T[..., :3, 3] = value[..., None] * axis
+        return T
+    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    s = np.sin(value)[..., None, None]
+    c = np.cos(value)[..., None, None]
+    T[..., :3, :3] = np.eye(3) + s * K + (1.0 - c) * (K @ K)
+    return T
+
+
+def forward_frames(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    """World poses of every frame, shape ``(..., n + 2, 4, 4)``.
+
+    Index 0 is the base, index ``i`` (1..n) joint ``i`` after its motion, index ``n + 1`` the tool.
+    """
+    qa = _as_joint_array(arm, q)
+    batch = qa.shape[:-1]
+    frames = np.empty((*batch, arm.n_joints + 2, 4, 4))
+    T = np.broadcast_to(arm.T_world_base, (*batch, 4, 4))
+    frames[..., 0, :, :] = T
+    for i, joint in enumerate(arm.joints):
+        T = (T @ joint.T_parent_joint) @ _joint_motion(joint.axis, joint.kind, qa[..., i])
+        frames[..., i + 1, :, :] = T
+    frames[..., -1, :, :] = T @ arm.T_flange_tool
+    return frames
+
+
+def landmark_positions(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    """Positions of the arm's landmarks (A..E for the seed arm), shape ``(..., L, 3)``."""
+    frames = forward_frames(arm, q)
+    idx = [lm.frame for lm in arm.landmarks]
+    return frames[..., idx, :, :][..., :3, 3]
+
+
+def tool_pose(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    """World pose of the tool frame, shape ``(..., 4, 4)``.
+
+    Unlike :func:`forward_frames` it keeps only the running transform, so it is the one to use
+    for large batches.
+    """
+    qa = _as_joint_array(arm, q)
+    T = np.broadcast_to(arm.T_world_base, (*qa.shape[:-1], 4, 4))
+    for i, joint in enumerate(arm.joints):
+        T = (T @ joint.T_parent_joint) @ _joint_motion(joint.axis, joint.kind, qa[..., i])
+    return np.asarray(T @ arm.T_flange_tool)
+
+
+def tool_position(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    """World position of the tool point (the fingertip), shape ``(..., 3)``."""
+    return tool_pose(arm, q)[..., :3, 3]
+
+
+def position_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    """Jacobian of the tool position w.r.t. the joints, shape ``(..., 3, n)``.
+
+    Column ``i`` is ``z_i x (p_tool - p_i)`` for a revolute joint (length unit per rad) and ``z_i``
+    for a prismatic one, with ``z_i`` the joint axis in the world.
+    """
+    frames = forward_frames(arm, q)
+    p_tool = frames[..., -1, :3, 3]
+    cols = []
+    for i, joint in enumerate(arm.joints):
+        F = frames[..., i + 1, :, :]
+        z = F[..., :3, :3] @ joint.axis
+        if joint.kind is JointKind.PRISMATIC:
+            cols.append(z)
+        else:
+            cols.append(np.cross(z, p_tool - F[..., :3, 3]))
+    return np.stack(cols, axis=-1)
+
+
+def displacement_bounds(arm: SerialArm) -> FloatArray:
+    """Per joint, how far any landmark or link point can move per unit of that joint's motion.
+
+    For a revolute joint this is an upper bound on the distance from the joint axis to any point of
+    the arm beyond it (sum of the fixed offsets along the chain; length unit per rad), for a
+    prismatic joint it is 1. So a motion ``dq`` moves every point of the arm by at most
+    ``sum_i |dq_i| * bound_i`` (for any straight joint-space motion of that size).
+    """
+    offsets = [float(np.linalg.norm(j.T_parent_joint[:3, 3])) for j in arm.joints]
+    offsets.append(float(np.linalg.norm(arm.T_flange_tool[:3, 3])))
+    bounds = []
+    for i, joint in enumerate(arm.joints):
+        if joint.kind is JointKind.PRISMATIC:
+            bounds.append(1.0)
+        else:
+            # a distal prismatic joint can lengthen the chain up to its limit
+            extra = sum(
+                max(abs(j.limits[0]), abs(j.limits[1]))
+                for j in arm.joints[i + 1 :]
+                if j.kind is JointKind.PRISMATIC
+            )
+            bounds.append(sum(offsets[i + 1 :]) + extra)
+    return np.array(bounds)

@@ -1,0 +1,222 @@
+"""A serial arm as a chain of joints, each with a fixed origin, an axis and limits.
+
+The description is URDF-like: joint ``i`` sits at the fixed transform ``T_parent_joint`` from the
+frame of joint ``i - 1`` (after that joint's motion) and moves about or along ``axis``, given in its
+own frame. Standard and modified D-H tables map onto this form, so later model sources slot in
+without touching kinematics.
+
+Frames are numbered ``0`` (world/base), ``1 .. n`` (joint ``i`` after its motion) and ``n + 1``
+(tool). Named *landmarks* pick frame origins along the arm (for the seed arm A, B, C, D, E);
+consecutive landmarks bound the *links* used for collision checking.
+
+Angles are radians, lengths are in the model's ``length_unit``; nothing is converted silently.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armpath.errors import InvalidInputError, JointLimitError
+
+FloatArray = NDArray[np.float64]
+
+
+def _frozen(a: ArrayLike, shape: tuple[int, ...], what: str) -> FloatArray:
+    arr = np.array(a, dtype=np.float64)
+    if arr.shape != shape:
+        raise InvalidInputError(f"{what} must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidInputError(f"{what} must be finite, got {arr.tolist()}")
+    arr.setflags(write=False)
+    return arr
+
+
+class JointKind(StrEnum):
+    """How a joint moves: about its axis (revolute) or along it (prismatic)."""
+
+    REVOLUTE = "revolute"
+    PRISMATIC = "prismatic"
+
+
+@dataclass(frozen=True, eq=False)
+class Joint:
+    """One joint of a serial chain.
+
+    Parameters
+    ----------
+    name:
+        Human-readable name (``"theta1"``).
+    T_parent_joint:
+        4x4 fixed transform from the previous joint's moved frame to this joint's frame at zero.
+    axis:
+        Unit axis of motion in this joint's frame (normalised on construction).
+    kind:
+        Revolute (value in rad) or prismatic (value in the model's length unit).
+    limits:
+        ``(lower, upper)`` in rad or length unit; ``-inf``/``inf`` for an unlimited joint
+        (a revolute joint may then turn past 360 degrees).
+    """
+
+    name: str
+    T_parent_joint: FloatArray
+    axis: FloatArray
+    kind: JointKind = JointKind.REVOLUTE
+    limits: tuple[float, float] = (-np.inf, np.inf)
+
+    def __post_init__(self) -> None:
+        T = _frozen(self.T_parent_joint, (4, 4), f"joint {self.name!r} T_parent_joint")
+        if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0]) or not np.allclose(
+            T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-9
+        ):
+            raise InvalidInputError(f"joint {self.name!r}: T_parent_joint is not a rigid transform")
+        axis = np.array(self.axis, dtype=np.float64)
+        norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
+        if axis.shape != (3,) or not np.isfinite(norm) or norm < 1e-12:
+            raise InvalidInputError(f"joint {self.name!r}: axis must be a non-zero 3-vector")
+        lo, hi = (float(v) for v in self.limits)
+        if np.isnan(lo) or np.isnan(hi) or lo > hi:
+            raise InvalidInputError(
+                f"joint {self.name!r}: limits must satisfy lower <= upper, got ({lo}, {hi})"
+            )
+        object.__setattr__(self, "T_parent_joint", T)
+        object.__setattr__(self, "axis", _frozen(axis / norm, (3,), "axis"))
+        object.__setattr__(self, "kind", JointKind(self.kind))
+        object.__setattr__(self, "limits", (lo, hi))
+
+    def same_as(self, other: Joint, atol: float = 1e-12) -> bool:
+        """Whether ``other`` has the same placement, axis, kind and limits (names ignored)."""
+        return (
+            self.kind is other.kind
+            and np.allclose(self.T_parent_joint, other.T_parent_joint, atol=atol)
+            and np.allclose(self.axis, other.axis, atol=atol)
+            and np.allclose(self.limits, other.limits, atol=atol)
+        )
+
+    @property
+    def is_limited(self) -> bool:
+        """Whether either limit is finite."""
+        return bool(np.isfinite(self.limits[0]) or np.isfinite(self.limits[1]))
+
+
+@dataclass(frozen=True)
+class Landmark:
+    """A named point of the arm: the origin of frame ``frame`` (0 base, i joint i, n+1 tool)."""
+
+    name: str
+    frame: int
+
+
+@dataclass(frozen=True)
+class Link:
+    """A straight link between two consecutive landmarks, checked for collision as a capsule.
+
+    ``radius`` is in the model's length unit. ``checked`` is False for a link that is part of the
+    fixed base (it stands on the table and never moves), e.g. the seed arm's column AB.
+    """
+
+    name: str
+    start: int
+    end: int
+    radius: float = 0.0
+    checked: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class SerialArm:
+    """An immutable serial arm model.
+
+    Parameters
+    ----------
+    name:
+        Model name used in results.
+    joints:
+        The chain, base to tip.
+    T_flange_tool:
+        4x4 transform from the last joint frame to the tool frame (the fingertip for the seed arm).
+    landmarks:
+        Named frame origins along the arm, base to tip.
+    links:
+        Links between landmarks (indices into ``landmarks``) with their capsule radii.
+    home:
+        Initial joint state, rad (or length unit for prismatic joints).
+    length_unit:
+        Unit of every length of the model (``"mm"`` or ``"m"``).
+    T_world_base:
+        4x4 placement of the base in the world.
+    parameters:
+        Model-specific numbers for results and reports (for the seed arm: link lengths in mm).
+    """
+
+    name: str
+    joints: tuple[Joint, ...]
+    T_flange_tool: FloatArray
+    landmarks: tuple[Landmark, ...]
+    links: tuple[Link, ...]
+    home: FloatArray
+    length_unit: str = "mm"
+    T_world_base: FloatArray = field(default_factory=lambda: np.eye(4))
+    parameters: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        n = len(self.joints)
+        if n == 0:
+            raise InvalidInputError("a serial arm needs at least one joint")
+        object.__setattr__(self, "T_flange_tool", _frozen(self.T_flange_tool, (4, 4), "tool"))
+        object.__setattr__(self, "T_world_base", _frozen(self.T_world_base, (4, 4), "base"))
+        object.__setattr__(self, "home", _frozen(self.home, (n,), "home"))
+        for lm in self.landmarks:
+            if not 0 <= lm.frame <= n + 1:
+                raise InvalidInputError(f"landmark {lm.name!r}: frame must be in [0, {n + 1}]")
+        for link in self.links:
+            if not (0 <= link.start < len(self.landmarks) and 0 <= link.end < len(self.landmarks)):
+                raise InvalidInputError(f"link {link.name!r}: landmark index out of range")
+            if not (np.isfinite(link.radius) and link.radius >= 0):
+                raise InvalidInputError(f"link {link.name!r}: radius must be >= 0")
+        if self.length_unit not in ("mm", "m"):
+            raise InvalidInputError(f"length_unit must be 'mm' or 'm', got {self.length_unit!r}")
+        self.check_limits(self.home, what="home pose")
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    @property
+    def lower(self) -> FloatArray:
+        """Lower joint limits (rad / length unit), ``-inf`` where unlimited."""
+        return np.array([j.limits[0] for j in self.joints])
+
+    @property
+    def upper(self) -> FloatArray:
+        """Upper joint limits (rad / length unit), ``inf`` where unlimited."""
+        return np.array([j.limits[1] for j in self.joints])
+
+    @property
+    def landmark_names(self) -> tuple[str, ...]:
+        return tuple(lm.name for lm in self.landmarks)
+
+    def within_limits(self, q: ArrayLike, tol: float = 1e-9) -> NDArray[np.bool_]:
+        """Per configuration, whether every joint is within its limits (``(...)`` bool)."""
+        q = np.asarray(q, dtype=np.float64)
+        return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
+
+    def check_limits(self, q: ArrayLike, what: str = "joint state", tol: float = 1e-9) -> None:
+        """Raise :class:`JointLimitError` naming the first joint outside its limits."""
+        qa = np.asarray(q, dtype=np.float64).reshape(-1, self.n_joints)
+        for i, joint in enumerate(self.joints):
+            lo, hi = joint.limits
+            bad = (qa[:, i] < lo - tol) | (qa[:, i] > hi + tol)
+            if np.any(bad):
+                value = float(qa[np.argmax(bad), i])
+                if joint.kind is JointKind.REVOLUTE:
+                    raise JointLimitError(
+                        f"{what}: joint {i + 1} ({joint.name}) = {np.degrees(value):.4g} deg is "
+                        f"outside its limits [{np.degrees(lo):.4g}, {np.degrees(hi):.4g}] deg"
+                    )
+                raise JointLimitError(
+                    f"{what}: joint {i + 1} ({joint.name}) = {value:.4g} {self.length_unit} is "
+                    f"outside its limits [{lo:.4g}, {hi:.4g}] {self.length_unit}"
+                )

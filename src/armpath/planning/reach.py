@@ -1,0 +1,576 @@
+"""Reach a point in the fewest commands, then with the smallest fingertip error.
+
+The seed arm's fingertip depends on joints 1-5, so a target has a two-dimensional family of
+joint solutions (:mod:`armpath.ik.seed_position`). A sequence of ``N`` commands can change every
+joint by at most ``2N`` degrees, so
+
+1. **Lower bound.** The smallest largest joint change over every configuration within the
+   tolerance of the target, ``t*``, gives ``N >= ceil(t* / 2 deg)``. ``t*`` is found by a grid over
+   the whole family (wrist point D on a sphere around the target, eight branches, joints 1 and 4
+   taken at the turn nearest the start, limits respected) refined by SLSQP on the epigraph
+   problem ``min t s.t. |E(q) - target| <= tol, |q_i - start_i| <= t``.
+2. **Lattice search.** For ``N`` from the bound upward, every lattice state within ``20 N`` ticks of
+   the start (and within limits) that lies near the family is enumerated: two of the joints
+   {1, 4, 5} run over *all* their lattice values in the feasible region, the other three are
+   solved in closed form and rounded down and up, for three choices of the pair (so that no
+   singular parametrization hides a good state); the best states are then polished by exhaustive
+   +-1 tick neighbourhoods.
+3. **Motion.** The move to the best state is split evenly into ``N`` commands and its continuous
+   motion is checked against the scene with a certified bound; the first clear state in order of
+   error is taken. Blocked direct motions raise :class:`~armpath.errors.PlanningError` (planning
+   around obstacles is a separate planner).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize
+
+from armpath.angles import nearest_equivalent, wrap_to_pi
+from armpath.commands import (
+    MAX_INCREMENT_TICKS,
+    TICK_RAD,
+    CommandSequence,
+    ticks_to_rad,
+)
+from armpath.errors import (
+    CollisionError,
+    InvalidInputError,
+    PlanningError,
+    UnreachableError,
+)
+from armpath.geometry.world import CollisionWorld
+from armpath.ik.seed_position import FIXED_PAIRS, family_from_wrist, solve_with_fixed_pair
+from armpath.kinematics import position_jacobian, tool_position
+from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.motion_check import MotionClearance, motion_clearance
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Joints that move the fingertip (0-based); joint 6 only turns the tool and is left unchanged.
+TIP_JOINTS = 5
+
+
+@dataclass(frozen=True)
+class ReachOptions:
+    """Settings of :func:`plan_reach`.
+
+    Attributes
+    ----------
+    tolerance_mm:
+        Largest acceptable fingertip error (mm). Fewest commands first, among plans within this
+        tolerance; then the smallest error.
+    extra_commands:
+        How many commands beyond the lower bound to try before giving up.
+    sphere_step_deg:
+        Grid step (deg) over the sphere of wrist points that maps the solution family.
+    polish_candidates:
+        How many of the best lattice states get their +-1 tick neighbourhoods searched.
+    max_motion_checks:
+        Largest number of candidate motions checked for clearance per command count.
+    clearance_tolerance_mm:
+        Precision of the continuous clearance computation (mm).
+    """
+
+    tolerance_mm: float = 0.05
+    extra_commands: int = 3
+    sphere_step_deg: float = 1.0
+    polish_candidates: int = 64
+    max_motion_checks: int = 200
+    clearance_tolerance_mm: float = 1e-3
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.tolerance_mm) and self.tolerance_mm > 0):
+            raise InvalidInputError(f"tolerance must be > 0 mm, got {self.tolerance_mm}")
+        if self.extra_commands < 0:
+            raise InvalidInputError("extra_commands must be >= 0")
+        if not (0.05 <= self.sphere_step_deg <= 5.0):
+            raise InvalidInputError("sphere_step_deg must be in [0.05, 5] deg")
+
+
+@dataclass(frozen=True)
+class LowerBound:
+    """What the search proved about the command count.
+
+    ``commands = ceil(max_joint_change_deg / 2)``: no sequence of fewer commands can bring the
+    fingertip within the tolerance. ``exact_max_joint_change_deg`` is the same minimum for
+    reaching the target exactly, attained at ``configuration_deg`` (joints 1-5).
+    """
+
+    commands: int
+    max_joint_change_deg: float
+    exact_max_joint_change_deg: float
+    configuration_deg: tuple[float, ...]
+    method: str
+
+
+@dataclass(frozen=True, eq=False)
+class ReachResult:
+    """A reach plan and its metrics (lengths mm, angles deg, commands in ticks of 0.1 deg)."""
+
+    sequence: CommandSequence
+    target_mm: FloatArray
+    tip_mm: FloatArray
+    error_mm: float
+    tolerance_mm: float
+    lower_bound: LowerBound
+    clearance: MotionClearance
+    lattice_states_examined: int
+    motion_checks: int
+
+    @property
+    def n_commands(self) -> int:
+        return self.sequence.n_commands
+
+    @property
+    def is_provably_fewest(self) -> bool:
+        """Whether the plan meets the lower bound, i.e. no plan has fewer commands."""
+        return self.n_commands == self.lower_bound.commands
+
+
+@dataclass(frozen=True)
+class _Problem:
+    arm: SerialArm
+    geometry: SeedArmGeometry
+    world: CollisionWorld
+    start_ticks: IntArray
+    target: FloatArray
+    lo_ticks: IntArray  # joint-limit box of joints 1-5, ticks (huge where unlimited)
+    hi_ticks: IntArray
+    unlimited: NDArray[np.bool_]
+
+    @property
+    def start_rad(self) -> FloatArray:
+        return ticks_to_rad(self.start_ticks[:TIP_JOINTS])
+
+    def normalize(self, q: FloatArray) -> FloatArray:
+        """Take unlimited joints to the turn nearest the start, others to [-pi, pi)."""
+        s = self.start_rad
+        return np.where(self.unlimited, nearest_equivalent(q, s), wrap_to_pi(q))
+
+    def full(self, q5: ArrayLike) -> FloatArray:
+        """Joints 1-5 (rad) completed with the start's joint 6."""
+        q = np.asarray(q5, dtype=np.float64)
+        j6 = np.broadcast_to(ticks_to_rad(self.start_ticks[TIP_JOINTS:]), (*q.shape[:-1], 1))
+        return np.concatenate([q, j6], axis=-1)
+
+    def errors_of_ticks(self, q_ticks: IntArray) -> FloatArray:
+        out = np.empty(q_ticks.shape[0])
+        for k in range(0, q_ticks.shape[0], 200_000):
+            chunk = self.full(ticks_to_rad(q_ticks[k : k + 200_000]))
+            out[k : k + 200_000] = np.linalg.norm(
+                tool_position(self.arm, chunk) - self.target, axis=-1
+            )
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class _Family:
+    """Samples of the solution family on the sphere grid of wrist points.
+
+    ``q`` is ``(P, A, 8, 5)`` rad (polar x azimuth x branch x joint), ``change`` the largest joint
+    change from the start ``(P, A, 8)`` rad (``inf`` where a branch is missing or outside the
+    limits). ``extra_q`` / ``extra_change`` hold solutions found by other means.
+    """
+
+    q: FloatArray
+    change: FloatArray
+    extra_q: FloatArray
+    extra_change: FloatArray
+
+    def points(self) -> tuple[FloatArray, FloatArray]:
+        """All samples flattened: ``(M, 5)`` and ``(M,)``."""
+        return (
+            np.vstack([self.q.reshape(-1, TIP_JOINTS), self.extra_q]),
+            np.r_[self.change.reshape(-1), self.extra_change],
+        )
+
+    def with_point(self, q: FloatArray, change: float) -> _Family:
+        return _Family(
+            self.q,
+            self.change,
+            np.vstack([self.extra_q, q[None]]),
+            np.r_[self.extra_change, change],
+        )
+
+    def step_ticks(self, limit: float) -> float:
+        """Largest joint step (ticks) between neighbouring samples where either is within
+        ``limit`` rad of largest change. Jumps over 90 deg are unlimited joints wrapping."""
+        steps = [0.0]
+        for axis in (0, 1):
+            d = np.abs(np.diff(self.q, axis=axis)).max(axis=-1) / TICK_RAD
+            c = self.change
+            near = np.minimum(np.delete(c, -1, axis=axis), np.delete(c, 0, axis=axis)) <= limit
+            ok = near & np.isfinite(d) & (d < 900)
+            if np.any(ok):
+                steps.append(float(d[ok].max()))
+        return max(steps)
+
+
+def _family(p: _Problem, step_deg: float) -> _Family:
+    q, change = _family_samples(p, step_deg)
+    return _Family(q, change, np.zeros((0, TIP_JOINTS)), np.zeros(0))
+
+
+def _family_samples(p: _Problem, step_deg: float) -> tuple[FloatArray, FloatArray]:
+    """Solution family on a sphere grid (polar x azimuth).
+
+    Returns joints ``(P, A, 8, 5)`` rad and the largest change from the start ``(P, A, 8)`` rad
+    (``inf`` where a branch does not exist or leaves the joint limits).
+    """
+    n_polar = max(8, int(round(180.0 / step_deg)))
+    polar = np.linspace(0.0, np.pi, n_polar + 1)
+    azim = np.linspace(-np.pi, np.pi, 2 * n_polar, endpoint=False)
+    P, A = np.meshgrid(polar, azim, indexing="ij")
+    dirs = np.stack([np.sin(P) * np.cos(A), np.sin(P) * np.sin(A), np.cos(P)], axis=-1)
+    wrist = p.target + p.geometry.de_mm * dirs
+    q = p.normalize(family_from_wrist(p.geometry, p.target, wrist))
+    change = np.max(np.abs(q - p.start_rad), axis=-1)
+    inside = np.all((q >= ticks_to_rad(p.lo_ticks)) & (q <= ticks_to_rad(p.hi_ticks)), axis=-1)
+    change = np.where(inside & np.isfinite(change), change, np.inf)
+    return q, change
+
+
+def _nearest_reachable(p: _Problem, rng: np.random.Generator) -> tuple[float, FloatArray]:
+    """Smallest distance from the target to any fingertip position within the joint limits."""
+    lo = np.maximum(ticks_to_rad(p.lo_ticks), -np.pi)
+    hi = np.minimum(ticks_to_rad(p.hi_ticks), np.pi)
+    starts = rng.uniform(lo, hi, size=(48, TIP_JOINTS))
+    best_d, best_q = np.inf, starts[0]
+    for x0 in starts:
+
+        def f(q: FloatArray) -> tuple[float, FloatArray]:
+            e = tool_position(p.arm, p.full(q)) - p.target
+            J = position_jacobian(p.arm, p.full(q))[:, :TIP_JOINTS]
+            return float(e @ e), 2.0 * e @ J
+
+        res = minimize(f, x0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True)))
+        d = float(np.sqrt(max(res.fun, 0.0)))
+        if d < best_d:
+            best_d, best_q = d, res.x
+    return best_d, best_q
+
+
+def _minimax(p: _Problem, x0: FloatArray, tol: float | None) -> tuple[float, FloatArray] | None:
+    """Refine ``min t s.t. tip within tol (exact if None), |q - start| <= t`` from ``x0``."""
+    s = p.start_rad
+    lo = ticks_to_rad(p.lo_ticks).astype(float)
+    hi = ticks_to_rad(p.hi_ticks).astype(float)
+    bounds = [
+        (None if u else float(a), None if u else float(b))
+        for a, b, u in zip(lo, hi, p.unlimited, strict=True)
+    ] + [(0.0, None)]
+    z0 = np.r_[x0, np.max(np.abs(x0 - s))]
+
+    def tip_err(z: FloatArray) -> FloatArray:
+        return tool_position(p.arm, p.full(z[:TIP_JOINTS])) - p.target
+
+    def tip_jac(z: FloatArray) -> FloatArray:
+        J = position_jacobian(p.arm, p.full(z[:TIP_JOINTS]))[:, :TIP_JOINTS]
+        return np.hstack([J, np.zeros((3, 1))])
+
+    eye = np.eye(TIP_JOINTS)
+    box_jac = np.vstack(
+        [np.hstack([-eye, np.ones((TIP_JOINTS, 1))]), np.hstack([eye, np.ones((TIP_JOINTS, 1))])]
+    )
+    cons: list[dict[str, object]] = [
+        {
+            "type": "ineq",
+            "fun": lambda z: np.r_[z[-1] - (z[:-1] - s), z[-1] + (z[:-1] - s)],
+            "jac": lambda z: box_jac,
+        }
+    ]
+    if tol is None:
+        cons.append({"type": "eq", "fun": tip_err, "jac": tip_jac})
+    else:
+        cons.append(
+            {
+                "type": "ineq",
+                "fun": lambda z: np.array([tol * tol - float(tip_err(z) @ tip_err(z))]),
+                "jac": lambda z: (-2.0 * tip_err(z) @ tip_jac(z))[None, :],
+            }
+        )
+    res = minimize(
+        lambda z: z[-1],
+        z0,
+        jac=lambda z: np.r_[np.zeros(TIP_JOINTS), 1.0],
+        method="SLSQP",
+        bounds=bounds,
+        constraints=cons,
+        options={"maxiter": 300, "ftol": 1e-13},
+    )
+    q = res.x[:TIP_JOINTS]
+    err = float(np.linalg.norm(tip_err(res.x)))
+    limit = 1e-7 if tol is None else tol * (1 + 1e-9)
+    if (
+        not np.all(np.isfinite(q))
+        or err > limit
+        or not np.all((q >= lo - 1e-12) & (q <= hi + 1e-12))
+    ):
+        return None
+    return float(np.max(np.abs(q - s))), q
+
+
+def _seed_points(fam: _Family, count: int) -> FloatArray:
+    """Start points for refinement: the best samples, at least 5 deg apart from each other."""
+    picks: list[FloatArray] = []
+    q, change = fam.points()
+    for i in np.argsort(change)[: count * 400]:
+        if not np.isfinite(change[i]):
+            break
+        if all(np.max(np.abs(q[i] - c)) > np.radians(5.0) for c in picks):
+            picks.append(q[i])
+        if len(picks) >= count:
+            break
+    return np.array(picks).reshape(-1, TIP_JOINTS)
+
+
+def _lower_bound(p: _Problem, fam: _Family, tol: float) -> LowerBound:
+    q, change = fam.points()
+    best_exact, best_q = float(np.min(change)), None
+    if np.isfinite(best_exact):
+        best_q = q[int(np.argmin(change))]
+    for x0 in _seed_points(fam, 16):
+        out = _minimax(p, x0, None)
+        if out is not None and out[0] < best_exact:
+            best_exact, best_q = out
+    if best_q is None:
+        raise PlanningError("no configuration within the joint limits reaches the target")
+    relaxed = _minimax(p, best_q, tol)
+    best_tol = min(best_exact, relaxed[0]) if relaxed is not None else best_exact
+    t_ticks = best_tol / TICK_RAD
+    bound = max(int(np.ceil(t_ticks / MAX_INCREMENT_TICKS - 1e-7)), 0)
+    return LowerBound(
+        commands=bound,
+        max_joint_change_deg=float(np.degrees(best_tol)),
+        exact_max_joint_change_deg=float(np.degrees(best_exact)),
+        configuration_deg=tuple(float(v) for v in np.degrees(best_q)),
+        method=(
+            "min over all configurations within the tolerance of the target of the largest "
+            "joint change: grid over the 2-D solution family (wrist point on a sphere around the "
+            "target, 8 branches) refined by SLSQP; commands >= ceil(change / 2 deg)"
+        ),
+    )
+
+
+def _pair_grid(p: _Problem, fam: _Family, pair: tuple[int, int], n: int) -> IntArray:
+    """All lattice values ``(M, 2)`` of ``pair`` where the family comes near the ``n``-box.
+
+    The grid samples of the family whose largest change is within ``2n`` deg plus the largest
+    step between neighbouring samples mark blocks of the ``pair`` lattice; those blocks and their
+    neighbours are enumerated completely, so the feasible region is covered whatever its shape.
+    """
+    box_lo = np.maximum(p.start_ticks[:TIP_JOINTS] - MAX_INCREMENT_TICKS * n, p.lo_ticks)
+    box_hi = np.minimum(p.start_ticks[:TIP_JOINTS] + MAX_INCREMENT_TICKS * n, p.hi_ticks)
+    idx = list(pair)
+    limit = MAX_INCREMENT_TICKS * n * TICK_RAD
+    step = fam.step_ticks(limit)
+    block = int(np.clip(np.ceil(step), 8, 64))
+    q, change = fam.points()
+    near = change <= limit + step * TICK_RAD
+    if not np.any(near):
+        return np.zeros((0, 2), dtype=np.int64)
+    vals = q[near][:, idx] / TICK_RAD
+    blocks = np.unique(np.floor(vals / block).astype(np.int64), axis=0)
+    ring = np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1], indexing="ij"), -1).reshape(-1, 2)
+    blocks = np.unique((blocks[:, None, :] + ring[None]).reshape(-1, 2), axis=0)
+    offs = np.stack(np.meshgrid(np.arange(block), np.arange(block), indexing="ij"), -1)
+    pairs = (blocks[:, None, :] * block + offs.reshape(-1, 2)[None]).reshape(-1, 2)
+    keep = np.all((pairs >= box_lo[idx]) & (pairs <= box_hi[idx]), axis=-1)
+    return np.asarray(pairs[keep], dtype=np.int64)
+
+
+def _lattice_candidates(
+    p: _Problem, fam: _Family, n: int, polish: int
+) -> tuple[IntArray, FloatArray]:
+    """Lattice states of joints 1-5 within ``n`` commands of the start, sorted by tip error."""
+    start = p.start_ticks[:TIP_JOINTS]
+    box_lo = np.maximum(start - MAX_INCREMENT_TICKS * n, p.lo_ticks)
+    box_hi = np.minimum(start + MAX_INCREMENT_TICKS * n, p.hi_ticks)
+    found: list[IntArray] = []
+    for pair in FIXED_PAIRS:
+        grid = _pair_grid(p, fam, pair, n)
+        solved = [j for j in range(TIP_JOINTS) if j not in pair]
+        for k in range(0, grid.shape[0], 250_000):
+            chunk = grid[k : k + 250_000]
+            sol = solve_with_fixed_pair(
+                p.geometry, p.target, pair, chunk[:, 0] * TICK_RAD, chunk[:, 1] * TICK_RAD
+            )
+            ticks = p.normalize(sol) / TICK_RAD  # (M, 4, 5)
+            ticks = ticks.reshape(-1, TIP_JOINTS)
+            ok = np.all(np.isfinite(ticks), axis=-1)
+            ok &= np.all((ticks >= box_lo - 1) & (ticks <= box_hi + 1), axis=-1)
+            ticks = ticks[ok]
+            if ticks.size == 0:
+                continue
+            base = np.floor(ticks).astype(np.int64)
+            base[:, list(pair)] = np.round(ticks[:, list(pair)]).astype(np.int64)
+            for corner in range(8):
+                cand = base.copy()
+                for bit, j in enumerate(solved):
+                    cand[:, j] += (corner >> bit) & 1
+                found.append(cand)
+    if not found:
+        return np.zeros((0, TIP_JOINTS), dtype=np.int64), np.zeros(0)
+    cands = np.unique(np.concatenate(found), axis=0)
+    cands = cands[np.all((cands >= box_lo) & (cands <= box_hi), axis=-1)]
+    errs = p.errors_of_ticks(cands)
+    # polish: exhaustive +-1 tick neighbourhoods of the best states until nothing improves
+    steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
+    seen_best = np.inf
+    for _ in range(6):
+        if cands.shape[0] == 0:
+            break
+        top = cands[np.argsort(errs)[:polish]]
+        near = (top[:, None, :] + steps[None, :, :]).reshape(-1, TIP_JOINTS)
+        near = near[np.all((near >= box_lo) & (near <= box_hi), axis=-1)]
+        cands = np.unique(np.concatenate([cands, near]), axis=0)
+        errs = p.errors_of_ticks(cands)
+        if errs.min() >= seen_best:
+            break
+        seen_best = float(errs.min())
+    order = np.argsort(errs, kind="stable")
+    return cands[order], errs[order]
+
+
+def _validated_problem(
+    arm: SerialArm, world: CollisionWorld, start_ticks: ArrayLike, target: ArrayLike
+) -> _Problem:
+    geometry = seed_geometry_of(arm)
+    start = np.asarray(start_ticks)
+    if start.shape != (arm.n_joints,):
+        raise InvalidInputError(f"start state needs {arm.n_joints} joint values, got {start.size}")
+    start = CommandSequence(start, np.zeros((0, arm.n_joints), np.int64)).start_ticks
+    arm.check_limits(ticks_to_rad(start), what="start state")
+    p = np.asarray(target, dtype=np.float64)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise InvalidInputError(
+            f"target must be three finite numbers (x, y, z) in mm, got {target}"
+        )
+    lo = np.array([j.limits[0] for j in arm.joints[:TIP_JOINTS]])
+    hi = np.array([j.limits[1] for j in arm.joints[:TIP_JOINTS]])
+    unlimited = ~np.isfinite(lo) & ~np.isfinite(hi)
+    big = 10**9
+    lo_t = np.where(np.isfinite(lo), np.ceil(lo / TICK_RAD - 1e-9), -big).astype(np.int64)
+    hi_t = np.where(np.isfinite(hi), np.floor(hi / TICK_RAD + 1e-9), big).astype(np.int64)
+    problem = _Problem(arm, geometry, world, start, p, lo_t, hi_t, unlimited)
+    q0 = ticks_to_rad(start)
+    clear = world.clearances(arm, q0)
+    parts = world.parts(arm)
+    required = np.array([0.0 if part.is_tip else world.margin for part in parts])
+    bad = clear - required[:, None]
+    if np.min(bad) < 0:
+        i, o = np.unravel_index(int(np.argmin(bad)), bad.shape)
+        raise CollisionError(
+            f"start state is in collision: link {parts[i].name} is {clear[i, o]:.3f} mm from "
+            f"{world.obstacles[o].name} (needs >= {required[i]:g} mm)"
+        )
+    return problem
+
+
+def plan_reach(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: ArrayLike,
+    target_mm: ArrayLike,
+    options: ReachOptions | None = None,
+    seed: int = 0,
+) -> ReachResult:
+    """Plan the fewest commands that bring the fingertip to ``target_mm``, then the least error.
+
+    Parameters
+    ----------
+    arm:
+        A seed-type arm (:func:`armpath.model.seed_arm`).
+    world:
+        Obstacles and clearance rule; the whole continuous motion must satisfy it.
+    start_ticks:
+        Start joint state, integer ticks of 0.1 deg (6 values).
+    target_mm:
+        Target point of the fingertip (mm).
+    options:
+        Tolerance and search settings.
+    seed:
+        Seed of the multi-start search for the nearest reachable point (unreachable targets).
+
+    Raises
+    ------
+    InvalidInputError, JointLimitError, CollisionError
+        Bad start state or target.
+    UnreachableError
+        No configuration within the limits comes within the tolerance; names the nearest
+        reachable distance.
+    PlanningError
+        The target is reachable but no direct motion within the tried command counts is clear.
+    """
+    opts = options or ReachOptions()
+    p = _validated_problem(arm, world, start_ticks, target_mm)
+    fam = _family(p, opts.sphere_step_deg)
+    if not np.isfinite(fam.change).any():  # no sample of the family within the limits
+        dist, q_near = _nearest_reachable(p, np.random.default_rng(seed))
+        if dist > opts.tolerance_mm:
+            tip = tool_position(arm, p.full(q_near))
+            raise UnreachableError(
+                f"target ({', '.join(f'{v:g}' for v in p.target)}) mm is out of reach within the "
+                f"joint limits: the nearest reachable point ({', '.join(f'{v:.2f}' for v in tip)}) "
+                f"is {dist:.3f} mm away"
+            )
+        # the grid missed a thin sliver of the family: keep the optimizer's solution
+        q_near = p.normalize(q_near)
+        fam = fam.with_point(q_near, float(np.max(np.abs(q_near - p.start_rad))))
+    bound = _lower_bound(p, fam, opts.tolerance_mm)
+
+    examined, checks = 0, 0
+    failures: list[str] = []
+    for n in range(bound.commands, bound.commands + opts.extra_commands + 1):
+        cands, errs = _lattice_candidates(p, fam, n, opts.polish_candidates)
+        examined += cands.shape[0]
+        within = errs <= opts.tolerance_mm
+        if not np.any(within):
+            best = f"{errs[0]:.4f} mm" if errs.size else "none"
+            failures.append(f"{n} commands: best lattice error {best}")
+            continue
+        cands, errs = cands[within], errs[within]
+        # cheap filter: the goal state itself must be clear
+        head = min(cands.shape[0], 4 * opts.max_motion_checks)
+        goal_slack = world.slack(arm, p.full(ticks_to_rad(cands[:head])))
+        order = np.flatnonzero(goal_slack >= 0)[: opts.max_motion_checks]
+        if order.size == 0:
+            failures.append(f"{n} commands: every goal state within tolerance is in collision")
+            continue
+        blocked = ""
+        for i in order:
+            goal = np.r_[cands[i], p.start_ticks[TIP_JOINTS:]]
+            seq = CommandSequence.straight(p.start_ticks, goal)
+            checks += 1
+            mc = motion_clearance(arm, world, seq, tolerance=opts.clearance_tolerance_mm)
+            if mc.certified_ok:
+                tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+                if seq.n_commands < bound.commands:
+                    raise AssertionError("plan beats the proven lower bound: search bug")
+                return ReachResult(
+                    sequence=seq,
+                    target_mm=p.target,
+                    tip_mm=tip,
+                    error_mm=float(np.linalg.norm(tip - p.target)),
+                    tolerance_mm=opts.tolerance_mm,
+                    lower_bound=bound,
+                    clearance=mc,
+                    lattice_states_examined=examined,
+                    motion_checks=checks,
+                )
+            blocked = blocked or (
+                f"{mc.worst_part} comes {mc.min_clearance:.2f} mm from {mc.worst_obstacle} "
+                f"during command {mc.worst_command}"
+            )
+        failures.append(f"{n} commands: every direct motion is blocked (e.g. {blocked})")
+    raise PlanningError(
+        "no clear direct motion reaches the target within "
+        f"{bound.commands + opts.extra_commands} commands ({'; '.join(failures)}); "
+        "collision-free planning around obstacles is not available yet"
+    )
