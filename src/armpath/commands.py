@@ -75,7 +75,7 @@ def split_move(delta_ticks: ArrayLike, n_commands: int) -> IntArray:
         return np.zeros((0, d.size), dtype=np.int64)
     k = np.arange(n_commands + 1, dtype=np.int64)[:, None]
     cumulative = np.floor_divide(k * d[None, :], n_commands)
-    return np.diff(cumulative, axis=0)
+    return np.asarray(np.diff(cumulative, axis=0), dtype=np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,7 +124,7 @@ class CommandSequence:
 
     @property
     def final_ticks(self) -> IntArray:
-        return self.start_ticks + self.commands.sum(axis=0)
+        return np.asarray(self.start_ticks + self.commands.sum(axis=0), dtype=np.int64)
 
     def sample_motion(self, substeps: int) -> FloatArray:
         """Joint angles (rad) along the continuous motion, ``(n_commands * substeps + 1, n)``.

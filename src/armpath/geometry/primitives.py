@@ -23,6 +23,8 @@ FloatArray = NDArray[np.float64]
 
 #: Spacing (length unit) of the samples along a segment before local refinement.
 SEGMENT_SAMPLE_SPACING = 2.0
+#: How many local minima of the samples along a segment are refined.
+REFINED_MINIMA = 3
 
 
 class Obstacle(ABC):
@@ -42,10 +44,11 @@ class Obstacle(ABC):
         """Smallest signed distance over segments ``p0 -> p1`` (each ``(..., 3)``).
 
         Generic method: samples every segment at most :data:`SEGMENT_SAMPLE_SPACING` apart, then
-        refines around the best sample by golden-section search. Because the signed distance is
-        1-Lipschitz, the result is within ``spacing / 2`` of the true minimum even before
-        refinement; after refinement it is exact up to rounding for locally unimodal profiles.
-        Subclasses with a closed form override this.
+        refines the lowest :data:`REFINED_MINIMA` local minima of the samples by golden-section
+        search. Because the signed distance is 1-Lipschitz, the result is never more than
+        ``spacing / 2`` above the true minimum, and it is the true minimum (to rounding) wherever
+        the distance is unimodal between neighbouring samples around those minima. Subclasses
+        with a closed form override this.
         """
         a = np.asarray(p0, dtype=np.float64)
         b = np.asarray(p1, dtype=np.float64)
@@ -55,15 +58,19 @@ class Obstacle(ABC):
         t = np.linspace(0.0, 1.0, n)
         pts = a[..., None, :] + t[:, None] * (b - a)[..., None, :]
         d = self.signed_distance(pts)
-        k = np.argmin(d, axis=-1)
-        best = np.take_along_axis(d, k[..., None], axis=-1)[..., 0]
+        best = d.min(axis=-1)
+        # refine around the REFINED_MINIMA lowest local minima of the samples
+        padded = np.concatenate([d[..., :1] + 1.0, d, d[..., -1:] + 1.0], axis=-1)
+        is_min = (d <= padded[..., :-2]) & (d <= padded[..., 2:])
+        ranked = np.argsort(np.where(is_min, d, np.inf), axis=-1)[..., :REFINED_MINIMA]
         step = 1.0 / (n - 1)
-        lo = np.clip(k * step - step, 0.0, 1.0)
-        hi = np.clip(k * step + step, 0.0, 1.0)
+        a_k, b_k = a[..., None, :], b[..., None, :]
+        lo = np.clip(ranked * step - step, 0.0, 1.0)
+        hi = np.clip(ranked * step + step, 0.0, 1.0)
         golden = (np.sqrt(5.0) - 1.0) / 2.0
 
         def at(s: FloatArray) -> FloatArray:
-            return self.signed_distance(a + s[..., None] * (b - a))
+            return self.signed_distance(a_k + s[..., None] * (b_k - a_k))
 
         x1 = hi - golden * (hi - lo)
         x2 = lo + golden * (hi - lo)
@@ -75,10 +82,10 @@ class Obstacle(ABC):
             x2n = np.where(left, x1, lo + golden * (hi - lo))
             x1n = np.where(left, hi - golden * (hi - lo), x2)
             fn = at(np.where(left, x1n, x2n))
-            f2 = np.where(left, f1, fn)
-            f1 = np.where(left, fn, f2)
+            f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
             x1, x2 = x1n, x2n
-        return np.minimum(best, np.minimum(f1, f2))
+        refined = np.minimum(f1, f2).min(axis=-1)
+        return np.asarray(np.minimum(best, refined), dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,7 +150,7 @@ def _polygon_signed_distance(
         r_cross = a[:, 0] + (pz - a[:, 1]) * er / ez
     crossings = np.sum(cond & (pr < r_cross), axis=-1)
     inside = (crossings % 2) == 1
-    return np.where(inside, -dist, dist)
+    return np.asarray(np.where(inside, -dist, dist), dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -226,7 +233,7 @@ class WallThickness(StrEnum):
 
 @dataclass(frozen=True, eq=False)
 class HollowFrustum(SolidOfRevolution):
-    """A hollow truncated cone (open or closed ends) standing on its base; see :func:`hollow_frustum`."""
+    """A hollow truncated cone (open or closed ends); built by :func:`hollow_frustum`."""
 
     height: float = 0.0
     r_bottom: float = 0.0
@@ -335,4 +342,6 @@ def _wall_convention(value: WallThickness | str) -> WallThickness:
         return WallThickness(value)
     except ValueError:
         valid = ", ".join(repr(w.value) for w in WallThickness)
-        raise InvalidInputError(f"wall thickness convention must be one of {valid}, got {value!r}")
+        raise InvalidInputError(
+            f"wall thickness convention must be one of {valid}, got {value!r}"
+        ) from None

@@ -93,7 +93,7 @@ class CollisionWorld:
         return np.stack(starts, axis=-2), np.stack(ends, axis=-2)
 
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
-        """Clearance of every part to every obstacle, ``(..., P, O)`` (capsule radius subtracted)."""
+        """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""
         p0, p1 = self.part_segments(arm, q)
         radii = np.array([p.radius for p in self.parts(arm)])
         cols = [o.segment_distance(p0, p1) - radii for o in self.obstacles]

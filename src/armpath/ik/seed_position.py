@@ -29,8 +29,32 @@ from armpath.model.seed_arm import SeedArmGeometry
 
 FloatArray = NDArray[np.float64]
 
+__all__ = ["FIXED_PAIRS", "family_from_wrist", "fingertip", "solve_with_fixed_pair"]
+
 #: Pairs of joints (0-based) that can be fixed, the other three solved in closed form.
 FIXED_PAIRS: tuple[tuple[int, int], ...] = ((0, 3), (0, 4), (3, 4))
+
+
+def fingertip(g: SeedArmGeometry, q: ArrayLike) -> FloatArray:
+    """Closed-form fingertip E of a seed-type arm for joints ``(..., >= 5)`` rad: ``(..., 3)`` mm.
+
+    A fast special case of :func:`armpath.kinematics.tool_position` for large lattice searches.
+    """
+    qa = np.asarray(q, dtype=np.float64)
+    t1, t2, t3, t4, t5 = (qa[..., i] for i in range(5))
+    s5 = np.sin(t5)
+    # wrist vector in the forearm frame: CD ez + DE Rz(t4) Rx(t5) ez
+    kx = g.de_mm * np.sin(t4) * s5
+    ky = -g.de_mm * np.cos(t4) * s5
+    kz = g.cd_mm + g.de_mm * np.cos(t5)
+    phi = t2 + t3
+    cp, sp = np.cos(phi), np.sin(phi)
+    # in the arm frame turned by t1: (X, Y, Z) = BC Rx(t2) ez + Rx(phi) k
+    X = kx
+    Y = -g.bc_mm * np.sin(t2) + cp * ky - sp * kz
+    Z = g.bc_mm * np.cos(t2) + sp * ky + cp * kz
+    c1, s1 = np.cos(t1), np.sin(t1)
+    return np.stack([c1 * X - s1 * Y, s1 * X + c1 * Y, g.ab_mm + Z], axis=-1)
 
 
 def _planar(
@@ -58,7 +82,7 @@ def _target_relative(g: SeedArmGeometry, target: ArrayLike) -> FloatArray:
     p = np.asarray(target, dtype=np.float64)
     if p.shape[-1:] != (3,) or not np.all(np.isfinite(p)):
         raise InvalidInputError(f"target must be finite (x, y, z), got {p.tolist()}")
-    return p - np.array([0.0, 0.0, g.ab_mm])
+    return np.asarray(p - np.array([0.0, 0.0, g.ab_mm]), dtype=np.float64)
 
 
 def solve_with_fixed_pair(

@@ -131,7 +131,8 @@ def seed_geometry_of(arm: SerialArm) -> SeedArmGeometry:
             f"model {arm.name!r} is not a seed-type arm (6R with links AB, BC, CD, DE)"
         )
     ranges = tuple(
-        float(np.degrees(j.limits[1])) if j.is_limited else float("inf") for j in arm.joints
+        round(float(np.degrees(j.limits[1])), 9) if j.is_limited else float("inf")
+        for j in arm.joints
     )
     geometry = SeedArmGeometry(
         ab_mm=params["AB_mm"],

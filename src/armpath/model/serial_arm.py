@@ -201,7 +201,7 @@ class SerialArm:
     def within_limits(self, q: ArrayLike, tol: float = 1e-9) -> NDArray[np.bool_]:
         """Per configuration, whether every joint is within its limits (``(...)`` bool)."""
         q = np.asarray(q, dtype=np.float64)
-        return np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1)
+        return np.asarray(np.all((q >= self.lower - tol) & (q <= self.upper + tol), axis=-1))
 
     def check_limits(self, q: ArrayLike, what: str = "joint state", tol: float = 1e-9) -> None:
         """Raise :class:`JointLimitError` naming the first joint outside its limits."""

@@ -28,22 +28,25 @@ FloatArray = NDArray[np.float64]
 class MotionClearance:
     """Clearances (length unit, capsule radii subtracted) over a whole continuous motion.
 
-    ``min_clearance`` covers every checked part including the tool tip; ``min_body_clearance``
-    excludes the tool tip (it must stay >= the margin); ``min_tip_clearance`` is the tool tip's
-    (it must stay >= 0). Each is exact to within ``tolerance``. ``certified_ok`` is True when the
-    clearance rule provably holds everywhere along the motion. ``worst_*`` locate the smallest
-    clearance: part, obstacle and the command during which it happens (0 = the start state).
+    ``min_clearance`` is the smallest clearance found (any part, tool tip included), a value the
+    motion really attains; ``min_clearance_lower_bound`` is a proven lower bound of the true
+    minimum, so the true minimum lies between the two. ``min_body_clearance`` excludes the tool
+    tip (it must stay >= the margin); ``min_tip_clearance`` is the tool tip's (>= 0 required).
+    ``certified_ok`` is True when the clearance rule provably holds everywhere along the motion;
+    ``violated`` when a sampled instant breaks it. ``worst_*`` locate the smallest clearance:
+    part, obstacle and the command during which it happens (0 = the start state).
     """
 
     min_clearance: float
+    min_clearance_lower_bound: float
     min_body_clearance: float
     min_tip_clearance: float
     lower_bound_slack: float
     certified_ok: bool
+    violated: bool
     worst_part: str
     worst_obstacle: str
     worst_command: int
-    tolerance: float
     evaluations: int
 
 
@@ -51,88 +54,95 @@ def motion_clearance(
     arm: SerialArm,
     world: CollisionWorld,
     sequence: CommandSequence,
-    tolerance: float = 1e-3,
+    tolerance: float = 0.01,
     initial_substeps: int = 4,
-    max_rounds: int = 60,
+    max_evaluations: int = 20_000,
+    precision_evaluations: int = 1_000,
 ) -> MotionClearance:
-    """Smallest clearance over the continuous motion of ``sequence`` (start state included)."""
+    """Smallest clearance over the continuous motion of ``sequence`` (start state included).
+
+    Intervals whose bound does not yet prove the clearance rule are bisected, lowest bound
+    first, until the rule is certified, a sampled instant violates it, or ``max_evaluations``
+    configurations have been evaluated. Then up to ``precision_evaluations`` more narrow the gap
+    between the smallest clearance found and its proven lower bound toward ``tolerance``. A
+    violated motion is not refined further.
+    """
     parts = world.parts(arm)
     is_tip = np.array([p.is_tip for p in parts])
     R = displacement_bounds(arm)
     states = sequence.states().astype(np.float64)
     n = sequence.n_commands
-    cmd_rate = np.abs(sequence.commands).astype(np.float64) @ R * ticks_to_rad(1.0) if n else None
+    rate = np.abs(sequence.commands).astype(np.float64) @ R * ticks_to_rad(1.0)
 
     def config(u: FloatArray) -> FloatArray:
-        k = np.clip(np.floor(u).astype(np.int64), 0, max(n - 1, 0))
-        frac = u - k
         if n == 0:
             return ticks_to_rad(np.broadcast_to(states[0], (u.size, states.shape[1])))
-        return ticks_to_rad(states[k] + frac[:, None] * sequence.commands[k])
-
-    def evaluate(u: FloatArray) -> FloatArray:
-        return world.clearances(arm, config(u))  # (M, P, O)
-
-    if n == 0:
-        u_nodes = np.zeros(1)
-    else:
-        u_nodes = np.unique(
-            np.concatenate(
-                [np.arange(n + 1, dtype=np.float64)]
-                + [np.arange(n) + j / initial_substeps for j in range(initial_substeps)]
-            )
-        )
-    C = evaluate(u_nodes)
-    evaluations = u_nodes.size
+        k = np.clip(np.floor(u).astype(np.int64), 0, n - 1)
+        return ticks_to_rad(states[k] + (u - k)[:, None] * sequence.commands[k])
 
     def metrics(c: FloatArray) -> FloatArray:
         body = np.where(is_tip[None, :, None], np.inf, c).min(axis=(1, 2))
         tip = np.where(~is_tip[None, :, None], np.inf, c).min(axis=(1, 2))
         return np.stack([body, tip], axis=1)  # (M, 2)
 
+    required = np.array([world.margin, 0.0])
+    u_nodes = np.unique(
+        np.concatenate(
+            [np.arange(n + 1, dtype=np.float64)]
+            + [np.arange(n) + j / initial_substeps for j in range(1, initial_substeps)]
+        )
+    )
+    C = world.clearances(arm, config(u_nodes))
     M = metrics(C)
-    if n > 0:
-        for _ in range(max_rounds):
-            order = np.argsort(u_nodes)
-            u_nodes, C, M = u_nodes[order], C[order], M[order]
-            ua, ub = u_nodes[:-1], u_nodes[1:]
-            k = np.minimum(np.floor(ua).astype(np.int64), n - 1)
-            assert cmd_rate is not None
-            half_delta = 0.5 * cmd_rate[k] * (ub - ua)
-            lb = np.minimum(M[:-1], M[1:]) - half_delta[:, None]
+
+    def bounds() -> tuple[FloatArray, FloatArray]:
+        k = np.minimum(np.floor(u_nodes[:-1]).astype(np.int64), max(n - 1, 0))
+        half_delta = 0.5 * rate[k] * np.diff(u_nodes) if n else np.zeros(0)
+        return np.minimum(M[:-1], M[1:]) - half_delta[:, None], half_delta
+
+    certified_at: int | None = None
+    while n > 0:
+        lb, half_delta = bounds()
+        if np.min(M - required) < 0:
+            break  # a sampled instant violates the rule: the motion is rejected
+        slack_lb = (lb - required).min(axis=1)
+        need = (slack_lb < 0) & (half_delta > tolerance / 2)
+        budget = max_evaluations - u_nodes.size
+        if not np.any(need):  # certified: spend a little on the precision of the minimum
             best = M.min(axis=0)
-            refine = np.any(lb < best[None, :] - tolerance, axis=1) & (half_delta > tolerance)
-            if not np.any(refine):
-                break
-            mid = 0.5 * (ua[refine] + ub[refine])
-            C_mid = evaluate(mid)
-            evaluations += mid.size
-            u_nodes = np.concatenate([u_nodes, mid])
-            C = np.concatenate([C, C_mid])
-            M = np.concatenate([M, metrics(C_mid)])
-        order = np.argsort(u_nodes)
-        u_nodes, C, M = u_nodes[order], C[order], M[order]
-        k = np.minimum(np.floor(u_nodes[:-1]).astype(np.int64), n - 1)
-        assert cmd_rate is not None
-        half_delta = 0.5 * cmd_rate[k] * np.diff(u_nodes)
-        lb = np.minimum(M[:-1], M[1:]) - half_delta[:, None]
-        lb_slack = float(np.min(np.minimum(lb[:, 0] - world.margin, lb[:, 1])))
-    else:
-        lb_slack = float(min(M[0, 0] - world.margin, M[0, 1]))
+            need = np.any(lb < best - tolerance, axis=1) & (half_delta > tolerance / 2)
+            if certified_at is None:
+                certified_at = u_nodes.size
+            budget = min(budget, certified_at + precision_evaluations - u_nodes.size)
+        if not np.any(need) or budget <= 0:
+            break
+        idx = np.flatnonzero(need)
+        idx = idx[np.argsort(slack_lb[idx])[: min(budget, 4096)]]
+        mid = 0.5 * (u_nodes[idx] + u_nodes[idx + 1])
+        C_mid = world.clearances(arm, config(mid))
+        order = np.argsort(np.concatenate([u_nodes, mid]), kind="stable")
+        u_nodes = np.concatenate([u_nodes, mid])[order]
+        C = np.concatenate([C, C_mid])[order]
+        M = np.concatenate([M, metrics(C_mid)])[order]
+
+    lb, _ = bounds()
+    lower = lb if n else M
+    lb_slack = float((lower - required).min())
     flat = C.reshape(C.shape[0], -1)
-    idx = int(np.argmin(flat.min(axis=1)))
-    p_idx, o_idx = np.unravel_index(int(np.argmin(C[idx])), C.shape[1:])
-    u_worst = float(u_nodes[idx])
-    worst_command = 0 if u_worst == 0.0 else int(np.ceil(u_worst))
+    idx_min = int(np.argmin(flat.min(axis=1)))
+    p_idx, o_idx = np.unravel_index(int(np.argmin(C[idx_min])), C.shape[1:])
+    u_worst = float(u_nodes[idx_min])
+    violated = bool(np.min(M - required) < 0)
     return MotionClearance(
         min_clearance=float(flat.min()),
+        min_clearance_lower_bound=float(lower.min()),
         min_body_clearance=float(M[:, 0].min()),
         min_tip_clearance=float(M[:, 1].min()),
         lower_bound_slack=lb_slack,
-        certified_ok=lb_slack >= 0.0,
+        certified_ok=lb_slack >= 0.0 and not violated,
+        violated=violated,
         worst_part=parts[p_idx].name,
         worst_obstacle=world.obstacles[o_idx].name,
-        worst_command=worst_command,
-        tolerance=tolerance,
-        evaluations=evaluations,
+        worst_command=0 if u_worst == 0.0 else int(np.ceil(u_worst)),
+        evaluations=int(u_nodes.size),
     )

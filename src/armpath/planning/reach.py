@@ -43,7 +43,12 @@ from armpath.errors import (
     UnreachableError,
 )
 from armpath.geometry.world import CollisionWorld
-from armpath.ik.seed_position import FIXED_PAIRS, family_from_wrist, solve_with_fixed_pair
+from armpath.ik.seed_position import (
+    FIXED_PAIRS,
+    family_from_wrist,
+    fingertip,
+    solve_with_fixed_pair,
+)
 from armpath.kinematics import position_jacobian, tool_position
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
@@ -72,7 +77,8 @@ class ReachOptions:
     polish_candidates:
         How many of the best lattice states get their +-1 tick neighbourhoods searched.
     max_motion_checks:
-        Largest number of candidate motions checked for clearance per command count.
+        Largest number of candidate motions checked for clearance per command count (spread
+        over the feasible region, at most 3 per 5 deg cell of joint space).
     clearance_tolerance_mm:
         Precision of the continuous clearance computation (mm).
     """
@@ -81,8 +87,8 @@ class ReachOptions:
     extra_commands: int = 3
     sphere_step_deg: float = 1.0
     polish_candidates: int = 64
-    max_motion_checks: int = 200
-    clearance_tolerance_mm: float = 1e-3
+    max_motion_checks: int = 60
+    clearance_tolerance_mm: float = 0.01
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.tolerance_mm) and self.tolerance_mm > 0):
@@ -122,6 +128,7 @@ class ReachResult:
     clearance: MotionClearance
     lattice_states_examined: int
     motion_checks: int
+    fewer_commands_rejected: tuple[str, ...] = ()
 
     @property
     def n_commands(self) -> int:
@@ -160,13 +167,9 @@ class _Problem:
         return np.concatenate([q, j6], axis=-1)
 
     def errors_of_ticks(self, q_ticks: IntArray) -> FloatArray:
-        out = np.empty(q_ticks.shape[0])
-        for k in range(0, q_ticks.shape[0], 200_000):
-            chunk = self.full(ticks_to_rad(q_ticks[k : k + 200_000]))
-            out[k : k + 200_000] = np.linalg.norm(
-                tool_position(self.arm, chunk) - self.target, axis=-1
-            )
-        return out
+        """Fingertip error (mm) of lattice states of joints 1-5, ``(M, 5)`` ticks."""
+        tip = fingertip(self.geometry, ticks_to_rad(q_ticks))
+        return np.asarray(np.linalg.norm(tip - self.target, axis=-1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,7 +226,7 @@ def _family_samples(p: _Problem, step_deg: float) -> tuple[FloatArray, FloatArra
     Returns joints ``(P, A, 8, 5)`` rad and the largest change from the start ``(P, A, 8)`` rad
     (``inf`` where a branch does not exist or leaves the joint limits).
     """
-    n_polar = max(8, int(round(180.0 / step_deg)))
+    n_polar = max(8, round(180.0 / step_deg))
     polar = np.linspace(0.0, np.pi, n_polar + 1)
     azim = np.linspace(-np.pi, np.pi, 2 * n_polar, endpoint=False)
     P, A = np.meshgrid(polar, azim, indexing="ij")
@@ -386,23 +389,39 @@ def _pair_grid(p: _Problem, fam: _Family, pair: tuple[int, int], n: int) -> IntA
 
 
 def _lattice_candidates(
-    p: _Problem, fam: _Family, n: int, polish: int
+    p: _Problem, fam: _Family, n: int, tol: float, polish: int
 ) -> tuple[IntArray, FloatArray]:
-    """Lattice states of joints 1-5 within ``n`` commands of the start, sorted by tip error."""
+    """Lattice states of joints 1-5 within ``n`` commands of the start, sorted by tip error.
+
+    Returns every state found within ``tol`` of the target plus the ``polish`` best ones.
+    """
     start = p.start_ticks[:TIP_JOINTS]
     box_lo = np.maximum(start - MAX_INCREMENT_TICKS * n, p.lo_ticks)
     box_hi = np.minimum(start + MAX_INCREMENT_TICKS * n, p.hi_ticks)
-    found: list[IntArray] = []
+    kept: list[IntArray] = []
+    kept_err: list[FloatArray] = []
+
+    def keep(cands: IntArray) -> None:
+        cands = cands[np.all((cands >= box_lo) & (cands <= box_hi), axis=-1)]
+        errs = p.errors_of_ticks(cands)
+        good = errs <= tol
+        if np.count_nonzero(~good) > polish:  # the best few beyond the tolerance, for polishing
+            cut = np.partition(errs[~good], polish)[polish]
+            good |= errs <= cut
+        else:
+            good[:] = True
+        kept.append(cands[good])
+        kept_err.append(errs[good])
+
     for pair in FIXED_PAIRS:
         grid = _pair_grid(p, fam, pair, n)
         solved = [j for j in range(TIP_JOINTS) if j not in pair]
-        for k in range(0, grid.shape[0], 250_000):
-            chunk = grid[k : k + 250_000]
+        for k in range(0, grid.shape[0], 100_000):
+            chunk = grid[k : k + 100_000]
             sol = solve_with_fixed_pair(
                 p.geometry, p.target, pair, chunk[:, 0] * TICK_RAD, chunk[:, 1] * TICK_RAD
             )
-            ticks = p.normalize(sol) / TICK_RAD  # (M, 4, 5)
-            ticks = ticks.reshape(-1, TIP_JOINTS)
+            ticks = (p.normalize(sol) / TICK_RAD).reshape(-1, TIP_JOINTS)
             ok = np.all(np.isfinite(ticks), axis=-1)
             ok &= np.all((ticks >= box_lo - 1) & (ticks <= box_hi + 1), axis=-1)
             ticks = ticks[ok]
@@ -410,32 +429,45 @@ def _lattice_candidates(
                 continue
             base = np.floor(ticks).astype(np.int64)
             base[:, list(pair)] = np.round(ticks[:, list(pair)]).astype(np.int64)
-            for corner in range(8):
-                cand = base.copy()
-                for bit, j in enumerate(solved):
-                    cand[:, j] += (corner >> bit) & 1
-                found.append(cand)
-    if not found:
+            corners = np.array([[(c >> b) & 1 for b in range(3)] for c in range(8)])
+            cands = np.repeat(base[:, None, :], 8, axis=1)
+            cands[:, :, solved] += corners[None]
+            keep(cands.reshape(-1, TIP_JOINTS))
+    if not kept:
         return np.zeros((0, TIP_JOINTS), dtype=np.int64), np.zeros(0)
-    cands = np.unique(np.concatenate(found), axis=0)
-    cands = cands[np.all((cands >= box_lo) & (cands <= box_hi), axis=-1)]
-    errs = p.errors_of_ticks(cands)
+    cands, index = np.unique(np.concatenate(kept), axis=0, return_index=True)
+    errs = np.concatenate(kept_err)[index]
     # polish: exhaustive +-1 tick neighbourhoods of the best states until nothing improves
     steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
-    seen_best = np.inf
     for _ in range(6):
-        if cands.shape[0] == 0:
-            break
+        best_before = float(errs.min()) if errs.size else np.inf
         top = cands[np.argsort(errs)[:polish]]
-        near = (top[:, None, :] + steps[None, :, :]).reshape(-1, TIP_JOINTS)
+        near = np.unique((top[:, None, :] + steps[None, :, :]).reshape(-1, TIP_JOINTS), axis=0)
         near = near[np.all((near >= box_lo) & (near <= box_hi), axis=-1)]
-        cands = np.unique(np.concatenate([cands, near]), axis=0)
-        errs = p.errors_of_ticks(cands)
-        if errs.min() >= seen_best:
+        near_err = p.errors_of_ticks(near)
+        cands, index = np.unique(np.concatenate([cands, near]), axis=0, return_index=True)
+        errs = np.r_[errs, near_err][index]
+        if errs.min() >= best_before:
             break
-        seen_best = float(errs.min())
     order = np.argsort(errs, kind="stable")
     return cands[order], errs[order]
+
+
+def _diverse(cands: IntArray, order: IntArray, count: int, per_cell: int = 3) -> IntArray:
+    """At most ``count`` of ``order`` (kept in order), at most ``per_cell`` per 5 deg cell.
+
+    Neighbouring lattice states give nearly the same motion; spreading the motion checks over
+    the feasible region finds a clear motion sooner when the best ones are blocked.
+    """
+    cells = np.floor_divide(cands[order], 50)
+    _, inverse = np.unique(cells, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    rank = np.zeros_like(inverse)
+    seen: dict[int, int] = {}
+    for k, c in enumerate(inverse.tolist()):
+        rank[k] = seen.get(c, 0)
+        seen[c] = rank[k] + 1
+    return order[rank < per_cell][:count]
 
 
 def _validated_problem(
@@ -450,7 +482,7 @@ def _validated_problem(
     p = np.asarray(target, dtype=np.float64)
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise InvalidInputError(
-            f"target must be three finite numbers (x, y, z) in mm, got {target}"
+            f"target must be three finite numbers (x, y, z) in mm, got {p.tolist()}"
         )
     lo = np.array([j.limits[0] for j in arm.joints[:TIP_JOINTS]])
     hi = np.array([j.limits[1] for j in arm.joints[:TIP_JOINTS]])
@@ -459,6 +491,13 @@ def _validated_problem(
     lo_t = np.where(np.isfinite(lo), np.ceil(lo / TICK_RAD - 1e-9), -big).astype(np.int64)
     hi_t = np.where(np.isfinite(hi), np.floor(hi / TICK_RAD + 1e-9), big).astype(np.int64)
     problem = _Problem(arm, geometry, world, start, p, lo_t, hi_t, unlimited)
+    for obstacle in world.obstacles:
+        depth = -float(obstacle.signed_distance(p))
+        if depth > 0:
+            raise CollisionError(
+                f"target ({', '.join(f'{v:g}' for v in p)}) mm lies {depth:.3f} mm inside "
+                f"{obstacle.name}: the fingertip may touch a surface but not enter it"
+            )
     q0 = ticks_to_rad(start)
     clear = world.clearances(arm, q0)
     parts = world.parts(arm)
@@ -528,18 +567,21 @@ def plan_reach(
     examined, checks = 0, 0
     failures: list[str] = []
     for n in range(bound.commands, bound.commands + opts.extra_commands + 1):
-        cands, errs = _lattice_candidates(p, fam, n, opts.polish_candidates)
+        cands, errs = _lattice_candidates(p, fam, n, opts.tolerance_mm, opts.polish_candidates)
         examined += cands.shape[0]
         within = errs <= opts.tolerance_mm
         if not np.any(within):
-            best = f"{errs[0]:.4f} mm" if errs.size else "none"
-            failures.append(f"{n} commands: best lattice error {best}")
+            best = f"{errs[0]:.4f} mm" if errs.size else "no lattice state near the target"
+            failures.append(
+                f"{n} commands: smallest fingertip error on the lattice is {best} "
+                f"> tolerance {opts.tolerance_mm} mm"
+            )
             continue
         cands, errs = cands[within], errs[within]
         # cheap filter: the goal state itself must be clear
         head = min(cands.shape[0], 4 * opts.max_motion_checks)
         goal_slack = world.slack(arm, p.full(ticks_to_rad(cands[:head])))
-        order = np.flatnonzero(goal_slack >= 0)[: opts.max_motion_checks]
+        order = _diverse(cands, np.flatnonzero(goal_slack >= 0), opts.max_motion_checks)
         if order.size == 0:
             failures.append(f"{n} commands: every goal state within tolerance is in collision")
             continue
@@ -563,6 +605,7 @@ def plan_reach(
                     clearance=mc,
                     lattice_states_examined=examined,
                     motion_checks=checks,
+                    fewer_commands_rejected=tuple(failures),
                 )
             blocked = blocked or (
                 f"{mc.worst_part} comes {mc.min_clearance:.2f} mm from {mc.worst_obstacle} "

@@ -1,0 +1,5 @@
+"""``python -m armpath``: the command line."""
+
+from armpath.cli import main
+
+main()

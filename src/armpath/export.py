@@ -1,0 +1,266 @@
+"""Result files: JSON (SPEC section 6), CSV and XLSX command tables, atomic output folders.
+
+Everything here is at the edge of the package: degrees and mm, units in every header.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from armpath import __version__
+from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
+from armpath.errors import OutputError
+from armpath.kinematics import tool_position
+from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.motion_check import MotionClearance
+from armpath.planning.reach import ReachResult
+from armpath.scenes import Scene
+
+UNITS = {
+    "length": "mm",
+    "angle": "deg",
+    "commands": "ticks of 0.1 deg per joint, each in [-20, 20]",
+}
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def model_dict(arm: SerialArm) -> dict[str, Any]:
+    """The model's name, numbers and joint limits (deg; null = unlimited)."""
+    limits: list[list[float] | None] = []
+    for j in arm.joints:
+        if not j.is_limited:
+            limits.append(None)
+        elif j.kind is JointKind.REVOLUTE:
+            limits.append([float(np.degrees(j.limits[0])), float(np.degrees(j.limits[1]))])
+        else:
+            limits.append([float(j.limits[0]), float(j.limits[1])])
+    return {
+        "name": arm.name,
+        "parameters": dict(arm.parameters),
+        "joint_limits_deg": limits,
+        "length_unit": arm.length_unit,
+    }
+
+
+def clearance_dict(c: MotionClearance) -> dict[str, Any]:
+    return {
+        "min_clearance_mm": c.min_clearance,
+        "min_clearance_lower_bound_mm": c.min_clearance_lower_bound,
+        "min_body_clearance_mm": _finite_or_none(c.min_body_clearance),
+        "min_tool_tip_clearance_mm": _finite_or_none(c.min_tip_clearance),
+        "certified": c.certified_ok,
+        "closest_part": c.worst_part,
+        "closest_obstacle": c.worst_obstacle,
+        "during_command": c.worst_command,
+        "configurations_evaluated": c.evaluations,
+        "method": (
+            "continuous motion (synchronous linear interpolation): bisection with a certified "
+            "bound from the largest displacement of any arm point between samples"
+        ),
+    }
+
+
+def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict[str, Any]:
+    """The JSON document of a reach plan (SPEC section 6)."""
+    seq = result.sequence
+    lb = result.lower_bound
+    wall = scene.wall_thickness
+    return {
+        "task": "reach",
+        "armpath_version": __version__,
+        "model": model_dict(arm),
+        "scene": scene.describe(),
+        "wall_thickness": wall.value if wall else None,
+        "units": UNITS,
+        "initial_deg": ticks_to_deg(seq.start_ticks).tolist(),
+        "commands": seq.commands.tolist(),
+        "final_deg": ticks_to_deg(seq.final_ticks).tolist(),
+        "target": result.target_mm.tolist(),
+        "tip": result.tip_mm.tolist(),
+        "error_mm": result.error_mm,
+        "tolerance_mm": result.tolerance_mm,
+        "n_commands": result.n_commands,
+        "lower_bound_commands": lb.commands,
+        "provably_fewest": result.is_provably_fewest,
+        "fewer_commands_rejected": list(result.fewer_commands_rejected),
+        "lower_bound": {
+            "commands": lb.commands,
+            "max_joint_change_deg": lb.max_joint_change_deg,
+            "exact_max_joint_change_deg": lb.exact_max_joint_change_deg,
+            "configuration_deg": list(lb.configuration_deg),
+            "method": lb.method,
+        },
+        "min_clearance_mm": result.clearance.min_clearance,
+        "clearance": clearance_dict(result.clearance),
+        "search": {
+            "lattice_states_examined": result.lattice_states_examined,
+            "motions_checked": result.motion_checks,
+        },
+    }
+
+
+def command_table(arm: SerialArm, seq: CommandSequence) -> tuple[list[str], list[list[Any]]]:
+    """Header and rows of the command table (SPEC section 6): one row per command."""
+    n = arm.n_joints
+    header = (
+        ["step"]
+        + [f"d{i + 1}_ticks" for i in range(n)]
+        + [f"theta{i + 1}_deg" for i in range(n)]
+        + ["tip_x_mm", "tip_y_mm", "tip_z_mm"]
+    )
+    states = seq.states()[1:]
+    tips = tool_position(arm, ticks_to_rad(states)) if len(states) else np.zeros((0, 3))
+    degs = ticks_to_deg(states)
+    rows = [
+        [
+            k + 1,
+            *map(int, seq.commands[k]),
+            *map(float, degs[k]),
+            *(round(float(v), 6) for v in tips[k]),
+        ]
+        for k in range(seq.n_commands)
+    ]
+    return header, rows
+
+
+def csv_text(header: list[str], rows: list[list[Any]]) -> str:
+    lines = [",".join(header)]
+    lines += [",".join(_csv_cell(v) for v in row) for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def _csv_cell(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.10g}"
+    return str(v)
+
+
+def write_xlsx(path: Path, sheets: dict[str, tuple[list[str], list[list[Any]]]]) -> None:
+    """Write tables to an XLSX workbook, one sheet each (bold header row, frozen)."""
+    from openpyxl import Workbook
+    from openpyxl.styles import Font
+
+    wb = Workbook()
+    wb.remove(wb.active)
+    for name, (header, rows) in sheets.items():
+        ws = wb.create_sheet(title=name[:31])
+        ws.append(header)
+        for cell in ws[1]:
+            cell.font = Font(bold=True)
+        for row in rows:
+            ws.append(row)
+        ws.freeze_panes = "A2"
+    wb.save(path)
+
+
+def summary_rows(doc: dict[str, Any]) -> list[list[Any]]:
+    """Key/value rows of a result document's scalar and short-list fields."""
+    rows: list[list[Any]] = []
+    for key, value in doc.items():
+        if isinstance(value, bool | int | float | str) or value is None:
+            rows.append([key, value])
+        elif (
+            isinstance(value, list)
+            and len(value) <= 6
+            and all(isinstance(v, int | float) for v in value)
+        ):
+            rows.append([key, ", ".join(f"{v:g}" for v in value)])
+    return rows
+
+
+def json_text(doc: dict[str, Any]) -> str:
+    return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+
+
+class OutputFolder:
+    """Stage result files in a temporary folder, then move them into place together.
+
+    The temporary folder is created next to the destination at construction, so an unwritable
+    destination fails *before* any computation; on error nothing is left behind.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path).expanduser()
+        if self.path.exists() and not self.path.is_dir():
+            raise OutputError(f"output folder {self.path} exists and is not a folder")
+        anchor = self.path
+        while not anchor.exists():
+            anchor = anchor.parent
+        if not anchor.is_dir():
+            raise OutputError(f"cannot create output folder {self.path}: {anchor} is not a folder")
+        try:
+            self._staging = Path(tempfile.mkdtemp(prefix=".armpath-", dir=anchor))
+        except OSError as exc:
+            raise OutputError(
+                f"output folder {self.path} is not writable: {exc.strerror}"
+            ) from None
+        self.written: list[Path] = []
+
+    def file(self, name: str) -> Path:
+        """Path inside the staging folder to write ``name`` to."""
+        return self._staging / name
+
+    def write_text(self, name: str, text: str) -> None:
+        self.file(name).write_text(text, encoding="utf-8")
+
+    def commit(self) -> list[Path]:
+        """Move every staged file into the destination folder; returns their final paths."""
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            names = sorted(p.name for p in self._staging.iterdir())
+            for name in names:
+                os.replace(self._staging / name, self.path / name)
+            self.written = [self.path / n for n in names]
+        except OSError as exc:
+            raise OutputError(
+                f"cannot write to output folder {self.path}: {exc.strerror}"
+            ) from None
+        finally:
+            self.discard()
+        return self.written
+
+    def discard(self) -> None:
+        shutil.rmtree(self._staging, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def output_folder(path: str | Path) -> Iterator[OutputFolder]:
+    """Context manager: stage files, commit on success, discard on any exception."""
+    folder = OutputFolder(path)
+    try:
+        yield folder
+    except BaseException:
+        folder.discard()
+        raise
+    folder.commit()
+
+
+def write_reach_files(
+    folder: OutputFolder,
+    stem: str,
+    result: ReachResult,
+    arm: SerialArm,
+    scene: Scene,
+) -> dict[str, Any]:
+    """Write ``stem.json``, ``stem.csv`` and ``stem.xlsx`` into ``folder``; returns the JSON."""
+    doc = reach_result_dict(result, arm, scene)
+    folder.write_text(f"{stem}.json", json_text(doc))
+    header, rows = command_table(arm, result.sequence)
+    folder.write_text(f"{stem}.csv", csv_text(header, rows))
+    write_xlsx(
+        folder.file(f"{stem}.xlsx"),
+        {"commands": (header, rows), "summary": (["quantity", "value"], summary_rows(doc))},
+    )
+    return doc

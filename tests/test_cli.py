@@ -1,0 +1,159 @@
+"""The command line as a user runs it: real subprocesses, exit codes, files."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import independent
+
+ARMPATH = [sys.executable, "-m", "armpath"]
+
+
+def run(*args, cwd=None):
+    return subprocess.run([*ARMPATH, *args], capture_output=True, text=True, cwd=cwd, timeout=600)
+
+
+@pytest.mark.parametrize(
+    "theta",
+    [
+        [30, -45, 60, 0, -30, 0],
+        [-120, 20, -100, 45, 80, 10],
+        [12.5, -33.3, 71.2, -150, 99.9, 45],  # not in SPEC
+        [-400, 110, -20.5, 720, -130, 3],
+    ],
+)
+def test_fk_json_matches_the_independent_model(theta):
+    r = run("fk", *map(str, theta), "--json")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    ref = independent.points(np.array(theta, float))
+    for name, p in zip("ABCDE", ref, strict=True):
+        np.testing.assert_allclose(doc["points"][name], p, atol=1e-9)
+    np.testing.assert_allclose(doc["tip"], ref[4], atol=1e-9)
+
+
+def test_fk_human_output_and_below_table_warning():
+    r = run("fk", "400", "-125", "138", "-270", "133.5", "0")
+    assert r.returncode == 0
+    assert "-134.2679" in r.stdout and "198.6061" in r.stdout
+    assert "below the table" in r.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["fk", "1", "2", "3"], "expected 6 numbers, got 3"),
+        (["fk", "1", "2", "3", "nan", "4", "5"], "'nan' is not a finite number"),
+        (["fk", "1", "2", "x", "0", "4", "5"], "'x' is not a number"),
+        (["reach", "0", "0", "800"], "out of reach"),
+        (["reach", "20", "-200", "120", "--from", "0", "-130", "0", "0", "-90", "0"], "joint 2"),
+        (["reach", "20", "-200", "120", "--from", "-90", "-90", "0", "0", "-90", "0"], "collision"),
+        (["reach", "20", "-200", "120", "--from", "0", "-90.05", "0", "0", "-90", "0"], "0.1 deg"),
+        (["reach", "20", "-200"], "expected 3 numbers"),
+        (["reach", "20", "-200", "120", "--wall", "diagonal"], "wall thickness"),
+        (["reach", "20", "-200", "120", "--tolerance", "0"], "tolerance"),
+    ],
+)
+def test_bad_input_gives_one_line_and_nonzero_exit(args, message, tmp_path):
+    r = run(*args, "--out", str(tmp_path / "out")) if args[0] == "reach" else run(*args)
+    assert r.returncode == 1, r.stdout + r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ")
+    assert message in lines[0]
+    assert not (tmp_path / "out").exists()
+    assert list(tmp_path.iterdir()) == []  # no staging folder left behind
+
+
+def test_unwritable_output_folder(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    r = run("reach", "20", "-200", "120", "--out", str(blocker / "sub"))
+    assert r.returncode == 1
+    assert r.stderr.startswith("error: ") and "not a folder" in r.stderr
+    r = run("run", "--out", "/proc/armpath-out")
+    assert r.returncode == 1 and "not writable" in r.stderr
+
+
+def test_reach_writes_json_csv_xlsx_and_figures(tmp_path):
+    out = tmp_path / "res"
+    r = run("reach", "20", "-200", "120", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert "provably fewest" in r.stdout
+    names = sorted(p.name for p in out.iterdir())
+    assert names == [
+        "reach.csv",
+        "reach.json",
+        "reach.xlsx",
+        "reach_joints.png",
+        "reach_motion.png",
+    ]
+    doc = json.loads((out / "reach.json").read_text())
+    for key in (
+        "initial_deg",
+        "commands",
+        "target",
+        "tip",
+        "error_mm",
+        "n_commands",
+        "min_clearance_mm",
+        "lower_bound_commands",
+        "model",
+        "scene",
+        "units",
+    ):
+        assert key in doc
+    # the CSV replays to the same states as the JSON commands
+    rows = (out / "reach.csv").read_text().strip().splitlines()
+    header = rows[0].split(",")
+    assert header[:7] == [
+        "step",
+        "d1_ticks",
+        "d2_ticks",
+        "d3_ticks",
+        "d4_ticks",
+        "d5_ticks",
+        "d6_ticks",
+    ]
+    table = np.array([[float(v) for v in row.split(",")] for row in rows[1:]])
+    assert len(table) == doc["n_commands"]
+    np.testing.assert_array_equal(table[:, 1:7], doc["commands"])
+    states = independent.replay(doc["initial_deg"], doc["commands"])
+    np.testing.assert_allclose(table[:, 7:13], states[1:], atol=1e-9)
+    np.testing.assert_allclose(table[-1, 13:16], doc["tip"], atol=1e-5)
+    from openpyxl import load_workbook
+
+    wb = load_workbook(out / "reach.xlsx")
+    assert wb["commands"].max_row == doc["n_commands"] + 1
+    assert (out / "reach_motion.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_reach_json_on_stdout_from_another_start():
+    r = run("reach", "300", "250", "300", "--from", "90", "-40", "60", "30", "-45", "10", "--json")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["initial_deg"] == [90, -40, 60, 30, -45, 10]
+    tip = independent.points(independent.replay(doc["initial_deg"], doc["commands"])[-1])[4]
+    assert np.linalg.norm(tip - [300, 250, 300]) <= 0.05
+
+
+def test_run_writes_every_task_and_a_summary(tmp_path):
+    r = run("run", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    out = tmp_path / "armpath-out"
+    assert (out / "reach.json").exists() and (out / "summary.md").exists()
+    doc = json.loads((out / "reach.json").read_text())
+    assert doc["n_commands"] <= 63 and doc["error_mm"] <= 0.05
+    assert "63" in r.stdout
+    r2 = run("run", "--out", str(tmp_path / "h"), "--wall", "horizontal")
+    assert r2.returncode == 0, r2.stderr
+    assert json.loads((tmp_path / "h" / "reach.json").read_text())["wall_thickness"] == "horizontal"
+
+
+def test_help_texts_state_units():
+    r = run("--help")
+    assert r.returncode == 0 and "deg" in r.stdout and "mm" in r.stdout
+    r = run("reach", "--help")
+    assert "--from" in r.stdout and "--tolerance" in r.stdout

@@ -1,0 +1,119 @@
+"""Analytic obstacle distances against brute force and an independent inside test."""
+
+import numpy as np
+import pytest
+
+import independent
+from armpath.errors import InvalidInputError
+from armpath.geometry import CollisionWorld, HalfSpace, WallThickness, hollow_frustum
+from armpath.model import seed_arm
+from armpath.scenes import seed_scene
+
+WORKPIECE = {
+    conv: hollow_frustum("workpiece", (210, 0, 0), 180, 168, 96, 8, conv)
+    for conv in ("normal", "horizontal")
+}
+
+
+def test_wall_conventions():
+    normal, horizontal = WORKPIECE["normal"], WORKPIECE["horizontal"]
+    assert normal.horizontal_wall == pytest.approx(8 * np.sqrt(1 + 0.4**2))
+    assert normal.horizontal_wall == pytest.approx(8.6163, abs=1e-4)
+    assert horizontal.horizontal_wall == 8.0
+    np.testing.assert_allclose(
+        normal.inner_radius([0, 90, 180]), [168 - 8.6163, 132 - 8.6163, 96 - 8.6163], atol=1e-4
+    )
+    # the normal thickness of the wall is 8: a point on the outer surface is 8 from the inner one
+    p = np.array([[210 + 132.0, 0, 90]])  # outer surface at z = 90
+    n = np.array([1.0, 0, 0.4]) / np.sqrt(1.16)  # outward normal of the cone wall
+    inner = p - 8 * n
+    assert WORKPIECE["normal"].signed_distance(inner)[0] == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("conv", ["normal", "horizontal"])
+def test_signed_distance_against_brute_force(conv):
+    rng = np.random.default_rng(7)
+    pts = np.column_stack(
+        [rng.uniform(0, 420, 4000), rng.uniform(-210, 210, 4000), rng.uniform(-20, 220, 4000)]
+    )
+    # many points near the walls too
+    theta = rng.uniform(0, 2 * np.pi, 2000)
+    z = rng.uniform(-5, 190, 2000)
+    r = 168 - 0.4 * z + rng.normal(0, 6, 2000)
+    near = np.column_stack([210 + r * np.cos(theta), r * np.sin(theta), z])
+    pts = np.vstack([pts, near])
+    ours = WORKPIECE[conv].signed_distance(pts)
+    ref = independent.Workpiece(conv).distance(pts)
+    np.testing.assert_allclose(ours, ref, atol=1e-9)
+    # the sign is exactly the independent inside test
+    inside = independent.Workpiece(conv).inside(pts)
+    assert np.all((ours < 0) == inside | (np.abs(ours) < 1e-9))
+
+
+def test_known_distances():
+    w = WORKPIECE["normal"]
+    # above the rim centre line, straight up
+    rim_mid = 96 - 8.6163 / 2
+    assert w.signed_distance([[210 + rim_mid, 0, 200]])[0] == pytest.approx(20.0)
+    # on the axis above the bottom plate, distance to the plate top (z = 8)
+    assert w.signed_distance([[210, 0, 50]])[0] == pytest.approx(42.0)
+    # inside the bottom plate
+    assert w.signed_distance([[210, 0, 3]])[0] == pytest.approx(-3.0)
+    # outside on the table next to the foot: the closest point is the foot's outer corner
+    assert w.signed_distance([[210 + 180, 0, 0]])[0] == pytest.approx(12.0)
+    # beside the wall at mid height: horizontal gap times the cosine of the wall's slope
+    assert w.signed_distance([[210 + 142, 0, 90]])[0] == pytest.approx(10.0 / np.sqrt(1.16))
+
+
+def test_segment_distance_against_dense_sampling():
+    rng = np.random.default_rng(11)
+    w = WORKPIECE["normal"]
+    a = rng.uniform([-50, -250, -10], [450, 250, 300], (300, 3))
+    b = a + rng.normal(0, 150, (300, 3))
+    ours = w.segment_distance(a, b)
+    s = np.linspace(0, 1, 20001)
+    dense = np.array(
+        [w.signed_distance(a[i] + s[:, None] * (b[i] - a[i])).min() for i in range(300)]
+    )
+    # never above the dense minimum, never below what 1-Lipschitz allows between dense samples
+    spacing = np.linalg.norm(b - a, axis=-1) / 20000
+    assert np.all(ours <= dense + 1e-9)
+    assert np.all(ours >= dense - spacing / 2 - 1e-9)
+
+
+def test_half_space():
+    table = HalfSpace("table", np.zeros(3), np.array([0, 0, 2.0]))
+    np.testing.assert_allclose(table.signed_distance([[1, 2, 3], [0, 0, -4]]), [3, -4])
+    np.testing.assert_allclose(table.segment_distance([[0, 0, 5]], [[9, 9, -1]]), [-1])
+
+
+def test_bad_obstacles_are_refused():
+    with pytest.raises(InvalidInputError, match="wall"):
+        hollow_frustum("w", (0, 0, 0), 180, 168, 96, 200)
+    with pytest.raises(InvalidInputError, match="one of"):
+        hollow_frustum("w", (0, 0, 0), 180, 168, 96, 8, "diagonal")
+    with pytest.raises(InvalidInputError, match="normal"):
+        HalfSpace("t", np.zeros(3), np.zeros(3))
+
+
+def test_arm_clearance_at_home():
+    arm = seed_arm()
+    world = seed_scene().world
+    q = arm.home
+    c = world.clearances(arm, q)
+    parts = [p.name for p in world.parts(arm)]
+    assert parts == ["BC", "CD", "DE", "DE tip"]
+    # at home BC, CD run along +y at z = 140 and DE points down to z = 75
+    table = world.obstacle_names.index("table")
+    np.testing.assert_allclose(c[:, table], [140, 140, 80, 75], atol=1e-9)
+    # CD passes over the workpiece rim: z = 140 is below the rim (180), so it goes through the wall?
+    # No: CD spans y in [255, 510] at x = 0, far from the workpiece (x >= 42).
+    wp = world.obstacle_names.index("workpiece")
+    ref = (
+        independent.Workpiece("normal")
+        .distance(np.array([[0, y, 140] for y in np.linspace(0, 510, 5101)]))
+        .min()
+    )
+    assert c[:2, wp].min() == pytest.approx(ref, abs=0.02)
+    assert CollisionWorld((), 1.0).describe()["clearance_margin_mm"] == 1.0
+    assert WallThickness("normal") is WallThickness.NORMAL
