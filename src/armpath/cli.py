@@ -25,7 +25,7 @@ from armpath import __version__
 from armpath.commands import deg_to_ticks, ticks_to_deg
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.kinematics import landmark_positions
-from armpath.model.seed_arm import seed_arm
+from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.reach import ReachOptions, ReachResult, plan_reach
 from armpath.scenes import Scene, load_scene
@@ -73,6 +73,12 @@ def _numbers(values: list[str], count: int, what: str) -> list[float]:
 def _scene(scene_file: Path | None, wall: str | None) -> Scene:
     scene = load_scene(scene_file)
     return scene.with_wall_thickness(wall) if wall else scene
+
+
+def _arm(link_radius_mm: float) -> SerialArm:
+    if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
+        raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
+    return seed_arm(SeedArmGeometry(link_radius_mm=link_radius_mm))
 
 
 def _fmt(v: Any, digits: int = 4) -> str:
@@ -191,10 +197,13 @@ def reach(
     scene_file: Annotated[
         Path | None, typer.Option("--scene", help="Scene file (TOML). Default: the seed scene.")
     ] = None,
+    link_radius: Annotated[
+        float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
+    ] = 0.0,
 ) -> None:
     """Reach a point with the fingertip in the fewest commands, then the smallest error."""
     with _cli_errors():
-        arm = seed_arm()
+        arm = _arm(link_radius)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
         theta = list(start) if start is not None else list(np.degrees(arm.home))
         start_ticks = deg_to_ticks(
@@ -237,6 +246,9 @@ def run(
     wall: Annotated[
         str | None, typer.Option(help="Workpiece wall thickness measured 'normal' or 'horizontal'.")
     ] = None,
+    link_radius: Annotated[
+        float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
+    ] = 0.0,
 ) -> None:
     """Run every seed task implemented so far (today: Task 1, reach the tool box)."""
     from armpath.export import OutputFolder, reach_result_dict
@@ -244,7 +256,7 @@ def run(
 
     with _cli_errors():
         scene = _scene(None, wall)
-        arm = seed_arm()
+        arm = _arm(link_radius)
         folder = OutputFolder(out)
         try:
             with err_console.status("Task 1: reaching the tool box ..."):
@@ -259,21 +271,22 @@ def run(
             raise
         written = folder.commit()
         table = Table(
-            title=f"armpath {__version__}: seed tasks (scene {scene.name}, "
-            f"wall thickness {doc['wall_thickness']})"
+            title=f"armpath {__version__}: seed tasks, scene {scene.name}, "
+            f"wall thickness {doc['wall_thickness']}"
         )
-        for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]", "files"):
-            table.add_column(escape(col), justify="left" if col in ("task", "files") else "right")
+        for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
+            table.add_column(escape(col), justify="left" if col == "task" else "right")
         table.add_row(
-            f"1 reach {_fmt(doc['target'], 0)}",
+            f"1 reach {_fmt(doc['target'], 0)} mm",
             str(doc["n_commands"]),
             str(doc["lower_bound_commands"]),
             f"{doc['error_mm']:.4f}",
             f"{doc['min_clearance_mm']:.3f}",
-            "reach.json/.csv/.xlsx, reach_*.png",
         )
         out_console.print(table)
-        out_console.print(f"wrote {len(written)} files to {folder.path}", markup=False)
+        out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
+        for path in written:
+            out_console.print(f"  {path.name}", markup=False)
 
 
 def _summary_markdown(tasks: list[tuple[str, dict[str, Any]]]) -> str:

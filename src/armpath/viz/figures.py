@@ -55,9 +55,9 @@ def _draw_solid(ax: Axes3D, solid: SolidOfRevolution, n_theta: int = 48) -> np.n
     return np.vstack(drawn) if drawn else np.zeros((0, 3))
 
 
-def _draw_table(ax: Axes3D, extent: float) -> None:
-    xs = np.array([-extent, extent])
-    X, Y = np.meshgrid(xs, xs)
+def _draw_table(ax: Axes3D) -> None:
+    """The plane z = 0 across the current x and y limits."""
+    X, Y = np.meshgrid(np.array(ax.get_xlim()), np.array(ax.get_ylim()))
     ax.plot_surface(X, Y, np.zeros_like(X), color="0.8", alpha=0.2, linewidth=0)
 
 
@@ -89,8 +89,6 @@ def plot_motion_3d(
     for obstacle in scene.world.obstacles:
         if isinstance(obstacle, SolidOfRevolution):
             pts.append(_draw_solid(ax, obstacle))
-    if any(isinstance(o, HalfSpace) for o in scene.world.obstacles):
-        _draw_table(ax, 650.0)
     step = max(1, len(states) // 12)
     for k in range(0, len(states), step):
         ax.plot(*states[k].T, color="0.6", alpha=0.35, linewidth=1)
@@ -104,6 +102,8 @@ def plot_motion_3d(
     for name, p in zip(arm.landmark_names, states[-1], strict=True):
         ax.text(*p, f" {name}", fontsize=8, color="tab:blue")
     _set_equal(ax, np.vstack(pts))
+    if any(isinstance(o, HalfSpace) for o in scene.world.obstacles):
+        _draw_table(ax)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")

@@ -1,0 +1,73 @@
+"""Scene files: the built-in seed scene and validation of user files."""
+
+import numpy as np
+import pytest
+
+from armpath.errors import SceneError
+from armpath.geometry import HollowFrustum, WallThickness
+from armpath.scenes import load_scene, seed_scene
+
+
+def test_seed_scene_is_spec_section_3():
+    scene = seed_scene()
+    assert scene.reach_target_mm == (20.0, -200.0, 120.0)
+    assert scene.world.margin == 1.0 and scene.world.tip_exempt == 5.0
+    (wp,) = scene.workpieces
+    assert isinstance(wp, HollowFrustum)
+    assert (wp.height, wp.r_bottom, wp.r_top, wp.wall) == (180, 168, 96, 8)
+    np.testing.assert_allclose(wp.origin, [210, 0, 0])
+    assert wp.open_top and wp.closed_bottom
+    assert scene.wall_thickness is WallThickness.NORMAL
+    horizontal = scene.with_wall_thickness("horizontal")
+    assert horizontal.wall_thickness is WallThickness.HORIZONTAL
+    assert horizontal.workpieces[0].horizontal_wall == 8.0
+    assert scene.describe()["wall_thickness"] == "normal"
+
+
+GOOD = """
+name = "mine"
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [0, 0, -10]
+normal = [0, 0, 1]
+[tasks.reach]
+target_mm = [100, 200, 300]
+"""
+
+
+def test_user_scene_file(tmp_path):
+    f = tmp_path / "s.toml"
+    f.write_text(GOOD)
+    scene = load_scene(f)
+    assert scene.name == "mine" and scene.reach_target_mm == (100, 200, 300)
+    assert scene.world.obstacles[0].signed_distance(np.array([0, 0, 0.0])) == 10
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("name = ", "not valid TOML"),
+        ('description = "x"', "name: Field required"),
+        (GOOD.replace('type = "half_space"', 'type = "torus"'), "obstacles.0"),
+        (GOOD.replace("[0, 0, 1]", "[0, 0]"), "obstacles.0.half_space.normal"),
+        (GOOD.replace("[0, 0, 1]", "[0, 0, 0]"), "normal must be non-zero"),
+        (GOOD + "\nspeed = 3\n", "speed: Extra inputs are not permitted"),
+        (GOOD.replace("[100, 200, 300]", '[100, "a", 300]'), "tasks.reach.target_mm"),
+        (
+            'name = "w"\n[[obstacles]]\ntype = "hollow_frustum"\nname = "w"\n'
+            "base_center = [0, 0, 0]\nheight = 10\nr_bottom = 5\nr_top = 5\nwall = -1\n",
+            "wall: Input should be greater than 0",
+        ),
+    ],
+)
+def test_bad_scene_files_name_the_problem(tmp_path, text, message):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(SceneError, match=message):
+        load_scene(f)
+
+
+def test_missing_scene_file(tmp_path):
+    with pytest.raises(SceneError, match="cannot read scene file"):
+        load_scene(tmp_path / "nope.toml")
