@@ -81,6 +81,27 @@ def test_segment_distance_against_dense_sampling():
     assert np.all(ours >= dense - spacing / 2 - 1e-9)
 
 
+def test_segment_distance_bounds_bracket_the_true_minimum():
+    rng = np.random.default_rng(12)
+    w = WORKPIECE["normal"]
+    a = rng.uniform([-50, -250, -10], [450, 250, 300], (300, 3))
+    b = a + rng.normal(0, 150, (300, 3))
+    s = np.linspace(0, 1, 20001)
+    dense = np.array(
+        [w.signed_distance(a[i] + s[:, None] * (b[i] - a[i])).min() for i in range(300)]
+    )
+    slack = np.linalg.norm(b - a, axis=-1) / 20000 / 2  # how far below the samples the truth can be
+    value, lower = w.segment_distance_bounds(a, b)
+    assert np.all(lower <= dense + 1e-9) and np.all(value >= dense - slack - 1e-9)
+    assert np.all(value - lower <= 1.0 + 1e-9)  # coarse samples 2 mm apart at most
+    # asking to certify 'clearance >= 50' tightens every bound below 50 to within 0.01 mm
+    value, lower = w.segment_distance_bounds(a, b, certify=50.0)
+    assert np.all(lower <= dense + 1e-9)
+    tight = lower < 50.0
+    assert tight.sum() > 50
+    assert np.all(value[tight] - lower[tight] <= 0.01 + 1e-9)
+
+
 def test_half_space():
     table = HalfSpace("table", np.zeros(3), np.array([0, 0, 2.0]))
     np.testing.assert_allclose(table.signed_distance([[1, 2, 3], [0, 0, -4]]), [3, -4])

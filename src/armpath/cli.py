@@ -102,7 +102,7 @@ def fk(
                 "tip": [float(c) for c in pts[-1]],
                 "units": {"length": "mm", "angle": "deg"},
             }
-            out_console.print(json.dumps(doc), markup=False, soft_wrap=True)
+            typer.echo(json.dumps(doc))
         else:
             table = Table(title=f"seed arm, θ = {_fmt(theta, 1)} deg")
             for col in ("point", "x [mm]", "y [mm]", "z [mm]"):
@@ -228,12 +228,7 @@ def reach(
         if json_out:
             from armpath.export import json_text, reach_result_dict
 
-            out_console.print(
-                json_text(reach_result_dict(result, arm, scene)),
-                markup=False,
-                soft_wrap=True,
-                end="",
-            )
+            typer.echo(json_text(reach_result_dict(result, arm, scene)), nl=False)
         else:
             out_console.print(_reach_summary(result, arm, scene))
             for path in written:

@@ -25,6 +25,8 @@ FloatArray = NDArray[np.float64]
 SEGMENT_SAMPLE_SPACING = 2.0
 #: How many local minima of the samples along a segment are refined.
 REFINED_MINIMA = 3
+#: Spacing (length unit) of the samples that tighten a lower bound near a required clearance.
+FINE_SAMPLE_SPACING = 0.02
 
 
 class Obstacle(ABC):
@@ -43,28 +45,59 @@ class Obstacle(ABC):
     def segment_distance(self, p0: ArrayLike, p1: ArrayLike) -> FloatArray:
         """Smallest signed distance over segments ``p0 -> p1`` (each ``(..., 3)``).
 
-        Generic method: samples every segment at most :data:`SEGMENT_SAMPLE_SPACING` apart, then
-        refines the lowest :data:`REFINED_MINIMA` local minima of the samples by golden-section
-        search. Because the signed distance is 1-Lipschitz, the result is never more than
-        ``spacing / 2`` above the true minimum, and it is the true minimum (to rounding) wherever
-        the distance is unimodal between neighbouring samples around those minima. Subclasses
-        with a closed form override this.
+        A value the segment really attains (see :meth:`segment_distance_bounds`).
+        """
+        return self.segment_distance_bounds(p0, p1)[0]
+
+    def segment_distance_bounds(
+        self, p0: ArrayLike, p1: ArrayLike, certify: ArrayLike = -np.inf
+    ) -> tuple[FloatArray, FloatArray]:
+        """Smallest signed distance over segments, as ``(value, proven lower bound)``.
+
+        Generic method: every segment is sampled at most :data:`SEGMENT_SAMPLE_SPACING` apart and
+        the lowest :data:`REFINED_MINIMA` local minima of the samples are refined by
+        golden-section search; ``value`` is the smallest distance found (attained by a point of
+        the segment). Because signed distance is 1-Lipschitz, the distance on a piece between two
+        samples ``h`` apart is at least ``min(ends) - h / 2``; the smallest such bound is a proven
+        lower bound of the true minimum. Pieces whose bound is below ``certify`` (broadcast
+        against the segments) are sampled again :data:`FINE_SAMPLE_SPACING` apart, so the bound
+        there comes within ``FINE_SAMPLE_SPACING / 2`` of the true distance. Subclasses with a
+        closed form override this.
         """
         a = np.asarray(p0, dtype=np.float64)
         b = np.asarray(p1, dtype=np.float64)
         a, b = np.broadcast_arrays(a, b)
+        shape = a.shape[:-1]
+        a, b = a.reshape(-1, 3), b.reshape(-1, 3)
+        threshold = np.broadcast_to(np.asarray(certify, dtype=np.float64), shape).reshape(-1)
         length = np.linalg.norm(b - a, axis=-1)
         n = max(2, int(np.ceil(float(np.max(length, initial=0.0)) / SEGMENT_SAMPLE_SPACING)) + 1)
         t = np.linspace(0.0, 1.0, n)
-        pts = a[..., None, :] + t[:, None] * (b - a)[..., None, :]
-        d = self.signed_distance(pts)
-        best = d.min(axis=-1)
-        # refine around the REFINED_MINIMA lowest local minima of the samples
-        padded = np.concatenate([d[..., :1] + 1.0, d, d[..., -1:] + 1.0], axis=-1)
-        is_min = (d <= padded[..., :-2]) & (d <= padded[..., 2:])
-        ranked = np.argsort(np.where(is_min, d, np.inf), axis=-1)[..., :REFINED_MINIMA]
+        d = self.signed_distance(a[:, None, :] + t[:, None] * (b - a)[:, None, :])
+        value = np.minimum(d.min(axis=-1), self._refine(a, b, d))
+        h = length / (n - 1)
+        piece_lower = np.minimum(d[:, :-1], d[:, 1:]) - h[:, None] / 2
+        seg, piece = np.nonzero(piece_lower < threshold[:, None])
+        if seg.size:
+            m = max(2, int(np.ceil(float(h.max()) / FINE_SAMPLE_SPACING)) + 1)
+            s = (piece[:, None] + np.linspace(0.0, 1.0, m)[None, :]) / (n - 1)  # (k, m)
+            step = max(1, 2_000_000 // m)
+            for c in range(0, seg.size, step):
+                sg, pc, sc = seg[c : c + step], piece[c : c + step], s[c : c + step]
+                fine = self.signed_distance(a[sg, None, :] + sc[..., None] * (b - a)[sg, None, :])
+                tight = np.minimum(fine[:, :-1], fine[:, 1:]).min(axis=-1) - h[sg] / (m - 1) / 2
+                piece_lower[sg, pc] = np.maximum(piece_lower[sg, pc], tight)
+                np.minimum.at(value, sg, fine.min(axis=-1))
+        return value.reshape(shape), piece_lower.min(axis=-1).reshape(shape)
+
+    def _refine(self, a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
+        """Golden-section search around the lowest local minima of samples ``d`` ``(K, n)``."""
+        n = d.shape[1]
+        padded = np.concatenate([d[:, :1] + 1.0, d, d[:, -1:] + 1.0], axis=-1)
+        is_min = (d <= padded[:, :-2]) & (d <= padded[:, 2:])
+        ranked = np.argsort(np.where(is_min, d, np.inf), axis=-1)[:, :REFINED_MINIMA]
         step = 1.0 / (n - 1)
-        a_k, b_k = a[..., None, :], b[..., None, :]
+        a_k, b_k = a[:, None, :], b[:, None, :]
         lo = np.clip(ranked * step - step, 0.0, 1.0)
         hi = np.clip(ranked * step + step, 0.0, 1.0)
         golden = (np.sqrt(5.0) - 1.0) / 2.0
@@ -84,8 +117,7 @@ class Obstacle(ABC):
             fn = at(np.where(left, x1n, x2n))
             f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
             x1, x2 = x1n, x2n
-        refined = np.minimum(f1, f2).min(axis=-1)
-        return np.asarray(np.minimum(best, refined), dtype=np.float64)
+        return np.asarray(np.minimum(f1, f2).min(axis=-1), dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,9 +143,12 @@ class HalfSpace(Obstacle):
         x = np.asarray(points, dtype=np.float64)
         return np.asarray((x - self.point) @ self.normal, dtype=np.float64)
 
-    def segment_distance(self, p0: ArrayLike, p1: ArrayLike) -> FloatArray:
-        """Exact: a linear function is smallest at an end point."""
-        return np.minimum(self.signed_distance(p0), self.signed_distance(p1))
+    def segment_distance_bounds(
+        self, p0: ArrayLike, p1: ArrayLike, certify: ArrayLike = -np.inf
+    ) -> tuple[FloatArray, FloatArray]:
+        """Exact: a linear function is smallest at an end point (value = lower bound)."""
+        d = np.minimum(self.signed_distance(p0), self.signed_distance(p1))
+        return d, d
 
     def describe(self) -> dict[str, object]:
         return {

@@ -92,20 +92,43 @@ class CollisionWorld:
                 ends.append(b)
         return np.stack(starts, axis=-2), np.stack(ends, axis=-2)
 
+    def required(self, arm: SerialArm) -> FloatArray:
+        """Clearance each part must keep: the margin, or 0 for the tool tip, ``(P,)``."""
+        return np.array([0.0 if p.is_tip else self.margin for p in self.parts(arm)])
+
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""
+        return self.clearance_bounds(arm, q)[0]
+
+    def clearance_bounds(
+        self, arm: SerialArm, q: ArrayLike, tighten_below: ArrayLike | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """Clearances ``(..., P, O)`` and proven lower bounds of them.
+
+        Lower bounds below ``tighten_below`` (a clearance per part, ``(P,)`` or scalar) are
+        tightened to within :data:`~armpath.geometry.primitives.FINE_SAMPLE_SPACING` / 2 of the
+        true value; ``None`` leaves them at the coarse sampling's bound.
+        """
         p0, p1 = self.part_segments(arm, q)
         radii = np.array([p.radius for p in self.parts(arm)])
-        cols = [o.segment_distance(p0, p1) - radii for o in self.obstacles]
-        return np.stack(cols, axis=-1)
+        threshold = (
+            np.full(radii.shape, -np.inf)
+            if tighten_below is None
+            else np.broadcast_to(np.asarray(tighten_below, dtype=np.float64), radii.shape) + radii
+        )
+        values, lowers = [], []
+        for o in self.obstacles:
+            v, lo = o.segment_distance_bounds(p0, p1, threshold)
+            values.append(v - radii)
+            lowers.append(lo - radii)
+        return np.stack(values, axis=-1), np.stack(lowers, axis=-1)
 
     def slack(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Per configuration, the smallest ``clearance - required`` over parts and obstacles.
 
         Non-negative exactly when the configuration satisfies the clearance rule.
         """
-        required = np.array([0.0 if p.is_tip else self.margin for p in self.parts(arm)])
-        c = self.clearances(arm, q) - required[:, None]
+        c = self.clearances(arm, q) - self.required(arm)[:, None]
         return np.asarray(c.min(axis=(-2, -1)), dtype=np.float64)
 
     def describe(self) -> dict[str, object]:

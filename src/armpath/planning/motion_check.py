@@ -86,19 +86,25 @@ def motion_clearance(
         return np.stack([body, tip], axis=1)  # (M, 2)
 
     required = np.array([world.margin, 0.0])
+    tighten = required.copy()  # per metric: tighten lower bounds that fall below this
+
+    def evaluate(u: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        per_part = np.where(is_tip, tighten[1], tighten[0])
+        values, lowers = world.clearance_bounds(arm, config(u), tighten_below=per_part)
+        return values, metrics(values), metrics(lowers)
+
     u_nodes = np.unique(
         np.concatenate(
             [np.arange(n + 1, dtype=np.float64)]
             + [np.arange(n) + j / initial_substeps for j in range(1, initial_substeps)]
         )
     )
-    C = world.clearances(arm, config(u_nodes))
-    M = metrics(C)
+    C, M, L = evaluate(u_nodes)  # values (M, P, O); value and lower-bound metrics (M, 2)
 
     def bounds() -> tuple[FloatArray, FloatArray]:
         k = np.minimum(np.floor(u_nodes[:-1]).astype(np.int64), max(n - 1, 0))
         half_delta = 0.5 * rate[k] * np.diff(u_nodes) if n else np.zeros(0)
-        return np.minimum(M[:-1], M[1:]) - half_delta[:, None], half_delta
+        return np.minimum(L[:-1], L[1:]) - half_delta[:, None], half_delta
 
     certified_at: int | None = None
     while n > 0:
@@ -110,23 +116,30 @@ def motion_clearance(
         budget = max_evaluations - u_nodes.size
         if not np.any(need):  # certified: spend a little on the precision of the minimum
             best = M.min(axis=0)
-            need = np.any(lb < best - tolerance, axis=1) & (half_delta > tolerance / 2)
             if certified_at is None:
                 certified_at = u_nodes.size
+                # tighten the bounds of the instants that could hide a smaller minimum
+                tighten = np.maximum(required, best - tolerance)
+                loose = np.flatnonzero(np.any(tighten > L, axis=1))[:precision_evaluations]
+                if loose.size:
+                    C[loose], M[loose], L[loose] = evaluate(u_nodes[loose])
+                continue
+            need = np.any(lb < best - tolerance, axis=1) & (half_delta > tolerance / 2)
             budget = min(budget, certified_at + precision_evaluations - u_nodes.size)
         if not np.any(need) or budget <= 0:
             break
         idx = np.flatnonzero(need)
         idx = idx[np.argsort(slack_lb[idx])[: min(budget, 4096)]]
         mid = 0.5 * (u_nodes[idx] + u_nodes[idx + 1])
-        C_mid = world.clearances(arm, config(mid))
+        C_mid, M_mid, L_mid = evaluate(mid)
         order = np.argsort(np.concatenate([u_nodes, mid]), kind="stable")
         u_nodes = np.concatenate([u_nodes, mid])[order]
         C = np.concatenate([C, C_mid])[order]
-        M = np.concatenate([M, metrics(C_mid)])[order]
+        M = np.concatenate([M, M_mid])[order]
+        L = np.concatenate([L, L_mid])[order]
 
     lb, _ = bounds()
-    lower = lb if n else M
+    lower = lb if n else L
     lb_slack = float((lower - required).min())
     flat = C.reshape(C.shape[0], -1)
     idx_min = int(np.argmin(flat.min(axis=1)))

@@ -501,7 +501,7 @@ def _validated_problem(
     q0 = ticks_to_rad(start)
     clear = world.clearances(arm, q0)
     parts = world.parts(arm)
-    required = np.array([0.0 if part.is_tip else world.margin for part in parts])
+    required = world.required(arm)
     bad = clear - required[:, None]
     if np.min(bad) < 0:
         i, o = np.unravel_index(int(np.argmin(bad)), bad.shape)
