@@ -44,6 +44,13 @@ err_console = Console(stderr=True, highlight=False)
 
 LOOSE = {"ignore_unknown_options": True}  # lets negative numbers through as arguments
 
+WallOption = Annotated[
+    str | None, typer.Option(help="Workpiece wall thickness measured 'normal' or 'horizontal'.")
+]
+LinkRadiusOption = Annotated[
+    float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
+]
+
 
 @contextlib.contextmanager
 def _cli_errors() -> Iterator[None]:
@@ -191,15 +198,11 @@ def reach(
         typer.Option("--out", help="Write reach.json, reach.csv, reach.xlsx and PNG figures here."),
     ] = None,
     tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
-    wall: Annotated[
-        str | None, typer.Option(help="Workpiece wall thickness measured 'normal' or 'horizontal'.")
-    ] = None,
+    wall: WallOption = None,
     scene_file: Annotated[
         Path | None, typer.Option("--scene", help="Scene file (TOML). Default: the seed scene.")
     ] = None,
-    link_radius: Annotated[
-        float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
-    ] = 0.0,
+    link_radius: LinkRadiusOption = 0.0,
 ) -> None:
     """Reach a point with the fingertip in the fewest commands, then the smallest error."""
     with _cli_errors():
@@ -238,12 +241,8 @@ def reach(
 @app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
-    wall: Annotated[
-        str | None, typer.Option(help="Workpiece wall thickness measured 'normal' or 'horizontal'.")
-    ] = None,
-    link_radius: Annotated[
-        float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
-    ] = 0.0,
+    wall: WallOption = None,
+    link_radius: LinkRadiusOption = 0.0,
 ) -> None:
     """Run every seed task implemented so far (today: Task 1, reach the tool box)."""
     from armpath.export import OutputFolder, reach_result_dict

@@ -114,19 +114,14 @@ def solve_with_fixed_pair(
             sols.append(np.stack(np.broadcast_arrays(t1, t2, t3, t4, t5), axis=-1))
 
     with np.errstate(divide="ignore", invalid="ignore"):
-        if pair == (0, 3):
-            t1, t4 = va, vb
+        if pair in ((0, 3), (0, 4)):
+            # X = DE s4 s5 is symmetric in joints 4 and 5: solve the free one of the two
+            t1, fixed = va, vb
             X = np.cos(t1) * P[..., 0] + np.sin(t1) * P[..., 1]
-            s5 = X / (c * np.sin(t4))
-            base = np.where(np.abs(s5) <= 1.0, np.arcsin(np.clip(s5, -1.0, 1.0)), np.nan)
-            for t5 in (base, wrap_to_pi(np.pi - base)):
-                finish(t1, t4, t5)
-        elif pair == (0, 4):
-            t1, t5 = va, vb
-            X = np.cos(t1) * P[..., 0] + np.sin(t1) * P[..., 1]
-            s4 = X / (c * np.sin(t5))
-            base = np.where(np.abs(s4) <= 1.0, np.arcsin(np.clip(s4, -1.0, 1.0)), np.nan)
-            for t4 in (base, wrap_to_pi(np.pi - base)):
+            ratio = X / (c * np.sin(fixed))
+            base = np.where(np.abs(ratio) <= 1.0, np.arcsin(np.clip(ratio, -1.0, 1.0)), np.nan)
+            for free in (base, wrap_to_pi(np.pi - base)):
+                t4, t5 = (fixed, free) if pair == (0, 3) else (free, fixed)
                 finish(t1, t4, t5)
         else:
             t4, t5 = va, vb
