@@ -94,7 +94,9 @@ def _fmt(v: Any, digits: int = 4) -> str:
 
 @app.command(context_settings=LOOSE)
 def fk(
-    angles: Annotated[list[str], typer.Argument(help="θ1 … θ6 in degrees", show_default=False)],
+    angles: Annotated[
+        list[str], typer.Argument(help="θ1 … θ6 in degrees", show_default=False, metavar="θ1 … θ6")
+    ],
     json_out: Annotated[bool, typer.Option("--json", help="Print JSON on stdout.")] = False,
 ) -> None:
     """Forward kinematics of the seed arm: joint points A–E and the fingertip (mm)."""
@@ -180,7 +182,8 @@ def _write_reach(folder: Any, stem: str, result: ReachResult, arm: SerialArm, sc
 @app.command(context_settings=LOOSE)
 def reach(
     target: Annotated[
-        list[str], typer.Argument(help="X Y Z of the target in mm", show_default=False)
+        list[str],
+        typer.Argument(help="X Y Z of the target in mm", show_default=False, metavar="X Y Z"),
     ],
     start: Annotated[
         tuple[float, float, float, float, float, float] | None,
