@@ -24,11 +24,19 @@ from rich.table import Table
 from armpath import __version__
 from armpath.commands import deg_to_ticks, ticks_to_deg
 from armpath.errors import ArmpathError, InvalidInputError
+from armpath.export import (
+    OutputFolder,
+    json_text,
+    output_folder,
+    reach_result_dict,
+    write_reach_files,
+)
 from armpath.kinematics import landmark_positions
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.reach import ReachOptions, ReachResult, plan_reach
 from armpath.scenes import Scene, load_scene
+from armpath.tasks import SEED_TASKS, reach_task
 
 app = typer.Typer(
     add_completion=False,
@@ -121,11 +129,10 @@ def fk(
             table.add_row("tip", *(f"{c:.4f}" for c in pts[-1]))
             out_console.print(table)
         warnings = []
-        if not bool(arm.within_limits(np.radians(theta))):
-            try:
-                arm.check_limits(np.radians(theta), what="pose")
-            except ArmpathError as exc:
-                warnings.append(str(exc))
+        try:
+            arm.check_limits(np.radians(theta), what="pose")
+        except ArmpathError as exc:
+            warnings.append(str(exc))
         if np.min(pts[1:, 2]) < 0:
             warnings.append("part of the arm is below the table (z < 0)")
         for w in warnings:
@@ -164,8 +171,9 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     return table
 
 
-def _write_reach(folder: Any, stem: str, result: ReachResult, arm: SerialArm, scene: Scene) -> None:
-    from armpath.export import write_reach_files
+def _write_reach(
+    folder: OutputFolder, stem: str, result: ReachResult, arm: SerialArm, scene: Scene
+) -> None:
     from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
     write_reach_files(folder, stem, result, arm, scene)
@@ -217,23 +225,13 @@ def reach(
         )
         options = ReachOptions(tolerance_mm=tolerance)
         scene = _scene(scene_file, wall)
-        folder = None
-        if out is not None:
-            from armpath.export import OutputFolder
-
-            folder = OutputFolder(out)
-        try:
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
             result = plan_reach(arm, scene.world, start_ticks, xyz, options)
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene)
-        except BaseException:
-            if folder is not None:
-                folder.discard()
-            raise
-        written = folder.commit() if folder is not None else []
+        written = folder.written if folder is not None else []
         if json_out:
-            from armpath.export import json_text, reach_result_dict
-
             typer.echo(json_text(reach_result_dict(result, arm, scene)), nl=False)
         else:
             out_console.print(_reach_summary(result, arm, scene))
@@ -248,25 +246,17 @@ def run(
     link_radius: LinkRadiusOption = 0.0,
 ) -> None:
     """Run every seed task implemented so far (today: Task 1, reach the tool box)."""
-    from armpath.export import OutputFolder, reach_result_dict
-    from armpath.tasks import reach_task
-
     with _cli_errors():
         scene = _scene(None, wall)
         arm = _arm(link_radius)
-        folder = OutputFolder(out)
-        try:
-            with err_console.status("Task 1: reaching the tool box ..."):
+        ((_, title),) = SEED_TASKS
+        with output_folder(out) as folder:
+            with err_console.status(f"{title} ..."):
                 result = reach_task(scene, arm)
             _write_reach(folder, "reach", result, arm, scene)
             doc = reach_result_dict(result, arm, scene)
-            folder.write_text(
-                "summary.md", _summary_markdown([("Task 1: reach the tool box", doc)])
-            )
-        except BaseException:
-            folder.discard()
-            raise
-        written = folder.commit()
+            folder.write_text("summary.md", _summary_markdown([(title, doc)]))
+        written = folder.written
         table = Table(
             title=f"armpath {__version__}: seed tasks, scene {scene.name}, "
             f"wall thickness {doc['wall_thickness']}"
