@@ -2,10 +2,22 @@
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import independent
 from armpath.errors import InvalidInputError
-from armpath.geometry import CollisionWorld, HalfSpace, WallThickness, hollow_frustum
+from armpath.geometry import (
+    Box,
+    Capsule,
+    CollisionWorld,
+    HalfSpace,
+    Sphere,
+    WallThickness,
+    cone_frustum,
+    cylinder,
+    hollow_frustum,
+)
+from armpath.geometry.primitives import TOUCHING
 from armpath.model import seed_arm
 from armpath.scenes import seed_scene
 
@@ -65,20 +77,52 @@ def test_known_distances():
     assert w.signed_distance([[210 + 142, 0, 90]])[0] == pytest.approx(10.0 / np.sqrt(1.16))
 
 
-def test_segment_distance_against_dense_sampling():
+def _dense_min(obstacle, a, b, samples=20001):
+    s = np.linspace(0, 1, samples)
+    return np.array(
+        [obstacle.signed_distance(a[i] + s[:, None] * (b[i] - a[i])).min() for i in range(len(a))]
+    )
+
+
+@pytest.mark.parametrize("convention", ["normal", "horizontal"])
+def test_segment_distance_against_dense_sampling(convention):
     rng = np.random.default_rng(11)
-    w = WORKPIECE["normal"]
+    w = WORKPIECE[convention]
     a = rng.uniform([-50, -250, -10], [450, 250, 300], (300, 3))
     b = a + rng.normal(0, 150, (300, 3))
     ours = w.segment_distance(a, b)
-    s = np.linspace(0, 1, 20001)
-    dense = np.array(
-        [w.signed_distance(a[i] + s[:, None] * (b[i] - a[i])).min() for i in range(300)]
-    )
-    # never above the dense minimum, never below what 1-Lipschitz allows between dense samples
+    dense = _dense_min(w, a, b)
     spacing = np.linalg.norm(b - a, axis=-1) / 20000
-    assert np.all(ours <= dense + 1e-9)
+    # never below what 1-Lipschitz allows between dense samples (every value is attained) ...
     assert np.all(ours >= dense - spacing / 2 - 1e-9)
+    # ... and for segments that stay outside, exact: never above the dense minimum
+    outside = dense > spacing
+    assert outside.sum() > 150 and (~outside).sum() > 30
+    assert np.all(ours[outside] <= dense[outside] + 1e-9)
+    # segments that enter the wall touch or go below zero
+    assert np.all(ours[dense < -spacing] <= TOUCHING)
+
+
+def test_segment_distance_exact_on_constructed_tangents():
+    """Segments built to touch the outer cone, the rim circle and the inner floor circle."""
+    w = WORKPIECE["normal"]
+    slope = (168 - 96) / 180
+    n_out = np.array([1.0, 0.0, slope]) / np.hypot(1.0, slope)  # outward normal of the cone
+    foot = np.array([210 + 168 - slope * 90, 0.0, 90.0])  # on the outer wall at z = 90
+    tangent = np.array([0.0, 1.0, 0.0])  # horizontal tangent there (a circle of the cone)
+    gen = np.array([-slope, 0.0, 1.0]) / np.hypot(1.0, slope)  # along the generator
+    for gap in (0.0, 0.3, 5.0):
+        c = foot + gap * n_out
+        # along the generator the distance is constant = gap
+        d = w.segment_distance([c - 40 * gen], [c + 40 * gen])[0]
+        assert d == pytest.approx(gap, abs=1e-9)
+        # a horizontal chord touching the cone from outside: the minimum is at the midpoint
+        d = w.segment_distance([c - 50 * tangent], [c + 50 * tangent])[0]
+        assert d == pytest.approx(gap, abs=1e-9)
+    # the rim: a segment passing 2 mm above the top circle of the outer wall
+    rim = np.array([210 + 96.0, 0.0, 180.0])
+    d = w.segment_distance([rim + np.array([-30, 0, 2])], [rim + np.array([30, 0, 2])])[0]
+    assert d == pytest.approx(2.0, abs=1e-9)
 
 
 def test_segment_distance_bounds_bracket_the_true_minimum():
@@ -86,20 +130,75 @@ def test_segment_distance_bounds_bracket_the_true_minimum():
     w = WORKPIECE["normal"]
     a = rng.uniform([-50, -250, -10], [450, 250, 300], (300, 3))
     b = a + rng.normal(0, 150, (300, 3))
-    s = np.linspace(0, 1, 20001)
-    dense = np.array(
-        [w.signed_distance(a[i] + s[:, None] * (b[i] - a[i])).min() for i in range(300)]
-    )
+    dense = _dense_min(w, a, b)
     slack = np.linalg.norm(b - a, axis=-1) / 20000 / 2  # how far below the samples the truth can be
     value, lower = w.segment_distance_bounds(a, b)
     assert np.all(lower <= dense + 1e-9) and np.all(value >= dense - slack - 1e-9)
-    assert np.all(value - lower <= 1.0 + 1e-9)  # coarse samples 2 mm apart at most
-    # asking to certify 'clearance >= 50' tightens every bound below 50 to within 0.01 mm
-    value, lower = w.segment_distance_bounds(a, b, certify=50.0)
+    outside = value > TOUCHING
+    # outside, the bound is the exact value less a rounding allowance
+    assert np.all(value[outside] - lower[outside] <= 1e-6)
+    # touching or entering: no bound unless asked for
+    assert np.all(np.isneginf(lower[~outside]))
+    # asking to certify 'clearance >= 0' bounds the depth of the entering segments to 0.01 mm
+    value, lower = w.segment_distance_bounds(a, b, certify=0.0)
+    assert np.all(lower <= dense + 1e-9) and np.all(np.isfinite(lower))
+    assert np.all(value[~outside] - lower[~outside] <= 0.01 + 1e-9)
+    assert np.all(value[~outside] <= dense[~outside] + 1e-9)
+
+
+def _random_segments(rng, n, center, spread, length):
+    a = center + rng.normal(0, spread, (n, 3))
+    return a, a + rng.normal(0, length, (n, 3))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: Sphere("s", [10, -20, 30], 25),
+        lambda: Capsule("c", [0, 0, 0], [40, 30, -20], 12),
+        lambda: Box(
+            "b", [5, 5, 5], [30, 10, 20], Rotation.from_rotvec([0.3, -0.5, 0.9]).as_matrix()
+        ),
+        lambda: cylinder("cy", [0, 0, -20], [0.2, 0.4, 1.0], 25, 60),
+        lambda: cone_frustum("cf", [0, 0, -20], [1.0, 0.0, 0.3], 40, 10, 50),
+        lambda: cone_frustum("cone", [0, 0, -20], [0.0, 0.0, 1.0], 40, 0, 50),
+    ],
+    ids=["sphere", "capsule", "box", "cylinder", "frustum", "cone"],
+)
+def test_primitive_segment_distance_against_dense_sampling(make):
+    obstacle = make()
+    rng = np.random.default_rng(5)
+    a, b = _random_segments(rng, 400, np.zeros(3), 60, 50)
+    value, lower = obstacle.segment_distance_bounds(a, b, certify=0.0)
+    dense = _dense_min(obstacle, a, b, 4001)
+    spacing = np.linalg.norm(b - a, axis=-1) / 4000
+    assert np.all(value <= dense + 1e-9)
     assert np.all(lower <= dense + 1e-9)
-    tight = lower < 50.0
-    assert tight.sum() > 50
-    assert np.all(value[tight] - lower[tight] <= 0.01 + 1e-9)
+    assert np.all(value >= dense - spacing / 2 - 1e-9)  # exact, inside too (certified)
+    assert (dense < 0).sum() > 10 and (dense > 0).sum() > 100
+
+
+def test_primitive_point_distances_closed_form():
+    box = Box("b", [1, 2, 3], [1, 2, 3])
+    np.testing.assert_allclose(
+        box.signed_distance([[1, 2, 3], [4, 2, 3], [3, 5, 7]]), [-1, 2, np.sqrt(3)]
+    )
+    cyl = cylinder("c", [0, 0, 0], [0, 0, 1], 2, 10)
+    np.testing.assert_allclose(
+        cyl.signed_distance([[0, 0, 5], [5, 0, 5], [0, 0, 13], [5, 0, 14]]), [-2, 3, 3, 5]
+    )
+    ball = Sphere("s", [0, 0, 0], 2)
+    np.testing.assert_allclose(ball.signed_distance([[3, 4, 0]]), [3])
+    for bad in (
+        lambda: Sphere("s", [0, 0], 1),
+        lambda: Sphere("s", [0, 0, 0], -1),
+        lambda: Box("b", [0, 0, 0], [1, 1, 0]),
+        lambda: Box("b", [0, 0, 0], [1, 1, 1], np.diag([1, 1, -1])),
+        lambda: cylinder("c", [0, 0, 0], [0, 0, 0], 1, 1),
+        lambda: cone_frustum("f", [0, 0, 0], [0, 0, 1], 0, 0, 1),
+    ):
+        with pytest.raises(InvalidInputError):
+            bad()
 
 
 def test_half_space():

@@ -60,6 +60,7 @@ def clearance_dict(c: MotionClearance) -> dict[str, Any]:
         "min_clearance_lower_bound_mm": c.min_clearance_lower_bound,
         "min_body_clearance_mm": _finite_or_none(c.min_body_clearance),
         "min_tool_tip_clearance_mm": _finite_or_none(c.min_tip_clearance),
+        "min_self_clearance_mm": _finite_or_none(c.min_self_clearance),
         "certified": c.certified_ok,
         "closest_part": c.worst_part,
         "closest_obstacle": c.worst_obstacle,

@@ -4,20 +4,30 @@ Signed distance is negative inside the solid, zero on its surface and positive o
 the exact Euclidean distance to the surface (1-Lipschitz), in the scene's length unit.
 
 * :class:`HalfSpace` — everything on one side of a plane (the table).
-* :class:`SolidOfRevolution` — a polygonal profile ``(r, z)`` revolved about an axis. Frustums,
-  cylinders and hollow vessels such as the seed workpiece (:func:`hollow_frustum`) are instances.
+* :class:`Sphere`, :class:`Capsule` — closed forms.
+* :class:`Box` — an oriented box.
+* :class:`SolidOfRevolution` — a polygonal profile ``(r, z)`` revolved about an axis. Cylinders
+  (:func:`cylinder`), cone frustums (:func:`cone_frustum`) and hollow vessels such as the seed
+  workpiece (:func:`hollow_frustum`) are instances.
+
+Every primitive also gives the smallest signed distance along line segments (a link of the arm)
+in closed form or by an exact compiled kernel (:mod:`armpath.geometry.kernels`): exact (to
+rounding) while the segment stays outside, and a negative value the segment attains when it
+enters the solid. Obstacles without such a form (meshes) fall back on the generic, certified
+sampling of :meth:`Obstacle.segment_distance_bounds`.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.geometry import kernels
 
 FloatArray = NDArray[np.float64]
 
@@ -27,6 +37,57 @@ SEGMENT_SAMPLE_SPACING = 2.0
 REFINED_MINIMA = 3
 #: Spacing (length unit) of the samples that tighten a lower bound near a required clearance.
 FINE_SAMPLE_SPACING = 0.02
+#: Segment distance (length unit) at or below which a segment counts as touching a solid.
+TOUCHING = 1e-9
+#: Allowance (length unit) for floating-point rounding subtracted from exact kernel results to
+#: give proven lower bounds.
+ROUNDING_ALLOWANCE = 1e-7
+
+
+def _flat_segments(p0: ArrayLike, p1: ArrayLike) -> tuple[FloatArray, FloatArray, tuple[int, ...]]:
+    """Broadcast segment end points to flat contiguous ``(K, 3)`` arrays plus the batch shape."""
+    a = np.asarray(p0, dtype=np.float64)
+    b = np.asarray(p1, dtype=np.float64)
+    a, b = np.broadcast_arrays(a, b)
+    if a.shape[-1:] != (3,):
+        raise InvalidInputError(f"segment end points must have shape (..., 3), got {a.shape}")
+    shape = a.shape[:-1]
+    return np.ascontiguousarray(a.reshape(-1, 3)), np.ascontiguousarray(b.reshape(-1, 3)), shape
+
+
+class ExactSegmentDistance(ABC):
+    """Mixin for obstacles whose :meth:`segment_distance_exact` is exact (to rounding).
+
+    ``exact_inside`` False means the kernel is exact only for segments that stay outside (value
+    above :data:`TOUCHING`); for a segment that touches or enters the solid its value is
+    attained but may not be the deepest. Such segments get the lower bound ``-inf`` (the motion
+    is rejected anyway), unless ``certify`` asks for a bound: then the generic certified
+    sampling of :meth:`Obstacle.segment_distance_bounds` supplies value and lower bound.
+    """
+
+    exact_inside: bool = True
+
+    @abstractmethod
+    def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
+        """Smallest signed distance of flat segments ``(K, 3)``, ``(K,)``."""
+
+    def segment_distance_bounds(
+        self, p0: ArrayLike, p1: ArrayLike, certify: ArrayLike = -np.inf
+    ) -> tuple[FloatArray, FloatArray]:
+        """Exact: the value, and the value less :data:`ROUNDING_ALLOWANCE` as the lower bound."""
+        a, b, shape = _flat_segments(p0, p1)
+        d = self.segment_distance_exact(a, b)
+        lower = d - ROUNDING_ALLOWANCE
+        if not self.exact_inside and isinstance(self, Obstacle):
+            touching = d <= TOUCHING
+            lower[touching] = -np.inf
+            threshold = np.broadcast_to(np.asarray(certify, dtype=np.float64), shape).reshape(-1)
+            redo = np.flatnonzero(touching & (threshold > -np.inf))
+            if redo.size:
+                v, lo = Obstacle.segment_distance_bounds(self, a[redo], b[redo], threshold[redo])
+                d[redo] = np.minimum(d[redo], v)
+                lower[redo] = lo
+        return d.reshape(shape), lower.reshape(shape)
 
 
 class Obstacle(ABC):
@@ -159,37 +220,143 @@ class HalfSpace(Obstacle):
         }
 
 
-def _polygon_signed_distance(
-    r: FloatArray, z: FloatArray, vertices: FloatArray, boundary: NDArray[np.bool_]
-) -> FloatArray:
-    """Signed distance of 2-D points to a closed polygon, counting only ``boundary`` edges.
+def _vector3(value: ArrayLike, what: str) -> FloatArray:
+    v = np.array(value, dtype=np.float64)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise InvalidInputError(f"{what} must be a finite 3-vector, got {value!r}")
+    v.setflags(write=False)
+    return v
 
-    ``vertices`` is ``(V, 2)`` (closed implicitly); edge ``i`` runs from vertex ``i`` to ``i + 1``.
-    Inside/outside uses every edge (crossing number); distance uses the boundary edges only, so
-    edges lying on the axis of revolution (interior in 3-D) are skipped.
-    """
-    a = vertices
-    b = np.roll(vertices, -1, axis=0)
-    pr = r[..., None]
-    pz = z[..., None]
-    er, ez = b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]
-    wr, wz = pr - a[:, 0], pz - a[:, 1]
-    ll = er * er + ez * ez
-    t = np.clip((wr * er + wz * ez) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
-    dr, dz = wr - t * er, wz - t * ez
-    dist2 = np.where(boundary, dr * dr + dz * dz, np.inf)
-    dist = np.sqrt(np.min(dist2, axis=-1))
-    # crossing number with the ray from the point toward +r
-    cond = (a[:, 1] > pz) != (b[:, 1] > pz)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r_cross = a[:, 0] + (pz - a[:, 1]) * er / ez
-    crossings = np.sum(cond & (pr < r_cross), axis=-1)
-    inside = (crossings % 2) == 1
-    return np.asarray(np.where(inside, -dist, dist), dtype=np.float64)
+
+def _positive(value: float, what: str) -> float:
+    v = float(value)
+    if not (np.isfinite(v) and v > 0):
+        raise InvalidInputError(f"{what} must be a positive number, got {value!r}")
+    return v
 
 
 @dataclass(frozen=True, eq=False)
-class SolidOfRevolution(Obstacle):
+class Sphere(ExactSegmentDistance, Obstacle):
+    """A ball of ``radius`` about ``center``."""
+
+    name: str
+    center: FloatArray
+    radius: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _vector3(self.center, f"sphere {self.name!r} center"))
+        object.__setattr__(self, "radius", _positive(self.radius, f"sphere {self.name!r} radius"))
+
+    def signed_distance(self, points: ArrayLike) -> FloatArray:
+        x = np.asarray(points, dtype=np.float64)
+        return np.asarray(np.linalg.norm(x - self.center, axis=-1) - self.radius)
+
+    def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
+        """Exact, also inside: the distance of the segment to the centre less the radius."""
+        c = np.ascontiguousarray(np.broadcast_to(self.center, p0.shape))
+        return np.asarray(kernels.segments_to_point(p0, p1, c) - self.radius)
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "sphere",
+            "name": self.name,
+            "center": self.center.tolist(),
+            "radius": self.radius,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Capsule(ExactSegmentDistance, Obstacle):
+    """All points within ``radius`` of the segment ``start -> end``."""
+
+    name: str
+    start: FloatArray
+    end: FloatArray
+    radius: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", _vector3(self.start, f"capsule {self.name!r} start"))
+        object.__setattr__(self, "end", _vector3(self.end, f"capsule {self.name!r} end"))
+        object.__setattr__(self, "radius", _positive(self.radius, f"capsule {self.name!r} radius"))
+
+    def signed_distance(self, points: ArrayLike) -> FloatArray:
+        x = np.asarray(points, dtype=np.float64)
+        flat = np.ascontiguousarray(x.reshape(-1, 3))
+        d = kernels.segments_to_point(
+            np.broadcast_to(self.start, flat.shape).copy(),
+            np.broadcast_to(self.end, flat.shape).copy(),
+            flat,
+        )
+        return np.asarray(d.reshape(x.shape[:-1]) - self.radius)
+
+    def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
+        """Exact, also inside: segment-to-segment distance less the radius."""
+        a0 = np.broadcast_to(self.start, p0.shape).copy()
+        a1 = np.broadcast_to(self.end, p0.shape).copy()
+        return np.asarray(kernels.segment_segment_distance(p0, p1, a0, a1) - self.radius)
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "capsule",
+            "name": self.name,
+            "start": self.start.tolist(),
+            "end": self.end.tolist(),
+            "radius": self.radius,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Box(ExactSegmentDistance, Obstacle):
+    """An oriented box: ``center``, ``half_extents`` along its axes, ``rotation`` (3x3).
+
+    The columns of ``rotation`` are the box axes in world coordinates (identity: axis-aligned).
+    """
+
+    name: str
+    center: FloatArray
+    half_extents: FloatArray
+    rotation: FloatArray = field(default_factory=lambda: np.eye(3))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _vector3(self.center, f"box {self.name!r} center"))
+        half = _vector3(self.half_extents, f"box {self.name!r} half extents")
+        if np.any(half <= 0):
+            raise InvalidInputError(f"box {self.name!r}: half extents must be positive")
+        object.__setattr__(self, "half_extents", half)
+        rot = np.array(self.rotation, dtype=np.float64)
+        if rot.shape != (3, 3) or not np.allclose(rot.T @ rot, np.eye(3), atol=1e-9):
+            raise InvalidInputError(f"box {self.name!r}: rotation must be a 3x3 rotation matrix")
+        if np.linalg.det(rot) < 0:
+            raise InvalidInputError(f"box {self.name!r}: rotation must not be a reflection")
+        rot = np.ascontiguousarray(rot)
+        rot.setflags(write=False)
+        object.__setattr__(self, "rotation", rot)
+
+    def signed_distance(self, points: ArrayLike) -> FloatArray:
+        x = np.asarray(points, dtype=np.float64)
+        local = np.abs((x - self.center) @ self.rotation) - self.half_extents
+        outside = np.linalg.norm(np.maximum(local, 0.0), axis=-1)
+        inside = np.minimum(local.max(axis=-1), 0.0)
+        return np.asarray(outside + inside)
+
+    def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
+        """The box's signed distance is convex: golden-section search along the segment."""
+        return np.asarray(
+            kernels.segments_to_box(p0, p1, self.center, self.rotation, self.half_extents)
+        )
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "box",
+            "name": self.name,
+            "center": self.center.tolist(),
+            "half_extents": self.half_extents.tolist(),
+            "rotation": self.rotation.tolist(),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class SolidOfRevolution(ExactSegmentDistance, Obstacle):
     """A closed polygon in the half-plane ``r >= 0`` revolved about an axis.
 
     Parameters
@@ -209,6 +376,7 @@ class SolidOfRevolution(Obstacle):
     origin: FloatArray
     axis: FloatArray
     profile: FloatArray
+    exact_inside = False
 
     def __post_init__(self) -> None:
         o = np.array(self.origin, dtype=np.float64)
@@ -234,9 +402,18 @@ class SolidOfRevolution(Obstacle):
     @property
     def boundary_edges(self) -> NDArray[np.bool_]:
         """Per profile edge, whether it is part of the 3-D surface (not on the axis)."""
-        a = self.profile
-        b = np.roll(self.profile, -1, axis=0)
-        return np.asarray(~((a[:, 0] == 0.0) & (b[:, 0] == 0.0)))
+        return self._boundary
+
+    @property
+    def _boundary(self) -> NDArray[np.bool_]:
+        cached = self.__dict__.get("_boundary_cache")
+        if cached is None:
+            a = self.profile
+            b = np.roll(self.profile, -1, axis=0)
+            cached = np.ascontiguousarray(~((a[:, 0] == 0.0) & (b[:, 0] == 0.0)))
+            cached.setflags(write=False)
+            self.__dict__["_boundary_cache"] = cached
+        return np.asarray(cached)
 
     def to_profile_coords(self, points: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Cylindrical coordinates ``(r, z)`` of points about the axis."""
@@ -246,8 +423,20 @@ class SolidOfRevolution(Obstacle):
         return np.linalg.norm(radial, axis=-1), z
 
     def signed_distance(self, points: ArrayLike) -> FloatArray:
-        r, z = self.to_profile_coords(points)
-        return _polygon_signed_distance(r, z, self.profile, self.boundary_edges)
+        x = np.asarray(points, dtype=np.float64)
+        flat = np.ascontiguousarray(x.reshape(-1, 3))
+        d = kernels.points_to_revolution(
+            flat, self.origin, self.axis, self.profile, self.boundary_edges
+        )
+        return np.asarray(d.reshape(x.shape[:-1]), dtype=np.float64)
+
+    def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
+        return np.asarray(
+            kernels.segments_to_revolution(
+                p0, p1, self.origin, self.axis, self.profile, self.boundary_edges
+            ),
+            dtype=np.float64,
+        )
 
     def describe(self) -> dict[str, object]:
         return {
@@ -380,3 +569,30 @@ def _wall_convention(value: WallThickness | str) -> WallThickness:
         raise InvalidInputError(
             f"wall thickness convention must be one of {valid}, got {value!r}"
         ) from None
+
+
+def cone_frustum(
+    name: str,
+    base_center: ArrayLike,
+    axis: ArrayLike,
+    r_bottom: float,
+    r_top: float,
+    height: float,
+) -> SolidOfRevolution:
+    """A solid truncated cone: radius ``r_bottom`` at ``base_center``, ``r_top`` at ``height``
+    along ``axis``. Either radius may be 0 (a cone)."""
+    h = _positive(height, f"cone frustum {name!r} height")
+    rb, rt = float(r_bottom), float(r_top)
+    if not (np.isfinite(rb) and np.isfinite(rt) and rb >= 0 and rt >= 0 and rb + rt > 0):
+        raise InvalidInputError(f"cone frustum {name!r}: radii must be >= 0, not both 0")
+    profile = [(0.0, 0.0), (rb, 0.0), (rt, h), (0.0, h)]
+    pts = [p for i, p in enumerate(profile) if p != profile[i - 1]]
+    return SolidOfRevolution(name, np.asarray(base_center), np.asarray(axis), np.array(pts))
+
+
+def cylinder(
+    name: str, base_center: ArrayLike, axis: ArrayLike, radius: float, height: float
+) -> SolidOfRevolution:
+    """A solid cylinder of ``radius`` from ``base_center`` to ``height`` along ``axis``."""
+    r = _positive(radius, f"cylinder {name!r} radius")
+    return cone_frustum(name, base_center, axis, r, r, height)

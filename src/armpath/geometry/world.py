@@ -1,8 +1,12 @@
-"""Clearance of an arm's links (capsules) to a set of obstacles.
+"""Clearance of an arm's links (capsules) to a set of obstacles and to each other.
 
-Each checked link of the arm is a capsule: the segment between two landmarks with the link's
-radius. The last ``tip_exempt`` length of the last link is the *tool tip*: it may touch the
-surface it works on (clearance >= 0) while every other part must keep ``margin`` (SPEC section 3).
+Each link of the arm is a capsule: the segment between two landmarks with the link's radius. The
+last ``tip_exempt`` length of the last link is the *tool tip*: it may touch the surface it works
+on (clearance >= 0) while every other part must keep ``margin`` (SPEC section 3). Links that are
+not neighbours in the chain must also keep ``self_margin`` from each other (self-collision).
+
+Every clearance the rule constrains is one *pair* (:class:`ClearancePair`): a part against an
+obstacle, or two non-adjacent links. Batched evaluation returns one column per pair.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.geometry.kernels import segment_segment_distance
 from armpath.geometry.primitives import Obstacle
 from armpath.kinematics import landmark_positions
 from armpath.model.serial_arm import SerialArm
@@ -22,12 +27,31 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class Part:
-    """A capsule of the arm checked for clearance: a piece of link ``link`` (name)."""
+    """A capsule of the arm checked against obstacles: a piece of link ``link`` (name)."""
 
     name: str
     link: str
     radius: float
     is_tip: bool
+
+
+@dataclass(frozen=True)
+class ClearancePair:
+    """One clearance the rule constrains: ``part`` against ``other`` (an obstacle or a link).
+
+    ``required`` is the clearance it must keep (length unit, capsule radii already subtracted
+    from the clearance), ``is_tip`` marks the tool tip, ``is_self`` a link-link pair.
+    """
+
+    part: str
+    other: str
+    required: float
+    is_tip: bool
+    is_self: bool
+
+    @property
+    def label(self) -> str:
+        return f"{self.part} - {self.other}"
 
 
 @dataclass(frozen=True)
@@ -42,17 +66,24 @@ class CollisionWorld:
         Clearance every part of the arm except the tool tip must keep (length unit, default 1).
     tip_exempt:
         Length at the end of the last link that only must not penetrate (default 5).
+    self_margin:
+        Clearance between links that are not neighbours in the chain (default 1, like the
+        margin: the seed arm's links have zero radius, so a margin is what keeps them apart).
     """
 
     obstacles: tuple[Obstacle, ...]
     margin: float = 1.0
     tip_exempt: float = 5.0
+    self_margin: float = 1.0
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.margin) and self.margin >= 0):
-            raise InvalidInputError(f"clearance margin must be >= 0, got {self.margin}")
-        if not (np.isfinite(self.tip_exempt) and self.tip_exempt >= 0):
-            raise InvalidInputError(f"tool-tip exempt length must be >= 0, got {self.tip_exempt}")
+        for what, v in (
+            ("clearance margin", self.margin),
+            ("tool-tip exempt length", self.tip_exempt),
+            ("self-collision margin", self.self_margin),
+        ):
+            if not (np.isfinite(v) and v >= 0):
+                raise InvalidInputError(f"{what} must be >= 0, got {v}")
         names = [o.name for o in self.obstacles]
         if len(set(names)) != len(names):
             raise InvalidInputError(f"obstacle names must be unique, got {names}")
@@ -67,73 +98,124 @@ class CollisionWorld:
         out: list[Part] = []
         for k, link in enumerate(checked):
             last = k == len(checked) - 1
+            out.append(Part(link.name, link.name, link.radius, False))
             if last and self.tip_exempt > 0:
-                out.append(Part(link.name, link.name, link.radius, False))
                 out.append(Part(f"{link.name} tip", link.name, link.radius, True))
-            else:
-                out.append(Part(link.name, link.name, link.radius, False))
+        return tuple(out)
+
+    def self_pairs(self, arm: SerialArm) -> tuple[tuple[int, int], ...]:
+        """Indices into ``arm.links`` of link pairs checked for self-collision.
+
+        Links that share a landmark (neighbours) are skipped; so are pairs of two unchecked links
+        (both part of the fixed base).
+        """
+        links = arm.links
+        out = []
+        for i in range(len(links)):
+            for j in range(i + 1, len(links)):
+                a, b = links[i], links[j]
+                if {a.start, a.end} & {b.start, b.end}:
+                    continue
+                if not (a.checked or b.checked):
+                    continue
+                out.append((i, j))
+        return tuple(out)
+
+    def pairs(self, arm: SerialArm) -> tuple[ClearancePair, ...]:
+        """Every constrained clearance: each part against each obstacle, then link pairs."""
+        out = [
+            ClearancePair(p.name, o.name, 0.0 if p.is_tip else self.margin, p.is_tip, False)
+            for p in self.parts(arm)
+            for o in self.obstacles
+        ]
+        out += [
+            ClearancePair(arm.links[i].name, arm.links[j].name, self.self_margin, False, True)
+            for i, j in self.self_pairs(arm)
+        ]
         return tuple(out)
 
     def part_segments(self, arm: SerialArm, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """End points of every part, each ``(..., P, 3)``, in the order of :meth:`parts`."""
-        pts = landmark_positions(arm, q)
+        return self._segments(arm, landmark_positions(arm, q))
+
+    def _segments(self, arm: SerialArm, pts: FloatArray) -> tuple[FloatArray, FloatArray]:
         checked = [link for link in arm.links if link.checked]
         starts, ends = [], []
         for k, link in enumerate(checked):
             a, b = pts[..., link.start, :], pts[..., link.end, :]
+            starts.append(a)
+            ends.append(b)
             if k == len(checked) - 1 and self.tip_exempt > 0:
                 length = np.linalg.norm(b - a, axis=-1, keepdims=True)
                 frac = np.clip(self.tip_exempt / np.where(length > 0, length, 1.0), 0.0, 1.0)
                 cut = b - frac * (b - a)
-                starts += [a, cut]
-                ends += [cut, b]
-            else:
-                starts.append(a)
+                ends[-1] = cut
+                starts.append(cut)
                 ends.append(b)
         return np.stack(starts, axis=-2), np.stack(ends, axis=-2)
 
     def required(self, arm: SerialArm) -> FloatArray:
-        """Clearance each part must keep: the margin, or 0 for the tool tip, ``(P,)``."""
-        return np.array([0.0 if p.is_tip else self.margin for p in self.parts(arm)])
+        """Clearance each pair must keep, ``(K,)`` in the order of :meth:`pairs`."""
+        return np.array([p.required for p in self.pairs(arm)])
+
+    def pair_clearances(self, arm: SerialArm, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Clearance of every pair ``(..., K)`` and a proven lower bound of it.
+
+        Capsule radii are subtracted. For analytic obstacles the two differ only by a rounding
+        allowance; obstacles without a closed form (meshes) give a certified lower bound.
+        """
+        pts = landmark_positions(arm, q)
+        batch = pts.shape[:-2]
+        p0, p1 = self._segments(arm, pts)
+        radii = np.array([p.radius for p in self.parts(arm)])
+        values, lowers = [], []
+        for o in self.obstacles:
+            v, lo = o.segment_distance_bounds(p0, p1)
+            values.append(v - radii)
+            lowers.append(lo - radii)
+        cols_v = [np.stack(values, axis=-1).reshape(*batch, -1)] if values else []
+        cols_l = [np.stack(lowers, axis=-1).reshape(*batch, -1)] if lowers else []
+        sp = self.self_pairs(arm)
+        if sp:
+            links = arm.links
+            i_idx = np.array([i for i, _ in sp])
+            j_idx = np.array([j for _, j in sp])
+            flat = pts.reshape(-1, *pts.shape[-2:])
+
+            def ends(idx: NDArray[np.int64], which: str) -> FloatArray:
+                lm = np.array([getattr(links[i], which) for i in idx])
+                return np.ascontiguousarray(flat[:, lm, :].reshape(-1, 3))
+
+            d = segment_segment_distance(
+                ends(i_idx, "start"), ends(i_idx, "end"), ends(j_idx, "start"), ends(j_idx, "end")
+            ).reshape(*batch, len(sp))
+            rsum = np.array([links[i].radius + links[j].radius for i, j in sp])
+            cols_v.append(d - rsum)
+            cols_l.append(d - rsum - 1e-7)
+        if not cols_v:
+            return np.zeros((*batch, 0)), np.zeros((*batch, 0))
+        return np.concatenate(cols_v, axis=-1), np.concatenate(cols_l, axis=-1)
 
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""
-        return self.clearance_bounds(arm, q)[0]
-
-    def clearance_bounds(
-        self, arm: SerialArm, q: ArrayLike, tighten_below: ArrayLike | None = None
-    ) -> tuple[FloatArray, FloatArray]:
-        """Clearances ``(..., P, O)`` and proven lower bounds of them.
-
-        Lower bounds below ``tighten_below`` (a clearance per part, ``(P,)`` or scalar) are
-        tightened to within :data:`~armpath.geometry.primitives.FINE_SAMPLE_SPACING` / 2 of the
-        true value; ``None`` leaves them at the coarse sampling's bound.
-        """
-        p0, p1 = self.part_segments(arm, q)
-        radii = np.array([p.radius for p in self.parts(arm)])
-        threshold = (
-            np.full(radii.shape, -np.inf)
-            if tighten_below is None
-            else np.broadcast_to(np.asarray(tighten_below, dtype=np.float64), radii.shape) + radii
-        )
-        values, lowers = [], []
-        for o in self.obstacles:
-            v, lo = o.segment_distance_bounds(p0, p1, threshold)
-            values.append(v - radii)
-            lowers.append(lo - radii)
-        return np.stack(values, axis=-1), np.stack(lowers, axis=-1)
+        values, _ = self.pair_clearances(arm, q)
+        n_parts, n_obs = len(self.parts(arm)), len(self.obstacles)
+        return values[..., : n_parts * n_obs].reshape(*values.shape[:-1], n_parts, n_obs)
 
     def slack(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
-        """Per configuration, the smallest ``clearance - required`` over parts and obstacles.
+        """Per configuration, the smallest ``clearance - required`` over all pairs.
 
         Non-negative exactly when the configuration satisfies the clearance rule.
         """
-        c = self.clearances(arm, q) - self.required(arm)[:, None]
-        return np.asarray(c.min(axis=(-2, -1)), dtype=np.float64)
+        values, _ = self.pair_clearances(arm, q)
+        if values.shape[-1] == 0:
+            return np.full(values.shape[:-1], np.inf)
+        return np.asarray((values - self.required(arm)).min(axis=-1), dtype=np.float64)
 
     def describe(self) -> dict[str, object]:
         return {
             "obstacles": [o.describe() for o in self.obstacles],
             "clearance_margin_mm": self.margin,
             "tool_tip_exempt_mm": self.tip_exempt,
+            "self_collision_margin_mm": self.self_margin,
         }

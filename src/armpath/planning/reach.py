@@ -608,8 +608,8 @@ def plan_reach(
                     fewer_commands_rejected=tuple(failures),
                 )
             blocked = blocked or (
-                f"{mc.worst_part} comes {mc.min_clearance:.2f} mm from {mc.worst_obstacle} "
-                f"during command {mc.worst_command}"
+                f"{mc.limiting_pair} is {mc.limiting_slack:+.2f} mm off its required clearance "
+                f"during command {mc.limiting_command}"
             )
         failures.append(f"{n} commands: every direct motion is blocked (e.g. {blocked})")
     raise PlanningError(
