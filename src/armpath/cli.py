@@ -23,20 +23,25 @@ from rich.table import Table
 
 from armpath import __version__
 from armpath.commands import deg_to_ticks, ticks_to_deg
-from armpath.errors import ArmpathError, InvalidInputError
+from armpath.errors import ArmpathError, InvalidInputError, PlanningError
 from armpath.export import (
     OutputFolder,
     json_text,
     output_folder,
+    plan_result_dict,
     reach_result_dict,
+    tour_result_dict,
     write_reach_files,
+    write_sequence_files,
 )
 from armpath.kinematics import landmark_positions
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.reach import ReachOptions, ReachResult, plan_reach
+from armpath.planning.motion import MotionOptions, MotionPlan, Objective, plan_motion
+from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
+from armpath.planning.tour import TourResult
 from armpath.scenes import Scene, load_scene
-from armpath.tasks import SEED_TASKS, reach_task
+from armpath.tasks import SEED_TASKS, reach_task, spotweld_task
 
 app = typer.Typer(
     add_completion=False,
@@ -58,6 +63,18 @@ WallOption = Annotated[
 LinkRadiusOption = Annotated[
     float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
 ]
+SceneOption = Annotated[
+    Path | None,
+    typer.Option("--scene", help="Scene file (TOML or YAML). Default: the seed scene."),
+]
+ObjectiveOption = Annotated[
+    Objective,
+    typer.Option(
+        help="What to minimise: number of commands, fingertip path length, or weighted joint "
+        "travel (energy). Every plan reports all three."
+    ),
+]
+SeedOption = Annotated[int, typer.Option(help="Random seed of the planner (same seed, same plan).")]
 
 
 @contextlib.contextmanager
@@ -210,12 +227,14 @@ def reach(
     ] = None,
     tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
     wall: WallOption = None,
-    scene_file: Annotated[
-        Path | None, typer.Option("--scene", help="Scene file (TOML). Default: the seed scene.")
-    ] = None,
+    scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = 0.0,
 ) -> None:
-    """Reach a point with the fingertip in the fewest commands, then the smallest error."""
+    """Reach a point with the fingertip in the fewest commands, then the smallest error.
+
+    When every direct motion is blocked, the motion is planned around the obstacles instead
+    (as ``armpath plan --to-xyz``).
+    """
     with _cli_errors():
         arm = _arm(link_radius)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
@@ -227,7 +246,19 @@ def reach(
         scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
-            result = plan_reach(arm, scene.world, start_ticks, xyz, options)
+            try:
+                result = plan_reach(arm, scene.world, start_ticks, xyz, options)
+            except PlanningError as exc:
+                if "blocked" not in str(exc) and "in collision" not in str(exc):
+                    raise
+                err_console.print(
+                    "note: no clear direct motion; planning around the obstacles", markup=False
+                )
+                _plan_to_point(
+                    arm, scene, start_ticks, np.array(xyz), tolerance, MotionOptions(),
+                    folder, json_out, "reach",
+                )  # fmt: skip
+                return
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene)
         written = folder.written if folder is not None else []
@@ -239,38 +270,296 @@ def reach(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _plan_summary(doc: dict[str, Any], title: str) -> Table:
+    table = Table(title=title, show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    m = doc["metrics"]
+    table.add_row(
+        "commands", f"{doc['n_commands']}  (direct-motion bound {doc['lower_bound_commands']})"
+    )
+    if "error_mm" in doc:
+        table.add_row(
+            "fingertip error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
+        )
+    table.add_row("method", str(doc["method"]))
+    table.add_row(
+        "objectives",
+        f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
+        f"joint travel {m['energy_deg']:.1f} deg (objective: {doc['objective']})",
+    )
+    table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} deg")
+    c = doc["clearance"]
+    table.add_row(
+        "min clearance",
+        f"{c['min_clearance_mm']:.3f} mm  ({c['closest_part']} to {c['closest_obstacle']}; "
+        f"body {c['min_body_clearance_mm']:.3f} mm; whole continuous motion, certified)",
+    )
+    return table
+
+
+def _plan_to_point(
+    arm: SerialArm,
+    scene: Scene,
+    start_ticks: np.ndarray,
+    xyz: np.ndarray,
+    tolerance: float,
+    options: MotionOptions,
+    folder: OutputFolder | None,
+    json_out: bool,
+    stem: str,
+) -> None:
+    goals, _ = goal_states(arm, scene.world, start_ticks, xyz, tolerance)
+    plan = plan_motion(arm, scene.world, start_ticks, goals, options)
+    doc = plan_result_dict(plan, arm, scene, options.objective.value, xyz, tolerance)
+    _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz)
+
+
+def _emit_plan(
+    plan: MotionPlan,
+    doc: dict[str, Any],
+    arm: SerialArm,
+    scene: Scene,
+    folder: OutputFolder | None,
+    json_out: bool,
+    stem: str,
+    target: np.ndarray | None,
+) -> None:
+    if folder is not None:
+        from armpath.viz.figures import plot_joint_angles, plot_motion_3d
+
+        write_sequence_files(folder, stem, doc, arm, plan.sequence)
+        title = f"{stem}: {plan.sequence.n_commands} commands ({plan.method})"
+        plot_motion_3d(folder.file(f"{stem}_motion.png"), arm, scene, plan.sequence, target, title)
+        plot_joint_angles(folder.file(f"{stem}_joints.png"), plan.sequence, title)
+    if json_out:
+        typer.echo(json_text(doc), nl=False)
+    else:
+        out_console.print(_plan_summary(doc, stem))
+
+
+@app.command(context_settings=LOOSE)
+def plan(
+    scene_file: SceneOption = None,
+    start: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option(
+            "--from",
+            help="Start joint angles θ1 … θ6 in deg (multiples of 0.1). Default: the arm's "
+            "initial pose.",
+        ),
+    ] = None,
+    to: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option("--to", help="Goal joint angles θ1 … θ6 in deg (multiples of 0.1)."),
+    ] = None,
+    to_xyz: Annotated[
+        tuple[float, float, float] | None,
+        typer.Option("--to-xyz", help="Goal point X Y Z of the fingertip, mm."),
+    ] = None,
+    objective: ObjectiveOption = Objective.COMMANDS,
+    weights: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option(help="Energy weights of joints 1 … 6 (default all 1)."),
+    ] = None,
+    tolerance: Annotated[
+        float, typer.Option(help="Largest fingertip error accepted with --to-xyz, mm.")
+    ] = 0.05,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Print the result JSON on stdout.")
+    ] = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write plan.json, plan.csv, plan.xlsx and PNG figures here."),
+    ] = None,
+    wall: WallOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    seed: SeedOption = 0,
+) -> None:
+    """Plan a collision-free command sequence to a joint goal or a fingertip point.
+
+    Obstacles and the clearance rule come from the scene file. The direct motion is used when
+    it is clear; otherwise RRT-Connect with shortcuts finds a path, which is put on the command
+    lattice and certified along its whole continuous motion.
+    """
+    with _cli_errors():
+        if (to is None) == (to_xyz is None):
+            raise InvalidInputError("give exactly one goal: --to θ1 … θ6 or --to-xyz X Y Z")
+        arm = _arm(link_radius)
+        theta = list(start) if start is not None else list(np.degrees(arm.home))
+        start_ticks = deg_to_ticks(
+            _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
+        )
+        options = MotionOptions(
+            objective=objective, energy_weights=tuple(weights) if weights else None, seed=seed
+        )
+        scene = _scene(scene_file, wall)
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            if to_xyz is not None:
+                xyz = np.array(_numbers([str(v) for v in to_xyz], 3, "--to-xyz X Y Z (mm)"))
+                _plan_to_point(
+                    arm, scene, start_ticks, xyz, tolerance, options, folder, json_out, "plan"
+                )
+            else:
+                assert to is not None
+                goal = deg_to_ticks(
+                    _numbers([str(t) for t in to], 6, "--to θ1 … θ6 (deg)"), what="--to angles"
+                )
+                result = plan_motion(arm, scene.world, start_ticks, goal[None, :], options)
+                doc = plan_result_dict(result, arm, scene, objective.value, None, None)
+                _emit_plan(result, doc, arm, scene, folder, json_out, "plan", None)
+        if folder is not None and not json_out:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+def _tour_summary(doc: dict[str, Any]) -> Table:
+    table = Table(title="spot welds", show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    table.add_row(
+        "commands",
+        f"{doc['n_commands']}  (bound for the chosen goal states and order: "
+        f"{doc['lower_bound_commands']})",
+    )
+    table.add_row("order", " → ".join(str(i) for i in doc["order"]))
+    for v in doc["visits"]:
+        table.add_row(
+            f"  weld {_fmt(v['target'], 2)} mm",
+            f"after command {v['after_command']}, error {v['error_mm']:.4f} mm",
+        )
+    table.add_row(
+        "largest error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
+    )
+    c = doc["clearance"]
+    table.add_row(
+        "min clearance",
+        f"{c['min_clearance_mm']:.3f} mm (tool tip, may touch); links "
+        f"{c['min_body_clearance_mm']:.3f} mm; whole continuous motion, certified",
+    )
+    m = doc["metrics"]
+    table.add_row(
+        "objectives",
+        f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
+        f"joint travel {m['energy_deg']:.1f} deg",
+    )
+    table.add_row("wall thickness", f"measured {doc['wall_thickness']}")
+    return table
+
+
+def _write_tour(
+    folder: OutputFolder, result: TourResult, doc: dict[str, Any], arm: SerialArm, scene: Scene
+) -> None:
+    from armpath.viz.figures import plot_joint_angles, plot_motion_3d
+
+    write_sequence_files(folder, "spotweld", doc, arm, result.sequence)
+    title = f"spot welds: {result.n_commands} commands, largest error {result.max_error_mm:.4f} mm"
+    targets = np.array(doc["targets"])  # labelled 1..N as listed in the scene
+    plot_motion_3d(folder.file("spotweld_motion.png"), arm, scene, result.sequence, targets, title)
+    plot_joint_angles(folder.file("spotweld_joints.png"), result.sequence, title)
+
+
+@app.command()
+def spotweld(
+    order: Annotated[
+        str,
+        typer.Option(help="Visiting order: 'auto' (best over all orders) or 'given' (as listed)."),
+    ] = "auto",
+    return_home: Annotated[
+        bool, typer.Option("--return", help="Return to the initial pose at the end.")
+    ] = False,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Print the result JSON on stdout.")
+    ] = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write spotweld.json, .csv, .xlsx and PNG figures here."),
+    ] = None,
+    tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
+    objective: ObjectiveOption = Objective.COMMANDS,
+    wall: WallOption = None,
+    scene_file: SceneOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    seed: SeedOption = 0,
+) -> None:
+    """Task 3: reach the spot welds on the workpiece's inner wall through the open top."""
+    with _cli_errors():
+        if order not in ("auto", "given"):
+            raise InvalidInputError(f"--order must be 'auto' or 'given', got {order!r}")
+        arm = _arm(link_radius)
+        scene = _scene(scene_file, wall)
+        options = MotionOptions(objective=objective, seed=seed)
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            with err_console.status("planning the spot welds ...") as status:
+                result = spotweld_task(
+                    scene, arm, order, return_home, tolerance, options,
+                    on_progress=lambda msg: status.update(msg),
+                )  # fmt: skip
+            doc = tour_result_dict(result, arm, scene, objective.value)
+            if folder is not None:
+                _write_tour(folder, result, doc, arm, scene)
+        if json_out:
+            typer.echo(json_text(doc), nl=False)
+        else:
+            out_console.print(_tour_summary(doc))
+            for path in folder.written if folder is not None else []:
+                out_console.print(f"wrote {path}", markup=False)
+
+
 @app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
     wall: WallOption = None,
     link_radius: LinkRadiusOption = 0.0,
 ) -> None:
-    """Run every seed task implemented so far (today: Task 1, reach the tool box)."""
+    """Run the seed tasks implemented so far: Task 1 (reach the tool box) and Task 3 (spot
+    welds inside the workpiece)."""
     with _cli_errors():
         scene = _scene(None, wall)
         arm = _arm(link_radius)
-        ((_, title),) = SEED_TASKS
+        titles = dict(SEED_TASKS)
         with output_folder(out) as folder:
-            with err_console.status(f"{title} ..."):
+            with err_console.status(f"{titles['reach']} ..."):
                 result = reach_task(scene, arm)
             _write_reach(folder, "reach", result, arm, scene)
-            doc = reach_result_dict(result, arm, scene)
-            folder.write_text("summary.md", _summary_markdown([(title, doc)]))
+            reach_doc = reach_result_dict(result, arm, scene)
+            with err_console.status(f"{titles['spotweld']} ...") as status:
+                tour = spotweld_task(scene, arm, on_progress=lambda msg: status.update(msg))
+            tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
+            _write_tour(folder, tour, tour_doc, arm, scene)
+            folder.write_text(
+                "summary.md",
+                _summary_markdown([(titles["reach"], reach_doc), (titles["spotweld"], tour_doc)]),
+            )
         written = folder.written
         table = Table(
             title=f"armpath {__version__}: seed tasks, scene {scene.name}, "
-            f"wall thickness {doc['wall_thickness']}"
+            f"wall thickness {reach_doc['wall_thickness']}"
         )
         for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
             table.add_column(escape(col), justify="left" if col == "task" else "right")
         table.add_row(
-            f"1 reach {_fmt(doc['target'], 0)} mm",
-            str(doc["n_commands"]),
-            str(doc["lower_bound_commands"]),
-            f"{doc['error_mm']:.4f}",
-            f"{doc['min_clearance_mm']:.3f}",
+            f"1 reach {_fmt(reach_doc['target'], 0)} mm",
+            str(reach_doc["n_commands"]),
+            str(reach_doc["lower_bound_commands"]),
+            f"{reach_doc['error_mm']:.4f}",
+            f"{reach_doc['min_clearance_mm']:.3f}",
+        )
+        table.add_row(
+            f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
+            str(tour_doc["n_commands"]),
+            f"{tour_doc['lower_bound_commands']}*",
+            f"{tour_doc['error_mm']:.4f} (largest)",
+            f"{tour_doc['min_clearance_mm']:.3f} (tip); "
+            f"{tour_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
         )
         out_console.print(table)
+        out_console.print(
+            "* Task 3's bound: direct motions between the chosen goal states, obstacles ignored.",
+            markup=False,
+        )
         out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
         for path in written:
             out_console.print(f"  {path.name}", markup=False)

@@ -15,15 +15,20 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from armpath import __version__
 from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
 from armpath.errors import OutputError
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.motion import MotionPlan, PlanMetrics
 from armpath.planning.motion_check import MotionClearance
 from armpath.planning.reach import ReachResult
+from armpath.planning.tour import TourResult
 from armpath.scenes import Scene
+
+FloatArray = NDArray[np.float64]
 
 UNITS = {
     "length": "mm",
@@ -110,6 +115,133 @@ def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict
             "motions_checked": result.motion_checks,
         },
     }
+
+
+def metrics_dict(m: PlanMetrics) -> dict[str, Any]:
+    return {
+        "commands": m.commands,
+        "tip_path_mm": m.tip_path_mm,
+        "energy_deg": m.energy_deg,
+        "joint_travel_deg": list(m.joint_travel_deg),
+    }
+
+
+def _sequence_fields(seq: CommandSequence) -> dict[str, Any]:
+    return {
+        "initial_deg": ticks_to_deg(seq.start_ticks).tolist(),
+        "commands": seq.commands.tolist(),
+        "final_deg": ticks_to_deg(seq.final_ticks).tolist(),
+        "n_commands": seq.n_commands,
+    }
+
+
+def tour_result_dict(
+    result: TourResult, arm: SerialArm, scene: Scene, objective: str
+) -> dict[str, Any]:
+    """The JSON document of a spot-weld tour (the reach schema plus targets and visits)."""
+    wall = scene.wall_thickness
+    seq = result.sequence
+    tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+    return {
+        "task": "spotweld",
+        "armpath_version": __version__,
+        "model": model_dict(arm),
+        "scene": scene.describe(),
+        "wall_thickness": wall.value if wall else None,
+        "z_from": "inner surface of the workpiece, under the wall_thickness convention",
+        "units": UNITS,
+        **_sequence_fields(seq),
+        "targets": [list(v.target_mm) for v in sorted(result.visits, key=lambda v: v.target_index)],
+        "order": [v.target_index + 1 for v in result.visits],
+        "visits": [
+            {"target": list(v.target_mm), "after_command": v.after_command, "error_mm": v.error_mm}
+            for v in result.visits
+        ],
+        "returns_to_start": result.returns_to_start,
+        "tip": tip.tolist(),
+        "error_mm": result.max_error_mm,
+        "tolerance_mm": result.tolerance_mm,
+        "objective": objective,
+        "metrics": metrics_dict(result.metrics),
+        "lower_bound_commands": result.order_lower_bounds[result.order],
+        "lower_bound": {
+            "commands": result.order_lower_bounds[result.order],
+            "method": (
+                "for the chosen order: fewest commands of direct motions (obstacles ignored) "
+                "through one of the candidate goal states per target; a bound for these goal "
+                "states, not over every configuration"
+            ),
+        },
+        "orders": [
+            {
+                "order": [i + 1 for i in o],
+                "lower_bound_commands": b,
+                "planned_commands": result.orders_planned.get(o),
+            }
+            for o, b in sorted(result.order_lower_bounds.items(), key=lambda kv: (kv[1], kv[0]))
+        ],
+        "legs": [
+            {
+                "commands": leg.sequence.n_commands,
+                "direct_commands": leg.direct_commands,
+                "method": leg.method,
+                "search_samples": leg.searched_samples,
+            }
+            for leg in result.legs
+        ],
+        "min_clearance_mm": result.clearance.min_clearance,
+        "clearance": clearance_dict(result.clearance),
+    }
+
+
+def plan_result_dict(
+    plan: MotionPlan,
+    arm: SerialArm,
+    scene: Scene,
+    objective: str,
+    target_mm: FloatArray | None,
+    tolerance_mm: float | None,
+) -> dict[str, Any]:
+    """The JSON document of a general motion plan (``armpath plan``)."""
+    seq = plan.sequence
+    wall = scene.wall_thickness
+    tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+    doc: dict[str, Any] = {
+        "task": "plan",
+        "armpath_version": __version__,
+        "model": model_dict(arm),
+        "scene": scene.describe(),
+        "wall_thickness": wall.value if wall else None,
+        "units": UNITS,
+        **_sequence_fields(seq),
+        "tip": tip.tolist(),
+        "objective": objective,
+        "metrics": metrics_dict(plan.metrics),
+        "direct_commands": plan.direct_commands,
+        "lower_bound_commands": plan.direct_commands,
+        "method": plan.method,
+        "search_samples": plan.searched_samples,
+        "min_clearance_mm": plan.clearance.min_clearance,
+        "clearance": clearance_dict(plan.clearance),
+    }
+    if target_mm is not None:
+        doc["target"] = np.asarray(target_mm).tolist()
+        doc["error_mm"] = float(np.linalg.norm(tip - target_mm))
+        doc["tolerance_mm"] = tolerance_mm
+    return doc
+
+
+def write_sequence_files(
+    folder: OutputFolder, stem: str, doc: dict[str, Any], arm: SerialArm, seq: CommandSequence
+) -> None:
+    """Write ``stem.json``, ``stem.csv`` and ``stem.xlsx`` of any result document."""
+    folder.write_text(f"{stem}.json", json_text(doc))
+    header, rows = command_table(arm, seq)
+    folder.write_text(f"{stem}.csv", csv_text(header, rows))
+    write_xlsx(
+        folder.file(f"{stem}.xlsx"),
+        {"commands": (header, rows), "summary": (["quantity", "value"], summary_rows(doc))},
+    )
 
 
 def command_table(arm: SerialArm, seq: CommandSequence) -> tuple[list[str], list[list[Any]]]:
@@ -257,11 +389,5 @@ def write_reach_files(
 ) -> dict[str, Any]:
     """Write ``stem.json``, ``stem.csv`` and ``stem.xlsx`` into ``folder``; returns the JSON."""
     doc = reach_result_dict(result, arm, scene)
-    folder.write_text(f"{stem}.json", json_text(doc))
-    header, rows = command_table(arm, result.sequence)
-    folder.write_text(f"{stem}.csv", csv_text(header, rows))
-    write_xlsx(
-        folder.file(f"{stem}.xlsx"),
-        {"commands": (header, rows), "summary": (["quantity", "value"], summary_rows(doc))},
-    )
+    write_sequence_files(folder, stem, doc, arm, result.sequence)
     return doc

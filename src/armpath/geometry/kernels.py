@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 #: Golden-section steps for convex solids: 0.618^72 < 1e-14 of the segment length.
 GOLDEN_ITERATIONS = 72
@@ -398,7 +398,7 @@ def segments_to_revolution(
     p[:, :3] = p0
     p[:, 3:] = p1
     n_chunks = min(k_count, 64)
-    for c in prange(n_chunks):
+    for c in range(n_chunks):
         cands = np.empty(8 + verts.shape[0] * 32)
         for k in range(c, k_count, n_chunks):
             out[k] = _segment_revolution(p, k, origin, axis, verts, boundary, cands)

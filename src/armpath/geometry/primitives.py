@@ -476,6 +476,28 @@ class HollowFrustum(SolidOfRevolution):
         zz = np.asarray(z, dtype=np.float64)
         return self.r_bottom + (self.r_top - self.r_bottom) * zz / self.height
 
+    def inner_wall_point(self, x: float, y: float) -> tuple[float, float, float]:
+        """The point of the inner wall whose projection along the axis is ``(x, y)``.
+
+        For the usual vertical axis this is the point above ``(x, y)`` on the inner surface:
+        its height comes from inverting the inner radius. Raises :class:`InvalidInputError`
+        when no point of the inner wall (between the bottom plate and the rim) projects there.
+        """
+        if not np.allclose(self.axis, [0.0, 0.0, 1.0]):
+            raise InvalidInputError(f"{self.name!r}: inner wall points need a vertical axis")
+        r = float(np.hypot(x - self.origin[0], y - self.origin[1]))
+        slope = (self.r_top - self.r_bottom) / self.height  # dr/dz of the inner wall
+        z_lo = self.wall if self.closed_bottom else 0.0
+        z_hi = self.height if self.open_top else self.height - self.wall
+        z = (r - (self.r_bottom - self.horizontal_wall)) / slope if slope else float("nan")
+        if not (np.isfinite(z) and z_lo <= z <= z_hi):
+            lo, hi = self.inner_radius(z_hi), self.inner_radius(z_lo)
+            raise InvalidInputError(
+                f"({x:g}, {y:g}) is {r:.3f} mm from the axis of {self.name!r}; its inner wall "
+                f"spans radii {min(lo, hi):.3f} to {max(lo, hi):.3f} mm"
+            )
+        return (float(x), float(y), float(self.origin[2] + z))
+
     @property
     def horizontal_wall(self) -> float:
         """Wall thickness measured horizontally (equals ``wall`` for the horizontal convention)."""

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.commands import CommandSequence, ticks_to_rad
+from armpath.errors import CollisionError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import displacement_bounds
 from armpath.model.serial_arm import SerialArm
@@ -186,3 +187,19 @@ def motion_clearance(
         limiting_command=command_of(int(i_lim)),
         evaluations=int(u_nodes.size),
     )
+
+
+def check_start_clear(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> None:
+    """Raise :class:`CollisionError` naming the worst pair when ``q`` breaks the clearance rule."""
+    values, _ = world.pair_clearances(arm, q)
+    pairs = world.pairs(arm)
+    if not pairs:
+        return
+    slack = values - world.required(arm)
+    k = int(np.argmin(slack))
+    if slack[k] < 0:
+        pair = pairs[k]
+        raise CollisionError(
+            f"start state is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
+            f"(needs >= {pair.required:g} mm)"
+        )

@@ -52,13 +52,15 @@ from armpath.ik.seed_position import (
 from armpath.kinematics import position_jacobian, tool_position
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.motion_check import MotionClearance, motion_clearance
+from armpath.planning.motion_check import MotionClearance, check_start_clear, motion_clearance
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: Joints that move the fingertip (0-based); joint 6 only turns the tool and is left unchanged.
 TIP_JOINTS = 5
+#: A target this close (mm) inside a surface counts as on it (a point computed on the surface).
+SURFACE_TOLERANCE_MM = 1e-6
 
 
 @dataclass(frozen=True)
@@ -493,22 +495,12 @@ def _validated_problem(
     problem = _Problem(arm, geometry, world, start, p, lo_t, hi_t, unlimited)
     for obstacle in world.obstacles:
         depth = -float(obstacle.signed_distance(p))
-        if depth > 0:
+        if depth > SURFACE_TOLERANCE_MM:
             raise CollisionError(
                 f"target ({', '.join(f'{v:g}' for v in p)}) mm lies {depth:.3f} mm inside "
                 f"{obstacle.name}: the fingertip may touch a surface but not enter it"
             )
-    q0 = ticks_to_rad(start)
-    clear = world.clearances(arm, q0)
-    parts = world.parts(arm)
-    required = world.required(arm)
-    bad = clear - required[:, None]
-    if np.min(bad) < 0:
-        i, o = np.unravel_index(int(np.argmin(bad)), bad.shape)
-        raise CollisionError(
-            f"start state is in collision: link {parts[i].name} is {clear[i, o]:.3f} mm from "
-            f"{world.obstacles[o].name} (needs >= {required[i]:g} mm)"
-        )
+    check_start_clear(arm, world, ticks_to_rad(start))
     return problem
 
 
@@ -617,3 +609,117 @@ def plan_reach(
         f"{bound.commands + opts.extra_commands} commands ({'; '.join(failures)}); "
         "collision-free planning around obstacles is not available yet"
     )
+
+
+def goal_states(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: ArrayLike,
+    target_mm: ArrayLike,
+    tolerance_mm: float = 0.05,
+    count: int = 12,
+    body_buffer_mm: float = 1.5,
+    spread_deg: float = 4.0,
+    sphere_step_deg: float = 1.0,
+) -> tuple[IntArray, FloatArray]:
+    """Lattice states that put the fingertip within ``tolerance_mm`` of the target, clear of
+    obstacles, nearest first.
+
+    The solution family is sampled on the wrist-sphere grid; samples whose links keep the
+    margin plus ``body_buffer_mm`` (the tool tip only must not penetrate; the buffer lets a
+    planner approach the goal with a certified edge test) are taken in order of
+    their largest joint change from the start, at least ``spread_deg`` apart. Around each, the
+    lattice is searched locally (two joints on their ticks near the sample, the other three
+    solved and rounded both ways, then +-1 tick polishing); the lattice state with the smallest
+    error whose links keep the margin plus ``body_buffer_mm`` is kept.
+
+    Returns ``(G, n)`` integer ticks and their fingertip errors (mm), at most ``count``, sorted
+    by largest joint change from the start. Raises :class:`PlanningError` when no clear state
+    exists.
+    """
+    p = _validated_problem(arm, world, start_ticks, target_mm)
+    fam = _family(p, sphere_step_deg)
+    q, change = fam.points()
+    finite = np.isfinite(change)
+    q, change = q[finite], change[finite]
+    if q.shape[0] == 0:
+        raise UnreachableError(
+            f"target ({', '.join(f'{v:g}' for v in p.target)}) mm is out of reach within the "
+            "joint limits"
+        )
+    pairs = world.pairs(arm)
+    is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
+    required = world.required(arm)
+    values, _ = world.pair_clearances(arm, p.full(q))
+    body_ok = np.all(np.where(is_tip, True, values - required >= body_buffer_mm), axis=-1)
+    if not np.any(body_ok):
+        raise PlanningError(
+            f"no configuration reaching ({', '.join(f'{v:g}' for v in p.target)}) mm keeps the "
+            f"links {world.margin:g} mm clear of the obstacles"
+        )
+    q, change = q[body_ok], change[body_ok]
+    order = np.argsort(change, kind="stable")
+    spread = np.radians(spread_deg)
+    picks: list[FloatArray] = []
+    for i in order:
+        if all(np.max(np.abs(q[i] - c)) >= spread for c in picks):
+            picks.append(q[i])
+            if len(picks) >= 4 * count:
+                break
+    states: list[IntArray] = []
+    errors: list[float] = []
+    steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
+    offsets = np.stack(np.meshgrid(np.arange(-2, 3), np.arange(-2, 3), indexing="ij"), -1)
+    offsets = offsets.reshape(-1, 2)
+    corners = np.array([[(c >> b) & 1 for b in range(3)] for c in range(8)])
+    for q_star in picks:
+        t_star = q_star / TICK_RAD
+        cands: list[IntArray] = []
+        for pair in FIXED_PAIRS:
+            grid = np.round(t_star[list(pair)]).astype(np.int64) + offsets
+            sol = solve_with_fixed_pair(
+                p.geometry, p.target, pair, grid[:, 0] * TICK_RAD, grid[:, 1] * TICK_RAD
+            )
+            ticks = (p.normalize(sol) / TICK_RAD).reshape(-1, TIP_JOINTS)
+            ticks = ticks[np.all(np.isfinite(ticks), axis=-1)]
+            ticks = ticks[np.max(np.abs(ticks - t_star), axis=-1) < 30]  # the same branch
+            if ticks.size == 0:
+                continue
+            solved = [j for j in range(TIP_JOINTS) if j not in pair]
+            base = np.floor(ticks).astype(np.int64)
+            base[:, list(pair)] = np.round(ticks[:, list(pair)]).astype(np.int64)
+            c = np.repeat(base[:, None, :], 8, axis=1)
+            c[:, :, solved] += corners[None]
+            cands.append(c.reshape(-1, TIP_JOINTS))
+        if not cands:
+            continue
+        c5 = np.unique(np.concatenate(cands), axis=0)
+        c5 = np.unique((c5[:, None, :] + steps[None]).reshape(-1, TIP_JOINTS), axis=0)
+        c5 = c5[np.all((c5 >= p.lo_ticks) & (c5 <= p.hi_ticks), axis=-1)]
+        errs = p.errors_of_ticks(c5)
+        within = errs <= tolerance_mm
+        if not np.any(within):
+            continue
+        c5, errs = c5[within], errs[within]
+        full = np.hstack([c5, np.broadcast_to(p.start_ticks[TIP_JOINTS:], (c5.shape[0], 1))])
+        vals, _ = world.pair_clearances(arm, ticks_to_rad(full))
+        margin_left = vals - required
+        ok = np.all(np.where(is_tip, vals >= 0, margin_left >= body_buffer_mm), axis=-1)
+        if not np.any(ok):
+            continue
+        k = int(np.flatnonzero(ok)[np.argmin(errs[ok])])
+        if any(np.array_equal(full[k], s) for s in states):
+            continue
+        states.append(full[k])
+        errors.append(float(errs[k]))
+        if len(states) >= count:
+            break
+    if not states:
+        raise PlanningError(
+            f"no lattice state within {tolerance_mm} mm of "
+            f"({', '.join(f'{v:g}' for v in p.target)}) mm satisfies the clearance rule"
+        )
+    out = np.array(states, dtype=np.int64)
+    change_ticks = np.max(np.abs(out[:, :TIP_JOINTS] - p.start_ticks[:TIP_JOINTS]), axis=-1)
+    order = np.argsort(change_ticks, kind="stable")
+    return out[order], np.array(errors)[order]

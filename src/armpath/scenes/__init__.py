@@ -1,4 +1,4 @@
-"""Scenes: obstacles, clearance rule and task data, read from TOML files.
+"""Scenes: obstacles, clearance rule and task data, read from TOML or YAML files.
 
 The seed scene (SPEC sections 3-4) lives in ``seed.toml`` next to this module; it is the one place
 for its numbers. Files are validated with pydantic and every problem is reported as a
@@ -14,15 +14,21 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from armpath.errors import InvalidInputError, SceneError
 from armpath.geometry import (
+    Box,
+    Capsule,
     CollisionWorld,
     HalfSpace,
     HollowFrustum,
     Obstacle,
+    Sphere,
     WallThickness,
+    cone_frustum,
+    cylinder,
     hollow_frustum,
 )
 
@@ -65,20 +71,100 @@ class HollowFrustumSpec(_FiniteVec):
     axis: Vec3 = (0.0, 0.0, 1.0)
 
 
-ObstacleSpec = Annotated[HalfSpaceSpec | HollowFrustumSpec, Field(discriminator="type")]
+class SphereSpec(_FiniteVec):
+    type: Literal["sphere"]
+    name: str
+    center: Vec3
+    radius: float = Field(gt=0)
+
+
+class CapsuleSpec(_FiniteVec):
+    type: Literal["capsule"]
+    name: str
+    start: Vec3
+    end: Vec3
+    radius: float = Field(gt=0)
+
+
+class BoxSpec(_FiniteVec):
+    type: Literal["box"]
+    name: str
+    center: Vec3
+    size: Vec3 = Field(description="edge lengths along the box axes")
+    rotation_deg: Vec3 = Field(
+        default=(0.0, 0.0, 0.0), description="rotation vector of the box axes, degrees"
+    )
+
+    @field_validator("size", mode="after")
+    @classmethod
+    def _positive(cls, v: Vec3) -> Vec3:
+        if any(x <= 0 for x in v):
+            raise ValueError("box size must be positive")
+        return v
+
+
+class CylinderSpec(_FiniteVec):
+    type: Literal["cylinder"]
+    name: str
+    base_center: Vec3
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    radius: float = Field(gt=0)
+    height: float = Field(gt=0)
+
+
+class ConeFrustumSpec(_FiniteVec):
+    type: Literal["cone_frustum"]
+    name: str
+    base_center: Vec3
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    r_bottom: float = Field(ge=0)
+    r_top: float = Field(ge=0)
+    height: float = Field(gt=0)
+
+
+class MeshSpec(_FiniteVec):
+    type: Literal["mesh"]
+    name: str
+    file: str = Field(description="STL/OBJ path, relative to the scene file")
+    scale: float = Field(default=1.0, gt=0)
+    translation: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+
+
+ObstacleSpec = Annotated[
+    HalfSpaceSpec
+    | HollowFrustumSpec
+    | SphereSpec
+    | CapsuleSpec
+    | BoxSpec
+    | CylinderSpec
+    | ConeFrustumSpec
+    | MeshSpec,
+    Field(discriminator="type"),
+]
 
 
 class ClearanceSpec(_FiniteVec):
     margin_mm: float = Field(default=1.0, ge=0)
     tool_tip_exempt_mm: float = Field(default=5.0, ge=0)
+    self_margin_mm: float = Field(default=1.0, ge=0)
 
 
 class ReachTaskSpec(_FiniteVec):
     target_mm: Vec3
 
 
+class SpotweldTaskSpec(_Strict):
+    """Points on the inner wall of a hollow obstacle, given by their projections on xy."""
+
+    workpiece: str = Field(description="name of the hollow_frustum obstacle")
+    points_xy_mm: list[tuple[float, float]] = Field(min_length=1)
+    surface: Literal["inner"] = "inner"
+
+
 class TasksSpec(_Strict):
     reach: ReachTaskSpec | None = None
+    spotweld: SpotweldTaskSpec | None = None
 
 
 class SceneFile(_Strict):
@@ -100,6 +186,23 @@ class Scene:
     world: CollisionWorld
     reach_target_mm: tuple[float, float, float] | None
     source: str
+    spotweld: SpotweldTaskSpec | None = None
+
+    def spotweld_targets_mm(self) -> NDArray[np.float64]:
+        """Task 3's points ``(N, 3)`` mm: each xy projection lifted onto the inner wall of the
+        named workpiece (its height from the inner surface under the scene's wall convention).
+        """
+        if self.spotweld is None:
+            raise SceneError(f"scene {self.source} defines no [tasks.spotweld]")
+        spec = self.spotweld
+        found = [o for o in self.world.obstacles if o.name == spec.workpiece]
+        if not found or not isinstance(found[0], HollowFrustum):
+            raise SceneError(
+                f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is not a "
+                "hollow_frustum obstacle"
+            )
+        w = found[0]
+        return np.array([w.inner_wall_point(x, y) for x, y in spec.points_xy_mm])
 
     @property
     def workpieces(self) -> tuple[HollowFrustum, ...]:
@@ -151,9 +254,40 @@ def _rebuild_frustum(f: HollowFrustum, conv: WallThickness) -> HollowFrustum:
     )
 
 
-def _build_obstacle(spec: HalfSpaceSpec | HollowFrustumSpec) -> Obstacle:
+def _rotation(rotvec_deg: Vec3) -> NDArray[np.float64]:
+    from scipy.spatial.transform import Rotation
+
+    return np.asarray(Rotation.from_rotvec(np.radians(rotvec_deg)).as_matrix())
+
+
+def _build_obstacle(spec: BaseModel, base_dir: Path | None) -> Obstacle:
     if isinstance(spec, HalfSpaceSpec):
         return HalfSpace(spec.name, np.array(spec.point), np.array(spec.normal))
+    if isinstance(spec, SphereSpec):
+        return Sphere(spec.name, np.array(spec.center), spec.radius)
+    if isinstance(spec, CapsuleSpec):
+        return Capsule(spec.name, np.array(spec.start), np.array(spec.end), spec.radius)
+    if isinstance(spec, BoxSpec):
+        return Box(
+            spec.name, np.array(spec.center), np.array(spec.size) / 2, _rotation(spec.rotation_deg)
+        )
+    if isinstance(spec, CylinderSpec):
+        return cylinder(spec.name, spec.base_center, spec.axis, spec.radius, spec.height)
+    if isinstance(spec, ConeFrustumSpec):
+        return cone_frustum(
+            spec.name, spec.base_center, spec.axis, spec.r_bottom, spec.r_top, spec.height
+        )
+    if isinstance(spec, MeshSpec):
+        from armpath.geometry.mesh import load_mesh
+
+        path = Path(spec.file)
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        T = np.eye(4)
+        T[:3, :3] = _rotation(spec.rotation_deg)
+        T[:3, 3] = spec.translation
+        return load_mesh(path, spec.name, spec.scale, T)
+    assert isinstance(spec, HollowFrustumSpec)
     return hollow_frustum(
         spec.name,
         spec.base_center,
@@ -168,8 +302,13 @@ def _build_obstacle(spec: HalfSpaceSpec | HollowFrustumSpec) -> Obstacle:
     )
 
 
-def scene_from_dict(data: dict[str, object], source: str = "<dict>") -> Scene:
-    """Validate a parsed scene file and build the scene."""
+def scene_from_dict(
+    data: dict[str, object], source: str = "<dict>", base_dir: Path | None = None
+) -> Scene:
+    """Validate a parsed scene file and build the scene (relative mesh paths from
+    ``base_dir``)."""
+    if not isinstance(data, dict):
+        raise SceneError(f"scene {source}: the top level must be a table of keys")
     try:
         spec = SceneFile.model_validate(data)
     except ValidationError as exc:
@@ -177,33 +316,54 @@ def scene_from_dict(data: dict[str, object], source: str = "<dict>") -> Scene:
         where = ".".join(str(p) for p in first["loc"])
         raise SceneError(f"scene {source}: {where}: {first['msg']}") from None
     try:
-        obstacles = tuple(_build_obstacle(o) for o in spec.obstacles)
+        obstacles = tuple(_build_obstacle(o, base_dir) for o in spec.obstacles)
         world = CollisionWorld(
-            obstacles, spec.clearance.margin_mm, spec.clearance.tool_tip_exempt_mm
+            obstacles,
+            spec.clearance.margin_mm,
+            spec.clearance.tool_tip_exempt_mm,
+            spec.clearance.self_margin_mm,
         )
     except InvalidInputError as exc:
         raise SceneError(f"scene {source}: {exc}") from None
     reach = spec.tasks.reach.target_mm if spec.tasks.reach else None
-    return Scene(spec.name, spec.description, world, reach, source)
+    scene = Scene(spec.name, spec.description, world, reach, source, spec.tasks.spotweld)
+    if scene.spotweld is not None:
+        scene.spotweld_targets_mm()  # validates the workpiece name and the points
+    return scene
 
 
 def load_scene(path: str | Path | None = None) -> Scene:
-    """Load a scene file (TOML); ``None`` loads the built-in seed scene."""
+    """Load a scene file (``.toml``, or ``.yaml``/``.yml``); ``None`` loads the seed scene."""
+    base_dir = None
+    suffix = ".toml"
     if path is None:
         text = resources.files("armpath.scenes").joinpath("seed.toml").read_text("utf-8")
         source = "built-in seed.toml"
     else:
         p = Path(path)
+        suffix = p.suffix.lower()
+        if suffix not in (".toml", ".yaml", ".yml"):
+            raise SceneError(f"scene file {p} must end in .toml, .yaml or .yml")
         try:
             text = p.read_text("utf-8")
         except OSError as exc:
             raise SceneError(f"cannot read scene file {p}: {exc.strerror}") from None
         source = str(p)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"scene {source}: not valid TOML: {exc}") from None
-    return scene_from_dict(data, source)
+        base_dir = p.parent
+    data: object
+    if suffix == ".toml":
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise SceneError(f"scene {source}: not valid TOML: {exc}") from None
+    else:
+        import yaml
+
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise SceneError(f"scene {source}: not valid YAML: {exc}") from None
+    return scene_from_dict(data, source, base_dir)  # type: ignore[arg-type]
 
 
 def seed_scene() -> Scene:

@@ -1,9 +1,12 @@
-"""Task 1 of the seed scene: fetch the tool from the tool box in the fewest commands.
+"""The seed scene's tasks: 1, fetch the tool from the tool box in the fewest commands; 3, spot
+welds on the workpiece's inner wall, reached through the open top.
 
-(Tasks 2, trace the crack, and 3, spot welds inside the workpiece, are added by later issues.)
+(Task 2, trace the crack, is added by a later issue.)
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
@@ -11,11 +14,16 @@ from armpath.commands import deg_to_ticks
 from armpath.errors import SceneError
 from armpath.model.seed_arm import seed_arm
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.motion import MotionOptions
 from armpath.planning.reach import ReachOptions, ReachResult, plan_reach
+from armpath.planning.tour import TourResult, plan_tour
 from armpath.scenes import Scene
 
 #: The seed tasks implemented so far, in SPEC order: (key, title).
-SEED_TASKS: tuple[tuple[str, str], ...] = (("reach", "Task 1: reach the tool box"),)
+SEED_TASKS: tuple[tuple[str, str], ...] = (
+    ("reach", "Task 1: reach the tool box"),
+    ("spotweld", "Task 3: spot welds inside the workpiece"),
+)
 
 
 def reach_task(
@@ -27,3 +35,28 @@ def reach_task(
     model = arm or seed_arm()
     start = deg_to_ticks(np.degrees(model.home), what="initial pose")
     return plan_reach(model, scene.world, start, scene.reach_target_mm, options)
+
+
+def spotweld_task(
+    scene: Scene,
+    arm: SerialArm | None = None,
+    order: str = "auto",
+    return_to_start: bool = False,
+    tolerance_mm: float = 0.05,
+    options: MotionOptions | None = None,
+    on_progress: Callable[[str], None] | None = None,
+) -> TourResult:
+    """Task 3: from the arm's initial pose through every spot weld of the scene, best order."""
+    model = arm or seed_arm()
+    start = deg_to_ticks(np.degrees(model.home), what="initial pose")
+    return plan_tour(
+        model,
+        scene.world,
+        start,
+        scene.spotweld_targets_mm(),
+        order=order,
+        return_to_start=return_to_start,
+        tolerance_mm=tolerance_mm,
+        options=options,
+        on_progress=on_progress,
+    )

@@ -10,7 +10,7 @@ from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike
 
 from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
-from armpath.geometry.primitives import HalfSpace, SolidOfRevolution
+from armpath.geometry.primitives import Box, HalfSpace, SolidOfRevolution, Sphere
 from armpath.kinematics import landmark_positions
 from armpath.model.serial_arm import SerialArm
 from armpath.scenes import Scene
@@ -55,6 +55,26 @@ def _draw_solid(ax: Axes3D, solid: SolidOfRevolution, n_theta: int = 48) -> np.n
     return np.vstack(drawn) if drawn else np.zeros((0, 3))
 
 
+def _draw_sphere(ax: Axes3D, s: Sphere) -> np.ndarray:
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 24), np.linspace(0, np.pi, 12))
+    x = s.center[0] + s.radius * np.cos(u) * np.sin(v)
+    y = s.center[1] + s.radius * np.sin(u) * np.sin(v)
+    z = s.center[2] + s.radius * np.cos(v)
+    ax.plot_surface(x, y, z, color="tan", alpha=0.25, linewidth=0)
+    return np.stack([x, y, z], axis=-1).reshape(-1, 3)
+
+
+def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
+    signs = np.array([[(c >> k) & 1 for k in range(3)] for c in range(8)]) * 2 - 1
+    corners = b.center + (signs * b.half_extents) @ b.rotation.T
+    for i in range(8):
+        for k in range(3):
+            j = i ^ (1 << k)
+            if j > i:
+                ax.plot(*corners[[i, j]].T, color="saddlebrown", alpha=0.6, linewidth=1)
+    return np.asarray(corners)
+
+
 def _draw_table(ax: Axes3D) -> None:
     """The plane z = 0 across the current x and y limits."""
     X, Y = np.meshgrid(np.array(ax.get_xlim()), np.array(ax.get_ylim()))
@@ -89,6 +109,10 @@ def plot_motion_3d(
     for obstacle in scene.world.obstacles:
         if isinstance(obstacle, SolidOfRevolution):
             pts.append(_draw_solid(ax, obstacle))
+        elif isinstance(obstacle, Sphere):
+            pts.append(_draw_sphere(ax, obstacle))
+        elif isinstance(obstacle, Box):
+            pts.append(_draw_box(ax, obstacle))
     step = max(1, len(states) // 12)
     for k in range(0, len(states), step):
         ax.plot(*states[k].T, color="0.6", alpha=0.35, linewidth=1)
@@ -96,9 +120,12 @@ def plot_motion_3d(
     ax.plot(*states[-1].T, "-o", color="tab:blue", linewidth=2.5, markersize=4, label="end")
     ax.plot(*motion[:, -1].T, color="tab:red", linewidth=1.5, label="fingertip path")
     if target is not None:
-        t = np.asarray(target, dtype=float)
-        ax.scatter(*t, color="tab:green", s=60, marker="*", label="target", depthshade=False)
-        pts.append(t[None])
+        t = np.asarray(target, dtype=float).reshape(-1, 3)
+        label = "target" if len(t) == 1 else "targets"
+        ax.scatter(*t.T, color="tab:green", s=60, marker="*", label=label, depthshade=False)
+        for k, p in enumerate(t if len(t) > 1 else []):
+            ax.text(*p, f" {k + 1}", fontsize=9, color="tab:green")
+        pts.append(t)
     for name, p in zip(arm.landmark_names, states[-1], strict=True):
         ax.text(*p, f" {name}", fontsize=8, color="tab:blue")
     _set_equal(ax, np.vstack(pts))

@@ -1,0 +1,108 @@
+"""Task 3 (spot welds inside the workpiece): the CLI's JSON replayed by the independent checker."""
+
+import itertools
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import independent
+
+HOME = [0, -90, 0, 0, -90, 0]
+LIMITS = np.array([np.inf, 125, 138, np.inf, 133.5, np.inf])
+XY = [(320, -104), (120, 106), (190, -125), (255, 88)]
+
+
+@pytest.fixture(scope="module")
+def task3(tmp_path_factory):
+    out = tmp_path_factory.mktemp("task3")
+    proc = subprocess.run(
+        [sys.executable, "-m", "armpath", "spotweld", "--out", str(out), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert json.loads((out / "spotweld.json").read_text()) == doc
+    return doc, out
+
+
+def test_targets_lie_on_the_inner_wall(task3):
+    doc, _ = task3
+    wp = independent.Workpiece("normal")
+    assert doc["wall_thickness"] == "normal"
+    targets = np.array(doc["targets"])
+    np.testing.assert_allclose(targets[:, :2], XY)
+    r = np.hypot(targets[:, 0] - 210, targets[:, 1])
+    np.testing.assert_allclose(r, wp.r_in(targets[:, 2]), atol=1e-9)
+    np.testing.assert_allclose(wp.distance(targets), 0.0, atol=1e-9)
+
+
+def test_every_weld_reached_within_tolerance(task3):
+    doc, _ = task3
+    cmds = np.array(doc["commands"])
+    assert cmds.dtype.kind == "i" and cmds.shape == (doc["n_commands"], 6)
+    assert np.abs(cmds).max() <= 20
+    assert doc["initial_deg"] == HOME
+    states = independent.replay(doc["initial_deg"], cmds)
+    assert np.all(np.abs(states) <= LIMITS + 1e-9)  # linear motion: the states bound it
+    visits = doc["visits"]
+    assert sorted(tuple(v["target"]) for v in visits) == sorted(map(tuple, doc["targets"]))
+    ks = [v["after_command"] for v in visits]
+    assert ks == sorted(ks) and ks[-1] == doc["n_commands"]
+    for v in visits:
+        tip = independent.points(states[v["after_command"]])[4]
+        err = float(np.linalg.norm(tip - np.array(v["target"])))
+        assert err <= 0.05
+        assert err == pytest.approx(v["error_mm"], abs=1e-9)
+        # the fingertip touches the wall from inside, never enters it
+        assert independent.Workpiece("normal").distance(tip)[0] >= -1e-9
+
+
+def test_continuous_motion_keeps_the_clearance_rule(task3):
+    doc, _ = task3
+    cmds = np.array(doc["commands"])
+    pts = independent.motion_points(doc["initial_deg"], cmds, 12)
+    samples, is_tip = independent.link_samples(pts, spacing=1.0)
+    wp = independent.Workpiece("normal").distance(samples.reshape(-1, 3)).reshape(samples.shape[:2])
+    clearance = np.minimum(wp, samples[..., 2])
+    is_tip = np.broadcast_to(is_tip, clearance.shape)
+    assert clearance[~is_tip].min() >= 1.0
+    assert clearance[is_tip].min() >= -1e-9
+    assert clearance.min() >= doc["clearance"]["min_clearance_lower_bound_mm"] - 1e-9
+    assert doc["clearance"]["certified"]
+    # links that are not neighbours stay apart (AB-CD, AB-DE, BC-DE)
+    for (i, j), (k, m) in [((0, 1), (2, 3)), ((0, 1), (3, 4)), ((1, 2), (3, 4))]:
+        s = np.linspace(0, 1, 200)
+        a = pts[:, i, None] + s[None, :, None] * (pts[:, j] - pts[:, i])[:, None]
+        b = pts[:, k, None] + s[None, :, None] * (pts[:, m] - pts[:, k])[:, None]
+        d = np.linalg.norm(a[:, :, None] - b[:, None, :], axis=-1).min(axis=(1, 2))
+        assert d.min() >= 1.0  # a sampled distance is never below the true one
+
+
+def test_order_is_the_best_planned_and_every_order_ranked(task3):
+    doc, _ = task3
+    orders = doc["orders"]
+    assert sorted(tuple(o["order"]) for o in orders) == sorted(
+        itertools.permutations(range(1, 5))
+    )
+    planned = [o for o in orders if o["planned_commands"] is not None]
+    assert planned and min(o["planned_commands"] for o in planned) == doc["n_commands"]
+    assert doc["n_commands"] >= doc["lower_bound_commands"]
+    chosen = next(o for o in orders if o["order"] == doc["order"])
+    assert chosen["planned_commands"] == doc["n_commands"]
+    # the legs add up and each needs at least its direct-motion count
+    assert sum(leg["commands"] for leg in doc["legs"]) == doc["n_commands"]
+    assert all(leg["commands"] >= leg["direct_commands"] for leg in doc["legs"])
+
+
+def test_files_and_figures_written(task3):
+    doc, out = task3
+    names = {p.name for p in out.iterdir()}
+    assert {"spotweld.json", "spotweld.csv", "spotweld.xlsx"} <= names
+    assert {"spotweld_motion.png", "spotweld_joints.png"} <= names
+    rows = (out / "spotweld.csv").read_text().strip().splitlines()
+    assert len(rows) == doc["n_commands"] + 1
