@@ -86,9 +86,7 @@ def test_continuous_motion_keeps_the_clearance_rule(task3):
 def test_order_is_the_best_planned_and_every_order_ranked(task3):
     doc, _ = task3
     orders = doc["orders"]
-    assert sorted(tuple(o["order"]) for o in orders) == sorted(
-        itertools.permutations(range(1, 5))
-    )
+    assert sorted(tuple(o["order"]) for o in orders) == sorted(itertools.permutations(range(1, 5)))
     planned = [o for o in orders if o["planned_commands"] is not None]
     assert planned and min(o["planned_commands"] for o in planned) == doc["n_commands"]
     assert doc["n_commands"] >= doc["lower_bound_commands"]

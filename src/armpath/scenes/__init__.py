@@ -278,7 +278,10 @@ def _build_obstacle(spec: BaseModel, base_dir: Path | None) -> Obstacle:
             spec.name, spec.base_center, spec.axis, spec.r_bottom, spec.r_top, spec.height
         )
     if isinstance(spec, MeshSpec):
-        from armpath.geometry.mesh import load_mesh
+        try:
+            from armpath.geometry.mesh import load_mesh
+        except ImportError as exc:
+            raise InvalidInputError(f"obstacle {spec.name!r}: {exc}") from None
 
         path = Path(spec.file)
         if not path.is_absolute() and base_dir is not None:

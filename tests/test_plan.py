@@ -1,0 +1,161 @@
+"""General collision-free planning in scenes other than the seed scene, replayed independently."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import independent
+from armpath.commands import deg_to_ticks
+from armpath.errors import InvalidInputError, PlanningError, SceneError
+from armpath.geometry import CollisionWorld, HalfSpace, Sphere
+from armpath.model import seed_arm
+from armpath.planning.motion import MotionOptions, Objective, plan_motion
+from armpath.planning.rrt import path_cost, rrt_connect, shortcut
+from armpath.scenes import load_scene
+
+ARM = seed_arm()
+HOME = [0, -90, 0, 0, -90, 0]
+LIMITS = np.array([np.inf, 125, 138, np.inf, 133.5, np.inf])
+
+POST_SCENE = """\
+name: post
+description: a post and a ball in the way of the direct sweep
+obstacles:
+  - {type: half_space, name: table, point: [0, 0, 0], normal: [0, 0, 1]}
+  - {type: box, name: post, center: [-330, 330, 100], size: [60, 60, 200],
+     rotation_deg: [0, 0, 45]}
+  - {type: sphere, name: ball, center: [-150, -420, 120], radius: 50}
+"""
+
+
+def box_distance(p, center, half, yaw_deg):
+    """Signed distance to a box rotated about z, written from scratch for the checks."""
+    c, s = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
+    R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    local = np.abs((p - center) @ R) - half
+    return np.linalg.norm(np.maximum(local, 0), axis=-1) + np.minimum(local.max(axis=-1), 0)
+
+
+@pytest.fixture(scope="module")
+def post_scene(tmp_path_factory):
+    path = tmp_path_factory.mktemp("scene") / "post.yaml"
+    path.write_text(POST_SCENE)
+    return path
+
+
+def test_yaml_scene_with_primitives(post_scene):
+    scene = load_scene(post_scene)
+    assert [o.name for o in scene.world.obstacles] == ["table", "post", "ball"]
+    box = scene.world.obstacles[1]
+    p = np.array([[-330.0, 330.0, 250.0], [-330.0, 330.0, 100.0]])
+    np.testing.assert_allclose(
+        box.signed_distance(p), box_distance(p, [-330, 330, 100], [30, 30, 100], 45), atol=1e-9
+    )
+
+
+def test_plan_around_a_post_replayed_independently(post_scene):
+    proc = subprocess.run(
+        [sys.executable, "-m", "armpath", "plan", "--scene", str(post_scene), "--json",
+         "--to", "180", "-90", "0", "0", "-90", "0"],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    cmds = np.array(doc["commands"])
+    assert cmds.dtype.kind == "i" and np.abs(cmds).max() <= 20
+    states = independent.replay(HOME, cmds)
+    np.testing.assert_allclose(states[-1], [180, -90, 0, 0, -90, 0])
+    assert np.all(np.abs(states) <= LIMITS + 1e-9)
+    # the straight sweep would hit the post: the plan is a detour, not the direct motion
+    direct = independent.motion_points(HOME, [[20, 0, 0, 0, 0, 0]] * 90, 4)
+    samples, _ = independent.link_samples(direct, 1.0)
+    post = box_distance(samples.reshape(-1, 3), np.array([-330, 330, 100]), [30, 30, 100], 45)
+    assert post.min() < 0
+    # the plan keeps 1 mm from post, ball and table along its continuous motion
+    pts = independent.motion_points(HOME, cmds, 12)
+    samples, _ = independent.link_samples(pts, 1.0)
+    flat = samples.reshape(-1, 3)
+    post = box_distance(flat, np.array([-330, 330, 100]), [30, 30, 100], 45)
+    ball = np.linalg.norm(flat - [-150, -420, 120], axis=-1) - 50
+    assert min(post.min(), ball.min(), flat[:, 2].min()) >= 1.0
+    assert doc["clearance"]["certified"]
+    assert doc["n_commands"] >= doc["lower_bound_commands"] == 90
+    for key in ("commands", "tip_path_mm", "energy_deg"):
+        assert key in doc["metrics"]
+
+
+def test_plans_are_deterministic_and_objectives_reported(post_scene):
+    scene = load_scene(post_scene)
+    start = deg_to_ticks(HOME)
+    goal = deg_to_ticks([150, -60, 30, 0, -90, 0])[None, :]
+    a = plan_motion(ARM, scene.world, start, goal, MotionOptions(seed=3))
+    b = plan_motion(ARM, scene.world, start, goal, MotionOptions(seed=3))
+    np.testing.assert_array_equal(a.sequence.commands, b.sequence.commands)
+    e = plan_motion(ARM, scene.world, start, goal, MotionOptions(objective=Objective.ENERGY))
+    travel = np.abs(e.sequence.commands).sum(axis=0) / 10
+    assert e.metrics.energy_deg == pytest.approx(travel.sum())
+    assert e.clearance.certified_ok and a.clearance.certified_ok
+
+
+def test_rrt_connect_and_shortcut_on_a_2d_maze():
+    """A 2-D configuration space with a wall: the path must go around its end."""
+
+    def clear(a, b):
+        a, b = np.atleast_2d(a), np.atleast_2d(b)
+        s = np.linspace(0, 1, 200)[None, :, None]
+        p = a[:, None] + s * (b - a)[:, None]
+        in_wall = (np.abs(p[..., 0]) < 0.1) & (p[..., 1] < 0.5)
+        return ~np.any(in_wall, axis=1)
+
+    rng = np.random.default_rng(0)
+    start, goal = np.array([-1.0, 0.0]), np.array([1.0, 0.0])
+    res = rrt_connect(start, goal[None], np.array([-2.0, -2]), np.array([2.0, 2]), clear, rng)
+    assert res.success
+    np.testing.assert_allclose(res.path[0], start)
+    np.testing.assert_allclose(res.path[-1], goal)
+    assert np.all(clear(res.path[:-1], res.path[1:]))
+    short = shortcut(res.path, clear, rng)
+    assert np.all(clear(short[:-1], short[1:]))
+    assert path_cost(short) <= path_cost(res.path) + 1e-12
+    # the best path goes over the wall's end at y = 0.5 (largest-change length 2.0)
+    assert path_cost(short) < 2.3
+
+
+def test_planning_errors_are_clear(tmp_path):
+    start = deg_to_ticks(HOME)
+    with pytest.raises(InvalidInputError, match="objective"):
+        MotionOptions(objective="fastest")
+    # a goal inside the post
+    boxed = CollisionWorld((HalfSpace("table", np.zeros(3), np.array([0, 0, 1.0])),
+                            Sphere("cage", np.array([0.0, 510.0, 75.0]), 30.0)))  # fmt: skip
+    with pytest.raises(PlanningError):
+        plan_motion(ARM, boxed, deg_to_ticks([10, -90, 0, 0, -90, 0]), start[None], MotionOptions())
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nobstacles:\n  - {type: pyramid, name: p}\n")
+    with pytest.raises(SceneError, match="obstacles"):
+        load_scene(bad)
+    bad.write_text("name: [unclosed\n")
+    with pytest.raises(SceneError, match="YAML"):
+        load_scene(bad)
+    missing = tmp_path / "mesh.yaml"
+    missing.write_text("name: m\nobstacles:\n  - {type: mesh, name: part, file: nowhere.stl}\n")
+    with pytest.raises(SceneError, match=r"nowhere\.stl"):
+        load_scene(missing)
+
+
+def test_mesh_obstacle_from_a_scene_file(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    trimesh.creation.box(extents=[60, 60, 200]).export(tmp_path / "post.stl")
+    (tmp_path / "mesh.toml").write_text(
+        'name = "mesh"\n[[obstacles]]\ntype = "mesh"\nname = "post"\nfile = "post.stl"\n'
+        "translation = [-330.0, 330.0, 100.0]\nrotation_deg = [0.0, 0.0, 45.0]\n"
+    )
+    scene = load_scene(tmp_path / "mesh.toml")
+    mesh = scene.world.obstacles[0]
+    p = np.array([[-330.0, 330.0, 250.0], [-250.0, 330.0, 100.0], [-330.0, 330.0, 150.0]])
+    np.testing.assert_allclose(
+        mesh.signed_distance(p), box_distance(p, [-330, 330, 100], [30, 30, 100], 45), atol=1e-6
+    )
