@@ -313,6 +313,8 @@ def plan_motion(
     for g in goals:
         arm.check_limits(ticks_to_rad(g), what="goal state")
     check_start_clear(arm, world, ticks_to_rad(start))
+    if goals.shape[0] == 1:
+        check_start_clear(arm, world, ticks_to_rad(goals[0]), what="goal state")
     weights = None if opts.energy_weights is None else np.asarray(opts.energy_weights)
     say = on_progress or (lambda _msg: None)
 

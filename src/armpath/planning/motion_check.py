@@ -189,7 +189,9 @@ def motion_clearance(
     )
 
 
-def check_start_clear(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> None:
+def check_start_clear(
+    arm: SerialArm, world: CollisionWorld, q: FloatArray, what: str = "start state"
+) -> None:
     """Raise :class:`CollisionError` naming the worst pair when ``q`` breaks the clearance rule."""
     values, _ = world.pair_clearances(arm, q)
     pairs = world.pairs(arm)
@@ -200,6 +202,6 @@ def check_start_clear(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> N
     if slack[k] < 0:
         pair = pairs[k]
         raise CollisionError(
-            f"start state is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
+            f"{what} is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
             f"(needs >= {pair.required:g} mm)"
         )
