@@ -344,6 +344,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[{scene}] building coal twins, warming up ...", flush=True)
         world.slack(arm, q[:16])  # compile / load the numba kernels before timing
         world.pair_clearances(arm, q[:16])
+        world.satisfied(arm, q[:16])
         runs: dict[int, CoalPairs] = {}
         for n in args.sections:
             runs[n] = CoalPairs(world, arm, [to_coal(o, n) for o in world.obstacles])
@@ -359,6 +360,9 @@ def main(argv: list[str] | None = None) -> int:
         for r in range(args.repeats):
             print(f"[{scene}] timing round {r + 1}/{args.repeats} ...", flush=True)
             t.setdefault("slack", []).append(seconds(lambda w=world: w.slack(arm, q)) / len(q))
+            t.setdefault("satisfied", []).append(
+                seconds(lambda w=world: w.satisfied(arm, q)) / len(q)
+            )
             t.setdefault("pairs", []).append(
                 seconds(lambda w=world: w.pair_clearances(arm, q)) / len(q)
             )
@@ -373,6 +377,7 @@ def main(argv: list[str] | None = None) -> int:
             [
                 scene,
                 str(P * n_obs + len(world.self_pairs(arm))),
+                f"{us['satisfied']:.2f}",
                 f"{us['slack']:.2f}",
                 f"{us['pairs']:.2f}",
                 f"{us['slack_sub']:.2f}",
@@ -390,7 +395,9 @@ def main(argv: list[str] | None = None) -> int:
             kind = mesh_kind[n]
             ratio_c = med(
                 (pc + cc) / s
-                for pc, cc, s in zip(t[(n, "poses")], t[(n, "collide")], t["slack"], strict=True)
+                for pc, cc, s in zip(
+                    t[(n, "poses")], t[(n, "collide")], t["satisfied"], strict=True
+                )
             )
             ratio_d = med(
                 (pc + dc) / s
@@ -521,7 +528,9 @@ def main(argv: list[str] | None = None) -> int:
         "",
         "## Ours",
         "",
-        "`slack` = the verdict with margins (min clearance - required over every pair); "
+        "`satisfied` = the verdict (every pair keeps its required clearance), with a broad "
+        "phase that skips exact distances behind each obstacle's enclosing ball; "
+        "`slack` = min clearance - required over every pair, exact; "
         "`pair_clearances` = every pair's clearance and proven lower bound. Both include "
         f"forward kinematics and the self-collision pairs. Batches of {len(q)} configurations, "
         f"and `slack` once more on the batch of {m} that coal gets.",
@@ -530,6 +539,7 @@ def main(argv: list[str] | None = None) -> int:
             [
                 "scene",
                 "pairs / config",
+                "satisfied [us]",
                 "slack [us]",
                 "pair_clearances [us]",
                 f"slack, batch of {m} [us]",
@@ -548,7 +558,7 @@ def main(argv: list[str] | None = None) -> int:
         "(`Transform3s`, column `poses`) but not forward kinematics (ours computes it; coal is "
         "given the segments). coal's default GJK tolerance (1e-6, relative) is used; the "
         "`DistanceResult` is cleared before each call (a reused one returns the previous "
-        "penetration depth instead of the new distance). Ratios: collide / our slack, "
+        "penetration depth instead of the new distance). Ratios: collide / our satisfied, "
         "distance / our pair_clearances.",
         "",
         _table(

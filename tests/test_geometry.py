@@ -237,3 +237,34 @@ def test_arm_clearance_at_home():
     assert c[:2, wp].min() == pytest.approx(ref, abs=0.02)
     assert CollisionWorld((), 1.0).describe()["clearance_margin_mm"] == 1.0
     assert WallThickness("normal") is WallThickness.NORMAL
+
+
+def test_broad_phase_verdict_equals_the_exact_clearances():
+    """``satisfied`` skips exact distances behind enclosing balls; its verdict must not change."""
+    arm = seed_arm()
+    extra = (
+        Box("box", [-200, 200, 50], [40, 40, 50], Rotation.from_rotvec([0, 0, 0.5]).as_matrix()),
+        Sphere("ball", [0, -300, 200], 40),
+        cylinder("post", [-250, -250, 0], [0, 0, 1], 30, 300),
+        Capsule("bar", [100, -300, 300], [300, 100, 250], 20),
+        cone_frustum("cone", [-300, 0, 0], [0, 0, 1], 80, 20, 150),
+    )
+    world = CollisionWorld(seed_scene().world.obstacles + extra)
+    rng = np.random.default_rng(8)
+    lim = np.radians([180, 125, 138, 180, 133.5, 180])
+    q = rng.uniform(-lim, lim, (4000, 6))
+    values, _ = world.pair_clearances(arm, q)
+    for margin in (0.0, 1.4, 25.0):
+        exact = np.all(values - world.required(arm) >= margin, axis=-1)
+        np.testing.assert_array_equal(world.satisfied(arm, q, margin), exact)
+        assert 0.05 < exact.mean() < 0.95
+    ball_center, ball_radius = extra[0].enclosing_ball()
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * 40
+    assert np.all(np.linalg.norm(corners, axis=-1) <= ball_radius + 1e-9)
+    for o in extra[2:]:
+        center, radius = o.enclosing_ball()
+        # no point of the surface beyond the ball: sample far points along random directions
+        dirs = rng.normal(size=(500, 3))
+        dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+        assert np.all(o.signed_distance(center + (radius + 1e-6) * dirs) > 0)
+    assert ball_center.shape == (3,)

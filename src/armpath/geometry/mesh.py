@@ -363,6 +363,10 @@ class MeshObstacle(Obstacle):
     def _proxies(self) -> MeshProxies:
         return enclosing_proxies(self.vertices, self.name)
 
+    def enclosing_ball(self) -> tuple[FloatArray, float]:
+        """The smallest enclosing ball of the vertices (broad phase)."""
+        return self.bounding_sphere.center, self.bounding_sphere.radius
+
     def proxies(self) -> MeshProxies:
         """Enclosing sphere, cylinder and frustum of the vertices (each contains the mesh).
 

@@ -103,6 +103,10 @@ class Obstacle(ABC):
     def describe(self) -> dict[str, object]:
         """The obstacle's parameters for result files (plain JSON types)."""
 
+    def enclosing_ball(self) -> tuple[FloatArray, float] | None:
+        """A ball ``(center, radius)`` containing the solid (broad phase), or None if unbounded."""
+        return None
+
     def segment_distance(self, p0: ArrayLike, p1: ArrayLike) -> FloatArray:
         """Smallest signed distance over segments ``p0 -> p1`` (each ``(..., 3)``).
 
@@ -251,6 +255,9 @@ class Sphere(ExactSegmentDistance, Obstacle):
         x = np.asarray(points, dtype=np.float64)
         return np.asarray(np.linalg.norm(x - self.center, axis=-1) - self.radius)
 
+    def enclosing_ball(self) -> tuple[FloatArray, float]:
+        return self.center, self.radius
+
     def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
         """Exact, also inside: the distance of the segment to the centre less the radius."""
         c = np.ascontiguousarray(np.broadcast_to(self.center, p0.shape))
@@ -288,6 +295,10 @@ class Capsule(ExactSegmentDistance, Obstacle):
             flat,
         )
         return np.asarray(d.reshape(x.shape[:-1]) - self.radius)
+
+    def enclosing_ball(self) -> tuple[FloatArray, float]:
+        half = 0.5 * float(np.linalg.norm(self.end - self.start))
+        return 0.5 * (self.start + self.end), half + self.radius
 
     def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
         """Exact, also inside: segment-to-segment distance less the radius."""
@@ -339,8 +350,12 @@ class Box(ExactSegmentDistance, Obstacle):
         inside = np.minimum(local.max(axis=-1), 0.0)
         return np.asarray(outside + inside)
 
+    def enclosing_ball(self) -> tuple[FloatArray, float]:
+        return self.center, float(np.linalg.norm(self.half_extents))
+
     def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
-        """The box's signed distance is convex: golden-section search along the segment."""
+        """Exact outside (piecewise quadratic); inside, golden-section search of the convex
+        signed distance along the segment."""
         return np.asarray(
             kernels.segments_to_box(p0, p1, self.center, self.rotation, self.half_extents)
         )
@@ -429,6 +444,12 @@ class SolidOfRevolution(ExactSegmentDistance, Obstacle):
             flat, self.origin, self.axis, self.profile, self.boundary_edges
         )
         return np.asarray(d.reshape(x.shape[:-1]), dtype=np.float64)
+
+    def enclosing_ball(self) -> tuple[FloatArray, float]:
+        z = self.profile[:, 1]
+        z_mid = 0.5 * float(z.min() + z.max())
+        radius = float(np.max(np.hypot(self.profile[:, 0], z - z_mid)))
+        return self.origin + z_mid * self.axis, radius
 
     def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
         return np.asarray(

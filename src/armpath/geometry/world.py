@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.geometry.kernels import segment_segment_distance
+from armpath.geometry.kernels import segment_segment_distance, segments_to_point
 from armpath.geometry.primitives import Obstacle
 from armpath.kinematics import landmark_positions
 from armpath.model.serial_arm import SerialArm
@@ -175,26 +175,74 @@ class CollisionWorld:
             lowers.append(lo - radii)
         cols_v = [np.stack(values, axis=-1).reshape(*batch, -1)] if values else []
         cols_l = [np.stack(lowers, axis=-1).reshape(*batch, -1)] if lowers else []
-        sp = self.self_pairs(arm)
-        if sp:
-            links = arm.links
-            i_idx = np.array([i for i, _ in sp])
-            j_idx = np.array([j for _, j in sp])
-            flat = pts.reshape(-1, *pts.shape[-2:])
-
-            def ends(idx: NDArray[np.int64], which: str) -> FloatArray:
-                lm = np.array([getattr(links[i], which) for i in idx])
-                return np.ascontiguousarray(flat[:, lm, :].reshape(-1, 3))
-
-            d = segment_segment_distance(
-                ends(i_idx, "start"), ends(i_idx, "end"), ends(j_idx, "start"), ends(j_idx, "end")
-            ).reshape(*batch, len(sp))
-            rsum = np.array([links[i].radius + links[j].radius for i, j in sp])
-            cols_v.append(d - rsum)
-            cols_l.append(d - rsum - 1e-7)
+        if self.self_pairs(arm):
+            d = self._self_clearances(arm, pts)
+            cols_v.append(d)
+            cols_l.append(d - 1e-7)
         if not cols_v:
             return np.zeros((*batch, 0)), np.zeros((*batch, 0))
         return np.concatenate(cols_v, axis=-1), np.concatenate(cols_l, axis=-1)
+
+    def satisfied(
+        self, arm: SerialArm, q: ArrayLike, extra: ArrayLike | float = 0.0
+    ) -> NDArray[np.bool_]:
+        """Per configuration ``(...)``, whether every pair keeps ``required + extra`` (``extra``
+        a scalar or one value per pair, length unit).
+
+        The fast verdict for planners: a part whose distance to an obstacle's enclosing ball
+        already exceeds what the pair needs skips the exact distance (broad phase); the verdict
+        equals ``all(pair_clearances >= required + extra)``.
+        """
+        pts = landmark_positions(arm, q)
+        batch = pts.shape[:-2]
+        pairs = self.pairs(arm)
+        need = self.required(arm) + np.broadcast_to(
+            np.asarray(extra, dtype=np.float64), (len(pairs),)
+        )
+        p0, p1 = self._segments(arm, pts)
+        n_parts = p0.shape[-2]
+        a = np.ascontiguousarray(p0.reshape(-1, 3))
+        b = np.ascontiguousarray(p1.reshape(-1, 3))
+        ok = np.ones(a.shape[0] // max(n_parts, 1), dtype=bool)
+        radii = np.tile(np.array([p.radius for p in self.parts(arm)]), ok.size)
+        owner = np.repeat(np.arange(ok.size), n_parts)
+        part_of = np.tile(np.arange(n_parts), ok.size)
+        for k, o in enumerate(self.obstacles):
+            col_need = need[k :: len(self.obstacles)][:n_parts][part_of] + radii
+            ball = o.enclosing_ball()
+            todo = np.arange(a.shape[0])
+            if ball is not None:
+                center, radius = ball
+                c = np.ascontiguousarray(np.broadcast_to(center, a.shape))
+                lower = segments_to_point(a, b, c) - radius
+                todo = np.flatnonzero(lower < col_need)
+            todo = todo[ok[owner[todo]]]
+            if todo.size:
+                d, _ = o.segment_distance_bounds(a[todo], b[todo])
+                bad = d < col_need[todo]
+                ok[owner[todo[bad]]] = False
+        n_self = len(self.self_pairs(arm))
+        if n_self and np.any(ok):
+            live = np.flatnonzero(ok)
+            d = self._self_clearances(arm, pts.reshape(-1, *pts.shape[-2:])[live])
+            ok[live] = np.all(d >= need[-n_self:], axis=-1)
+        return ok.reshape(batch)
+
+    def _self_clearances(self, arm: SerialArm, pts: FloatArray) -> FloatArray:
+        """Distances between the self-collision link pairs less their radii, ``(..., S)``."""
+        sp = self.self_pairs(arm)
+        links = arm.links
+        flat = pts.reshape(-1, *pts.shape[-2:])
+
+        def ends(which: str, first: bool) -> FloatArray:
+            lm = np.array([getattr(links[i if first else j], which) for i, j in sp])
+            return np.ascontiguousarray(flat[:, lm, :].reshape(-1, 3))
+
+        d = segment_segment_distance(
+            ends("start", True), ends("end", True), ends("start", False), ends("end", False)
+        ).reshape(*pts.shape[:-2], len(sp))
+        rsum = np.array([links[i].radius + links[j].radius for i, j in sp])
+        return np.asarray(d - rsum)
 
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""

@@ -14,7 +14,8 @@ Pipeline (:func:`plan_motion`):
    whenever a straight motion needs fewer commands and passes the edge test.
 4. **Certify**: the final command sequence is checked on its continuous motion; if it fails
    (rounding near an obstacle), the search is repeated with 1.5 times the buffer and half the
-   sample spacing.
+   sample spacing. Several successful searches (``searches``, different seeds) are made and the
+   best by the objective is kept.
 
 Objectives (seed 000 section 5.2.5): ``commands`` (default: largest-change path length),
 ``path`` (fingertip path length) and ``energy`` (weighted joint travel) steer the shortcuts and the
@@ -94,7 +95,10 @@ class MotionOptions:
     shortcut_rounds:
         Random shortcut attempts on the searched path.
     attempts:
-        Searches (with doubled buffer and a new seed) before giving up.
+        Failed searches tolerated (each retry with a new seed, 1.5 times the buffer and half
+        the spacing) before giving up.
+    searches:
+        Successful searches (different seeds) whose best plan by the objective is kept.
     seed:
         Seed of the random generator: the same seed gives the same plan.
     """
@@ -106,6 +110,7 @@ class MotionOptions:
     rrt: RrtOptions = field(default_factory=RrtOptions)
     shortcut_rounds: int = 300
     attempts: int = 3
+    searches: int = 3
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -192,9 +197,7 @@ def edge_checker(
     pairs = world.pairs(arm)
     is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
     is_self = np.array([p.is_self for p in pairs], dtype=bool)
-    need = world.required(arm) + np.where(
-        is_tip, 0.0, buffer_mm + np.where(is_self, spacing_mm, spacing_mm / 2)
-    )
+    extra = np.where(is_tip, 0.0, buffer_mm + np.where(is_self, spacing_mm, spacing_mm / 2))
     R = displacement_bounds(arm)
 
     def check(a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
@@ -216,8 +219,7 @@ def edge_checker(
             live = ok[owner[sl]]
             if not np.any(live):
                 continue
-            values, _ = world.pair_clearances(arm, q[sl][live])
-            bad = np.any(values < need, axis=-1)
+            bad = ~world.satisfied(arm, q[sl][live], extra)
             ok[np.unique(owner[sl][live][bad])] = False
         return ok
 
@@ -379,14 +381,17 @@ def plan_motion(
         return lambda path: float(np.abs(np.diff(path, axis=0)).max(axis=1).sum())
 
     failures: list[str] = []
+    found: list[MotionPlan] = []
     buffer, spacing = opts.buffer_mm, opts.sample_spacing_mm
-    for attempt in range(opts.attempts):
+    for attempt in range(opts.attempts + opts.searches - 1):
+        if len(found) >= opts.searches:
+            break
         rng = np.random.default_rng([opts.seed, attempt])
         check = edge_checker(arm, world, buffer, spacing)
-        say(f"searching (attempt {attempt + 1}, buffer {buffer:g} mm)")
+        say(f"searching (search {attempt + 1}, buffer {buffer:g} mm)")
         res = rrt_connect(s_rad, goals_search, lower, upper, check, rng, opts.rrt)
         if not res.success:
-            failures.append(f"attempt {attempt + 1}: {res.reason}")
+            failures.append(f"search {attempt + 1}: {res.reason}")
             continue
         path = res.path.copy()
         path[-1] = g_rad[res.goal_index]  # inactive joints reach their goal value at the end
@@ -395,21 +400,26 @@ def plan_motion(
         seq = merge_commands(seq, check)
         mc = motion_clearance(arm, world, seq)
         if mc.certified_ok:
-            return MotionPlan(
-                seq,
-                res.goal_index,
-                mc,
-                plan_metrics(arm, seq, weights),
-                int(direct_counts[res.goal_index]),
-                "rrt-connect + shortcuts + lattice merge",
-                res.samples,
+            found.append(
+                MotionPlan(
+                    seq,
+                    res.goal_index,
+                    mc,
+                    plan_metrics(arm, seq, weights),
+                    int(direct_counts[res.goal_index]),
+                    "rrt-connect + shortcuts + lattice merge",
+                    res.samples,
+                )
             )
+            continue
         failures.append(
-            f"attempt {attempt + 1}: lattice path breaks the rule "
+            f"search {attempt + 1}: lattice path breaks the rule "
             f"({mc.limiting_pair} {mc.limiting_slack:+.3f} mm at command {mc.limiting_command})"
         )
         buffer *= 1.5
         spacing *= 0.5
+    if found:
+        return min(found, key=lambda plan: score(plan.sequence))
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
 
 
