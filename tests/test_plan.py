@@ -9,11 +9,11 @@ import pytest
 
 import independent
 from armpath.commands import deg_to_ticks
-from armpath.errors import InvalidInputError, PlanningError, SceneError
+from armpath.errors import CollisionError, InvalidInputError, PlanningError, SceneError
 from armpath.geometry import CollisionWorld, HalfSpace, Sphere
 from armpath.model import seed_arm
 from armpath.planning.motion import MotionOptions, Objective, plan_motion
-from armpath.planning.rrt import path_cost, rrt_connect, shortcut
+from armpath.planning.rrt import RrtOptions, path_cost, rrt_connect, shortcut
 from armpath.scenes import load_scene
 
 ARM = seed_arm()
@@ -131,8 +131,13 @@ def test_planning_errors_are_clear(tmp_path):
     # a goal inside the post
     boxed = CollisionWorld((HalfSpace("table", np.zeros(3), np.array([0, 0, 1.0])),
                             Sphere("cage", np.array([0.0, 510.0, 75.0]), 30.0)))  # fmt: skip
-    with pytest.raises(PlanningError):
+    with pytest.raises(CollisionError, match=r"goal state is in collision: DE.* cage"):
         plan_motion(ARM, boxed, deg_to_ticks([10, -90, 0, 0, -90, 0]), start[None], MotionOptions())
+    # two goals, both caged: no search can reach them
+    goals = np.stack([start, start + np.array([5, 0, 0, 0, 0, 0])])
+    fast = MotionOptions(rrt=RrtOptions(max_samples=200), attempts=1)
+    with pytest.raises(PlanningError, match="no collision-free motion"):
+        plan_motion(ARM, boxed, deg_to_ticks([40, -90, 0, 0, -90, 0]), goals, fast)
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nobstacles:\n  - {type: pyramid, name: p}\n")
     with pytest.raises(SceneError, match="obstacles"):
