@@ -139,17 +139,48 @@ def test_reach_json_on_stdout_from_another_start():
     assert np.linalg.norm(tip - [300, 250, 300]) <= 0.05
 
 
-def test_run_writes_every_task_and_a_summary(tmp_path):
-    r = run("run", cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
-    out = tmp_path / "armpath-out"
-    assert (out / "reach.json").exists() and (out / "summary.md").exists()
+def test_run_writes_every_task_and_a_summary(seed_run):
+    out, stdout = seed_run
+    names = {p.name for p in out.iterdir()}
+    for stem in ("reach", "spotweld"):
+        assert {f"{stem}.json", f"{stem}.csv", f"{stem}.xlsx", f"{stem}_motion.png"} <= names
+    assert "summary.md" in names
     doc = json.loads((out / "reach.json").read_text())
     assert doc["n_commands"] <= 63 and doc["error_mm"] <= 0.05
-    assert "63" in r.stdout
-    r2 = run("run", "--out", str(tmp_path / "h"), "--wall", "horizontal")
-    assert r2.returncode == 0, r2.stderr
-    assert json.loads((tmp_path / "h" / "reach.json").read_text())["wall_thickness"] == "horizontal"
+    weld = json.loads((out / "spotweld.json").read_text())
+    assert "63" in stdout and str(weld["n_commands"]) in stdout
+    summary = (out / "summary.md").read_text()
+    assert "Task 1" in summary and "Task 3" in summary
+
+
+def test_spotweld_horizontal_wall_given_order(tmp_path):
+    r = run(
+        "spotweld", "--wall", "horizontal", "--order", "given", "--json", "--out", str(tmp_path)
+    )
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert json.loads((tmp_path / "spotweld.json").read_text()) == doc
+    assert doc["wall_thickness"] == "horizontal" and doc["order"] == [1, 2, 3, 4]
+    targets = np.array(doc["targets"])
+    # horizontal convention: the inner radius is 8 mm (not 8.616) inside the outer one
+    r_in = 168 - 0.4 * targets[:, 2] - 8.0
+    np.testing.assert_allclose(np.hypot(targets[:, 0] - 210, targets[:, 1]), r_in, atol=1e-9)
+    states = independent.replay(doc["initial_deg"], doc["commands"])
+    for v in doc["visits"]:
+        tip = independent.points(states[v["after_command"]])[4]
+        assert np.linalg.norm(tip - v["target"]) <= 0.05
+    assert doc["clearance"]["certified"]
+
+
+def test_plan_and_spotweld_errors():
+    r = run("spotweld", "--order", "random")
+    assert r.returncode == 1 and r.stderr.startswith("error: --order must be")
+    r = run("plan", "--to", "0", "-90", "0", "0", "-90", "0", "--to-xyz", "1", "2", "3")
+    assert r.returncode == 1 and "exactly one goal" in r.stderr
+    r = run("plan", "--to", "0", "120", "60", "0", "0", "0")
+    assert r.returncode == 1 and "goal state is in collision" in r.stderr
+    r = run("plan", "--to-xyz", "0", "0", "900")
+    assert r.returncode == 1 and "out of reach" in r.stderr
 
 
 def test_help_texts_state_units():

@@ -179,9 +179,27 @@ def test_target_inside_the_wall_is_refused():
         plan_reach(ARM, SCENE.world, deg_to_ticks(HOME), inside_wall)
 
 
-def test_blocked_direct_motion_is_reported():
+def test_blocked_direct_motion_is_reported_or_planned_around():
     # a point on the far side of the workpiece, low down: every direct motion hits the wall
+    target = [300, -170, 15]
     with pytest.raises(PlanningError, match=r"blocked|collision"):
         plan_reach(
-            ARM, SCENE.world, deg_to_ticks(HOME), [300, -170, 15], ReachOptions(extra_commands=0)
+            ARM,
+            SCENE.world,
+            deg_to_ticks(HOME),
+            target,
+            ReachOptions(extra_commands=0, plan_around=False),
         )
+    result = plan_reach(
+        ARM, SCENE.world, deg_to_ticks(HOME), target, ReachOptions(extra_commands=0)
+    )
+    assert result.method != "direct" and result.clearance.certified_ok
+    assert result.n_commands >= result.lower_bound.commands
+    assert "planned around" in result.fewer_commands_rejected[-1]
+    states = independent.replay(HOME, result.sequence.commands)
+    assert np.linalg.norm(independent.points(states[-1])[4] - target) <= 0.05
+    pts = independent.motion_points(HOME, result.sequence.commands, 12)
+    samples, is_tip = independent.link_samples(pts, spacing=1.0)
+    wp = independent.Workpiece("normal").distance(samples.reshape(-1, 3)).reshape(samples.shape[:2])
+    clearance = np.minimum(wp, samples[..., 2])
+    assert clearance[~np.broadcast_to(is_tip, clearance.shape)].min() >= 1.0

@@ -23,7 +23,7 @@ from rich.table import Table
 
 from armpath import __version__
 from armpath.commands import deg_to_ticks, ticks_to_deg
-from armpath.errors import ArmpathError, InvalidInputError, PlanningError
+from armpath.errors import ArmpathError, InvalidInputError
 from armpath.export import (
     OutputFolder,
     json_text,
@@ -167,6 +167,8 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     table.add_row("start", f"{_fmt(ticks_to_deg(seq.start_ticks), 1)} deg")
     proof = "provably fewest" if result.is_provably_fewest else "not proven fewest"
     table.add_row("commands", f"{result.n_commands}  (lower bound {lb.commands}: {proof})")
+    if result.method != "direct":
+        table.add_row("method", f"{result.method} (every direct motion is blocked)")
     table.add_row(
         "fingertip error", f"{result.error_mm:.4f} mm  (tolerance {result.tolerance_mm} mm)"
     )
@@ -233,7 +235,7 @@ def reach(
     """Reach a point with the fingertip in the fewest commands, then the smallest error.
 
     When every direct motion is blocked, the motion is planned around the obstacles instead
-    (as ``armpath plan --to-xyz``).
+    (the summary's method says so).
     """
     with _cli_errors():
         arm = _arm(link_radius)
@@ -246,19 +248,7 @@ def reach(
         scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
-            try:
-                result = plan_reach(arm, scene.world, start_ticks, xyz, options)
-            except PlanningError as exc:
-                if "blocked" not in str(exc) and "in collision" not in str(exc):
-                    raise
-                err_console.print(
-                    "note: no clear direct motion; planning around the obstacles", markup=False
-                )
-                _plan_to_point(
-                    arm, scene, start_ticks, np.array(xyz), tolerance, MotionOptions(),
-                    folder, json_out, "reach",
-                )  # fmt: skip
-                return
+            result = plan_reach(arm, scene.world, start_ticks, xyz, options)
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene)
         written = folder.written if folder is not None else []

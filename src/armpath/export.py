@@ -101,6 +101,7 @@ def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict
         "lower_bound_commands": lb.commands,
         "provably_fewest": result.is_provably_fewest,
         "fewer_commands_rejected": list(result.fewer_commands_rejected),
+        "method": result.method,
         "lower_bound": {
             "commands": lb.commands,
             "max_joint_change_deg": lb.max_joint_change_deg,

@@ -42,7 +42,12 @@ from armpath.commands import (
 )
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
-from armpath.kinematics import displacement_bounds, landmark_positions, tool_position
+from armpath.kinematics import (
+    displacement_bounds,
+    landmark_positions,
+    position_jacobian,
+    tool_position,
+)
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion_check import MotionClearance, check_start_clear, motion_clearance
 from armpath.planning.rrt import EdgeChecker, RrtOptions, rrt_connect, shortcut
@@ -99,6 +104,10 @@ class MotionOptions:
         the spacing) before giving up.
     searches:
         Successful searches (different seeds) whose best plan by the objective is kept.
+    approach_mm:
+        A goal whose tool tip is closer than this to a surface is searched for at a pre-goal
+        with the tip backed off this far along the surface normal; the last motion goes
+        straight from there to the goal (the tip meets the surface head-on).
     seed:
         Seed of the random generator: the same seed gives the same plan.
     """
@@ -111,6 +120,7 @@ class MotionOptions:
     shortcut_rounds: int = 300
     attempts: int = 3
     searches: int = 3
+    approach_mm: float = 3.0
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -363,8 +373,10 @@ def plan_motion(
     upper = np.where(np.isfinite(hi), np.minimum(hi, span_hi), span_hi)
     lower = np.where(active, lower, s_rad)
     upper = np.where(active, upper, s_rad)
+    # goals whose tool tip touches a surface are approached from a retracted pre-goal
+    pre = np.array([_retracted(arm, world, g, active, opts.approach_mm) for g in g_rad])
     # inactive joints move straight from start to goal; plan with them at the start value
-    goals_search = np.where(active, g_rad, s_rad)
+    goals_search = np.where(active, pre, s_rad)
 
     def cost_fn(w: FloatArray | None) -> Callable[[FloatArray], float]:
         if opts.objective is Objective.PATH:
@@ -393,20 +405,26 @@ def plan_motion(
         if not res.success:
             failures.append(f"search {attempt + 1}: {res.reason}")
             continue
+        gi = res.goal_index
         path = res.path.copy()
-        path[-1] = g_rad[res.goal_index]  # inactive joints reach their goal value at the end
+        path[-1] = np.where(active, pre[gi], g_rad[gi])  # inactive joints: goal value at the end
         path = shortcut(path, check, rng, cost_fn(weights), opts.shortcut_rounds)
-        seq = path_to_sequence(path / TICK_RAD, start, goals[res.goal_index])
-        seq = merge_commands(seq, check)
+        if np.array_equal(pre[gi], g_rad[gi]):
+            seq = merge_commands(path_to_sequence(path / TICK_RAD, start, goals[gi]), check)
+        else:  # the final approach from the pre-goal is its own straight motion
+            pre_ticks = np.round(path[-1] / TICK_RAD).astype(np.int64)
+            main = merge_commands(path_to_sequence(path / TICK_RAD, start, pre_ticks), check)
+            last = CommandSequence.straight(pre_ticks, goals[gi])
+            seq = CommandSequence(start, np.vstack([main.commands, last.commands]))
         mc = motion_clearance(arm, world, seq)
         if mc.certified_ok:
             found.append(
                 MotionPlan(
                     seq,
-                    res.goal_index,
+                    gi,
                     mc,
                     plan_metrics(arm, seq, weights),
-                    int(direct_counts[res.goal_index]),
+                    int(direct_counts[gi]),
                     "rrt-connect + shortcuts + lattice merge",
                     res.samples,
                 )
@@ -421,6 +439,54 @@ def plan_motion(
     if found:
         return min(found, key=lambda plan: score(plan.sequence))
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
+
+
+def _retracted(
+    arm: SerialArm,
+    world: CollisionWorld,
+    q: FloatArray,
+    active: NDArray[np.bool_],
+    distance_mm: float,
+) -> FloatArray:
+    """``q`` moved so the tool tip backs ``distance_mm`` away from the surface it touches.
+
+    When the tip is within ``distance_mm`` of an obstacle, the joints move (least squares,
+    active joints only, two Newton steps) so the tip goes along that obstacle's outward normal;
+    otherwise ``q`` is returned unchanged. A straight motion from the result to ``q`` then
+    approaches the surface head-on instead of grazing it.
+    """
+    if distance_mm <= 0 or not world.obstacles:
+        return q
+    tip = tool_position(arm, q)
+    d = np.array([float(o.signed_distance(tip)) for o in world.obstacles])
+    k = int(np.argmin(d))
+    if d[k] >= distance_mm:
+        return q
+    obstacle = world.obstacles[k]
+    h = 1e-4
+    grad = np.array(
+        [
+            float(obstacle.signed_distance(tip + h * e) - obstacle.signed_distance(tip - h * e))
+            for e in np.eye(3)
+        ]
+    ) / (2 * h)
+    norm = float(np.linalg.norm(grad))
+    if norm < 1e-9:
+        return q
+    goal = tip + (distance_mm - d[k]) * grad / norm
+    out = q.copy()
+    for _ in range(2):
+        J = position_jacobian(arm, out)[:, active]
+        step, *_ = np.linalg.lstsq(J, goal - tool_position(arm, out), rcond=None)
+        out[active] += step
+    lo = np.array([j.limits[0] for j in arm.joints])
+    hi = np.array([j.limits[1] for j in arm.joints])
+    if (
+        not np.all((out >= lo) & (out <= hi))
+        or np.linalg.norm(tool_position(arm, out) - goal) > 0.5
+    ):
+        return q
+    return out
 
 
 def _densify_path(path: FloatArray, step: float) -> FloatArray:

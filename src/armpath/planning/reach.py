@@ -52,6 +52,7 @@ from armpath.ik.seed_position import (
 from armpath.kinematics import position_jacobian, tool_position
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.motion import MotionOptions, plan_motion
 from armpath.planning.motion_check import MotionClearance, check_start_clear, motion_clearance
 
 FloatArray = NDArray[np.float64]
@@ -83,6 +84,10 @@ class ReachOptions:
         over the feasible region, at most 3 per 5 deg cell of joint space).
     clearance_tolerance_mm:
         Precision of the continuous clearance computation (mm).
+    plan_around:
+        When every direct motion is blocked, plan around the obstacles
+        (:func:`armpath.planning.motion.plan_motion` to clear goal states from
+        :func:`goal_states`) instead of raising :class:`PlanningError`.
     """
 
     tolerance_mm: float = 0.05
@@ -91,6 +96,7 @@ class ReachOptions:
     polish_candidates: int = 64
     max_motion_checks: int = 60
     clearance_tolerance_mm: float = 0.01
+    plan_around: bool = True
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.tolerance_mm) and self.tolerance_mm > 0):
@@ -131,6 +137,7 @@ class ReachResult:
     lattice_states_examined: int
     motion_checks: int
     fewer_commands_rejected: tuple[str, ...] = ()
+    method: str = "direct"
 
     @property
     def n_commands(self) -> int:
@@ -537,7 +544,8 @@ def plan_reach(
         No configuration within the limits comes within the tolerance; names the nearest
         reachable distance.
     PlanningError
-        The target is reachable but no direct motion within the tried command counts is clear.
+        The target is reachable but no direct motion within the tried command counts is clear
+        and planning around the obstacles failed (or ``plan_around`` is off).
     """
     opts = options or ReachOptions()
     p = _validated_problem(arm, world, start_ticks, target_mm)
@@ -604,10 +612,27 @@ def plan_reach(
                 f"during command {mc.limiting_command}"
             )
         failures.append(f"{n} commands: every direct motion is blocked (e.g. {blocked})")
+    if opts.plan_around:
+        goals, _ = goal_states(arm, world, p.start_ticks, p.target, opts.tolerance_mm)
+        plan = plan_motion(arm, world, p.start_ticks, goals, MotionOptions(seed=seed))
+        seq = plan.sequence
+        tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+        return ReachResult(
+            sequence=seq,
+            target_mm=p.target,
+            tip_mm=tip,
+            error_mm=float(np.linalg.norm(tip - p.target)),
+            tolerance_mm=opts.tolerance_mm,
+            lower_bound=bound,
+            clearance=plan.clearance,
+            lattice_states_examined=examined,
+            motion_checks=checks,
+            fewer_commands_rejected=(*failures, "planned around the obstacles instead"),
+            method=plan.method,
+        )
     raise PlanningError(
         "no clear direct motion reaches the target within "
-        f"{bound.commands + opts.extra_commands} commands ({'; '.join(failures)}); "
-        "collision-free planning around obstacles is not available yet"
+        f"{bound.commands + opts.extra_commands} commands ({'; '.join(failures)})"
     )
 
 

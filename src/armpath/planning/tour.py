@@ -95,7 +95,7 @@ def plan_tour(
     order: str = "auto",
     return_to_start: bool = False,
     tolerance_mm: float = 0.05,
-    goals_per_target: int = 8,
+    goals_per_target: int = 16,
     orders_to_plan: int = 2,
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
