@@ -365,6 +365,14 @@ def plan(
     wall: WallOption = None,
     link_radius: LinkRadiusOption = 0.0,
     seed: SeedOption = 0,
+    searches: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            help="Successful searches (seeds) to try when the direct motion is blocked; "
+            "the best is kept.",
+        ),
+    ] = 1,
 ) -> None:
     """Plan a collision-free command sequence to a joint goal or a fingertip point.
 
@@ -381,7 +389,10 @@ def plan(
             _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
         )
         options = MotionOptions(
-            objective=objective, energy_weights=tuple(weights) if weights else None, seed=seed
+            objective=objective,
+            energy_weights=tuple(weights) if weights else None,
+            seed=seed,
+            searches=searches,
         )
         scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()

@@ -14,8 +14,8 @@ Pipeline (:func:`plan_motion`):
    whenever a straight motion needs fewer commands and passes the edge test.
 4. **Certify**: the final command sequence is checked on its continuous motion; if it fails
    (rounding near an obstacle), the search is repeated with 1.5 times the buffer and half the
-   sample spacing. Several successful searches (``searches``, different seeds) are made and the
-   best by the objective is kept.
+   sample spacing. With ``searches`` > 1, several successful searches (different seeds) are
+   made and the best by the objective is kept.
 
 Objectives (seed 000 section 5.2.5): ``commands`` (default: largest-change path length),
 ``path`` (fingertip path length) and ``energy`` (weighted joint travel) steer the shortcuts and the
@@ -103,7 +103,8 @@ class MotionOptions:
         Failed searches tolerated (each retry with a new seed, 1.5 times the buffer and half
         the spacing) before giving up.
     searches:
-        Successful searches (different seeds) whose best plan by the objective is kept.
+        Successful searches (different seeds) whose best plan by the objective is kept (more
+        searches: often fewer commands, proportionally more time).
     approach_mm:
         A goal whose tool tip is closer than this to a surface is searched for at a pre-goal
         with the tip backed off this far along the surface normal; the last motion goes
@@ -119,7 +120,7 @@ class MotionOptions:
     rrt: RrtOptions = field(default_factory=RrtOptions)
     shortcut_rounds: int = 300
     attempts: int = 3
-    searches: int = 3
+    searches: int = 1
     approach_mm: float = 3.0
     seed: int = 0
 
@@ -196,18 +197,20 @@ def active_joints(arm: SerialArm, rng: np.random.Generator | None = None) -> NDA
 def edge_checker(
     arm: SerialArm, world: CollisionWorld, buffer_mm: float, spacing_mm: float
 ) -> EdgeChecker:
-    """Straight joint-space segments ``a -> b`` (rad) that provably keep the body rule.
+    """Straight joint-space segments ``a -> b`` (rad) that provably keep the clearance rule.
 
     Each segment is sampled so that no arm point moves more than ``spacing_mm`` between samples;
     every non-tip pair must keep ``required + buffer_mm + spacing_mm / 2`` at the samples (link
     pairs ``+ spacing_mm``), which by the Lipschitz bound proves ``required + buffer_mm`` along
-    the whole segment. The tool tip (which may touch) must not penetrate at the samples; the
-    final certification of the command sequence covers it between samples.
+    the whole segment. The tool tip keeps ``spacing_mm / 2``, which proves it never penetrates
+    (a goal where it touches a surface is searched for at a retracted pre-goal).
     """
     pairs = world.pairs(arm)
     is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
     is_self = np.array([p.is_self for p in pairs], dtype=bool)
-    extra = np.where(is_tip, 0.0, buffer_mm + np.where(is_self, spacing_mm, spacing_mm / 2))
+    extra = np.where(
+        is_tip, spacing_mm / 2, buffer_mm + np.where(is_self, spacing_mm, spacing_mm / 2)
+    )
     R = displacement_bounds(arm)
 
     def check(a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
@@ -430,10 +433,13 @@ def plan_motion(
                 )
             )
             continue
-        failures.append(
-            f"search {attempt + 1}: lattice path breaks the rule "
-            f"({mc.limiting_pair} {mc.limiting_slack:+.3f} mm at command {mc.limiting_command})"
+        what = (
+            f"{mc.limiting_pair} {mc.limiting_slack:+.3f} mm off its clearance at command "
+            f"{mc.limiting_command}"
+            if mc.violated
+            else f"clearance not provable: lower bound {mc.lower_bound_slack:+.4f} mm"
         )
+        failures.append(f"search {attempt + 1}: lattice path fails the final check ({what})")
         buffer *= 1.5
         spacing *= 0.5
     if found:

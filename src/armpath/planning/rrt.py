@@ -28,8 +28,8 @@ class RrtOptions:
     ``goal_bias`` is the probability of sampling a goal instead of a random configuration.
     """
 
-    step: float = np.radians(8.0)
-    max_samples: int = 4000
+    step: float = np.radians(20.0)
+    max_samples: int = 5000
     goal_bias: float = 0.05
 
 
