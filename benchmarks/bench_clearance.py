@@ -29,14 +29,14 @@ import math
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import time
 from dataclasses import dataclass, replace
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
+import report
+from report import table
 
 try:
     import coal
@@ -274,32 +274,6 @@ def boundary_configurations(
 # --- report ---------------------------------------------------------------------------------
 
 
-def _versions() -> dict[str, str]:
-    out = {"python": platform.python_version()}
-    for pkg in ("numpy", "numba", "coal", "trimesh", "scipy"):
-        try:
-            out[pkg] = metadata.version(pkg)
-        except metadata.PackageNotFoundError:
-            out[pkg] = "?"
-    try:
-        head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "src"], cwd=ROOT, capture_output=True, text=True
-        ).stdout.strip()
-        out["armpath"] = head + (" + uncommitted changes in src/" if dirty else "")
-    except OSError:
-        out["armpath"] = "?"
-    return out
-
-
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
-
-
 def _fmt_q(q: np.ndarray) -> str:
     return "[" + ", ".join(repr(float(x)) for x in q) + "]"
 
@@ -495,7 +469,7 @@ def main(argv: list[str] | None = None) -> int:
                         )
             boundary_rows.append(row)
 
-    versions = _versions()
+    versions = report.versions(("numpy", "numba", "coal", "trimesh", "scipy"))
     now = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     cpu = platform.machine()
     try:
@@ -535,7 +509,7 @@ def main(argv: list[str] | None = None) -> int:
         f"forward kinematics and the self-collision pairs. Batches of {len(q)} configurations, "
         f"and `slack` once more on the batch of {m} that coal gets.",
         "",
-        _table(
+        table(
             [
                 "scene",
                 "pairs / config",
@@ -561,14 +535,14 @@ def main(argv: list[str] | None = None) -> int:
         "penetration depth instead of the new distance). Ratios: collide / our satisfied, "
         "distance / our pair_clearances.",
         "",
-        _table(
+        table(
             [
                 "scene",
                 "workpiece",
                 "collide [us]",
                 "distance [us]",
                 "poses [us]",
-                "collide / slack",
+                "collide / satisfied",
                 "distance / pair_clearances",
             ],
             coal_rows,
@@ -576,7 +550,7 @@ def main(argv: list[str] | None = None) -> int:
         "",
         f"coal per call (each obstacle alone, {m} configurations x {P} parts, median of 3):",
         "",
-        _table(["obstacle", "distance [us/call]", "collide [us/call]"], call_rows),
+        table(["obstacle", "distance [us/call]", "collide [us/call]"], call_rows),
         "",
         "## Agreement",
         "",
@@ -585,7 +559,7 @@ def main(argv: list[str] | None = None) -> int:
         "(collide / distance) whose configuration's obstacle slack is farther from 0 than the "
         "mesh's discretisation bound r_max (1 - cos(pi / sections)).",
         "",
-        _table(
+        table(
             [
                 "scene",
                 "workpiece",
@@ -602,9 +576,7 @@ def main(argv: list[str] | None = None) -> int:
         "Distances of link-obstacle pairs clear of the obstacle (beyond the mesh error), "
         "ours vs coal (the cylinder's difference is coal's GJK tolerance):",
         "",
-        _table(
-            ["obstacle", "pairs", "max abs difference [mm]", "mesh error bound [mm]"], diff_rows
-        ),
+        table(["obstacle", "pairs", "max abs difference [mm]", "mesh error bound [mm]"], diff_rows),
         "",
         "### Near the boundary",
         "",
@@ -614,7 +586,7 @@ def main(argv: list[str] | None = None) -> int:
         "and in parentheses the disagreements the mesh does not explain (our worst pair is not "
         "against the mesh, or |level| exceeds the mesh error bound); expected 0.",
         "",
-        _table(["scene", "level [mm]", "max |slack - level|", *kinds], boundary_rows),
+        table(["scene", "level [mm]", "max |slack - level|", *kinds], boundary_rows),
         "",
     ]
     if examples:
@@ -636,13 +608,7 @@ def main(argv: list[str] | None = None) -> int:
         "(tests/test_geometry_peers.py pins it).",
         "",
     ]
-    text = "\n".join(md)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text)
-    print()
-    print(text)
-    print(f"written to {args.out}")
-    return 0
+    return report.write(args.out, md)
 
 
 if __name__ == "__main__":

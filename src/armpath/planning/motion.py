@@ -377,7 +377,7 @@ def plan_motion(
     lower = np.where(active, lower, s_rad)
     upper = np.where(active, upper, s_rad)
     # goals whose tool tip touches a surface are approached from a retracted pre-goal
-    pre = np.array([_retracted(arm, world, g, active, opts.approach_mm) for g in g_rad])
+    pre = np.array([retracted_pre_goal(arm, world, g, active, opts.approach_mm) for g in g_rad])
     # inactive joints move straight from start to goal; plan with them at the start value
     goals_search = np.where(active, pre, s_rad)
 
@@ -447,7 +447,7 @@ def plan_motion(
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
 
 
-def _retracted(
+def retracted_pre_goal(
     arm: SerialArm,
     world: CollisionWorld,
     q: FloatArray,
