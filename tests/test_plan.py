@@ -164,3 +164,24 @@ def test_mesh_obstacle_from_a_scene_file(tmp_path):
     np.testing.assert_allclose(
         mesh.signed_distance(p), box_distance(p, [-330, 330, 100], [30, 30, 100], 45), atol=1e-6
     )
+
+
+def test_mesh_broad_phase_keeps_the_verdict(tmp_path):
+    """Ball, then frustum proxy, then coal: the verdict equals the exact clearances."""
+    trimesh = pytest.importorskip("trimesh")
+    cone = trimesh.creation.cone(radius=80, height=200, sections=64)
+    cone.apply_translation([250, -150, 0])
+    from armpath.geometry.mesh import MeshObstacle
+
+    mesh = MeshObstacle.from_trimesh(cone, "cone")
+    proxy = mesh.enclosing_solid()
+    assert np.all(proxy.signed_distance(cone.vertices) <= 1e-6)  # the proxy contains the mesh
+    world = CollisionWorld((HalfSpace("table", np.zeros(3), np.array([0, 0, 1.0])), mesh))
+    rng = np.random.default_rng(4)
+    lim = np.radians([180, 125, 138, 180, 133.5, 180])
+    q = rng.uniform(-lim, lim, (400, 6))
+    values, _ = world.pair_clearances(ARM, q)
+    for margin in (0.0, 5.0):
+        exact = np.all(values - world.required(ARM) >= margin, axis=-1)
+        np.testing.assert_array_equal(world.satisfied(ARM, q, margin), exact)
+        assert 0.05 < exact.mean() < 0.95

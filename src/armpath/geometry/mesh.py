@@ -367,6 +367,10 @@ class MeshObstacle(Obstacle):
         """The smallest enclosing ball of the vertices (broad phase)."""
         return self.bounding_sphere.center, self.bounding_sphere.radius
 
+    def enclosing_solid(self) -> Obstacle:
+        """The enclosing cone frustum (exact analytic distance: the mesh's broad phase)."""
+        return self.proxies().frustum
+
     def proxies(self) -> MeshProxies:
         """Enclosing sphere, cylinder and frustum of the vertices (each contains the mesh).
 

@@ -107,6 +107,10 @@ class Obstacle(ABC):
         """A ball ``(center, radius)`` containing the solid (broad phase), or None if unbounded."""
         return None
 
+    def enclosing_solid(self) -> Obstacle | None:
+        """A cheaper solid containing this one (second broad-phase level), or None."""
+        return None
+
     def segment_distance(self, p0: ArrayLike, p1: ArrayLike) -> FloatArray:
         """Smallest signed distance over segments ``p0 -> p1`` (each ``(..., 3)``).
 

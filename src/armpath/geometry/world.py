@@ -190,8 +190,9 @@ class CollisionWorld:
         a scalar or one value per pair, length unit).
 
         The fast verdict for planners: a part whose distance to an obstacle's enclosing ball
-        already exceeds what the pair needs skips the exact distance (broad phase); the verdict
-        equals ``all(pair_clearances >= required + extra)``.
+        (then, for meshes, to the enclosing cone frustum) already exceeds what the pair needs
+        skips the exact distance (broad phase); the verdict equals
+        ``all(pair_clearances >= required + extra)``.
         """
         pts = landmark_positions(arm, q)
         batch = pts.shape[:-2]
@@ -217,6 +218,10 @@ class CollisionWorld:
                 lower = segments_to_point(a, b, c) - radius
                 todo = np.flatnonzero(lower < col_need)
             todo = todo[ok[owner[todo]]]
+            proxy = o.enclosing_solid()
+            if proxy is not None and todo.size:
+                d_proxy, _ = proxy.segment_distance_bounds(a[todo], b[todo])
+                todo = todo[d_proxy < col_need[todo]]
             if todo.size:
                 d, _ = o.segment_distance_bounds(a[todo], b[todo])
                 bad = d < col_need[todo]
