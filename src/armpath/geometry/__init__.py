@@ -1,5 +1,7 @@
-"""Collision geometry: analytic obstacle solids and arm clearance."""
+"""Collision geometry: analytic obstacle solids, arm clearance, and curves to trace."""
 
+from armpath.geometry.curves import ConeSection, Curve, ParametricCurve, Polyline, seed_crack
+from armpath.geometry.expressions import parse_expression
 from armpath.geometry.primitives import (
     Box,
     Capsule,
@@ -13,20 +15,27 @@ from armpath.geometry.primitives import (
     cylinder,
     hollow_frustum,
 )
-from armpath.geometry.world import CollisionWorld, Part
+from armpath.geometry.world import ClearancePair, CollisionWorld, Part
 
 __all__ = [
     "Box",
     "Capsule",
+    "ClearancePair",
     "CollisionWorld",
+    "ConeSection",
+    "Curve",
     "HalfSpace",
     "HollowFrustum",
     "Obstacle",
+    "ParametricCurve",
     "Part",
+    "Polyline",
     "SolidOfRevolution",
     "Sphere",
     "WallThickness",
     "cone_frustum",
     "cylinder",
     "hollow_frustum",
+    "parse_expression",
+    "seed_crack",
 ]

@@ -1,0 +1,289 @@
+"""Space curves for tracing: parametric expressions, polylines and plane sections of solids.
+
+Every curve maps a parameter ``u`` in ``[0, 1]`` to points ``(..., 3)`` (length unit of the
+scene). :class:`Curve` adds, for all of them, arc-length parametrization (``length``,
+:meth:`Curve.at_arc_length`, :meth:`Curve.sample`) and the distance from points to the curve
+(:meth:`Curve.closest`), computed on a dense table of the curve refined by golden-section search.
+
+* :class:`ParametricCurve` — ``x(t), y(t), z(t)`` given as safe expressions
+  (:mod:`armpath.geometry.expressions`) over ``[t0, t1]``.
+* :class:`Polyline` — straight pieces through vertices, open or closed.
+* :class:`ConeSection` — the intersection of one conical (or cylindrical) face of a solid of
+  revolution with a plane, in closed form: around the axis at angle ``phi`` the face has radius
+  ``R0 + R1 z``, so the plane fixes ``z(phi)`` by a linear equation. The seed crack is the
+  workpiece's outer face cut by the plane ``x = 2 z`` (:func:`seed_crack`).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
+
+from armpath.errors import InvalidInputError
+from armpath.geometry.expressions import Expression, parse_expression
+from armpath.geometry.primitives import SolidOfRevolution
+
+FloatArray = NDArray[np.float64]
+
+#: Samples of the dense table behind arc length and closest points.
+TABLE_SAMPLES = 20_001
+_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
+
+
+class Curve(ABC):
+    """A curve ``u -> point`` on ``[0, 1]``; ``closed`` when the end meets the start."""
+
+    name: str
+    closed: bool
+
+    @abstractmethod
+    def points(self, u: ArrayLike) -> FloatArray:
+        """Points ``(..., 3)`` at parameters ``u`` in ``[0, 1]``."""
+
+    @abstractmethod
+    def describe(self) -> dict[str, object]:
+        """The curve's definition for result files (plain JSON types)."""
+
+    @cached_property
+    def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        u = np.linspace(0.0, 1.0, TABLE_SAMPLES)
+        p = self.points(u)
+        if not np.all(np.isfinite(p)):
+            raise InvalidInputError(f"curve {self.name!r} is not finite everywhere on [0, 1]")
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=-1))]
+        return u, p, s
+
+    @cached_property
+    def _tree(self) -> cKDTree:
+        return cKDTree(self._table[1])
+
+    @property
+    def length(self) -> float:
+        """Arc length (length unit)."""
+        return float(self._table[2][-1])
+
+    def parameter_at(self, s: ArrayLike) -> FloatArray:
+        """Parameters ``u`` at arc lengths ``s`` (clipped to ``[0, length]``)."""
+        u, _, table_s = self._table
+        return np.asarray(np.interp(np.clip(s, 0.0, self.length), table_s, u))
+
+    def arc_length_at(self, u: ArrayLike) -> FloatArray:
+        """Arc lengths at parameters ``u``."""
+        table_u, _, s = self._table
+        return np.asarray(np.interp(np.clip(u, 0.0, 1.0), table_u, s))
+
+    def at_arc_length(self, s: ArrayLike) -> FloatArray:
+        """Points at arc lengths ``s``, ``(..., 3)``."""
+        return self.points(self.parameter_at(s))
+
+    def sample(self, count: int) -> FloatArray:
+        """``count`` points equally spaced in arc length (both ends included)."""
+        if count < 2:
+            raise InvalidInputError("a curve sample needs at least 2 points")
+        return self.at_arc_length(np.linspace(0.0, self.length, count))
+
+    def closest(self, points: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Distance from each point ``(..., 3)`` to the curve and the arc length where it is
+        attained: nearest table sample, then golden-section search between its neighbours."""
+        x = np.asarray(points, dtype=np.float64)
+        flat = x.reshape(-1, 3)
+        u_tab, _, _ = self._table
+        _, idx = self._tree.query(flat)
+        step = u_tab[1] - u_tab[0]
+        lo = np.clip(u_tab[idx] - step, 0.0, 1.0)
+        hi = np.clip(u_tab[idx] + step, 0.0, 1.0)
+
+        def dist(u: FloatArray) -> FloatArray:
+            return np.asarray(np.linalg.norm(self.points(u) - flat, axis=-1), dtype=np.float64)
+
+        x1 = hi - _GOLDEN * (hi - lo)
+        x2 = lo + _GOLDEN * (hi - lo)
+        f1, f2 = dist(x1), dist(x2)
+        for _ in range(40):
+            left = f1 < f2
+            hi = np.where(left, x2, hi)
+            lo = np.where(left, lo, x1)
+            x2n = np.where(left, x1, lo + _GOLDEN * (hi - lo))
+            x1n = np.where(left, hi - _GOLDEN * (hi - lo), x2)
+            fn = dist(np.where(left, x1n, x2n))
+            f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
+            x1, x2 = x1n, x2n
+        u_best = np.where(f1 < f2, x1, x2)
+        d = np.minimum(f1, f2)
+        return d.reshape(x.shape[:-1]), self.arc_length_at(u_best).reshape(x.shape[:-1])
+
+
+@dataclass(frozen=True, eq=False)
+class ParametricCurve(Curve):
+    """``(x(t), y(t), z(t))`` for ``t`` in ``[t0, t1]``, each coordinate a safe expression."""
+
+    name: str
+    x: str
+    y: str
+    z: str
+    t0: float = 0.0
+    t1: float = 1.0
+    closed: bool = field(init=False, default=False)
+    _exprs: tuple[Expression, Expression, Expression] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.t0) and np.isfinite(self.t1) and self.t1 > self.t0):
+            raise InvalidInputError(f"curve {self.name!r}: need finite t0 < t1")
+        exprs = tuple(parse_expression(e, "t") for e in (self.x, self.y, self.z))
+        object.__setattr__(self, "_exprs", exprs)
+        ends = self.points(np.array([0.0, 1.0]))
+        object.__setattr__(self, "closed", bool(np.linalg.norm(ends[1] - ends[0]) < 1e-9))
+
+    def points(self, u: ArrayLike) -> FloatArray:
+        t = self.t0 + np.asarray(u, dtype=np.float64) * (self.t1 - self.t0)
+        return np.stack([e(t) for e in self._exprs], axis=-1)
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "parametric",
+            "name": self.name,
+            "x": self.x,
+            "y": self.y,
+            "z": self.z,
+            "t": [self.t0, self.t1],
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Polyline(Curve):
+    """Straight pieces through ``vertices`` ``(V, 3)``; ``closed`` adds the piece back."""
+
+    name: str
+    vertices: FloatArray
+    closed: bool = False
+
+    def __post_init__(self) -> None:
+        v = np.array(self.vertices, dtype=np.float64)
+        if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < 2 or not np.all(np.isfinite(v)):
+            raise InvalidInputError(f"polyline {self.name!r}: need (V >= 2, 3) finite vertices")
+        if self.closed:
+            v = np.vstack([v, v[:1]])
+        if np.any(np.linalg.norm(np.diff(v, axis=0), axis=-1) == 0):
+            raise InvalidInputError(f"polyline {self.name!r}: repeated consecutive vertices")
+        v.setflags(write=False)
+        object.__setattr__(self, "vertices", v)
+
+    @cached_property
+    def _knots(self) -> FloatArray:
+        seg = np.linalg.norm(np.diff(self.vertices, axis=0), axis=-1)
+        return np.asarray(np.r_[0.0, np.cumsum(seg)] / seg.sum(), dtype=np.float64)
+
+    def points(self, u: ArrayLike) -> FloatArray:
+        uu = np.clip(np.asarray(u, dtype=np.float64), 0.0, 1.0)
+        return np.stack([np.interp(uu, self._knots, self.vertices[:, k]) for k in range(3)], -1)
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "polyline",
+            "name": self.name,
+            "vertices": self.vertices[:-1].tolist() if self.closed else self.vertices.tolist(),
+            "closed": self.closed,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class ConeSection(Curve):
+    """Where the plane ``{p : normal . (p - point) = 0}`` cuts one face of a solid of revolution.
+
+    ``edge`` is the index of the profile edge (from vertex ``edge`` to ``edge + 1``) whose
+    surface is cut; it must be conical or cylindrical (not perpendicular to the axis). The
+    parameter ``u`` is the angle ``2 pi u`` around the axis; the plane must cut the face in one
+    closed curve within the edge's height range, otherwise :class:`InvalidInputError` says so.
+    """
+
+    name: str
+    solid: SolidOfRevolution
+    edge: int
+    plane_point: FloatArray
+    plane_normal: FloatArray
+    closed: bool = field(init=False, default=True)
+
+    def __post_init__(self) -> None:
+        n = np.array(self.plane_normal, dtype=np.float64)
+        p = np.array(self.plane_point, dtype=np.float64)
+        if n.shape != (3,) or p.shape != (3,) or np.linalg.norm(n) < 1e-12:
+            raise InvalidInputError(f"curve {self.name!r}: plane needs a point and a normal")
+        object.__setattr__(self, "plane_normal", n / np.linalg.norm(n))
+        object.__setattr__(self, "plane_point", p)
+        prof = self.solid.profile
+        if not 0 <= self.edge < len(prof):
+            raise InvalidInputError(f"curve {self.name!r}: no profile edge {self.edge}")
+        za, zb = prof[self.edge][1], prof[(self.edge + 1) % len(prof)][1]
+        if za == zb:
+            raise InvalidInputError(f"curve {self.name!r}: edge {self.edge} is not a side face")
+        z = self._z(np.linspace(0.0, 2.0 * np.pi, 3601))
+        if (
+            not np.all(np.isfinite(z))
+            or z.min() < min(za, zb) - 1e-9
+            or z.max() > max(za, zb) + 1e-9
+        ):
+            raise InvalidInputError(
+                f"curve {self.name!r}: the plane does not cut face {self.edge} of "
+                f"{self.solid.name!r} in one closed curve between z = {min(za, zb):g} and "
+                f"{max(za, zb):g}"
+            )
+
+    @cached_property
+    def _frame(self) -> tuple[FloatArray, FloatArray, float, float]:
+        a = self.solid.axis
+        helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        e1 = helper - (helper @ a) * a
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(a, e1)
+        prof = self.solid.profile
+        (ra, za), (rb, zb) = prof[self.edge], prof[(self.edge + 1) % len(prof)]
+        r1 = (rb - ra) / (zb - za)
+        return e1, e2, ra - r1 * za, r1
+
+    def _z(self, phi: FloatArray) -> FloatArray:
+        e1, e2, r0, r1 = self._frame
+        n = self.plane_normal
+        ne = np.cos(phi) * (n @ e1) + np.sin(phi) * (n @ e2)
+        rhs = n @ (self.plane_point - self.solid.origin) - r0 * ne
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.asarray(rhs / (n @ self.solid.axis + r1 * ne))
+
+    def points(self, u: ArrayLike) -> FloatArray:
+        phi = 2.0 * np.pi * np.asarray(u, dtype=np.float64)
+        e1, e2, r0, r1 = self._frame
+        z = self._z(phi)
+        radial = (np.cos(phi)[..., None] * e1 + np.sin(phi)[..., None] * e2) * (r0 + r1 * z)[
+            ..., None
+        ]
+        return np.asarray(self.solid.origin + radial + z[..., None] * self.solid.axis)
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "cone_section",
+            "name": self.name,
+            "solid": self.solid.name,
+            "edge": self.edge,
+            "plane_point": self.plane_point.tolist(),
+            "plane_normal": self.plane_normal.tolist(),
+        }
+
+
+def seed_crack(workpiece: SolidOfRevolution) -> ConeSection:
+    """SPEC section 4, Task 2: the workpiece's outer face cut by the plane ``x = 2 z``.
+
+    The outer face is the profile edge from the bottom outer corner ``(r_bottom, 0)`` upward.
+    """
+    prof = workpiece.profile
+    bottom = int(np.argmax(np.where(prof[:, 1] == prof[:, 1].min(), prof[:, 0], -np.inf)))
+    return ConeSection(
+        "crack",
+        workpiece,
+        bottom,
+        np.zeros(3),
+        np.array([1.0, 0.0, -2.0]),
+    )

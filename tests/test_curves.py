@@ -1,0 +1,103 @@
+"""Curves for tracing: the safe expression parser, arc length and closest points, the seed crack."""
+
+import numpy as np
+import pytest
+
+import independent
+from armpath.errors import InvalidInputError
+from armpath.geometry.curves import ParametricCurve, Polyline, seed_crack
+from armpath.geometry.expressions import parse_expression
+from armpath.scenes import seed_scene
+
+WORKPIECE = seed_scene().world.obstacles[1]
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("210 + 150*cos(t)", lambda t: 210 + 150 * np.cos(t)),
+        ("-t**2 / 3 + sqrt(abs(t))", lambda t: -(t**2) / 3 + np.sqrt(np.abs(t))),
+        ("atan2(sin(t), cos(t)) + pi - tau/2", lambda t: np.arctan2(np.sin(t), np.cos(t))),
+        ("max(t, 0.5) * exp(-t) + 2e-3", lambda t: np.maximum(t, 0.5) * np.exp(-t) + 2e-3),
+        ("7", lambda t: np.full_like(t, 7.0)),
+    ],
+)
+def test_expressions_match_numpy(text, expected):
+    t = np.linspace(-2, 2, 101)
+    np.testing.assert_allclose(parse_expression(text)(t), expected(t), rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("__import__('os').system('echo hi')", "unknown function"),
+        ("t.__class__", "Attribute"),
+        ("(lambda: 1)()", "unknown function"),
+        ("[t for t in range(3)]", "ListComp"),
+        ("x + 1", "unknown name 'x'"),
+        ("sin(t, 2)", "takes 1"),
+        ("sin(x=t)", "takes 1"),
+        ("t[0]", "Subscript"),
+        ("'abc'", "numbers"),
+        ("2 +", "not valid arithmetic"),
+        ("t if t > 0 else 0", "IfExp"),
+        ("", "non-empty"),
+    ],
+)
+def test_expressions_refuse_everything_else(text, message):
+    with pytest.raises(InvalidInputError, match=message):
+        parse_expression(text)
+
+
+def test_seed_crack_lies_on_the_outer_wall_and_the_plane():
+    crack = seed_crack(WORKPIECE)
+    assert crack.closed
+    p = crack.sample(4001)
+    np.testing.assert_allclose(p[:, 0], 2 * p[:, 2], atol=1e-9)
+    # independent: on the outer cone r = 168 - 0.4 z around (210, 0), between z = 0 and 180
+    r = np.hypot(p[:, 0] - 210, p[:, 1])
+    np.testing.assert_allclose(r, 168 - 0.4 * p[:, 2], atol=1e-9)
+    # the SPEC's end points of the curve in the plane y = 0
+    d, _ = crack.closest([[52.5, 0, 26.25], [315, 0, 157.5]])
+    np.testing.assert_allclose(d, 0, atol=1e-8)
+    assert p[:, 2].min() == pytest.approx(26.25) and p[:, 2].max() == pytest.approx(157.5)
+    # length against an independent parametrization: by z, y = +-sqrt(R(z)^2 - (2z - 210)^2)
+    z = 26.25 + (157.5 - 26.25) * (0.5 - 0.5 * np.cos(np.linspace(0, np.pi, 400_001)))
+    y = np.sqrt(np.maximum((168 - 0.4 * z) ** 2 - (2 * z - 210) ** 2, 0))
+    half = np.stack([2 * z, y, z], axis=-1)
+    length = 2 * np.linalg.norm(np.diff(half, axis=0), axis=-1).sum()
+    assert crack.length == pytest.approx(length, rel=1e-7)
+    # the workpiece's own distance puts the crack on its surface
+    assert np.abs(independent.Workpiece("normal").distance(p)).max() < 1e-9
+
+
+def test_arc_length_and_closest_points_on_a_helix():
+    r, pitch, turns = 40.0, 25.0, 3.0
+    helix = ParametricCurve(
+        "helix", f"{r}*cos(t)", f"{r}*sin(t)", f"{pitch}*t/(2*pi)", 0, 2 * np.pi * turns
+    )
+    exact = turns * np.hypot(2 * np.pi * r, pitch)
+    assert helix.length == pytest.approx(exact, rel=1e-7) and not helix.closed
+    pts = helix.sample(301)
+    steps = np.linalg.norm(np.diff(pts, axis=0), axis=-1)
+    assert steps.max() / steps.min() < 1 + 1e-4  # equal arc-length spacing
+    # points pushed off the curve along the (horizontal) principal normal: distance = push
+    t = np.linspace(0.3, 2 * np.pi * turns - 0.3, 50)
+    on = np.stack([r * np.cos(t), r * np.sin(t), pitch * t / (2 * np.pi)], axis=-1)
+    out = on + 5.0 * np.stack([np.cos(t), np.sin(t), 0 * t], axis=-1)
+    d, s = helix.closest(out)
+    np.testing.assert_allclose(d, 5.0, atol=1e-6)
+    np.testing.assert_allclose(s, t * np.hypot(r, pitch / (2 * np.pi)), atol=1e-3)
+
+
+def test_polyline():
+    square = Polyline("square", [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]], closed=True)
+    assert square.length == pytest.approx(40.0)
+    d, s = square.closest([[5, -3, 0], [12, 5, 4], [-1, -1, 0]])
+    np.testing.assert_allclose(d, [3, np.hypot(2, 4), np.sqrt(2)], atol=1e-9)
+    np.testing.assert_allclose(s[:2], [5, 15], atol=1e-6)
+    np.testing.assert_allclose(
+        square.at_arc_length([0, 25, 40]), [[0, 0, 0], [5, 10, 0], [0, 0, 0]], atol=1e-9
+    )
+    with pytest.raises(InvalidInputError, match="repeated"):
+        Polyline("bad", [[0, 0, 0], [0, 0, 0], [1, 0, 0]])
