@@ -26,13 +26,12 @@ from scipy.spatial import cKDTree
 
 from armpath.errors import InvalidInputError
 from armpath.geometry.expressions import Expression, parse_expression
-from armpath.geometry.primitives import SolidOfRevolution
+from armpath.geometry.primitives import SolidOfRevolution, golden_section_min
 
 FloatArray = NDArray[np.float64]
 
 #: Samples of the dense table behind arc length and closest points.
 TABLE_SAMPLES = 20_001
-_GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
 
 
 class Curve(ABC):
@@ -101,20 +100,7 @@ class Curve(ABC):
         def dist(u: FloatArray) -> FloatArray:
             return np.asarray(np.linalg.norm(self.points(u) - flat, axis=-1), dtype=np.float64)
 
-        x1 = hi - _GOLDEN * (hi - lo)
-        x2 = lo + _GOLDEN * (hi - lo)
-        f1, f2 = dist(x1), dist(x2)
-        for _ in range(40):
-            left = f1 < f2
-            hi = np.where(left, x2, hi)
-            lo = np.where(left, lo, x1)
-            x2n = np.where(left, x1, lo + _GOLDEN * (hi - lo))
-            x1n = np.where(left, hi - _GOLDEN * (hi - lo), x2)
-            fn = dist(np.where(left, x1n, x2n))
-            f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
-            x1, x2 = x1n, x2n
-        u_best = np.where(f1 < f2, x1, x2)
-        d = np.minimum(f1, f2)
+        u_best, d = golden_section_min(dist, lo, hi)
         return d.reshape(x.shape[:-1]), self.arc_length_at(u_best).reshape(x.shape[:-1])
 
 
