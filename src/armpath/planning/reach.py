@@ -62,6 +62,11 @@ IntArray = NDArray[np.int64]
 TIP_JOINTS = 5
 #: A target this close (mm) inside a surface counts as on it (a point computed on the surface).
 SURFACE_TOLERANCE_MM = 1e-6
+#: Defaults of :func:`goal_states`: how many states, the links' clearance beyond the margin (mm)
+#: and the least largest-joint difference between the family samples they start from (deg).
+GOAL_COUNT = 12
+GOAL_BODY_BUFFER_MM = 1.5
+GOAL_SPREAD_DEG = 4.0
 
 
 @dataclass(frozen=True)
@@ -565,6 +570,25 @@ def plan_reach(
     bound = _lower_bound(p, fam, opts.tolerance_mm)
 
     examined, checks = 0, 0
+
+    def result(
+        seq: CommandSequence, clearance: MotionClearance, rejected: tuple[str, ...], method: str
+    ) -> ReachResult:
+        tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+        return ReachResult(
+            sequence=seq,
+            target_mm=p.target,
+            tip_mm=tip,
+            error_mm=float(np.linalg.norm(tip - p.target)),
+            tolerance_mm=opts.tolerance_mm,
+            lower_bound=bound,
+            clearance=clearance,
+            lattice_states_examined=examined,
+            motion_checks=checks,
+            fewer_commands_rejected=rejected,
+            method=method,
+        )
+
     failures: list[str] = []
     for n in range(bound.commands, bound.commands + opts.extra_commands + 1):
         cands, errs = _lattice_candidates(p, fam, n, opts.tolerance_mm, opts.polish_candidates)
@@ -592,44 +616,21 @@ def plan_reach(
             checks += 1
             mc = motion_clearance(arm, world, seq, tolerance=opts.clearance_tolerance_mm)
             if mc.certified_ok:
-                tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
                 if seq.n_commands < bound.commands:
                     raise AssertionError("plan beats the proven lower bound: search bug")
-                return ReachResult(
-                    sequence=seq,
-                    target_mm=p.target,
-                    tip_mm=tip,
-                    error_mm=float(np.linalg.norm(tip - p.target)),
-                    tolerance_mm=opts.tolerance_mm,
-                    lower_bound=bound,
-                    clearance=mc,
-                    lattice_states_examined=examined,
-                    motion_checks=checks,
-                    fewer_commands_rejected=tuple(failures),
-                )
+                return result(seq, mc, tuple(failures), "direct")
             blocked = blocked or (
                 f"{mc.limiting_pair} is {mc.limiting_slack:+.2f} mm off its required clearance "
                 f"during command {mc.limiting_command}"
             )
         failures.append(f"{n} commands: every direct motion is blocked (e.g. {blocked})")
     if opts.plan_around:
-        goals, _ = goal_states(arm, world, p.start_ticks, p.target, opts.tolerance_mm)
-        plan = plan_motion(arm, world, p.start_ticks, goals, MotionOptions(seed=seed))
-        seq = plan.sequence
-        tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
-        return ReachResult(
-            sequence=seq,
-            target_mm=p.target,
-            tip_mm=tip,
-            error_mm=float(np.linalg.norm(tip - p.target)),
-            tolerance_mm=opts.tolerance_mm,
-            lower_bound=bound,
-            clearance=plan.clearance,
-            lattice_states_examined=examined,
-            motion_checks=checks,
-            fewer_commands_rejected=(*failures, "planned around the obstacles instead"),
-            method=plan.method,
+        goals, _ = _goal_states(
+            p, fam, opts.tolerance_mm, GOAL_COUNT, GOAL_BODY_BUFFER_MM, GOAL_SPREAD_DEG
         )
+        plan = plan_motion(arm, world, p.start_ticks, goals, MotionOptions(seed=seed))
+        rejected = (*failures, "planned around the obstacles instead")
+        return result(plan.sequence, plan.clearance, rejected, plan.method)
     raise PlanningError(
         "no clear direct motion reaches the target within "
         f"{bound.commands + opts.extra_commands} commands ({'; '.join(failures)})"
@@ -642,9 +643,9 @@ def goal_states(
     start_ticks: ArrayLike,
     target_mm: ArrayLike,
     tolerance_mm: float = 0.05,
-    count: int = 12,
-    body_buffer_mm: float = 1.5,
-    spread_deg: float = 4.0,
+    count: int = GOAL_COUNT,
+    body_buffer_mm: float = GOAL_BODY_BUFFER_MM,
+    spread_deg: float = GOAL_SPREAD_DEG,
     sphere_step_deg: float = 1.0,
 ) -> tuple[IntArray, FloatArray]:
     """Lattice states that put the fingertip within ``tolerance_mm`` of the target, clear of
@@ -663,7 +664,21 @@ def goal_states(
     exists.
     """
     p = _validated_problem(arm, world, start_ticks, target_mm)
-    fam = _family(p, sphere_step_deg)
+    return _goal_states(
+        p, _family(p, sphere_step_deg), tolerance_mm, count, body_buffer_mm, spread_deg
+    )
+
+
+def _goal_states(
+    p: _Problem,
+    fam: _Family,
+    tolerance_mm: float,
+    count: int,
+    body_buffer_mm: float,
+    spread_deg: float,
+) -> tuple[IntArray, FloatArray]:
+    """:func:`goal_states` for a validated problem and its sampled solution family."""
+    arm, world = p.arm, p.world
     q, change = fam.points()
     finite = np.isfinite(change)
     q, change = q[finite], change[finite]
