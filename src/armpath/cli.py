@@ -74,6 +74,7 @@ ObjectiveOption = Annotated[
         "travel (energy). Every plan reports all three."
     ),
 ]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result JSON on stdout.")]
 SeedOption = Annotated[int, typer.Option(help="Random seed of the planner (same seed, same plan).")]
 
 
@@ -220,9 +221,7 @@ def reach(
             "Default: the arm's initial pose (0 -90 0 0 -90 0).",
         ),
     ] = None,
-    json_out: Annotated[
-        bool, typer.Option("--json", help="Print the result JSON on stdout.")
-    ] = False,
+    json_out: JsonOption = False,
     out: Annotated[
         Path | None,
         typer.Option("--out", help="Write reach.json, reach.csv, reach.xlsx and PNG figures here."),
@@ -355,9 +354,7 @@ def plan(
     tolerance: Annotated[
         float, typer.Option(help="Largest fingertip error accepted with --to-xyz, mm.")
     ] = 0.05,
-    json_out: Annotated[
-        bool, typer.Option("--json", help="Print the result JSON on stdout.")
-    ] = False,
+    json_out: JsonOption = False,
     out: Annotated[
         Path | None,
         typer.Option("--out", help="Write plan.json, plan.csv, plan.xlsx and PNG figures here."),
@@ -470,9 +467,7 @@ def spotweld(
     return_home: Annotated[
         bool, typer.Option("--return", help="Return to the initial pose at the end.")
     ] = False,
-    json_out: Annotated[
-        bool, typer.Option("--json", help="Print the result JSON on stdout.")
-    ] = False,
+    json_out: JsonOption = False,
     out: Annotated[
         Path | None,
         typer.Option("--out", help="Write spotweld.json, .csv, .xlsx and PNG figures here."),

@@ -78,18 +78,25 @@ def clearance_dict(c: MotionClearance) -> dict[str, Any]:
     }
 
 
-def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict[str, Any]:
-    """The JSON document of a reach plan (SPEC section 6)."""
-    seq = result.sequence
-    lb = result.lower_bound
+def _document_head(task: str, arm: SerialArm, scene: Scene) -> dict[str, Any]:
+    """Fields every result document starts with: task, version, model, scene, units."""
     wall = scene.wall_thickness
     return {
-        "task": "reach",
+        "task": task,
         "armpath_version": __version__,
         "model": model_dict(arm),
         "scene": scene.describe(),
         "wall_thickness": wall.value if wall else None,
         "units": UNITS,
+    }
+
+
+def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict[str, Any]:
+    """The JSON document of a reach plan (SPEC section 6)."""
+    seq = result.sequence
+    lb = result.lower_bound
+    return {
+        **_document_head("reach", arm, scene),
         "initial_deg": ticks_to_deg(seq.start_ticks).tolist(),
         "commands": seq.commands.tolist(),
         "final_deg": ticks_to_deg(seq.final_ticks).tolist(),
@@ -140,17 +147,11 @@ def tour_result_dict(
     result: TourResult, arm: SerialArm, scene: Scene, objective: str
 ) -> dict[str, Any]:
     """The JSON document of a spot-weld tour (the reach schema plus targets and visits)."""
-    wall = scene.wall_thickness
     seq = result.sequence
     tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
     return {
-        "task": "spotweld",
-        "armpath_version": __version__,
-        "model": model_dict(arm),
-        "scene": scene.describe(),
-        "wall_thickness": wall.value if wall else None,
+        **_document_head("spotweld", arm, scene),
         "z_from": "inner surface of the workpiece, under the wall_thickness convention",
-        "units": UNITS,
         **_sequence_fields(seq),
         "targets": [list(v.target_mm) for v in sorted(result.visits, key=lambda v: v.target_index)],
         "order": [v.target_index + 1 for v in result.visits],
@@ -205,15 +206,9 @@ def plan_result_dict(
 ) -> dict[str, Any]:
     """The JSON document of a general motion plan (``armpath plan``)."""
     seq = plan.sequence
-    wall = scene.wall_thickness
     tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
     doc: dict[str, Any] = {
-        "task": "plan",
-        "armpath_version": __version__,
-        "model": model_dict(arm),
-        "scene": scene.describe(),
-        "wall_thickness": wall.value if wall else None,
-        "units": UNITS,
+        **_document_head("plan", arm, scene),
         **_sequence_fields(seq),
         "tip": tip.tolist(),
         "objective": objective,

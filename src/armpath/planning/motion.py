@@ -49,7 +49,7 @@ from armpath.kinematics import (
     tool_position,
 )
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.motion_check import MotionClearance, check_start_clear, motion_clearance
+from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.rrt import EdgeChecker, RrtOptions, rrt_connect, shortcut
 
 FloatArray = NDArray[np.float64]
@@ -327,9 +327,9 @@ def plan_motion(
     arm.check_limits(ticks_to_rad(start), what="start state")
     for g in goals:
         arm.check_limits(ticks_to_rad(g), what="goal state")
-    check_start_clear(arm, world, ticks_to_rad(start))
+    check_state_clear(arm, world, ticks_to_rad(start))
     if goals.shape[0] == 1:
-        check_start_clear(arm, world, ticks_to_rad(goals[0]), what="goal state")
+        check_state_clear(arm, world, ticks_to_rad(goals[0]), what="goal state")
     weights = None if opts.energy_weights is None else np.asarray(opts.energy_weights)
     say = on_progress or (lambda _msg: None)
 

@@ -189,7 +189,7 @@ def motion_clearance(
     )
 
 
-def check_start_clear(
+def check_state_clear(
     arm: SerialArm, world: CollisionWorld, q: FloatArray, what: str = "start state"
 ) -> None:
     """Raise :class:`CollisionError` naming the worst pair when ``q`` breaks the clearance rule."""

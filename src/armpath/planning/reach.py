@@ -53,7 +53,7 @@ from armpath.kinematics import position_jacobian, tool_position
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
-from armpath.planning.motion_check import MotionClearance, check_start_clear, motion_clearance
+from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -512,7 +512,7 @@ def _validated_problem(
                 f"target ({', '.join(f'{v:g}' for v in p)}) mm lies {depth:.3f} mm inside "
                 f"{obstacle.name}: the fingertip may touch a surface but not enter it"
             )
-    check_start_clear(arm, world, ticks_to_rad(start))
+    check_state_clear(arm, world, ticks_to_rad(start))
     return problem
 
 
