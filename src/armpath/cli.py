@@ -31,6 +31,7 @@ from armpath.export import (
     plan_result_dict,
     reach_result_dict,
     tour_result_dict,
+    trace_result_dict,
     write_reach_files,
     write_sequence_files,
 )
@@ -40,8 +41,9 @@ from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, Objective, plan_motion
 from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
 from armpath.planning.tour import TourResult
+from armpath.planning.trace import TraceOptions, TraceResult
 from armpath.scenes import Scene, load_scene
-from armpath.tasks import SEED_TASKS, reach_task, spotweld_task
+from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
 
 app = typer.Typer(
     add_completion=False,
@@ -504,14 +506,137 @@ def spotweld(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _trace_summary(doc: dict[str, Any]) -> Table:
+    table = Table(
+        title=f"trace {doc['curve']['definition'].get('name', 'curve')}", show_header=False
+    )
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    transit = sum(t["commands"] for t in doc["transits"])
+    table.add_row(
+        "commands",
+        f"{doc['n_commands']}  ({transit} moving onto the curve or between passes, "
+        f"{doc['n_commands'] - transit} tracing)",
+    )
+    table.add_row("passes", str(len(doc["passes"])))
+    for p in doc["pass_details"]:
+        table.add_row(
+            f"  states {p['states'][0]}-{p['states'][1]}",
+            f"arc {p['start_mm']:.2f} .. {p['end_mm']:.2f} mm ({p['length_mm']:.2f} mm), "
+            f"largest deviation {p['max_deviation_mm']:.4f} mm",
+        )
+    cov = doc["coverage"]
+    table.add_row(
+        "covered",
+        f"{cov['covered_mm']:.2f} mm of {cov['reachable_mm']:.2f} mm reachable "
+        f"({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
+    )
+    for u in doc["unreachable"]:
+        table.add_row(
+            "unreachable",
+            f"arc {u['start_mm']:.2f} .. {u['end_mm']:.2f} mm ({u['length_mm']:.2f} mm), "
+            f"from {_fmt(u['start_point_mm'], 2)} to {_fmt(u['end_point_mm'], 2)} mm: "
+            f"{u['reason']}",
+        )
+    table.add_row(
+        "largest deviation",
+        f"{doc['max_deviation_mm']:.4f} mm (proven <= {doc['max_deviation_bound_mm']:.4f}; "
+        f"tolerance {doc['tolerance_mm']} mm; continuous tip path)",
+    )
+    c = doc["clearance"]
+    table.add_row(
+        "min clearance",
+        f"{c['min_clearance_mm']:.3f} mm (tool tip, may touch); links "
+        f"{c['min_body_clearance_mm']:.3f} mm; whole continuous motion, "
+        f"{'certified' if c['certified'] else 'NOT certified'}",
+    )
+    table.add_row("wall thickness", f"measured {doc['wall_thickness']}")
+    return table
+
+
+def _write_trace(
+    folder: OutputFolder, result: TraceResult, doc: dict[str, Any], arm: SerialArm, scene: Scene
+) -> None:
+    from armpath.viz.figures import plot_trace_3d, plot_trace_deviation
+
+    write_sequence_files(folder, "trace", doc, arm, result.sequence)
+    curve = result.curve
+    L = curve.length
+    title = (
+        f"trace: {result.n_commands} commands, {len(result.passes)} pass(es), "
+        f"largest deviation {result.max_deviation_mm:.3f} mm"
+    )
+    gaps = [
+        curve.at_arc_length(np.linspace(a.start_mm, a.end_mm, 200) % L if curve.closed else
+                            np.linspace(a.start_mm, a.end_mm, 200))
+        for a in result.reachability.unreachable
+    ]  # fmt: skip
+    plot_trace_3d(
+        folder.file("trace_3d.png"),
+        arm,
+        scene,
+        result.sequence,
+        curve.sample(2001),
+        [(p.first, p.last) for p in result.passes],
+        gaps,
+        title,
+    )
+    plot_trace_deviation(
+        folder.file("trace_deviation.png"),
+        result.deviation_s_mm % L if curve.closed else result.deviation_s_mm,
+        result.deviation_mm,
+        result.tolerance_mm,
+        [(a.start_mm, a.end_mm) for a in result.reachability.unreachable],
+        L,
+        title,
+    )
+
+
+@app.command()
+def trace(
+    tolerance: Annotated[
+        float,
+        typer.Option(help="Largest distance of the continuous fingertip path from the curve, mm."),
+    ] = 0.1,
+    json_out: JsonOption = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write trace.json, .csv, .xlsx and PNG figures here."),
+    ] = None,
+    wall: WallOption = None,
+    scene_file: SceneOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    seed: SeedOption = 0,
+) -> None:
+    """Task 2: go once around the scene's curve (the crack) with the fingertip, every reachable
+    part, fewest passes and commands; report the unreachable arcs and why."""
+    with _cli_errors():
+        arm = _arm(link_radius)
+        scene = _scene(scene_file, wall)
+        options = TraceOptions(tolerance_mm=tolerance, motion=MotionOptions(seed=seed))
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            with err_console.status("tracing the curve ...") as status:
+                result = trace_task(scene, arm, options, lambda msg: status.update(msg))
+            doc = trace_result_dict(result, arm, scene)
+            if folder is not None:
+                _write_trace(folder, result, doc, arm, scene)
+        if json_out:
+            typer.echo(json_text(doc), nl=False)
+        else:
+            out_console.print(_trace_summary(doc))
+            for path in folder.written if folder is not None else []:
+                out_console.print(f"wrote {path}", markup=False)
+
+
 @app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
     wall: WallOption = None,
     link_radius: LinkRadiusOption = 0.0,
 ) -> None:
-    """Run the seed tasks implemented so far: Task 1 (reach the tool box) and Task 3 (spot
-    welds inside the workpiece)."""
+    """Run the seed scene's three tasks: 1, reach the tool box; 2, trace the crack; 3, spot welds
+    inside the workpiece."""
     with _cli_errors():
         scene = _scene(None, wall)
         arm = _arm(link_radius)
@@ -521,13 +646,23 @@ def run(
                 result = reach_task(scene, arm)
             _write_reach(folder, "reach", result, arm, scene)
             reach_doc = reach_result_dict(result, arm, scene)
+            with err_console.status(f"{titles['trace']} ...") as status:
+                traced = trace_task(scene, arm, on_progress=lambda msg: status.update(msg))
+            trace_doc = trace_result_dict(traced, arm, scene)
+            _write_trace(folder, traced, trace_doc, arm, scene)
             with err_console.status(f"{titles['spotweld']} ...") as status:
                 tour = spotweld_task(scene, arm, on_progress=lambda msg: status.update(msg))
             tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
             _write_tour(folder, tour, tour_doc, arm, scene)
             folder.write_text(
                 "summary.md",
-                _summary_markdown([(titles["reach"], reach_doc), (titles["spotweld"], tour_doc)]),
+                _summary_markdown(
+                    [
+                        (titles["reach"], reach_doc),
+                        (titles["trace"], trace_doc),
+                        (titles["spotweld"], tour_doc),
+                    ]
+                ),
             )
         written = folder.written
         table = Table(
@@ -542,6 +677,16 @@ def run(
             str(reach_doc["lower_bound_commands"]),
             f"{reach_doc['error_mm']:.4f}",
             f"{reach_doc['min_clearance_mm']:.3f}",
+        )
+        cov = trace_doc["coverage"]
+        table.add_row(
+            f"2 trace the crack: {len(trace_doc['passes'])} pass, "
+            f"{cov['covered_mm']:.1f} of {cov['reachable_mm']:.1f} mm reachable covered",
+            str(trace_doc["n_commands"]),
+            "-",
+            f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
+            f"{trace_doc['min_clearance_mm']:.3f} (tip); "
+            f"{trace_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
         )
         table.add_row(
             f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
@@ -570,6 +715,25 @@ def _summary_markdown(tasks: list[tuple[str, dict[str, Any]]]) -> str:
     ]
     notes = []
     for title, doc in tasks:
+        if doc["task"] == "trace":
+            body = doc["clearance"]["min_body_clearance_mm"]
+            cov = doc["coverage"]
+            lines.append(
+                f"| {title} | {doc['n_commands']} | - | {doc['max_deviation_mm']:.4f} (largest "
+                f"deviation of the continuous path) | {doc['min_clearance_mm']:.3f} (tool tip) / "
+                f"{body:.3f} (links) | {doc['wall_thickness']} |"
+            )
+            gaps = "; ".join(
+                f"{u['start_mm']:.2f}..{u['end_mm']:.2f} mm ({u['length_mm']:.2f} mm: "
+                f"{u['reason']})"
+                for u in doc["unreachable"]
+            )
+            notes.append(
+                f"Task 2: {len(doc['passes'])} pass(es) cover {cov['covered_mm']:.2f} mm of the "
+                f"{cov['reachable_mm']:.2f} mm reachable ({100 * cov['of_reachable']:.2f} %) of "
+                f"the {cov['curve_mm']:.2f} mm crack; unreachable: {gaps or 'none'}."
+            )
+            continue
         bound, error = str(doc["lower_bound_commands"]), f"{doc['error_mm']:.4f}"
         clearance = f"{doc['min_clearance_mm']:.3f}"
         if doc["task"] == "spotweld":

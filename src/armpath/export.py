@@ -26,6 +26,7 @@ from armpath.planning.motion import MotionPlan, PlanMetrics
 from armpath.planning.motion_check import MotionClearance
 from armpath.planning.reach import ReachResult
 from armpath.planning.tour import TourResult
+from armpath.planning.trace import TraceResult
 from armpath.scenes import Scene
 
 FloatArray = NDArray[np.float64]
@@ -191,6 +192,96 @@ def tour_result_dict(
             }
             for leg in result.legs
         ],
+        "min_clearance_mm": result.clearance.min_clearance,
+        "clearance": clearance_dict(result.clearance),
+    }
+
+
+def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict[str, Any]:
+    """The JSON document of a traced curve (the reach schema plus the curve, passes, coverage).
+
+    Arc lengths are measured along the curve from its start; an arc of a closed curve may end
+    past the curve's length (it runs on through the start).
+    """
+    seq = result.sequence
+    curve = result.curve
+    reach = result.reachability
+    L = curve.length
+    s_dense = np.linspace(0.0, L, 2001)
+    tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+
+    def point(s: float) -> list[float]:
+        return [float(x) for x in curve.at_arc_length(np.array([s % L if curve.closed else s]))[0]]
+
+    covered = result.covered_mm
+    reachable = reach.reachable_mm
+    return {
+        **_document_head("trace", arm, scene),
+        **_sequence_fields(seq),
+        "tip": tip.tolist(),
+        "tolerance_mm": result.tolerance_mm,
+        "curve": {
+            "definition": curve.describe(),
+            "length_mm": L,
+            "closed": curve.closed,
+            "arc_length_mm": s_dense.tolist(),
+            "points_mm": curve.at_arc_length(s_dense).tolist(),
+        },
+        "surface": reach.surface,
+        "passes": [[p.first, p.last] for p in result.passes],
+        "pass_details": [
+            {
+                "states": [p.first, p.last],
+                "commands": p.last - p.first,
+                "start_mm": p.start_mm,
+                "end_mm": p.end_mm,
+                "length_mm": p.covered_mm,
+                "max_deviation_mm": p.max_deviation_mm,
+                "max_deviation_bound_mm": p.max_deviation_bound_mm,
+            }
+            for p in result.passes
+        ],
+        "transits": [
+            {"states": [t.first, t.last], "commands": t.last - t.first, "method": t.method}
+            for t in result.transits
+        ],
+        "covered": [{"start_mm": p.start_mm, "end_mm": p.end_mm} for p in result.passes],
+        "reachable": [
+            {"start_mm": a.start_mm, "end_mm": a.end_mm, "length_mm": a.length_mm}
+            for a in reach.reachable
+        ],
+        "unreachable": [
+            {
+                "start_mm": a.start_mm,
+                "end_mm": a.end_mm,
+                "length_mm": a.length_mm,
+                "start_point_mm": point(a.start_mm),
+                "end_point_mm": point(a.end_mm),
+                "reason": a.reason,
+                "blocked_by": list(a.blocked_by),
+                "limiting_at_start": list(a.limiting_at_start),
+                "limiting_at_end": list(a.limiting_at_end),
+            }
+            for a in reach.unreachable
+        ],
+        "reachability_method": (
+            f"solution family searched at every {reach.scan_s_mm[1] - reach.scan_s_mm[0]:.2f} mm "
+            f"of arc length; ends of unreachable arcs bisected to {reach.resolution_mm:g} mm"
+        ),
+        "max_deviation_mm": result.max_deviation_mm,
+        "max_deviation_bound_mm": result.max_deviation_bound_mm,
+        "deviation_method": (
+            "distance from the fingertip to the curve over the continuous motion of every pass: "
+            "branch and bound with the fingertip's largest speed (proven bound)"
+        ),
+        "coverage": {
+            "covered_mm": covered,
+            "reachable_mm": reachable,
+            "curve_mm": L,
+            "of_reachable": covered / reachable if reachable > 0 else 0.0,
+            "of_curve": covered / L,
+        },
+        "metrics": metrics_dict(result.metrics),
         "min_clearance_mm": result.clearance.min_clearance,
         "clearance": clearance_dict(result.clearance),
     }

@@ -259,17 +259,22 @@ class ConeSection(Curve):
         }
 
 
-def seed_crack(workpiece: SolidOfRevolution) -> ConeSection:
-    """SPEC section 4, Task 2: the workpiece's outer face cut by the plane ``x = 2 z``.
-
-    The outer face is the profile edge from the bottom outer corner ``(r_bottom, 0)`` upward.
-    """
-    prof = workpiece.profile
+def plane_section(
+    name: str, solid: SolidOfRevolution, plane_point: ArrayLike, plane_normal: ArrayLike
+) -> ConeSection:
+    """Where a plane cuts the outer side face of ``solid``: the profile edge that rises from the
+    outermost bottom corner (for the seed workpiece, its outer conical face)."""
+    prof = solid.profile
     bottom = int(np.argmax(np.where(prof[:, 1] == prof[:, 1].min(), prof[:, 0], -np.inf)))
     return ConeSection(
-        "crack",
-        workpiece,
+        name,
+        solid,
         bottom,
-        np.zeros(3),
-        np.array([1.0, 0.0, -2.0]),
+        np.asarray(plane_point, dtype=np.float64),
+        np.asarray(plane_normal, dtype=np.float64),
     )
+
+
+def seed_crack(workpiece: SolidOfRevolution) -> ConeSection:
+    """SPEC section 4, Task 2: the workpiece's outer face cut by the plane ``x = 2 z``."""
+    return plane_section("crack", workpiece, np.zeros(3), np.array([1.0, 0.0, -2.0]))

@@ -31,6 +31,7 @@ from armpath.geometry import (
     cylinder,
     hollow_frustum,
 )
+from armpath.geometry.curves import Curve, ParametricCurve, Polyline, plane_section
 
 Vec3 = tuple[float, float, float]
 
@@ -162,8 +163,48 @@ class SpotweldTaskSpec(_Strict):
     surface: Literal["inner"] = "inner"
 
 
+class PlaneSectionCurveSpec(_FiniteVec):
+    """Where a plane cuts the outer side face of a hollow_frustum obstacle (the seed crack)."""
+
+    type: Literal["plane_section"]
+    name: str = "curve"
+    solid: str = Field(description="name of the hollow_frustum obstacle")
+    plane_point: Vec3
+    plane_normal: Vec3
+
+
+class ParametricCurveSpec(_Strict):
+    """``x(t), y(t), z(t)`` (mm) as expressions in ``t`` (numbers, + - * / ^ **, sin, cos, ...)."""
+
+    type: Literal["parametric"]
+    name: str = "curve"
+    x: str
+    y: str
+    z: str
+    t: tuple[float, float] = (0.0, 1.0)
+
+
+class PolylineCurveSpec(_Strict):
+    type: Literal["polyline"]
+    name: str = "curve"
+    points_mm: list[Vec3] = Field(min_length=2)
+    closed: bool = False
+
+
+CurveSpec = Annotated[
+    PlaneSectionCurveSpec | ParametricCurveSpec | PolylineCurveSpec, Field(discriminator="type")
+]
+
+
+class TraceTaskSpec(_Strict):
+    """Task 2: the curve the fingertip follows."""
+
+    curve: CurveSpec
+
+
 class TasksSpec(_Strict):
     reach: ReachTaskSpec | None = None
+    trace: TraceTaskSpec | None = None
     spotweld: SpotweldTaskSpec | None = None
 
 
@@ -187,6 +228,7 @@ class Scene:
     reach_target_mm: tuple[float, float, float] | None
     source: str
     spotweld: SpotweldTaskSpec | None = None
+    trace: TraceTaskSpec | None = None
 
     def spotweld_targets_mm(self) -> NDArray[np.float64]:
         """Task 3's points ``(N, 3)`` mm: each xy projection lifted onto the inner wall of the
@@ -203,6 +245,28 @@ class Scene:
             )
         w = found[0]
         return np.array([w.inner_wall_point(x, y) for x, y in spec.points_xy_mm])
+
+    def trace_curve(self) -> Curve:
+        """Task 2's curve, built against the scene's obstacles (mm)."""
+        if self.trace is None:
+            raise SceneError(f"scene {self.source} defines no [tasks.trace]")
+        spec = self.trace.curve
+        try:
+            if isinstance(spec, PlaneSectionCurveSpec):
+                found = [o for o in self.world.obstacles if o.name == spec.solid]
+                if not found or not isinstance(found[0], HollowFrustum):
+                    raise SceneError(
+                        f"scene {self.source}: tasks.trace.curve.solid {spec.solid!r} is not a "
+                        "hollow_frustum obstacle"
+                    )
+                return plane_section(spec.name, found[0], spec.plane_point, spec.plane_normal)
+            if isinstance(spec, ParametricCurveSpec):
+                return ParametricCurve(spec.name, spec.x, spec.y, spec.z, spec.t[0], spec.t[1])
+            return Polyline(spec.name, np.array(spec.points_mm), spec.closed)
+        except SceneError:
+            raise
+        except InvalidInputError as exc:
+            raise SceneError(f"scene {self.source}: tasks.trace.curve: {exc}") from None
 
     @property
     def workpieces(self) -> tuple[HollowFrustum, ...]:
@@ -329,9 +393,13 @@ def scene_from_dict(
     except InvalidInputError as exc:
         raise SceneError(f"scene {source}: {exc}") from None
     reach = spec.tasks.reach.target_mm if spec.tasks.reach else None
-    scene = Scene(spec.name, spec.description, world, reach, source, spec.tasks.spotweld)
+    scene = Scene(
+        spec.name, spec.description, world, reach, source, spec.tasks.spotweld, spec.tasks.trace
+    )
     if scene.spotweld is not None:
         scene.spotweld_targets_mm()  # validates the workpiece name and the points
+    if scene.trace is not None:
+        scene.trace_curve()  # validates the curve against the obstacles
     return scene
 
 

@@ -1,8 +1,6 @@
-"""The seed scene's tasks: 1, fetch the tool from the tool box in the fewest commands; 3, spot
-welds on the workpiece's inner wall, reached through the open top.
-
-(Task 2, trace the crack, is added by a later issue.)
-"""
+"""The seed scene's tasks: 1, fetch the tool from the tool box in the fewest commands; 2, go
+once around the crack on the workpiece's outer face; 3, spot welds on the workpiece's inner wall,
+reached through the open top."""
 
 from __future__ import annotations
 
@@ -17,11 +15,13 @@ from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions
 from armpath.planning.reach import ReachOptions, ReachResult, plan_reach
 from armpath.planning.tour import TourResult, plan_tour
+from armpath.planning.trace import TraceOptions, TraceResult, plan_trace
 from armpath.scenes import Scene
 
 #: The seed tasks implemented so far, in SPEC order: (key, title).
 SEED_TASKS: tuple[tuple[str, str], ...] = (
     ("reach", "Task 1: reach the tool box"),
+    ("trace", "Task 2: trace the crack"),
     ("spotweld", "Task 3: spot welds inside the workpiece"),
 )
 
@@ -60,3 +60,15 @@ def spotweld_task(
         options=options,
         on_progress=on_progress,
     )
+
+
+def trace_task(
+    scene: Scene,
+    arm: SerialArm | None = None,
+    options: TraceOptions | None = None,
+    on_progress: Callable[[str], None] | None = None,
+) -> TraceResult:
+    """Task 2: from the arm's initial pose, trace every reachable part of the scene's curve."""
+    model = arm or seed_arm()
+    start = deg_to_ticks(np.degrees(model.home), what="initial pose")
+    return plan_trace(model, scene.world, start, scene.trace_curve(), options, on_progress)

@@ -1,7 +1,9 @@
-"""PNG figures of plans: a 3-D view of the motion in the scene, joint angles per step."""
+"""PNG figures of plans: a 3-D view of the motion in the scene, joint angles per step, and the
+crack trace (3-D view of the passes, deviation along the curve)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -10,8 +12,9 @@ from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike
 
 from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
+from armpath.errors import InvalidInputError
 from armpath.geometry.primitives import Box, HalfSpace, SolidOfRevolution, Sphere
-from armpath.kinematics import landmark_positions
+from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.scenes import Scene
 
@@ -154,5 +157,327 @@ def plot_joint_angles(path: str | Path, seq: CommandSequence, title: str = "") -
     ax.set_title(title or "joint angles per command")
     ax.grid(alpha=0.3)
     ax.legend(ncol=6, fontsize=8, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+_PASS_COLOURS = ("tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:cyan", "tab:olive")
+_SUBSTEPS = 8  # instants sampled per command when drawing the continuous motion
+
+
+_TRACE_VIEW = (24.0, -140.0)  # elevation, azimuth (deg): from the arm's side, slightly above
+_HIDDEN_ALPHA = 0.3  # opacity factor of line parts seen through an obstacle
+
+
+def _eye_direction(elev_deg: float, azim_deg: float) -> np.ndarray:
+    """Unit vector from the scene toward the camera of ``Axes3D.view_init(elev, azim)``."""
+    e, a = np.radians(elev_deg), np.radians(azim_deg)
+    return np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+
+
+def _hidden(points: np.ndarray, scene: Scene, eye: np.ndarray) -> np.ndarray:
+    """Which points ``(K, 3)`` are behind a bounded obstacle as seen from direction ``eye``.
+
+    A point is hidden when the ray from 1 mm in front of it toward the camera enters an obstacle
+    (exact segment distance below 0), so points on a surface facing the camera stay visible.
+    """
+    hidden = np.zeros(len(points), dtype=bool)
+    for obstacle in scene.world.obstacles:
+        ball = obstacle.enclosing_ball()
+        if ball is None or not len(points):
+            continue
+        center, radius = ball
+        reach = np.linalg.norm(points - center, axis=1) + radius + 1.0
+        d = obstacle.segment_distance(points + eye, points + reach[:, None] * eye)
+        hidden |= np.asarray(d) < 0.0
+    return hidden
+
+
+def _plot_depth_cued(
+    ax: Axes3D,
+    pts: np.ndarray,
+    hidden: np.ndarray,
+    *fmt: str,
+    alpha: float = 1.0,
+    label: str | None = None,
+    **style: object,
+) -> None:
+    """Plot a 3-D polyline ``(K, 3)``, fading (``alpha`` times :data:`_HIDDEN_ALPHA`) the
+    segments with a hidden end point; ``label`` goes to the visible part, ``fmt`` and ``style``
+    to ``Axes3D.plot``.
+    """
+    seg_hidden = hidden[:-1] | hidden[1:]
+    for faded in (False, True):
+        seg = seg_hidden if faded else ~seg_hidden
+        keep = np.zeros(len(pts), dtype=bool)
+        keep[:-1] |= seg
+        keep[1:] |= seg
+        if faded and not keep.any():
+            continue
+        xyz = np.where(keep[:, None], pts, np.nan)
+        ax.plot(
+            *xyz.T,
+            *fmt,
+            alpha=alpha * _HIDDEN_ALPHA if faded else alpha,
+            label=None if faded else label,
+            **style,
+        )
+
+
+def _check_passes(passes: Sequence[tuple[int, int]], n_commands: int) -> list[tuple[int, int]]:
+    """The passes as state-index pairs ``(i, j)``, checked: ``0 <= i < j <= n_commands`` and in
+    order without overlap."""
+    out = [(int(i), int(j)) for i, j in passes]
+    last = 0
+    for i, j in out:
+        if not 0 <= i < j <= n_commands or i < last:
+            raise InvalidInputError(
+                f"pass ({i}, {j}) is not a state range 0 <= i < j <= {n_commands} after the "
+                "previous pass; passes must be ordered and must not overlap"
+            )
+        last = j
+    return out
+
+
+def plot_trace_3d(
+    path: str | Path,
+    arm: SerialArm,
+    scene: Scene,
+    sequence: CommandSequence,
+    curve_points: ArrayLike,
+    passes: Sequence[tuple[int, int]],
+    unreachable_points: Sequence[ArrayLike] = (),
+    title: str = "",
+) -> None:
+    """3-D view of a curve trace (all lengths in mm, the seed arm's unit).
+
+    Seen from the arm's side (elevation 24°, azimuth -140°) with equal axes; lines are drawn
+    over the translucent obstacles, and the parts of them behind an obstacle are faded.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    arm, scene
+        The arm and the scene whose obstacles are drawn (semi-transparent).
+    sequence
+        The whole command sequence; state 0 is its start, state ``k`` the state after command
+        ``k``.
+    curve_points
+        ``(M, 3)`` points along the curve (the crack), drawn as a thin dark line.
+    passes
+        ``(i, j)`` state-index ranges during which the fingertip traces the curve; the continuous
+        tip path over commands ``i+1 .. j`` is drawn thick, one colour per pass. Every other
+        command (approach, lift-off, transit) is drawn thin, dashed and grey.
+    unreachable_points
+        One ``(K, 3)`` array of curve points per arc that cannot be traced, drawn in red.
+    title
+        Figure title (default: command and pass counts).
+    """
+    spans = _check_passes(passes, sequence.n_commands)
+    curve = np.asarray(curve_points, dtype=np.float64).reshape(-1, 3)
+    arcs = [np.asarray(a, dtype=np.float64).reshape(-1, 3) for a in unreachable_points]
+    fig = Figure(figsize=(9, 7.5))
+    # draw order is the call order (lines over the translucent solids); matplotlib's depth sort
+    # would hide lines behind the surfaces unpredictably. Depth is shown by fading instead.
+    ax = fig.add_subplot(projection="3d", computed_zorder=False)
+    assert isinstance(ax, Axes3D)
+    eye = _eye_direction(*_TRACE_VIEW)
+    tip = tool_position(arm, sequence.sample_motion(_SUBSTEPS))  # state k is row k * _SUBSTEPS
+    states = landmark_positions(arm, ticks_to_rad(sequence.states()))
+    first = spans[0][0] if spans else 0
+    pts = [tip, curve, states[[first, -1]].reshape(-1, 3)]
+    for obstacle in scene.world.obstacles:
+        if isinstance(obstacle, SolidOfRevolution):
+            pts.append(_draw_solid(ax, obstacle))
+        elif isinstance(obstacle, Sphere):
+            pts.append(_draw_sphere(ax, obstacle))
+        elif isinstance(obstacle, Box):
+            pts.append(_draw_box(ax, obstacle))
+    ax.plot(
+        *states[-1].T,
+        "-o",
+        color="0.55",
+        alpha=0.4,
+        linewidth=1.5,
+        markersize=3,
+        label=f"arm at the final state ({sequence.n_commands})",
+    )
+    ax.plot(
+        *states[first].T,
+        "-o",
+        color="0.3",
+        alpha=0.8,
+        linewidth=2.0,
+        markersize=4,
+        label=f"arm at the start of pass 1 (state {first})",
+    )
+    for k, arc in enumerate(arcs):
+        _plot_depth_cued(
+            ax,
+            arc,
+            _hidden(arc, scene, eye),
+            color="tab:red",
+            linewidth=3.5,
+            solid_capstyle="butt",
+            label="unreachable" if k == 0 else None,
+        )
+    tip_hidden = _hidden(tip, scene, eye)
+    # transit: every command outside the passes
+    bounds = [0, *[b for ij in spans for b in ij], sequence.n_commands]
+    labelled = False
+    for a, b in zip(bounds[::2], bounds[1::2], strict=True):
+        if b > a:
+            rows = slice(a * _SUBSTEPS, b * _SUBSTEPS + 1)
+            _plot_depth_cued(
+                ax,
+                tip[rows],
+                tip_hidden[rows],
+                "--",
+                color="0.35",
+                linewidth=1.0,
+                label=None if labelled else "transit (approach / lift-off)",
+            )
+            labelled = True
+    for k, (i, j) in enumerate(spans):
+        rows = slice(i * _SUBSTEPS, j * _SUBSTEPS + 1)
+        _plot_depth_cued(
+            ax,
+            tip[rows],
+            tip_hidden[rows],
+            color=_PASS_COLOURS[k % len(_PASS_COLOURS)],
+            linewidth=3.0,
+            alpha=0.9,
+            label=f"fingertip, pass {k + 1}: states {i}–{j}",
+        )
+    # the curve over the passes: a thin dark centre line in each coloured band
+    _plot_depth_cued(
+        ax, curve, _hidden(curve, scene, eye), color="0.1", linewidth=0.8, label="curve (crack)"
+    )
+    for k, (i, j) in enumerate(spans):
+        p, q = tip[i * _SUBSTEPS], tip[j * _SUBSTEPS]
+        ax.scatter(
+            *p,
+            color="k",
+            marker="o",
+            s=40,
+            depthshade=False,
+            label="pass start (number)" if k == 0 else None,
+        )
+        ax.scatter(
+            *q, color="k", marker="s", s=28, depthshade=False, label="pass end" if k == 0 else None
+        )
+        ax.text(*p, f"  {k + 1}", fontsize=10, fontweight="bold")
+    _set_equal(ax, np.vstack(pts))
+    if any(isinstance(o, HalfSpace) for o in scene.world.obstacles):
+        _draw_table(ax)
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_zlabel("z [mm]")
+    n_pass = f"{len(spans)} pass" + ("" if len(spans) == 1 else "es")
+    ax.set_title(title or f"curve trace: {sequence.n_commands} commands, {n_pass}")
+    ax.view_init(elev=_TRACE_VIEW[0], azim=_TRACE_VIEW[1])
+    ax.set_box_aspect((1, 1, 1), zoom=1.15)
+    fig.legend(loc="lower center", ncol=3, fontsize=8, frameon=False)
+    fig.text(
+        0.99, 0.01, "faded: behind an obstacle", ha="right", va="bottom", fontsize=7, color="0.4"
+    )
+    fig.tight_layout(rect=(0.0, 0.08, 1.0, 1.0))
+    fig.savefig(path, dpi=110)
+
+
+def plot_trace_deviation(
+    path: str | Path,
+    s_mm: ArrayLike,
+    deviation_mm: ArrayLike,
+    tolerance_mm: float,
+    unreachable: Sequence[tuple[float, float]] = (),
+    curve_length_mm: float | None = None,
+    title: str = "",
+) -> None:
+    """Deviation of the continuous tip path from the curve along the curve's arc length.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    s_mm, deviation_mm
+        Arc length along the curve (mm) and the tip's distance from the curve there (mm), same
+        length, in any order (they are sorted by ``s``); NaN deviations (not traced) are left
+        as gaps, and the line is never drawn across an unreachable arc.
+    tolerance_mm
+        Allowed deviation (mm), drawn as a dashed horizontal line.
+    unreachable
+        Arcs ``(start, end)`` in mm of arc length that cannot be traced, shaded. On a closed
+        curve of length ``curve_length_mm`` an arc with ``end > curve_length_mm`` wraps past 0:
+        both pieces are shaded.
+    curve_length_mm
+        Length of the curve (mm); sets the x range (default: the data range).
+    title
+        Figure title.
+    """
+    s = np.asarray(s_mm, dtype=np.float64).ravel()
+    dev = np.asarray(deviation_mm, dtype=np.float64).ravel()
+    if s.shape != dev.shape:
+        raise InvalidInputError(
+            f"s_mm and deviation_mm must have the same length, got {s.size} and {dev.size}"
+        )
+    order = np.argsort(s, kind="stable")
+    s, dev = s[order], dev[order]
+    length = curve_length_mm
+    pieces: list[tuple[float, float]] = []
+    for a, b in unreachable:
+        if length is not None and b > length:
+            pieces += [(float(a), length), (0.0, float(b) - length)]
+        else:
+            pieces.append((float(a), float(b)))
+    # never draw the deviation line across an unreachable arc, even without a NaN there
+    mid = (s[:-1] + s[1:]) / 2
+    cut = np.flatnonzero(np.any([(lo < mid) & (mid < hi) for lo, hi in pieces], axis=0))
+    if pieces and cut.size:
+        s = np.insert(s, cut + 1, mid[cut])
+        dev = np.insert(dev, cut + 1, np.nan)
+    fig = Figure(figsize=(9, 4.2))
+    ax = fig.add_subplot()
+    for m, (lo, hi) in enumerate(pieces):
+        ax.axvspan(
+            lo,
+            hi,
+            color="tab:red",
+            alpha=0.15,
+            linewidth=0,
+            label="unreachable" if m == 0 else None,
+        )
+    ax.plot(s, dev, color="tab:blue", linewidth=1.4, label="tip deviation")
+    ax.axhline(
+        tolerance_mm,
+        color="k",
+        linestyle="--",
+        linewidth=1.0,
+        label=f"tolerance {tolerance_mm:g} mm",
+    )
+    finite = np.isfinite(dev)
+    if finite.any():
+        k = int(np.nanargmax(dev))
+        ax.plot(
+            s[k],
+            dev[k],
+            "v",
+            color="tab:blue",
+            markersize=7,
+            label=f"max {dev[k]:.3f} mm at s = {s[k]:.1f} mm",
+        )
+    top = max(float(np.nanmax(dev)) if finite.any() else 0.0, tolerance_mm)
+    ax.set_ylim(0.0, 1.1 * top if top > 0 else 1.0)
+    if length is not None:
+        ax.set_xlim(0.0, length)
+    elif s.size:
+        ax.set_xlim(float(s[0]), float(s[-1]))
+    ax.set_xlabel("arc length along the curve s [mm]")
+    ax.set_ylabel("deviation from the curve [mm]")
+    ax.set_title(title or "deviation of the continuous tip path from the curve", pad=24)
+    ax.grid(alpha=0.3)
+    # above the axes, under the title: never over the data
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, fontsize=8, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

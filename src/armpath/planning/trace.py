@@ -1,0 +1,640 @@
+"""Trace a curve with the fingertip: command sequences whose continuous tip path stays on it.
+
+1. **Reachability** (:mod:`armpath.planning.curve_reach`) splits the curve into reachable arcs;
+   each becomes one *pass*.
+2. **Redundancy resolution.** The fingertip has a two-dimensional family of solutions at every
+   curve point. A reference path through the family is chosen by dynamic programming over layers
+   of the family every few mm: nodes keep a clearance and joint-limit slack, transitions cost the
+   largest joint change (what commands cost) less a small reward for slack.
+3. **Commands.** From the current lattice state, the planner looks for the command that carries
+   the tip farthest along the curve: for each candidate advance it follows the reference (pulled
+   gently toward it), projects onto the curve point (offset outward by half the tolerance when the
+   curve lies on a surface, so the tip neither leaves the band nor enters the surface), and
+   searches the lattice around it. Candidates are pre-filtered by the linearized offset in the
+   curve's normal plane, then checked exactly: end point within the band, the continuous motion
+   sampled within the band and outside the surface, the clearance rule with a small buffer.
+4. **Passes and transits.** The arm moves from the start to each pass, and between passes (lifting
+   off the surface), with the collision-free planner (:func:`~armpath.planning.motion.plan_motion`).
+5. **Certification.** The whole sequence's clearance is certified along the continuous motion
+   (:func:`~armpath.planning.motion_check.motion_clearance`); the tip's deviation from the curve
+   during every pass is bounded by branch and bound with the tip's largest speed, so the reported
+   largest deviation is the true maximum of the continuous path to within ``2 um``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.commands import MAX_INCREMENT_TICKS, TICK_RAD, CommandSequence, ticks_to_rad
+from armpath.errors import InvalidInputError, PlanningError
+from armpath.geometry.curves import Curve
+from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import displacement_bounds, position_jacobian, tool_position
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.curve_reach import (
+    CurveArc,
+    CurveFamily,
+    CurveReachability,
+    curve_reachability,
+)
+from armpath.planning.motion import (
+    MotionOptions,
+    MotionPlan,
+    PlanMetrics,
+    plan_metrics,
+    plan_motion,
+)
+from armpath.planning.motion_check import MotionClearance, motion_clearance
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Joints that move the fingertip of a seed-type arm (joint 6 turns the tool only).
+_TIP_JOINTS = 5
+#: Lattice offsets searched around a projected configuration, per tip joint (ticks).
+_BOX = 4
+#: Instants per command at which a candidate's continuous motion is checked while searching.
+_PATH_SAMPLES = 16
+#: Extra clearance the links keep while tracing, so the certification of the continuous motion
+#: (bound from sampling) succeeds (mm).
+_BODY_BUFFER_MM = 0.02
+#: Candidate advances along the curve per command (mm), tried largest first.
+_ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
+
+
+@dataclass(frozen=True)
+class TraceOptions:
+    """How to trace.
+
+    ``tolerance_mm``: the largest distance of the continuous tip path from the curve during a
+    pass. ``layer_step_mm``: spacing of the reference path's layers. ``motion``: options of the
+    transits between passes.
+    """
+
+    tolerance_mm: float = 0.1
+    layer_step_mm: float = 5.0
+    scan_step_mm: float = 4.0
+    motion: MotionOptions = field(default_factory=MotionOptions)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.tolerance_mm) and 0.005 <= self.tolerance_mm <= 10.0):
+            raise InvalidInputError(
+                f"tracing tolerance must be between 0.005 and 10 mm, got {self.tolerance_mm}"
+            )
+        if not self.layer_step_mm > 0:
+            raise InvalidInputError("layer step must be > 0 mm")
+
+
+@dataclass(frozen=True)
+class TracePass:
+    """One continuous pass: the tip follows the curve from state ``first`` to state ``last``
+    (state 0 is the start, state k the state after command k), covering arc lengths
+    ``start_mm``..``end_mm``."""
+
+    first: int
+    last: int
+    start_mm: float
+    end_mm: float
+    max_deviation_mm: float
+    max_deviation_bound_mm: float
+
+    @property
+    def covered_mm(self) -> float:
+        return self.end_mm - self.start_mm
+
+
+@dataclass(frozen=True)
+class Transit:
+    """A move off the curve (to the first pass, or lifting off between passes)."""
+
+    first: int
+    last: int
+    method: str
+
+
+@dataclass(frozen=True, eq=False)
+class TraceResult:
+    """A traced curve: the command sequence, its passes and what they cover."""
+
+    sequence: CommandSequence
+    curve: Curve
+    reachability: CurveReachability
+    passes: tuple[TracePass, ...]
+    transits: tuple[Transit, ...]
+    tolerance_mm: float
+    clearance: MotionClearance
+    metrics: PlanMetrics
+    deviation_s_mm: FloatArray
+    deviation_mm: FloatArray
+
+    @property
+    def n_commands(self) -> int:
+        return self.sequence.n_commands
+
+    @property
+    def covered_mm(self) -> float:
+        return float(sum(p.covered_mm for p in self.passes))
+
+    @property
+    def max_deviation_mm(self) -> float:
+        return max((p.max_deviation_mm for p in self.passes), default=0.0)
+
+    @property
+    def max_deviation_bound_mm(self) -> float:
+        return max((p.max_deviation_bound_mm for p in self.passes), default=0.0)
+
+
+def _joint_change(q_deg: FloatArray, here_deg: FloatArray, wrap: NDArray[np.bool_]) -> FloatArray:
+    """Largest joint change (deg) from ``here_deg`` to each row of ``q_deg`` (unlimited joints
+    by the shorter way round)."""
+    d = q_deg - here_deg
+    d = np.where(wrap, (d + 180.0) % 360.0 - 180.0, d)
+    return np.asarray(np.abs(d).max(axis=-1), dtype=np.float64)
+
+
+def _flips(q_deg: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Configurations of a seed-type arm (joints 1-5, deg) and their wrist flips."""
+    other = q_deg.copy()
+    other[..., 3] = (other[..., 3] + 360.0) % 360.0 - 180.0
+    other[..., 4] = -other[..., 4]
+    return q_deg, other
+
+
+@numba.njit(cache=True)
+def _dp_layer(
+    prev_q: FloatArray,
+    prev_cost: FloatArray,
+    q: FloatArray,
+    bonus: FloatArray,
+    wrap: NDArray[np.bool_],
+    max_step: float,
+) -> tuple[FloatArray, NDArray[np.int64]]:  # pragma: no cover - compiled
+    """One DP layer: for each node of ``q``, the best predecessor in ``prev_q`` (deg)."""
+    n, m, j = prev_q.shape[0], q.shape[0], q.shape[1]
+    cost = np.full(m, np.inf)
+    arg = np.full(m, -1, dtype=np.int64)
+    for b in range(m):
+        for a in range(n):
+            if not np.isfinite(prev_cost[a]):
+                continue
+            worst = 0.0
+            for k in range(j):
+                d = q[b, k] - prev_q[a, k]
+                if wrap[k]:
+                    d = (d + 180.0) % 360.0 - 180.0
+                d = abs(d)
+                if d > worst:
+                    worst = d
+            if worst > max_step:
+                continue
+            c = prev_cost[a] + worst - bonus[b]
+            if c < cost[b]:
+                cost[b] = c
+                arg[b] = a
+    return cost, arg
+
+
+class _Tracer:
+    """Greedy lattice tracing of one arc along a reference path through the family."""
+
+    def __init__(
+        self,
+        fam: CurveFamily,
+        arc: CurveArc,
+        tolerance: float,
+        layer_step: float,
+        q_from: FloatArray,
+    ) -> None:
+        self.fam = fam
+        self.arm = fam.arm
+        self.world = fam.world
+        self.arc = arc
+        self.tol = tolerance
+        self.offset = tolerance / 2 if fam.surface is not None else 0.0
+        self.limits_lo = self.arm.lower
+        self.limits_hi = self.arm.upper
+        self.wrap = ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
+        pairs = self.world.pairs(self.arm)
+        self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
+        self.layers, self.ref = self._reference(layer_step, q_from)
+        box = np.arange(-_BOX, _BOX + 1)
+        self.offsets = np.stack(np.meshgrid(*[box] * _TIP_JOINTS, indexing="ij"), -1).reshape(
+            -1, _TIP_JOINTS
+        )
+        self.rate = displacement_bounds(self.arm) * TICK_RAD
+
+    # -- reference path ------------------------------------------------------------------
+    def _reference(self, step: float, q_from: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Layers (arc length) and the reference configurations there (rad, unwrapped).
+
+        The first layer's cost is the largest joint change from ``q_from`` (the transit onto the
+        curve costs commands too). The wrist flip (joint 4 + 180 deg, joint 5 negated) moves no
+        link, so it is chosen afterwards, for the whole path, to suit ``q_from``."""
+        a, b = self.arc.start_mm, self.arc.end_mm
+        inset = min(1.0, 0.1 * (b - a))
+        n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
+        s_layers = np.linspace(a + inset, b - inset, n + 1)
+        nodes: list[tuple[float, FloatArray, FloatArray]] = []
+        for s in s_layers:
+            q = self.fam.configs(float(s), self.fam._coarse_dirs)
+            if q.shape[0] == 0:
+                continue
+            sc = self.fam.score(q)
+            best = float(np.max(sc))
+            if best < 0:
+                continue
+            keep = sc >= min(0.3, 0.5 * best)
+            nodes.append((float(s), np.degrees(q[keep, :_TIP_JOINTS]), sc[keep]))
+        if not nodes:
+            raise PlanningError(
+                f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm of the curve"
+            )
+        wrap = self.wrap[:_TIP_JOINTS]
+        here = np.degrees(q_from[:_TIP_JOINTS])
+        cost = np.min([_joint_change(q, here, wrap) for q in _flips(nodes[0][1])], axis=0)
+        back = []
+        for k in range(1, len(nodes)):
+            gap = nodes[k][0] - nodes[k - 1][0]
+            bonus = 0.3 * np.minimum(nodes[k][2], 3.0)
+            new_cost, arg = _dp_layer(
+                nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max(30.0, 6.0 * gap)
+            )
+            if not np.any(np.isfinite(new_cost)):
+                raise PlanningError(
+                    f"the clear configurations at {nodes[k - 1][0]:.1f} and {nodes[k][0]:.1f} mm "
+                    "along the curve are not connected: the arc needs more than one pass"
+                )
+            cost = new_cost
+            back.append(arg)
+        j = int(np.argmin(cost))
+        path = [j]
+        for arg in reversed(back):
+            j = int(arg[j])
+            path.append(j)
+        path.reverse()
+        ref = np.array([nodes[k][1][path[k]] for k in range(len(nodes))])
+        flipped = _flips(ref)[1]
+        if _joint_change(flipped[:1], here, wrap)[0] < _joint_change(ref[:1], here, wrap)[0]:
+            ref = flipped
+        ref_rad = np.radians(ref)
+        ref_rad[:, wrap] = np.unwrap(ref_rad[:, wrap], axis=0)
+        full = np.concatenate([ref_rad, np.zeros((ref_rad.shape[0], 1))], axis=1)
+        return np.array([x[0] for x in nodes]), full
+
+    def q_ref(self, s: float | FloatArray) -> FloatArray:
+        s_arr = np.asarray(s, dtype=np.float64)
+        return np.stack(
+            [np.interp(s_arr, self.layers, self.ref[:, j]) for j in range(self.ref.shape[1])],
+            axis=-1,
+        )
+
+    def align(self, q_start: FloatArray) -> None:
+        """Shift unlimited joints of the reference by whole turns to start near ``q_start``."""
+        first = self.q_ref(self.layers[0])
+        turns = np.round((q_start - first) / (2 * np.pi)) * self.wrap
+        self.ref = self.ref + turns * 2 * np.pi
+
+    def matched(self, q: FloatArray, like: FloatArray) -> FloatArray:
+        """``q`` or its wrist flip, unlimited joints turned by whole turns, nearest ``like``."""
+        flip = q.copy()
+        flip[3] += np.pi
+        flip[4] = -flip[4]
+        best = None
+        for cand in (q, flip):
+            c = cand + np.round((like - cand) / (2 * np.pi)) * 2 * np.pi * self.wrap
+            if best is None or np.abs(c - like).max() < np.abs(best - like).max():
+                best = c
+        assert best is not None
+        return best
+
+    # -- curve geometry -------------------------------------------------------------------------
+    def target(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Target tip point at ``s`` and two unit vectors spanning the curve's normal plane."""
+        c, t, n = self.fam.frame(s)
+        if not np.any(n):
+            helper = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            n = helper - (helper @ t) * t
+            n /= np.linalg.norm(n)
+        return c + self.offset * n if self.fam.surface is not None else c, n, np.cross(t, n)
+
+    def unwrap_s(self, s: FloatArray, near: float) -> FloatArray:
+        if not self.fam.curve.closed:
+            return s
+        L = self.fam.curve.length
+        return np.asarray(s + L * np.round((near - s) / L))
+
+    def tip_checks(self, P: FloatArray, near: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Distance to the curve, arc length of the closest point (unwrapped near ``near``) and
+        signed distance to the surface (inf without one) of tip points ``(..., 3)``."""
+        d, s = self.fam.curve.closest(P)
+        if self.fam.surface is not None:
+            sd = self.fam.surface.signed_distance(P)
+        else:
+            sd = np.full(d.shape, np.inf)
+        return d, self.unwrap_s(s, near), sd
+
+    # -- lattice ---------------------------------------------------------------------------
+    def project(self, q: FloatArray, E: FloatArray) -> FloatArray:
+        """Nearest family member to ``q`` (minimum-norm Newton steps) with the tip at ``E``."""
+        q = q.copy()
+        for _ in range(5):
+            e = E - tool_position(self.arm, q)
+            if np.linalg.norm(e) < 1e-9:
+                break
+            J = position_jacobian(self.arm, q)[:, :_TIP_JOINTS]
+            q[:_TIP_JOINTS] += np.linalg.pinv(J) @ e
+        return q
+
+    def lattice_near(self, base: FloatArray, n: FloatArray, b: FloatArray, q6: int) -> IntArray:
+        """Lattice states around ``base`` (rad) whose tip, linearized, is within half the
+        tolerance of the base's tip in the normal plane."""
+        J = position_jacobian(self.arm, base)[:, :_TIP_JOINTS]
+        A = np.stack([n, b]) @ J
+        exact = base[:_TIP_JOINTS] / TICK_RAD
+        rounded = np.round(exact).astype(np.int64)
+        lin = ((self.offsets + (rounded - exact)) * TICK_RAD) @ A.T
+        keep = np.hypot(lin[:, 0], lin[:, 1]) <= self.tol / 2
+        cand = rounded + self.offsets[keep]
+        return np.concatenate([cand, np.full((cand.shape[0], 1), q6)], axis=1)
+
+    def valid_ends(
+        self, qk: IntArray, sk: float, cand: IntArray, goal: float
+    ) -> tuple[IntArray, FloatArray]:
+        """Candidates whose command from ``qk`` keeps the tip in the band and the arm clear while
+        it moves toward arc length ``goal``; returned with the arc length their end state
+        reaches."""
+        sign = 1.0 if goal >= sk else -1.0
+        if cand.shape[0] == 0:
+            return cand, np.zeros(0)
+        cand = cand[np.abs(cand - qk).max(axis=1) <= MAX_INCREMENT_TICKS]
+        cand = cand[self.arm.within_limits(ticks_to_rad(cand))]
+        if cand.shape[0] == 0:
+            return cand, np.zeros(0)
+        d, s, sd = self.tip_checks(tool_position(self.arm, ticks_to_rad(cand)), sk)
+        ok = (d <= 0.9 * self.tol) & (sign * (s - sk) > 0.05) & (sign * (s - goal) <= self.tol)
+        if self.fam.surface is not None:
+            ok &= sd >= 0.1 * self.tol
+        cand, s = cand[ok], s[ok]
+        if cand.shape[0] == 0:
+            return cand, s
+        t = np.linspace(0.0, 1.0, _PATH_SAMPLES + 1)[1:-1]
+        Q = qk[None, None, :] + t[None, :, None] * (cand - qk)[:, None, :]
+        d2, _, sd2 = self.tip_checks(tool_position(self.arm, ticks_to_rad(Q)), sk)
+        ok = d2.max(axis=1) <= 0.9 * self.tol
+        if self.fam.surface is not None:
+            ok &= sd2.min(axis=1) >= 0.05 * self.tol
+        cand, s, Q = cand[ok], s[ok], Q[ok]
+        if cand.shape[0] == 0:
+            return cand, s
+        checked = np.concatenate([Q[:, 1::2], cand[:, None, :]], axis=1)
+        clear = self.world.satisfied(self.arm, ticks_to_rad(checked), self.extra).all(axis=1)
+        return cand[clear], s[clear]
+
+    def step(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """The command from ``qk`` that carries the tip farthest along the curve toward arc
+        length ``goal``."""
+        qk_rad = ticks_to_rad(qk)
+        sign = 1.0 if goal >= sk else -1.0
+        last = None
+        for adv in _ADVANCES_MM:
+            s1 = sk + sign * min(adv, abs(goal - sk))
+            if abs(s1 - sk) <= 0.05 or s1 == last:
+                continue
+            last = s1
+            E, n, b = self.target(s1)
+            drift = self.q_ref(s1) - self.q_ref(sk)
+            pull = np.clip(0.3 * (self.q_ref(sk) - qk_rad), -np.radians(0.5), np.radians(0.5))
+            found = []
+            for guess in (qk_rad + drift + pull, qk_rad + drift):
+                base = self.project(guess, E)
+                if np.degrees(np.abs(base - qk_rad)).max() > 2.3:
+                    continue
+                found.append(self.lattice_near(base, n, b, int(qk[-1])))
+            if not found:
+                continue
+            cand, s = self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+            if cand.shape[0]:
+                ref_gap = np.degrees(np.abs(ticks_to_rad(cand) - self.q_ref(s))).max(axis=1)
+                k = int(np.argmax(sign * s - 0.05 * ref_gap))
+                return cand[k], float(s[k])
+        return None
+
+    def start_state(
+        self, s_from: float, body_buffer_mm: float = _BODY_BUFFER_MM
+    ) -> tuple[IntArray, float]:
+        """A lattice state with the tip in the band as close after ``s_from`` as found, whose
+        links keep ``body_buffer_mm`` beyond the clearance rule."""
+        extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
+        for gap in (0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 6.4):
+            s0 = s_from + gap
+            E, n, b = self.target(s0)
+            ref = self.q_ref(s0)
+            bases = [ref]
+            q = self.fam.configs(self.fam.wrap(s0), self.fam._fine_dirs)
+            if q.shape[0]:
+                q = np.array([self.matched(x, ref) for x in q])
+                gap = np.degrees(np.abs(q - ref).max(axis=1))
+                score = np.where(gap <= 30.0, self.fam.score(q), -np.inf)
+                roomy = score >= body_buffer_mm
+                pick = (
+                    np.argmin(np.where(roomy, gap, np.inf)) if np.any(roomy) else np.argmax(score)
+                )
+                if np.isfinite(score[pick]):
+                    bases.insert(0, q[pick])
+            for base in bases:
+                cand = self.lattice_near(self.project(base, E), n, b, 0)
+                cand = cand[self.arm.within_limits(ticks_to_rad(cand))]
+                if cand.shape[0] == 0:
+                    continue
+                d, s, sd = self.tip_checks(tool_position(self.arm, ticks_to_rad(cand)), s0)
+                ok = (d <= 0.9 * self.tol) & (s >= self.arc.start_mm - self.tol)
+                if self.fam.surface is not None:
+                    ok &= sd >= 0.1 * self.tol
+                ok &= self.world.satisfied(self.arm, ticks_to_rad(cand), extra)
+                if np.any(ok):
+                    k = int(np.argmin(np.where(ok, s, np.inf)))
+                    return cand[k], float(s[k])
+        raise PlanningError(
+            f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
+            f"{s_from:.1f} mm"
+        )
+
+    def run(self, q_start: IntArray, s_start: float, goal: float) -> tuple[list[IntArray], float]:
+        """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes)."""
+        states, sk, qk = [q_start], s_start, q_start
+        while abs(goal - sk) > 0.05:
+            nxt = self.step(qk, sk, goal)
+            if nxt is None:
+                break
+            qk, sk = nxt
+            states.append(qk)
+        return states, sk
+
+
+def certified_deviation(
+    arm: SerialArm, curve: Curve, states: IntArray, s_near: float, precision: float = 0.002
+) -> tuple[float, float, FloatArray, FloatArray]:
+    """Largest distance (mm) of the continuous tip path through lattice ``states`` (ticks) from
+    ``curve``, a proven upper bound (branch and bound: the tip moves at most ``rate * dt`` between
+    instants, distance is 1-Lipschitz), and a profile ``(s, deviation)`` sampled 32 times per
+    command."""
+    states = np.asarray(states, dtype=np.int64)
+    if states.shape[0] < 2:
+        P = tool_position(arm, ticks_to_rad(states))
+        d, s = curve.closest(P)
+        return float(d.max()), float(d.max()), s, d
+    steps = np.diff(states, axis=0).astype(np.float64)
+    rate = np.abs(steps) @ (displacement_bounds(arm) * TICK_RAD)  # mm per unit of u
+    n = steps.shape[0]
+
+    def tip(u: FloatArray) -> FloatArray:
+        k = np.clip(np.floor(u).astype(np.int64), 0, n - 1)
+        return tool_position(arm, ticks_to_rad(states[k] + (u - k)[:, None] * steps[k]))
+
+    u = np.linspace(0.0, n, 32 * n + 1)
+    d, s = curve.closest(tip(u))
+    profile_s = s.copy()
+    if curve.closed:
+        L = curve.length
+        profile_s = np.asarray(np.unwrap(s / L * 2 * np.pi) * L / (2 * np.pi))
+        profile_s += L * np.round((s_near - profile_s[0]) / L)
+    profile_d = d.copy()
+    for _ in range(40):
+        k = np.minimum(np.floor(u[:-1]).astype(np.int64), n - 1)
+        h = np.diff(u)
+        bound = 0.5 * (d[:-1] + d[1:] + rate[k] * h)
+        best = float(d.max())
+        need = bound > best + precision
+        if not np.any(need):
+            break
+        mid = 0.5 * (u[:-1][need] + u[1:][need])
+        d_mid, _ = curve.closest(tip(mid))
+        order = np.argsort(np.concatenate([u, mid]), kind="stable")
+        u = np.concatenate([u, mid])[order]
+        d = np.concatenate([d, d_mid])[order]
+    k = np.minimum(np.floor(u[:-1]).astype(np.int64), n - 1)
+    bound = float(np.max(0.5 * (d[:-1] + d[1:] + rate[k] * np.diff(u))))
+    return float(d.max()), max(bound, float(d.max())), profile_s, profile_d
+
+
+def plan_trace(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: IntArray,
+    curve: Curve,
+    options: TraceOptions | None = None,
+    on_progress: Callable[[str], None] | None = None,
+) -> TraceResult:
+    """Trace every reachable part of ``curve`` from ``start_ticks``, fewest passes first."""
+    opts = options or TraceOptions()
+    say = on_progress or (lambda _m: None)
+    reach = curve_reachability(arm, world, curve, scan_step_mm=opts.scan_step_mm, on_progress=say)
+    if not reach.reachable:
+        raise PlanningError(
+            f"no part of curve {curve.name!r} is reachable: "
+            + "; ".join(a.reason for a in reach.unreachable)
+        )
+    fam = CurveFamily(arm, world, curve)
+    start = np.asarray(start_ticks, dtype=np.int64)
+    states: list[IntArray] = [start]
+    passes: list[TracePass] = []
+    transits: list[Transit] = []
+    prof_s: list[FloatArray] = []
+    prof_d: list[FloatArray] = []
+    arcs = list(reach.reachable)
+    if curve.closed and len(arcs) == 1 and arcs[0].length_mm >= curve.length - 1e-9:
+        arcs = [CurveArc(arcs[0].start_mm, arcs[0].start_mm + curve.length)]
+    for i, arc in enumerate(arcs):
+        say(f"tracing pass {i + 1} of {len(arcs)}: {arc.start_mm:.1f}..{arc.end_mm:.1f} mm")
+        tracer = _Tracer(fam, arc, opts.tolerance_mm, opts.layer_step_mm, ticks_to_rad(states[-1]))
+        tracer.align(ticks_to_rad(states[-1]))
+        here = len(states) - 1
+        motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
+        states.extend(list(motion.sequence.states()[1:]))
+        transits.append(Transit(here, len(states) - 1, motion.method))
+        first = len(states) - 1
+        pass_states = [q_entry]
+        if s_entry > arc.start_mm + 0.05:  # back to the start of the arc first
+            back, s_back = tracer.run(q_entry, s_entry, arc.start_mm)
+            pass_states = back
+            s_entry = s_back
+        ahead, _ = tracer.run(pass_states[-1], s_entry, arc.end_mm)
+        pass_states += ahead[1:]
+        states.extend(pass_states[1:])
+        dev, dev_bound, ps, pd = certified_deviation(
+            arm, curve, np.array(pass_states), arc.start_mm
+        )
+        prof_s.append(ps)
+        prof_d.append(pd)
+        passes.append(
+            TracePass(first, len(states) - 1, float(ps.min()), float(ps.max()), dev, dev_bound)
+        )
+    all_states = np.array(states)
+    sequence = CommandSequence(all_states[0], np.diff(all_states, axis=0))
+    say("certifying the clearance of the whole motion")
+    clearance = motion_clearance(arm, world, sequence, max_evaluations=400_000)
+    return TraceResult(
+        sequence,
+        curve,
+        reach,
+        tuple(passes),
+        tuple(transits),
+        opts.tolerance_mm,
+        clearance,
+        plan_metrics(arm, sequence),
+        np.concatenate(prof_s) if prof_s else np.zeros(0),
+        np.concatenate(prof_d) if prof_d else np.zeros(0),
+    )
+
+
+def _enter(
+    tracer: _Tracer,
+    reach: CurveReachability,
+    q_from: IntArray,
+    opts: TraceOptions,
+    say: Callable[[str], None],
+) -> tuple[MotionPlan, IntArray, float]:
+    """Move from ``q_from`` onto the curve near the start of the tracer's arc.
+
+    The start of an arc is usually a tight spot (that is why the arc ends there), so the entry is
+    the first point along the arc where the arm keeps ``transit_body_mm`` of spare clearance; the
+    pass then runs back to the start of the arc before tracing forward.
+    """
+    arc = tracer.arc
+    L = reach.curve.length
+    scan_s = reach.scan_s_mm
+    if reach.curve.closed:
+        scan_s = np.concatenate([scan_s, scan_s + L, scan_s + 2 * L])
+        scores = np.tile(reach.scan_score, 3)
+    else:
+        scores = reach.scan_score
+    inside = (scan_s >= arc.start_mm) & (scan_s <= arc.end_mm)
+    need = opts.motion.buffer_mm + opts.motion.sample_spacing_mm / 2 + 0.5
+    roomy = scan_s[inside & (scores >= need)]
+    candidates = [arc.start_mm, *roomy[:3].tolist()]
+    failures = []
+    for i, s_try in enumerate(candidates):
+        try:
+            q, s = tracer.start_state(s_try, need if i else _BODY_BUFFER_MM)
+        except PlanningError as exc:
+            failures.append(f"{s_try:.1f} mm: {exc}")
+            continue
+        say(f"moving onto the curve at {s % L if reach.curve.closed else s:.1f} mm")
+        if i == 0:  # the tight start of the arc: only a straight motion can end there
+            seq = CommandSequence.straight(q_from, q)
+            mc = motion_clearance(tracer.arm, tracer.world, seq)
+            if mc.certified_ok:
+                m = plan_metrics(tracer.arm, seq)
+                return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
+            failures.append(f"{s:.1f} mm: the straight motion there is blocked")
+            continue
+        try:
+            return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], opts.motion), q, s
+        except PlanningError as exc:
+            failures.append(f"{s:.1f} mm: {exc}")
+    raise PlanningError("could not move onto the curve: " + "; ".join(failures))
