@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 
 from armpath.errors import InvalidInputError
 from armpath.geometry.expressions import Expression, parse_expression
-from armpath.geometry.primitives import SolidOfRevolution, golden_section_min
+from armpath.geometry.primitives import SolidOfRevolution
 
 FloatArray = NDArray[np.float64]
 
@@ -88,20 +88,49 @@ class Curve(ABC):
 
     def closest(self, points: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Distance from each point ``(..., 3)`` to the curve and the arc length where it is
-        attained: nearest table sample, then golden-section search between its neighbours."""
+        attained.
+
+        The nearest sample of the arc-length table (20001 points), the exact projection onto the
+        two table chords next to it (exact for polylines), then one Newton step on the curve
+        itself (smooth curves: error far below 1e-6 mm).
+        """
         x = np.asarray(points, dtype=np.float64)
         flat = x.reshape(-1, 3)
-        u_tab, _, _ = self._table
+        _, table_p, table_s = self._table
         _, idx = self._tree.query(flat)
-        step = u_tab[1] - u_tab[0]
-        lo = np.clip(u_tab[idx] - step, 0.0, 1.0)
-        hi = np.clip(u_tab[idx] + step, 0.0, 1.0)
-
-        def dist(u: FloatArray) -> FloatArray:
-            return np.asarray(np.linalg.norm(self.points(u) - flat, axis=-1), dtype=np.float64)
-
-        u_best, d = golden_section_min(dist, lo, hi)
-        return d.reshape(x.shape[:-1]), self.arc_length_at(u_best).reshape(x.shape[:-1])
+        best_d = np.full(flat.shape[0], np.inf)
+        best_s = np.zeros(flat.shape[0])
+        last = table_p.shape[0] - 1
+        for lo in (np.maximum(idx - 1, 0), np.minimum(idx, last - 1)):
+            a, b = table_p[lo], table_p[lo + 1]
+            ab = b - a
+            t = np.clip(
+                np.einsum("ij,ij->i", flat - a, ab)
+                / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300),
+                0.0,
+                1.0,
+            )
+            d = np.linalg.norm(a + t[:, None] * ab - flat, axis=-1)
+            better = d < best_d
+            best_d = np.where(better, d, best_d)
+            best_s = np.where(better, table_s[lo] + t * (table_s[lo + 1] - table_s[lo]), best_s)
+        # one Newton step on (c(u) - x) . c'(u) = 0 from the chord estimate, then keep the better
+        u_tab = self._table[0]
+        h = 0.25 * (u_tab[1] - u_tab[0])
+        u0 = self.parameter_at(best_s)
+        u0 = np.clip(u0, h, 1.0 - h)
+        c_m, c_0, c_p = self.points(u0 - h), self.points(u0), self.points(u0 + h)
+        d1 = (c_p - c_m) / (2 * h)
+        d2 = (c_p - 2 * c_0 + c_m) / (h * h)
+        r = c_0 - flat
+        f1 = np.einsum("ij,ij->i", r, d1)
+        f2 = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", r, d2)
+        u1 = np.clip(u0 - f1 / np.where(np.abs(f2) > 1e-300, f2, 1.0), 0.0, 1.0)
+        d_new = np.linalg.norm(self.points(u1) - flat, axis=-1)
+        better = d_new < best_d
+        best_d = np.where(better, d_new, best_d)
+        best_s = np.where(better, self.arc_length_at(u1), best_s)
+        return best_d.reshape(x.shape[:-1]), best_s.reshape(x.shape[:-1])
 
 
 @dataclass(frozen=True, eq=False)

@@ -226,7 +226,7 @@ class _Tracer:
         self.offsets = np.stack(np.meshgrid(*[box] * _TIP_JOINTS, indexing="ij"), -1).reshape(
             -1, _TIP_JOINTS
         )
-        self.rate = displacement_bounds(self.arm) * TICK_RAD
+        self.offsets_f = self.offsets.astype(np.float64)
 
     # -- reference path ------------------------------------------------------------------
     def _reference(self, step: float, q_from: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -300,16 +300,24 @@ class _Tracer:
         self.ref = self.ref + turns * 2 * np.pi
 
     def matched(self, q: FloatArray, like: FloatArray) -> FloatArray:
-        """``q`` or its wrist flip, unlimited joints turned by whole turns, nearest ``like``."""
-        flip = q.copy()
-        flip[3] += np.pi
-        flip[4] = -flip[4]
-        best = None
-        for cand in (q, flip):
+        """The representation of ``q``'s links nearest ``like``: ``q``, its wrist flip (joint 4
+        + 180 deg, joint 5 negated), its arm-side flip (joint 1 + 180 deg, joints 2 and 3
+        negated, joint 4 - 180 deg) or both, unlimited joints turned by whole turns; a
+        representation outside the joint limits is not used."""
+        wrist = q + np.array([0.0, 0.0, 0.0, np.pi, 0.0, 0.0])
+        wrist[4] = -q[4]
+        side = q * np.array([1.0, -1.0, -1.0, 1.0, 1.0, 1.0]) + np.array(
+            [np.pi, 0.0, 0.0, -np.pi, 0.0, 0.0]
+        )
+        both = side + np.array([0.0, 0.0, 0.0, np.pi, 0.0, 0.0])
+        both[4] = -side[4]
+        best = q
+        for cand in (q, wrist, side, both):
             c = cand + np.round((like - cand) / (2 * np.pi)) * 2 * np.pi * self.wrap
-            if best is None or np.abs(c - like).max() < np.abs(best - like).max():
+            if not self.arm.within_limits(c):
+                continue
+            if np.abs(c - like).max() < np.abs(best - like).max():
                 best = c
-        assert best is not None
         return best
 
     # -- curve geometry -------------------------------------------------------------------------
@@ -354,11 +362,11 @@ class _Tracer:
         """Lattice states around ``base`` (rad) whose tip, linearized, is within half the
         tolerance of the base's tip in the normal plane."""
         J = position_jacobian(self.arm, base)[:, :_TIP_JOINTS]
-        A = np.stack([n, b]) @ J
+        A_t = (np.stack([n, b]) @ J).T * TICK_RAD  # mm per tick
         exact = base[:_TIP_JOINTS] / TICK_RAD
         rounded = np.round(exact).astype(np.int64)
-        lin = ((self.offsets + (rounded - exact)) * TICK_RAD) @ A.T
-        keep = np.hypot(lin[:, 0], lin[:, 1]) <= self.tol / 2
+        lin = self.offsets_f @ A_t + (rounded - exact) @ A_t
+        keep = np.einsum("ij,ij->i", lin, lin) <= (self.tol / 2) ** 2
         cand = rounded + self.offsets[keep]
         return np.concatenate([cand, np.full((cand.shape[0], 1), q6)], axis=1)
 
@@ -421,6 +429,36 @@ class _Tracer:
             if cand.shape[0]:
                 ref_gap = np.degrees(np.abs(ticks_to_rad(cand) - self.q_ref(s))).max(axis=1)
                 k = int(np.argmax(sign * s - 0.05 * ref_gap))
+                return cand[k], float(s[k])
+        if abs(goal - sk) <= 15.0:
+            return self._toward_best(qk, sk, goal)
+        return None
+
+    def _toward_best(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """Near the end of an arc (a tight spot): small advances, the joints turned toward the
+        family member with the most slack there rather than along the reference."""
+        qk_rad = ticks_to_rad(qk)
+        sign = 1.0 if goal >= sk else -1.0
+        for adv in (3.0, 1.5, 0.8, 0.4, 0.2, 0.1):
+            s1 = sk + sign * min(adv, abs(goal - sk))
+            v = self.fam.best(self.fam.wrap(s1), fine=True)
+            if not v.reachable:
+                continue
+            E, n, b = self.target(s1)
+            best = self.matched(v.q, qk_rad)
+            found = []
+            for turn_deg in (1.9, 1.0, 0.5, 0.25):
+                guess = qk_rad + np.clip(best - qk_rad, -np.radians(turn_deg), np.radians(turn_deg))
+                base = self.project(guess, E)
+                if np.degrees(np.abs(base - qk_rad)).max() <= 2.3:
+                    found.append(self.lattice_near(base, n, b, int(qk[-1])))
+            if not found:
+                continue
+            cand, s = self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+            if cand.shape[0]:
+                # the most slack first (a tight spot), then the farthest
+                score = self.fam.score(ticks_to_rad(cand))
+                k = int(np.lexsort((-sign * s, -np.round(score, 2)))[0])
                 return cand[k], float(s[k])
         return None
 
