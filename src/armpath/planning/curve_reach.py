@@ -409,7 +409,7 @@ def curve_reachability(
         arcs = [CurveArc(0.0, L)]
         return CurveReachability(curve, _name(fam), tuple(arcs), (), resolution_mm, s_scan, scores)
     if not np.any(ok):
-        bad = UnreachableArc(0.0, L, *_reason(fam, np.linspace(0, L, 9)[1:-1]))
+        bad = UnreachableArc(0.0, L, *_reason(fam, 0.0, L))
         return CurveReachability(curve, _name(fam), (), (bad,), resolution_mm, s_scan, scores)
     # every change of verdict between neighbouring scan points, bisected
     edges: list[tuple[float, bool, tuple[str, ...]]] = []  # (s, enters reachable, limiting)
@@ -486,15 +486,17 @@ def _normalized(arc: _Arc, L: float, closed: bool) -> _Arc:
 def _bad(
     fam: CurveFamily, a: float, b: float, lim_a: tuple[str, ...], lim_b: tuple[str, ...]
 ) -> UnreachableArc:
-    inside = a + (b - a) * np.array([0.1, 0.3, 0.5, 0.7, 0.9])
-    reason, blocked = _reason(fam, inside)
+    reason, blocked = _reason(fam, a, b)
     return UnreachableArc(a, b, reason, blocked, lim_a, lim_b)
 
 
-def _reason(fam: CurveFamily, s_inside: FloatArray) -> tuple[str, tuple[str, ...]]:
-    """Why the points ``s_inside`` are unreachable: the constraint groups that block each."""
+def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]:
+    """Why the arc ``a``..``b`` is unreachable: the constraint groups that block points at 10,
+    30, 50, 70 and 90 % of it, and where each one does."""
     names = [o.name for o in fam.world.obstacles]
-    blocked: list[str] = []
+    fractions = (0.1, 0.3, 0.5, 0.7, 0.9)
+    s_inside = [a + (b - a) * f for f in fractions]
+    tags: list[str] = []
 
     def verdict(s: float, limits: bool, obstacles: tuple[str, ...]) -> Verdict:
         v = fam.best(s, limits=limits, obstacles=obstacles)
@@ -513,7 +515,13 @@ def _reason(fam: CurveFamily, s_inside: FloatArray) -> tuple[str, tuple[str, ...
                 tag = "collision with " + " and ".join(alone)
             else:
                 tag = "joint limits and collisions together"
-        if tag not in blocked:
-            blocked.append(tag)
-    reason = "; ".join(blocked)
+        tags.append(tag)
+    blocked = list(dict.fromkeys(tags))
+    if len(blocked) == 1:
+        return blocked[0], tuple(blocked)
+    where = {
+        b: [f"{100 * f:.0f} %" for f, t in zip(fractions, tags, strict=True) if t == b]
+        for b in blocked
+    }
+    reason = "; ".join(f"{b} (at {', '.join(where[b])} of the arc)" for b in blocked)
     return reason, tuple(blocked)

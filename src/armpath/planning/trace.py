@@ -138,7 +138,8 @@ class TraceResult:
 
     @property
     def covered_mm(self) -> float:
-        return float(sum(p.covered_mm for p in self.passes))
+        """Length of the curve covered by the passes (mm; overlaps counted once)."""
+        return min(float(sum(p.covered_mm for p in self.passes)), self.curve.length)
 
     @property
     def max_deviation_mm(self) -> float:
@@ -585,8 +586,11 @@ def plan_trace(
     prof_s: list[FloatArray] = []
     prof_d: list[FloatArray] = []
     arcs = list(reach.reachable)
+    overlap = 0.0
     if curve.closed and len(arcs) == 1 and arcs[0].length_mm >= curve.length - 1e-9:
+        # all around: run on a little past the start so the covered ends meet
         arcs = [CurveArc(arcs[0].start_mm, arcs[0].start_mm + curve.length)]
+        overlap = 2.0 * opts.tolerance_mm
     for i, arc in enumerate(arcs):
         say(f"tracing pass {i + 1} of {len(arcs)}: {arc.start_mm:.1f}..{arc.end_mm:.1f} mm")
         tracer = _Tracer(fam, arc, opts.tolerance_mm, opts.layer_step_mm, ticks_to_rad(states[-1]))
@@ -601,7 +605,7 @@ def plan_trace(
             back, s_back = tracer.run(q_entry, s_entry, arc.start_mm)
             pass_states = back
             s_entry = s_back
-        ahead, _ = tracer.run(pass_states[-1], s_entry, arc.end_mm)
+        ahead, _ = tracer.run(pass_states[-1], s_entry, arc.end_mm + overlap)
         pass_states += ahead[1:]
         states.extend(pass_states[1:])
         dev, dev_bound, ps, pd = certified_deviation(

@@ -1,0 +1,159 @@
+"""Tracing curves other than the seed crack, checked against closed-form truth.
+
+* a horizontal circle in free space: every point reachable, one closed pass; the replayed
+  continuous tip path (independent FK) stays within the tolerance of the circle (closed-form
+  distance) and sweeps all of it;
+* a straight polyline leaving the workspace: the reachable part ends exactly where the fingertip is
+  ``BC + CD + DE`` from B, found to the stated resolution, with the reason "out of reach";
+* curves written in scene files (parametric expressions and polylines), and their errors.
+"""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import independent
+from armpath.commands import deg_to_ticks
+from armpath.errors import SceneError
+from armpath.geometry.curves import ParametricCurve, Polyline
+from armpath.model.seed_arm import seed_arm
+from armpath.planning.curve_reach import curve_reachability
+from armpath.planning.trace import TraceOptions, plan_trace
+from armpath.scenes import scene_from_dict
+
+TABLE_ONLY = {
+    "name": "table only",
+    "obstacles": [{"type": "half_space", "name": "table", "point": [0, 0, 0], "normal": [0, 0, 1]}],
+}
+CENTER, RADIUS = np.array([330.0, 60.0, 260.0]), 25.0
+
+
+def circle_distance(p):
+    """Distance from points (..., 3) to the horizontal circle (closed form)."""
+    d = p - CENTER
+    rho = np.hypot(d[..., 0], d[..., 1])
+    return np.hypot(rho - RADIUS, d[..., 2])
+
+
+@pytest.fixture(scope="module")
+def circle_trace():
+    scene = scene_from_dict(TABLE_ONLY)
+    circle = ParametricCurve(
+        "circle",
+        f"{CENTER[0]} + {RADIUS}*cos(t)",
+        f"{CENTER[1]} + {RADIUS}*sin(t)",
+        f"{CENTER[2]}",
+        0.0,
+        2 * np.pi,
+    )
+    arm = seed_arm()
+    start = deg_to_ticks([0, -90, 0, 0, -90, 0])
+    return plan_trace(arm, scene.world, start, circle, TraceOptions(tolerance_mm=0.1))
+
+
+def test_a_free_circle_is_traced_in_one_closed_pass(circle_trace):
+    r = circle_trace
+    assert r.curve.closed and not r.reachability.unreachable
+    assert len(r.passes) == 1
+    p = r.passes[0]
+    # replay with the independent FK, 200 instants per command of the pass
+    states = r.sequence.states()
+    cmds = np.diff(states, axis=0)[p.first : p.last]
+    t = np.linspace(0.0, 1.0, 201)
+    q = states[p.first : p.last, None, :] + t[None, :, None] * cmds[:, None, :]
+    tips = independent.points(q.reshape(-1, 6) / 10.0)[:, -1, :]
+    dev = circle_distance(tips)
+    assert dev.max() <= 0.1
+    assert dev.max() == pytest.approx(p.max_deviation_mm, abs=2e-3)
+    assert p.max_deviation_mm <= p.max_deviation_bound_mm <= 0.1
+    # the sweep goes once around: the tip's angle about the centre covers 2 pi
+    ang = np.unwrap(np.arctan2(tips[:, 1] - CENTER[1], tips[:, 0] - CENTER[0]))
+    assert abs(ang[-1] - ang[0]) >= 2 * np.pi - 1e-3
+    assert r.covered_mm >= r.curve.length - 1e-3
+    # every command is legal and the motion is certified clear
+    assert np.abs(np.diff(states, axis=0)).max() <= 20
+    assert r.clearance.certified_ok
+
+
+def test_the_reachable_part_of_a_line_ends_at_full_stretch():
+    scene = scene_from_dict(TABLE_ONLY)
+    line = Polyline("line", np.array([[300.0, 0.0, 300.0], [800.0, 0.0, 300.0]]))
+    res = curve_reachability(seed_arm(), scene.world, line, scan_step_mm=5.0, resolution_mm=0.05)
+    # the fingertip can be at most BC + CD + DE = 575 mm from B = (0, 0, 140)
+    x_max = np.sqrt(575.0**2 - 160.0**2)
+    assert len(res.reachable) == 1 and len(res.unreachable) == 1
+    assert res.reachable[0].start_mm == 0.0
+    assert res.reachable[0].end_mm == pytest.approx(x_max - 300.0, abs=0.1)
+    bad = res.unreachable[0]
+    assert bad.start_mm == pytest.approx(x_max - 300.0, abs=0.1) and bad.end_mm == 500.0
+    assert bad.blocked_by == ("out of reach",)
+
+
+def test_curves_from_scene_files():
+    data = dict(TABLE_ONLY)
+    data["tasks"] = {
+        "trace": {
+            "curve": {"type": "parametric", "x": "100 + t", "y": "2*t", "z": "50", "t": [0, 10]}
+        }
+    }
+    curve = scene_from_dict(data).trace_curve()
+    assert curve.length == pytest.approx(10 * np.sqrt(5), rel=1e-9)
+    data["tasks"] = {
+        "trace": {
+            "curve": {"type": "polyline", "points_mm": [[0, 0, 1], [3, 4, 1]], "closed": False}
+        }
+    }
+    assert scene_from_dict(data).trace_curve().length == pytest.approx(5.0)
+    data["tasks"] = {
+        "trace": {"curve": {"type": "parametric", "x": "__import__('os')", "y": "t", "z": "t"}}
+    }
+    with pytest.raises(SceneError, match=r"tasks\.trace\.curve"):
+        scene_from_dict(data)
+    data["tasks"] = {
+        "trace": {
+            "curve": {
+                "type": "plane_section",
+                "solid": "table",
+                "plane_point": [0, 0, 0],
+                "plane_normal": [1, 0, -2],
+            }
+        }
+    }
+    with pytest.raises(SceneError, match="not a hollow_frustum"):
+        scene_from_dict(data)
+
+
+def test_trace_cli_rejects_a_bad_tolerance(tmp_path):
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "armpath",
+            "trace",
+            "--tolerance",
+            "0",
+            "--out",
+            str(tmp_path / "o"),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 1
+    assert "tolerance" in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_run_reports_task_2(seed_run):
+    out, stdout = seed_run
+    doc = json.loads((out / "trace.json").read_text())
+    assert "2 trace the crack" in stdout
+    for name in ("trace.csv", "trace.xlsx", "trace_3d.png", "trace_deviation.png"):
+        assert (out / name).stat().st_size > 0
+    assert "Task 2" in (out / "summary.md").read_text()
+    assert len(doc["passes"]) == 1 and doc["max_deviation_mm"] <= doc["tolerance_mm"]
+    assert doc["coverage"]["of_reachable"] > 0.999
+    (bad,) = doc["unreachable"]
+    assert "joint limits" in bad["reason"]
