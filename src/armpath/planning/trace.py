@@ -24,7 +24,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numba
 import numpy as np
@@ -46,6 +46,7 @@ from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
     PlanMetrics,
+    active_joints,
     plan_metrics,
     plan_motion,
 )
@@ -64,6 +65,11 @@ _PATH_SAMPLES = 16
 #: (bound from sampling) succeeds (mm).
 _BODY_BUFFER_MM = 0.02
 #: Candidate advances along the curve per command (mm), tried largest first.
+#: Largest joint change between reference layers 5 mm apart that still counts as following the
+#: solution family continuously (deg).
+_MAX_LAYER_STEP_DEG = 12.0
+#: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
+_LIFT_OFF_DEG = 120.0
 _ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
 
 
@@ -174,11 +180,15 @@ def _dp_layer(
     bonus: FloatArray,
     wrap: NDArray[np.bool_],
     max_step: float,
-) -> tuple[FloatArray, NDArray[np.int64]]:  # pragma: no cover - compiled
-    """One DP layer: for each node of ``q``, the best predecessor in ``prev_q`` (deg)."""
+    lift_cost: float,
+) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover - compiled
+    """One DP layer: for each node of ``q`` (deg) the best predecessor in ``prev_q``, either
+    traced (largest joint change <= ``max_step``, costing that change) or after a lift-off
+    (costing ``lift_cost`` plus half the change: a new pass)."""
     n, m, j = prev_q.shape[0], q.shape[0], q.shape[1]
     cost = np.full(m, np.inf)
     arg = np.full(m, -1, dtype=np.int64)
+    lifted = np.zeros(m, dtype=np.bool_)
     for b in range(m):
         for a in range(n):
             if not np.isfinite(prev_cost[a]):
@@ -191,101 +201,122 @@ def _dp_layer(
                 d = abs(d)
                 if d > worst:
                     worst = d
-            if worst > max_step:
-                continue
-            c = prev_cost[a] + worst - bonus[b]
+            if worst <= max_step:
+                c = prev_cost[a] + worst - bonus[b]
+                if c < cost[b]:
+                    cost[b] = c
+                    arg[b] = a
+                    lifted[b] = False
+            c = prev_cost[a] + lift_cost + 0.5 * worst - bonus[b]
             if c < cost[b]:
                 cost[b] = c
                 arg[b] = a
-    return cost, arg
+                lifted[b] = True
+    return cost, arg, lifted
+
+
+@dataclass(frozen=True)
+class _Piece:
+    """A piece of a reachable arc traced in one pass, with its reference path (layers, rad)."""
+
+    arc: CurveArc
+    layers: FloatArray
+    ref: FloatArray
+
+
+def _reference_pieces(
+    fam: CurveFamily, arc: CurveArc, step: float, q_from: FloatArray
+) -> list[_Piece]:
+    """Reference paths through the solution family along ``arc``, as few pieces (passes) as
+    possible.
+
+    Dynamic programming over layers of the family every ``step`` mm: nodes keep a slack, a traced
+    transition costs the largest joint change (at most :data:`_MAX_LAYER_STEP_DEG`: the family
+    must be followed continuously), a lift-off costs :data:`_LIFT_OFF_DEG` more (a new pass). The
+    first layer's cost is the largest joint change from ``q_from``. The wrist flip (joint 4 + 180
+    deg, joint 5 negated) moves no link, so it is chosen per piece afterwards.
+    """
+    a, b = arc.start_mm, arc.end_mm
+    inset = min(1.0, 0.1 * (b - a))
+    n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
+    nodes: list[tuple[float, FloatArray, FloatArray]] = []
+    for s in np.linspace(a + inset, b - inset, n + 1):
+        q = fam.configs(fam.wrap(float(s)), fam._coarse_dirs)
+        if q.shape[0] == 0:
+            continue
+        sc = fam.score(q)
+        best = float(np.max(sc))
+        if best < 0:
+            continue
+        keep = sc >= min(0.3, 0.5 * best)
+        nodes.append((float(s), np.degrees(q[keep, :_TIP_JOINTS]), sc[keep]))
+    if not nodes:
+        raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
+    wrap = ~(np.isfinite(fam.arm.lower) | np.isfinite(fam.arm.upper))[:_TIP_JOINTS]
+    here = np.degrees(q_from[:_TIP_JOINTS])
+    cost = np.min([_joint_change(q, here, wrap) for q in _flips(nodes[0][1])], axis=0)
+    back = []
+    for k in range(1, len(nodes)):
+        gap = nodes[k][0] - nodes[k - 1][0]
+        bonus = 0.3 * np.minimum(nodes[k][2], 3.0)
+        max_step = _MAX_LAYER_STEP_DEG * max(gap / 5.0, 1.0)
+        cost, arg, lifted = _dp_layer(
+            nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max_step, _LIFT_OFF_DEG
+        )
+        back.append((arg, lifted))
+    j = int(np.argmin(cost))
+    path, lifts = [j], []
+    for k in range(len(back) - 1, -1, -1):
+        arg, lifted = back[k]
+        if lifted[j]:
+            lifts.append(k + 1)  # a new pass starts at layer k + 1
+        j = int(arg[j])
+        path.append(j)
+    path.reverse()
+    ref = np.array([nodes[k][1][path[k]] for k in range(len(nodes))])
+    s_nodes = np.array([x[0] for x in nodes])
+    cuts = [0, *sorted(lifts), len(nodes)]
+    pieces = []
+    prev = here
+    for i in range(len(cuts) - 1):
+        lo, hi = cuts[i], cuts[i + 1]
+        part = ref[lo:hi]
+        flipped = _flips(part)[1]
+        if _joint_change(flipped[:1], prev, wrap)[0] < _joint_change(part[:1], prev, wrap)[0]:
+            part = flipped
+        prev = part[-1]
+        rad = np.radians(part)
+        rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
+        full = np.concatenate([rad, np.zeros((rad.shape[0], 1))], axis=1)
+        start = a if i == 0 else float(s_nodes[lo - 1])
+        end = b if i == len(cuts) - 2 else float(s_nodes[hi - 1])
+        layers = s_nodes[lo:hi]
+        if layers.size == 1:  # a one-layer piece: a constant reference
+            layers = np.array([layers[0], layers[0] + 1e-9])
+            full = np.vstack([full, full])
+        pieces.append(_Piece(CurveArc(start, end), layers, full))
+    return pieces
 
 
 class _Tracer:
     """Greedy lattice tracing of one arc along a reference path through the family."""
 
-    def __init__(
-        self,
-        fam: CurveFamily,
-        arc: CurveArc,
-        tolerance: float,
-        layer_step: float,
-        q_from: FloatArray,
-    ) -> None:
+    def __init__(self, fam: CurveFamily, piece: _Piece, tolerance: float) -> None:
         self.fam = fam
         self.arm = fam.arm
         self.world = fam.world
-        self.arc = arc
+        self.arc = piece.arc
         self.tol = tolerance
         self.offset = tolerance / 2 if fam.surface is not None else 0.0
-        self.limits_lo = self.arm.lower
-        self.limits_hi = self.arm.upper
         self.wrap = ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
         pairs = self.world.pairs(self.arm)
         self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
-        self.layers, self.ref = self._reference(layer_step, q_from)
+        self.layers, self.ref = piece.layers, piece.ref
         box = np.arange(-_BOX, _BOX + 1)
         self.offsets = np.stack(np.meshgrid(*[box] * _TIP_JOINTS, indexing="ij"), -1).reshape(
             -1, _TIP_JOINTS
         )
         self.offsets_f = self.offsets.astype(np.float64)
-
-    # -- reference path ------------------------------------------------------------------
-    def _reference(self, step: float, q_from: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Layers (arc length) and the reference configurations there (rad, unwrapped).
-
-        The first layer's cost is the largest joint change from ``q_from`` (the transit onto the
-        curve costs commands too). The wrist flip (joint 4 + 180 deg, joint 5 negated) moves no
-        link, so it is chosen afterwards, for the whole path, to suit ``q_from``."""
-        a, b = self.arc.start_mm, self.arc.end_mm
-        inset = min(1.0, 0.1 * (b - a))
-        n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
-        s_layers = np.linspace(a + inset, b - inset, n + 1)
-        nodes: list[tuple[float, FloatArray, FloatArray]] = []
-        for s in s_layers:
-            q = self.fam.configs(float(s), self.fam._coarse_dirs)
-            if q.shape[0] == 0:
-                continue
-            sc = self.fam.score(q)
-            best = float(np.max(sc))
-            if best < 0:
-                continue
-            keep = sc >= min(0.3, 0.5 * best)
-            nodes.append((float(s), np.degrees(q[keep, :_TIP_JOINTS]), sc[keep]))
-        if not nodes:
-            raise PlanningError(
-                f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm of the curve"
-            )
-        wrap = self.wrap[:_TIP_JOINTS]
-        here = np.degrees(q_from[:_TIP_JOINTS])
-        cost = np.min([_joint_change(q, here, wrap) for q in _flips(nodes[0][1])], axis=0)
-        back = []
-        for k in range(1, len(nodes)):
-            gap = nodes[k][0] - nodes[k - 1][0]
-            bonus = 0.3 * np.minimum(nodes[k][2], 3.0)
-            new_cost, arg = _dp_layer(
-                nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max(30.0, 6.0 * gap)
-            )
-            if not np.any(np.isfinite(new_cost)):
-                raise PlanningError(
-                    f"the clear configurations at {nodes[k - 1][0]:.1f} and {nodes[k][0]:.1f} mm "
-                    "along the curve are not connected: the arc needs more than one pass"
-                )
-            cost = new_cost
-            back.append(arg)
-        j = int(np.argmin(cost))
-        path = [j]
-        for arg in reversed(back):
-            j = int(arg[j])
-            path.append(j)
-        path.reverse()
-        ref = np.array([nodes[k][1][path[k]] for k in range(len(nodes))])
-        flipped = _flips(ref)[1]
-        if _joint_change(flipped[:1], here, wrap)[0] < _joint_change(ref[:1], here, wrap)[0]:
-            ref = flipped
-        ref_rad = np.radians(ref)
-        ref_rad[:, wrap] = np.unwrap(ref_rad[:, wrap], axis=0)
-        full = np.concatenate([ref_rad, np.zeros((ref_rad.shape[0], 1))], axis=1)
-        return np.array([x[0] for x in nodes]), full
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
         s_arr = np.asarray(s, dtype=np.float64)
@@ -591,31 +622,48 @@ def plan_trace(
         # all around: run on a little past the start so the covered ends meet
         arcs = [CurveArc(arcs[0].start_mm, arcs[0].start_mm + curve.length)]
         overlap = 2.0 * opts.tolerance_mm
-    for i, arc in enumerate(arcs):
-        say(f"tracing pass {i + 1} of {len(arcs)}: {arc.start_mm:.1f}..{arc.end_mm:.1f} mm")
-        tracer = _Tracer(fam, arc, opts.tolerance_mm, opts.layer_step_mm, ticks_to_rad(states[-1]))
-        tracer.align(ticks_to_rad(states[-1]))
-        here = len(states) - 1
-        motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
-        states.extend(list(motion.sequence.states()[1:]))
-        transits.append(Transit(here, len(states) - 1, motion.method))
-        first = len(states) - 1
-        pass_states = [q_entry]
-        if s_entry > arc.start_mm + 0.05:  # back to the start of the arc first
-            back, s_back = tracer.run(q_entry, s_entry, arc.start_mm)
-            pass_states = back
-            s_entry = s_back
-        ahead, _ = tracer.run(pass_states[-1], s_entry, arc.end_mm + overlap)
-        pass_states += ahead[1:]
-        states.extend(pass_states[1:])
-        dev, dev_bound, ps, pd = certified_deviation(
-            arm, curve, np.array(pass_states), arc.start_mm
-        )
-        prof_s.append(ps)
-        prof_d.append(pd)
-        passes.append(
-            TracePass(first, len(states) - 1, float(ps.min()), float(ps.max()), dev, dev_bound)
-        )
+    queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
+    queue[-1] = (queue[-1][0], overlap)
+    while queue:
+        arc, run_on = queue.pop(0)
+        pieces = _reference_pieces(fam, arc, opts.layer_step_mm, ticks_to_rad(states[-1]))
+        for k, piece in enumerate(pieces):
+            last_piece = k == len(pieces) - 1
+            say(
+                f"tracing pass {len(passes) + 1}: {piece.arc.start_mm:.1f}.."
+                f"{piece.arc.end_mm:.1f} mm of the curve"
+            )
+            tracer = _Tracer(fam, piece, opts.tolerance_mm)
+            tracer.align(ticks_to_rad(states[-1]))
+            here = len(states) - 1
+            if passes:  # lift off the surface first: the tool backs away along its normal
+                states.extend(list(_lift_off(arm, world, states[-1], opts).states()[1:]))
+            motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
+            states.extend(list(motion.sequence.states()[1:]))
+            transits.append(Transit(here, len(states) - 1, motion.method))
+            first = len(states) - 1
+            pass_states = [q_entry]
+            if s_entry > piece.arc.start_mm + 0.05:  # back to the start of the piece first
+                pass_states, s_entry = tracer.run(q_entry, s_entry, piece.arc.start_mm)
+            goal = piece.arc.end_mm + (run_on if last_piece else 0.0)
+            ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
+            pass_states += ahead[1:]
+            states.extend(pass_states[1:])
+            dev, dev_bound, ps, pd = certified_deviation(
+                arm, curve, np.array(pass_states), piece.arc.start_mm
+            )
+            prof_s.append(ps)
+            prof_d.append(pd)
+            passes.append(
+                TracePass(first, len(states) - 1, float(ps.min()), float(ps.max()), dev, dev_bound)
+            )
+            if s_reached < piece.arc.end_mm - 0.5:
+                # stuck: the rest of the arc gets new passes (skipping ahead a little if this
+                # pass made no progress, so the loop ends)
+                resume = s_reached if s_reached > piece.arc.start_mm + 1.0 else s_reached + 2.0
+                if resume < arc.end_mm - 0.5:
+                    queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
+                break
     all_states = np.array(states)
     sequence = CommandSequence(all_states[0], np.diff(all_states, axis=0))
     say("certifying the clearance of the whole motion")
@@ -632,6 +680,52 @@ def plan_trace(
         np.concatenate(prof_s) if prof_s else np.zeros(0),
         np.concatenate(prof_d) if prof_d else np.zeros(0),
     )
+
+
+def _lift_off(
+    arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, opts: TraceOptions
+) -> CommandSequence:
+    """Commands that take the arm from the end of a pass (tool on the surface, links possibly in
+    a tight spot) to a state with the room the motion planner's search needs.
+
+    Greedy escape: from each state, random full-size commands (seeded) are scored by their end
+    state's smallest slack against the search's clearance needs, and the best one whose continuous
+    motion is certified clear is taken; at most 12 commands.
+    """
+    pairs = world.pairs(arm)
+    is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
+    is_self = np.array([p.is_self for p in pairs], dtype=bool)
+    spacing, buffer = opts.motion.sample_spacing_mm, opts.motion.buffer_mm
+    need = world.required(arm) + np.where(
+        is_tip, spacing / 2, buffer + np.where(is_self, spacing, spacing / 2)
+    )
+    active = active_joints(arm)
+    rng = np.random.default_rng([opts.motion.seed, 7])
+    states = [np.asarray(q_ticks, dtype=np.int64)]
+
+    def slack(q: IntArray) -> FloatArray:
+        values, _ = world.pair_clearances(arm, ticks_to_rad(q))
+        return np.asarray((values - need).min(axis=-1), dtype=np.float64)
+
+    for _ in range(12):
+        here = states[-1]
+        if float(slack(here[None])[0]) >= 0.0:
+            break
+        size = rng.uniform(1.0, MAX_INCREMENT_TICKS, (4000, 1))
+        steps = np.round(rng.uniform(-1.0, 1.0, (4000, here.size)) * size).astype(np.int64)
+        cand = here + steps * active
+        cand = cand[arm.within_limits(ticks_to_rad(cand))]
+        if cand.shape[0] == 0:
+            break
+        sc = slack(cand)
+        for k in np.argsort(-sc)[:16]:
+            seq = CommandSequence.straight(here, cand[k])
+            if motion_clearance(arm, world, seq).certified_ok:
+                states.append(cand[k])
+                break
+        else:
+            break
+    return CommandSequence(states[0], np.diff(np.array(states), axis=0))
 
 
 def _enter(
@@ -675,8 +769,10 @@ def _enter(
                 return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
             failures.append(f"{s:.1f} mm: the straight motion there is blocked")
             continue
+        # one search per entry point but the last: another entry often works where one fails
+        motion_opts = opts.motion if i == len(candidates) - 1 else replace(opts.motion, attempts=1)
         try:
-            return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], opts.motion), q, s
+            return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], motion_opts), q, s
         except PlanningError as exc:
             failures.append(f"{s:.1f} mm: {exc}")
     raise PlanningError("could not move onto the curve: " + "; ".join(failures))
