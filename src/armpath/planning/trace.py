@@ -725,7 +725,9 @@ def _lift_off(
                 break
         else:
             break
-    return CommandSequence(states[0], np.diff(np.array(states), axis=0))
+    return CommandSequence(
+        states[0], np.diff(np.array(states, dtype=np.int64), axis=0).astype(np.int64)
+    )
 
 
 def _enter(
