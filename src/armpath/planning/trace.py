@@ -332,25 +332,29 @@ class _Tracer:
         self.ref = self.ref + turns * 2 * np.pi
 
     def matched(self, q: FloatArray, like: FloatArray) -> FloatArray:
-        """The representation of ``q``'s links nearest ``like``: ``q``, its wrist flip (joint 4
-        + 180 deg, joint 5 negated), its arm-side flip (joint 1 + 180 deg, joints 2 and 3
-        negated, joint 4 - 180 deg) or both, unlimited joints turned by whole turns; a
-        representation outside the joint limits is not used."""
-        wrist = q + np.array([0.0, 0.0, 0.0, np.pi, 0.0, 0.0])
-        wrist[4] = -q[4]
-        side = q * np.array([1.0, -1.0, -1.0, 1.0, 1.0, 1.0]) + np.array(
-            [np.pi, 0.0, 0.0, -np.pi, 0.0, 0.0]
-        )
-        both = side + np.array([0.0, 0.0, 0.0, np.pi, 0.0, 0.0])
-        both[4] = -side[4]
-        best = q
-        for cand in (q, wrist, side, both):
-            c = cand + np.round((like - cand) / (2 * np.pi)) * 2 * np.pi * self.wrap
-            if not self.arm.within_limits(c):
-                continue
-            if np.abs(c - like).max() < np.abs(best - like).max():
-                best = c
-        return best
+        """The representation of each configuration's links (``q`` ``(6,)`` or ``(M, 6)``)
+        nearest ``like``: itself, its wrist flip (joint 4 + 180 deg, joint 5 negated), its
+        arm-side flip (joint 1 + 180 deg, joints 2 and 3 negated, joint 4 - 180 deg) or both,
+        unlimited joints turned by whole turns; representations outside the joint limits are
+        not used."""
+        q2 = np.atleast_2d(q)
+        wrist = q2.copy()
+        wrist[:, 3] += np.pi
+        wrist[:, 4] *= -1.0
+        side = q2 * np.array([1.0, -1.0, -1.0, 1.0, 1.0, 1.0])
+        side[:, 0] += np.pi
+        side[:, 3] -= np.pi
+        both = side.copy()
+        both[:, 3] += np.pi
+        both[:, 4] *= -1.0
+        reps = np.stack([q2, wrist, side, both])  # (4, M, 6)
+        reps = reps + np.round((like - reps) / (2 * np.pi)) * 2 * np.pi * self.wrap
+        gap = np.abs(reps - like).max(axis=-1)
+        gap = np.where(self.arm.within_limits(reps), gap, np.inf)
+        gap[0] = np.where(np.isfinite(gap).any(axis=0), gap[0], 0.0)  # keep q if none fits
+        pick = np.argmin(gap, axis=0)
+        out = reps[pick, np.arange(q2.shape[0])]
+        return np.asarray(out if q.ndim == 2 else out[0], dtype=np.float64)
 
     # -- curve geometry -------------------------------------------------------------------------
     def target(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -507,7 +511,7 @@ class _Tracer:
             bases = [ref]
             q = self.fam.configs(self.fam.wrap(s0), self.fam._fine_dirs)
             if q.shape[0]:
-                q = np.array([self.matched(x, ref) for x in q])
+                q = self.matched(q, ref)
                 gap = np.degrees(np.abs(q - ref).max(axis=1))
                 score = np.where(gap <= 30.0, self.fam.score(q), -np.inf)
                 roomy = score >= body_buffer_mm
