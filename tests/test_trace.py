@@ -157,3 +157,54 @@ def test_run_reports_task_2(seed_run):
     assert doc["coverage"]["of_reachable"] > 0.999
     (bad,) = doc["unreachable"]
     assert "joint limits" in bad["reason"]
+
+
+def test_a_clamp_on_the_crack_forces_a_second_pass_with_a_planned_lift_off():
+    """A 20 mm sphere 2 mm off the crack: every point stays reachable (the tool slips under it
+    from one side or the other) but the family cannot be followed continuously past it, so the
+    arc needs two passes and a lift-off between them. Checked independently: the continuous tip
+    path of each pass within tolerance of the crack (independent crack), the links >= 1 mm from
+    the workpiece (independent distance), the table and the sphere (closed form) over the whole
+    motion, the tool tip never inside anything, the whole piece covered."""
+    import tomllib
+    from importlib import resources
+
+    import independent_trace as it
+
+    data = tomllib.loads(resources.files("armpath.scenes").joinpath("seed.toml").read_text())
+    center, radius = np.array([180.22, -148.626, 100.287]), 20.0
+    data["obstacles"].append(
+        {"type": "sphere", "name": "clamp", "center": center.tolist(), "radius": radius}
+    )
+    scene = scene_from_dict(data)
+    crack = scene.trace_curve()
+    u = crack.parameter_at(np.array([590.0, 710.0])) * 2 * np.pi
+    z = "(210 + 168*cos(t))/(2 + 0.4*cos(t))"
+    piece = ParametricCurve("crack piece", f"2*{z}", f"(168 - 0.4*{z})*sin(t)", z, u[0], u[1])
+    arm = seed_arm()
+    r = plan_trace(arm, scene.world, deg_to_ticks([0, -90, 0, 0, -90, 0]), piece)
+    assert r.reachability.surface == "workpiece" and not r.reachability.unreachable
+    assert len(r.passes) == 2 and len(r.transits) == 2
+    states = r.sequence.states()
+    assert np.abs(np.diff(states, axis=0)).max() <= 20
+    t = np.linspace(0.0, 1.0, 101)
+    q = states[:-1, None, :] + t[None, :, None] * np.diff(states, axis=0)[:, None, :]
+    P = independent.points(q.reshape(-1, 6) / 10.0)  # (K, 5, 3)
+    for p in r.passes:
+        tips = P.reshape(len(states) - 1, 101, 5, 3)[p.first : p.last, :, 4].reshape(-1, 3)
+        assert it.distance_to_crack(tips).max() <= 0.1
+    body, _ = it.body_clearance(P)
+    assert body.min() >= 1.0 - 1e-3
+    assert it.tip_clearance(P).min() >= -1e-6
+    # links and the sphere: segments B-C, C-D, D-(E - 5 mm) at 1 mm steps; the tip segment >= 0
+    B, C, D, E = P[:, 1], P[:, 2], P[:, 3], P[:, 4]
+    T = E + (D - E) * (5.0 / 65.0)
+    for a, b, need in ((B, C, 1.0), (C, D, 1.0), (D, T, 1.0), (T, E, 0.0)):
+        s = np.linspace(0.0, 1.0, 256)
+        pts = a[:, None] + s[None, :, None] * (b - a)[:, None]
+        assert np.linalg.norm(pts - center, axis=-1).min() - radius >= need - 2e-3
+        assert pts[..., 2].min() >= need - 1e-9 or need == 0.0
+    # the two passes together cover the whole piece (overlapping where the second begins)
+    covered = sorted((p.start_mm, p.end_mm) for p in r.passes)
+    assert covered[0][0] <= 0.05 and covered[-1][1] >= piece.length - 0.05
+    assert covered[1][0] <= covered[0][1]

@@ -509,6 +509,8 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
         elif not v.reachable:
             joints = [x.split(" at ")[0] for x in v.limiting if x.startswith("joint")]
             tag = "joint limits" + (f" ({', '.join(joints)})" if joints else "")
+            if fam.surface is not None:  # the tool must come from outside what it works on
+                tag += f" for every tool direction from outside the {fam.surface.name}"
         else:
             alone = [o for o in names if not verdict(s, False, (o,)).reachable]
             if alone:
