@@ -563,7 +563,8 @@ def _write_trace(
     curve = result.curve
     L = curve.length
     title = (
-        f"trace: {result.n_commands} commands, {len(result.passes)} pass(es), "
+        f"trace: {result.n_commands} commands, {len(result.passes)} "
+        f"pass{'es' if len(result.passes) != 1 else ''}, "
         f"largest deviation {result.max_deviation_mm:.3f} mm"
     )
     gaps = [
@@ -679,9 +680,9 @@ def run(
             f"{reach_doc['min_clearance_mm']:.3f}",
         )
         cov = trace_doc["coverage"]
+        n_passes = len(trace_doc["passes"])
         table.add_row(
-            f"2 trace the crack: {len(trace_doc['passes'])} pass, "
-            f"{cov['covered_mm']:.1f} of {cov['reachable_mm']:.1f} mm reachable covered",
+            f"2 trace the crack, {n_passes} pass{'es' if n_passes != 1 else ''}",
             str(trace_doc["n_commands"]),
             "-",
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
@@ -697,6 +698,16 @@ def run(
             f"{tour_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
         )
         out_console.print(table)
+        out_console.print(
+            f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm reachable "
+            f"covered; error column = largest deviation of the continuous fingertip path; "
+            + "; ".join(
+                f"unreachable {u['start_mm']:.2f}..{u['end_mm']:.2f} mm ({u['reason']})"
+                for u in trace_doc["unreachable"]
+            ),
+            markup=False,
+            soft_wrap=True,
+        )
         out_console.print(
             "* Task 3's bound: direct motions between the chosen goal states, obstacles ignored.",
             markup=False,
@@ -729,7 +740,8 @@ def _summary_markdown(tasks: list[tuple[str, dict[str, Any]]]) -> str:
                 for u in doc["unreachable"]
             )
             notes.append(
-                f"Task 2: {len(doc['passes'])} pass(es) cover {cov['covered_mm']:.2f} mm of the "
+                f"Task 2: {len(doc['passes'])} pass{'es' if len(doc['passes']) != 1 else ''} "
+                f"cover {cov['covered_mm']:.2f} mm of the "
                 f"{cov['reachable_mm']:.2f} mm reachable ({100 * cov['of_reachable']:.2f} %) of "
                 f"the {cov['curve_mm']:.2f} mm crack; unreachable: {gaps or 'none'}."
             )
