@@ -191,11 +191,13 @@ class CurveFamily:
         return c, t, n / np.linalg.norm(n)
 
     @cached_property
-    def _coarse_dirs(self) -> FloatArray:
+    def coarse_dirs(self) -> FloatArray:
+        """Tool directions of the scan (2000, about 4.5 deg apart)."""
         return fibonacci_directions(2000)
 
     @cached_property
-    def _fine_dirs(self) -> FloatArray:
+    def fine_dirs(self) -> FloatArray:
+        """Tool directions of the refined search (8000, about 2.3 deg apart)."""
         return fibonacci_directions(8000)
 
     # -- the family at one point -------------------------------------------------------------
@@ -282,7 +284,7 @@ class CurveFamily:
     ) -> Verdict:
         """The family member with the largest score at ``s``: grid, then (``fine``) a finer grid
         polished by Nelder-Mead over the tool direction."""
-        dirs = self._fine_dirs if fine else self._coarse_dirs
+        dirs = self.fine_dirs if fine else self.coarse_dirs
         q = self.configs(s, dirs)
         if q.shape[0] == 0:
             return Verdict(s, -np.inf, np.full(6, np.nan), ("out of reach",))
@@ -504,7 +506,7 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
 
     for s in map(float, s_inside):
         v = verdict(s, True, ())
-        if fam.configs(s, fam._coarse_dirs).shape[0] == 0:
+        if fam.configs(s, fam.coarse_dirs).shape[0] == 0:
             tag = "out of reach"
         elif not v.reachable:
             joints = [x.split(" at ")[0] for x in v.limiting if x.startswith("joint")]

@@ -241,7 +241,7 @@ def _reference_pieces(
     n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
     nodes: list[tuple[float, FloatArray, FloatArray]] = []
     for s in np.linspace(a + inset, b - inset, n + 1):
-        q = fam.configs(fam.wrap(float(s)), fam._coarse_dirs)
+        q = fam.configs(fam.wrap(float(s)), fam.coarse_dirs)
         if q.shape[0] == 0:
             continue
         sc = fam.score(q)
@@ -509,7 +509,7 @@ class _Tracer:
             E, n, b = self.target(s0)
             ref = self.q_ref(s0)
             bases = [ref]
-            q = self.fam.configs(self.fam.wrap(s0), self.fam._fine_dirs)
+            q = self.fam.configs(self.fam.wrap(s0), self.fam.fine_dirs)
             if q.shape[0]:
                 q = self.matched(q, ref)
                 gap = np.degrees(np.abs(q - ref).max(axis=1))
