@@ -68,6 +68,8 @@ _BODY_BUFFER_MM = 0.02
 #: Largest joint change between reference layers 5 mm apart that still counts as following the
 #: solution family continuously (deg).
 _MAX_LAYER_STEP_DEG = 12.0
+#: Most nodes per layer of the reference DP (every k-th clear family member beyond this).
+_MAX_LAYER_NODES = 1200
 #: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
 _LIFT_OFF_DEG = 120.0
 _ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
@@ -248,7 +250,9 @@ def _reference_pieces(
         best = float(np.max(sc))
         if best < 0:
             continue
-        keep = sc >= min(0.3, 0.5 * best)
+        keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
+        if keep.size > _MAX_LAYER_NODES:  # spread over the family (the grid order is spread)
+            keep = keep[:: int(np.ceil(keep.size / _MAX_LAYER_NODES))]
         nodes.append((float(s), np.degrees(q[keep, :_TIP_JOINTS]), sc[keep]))
     if not nodes:
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
