@@ -68,8 +68,6 @@ _BODY_BUFFER_MM = 0.02
 #: Largest joint change between reference layers 5 mm apart that still counts as following the
 #: solution family continuously (deg).
 _MAX_LAYER_STEP_DEG = 12.0
-#: Most nodes per layer of the reference DP (every k-th clear family member beyond this).
-_MAX_LAYER_NODES = 1200
 #: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
 _LIFT_OFF_DEG = 120.0
 _ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
@@ -242,17 +240,18 @@ def _reference_pieces(
     inset = min(1.0, 0.1 * (b - a))
     n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
     nodes: list[tuple[float, FloatArray, FloatArray]] = []
+    # the same tool directions on every layer; a curve in free space (every direction allowed,
+    # not half of them) takes every third, which keeps the DP's work alike
+    dirs = fam.coarse_dirs if fam.surface is not None else fam.coarse_dirs[::3]
     for s in np.linspace(a + inset, b - inset, n + 1):
-        q = fam.configs(fam.wrap(float(s)), fam.coarse_dirs)
+        q = fam.configs(fam.wrap(float(s)), dirs)
         if q.shape[0] == 0:
             continue
         sc = fam.score(q)
         best = float(np.max(sc))
         if best < 0:
             continue
-        keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
-        if keep.size > _MAX_LAYER_NODES:  # spread over the family (the grid order is spread)
-            keep = keep[:: int(np.ceil(keep.size / _MAX_LAYER_NODES))]
+        keep = sc >= min(0.3, 0.5 * best)
         nodes.append((float(s), np.degrees(q[keep, :_TIP_JOINTS]), sc[keep]))
     if not nodes:
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
