@@ -506,6 +506,10 @@ def spotweld(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _passes(n: int) -> str:
+    return f"{n} pass" if n == 1 else f"{n} passes"
+
+
 def _trace_summary(doc: dict[str, Any]) -> Table:
     table = Table(
         title=f"trace {doc['curve']['definition'].get('name', 'curve')}", show_header=False
@@ -561,17 +565,12 @@ def _write_trace(
 
     write_sequence_files(folder, "trace", doc, arm, result.sequence)
     curve = result.curve
-    L = curve.length
     title = (
-        f"trace: {result.n_commands} commands, {len(result.passes)} "
-        f"pass{'es' if len(result.passes) != 1 else ''}, "
+        f"trace: {result.n_commands} commands, {_passes(len(result.passes))}, "
         f"largest deviation {result.max_deviation_mm:.3f} mm"
     )
-    gaps = [
-        curve.at_arc_length(np.linspace(a.start_mm, a.end_mm, 200) % L if curve.closed else
-                            np.linspace(a.start_mm, a.end_mm, 200))
-        for a in result.reachability.unreachable
-    ]  # fmt: skip
+    unreachable = result.reachability.unreachable
+    gaps = [curve.at_arc_length(np.linspace(a.start_mm, a.end_mm, 200)) for a in unreachable]
     plot_trace_3d(
         folder.file("trace_3d.png"),
         arm,
@@ -584,11 +583,11 @@ def _write_trace(
     )
     plot_trace_deviation(
         folder.file("trace_deviation.png"),
-        result.deviation_s_mm % L if curve.closed else result.deviation_s_mm,
+        curve.wrap(result.deviation_s_mm),
         result.deviation_mm,
         result.tolerance_mm,
-        [(a.start_mm, a.end_mm) for a in result.reachability.unreachable],
-        L,
+        [(a.start_mm, a.end_mm) for a in unreachable],
+        curve.length,
         title,
     )
 
@@ -680,9 +679,8 @@ def run(
             f"{reach_doc['min_clearance_mm']:.3f}",
         )
         cov = trace_doc["coverage"]
-        n_passes = len(trace_doc["passes"])
         table.add_row(
-            f"2 trace the crack, {n_passes} pass{'es' if n_passes != 1 else ''}",
+            f"2 trace the crack, {_passes(len(trace_doc['passes']))}",
             str(trace_doc["n_commands"]),
             "-",
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
@@ -740,8 +738,7 @@ def _summary_markdown(tasks: list[tuple[str, dict[str, Any]]]) -> str:
                 for u in doc["unreachable"]
             )
             notes.append(
-                f"Task 2: {len(doc['passes'])} pass{'es' if len(doc['passes']) != 1 else ''} "
-                f"cover {cov['covered_mm']:.2f} mm of the "
+                f"Task 2: {_passes(len(doc['passes']))} cover {cov['covered_mm']:.2f} mm of the "
                 f"{cov['reachable_mm']:.2f} mm reachable ({100 * cov['of_reachable']:.2f} %) of "
                 f"the {cov['curve_mm']:.2f} mm crack; unreachable: {gaps or 'none'}."
             )

@@ -211,7 +211,7 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
     tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
 
     def point(s: float) -> list[float]:
-        return [float(x) for x in curve.at_arc_length(np.array([s % L if curve.closed else s]))[0]]
+        return [float(x) for x in curve.at_arc_length(s)]
 
     covered = result.covered_mm
     reachable = reach.reachable_mm

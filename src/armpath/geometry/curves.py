@@ -66,10 +66,18 @@ class Curve(ABC):
         """Arc length (length unit)."""
         return float(self._table[2][-1])
 
+    def wrap(self, s: ArrayLike) -> FloatArray:
+        """Arc lengths ``s`` brought onto the curve: modulo the length on a closed curve (an arc
+        may run on past its start), clipped to ``[0, length]`` on an open one."""
+        a = np.asarray(s, dtype=np.float64)
+        if self.closed:
+            return np.asarray(a % self.length)
+        return np.asarray(np.clip(a, 0.0, self.length))
+
     def parameter_at(self, s: ArrayLike) -> FloatArray:
-        """Parameters ``u`` at arc lengths ``s`` (clipped to ``[0, length]``)."""
+        """Parameters ``u`` at arc lengths ``s`` (brought onto the curve by :meth:`wrap`)."""
         u, _, table_s = self._table
-        return np.asarray(np.interp(np.clip(s, 0.0, self.length), table_s, u))
+        return np.asarray(np.interp(self.wrap(s), table_s, u))
 
     def arc_length_at(self, u: ArrayLike) -> FloatArray:
         """Arc lengths at parameters ``u``."""

@@ -132,6 +132,21 @@ class Obstacle(ABC):
     def describe(self) -> dict[str, object]:
         """The obstacle's parameters for result files (plain JSON types)."""
 
+    def outward_normal(self, points: ArrayLike, h: float = 1e-4) -> FloatArray:
+        """Unit outward normal ``(..., 3)`` at ``points``: the signed distance's gradient by
+        central differences of step ``h`` (NaN where the gradient vanishes)."""
+        p = np.asarray(points, dtype=np.float64)
+        grad = np.stack(
+            [
+                (self.signed_distance(p + h * e) - self.signed_distance(p - h * e)) / (2 * h)
+                for e in np.eye(3)
+            ],
+            axis=-1,
+        )
+        norm = np.linalg.norm(grad, axis=-1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.asarray(np.where(norm >= 1e-9, grad / norm, np.nan), dtype=np.float64)
+
     def enclosing_ball(self) -> tuple[FloatArray, float] | None:
         """A ball ``(center, radius)`` containing the solid (broad phase), or None if unbounded."""
         return None

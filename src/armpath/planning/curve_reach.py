@@ -16,8 +16,9 @@ change of verdict is then bisected to ``resolution_mm`` with the family searched
 polished by Nelder-Mead, so the ends of unreachable arcs are located to that resolution.
 
 The reason an arc is unreachable comes from relaxations at points inside it: *out of reach* (no
-real solution at all), *joint limits* (unreachable even with obstacles ignored), *collision with*
-an obstacle (unreachable with that obstacle alone, limits ignored), or both together.
+real solution at all), *joint limits* (unreachable even with the clearances ignored, except that
+the tool must still come from outside the surface it works on), *collision with* an obstacle
+(unreachable with that obstacle alone, limits ignored), or both together.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from armpath.geometry.curves import Curve
 from armpath.geometry.primitives import Obstacle
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.seed_position import family_from_wrist
+from armpath.kinematics import landmark_positions
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 
@@ -58,25 +60,13 @@ def fibonacci_directions(count: int) -> FloatArray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
-def surface_normal(obstacle: Obstacle, points: FloatArray, h: float = 1e-4) -> FloatArray:
-    """Outward unit normal ``(..., 3)`` of ``obstacle`` at ``points`` (signed-distance gradient)."""
-    p = np.asarray(points, dtype=np.float64)
-    grad = np.stack(
-        [
-            (obstacle.signed_distance(p + h * e) - obstacle.signed_distance(p - h * e)) / (2 * h)
-            for e in np.eye(3)
-        ],
-        axis=-1,
-    )
-    return np.asarray(grad / np.linalg.norm(grad, axis=-1, keepdims=True), dtype=np.float64)
-
-
 @dataclass(frozen=True)
 class Verdict:
     """The best configuration the family search found for one curve point.
 
     ``score`` is the smallest slack there (>= 0: reachable); ``q`` joints (rad, 6) or NaN when the
-    point has no real solution; ``limiting`` names the constraints within 0.05 of the smallest.
+    point has no real solution; ``limiting`` names the constraints at the smallest slack (see
+    :meth:`CurveFamily.limiting`).
     """
 
     s_mm: float
@@ -87,6 +77,11 @@ class Verdict:
     @property
     def reachable(self) -> bool:
         return bool(self.score >= 0.0)
+
+    @property
+    def out_of_reach(self) -> bool:
+        """No configuration at all puts the fingertip there."""
+        return not bool(np.all(np.isfinite(self.q)))
 
 
 @dataclass(frozen=True)
@@ -118,7 +113,8 @@ class UnreachableArc(CurveArc):
 
 @dataclass(frozen=True)
 class CurveReachability:
-    """Reachable and unreachable arcs of a curve, with the scan they came from."""
+    """Reachable and unreachable arcs of a curve, with the scan they came from and the solution
+    family searched."""
 
     curve: Curve
     surface: str | None
@@ -127,6 +123,7 @@ class CurveReachability:
     resolution_mm: float
     scan_s_mm: FloatArray
     scan_score: FloatArray
+    family: CurveFamily = field(repr=False)
 
     @property
     def reachable_mm(self) -> float:
@@ -163,30 +160,22 @@ class CurveFamily:
         self._labels = [p.label for p in pairs]
         self._others = [p.other for p in pairs]
         self._is_self = np.array([p.is_self for p in pairs], dtype=bool)
-        limited = np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper)
-        self._limited = limited
+        #: joints without limits (turning by whole turns gives the same links)
+        self.unlimited = ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
         self._lo = np.where(np.isfinite(self.arm.lower), self.arm.lower, -np.inf)
         self._hi = np.where(np.isfinite(self.arm.upper), self.arm.upper, np.inf)
 
     # -- geometry of the curve -------------------------------------------------------------
-    def point(self, s: float) -> FloatArray:
-        """Curve point at arc length ``s`` (wrapped on a closed curve), mm."""
-        return np.asarray(self.curve.at_arc_length(np.array([self.wrap(s)]))[0])
-
-    def wrap(self, s: float) -> float:
-        L = self.curve.length
-        return float(s % L) if self.curve.closed else float(np.clip(s, 0.0, L))
-
     def frame(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Point, unit tangent and outward normal (zero without a surface) at ``s``."""
-        c = self.point(s)
+        """Point, unit tangent and outward normal (zero without a surface) at arc length ``s``
+        (mm; brought onto the curve by :meth:`Curve.wrap`)."""
         h = 1e-3
-        a = self.curve.at_arc_length(np.array([self.wrap(s - h), self.wrap(s + h)]))
-        t = a[1] - a[0]
+        c, before, after = self.curve.at_arc_length(np.array([s, s - h, s + h]))
+        t = after - before
         t = t / np.linalg.norm(t)
         if self.surface is None:
             return c, t, np.zeros(3)
-        n = surface_normal(self.surface, c[None])[0]
+        n = self.surface.outward_normal(c)
         n = n - (n @ t) * t
         return c, t, n / np.linalg.norm(n)
 
@@ -313,6 +302,13 @@ class CurveFamily:
         e2 = np.cross(axis, e1)
         # the direction E - D of each candidate, as polar angles about ``axis``
         pts_d = self._wrist_dirs(q, c)
+
+        def member(x: FloatArray, branch: int) -> FloatArray:
+            """The family member of ``branch`` whose tool direction has polar angles ``x``."""
+            u = np.cos(x[0]) * axis + np.sin(x[0]) * (np.cos(x[1]) * e1 + np.sin(x[1]) * e2)
+            sol = family_from_wrist(self.geometry, c, (c - self.geometry.de_mm * u)[None])
+            return np.asarray(np.r_[sol[0, _BRANCHES[branch]], 0.0], dtype=np.float64)
+
         for k in np.argsort(-sc)[:3]:
             if not np.isfinite(sc[k]):
                 break
@@ -320,17 +316,11 @@ class CurveFamily:
             x0 = np.array([np.arccos(np.clip(d @ axis, -1, 1)), np.arctan2(d @ e2, d @ e1)])
             branch = self._branch_of(q[k], c, d)
 
-            def objective(x: FloatArray, branch: int = branch, axis: FloatArray = axis) -> float:
-                u = (np.cos(x[0]) * axis + np.sin(x[0]) * (np.cos(x[1]) * e1 + np.sin(x[1]) * e2))[
-                    None
-                ]
-                sol = family_from_wrist(self.geometry, c, c - self.geometry.de_mm * u)[
-                    0, _BRANCHES[branch]
-                ]
-                if not np.all(np.isfinite(sol)):
+            def objective(x: FloatArray, branch: int = branch) -> float:
+                cand = member(x, branch)
+                if not np.all(np.isfinite(cand)):
                     return 1e6
-                cand = np.r_[sol, 0.0][None]
-                return -float(self.score(cand, limits, obstacles)[0])
+                return -float(self.score(cand[None], limits, obstacles)[0])
 
             res = minimize(
                 objective,
@@ -339,18 +329,10 @@ class CurveFamily:
                 options={"xatol": 1e-4, "fatol": 1e-5, "maxfev": 250},
             )
             if -res.fun > best_sc:
-                u = np.cos(res.x[0]) * axis + np.sin(res.x[0]) * (
-                    np.cos(res.x[1]) * e1 + np.sin(res.x[1]) * e2
-                )
-                sol = family_from_wrist(self.geometry, c, (c - self.geometry.de_mm * u)[None])[
-                    0, _BRANCHES[branch]
-                ]
-                best_q, best_sc = np.r_[sol, 0.0], float(-res.fun)
+                best_q, best_sc = member(res.x, branch), float(-res.fun)
         return best_q, best_sc
 
     def _wrist_dirs(self, q: FloatArray, E: FloatArray) -> FloatArray:
-        from armpath.kinematics import landmark_positions
-
         D = landmark_positions(self.arm, q)[:, -2, :]
         u = E - D
         return np.asarray(u / np.linalg.norm(u, axis=-1, keepdims=True), dtype=np.float64)
@@ -409,10 +391,12 @@ def curve_reachability(
 
     if np.all(ok):
         arcs = [CurveArc(0.0, L)]
-        return CurveReachability(curve, _name(fam), tuple(arcs), (), resolution_mm, s_scan, scores)
+        return CurveReachability(
+            curve, _name(fam), tuple(arcs), (), resolution_mm, s_scan, scores, fam
+        )
     if not np.any(ok):
         bad = UnreachableArc(0.0, L, *_reason(fam, 0.0, L))
-        return CurveReachability(curve, _name(fam), (), (bad,), resolution_mm, s_scan, scores)
+        return CurveReachability(curve, _name(fam), (), (bad,), resolution_mm, s_scan, scores, fam)
     # every change of verdict between neighbouring scan points, bisected
     edges: list[tuple[float, bool, tuple[str, ...]]] = []  # (s, enters reachable, limiting)
     m = s_scan.size
@@ -463,6 +447,7 @@ def curve_reachability(
         resolution_mm,
         s_scan,
         scores,
+        fam,
     )
 
 
@@ -506,7 +491,7 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
 
     for s in map(float, s_inside):
         v = verdict(s, True, ())
-        if fam.configs(s, fam.coarse_dirs).shape[0] == 0:
+        if v.out_of_reach:
             tag = "out of reach"
         elif not v.reachable:
             joints = [x.split(" at ")[0] for x in v.limiting if x.startswith("joint")]

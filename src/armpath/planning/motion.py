@@ -194,6 +194,21 @@ def active_joints(arm: SerialArm, rng: np.random.Generator | None = None) -> NDA
     return active
 
 
+def search_clearance_extra(
+    arm: SerialArm, world: CollisionWorld, buffer_mm: float, spacing_mm: float
+) -> FloatArray:
+    """Per pair, what the search's samples must keep beyond the clearance rule (mm): the tool
+    tip ``spacing_mm / 2``, other obstacle pairs ``buffer_mm + spacing_mm / 2``, link pairs
+    ``buffer_mm + spacing_mm`` (see :func:`edge_checker`)."""
+    pairs = world.pairs(arm)
+    is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
+    is_self = np.array([p.is_self for p in pairs], dtype=bool)
+    return np.asarray(
+        np.where(is_tip, spacing_mm / 2, buffer_mm + np.where(is_self, spacing_mm, spacing_mm / 2)),
+        dtype=np.float64,
+    )
+
+
 def edge_checker(
     arm: SerialArm, world: CollisionWorld, buffer_mm: float, spacing_mm: float
 ) -> EdgeChecker:
@@ -206,11 +221,7 @@ def edge_checker(
     (a goal where it touches a surface is searched for at a retracted pre-goal).
     """
     pairs = world.pairs(arm)
-    is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
-    is_self = np.array([p.is_self for p in pairs], dtype=bool)
-    extra = np.where(
-        is_tip, spacing_mm / 2, buffer_mm + np.where(is_self, spacing_mm, spacing_mm / 2)
-    )
+    extra = search_clearance_extra(arm, world, buffer_mm, spacing_mm)
     R = displacement_bounds(arm)
 
     def check(a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
@@ -468,18 +479,10 @@ def retracted_pre_goal(
     k = int(np.argmin(d))
     if d[k] >= distance_mm:
         return q
-    obstacle = world.obstacles[k]
-    h = 1e-4
-    grad = np.array(
-        [
-            float(obstacle.signed_distance(tip + h * e) - obstacle.signed_distance(tip - h * e))
-            for e in np.eye(3)
-        ]
-    ) / (2 * h)
-    norm = float(np.linalg.norm(grad))
-    if norm < 1e-9:
+    normal = world.obstacles[k].outward_normal(tip)
+    if not np.all(np.isfinite(normal)):
         return q
-    goal = tip + (distance_mm - d[k]) * grad / norm
+    goal = tip + (distance_mm - d[k]) * normal
     out = q.copy()
     for _ in range(2):
         J = position_jacobian(arm, out)[:, active]

@@ -1,11 +1,12 @@
 """Trace a curve with the fingertip: command sequences whose continuous tip path stays on it.
 
-1. **Reachability** (:mod:`armpath.planning.curve_reach`) splits the curve into reachable arcs;
-   each becomes one *pass*.
+1. **Reachability** (:mod:`armpath.planning.curve_reach`) splits the curve into reachable arcs.
 2. **Redundancy resolution.** The fingertip has a two-dimensional family of solutions at every
    curve point. A reference path through the family is chosen by dynamic programming over layers
    of the family every few mm: nodes keep a clearance and joint-limit slack, transitions cost the
-   largest joint change (what commands cost) less a small reward for slack.
+   largest joint change (what commands cost) less a small reward for slack; where the family
+   cannot be followed continuously the path pays for a lift-off, which splits the arc into
+   *passes* (as few as possible).
 3. **Commands.** From the current lattice state, the planner looks for the command that carries
    the tip farthest along the curve: for each candidate advance it follows the reference (pulled
    gently toward it), projects onto the curve point (offset outward by half the tolerance when the
@@ -49,6 +50,7 @@ from armpath.planning.motion import (
     active_joints,
     plan_metrics,
     plan_motion,
+    search_clearance_extra,
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
 
@@ -64,12 +66,12 @@ _PATH_SAMPLES = 16
 #: Extra clearance the links keep while tracing, so the certification of the continuous motion
 #: (bound from sampling) succeeds (mm).
 _BODY_BUFFER_MM = 0.02
-#: Candidate advances along the curve per command (mm), tried largest first.
 #: Largest joint change between reference layers 5 mm apart that still counts as following the
 #: solution family continuously (deg).
 _MAX_LAYER_STEP_DEG = 12.0
 #: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
 _LIFT_OFF_DEG = 120.0
+#: Candidate advances along the curve per command (mm), tried largest first.
 _ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
 
 
@@ -78,8 +80,9 @@ class TraceOptions:
     """How to trace.
 
     ``tolerance_mm``: the largest distance of the continuous tip path from the curve during a
-    pass. ``layer_step_mm``: spacing of the reference path's layers. ``motion``: options of the
-    transits between passes.
+    pass. ``layer_step_mm``: spacing of the reference path's layers. ``scan_step_mm``: spacing of
+    the reachability scan (see :func:`~armpath.planning.curve_reach.curve_reachability`).
+    ``motion``: options of the transits onto the curve and between passes.
     """
 
     tolerance_mm: float = 0.1
@@ -164,11 +167,29 @@ def _joint_change(q_deg: FloatArray, here_deg: FloatArray, wrap: NDArray[np.bool
     return np.asarray(np.abs(d).max(axis=-1), dtype=np.float64)
 
 
+def _same_links(q: FloatArray, half_turn: float) -> FloatArray:
+    """Configurations of a seed-type arm ``(..., >= 5)`` and the others with the same links,
+    stacked ``(4, ..., n)``: itself, its wrist flip (joint 4 + half a turn, joint 5 negated), its
+    arm-side flip (joint 1 + half a turn, joints 2 and 3 negated, joint 4 - half a turn) and
+    both. ``half_turn`` is 180 for degrees, pi for radians."""
+    wrist = q.copy()
+    wrist[..., 3] += half_turn
+    wrist[..., 4] *= -1.0
+    side = q.copy()
+    side[..., 0] += half_turn
+    side[..., 1:3] *= -1.0
+    side[..., 3] -= half_turn
+    both = side.copy()
+    both[..., 3] += half_turn
+    both[..., 4] *= -1.0
+    return np.stack([q, wrist, side, both])
+
+
 def _flips(q_deg: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Configurations of a seed-type arm (joints 1-5, deg) and their wrist flips."""
-    other = q_deg.copy()
-    other[..., 3] = (other[..., 3] + 360.0) % 360.0 - 180.0
-    other[..., 4] = -other[..., 4]
+    """Configurations of a seed-type arm (joints 1-5, deg) and their wrist flips (joint 4 in
+    ``[-180, 180)``)."""
+    other = _same_links(q_deg, 180.0)[1]
+    other[..., 3] = (other[..., 3] + 180.0) % 360.0 - 180.0
     return q_deg, other
 
 
@@ -244,7 +265,7 @@ def _reference_pieces(
     # not half of them) takes every third, which keeps the DP's work alike
     dirs = fam.coarse_dirs if fam.surface is not None else fam.coarse_dirs[::3]
     for s in np.linspace(a + inset, b - inset, n + 1):
-        q = fam.configs(fam.wrap(float(s)), dirs)
+        q = fam.configs(float(s), dirs)
         if q.shape[0] == 0:
             continue
         sc = fam.score(q)
@@ -255,7 +276,7 @@ def _reference_pieces(
         nodes.append((float(s), np.degrees(q[keep, :_TIP_JOINTS]), sc[keep]))
     if not nodes:
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
-    wrap = ~(np.isfinite(fam.arm.lower) | np.isfinite(fam.arm.upper))[:_TIP_JOINTS]
+    wrap = fam.unlimited[:_TIP_JOINTS]
     here = np.degrees(q_from[:_TIP_JOINTS])
     cost = np.min([_joint_change(q, here, wrap) for q in _flips(nodes[0][1])], axis=0)
     back = []
@@ -311,7 +332,7 @@ class _Tracer:
         self.arc = piece.arc
         self.tol = tolerance
         self.offset = tolerance / 2 if fam.surface is not None else 0.0
-        self.wrap = ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
+        self.wrap = fam.unlimited
         pairs = self.world.pairs(self.arm)
         self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
         self.layers, self.ref = piece.layers, piece.ref
@@ -336,21 +357,10 @@ class _Tracer:
 
     def matched(self, q: FloatArray, like: FloatArray) -> FloatArray:
         """The representation of each configuration's links (``q`` ``(6,)`` or ``(M, 6)``)
-        nearest ``like``: itself, its wrist flip (joint 4 + 180 deg, joint 5 negated), its
-        arm-side flip (joint 1 + 180 deg, joints 2 and 3 negated, joint 4 - 180 deg) or both,
-        unlimited joints turned by whole turns; representations outside the joint limits are
-        not used."""
+        nearest ``like`` among :func:`_same_links`, unlimited joints turned by whole turns;
+        representations outside the joint limits are not used."""
         q2 = np.atleast_2d(q)
-        wrist = q2.copy()
-        wrist[:, 3] += np.pi
-        wrist[:, 4] *= -1.0
-        side = q2 * np.array([1.0, -1.0, -1.0, 1.0, 1.0, 1.0])
-        side[:, 0] += np.pi
-        side[:, 3] -= np.pi
-        both = side.copy()
-        both[:, 3] += np.pi
-        both[:, 4] *= -1.0
-        reps = np.stack([q2, wrist, side, both])  # (4, M, 6)
+        reps = _same_links(q2, np.pi)  # (4, M, 6)
         reps = reps + np.round((like - reps) / (2 * np.pi)) * 2 * np.pi * self.wrap
         gap = np.abs(reps - like).max(axis=-1)
         gap = np.where(self.arm.within_limits(reps), gap, np.inf)
@@ -384,6 +394,11 @@ class _Tracer:
         else:
             sd = np.full(d.shape, np.inf)
         return d, self.unwrap_s(s, near), sd
+
+    def in_band(self, d: FloatArray, sd: FloatArray, off_surface: float) -> NDArray[np.bool_]:
+        """Tip points within 0.9 of the tolerance from the curve and, on a surface, at least
+        ``off_surface`` times the tolerance outside it (``d``, ``sd`` from :meth:`tip_checks`)."""
+        return np.asarray((d <= 0.9 * self.tol) & (sd >= off_surface * self.tol), dtype=bool)
 
     # -- lattice ---------------------------------------------------------------------------
     def project(self, q: FloatArray, E: FloatArray) -> FloatArray:
@@ -423,18 +438,14 @@ class _Tracer:
         if cand.shape[0] == 0:
             return cand, np.zeros(0)
         d, s, sd = self.tip_checks(tool_position(self.arm, ticks_to_rad(cand)), sk)
-        ok = (d <= 0.9 * self.tol) & (sign * (s - sk) > 0.05) & (sign * (s - goal) <= self.tol)
-        if self.fam.surface is not None:
-            ok &= sd >= 0.1 * self.tol
+        ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > 0.05) & (sign * (s - goal) <= self.tol)
         cand, s = cand[ok], s[ok]
         if cand.shape[0] == 0:
             return cand, s
         t = np.linspace(0.0, 1.0, _PATH_SAMPLES + 1)[1:-1]
         Q = qk[None, None, :] + t[None, :, None] * (cand - qk)[:, None, :]
         d2, _, sd2 = self.tip_checks(tool_position(self.arm, ticks_to_rad(Q)), sk)
-        ok = d2.max(axis=1) <= 0.9 * self.tol
-        if self.fam.surface is not None:
-            ok &= sd2.min(axis=1) >= 0.05 * self.tol
+        ok = np.all(self.in_band(d2, sd2, 0.05), axis=1)
         cand, s, Q = cand[ok], s[ok], Q[ok]
         if cand.shape[0] == 0:
             return cand, s
@@ -453,18 +464,9 @@ class _Tracer:
             if abs(s1 - sk) <= 0.05 or s1 == last:
                 continue
             last = s1
-            E, n, b = self.target(s1)
             drift = self.q_ref(s1) - self.q_ref(sk)
             pull = np.clip(0.3 * (self.q_ref(sk) - qk_rad), -np.radians(0.5), np.radians(0.5))
-            found = []
-            for guess in (qk_rad + drift + pull, qk_rad + drift):
-                base = self.project(guess, E)
-                if np.degrees(np.abs(base - qk_rad)).max() > 2.3:
-                    continue
-                found.append(self.lattice_near(base, n, b, int(qk[-1])))
-            if not found:
-                continue
-            cand, s = self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+            cand, s = self._commands_toward(qk, sk, s1, goal, [drift + pull, drift])
             if cand.shape[0]:
                 ref_gap = np.degrees(np.abs(ticks_to_rad(cand) - self.q_ref(s))).max(axis=1)
                 k = int(np.argmax(sign * s - 0.05 * ref_gap))
@@ -473,6 +475,23 @@ class _Tracer:
             return self._toward_best(qk, sk, goal)
         return None
 
+    def _commands_toward(
+        self, qk: IntArray, sk: float, s1: float, goal: float, moves: list[FloatArray]
+    ) -> tuple[IntArray, FloatArray]:
+        """Valid next states (see :meth:`valid_ends`) near the tip target at ``s1``: each joint
+        move (rad) from ``qk`` is projected onto the target and the lattice searched around it
+        (moves that end up more than 2.3 deg from ``qk`` are dropped)."""
+        qk_rad = ticks_to_rad(qk)
+        E, n, b = self.target(s1)
+        found = []
+        for move in moves:
+            base = self.project(qk_rad + move, E)
+            if np.degrees(np.abs(base - qk_rad)).max() <= 2.3:
+                found.append(self.lattice_near(base, n, b, int(qk[-1])))
+        if not found:
+            return np.zeros((0, qk.size), dtype=np.int64), np.zeros(0)
+        return self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+
     def _toward_best(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """Near the end of an arc (a tight spot): small advances, the joints turned toward the
         family member with the most slack there rather than along the reference."""
@@ -480,20 +499,12 @@ class _Tracer:
         sign = 1.0 if goal >= sk else -1.0
         for adv in (3.0, 1.5, 0.8, 0.4, 0.2, 0.1):
             s1 = sk + sign * min(adv, abs(goal - sk))
-            v = self.fam.best(self.fam.wrap(s1), fine=True)
+            v = self.fam.best(s1, fine=True)
             if not v.reachable:
                 continue
-            E, n, b = self.target(s1)
-            best = self.matched(v.q, qk_rad)
-            found = []
-            for turn_deg in (1.9, 1.0, 0.5, 0.25):
-                guess = qk_rad + np.clip(best - qk_rad, -np.radians(turn_deg), np.radians(turn_deg))
-                base = self.project(guess, E)
-                if np.degrees(np.abs(base - qk_rad)).max() <= 2.3:
-                    found.append(self.lattice_near(base, n, b, int(qk[-1])))
-            if not found:
-                continue
-            cand, s = self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+            turn = self.matched(v.q, qk_rad) - qk_rad
+            moves = [np.clip(turn, -np.radians(t), np.radians(t)) for t in (1.9, 1.0, 0.5, 0.25)]
+            cand, s = self._commands_toward(qk, sk, s1, goal, moves)
             if cand.shape[0]:
                 # the most slack first (a tight spot), then the farthest
                 score = self.fam.score(ticks_to_rad(cand))
@@ -512,14 +523,14 @@ class _Tracer:
             E, n, b = self.target(s0)
             ref = self.q_ref(s0)
             bases = [ref]
-            q = self.fam.configs(self.fam.wrap(s0), self.fam.fine_dirs)
+            q = self.fam.configs(s0, self.fam.fine_dirs)
             if q.shape[0]:
                 q = self.matched(q, ref)
-                gap = np.degrees(np.abs(q - ref).max(axis=1))
-                score = np.where(gap <= 30.0, self.fam.score(q), -np.inf)
+                turn = np.degrees(np.abs(q - ref).max(axis=1))
+                score = np.where(turn <= 30.0, self.fam.score(q), -np.inf)
                 roomy = score >= body_buffer_mm
                 pick = (
-                    np.argmin(np.where(roomy, gap, np.inf)) if np.any(roomy) else np.argmax(score)
+                    np.argmin(np.where(roomy, turn, np.inf)) if np.any(roomy) else np.argmax(score)
                 )
                 if np.isfinite(score[pick]):
                     bases.insert(0, q[pick])
@@ -529,9 +540,7 @@ class _Tracer:
                 if cand.shape[0] == 0:
                     continue
                 d, s, sd = self.tip_checks(tool_position(self.arm, ticks_to_rad(cand)), s0)
-                ok = (d <= 0.9 * self.tol) & (s >= self.arc.start_mm - self.tol)
-                if self.fam.surface is not None:
-                    ok &= sd >= 0.1 * self.tol
+                ok = self.in_band(d, sd, 0.1) & (s >= self.arc.start_mm - self.tol)
                 ok &= self.world.satisfied(self.arm, ticks_to_rad(cand), extra)
                 if np.any(ok):
                     k = int(np.argmin(np.where(ok, s, np.inf)))
@@ -616,7 +625,7 @@ def plan_trace(
             f"no part of curve {curve.name!r} is reachable: "
             + "; ".join(a.reason for a in reach.unreachable)
         )
-    fam = CurveFamily(arm, world, curve)
+    fam = reach.family
     start = np.asarray(start_ticks, dtype=np.int64)
     states: list[IntArray] = [start]
     passes: list[TracePass] = []
@@ -643,7 +652,7 @@ def plan_trace(
             tracer = _Tracer(fam, piece, opts.tolerance_mm)
             tracer.align(ticks_to_rad(states[-1]))
             here = len(states) - 1
-            if passes:  # lift off the surface first: the tool backs away along its normal
+            if passes:  # lift off first, to where the transit's search has room
                 states.extend(list(_lift_off(arm, world, states[-1], opts).states()[1:]))
             motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
             states.extend(list(motion.sequence.states()[1:]))
@@ -699,12 +708,8 @@ def _lift_off(
     state's smallest slack against the search's clearance needs, and the best one whose continuous
     motion is certified clear is taken; at most 12 commands.
     """
-    pairs = world.pairs(arm)
-    is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
-    is_self = np.array([p.is_self for p in pairs], dtype=bool)
-    spacing, buffer = opts.motion.sample_spacing_mm, opts.motion.buffer_mm
-    need = world.required(arm) + np.where(
-        is_tip, spacing / 2, buffer + np.where(is_self, spacing, spacing / 2)
+    need = world.required(arm) + search_clearance_extra(
+        arm, world, opts.motion.buffer_mm, opts.motion.sample_spacing_mm
     )
     active = active_joints(arm)
     rng = np.random.default_rng([opts.motion.seed, 7])
@@ -746,9 +751,10 @@ def _enter(
 ) -> tuple[MotionPlan, IntArray, float]:
     """Move from ``q_from`` onto the curve near the start of the tracer's arc.
 
-    The start of an arc is usually a tight spot (that is why the arc ends there), so the entry is
-    the first point along the arc where the arm keeps ``transit_body_mm`` of spare clearance; the
-    pass then runs back to the start of the arc before tracing forward.
+    The start of an arc is usually a tight spot (that is why the arc ends there): it is entered
+    only by a straight motion. Otherwise the entry is one of the first scan points along the arc
+    whose best configuration keeps the transit search's buffer plus half its sample spacing plus
+    0.5 mm of slack; the pass then runs back to the start of the arc before tracing forward.
     """
     arc = tracer.arc
     L = reach.curve.length
@@ -769,7 +775,7 @@ def _enter(
         except PlanningError as exc:
             failures.append(f"{s_try:.1f} mm: {exc}")
             continue
-        say(f"moving onto the curve at {s % L if reach.curve.closed else s:.1f} mm")
+        say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm")
         if i == 0:  # the tight start of the arc: only a straight motion can end there
             seq = CommandSequence.straight(q_from, q)
             mc = motion_clearance(tracer.arm, tracer.world, seq)

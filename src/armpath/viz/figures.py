@@ -94,6 +94,20 @@ def _set_equal(ax: Axes3D, pts: np.ndarray) -> None:
     ax.set_box_aspect((1, 1, 1))
 
 
+def _draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
+    """Draw every bounded obstacle the 3-D figures know how to draw (solids of revolution,
+    spheres, boxes); returns their drawn points for framing the view."""
+    drawn = []
+    for obstacle in scene.world.obstacles:
+        if isinstance(obstacle, SolidOfRevolution):
+            drawn.append(_draw_solid(ax, obstacle))
+        elif isinstance(obstacle, Sphere):
+            drawn.append(_draw_sphere(ax, obstacle))
+        elif isinstance(obstacle, Box):
+            drawn.append(_draw_box(ax, obstacle))
+    return drawn
+
+
 def plot_motion_3d(
     path: str | Path,
     arm: SerialArm,
@@ -109,13 +123,7 @@ def plot_motion_3d(
     motion = landmark_positions(arm, seq.sample_motion(8))
     states = landmark_positions(arm, ticks_to_rad(seq.states()))
     pts = [motion.reshape(-1, 3), np.zeros((1, 3))]
-    for obstacle in scene.world.obstacles:
-        if isinstance(obstacle, SolidOfRevolution):
-            pts.append(_draw_solid(ax, obstacle))
-        elif isinstance(obstacle, Sphere):
-            pts.append(_draw_sphere(ax, obstacle))
-        elif isinstance(obstacle, Box):
-            pts.append(_draw_box(ax, obstacle))
+    pts += _draw_obstacles(ax, scene)
     step = max(1, len(states) // 12)
     for k in range(0, len(states), step):
         ax.plot(*states[k].T, color="0.6", alpha=0.35, linewidth=1)
@@ -287,13 +295,7 @@ def plot_trace_3d(
     states = landmark_positions(arm, ticks_to_rad(sequence.states()))
     first = spans[0][0] if spans else 0
     pts = [tip, curve, states[[first, -1]].reshape(-1, 3)]
-    for obstacle in scene.world.obstacles:
-        if isinstance(obstacle, SolidOfRevolution):
-            pts.append(_draw_solid(ax, obstacle))
-        elif isinstance(obstacle, Sphere):
-            pts.append(_draw_sphere(ax, obstacle))
-        elif isinstance(obstacle, Box):
-            pts.append(_draw_box(ax, obstacle))
+    pts += _draw_obstacles(ax, scene)
     ax.plot(
         *states[-1].T,
         "-o",
