@@ -218,3 +218,55 @@ def displacement_bounds(arm: SerialArm) -> FloatArray:
             )
             bounds.append(sum(offsets[i + 1 :]) + extra)
     return np.array(bounds)
+
+
+def geometric_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    """Geometric Jacobian ``[v; w]`` of the tool frame, shape ``(..., 6, n)``.
+
+    Rows 0-2: tool-point velocity (length unit per rad, or unitless for prismatic joints); rows
+    3-5: angular velocity (rad per rad, zero for prismatic joints), all in the world frame.
+    """
+    frames = forward_frames(arm, q)
+    p_tool = frames[..., -1, :3, 3]
+    J = np.zeros((*frames.shape[:-3], 6, arm.n_joints))
+    for i, joint in enumerate(arm.joints):
+        R = frames[..., i + 1, :3, :3]
+        z = R @ joint.axis
+        if joint.kind is JointKind.PRISMATIC:
+            J[..., :3, i] = z
+        else:
+            J[..., :3, i] = np.cross(z, p_tool - frames[..., i + 1, :3, 3])
+            J[..., 3:, i] = z
+    return J
+
+
+def _rotation_taking_z_to(axis: FloatArray) -> FloatArray:
+    """A rotation R with ``R @ ez = axis`` (unit axis); the identity for ``axis = ez``."""
+    z = np.array([0.0, 0.0, 1.0])
+    v = np.cross(z, axis)
+    s = float(np.linalg.norm(v))
+    c = float(axis @ z)
+    if s < 1e-15:
+        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+    K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.asarray(np.eye(3) + K + K @ K * ((1.0 - c) / s**2), dtype=np.float64)
+
+
+def z_axis_chain(arm: SerialArm) -> FloatArray:
+    """The arm as ``C0 Rz(q1) C1 Rz(q2) ... Rz(qn) Cn``, shape ``(n + 1, 4, 4)``.
+
+    Every joint turns about (or slides along) its local z; the constants absorb base, joint
+    placements, axis directions and tool, so that the product equals :func:`tool_pose`.
+    """
+    n = arm.n_joints
+    C = np.empty((n + 1, 4, 4))
+    Ra = []
+    for joint in arm.joints:
+        T = np.eye(4)
+        T[:3, :3] = _rotation_taking_z_to(joint.axis)
+        Ra.append(T)
+    C[0] = arm.T_world_base @ arm.joints[0].T_parent_joint @ Ra[0]
+    for i in range(1, n):
+        C[i] = Ra[i - 1].T @ arm.joints[i].T_parent_joint @ Ra[i]
+    C[n] = Ra[n - 1].T @ arm.T_flange_tool
+    return C

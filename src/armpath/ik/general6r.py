@@ -1,0 +1,1083 @@
+"""Every inverse-kinematics solution of a general 6R arm, by Raghavan-Roth elimination.
+
+The method (Raghavan & Roth 1993, Manocha & Canny 1994; the problem of seed 004), without any
+symbolic preprocessing:
+
+1. Rotate each joint frame so that every joint turns about its local z. The arm is then the loop
+   ``Z(p0) K0 Z(p1) K1 ... Z(p5) K5 = I`` with ``Z(p)`` a rotation about z by joint angle ``p``
+   and ``K5`` holding the target pose.
+2. Split it as ``K1 Z(p2) K2 Z(p3) K3 Z(p4) K4 = Z(-p1) K0^-1 Z(-p0) K5^-1 Z(-p5)``. The z axis
+   ``l`` and origin ``p`` of both sides do not depend on ``p5``. From them the 14 Raghavan-Roth
+   quantities (``l, p, p.p, p.l, p x l, (p.p) l - 2 (p.l) p``) are trigonometric polynomials of
+   degree one in each angle. Their coefficients are *measured*, not derived: the quantities are
+   evaluated on the 3-point grids {0, 120, 240} deg of each angle and the grid is inverted
+   exactly. The left side depends on the arm only and is measured once per arm.
+3. Eliminating the eight products of ``p0, p1`` (left null space of their 14x8 coefficient
+   matrix) leaves six equations bilinear in the half-angle monomials of ``p3, p4`` with
+   coefficients linear in ``cos p2, sin p2``; multiplied by ``tan(p3/2)`` they become the 12x12
+   matrix ``M(p2)``. Its determinant is a trigonometric polynomial of degree 8 in ``p2``
+   (sixteen roots, the known bound), measured by 18 samples and a discrete Fourier transform.
+4. Real roots: sign changes on a 360-point grid, refined by safeguarded Newton; a grid cell
+   holding two close roots or a double root shows as a small local extremum, which is resolved
+   by its local quadratic and reported as near-double.
+5. Per root, the null vector of ``M(p2)`` gives ``p3, p4``; the eliminated products give
+   ``p0, p1``; the loop gives ``p5``. Every candidate is refined by Newton steps on the full
+   pose and kept only if forward kinematics reproduces the target.
+
+If a split is degenerate for the arm or the pose (a rank-deficient product matrix or a
+determinant that vanishes identically, as for some special geometries), the loop is rotated or
+reversed (twelve splits) until one is regular; the result says which one served.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+from armpath.errors import InvalidInputError
+from armpath.ik.result import IKResult
+from armpath.kinematics import z_axis_chain
+from armpath.model.serial_arm import JointKind, SerialArm
+
+FloatArray = NDArray[np.float64]
+
+#: Most real solutions a general 6R arm can have.
+MAX_SOLUTIONS = 16
+_CAP = 24  # candidate slots (a few spare for near-double pairs before de-duplication)
+_GRID: FloatArray = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
+_BASIS = np.stack([np.ones(3), np.cos(_GRID), np.sin(_GRID)], axis=1)  # [sample, harmonic]
+_BASIS_INV = np.linalg.inv(_BASIS)  # harmonic coefficients = _BASIS_INV @ samples
+#: (1 + x^2) * {1, cos, sin} of the half-angle x = tan(p/2), as coefficients of x^0, x^1, x^2.
+_HALF = np.array([[1.0, 0.0, 1.0], [1.0, 0.0, -1.0], [0.0, 2.0, 0.0]])
+_HALF2: FloatArray = np.asarray(np.kron(_HALF, _HALF), dtype=np.float64)
+_N_DET = 18  # determinant samples: 17 harmonics of the degree-8 polynomial (9..12 vanish)
+_N_SCAN = 360  # root-scan grid
+_SCAN: FloatArray = np.asarray(np.arange(_N_SCAN) * (2.0 * np.pi / _N_SCAN), dtype=np.float64)
+_SCAN_COS: FloatArray = np.cos(np.outer(_SCAN, np.arange(9)))
+_SCAN_SIN: FloatArray = np.sin(np.outer(_SCAN, np.arange(9)))
+_DET_PHI: FloatArray = np.asarray(np.arange(_N_DET) * (2.0 * np.pi / _N_DET), dtype=np.float64)
+#: Fixed offsets of the three left-side angles (rad): keep half-angle monomials finite.
+DEFAULT_DELTAS = np.array([0.7123, -1.1379, 0.4518])
+
+# Status codes of one pose
+OK = 0
+DEGENERATE = 1  # every split degenerate (positive-dimensional set or special geometry)
+
+
+@njit(cache=True)
+def _rz(phi: float) -> FloatArray:
+    T = np.eye(4)
+    c, s = np.cos(phi), np.sin(phi)
+    T[0, 0] = c
+    T[0, 1] = -s
+    T[1, 0] = s
+    T[1, 1] = c
+    return T
+
+
+@njit(cache=True)
+def _mm(A: FloatArray, B: FloatArray) -> FloatArray:
+    """Product of two 4x4 rigid transforms (explicit loops: no BLAS call overhead)."""
+    out = np.empty((4, 4))
+    for i in range(3):
+        for j in range(4):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+        out[i, 3] += A[i, 3]
+    out[3, 0] = 0.0
+    out[3, 1] = 0.0
+    out[3, 2] = 0.0
+    out[3, 3] = 1.0
+    return out
+
+
+@njit(cache=True)
+def _mrz(A: FloatArray, phi: float) -> FloatArray:
+    """``A @ Rz(phi)`` for a 4x4 rigid transform."""
+    c, s = np.cos(phi), np.sin(phi)
+    out = A.copy()
+    for i in range(3):
+        out[i, 0] = A[i, 0] * c + A[i, 1] * s
+        out[i, 1] = -A[i, 0] * s + A[i, 1] * c
+    return out
+
+
+@njit(cache=True)
+def _rigid_inv(T: FloatArray) -> FloatArray:
+    out = np.eye(4)
+    R = T[:3, :3].T.copy()
+    out[:3, :3] = R
+    out[:3, 3] = -(R @ np.ascontiguousarray(T[:3, 3]))
+    return out
+
+
+@njit(cache=True)
+def _quantities(l: FloatArray, p: FloatArray, out: FloatArray) -> None:  # noqa: E741
+    """The 14 Raghavan-Roth quantities of the line (direction l, point p)."""
+    pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
+    pl = p[0] * l[0] + p[1] * l[1] + p[2] * l[2]
+    for k in range(3):
+        out[k] = l[k]
+        out[3 + k] = p[k]
+        out[11 + k] = pp * l[k] - 2.0 * pl * p[k]
+    out[6] = pp
+    out[7] = pl
+    out[8] = p[1] * l[2] - p[2] * l[1]
+    out[9] = p[2] * l[0] - p[0] * l[2]
+    out[10] = p[0] * l[1] - p[1] * l[0]
+
+
+@njit(cache=True)
+def lhs_coefficients(
+    D: FloatArray, deltas: FloatArray, grid: FloatArray, basis_inv: FloatArray
+) -> FloatArray:
+    """Coefficients ``P[h2, q, h3 * 3 + h4]`` of the left side ``D0 Z D1 Z D2 Z D3``.
+
+    ``h`` indexes the harmonics {1, cos, sin} of ``p_k - delta_k``; ``q`` the 14 quantities.
+    """
+    F = np.empty((3, 3, 3, 14))
+    for i in range(3):
+        A = _mm(_mrz(D[0], grid[i] + deltas[0]), D[1])
+        for j in range(3):
+            B = _mm(_mrz(A, grid[j] + deltas[1]), D[2])
+            for k in range(3):
+                M = _mm(_mrz(B, grid[k] + deltas[2]), D[3])
+                _quantities(
+                    np.ascontiguousarray(M[:3, 2]), np.ascontiguousarray(M[:3, 3]), F[i, j, k]
+                )
+    P = np.zeros((3, 14, 9))
+    for a in range(3):
+        for b in range(3):
+            for c in range(3):
+                for i in range(3):
+                    for j in range(3):
+                        for k in range(3):
+                            w = basis_inv[a, i] * basis_inv[b, j] * basis_inv[c, k]
+                            if w != 0.0:
+                                for q in range(14):
+                                    P[a, q, b * 3 + c] += w * F[i, j, k, q]
+    return P
+
+
+@njit(cache=True)
+def _rhs_coefficients(
+    E1: FloatArray, lE: FloatArray, pE: FloatArray, grid: FloatArray, basis_inv: FloatArray
+) -> FloatArray:
+    """Coefficients ``R[q, h0 * 3 + h1]`` of ``Z(-p1) E1 Z(-p0)`` applied to the line (lE, pE)."""
+    G = np.empty((3, 3, 14))
+    lv = np.empty(3)
+    pv = np.empty(3)
+    for i in range(3):
+        A = _mrz(E1, -grid[i])
+        for j in range(3):
+            M = _mm(_rz(-grid[j]), A)
+            for r in range(3):
+                lv[r] = M[r, 0] * lE[0] + M[r, 1] * lE[1] + M[r, 2] * lE[2]
+                pv[r] = M[r, 0] * pE[0] + M[r, 1] * pE[1] + M[r, 2] * pE[2] + M[r, 3]
+            _quantities(lv, pv, G[i, j])
+    R = np.zeros((14, 9))
+    for a in range(3):
+        for b in range(3):
+            for i in range(3):
+                for j in range(3):
+                    w = basis_inv[a, i] * basis_inv[b, j]
+                    if w != 0.0:
+                        for q in range(14):
+                            R[q, a * 3 + b] += w * G[i, j, q]
+    return R
+
+
+@njit(cache=True)
+def _det_lu(A: FloatArray) -> float:
+    """Determinant by LU with partial pivoting (A is overwritten)."""
+    n = A.shape[0]
+    det = 1.0
+    for k in range(n):
+        piv = k
+        big = abs(A[k, k])
+        for r in range(k + 1, n):
+            if abs(A[r, k]) > big:
+                big = abs(A[r, k])
+                piv = r
+        if big == 0.0:
+            return 0.0
+        if piv != k:
+            for c in range(n):
+                tmp = A[k, c]
+                A[k, c] = A[piv, c]
+                A[piv, c] = tmp
+            det = -det
+        det *= A[k, k]
+        inv = 1.0 / A[k, k]
+        for r in range(k + 1, n):
+            f = A[r, k] * inv
+            if f != 0.0:
+                for c in range(k + 1, n):
+                    A[r, c] -= f * A[k, c]
+    return det
+
+
+@njit(cache=True)
+def _lu_solve(A: FloatArray, rhs: FloatArray) -> tuple[FloatArray, float]:
+    """Solve ``A x = rhs`` by LU with partial pivoting (A, rhs overwritten); also det(A)."""
+    n = A.shape[0]
+    det = 1.0
+    for k in range(n):
+        piv = k
+        big = abs(A[k, k])
+        for r in range(k + 1, n):
+            if abs(A[r, k]) > big:
+                big = abs(A[r, k])
+                piv = r
+        if big == 0.0:
+            return np.zeros(n), 0.0
+        if piv != k:
+            for c in range(n):
+                tmp = A[k, c]
+                A[k, c] = A[piv, c]
+                A[piv, c] = tmp
+            tmp = rhs[k]
+            rhs[k] = rhs[piv]
+            rhs[piv] = tmp
+            det = -det
+        det *= A[k, k]
+        inv = 1.0 / A[k, k]
+        for r in range(k + 1, n):
+            f = A[r, k] * inv
+            if f != 0.0:
+                for c in range(k + 1, n):
+                    A[r, c] -= f * A[k, c]
+                rhs[r] -= f * rhs[k]
+    x = np.empty(n)
+    for k in range(n - 1, -1, -1):
+        acc = rhs[k]
+        for c in range(k + 1, n):
+            acc -= A[k, c] * x[c]
+        x[k] = acc / A[k, k]
+    return x, det
+
+
+@njit(cache=True)
+def _null_vector(A: FloatArray) -> FloatArray:
+    """Approximate null vector of a (near-)singular square matrix by complete-pivoting LU."""
+    n = A.shape[0]
+    cols = np.arange(n)
+    for k in range(n):
+        pr, pc, big = k, k, -1.0
+        for r in range(k, n):
+            for c in range(k, n):
+                if abs(A[r, c]) > big:
+                    big = abs(A[r, c])
+                    pr, pc = r, c
+        if pr != k:
+            for c in range(n):
+                tmp = A[k, c]
+                A[k, c] = A[pr, c]
+                A[pr, c] = tmp
+        if pc != k:
+            for r in range(n):
+                tmp = A[r, k]
+                A[r, k] = A[r, pc]
+                A[r, pc] = tmp
+            t = cols[k]
+            cols[k] = cols[pc]
+            cols[pc] = t
+        if big == 0.0:
+            break
+        inv = 1.0 / A[k, k]
+        for r in range(k + 1, n):
+            f = A[r, k] * inv
+            if f != 0.0:
+                for c in range(k + 1, n):
+                    A[r, c] -= f * A[k, c]
+    # Null vector of U: last (permuted) component 1, back substitution over the rest.
+    y = np.zeros(n)
+    y[n - 1] = 1.0
+    for k in range(n - 2, -1, -1):
+        s = 0.0
+        for c in range(k + 1, n):
+            s += A[k, c] * y[c]
+        y[k] = -s / A[k, k] if A[k, k] != 0.0 else 0.0
+    v = np.empty(n)
+    for k in range(n):
+        v[cols[k]] = y[k]
+    out: FloatArray = v / np.sqrt(np.sum(v * v))
+    return out
+
+
+@njit(cache=True)
+def _half_angle_from_ratio(num: float, den_low: float, den_high: float) -> float:
+    """Angle p with tan(p/2) = num/den_low (or den_high/num), stable for any size of tan."""
+    if den_low >= den_high:
+        return float(2.0 * np.arctan2(num, den_low))
+    return float(2.0 * np.arctan2(den_high, num))
+
+
+@njit(cache=True)
+def _trig_eval(a: FloatArray, b: FloatArray, phi: float) -> tuple[float, float, float]:
+    """Value, first and second derivative of sum_k a_k cos k phi + b_k sin k phi."""
+    c1 = np.cos(phi)
+    s1 = np.sin(phi)
+    c = 1.0
+    s = 0.0
+    g = a[0]
+    d1 = 0.0
+    d2 = 0.0
+    for k in range(1, a.shape[0]):
+        c, s = c * c1 - s * s1, s * c1 + c * s1
+        t = a[k] * c + b[k] * s
+        g += t
+        d1 += k * (b[k] * c - a[k] * s)
+        d2 -= k * k * t
+    return g, d1, d2
+
+
+@njit(cache=True)
+def _bracketed_root(a: FloatArray, b: FloatArray, lo: float, hi: float, glo: float) -> float:
+    """Root of the trigonometric polynomial in [lo, hi] (sign change), safeguarded Newton."""
+    x = 0.5 * (lo + hi)
+    for _ in range(60):
+        g, d1, _d2 = _trig_eval(a, b, x)
+        if g == 0.0:
+            return x
+        if (g < 0.0) == (glo < 0.0):
+            lo = x
+            glo = g
+        else:
+            hi = x
+        step = g / d1 if d1 != 0.0 else 0.0
+        xn = x - step
+        if not (lo < xn < hi):
+            xn = 0.5 * (lo + hi)
+        if abs(xn - x) < 1e-14:
+            return xn
+        x = xn
+        if hi - lo < 1e-14:
+            break
+    return x
+
+
+@njit(cache=True)
+def _hidden_pair(dm: float, d0: float, d1: float, d2: float) -> bool:
+    """Whether g' sampled at four consecutive grid points may have two roots in the middle cell.
+
+    All four values share a sign and |g'| is smallest in the middle; a parabola through either
+    three-point window then predicts how low |g'| gets. Cells are sub-sampled only when it comes
+    below a quarter of the smaller end value (or crosses zero).
+    """
+    if not ((dm < 0.0) == (d0 < 0.0) == (d1 < 0.0) == (d2 < 0.0)):
+        return False
+    if not (abs(d0) <= abs(dm) and abs(d1) <= abs(d2)):
+        return False
+    low = min(abs(d0), abs(d1))
+    for y0, y1, y2 in ((abs(dm), abs(d0), abs(d1)), (abs(d0), abs(d1), abs(d2))):
+        curv = y0 - 2.0 * y1 + y2
+        if curv > 0.0:
+            slope = 0.5 * (y2 - y0)
+            vmin = y1 - slope * slope / (2.0 * curv)
+            if vmin < 0.25 * low:
+                return True
+    return False
+
+
+@njit(cache=True)
+def _trig_roots(
+    a: FloatArray,
+    b: FloatArray,
+    scan_cos: FloatArray,
+    scan_sin: FloatArray,
+    scan: FloatArray,
+    roots: FloatArray,
+    doubles: NDArray[np.bool_],
+) -> int:
+    """Real roots in [0, 2 pi) of g = sum a_k cos k p + b_k sin k p; their count (-1 if g = 0).
+
+    The critical points of g (sign changes of g' on the grid, refined by Newton) cut the circle
+    into pieces on which g is monotone; each piece holds at most one root, bracketed exactly.
+    Two roots closer than the grid step are thus still separated, and a critical point where g
+    touches zero is returned once and marked as a double root.
+    """
+    n = scan.shape[0]
+    m = a.shape[0]
+    kk = np.arange(m).astype(np.float64)
+    vals = scan_cos @ a + scan_sin @ b
+    der = scan_cos @ (kk * b) - scan_sin @ (kk * a)
+    scale = np.max(np.abs(vals))
+    if scale == 0.0:
+        return -1
+    h = 2.0 * np.pi / n
+    # Derivative coefficients: g' = sum (k b_k) cos + (-k a_k) sin.
+    da = kk * b
+    db = -kk * a
+    xs = np.empty(2 * n + 1)
+    gs = np.empty(2 * n + 1)
+    crit = np.zeros(2 * n + 1, dtype=np.bool_)
+    npts = 0
+    for i in range(n):
+        xs[npts] = scan[i]
+        gs[npts] = vals[i]
+        npts += 1
+        d0 = der[i]
+        d1 = der[(i + 1) % n]
+        if (d0 < 0.0) != (d1 < 0.0) and d1 != 0.0 and d0 != 0.0:
+            x = _bracketed_root(da, db, scan[i], scan[i] + h, d0)
+            g, _, _ = _trig_eval(a, b, x)
+            xs[npts] = x
+            gs[npts] = g
+            crit[npts] = True
+            npts += 1
+        elif _hidden_pair(der[(i - 1) % n], d0, d1, der[(i + 2) % n]):
+            # g' may cross zero twice inside this cell: sub-sample it.
+            sub = 24
+            hs = h / sub
+            xprev = scan[i]
+            dprev = d0
+            for k in range(1, sub + 1):
+                xk = scan[i] + k * hs
+                _, dk, _ = _trig_eval(a, b, xk)
+                if k == sub:
+                    dk = d1
+                if (dprev < 0.0) != (dk < 0.0) and dk != 0.0 and dprev != 0.0 and npts < 2 * n:
+                    x = _bracketed_root(da, db, xprev, xk, dprev)
+                    g, _, _ = _trig_eval(a, b, x)
+                    xs[npts] = x
+                    gs[npts] = g
+                    crit[npts] = True
+                    npts += 1
+                xprev = xk
+                dprev = dk
+    xs[npts] = 2.0 * np.pi
+    gs[npts] = vals[0]
+    count = 0
+    cap = roots.shape[0]
+    for i in range(npts):
+        g0 = gs[i]
+        g1 = gs[i + 1]
+        if g0 == 0.0 or (crit[i] and abs(g0) <= 1e-13 * scale):
+            if count < cap:
+                roots[count] = xs[i]
+                doubles[count] = crit[i]
+                count += 1
+            continue
+        if (g0 < 0.0) != (g1 < 0.0) and g1 != 0.0:
+            if crit[i + 1] and abs(g1) <= 1e-13 * scale:
+                continue  # the double root at the next point is taken there
+            if count < cap:
+                roots[count] = _bracketed_root(a, b, xs[i], xs[i + 1], g0)
+                doubles[count] = False
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def _chain_pose(C: FloatArray, q: FloatArray) -> FloatArray:
+    T = C[0].copy()
+    for i in range(6):
+        T = _mm(_mrz(T, q[i]), C[i + 1])
+    out: FloatArray = T
+    return out
+
+
+@njit(cache=True)
+def _pose_error(C: FloatArray, q: FloatArray, T: FloatArray, err: FloatArray) -> FloatArray:
+    """Pose error [position; rotation vector] of FK(q) to T, and the 6x6 geometric Jacobian."""
+    J = np.empty((6, 6))
+    frames = np.empty((6, 4, 4))
+    A = C[0].copy()
+    for i in range(6):
+        A = _mrz(A, q[i])
+        frames[i] = A
+        A = _mm(A, C[i + 1])
+    p = A[:3, 3]
+    for i in range(6):
+        z = frames[i][:3, 2]
+        o = frames[i][:3, 3]
+        r = p - o
+        J[0, i] = z[1] * r[2] - z[2] * r[1]
+        J[1, i] = z[2] * r[0] - z[0] * r[2]
+        J[2, i] = z[0] * r[1] - z[1] * r[0]
+        J[3, i] = z[0]
+        J[4, i] = z[1]
+        J[5, i] = z[2]
+    for k in range(3):
+        err[k] = T[k, 3] - A[k, 3]
+    # Rotation error: 0.5 * sum_k cross(R_k, Rt_k) over the columns (exact to first order).
+    wx = 0.0
+    wy = 0.0
+    wz = 0.0
+    for k in range(3):
+        a0, a1, a2 = A[0, k], A[1, k], A[2, k]
+        t0, t1, t2 = T[0, k], T[1, k], T[2, k]
+        wx += a1 * t2 - a2 * t1
+        wy += a2 * t0 - a0 * t2
+        wz += a0 * t1 - a1 * t0
+    err[3] = 0.5 * wx
+    err[4] = 0.5 * wy
+    err[5] = 0.5 * wz
+    return J
+
+
+@njit(cache=True)
+def _refine(
+    C: FloatArray,
+    T: FloatArray,
+    q: FloatArray,
+    iterations: int,
+    q_known: FloatArray,
+    deflate: bool,
+) -> tuple[float, float, float]:
+    """Newton steps on the pose; returns (position error, rotation error, Jacobian ratio).
+
+    Steps are clamped to 0.3 rad. With ``deflate`` the residual is divided by the distance to
+    ``q_known`` (Brown / Farrell deflation), so that Newton finds a *second* solution next to a
+    known one, which is how a near-double pair is split.
+    """
+    err = np.empty(6)
+    ratio = 0.0
+    previous = np.inf
+    for _ in range(iterations):
+        J = _pose_error(C, q, T, err)
+        size = np.sqrt(np.sum(err * err))
+        if size < 1e-14 or (size < 1e-11 and size > 0.25 * previous):
+            break  # converged, or stalled at rounding level
+        previous = size
+        dq, det = _lu_solve(J, err.copy())
+        if det == 0.0:
+            break
+        if deflate:
+            diff = q - q_known
+            r2 = np.sum(diff * diff)
+            if r2 < 1e-30:
+                break
+            m = 1.0 / r2 + 1.0
+            grad_dot = -2.0 * np.sum(diff * dq) / (r2 * r2)
+            denom = 1.0 - grad_dot / m
+            if abs(denom) > 1e-12:
+                dq = dq / denom
+        norm = np.sqrt(np.sum(dq * dq))
+        if norm > 0.3:
+            dq *= 0.3 / norm
+        q += dq
+        if norm < 1e-14:
+            break
+    J = _pose_error(C, q, T, err)
+    norms = 1.0
+    for i in range(6):
+        norms *= np.sqrt(np.sum(J[:, i] * J[:, i]))
+    if norms > 0.0:
+        ratio = abs(_lu_solve(J.copy(), err.copy())[1]) / norms
+    pos = np.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
+    rot = np.sqrt(err[3] ** 2 + err[4] ** 2 + err[5] ** 2)
+    return pos, rot, ratio
+
+
+@njit(cache=True)
+def _keep(
+    q: FloatArray,
+    pos: float,
+    rot: float,
+    flag: int,
+    out_q: FloatArray,
+    out_res: FloatArray,
+    out_flags: NDArray[np.int64],
+    kept: int,
+) -> tuple[int, int]:
+    """Store a converged solution unless it repeats one; returns (new kept, duplicate index)."""
+    for i in range(6):
+        q[i] = _wrap(q[i])
+    for m in range(kept):
+        same = True
+        for i in range(6):
+            if abs(_wrap(out_q[m, i] - q[i])) > 1e-6:
+                same = False
+                break
+        if same:
+            out_flags[m] |= flag
+            return kept, m
+    if kept < out_q.shape[0]:
+        out_q[kept] = q
+        out_res[kept, 0] = pos
+        out_res[kept, 1] = rot
+        out_flags[kept] = flag
+        kept += 1
+    return kept, -1
+
+
+@njit(cache=True)
+def _wrap(x: float) -> float:
+    return (x + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@njit(cache=True)
+def _loop_constants(
+    C: FloatArray, T: FloatArray, forward: bool, start: int
+) -> tuple[FloatArray, NDArray[np.int64], float]:
+    """The loop ``Z(p0) K0 ... Z(p5) K5 = I`` of one split: constants, joint order, angle sign."""
+    K = np.empty((6, 4, 4))
+    order = np.empty(6, dtype=np.int64)
+    Tinv = _rigid_inv(T)
+    if forward:
+        for i in range(6):
+            j = (start + i) % 6
+            order[i] = j
+            K[i] = _mm(_mm(C[6], Tinv), C[0]) if j == 5 else C[j + 1]
+        return K, order, 1.0
+    for i in range(6):
+        j = (start - i) % 6
+        order[i] = j
+        K[i] = _mm(_mm(_rigid_inv(C[0]), T), _rigid_inv(C[6])) if j == 0 else _rigid_inv(C[j])
+    return K, order, -1.0
+
+
+@njit(cache=True)
+def _solve_split(
+    K: FloatArray,
+    P: FloatArray,
+    deltas: FloatArray,
+    grid: FloatArray,
+    basis_inv: FloatArray,
+    half2: FloatArray,
+    det_phi: FloatArray,
+    scan_cos: FloatArray,
+    scan_sin: FloatArray,
+    scan: FloatArray,
+    phis: FloatArray,
+    doubles: NDArray[np.bool_],
+) -> int:
+    """Candidate loop angles ``phis[k, 0..5]`` of one split; -1 if the split is degenerate."""
+    Kinv5 = _rigid_inv(K[5])
+    lE = np.ascontiguousarray(Kinv5[:3, 2])
+    pE = np.ascontiguousarray(Kinv5[:3, 3])
+    R = _rhs_coefficients(_rigid_inv(K[0]), lE, pE, grid, basis_inv)
+    Q = np.ascontiguousarray(R[:, 1:])
+    U, S, Vt = np.linalg.svd(Q)
+    if S[7] < 1e-9 * S[0]:
+        return -1
+    Pm = P.copy()
+    for q in range(14):
+        Pm[0, q, 0] -= R[q, 0]
+    N = np.ascontiguousarray(U[:, 8:].T)  # 6 x 14, N @ Q = 0
+    # Sig[h] = N @ Pm[h] @ half2 (monomials x3^i x4^j, i, j in 0..2)
+    Mh = np.zeros((3, 12, 12))
+    for h in range(3):
+        Sg = N @ np.ascontiguousarray(Pm[h]) @ half2
+        for r in range(6):
+            for m in range(9):
+                i = m // 3
+                j = m % 3
+                Mh[h, r, i * 3 + j] = Sg[r, m]
+                Mh[h, r + 6, (i + 1) * 3 + j] = Sg[r, m]
+    # Row scaling (does not move roots).
+    for r in range(12):
+        s = 0.0
+        for h in range(3):
+            for c in range(12):
+                s += Mh[h, r, c] * Mh[h, r, c]
+        if s == 0.0:
+            return -1
+        s = 1.0 / np.sqrt(s)
+        for h in range(3):
+            for c in range(12):
+                Mh[h, r, c] *= s
+    ndet = det_phi.shape[0]
+    dets = np.empty(ndet)
+    biggest = 0.0
+    for n in range(ndet):
+        A = Mh[0] + np.cos(det_phi[n]) * Mh[1] + np.sin(det_phi[n]) * Mh[2]
+        dets[n] = _det_lu(A)
+        if abs(dets[n]) > biggest:
+            biggest = abs(dets[n])
+    if biggest < 1e-12:
+        return -1  # determinant vanishes identically: degenerate split
+    a = np.zeros(9)
+    b = np.zeros(9)
+    for k in range(9):
+        sc = 0.0
+        ss = 0.0
+        for n in range(ndet):
+            sc += dets[n] * np.cos(k * det_phi[n])
+            ss += dets[n] * np.sin(k * det_phi[n])
+        f = 1.0 / ndet if k == 0 else 2.0 / ndet
+        a[k] = sc * f
+        b[k] = ss * f
+    roots = np.empty(phis.shape[0])
+    count = _trig_roots(a, b, scan_cos, scan_sin, scan, roots, doubles)
+    if count < 0:
+        return -1
+    # Pseudo-inverse of Q for the eliminated products.
+    pinvQ = np.zeros((8, 14))
+    for i in range(8):
+        for j in range(8):
+            if S[j] > 0.0:
+                for q in range(14):
+                    pinvQ[i, q] += Vt[j, i] * U[q, j] / S[j]
+    v45 = np.empty(9)
+    for c in range(count):
+        p2 = roots[c]
+        A = Mh[0] + np.cos(p2) * Mh[1] + np.sin(p2) * Mh[2]
+        w = _null_vector(A)
+        num = 0.0
+        dlo = 0.0
+        dhi = 0.0
+        for i in range(3):
+            for j in range(3):
+                num += w[i * 3 + j] * w[(i + 1) * 3 + j]
+                dlo += w[i * 3 + j] ** 2
+                dhi += w[(i + 1) * 3 + j] ** 2
+        p3 = _half_angle_from_ratio(num, dlo, dhi)
+        num = 0.0
+        dlo = 0.0
+        dhi = 0.0
+        for i in range(4):
+            for j in range(2):
+                num += w[i * 3 + j] * w[i * 3 + j + 1]
+                dlo += w[i * 3 + j] ** 2
+                dhi += w[i * 3 + j + 1] ** 2
+        p4 = _half_angle_from_ratio(num, dlo, dhi)
+        b2 = (1.0, np.cos(p2), np.sin(p2))
+        b3 = (1.0, np.cos(p3), np.sin(p3))
+        b4 = (1.0, np.cos(p4), np.sin(p4))
+        for i in range(3):
+            for j in range(3):
+                v45[i * 3 + j] = b3[i] * b4[j]
+        rhs = np.zeros(14)
+        for h in range(3):
+            rhs += b2[h] * (np.ascontiguousarray(Pm[h]) @ v45)
+        v = pinvQ @ rhs  # products of p0, p1 without the constant: index h0*3+h1-1
+        phis[c, 0] = np.arctan2(v[5], v[2])
+        phis[c, 1] = np.arctan2(v[1], v[0])
+        phis[c, 2] = p2 + deltas[0]
+        phis[c, 3] = p3 + deltas[1]
+        phis[c, 4] = p4 + deltas[2]
+        M = np.eye(4)
+        for i in range(5):
+            M = _mm(_mrz(M, phis[c, i]), K[i])
+        Z5 = _mm(_rigid_inv(M), _rigid_inv(K[5]))
+        phis[c, 5] = np.arctan2(Z5[1, 0], Z5[0, 0])
+    return count
+
+
+@njit(cache=True)
+def _solve_pose(
+    C: FloatArray,
+    P0: FloatArray,
+    T: FloatArray,
+    deltas: FloatArray,
+    splits: NDArray[np.int64],
+    grid: FloatArray,
+    basis_inv: FloatArray,
+    half2: FloatArray,
+    det_phi: FloatArray,
+    scan_cos: FloatArray,
+    scan_sin: FloatArray,
+    scan: FloatArray,
+    newton_iterations: int,
+    accept: float,
+    out_q: FloatArray,
+    out_res: FloatArray,
+    out_flags: NDArray[np.int64],
+) -> tuple[int, int]:
+    """Every solution of one pose ``T`` (lengths scaled); returns (count, split index or -1).
+
+    ``splits[k] = (forward, start)``; split 0 uses the per-arm left side ``P0``.
+    Flags per solution: bit 0 near-double root, bit 1 near-singular Jacobian.
+    """
+    split_out = -1
+    kept = 0
+    tries = 0
+    phis = np.zeros((_CAP, 6))
+    doubles = np.zeros(_CAP, dtype=np.bool_)
+    q = np.empty(6)
+    guess = np.empty(6)
+    for s in range(splits.shape[0]):
+        forward = splits[s, 0] == 1
+        K, order, sign = _loop_constants(C, T, forward, splits[s, 1])
+        if s == 0:
+            P = P0
+        else:
+            D = np.empty((4, 4, 4))
+            for i in range(4):
+                D[i] = K[i + 1]
+            P = lhs_coefficients(D, deltas, grid, basis_inv)
+        count = _solve_split(
+            K,
+            P,
+            deltas,
+            grid,
+            basis_inv,
+            half2,
+            det_phi,
+            scan_cos,
+            scan_sin,
+            scan,
+            phis,
+            doubles,
+        )
+        if count < 0:
+            continue
+        if split_out < 0:
+            split_out = s
+        tries += 1
+        suspicious = False
+        for c in range(count):
+            for i in range(6):
+                guess[order[i]] = sign * phis[c, i]
+            q[:] = guess
+            pos, rot, ratio = _refine(C, T, q, newton_iterations, guess, False)
+            if not (pos <= accept and rot <= accept):
+                suspicious = True
+                continue
+            flag = (1 if doubles[c] else 0) | (2 if ratio < 1e-6 else 0)
+            before = kept
+            kept, dup = _keep(q, pos, rot, flag, out_q, out_res, out_flags, kept)
+            if dup < 0 and not doubles[c]:
+                continue
+            if tries > 1 and dup >= 0 and before > 0:
+                continue  # a later split re-finding a known solution is expected
+            suspicious = True
+            # Two candidates met (or a near-double root): look for the partner by deflation.
+            known = out_q[dup if dup >= 0 else kept - 1].copy()
+            q[:] = guess
+            pos, rot, ratio = _refine(C, T, q, 4 * newton_iterations, known, True)
+            if pos <= accept and rot <= accept:
+                pos, rot, ratio = _refine(C, T, q, newton_iterations, known, False)
+                if pos <= accept and rot <= accept:
+                    kept, dup2 = _keep(
+                        q,
+                        pos,
+                        rot,
+                        1 | (2 if ratio < 1e-6 else 0),
+                        out_q,
+                        out_res,
+                        out_flags,
+                        kept,
+                    )
+                    if dup2 < 0:
+                        out_flags[dup if dup >= 0 else kept - 2] |= 1
+        # A general 6R has an even number of real solutions unless one is double: an odd count,
+        # a candidate that failed to converge or candidates that met send us to the next split.
+        if not suspicious and kept % 2 == 0:
+            break
+        if tries >= 3:
+            break
+    count_out = kept
+    return count_out, split_out
+
+
+@njit(cache=True)
+def _solve_serial(
+    C: FloatArray,
+    P0: FloatArray,
+    Ts: FloatArray,
+    deltas: FloatArray,
+    splits: NDArray[np.int64],
+    grid: FloatArray,
+    basis_inv: FloatArray,
+    half2: FloatArray,
+    det_phi: FloatArray,
+    scan_cos: FloatArray,
+    scan_sin: FloatArray,
+    scan: FloatArray,
+    newton_iterations: int,
+    accept: float,
+    out_q: FloatArray,
+    out_res: FloatArray,
+    out_flags: NDArray[np.int64],
+    out_count: NDArray[np.int64],
+    out_split: NDArray[np.int64],
+) -> None:
+    """Solve the poses one after another (small batches: no thread start-up)."""
+    for n in range(Ts.shape[0]):
+        out_count[n], out_split[n] = _solve_pose(
+            C,
+            P0,
+            Ts[n],
+            deltas,
+            splits,
+            grid,
+            basis_inv,
+            half2,
+            det_phi,
+            scan_cos,
+            scan_sin,
+            scan,
+            newton_iterations,
+            accept,
+            out_q[n],
+            out_res[n],
+            out_flags[n],
+        )
+
+
+@njit(cache=True, parallel=True)
+def _solve_parallel(
+    C: FloatArray,
+    P0: FloatArray,
+    Ts: FloatArray,
+    deltas: FloatArray,
+    splits: NDArray[np.int64],
+    grid: FloatArray,
+    basis_inv: FloatArray,
+    half2: FloatArray,
+    det_phi: FloatArray,
+    scan_cos: FloatArray,
+    scan_sin: FloatArray,
+    scan: FloatArray,
+    newton_iterations: int,
+    accept: float,
+    out_q: FloatArray,
+    out_res: FloatArray,
+    out_flags: NDArray[np.int64],
+    out_count: NDArray[np.int64],
+    out_split: NDArray[np.int64],
+) -> None:
+    """Solve the poses on all cores."""
+    for n in prange(Ts.shape[0]):
+        out_count[n], out_split[n] = _solve_pose(
+            C,
+            P0,
+            Ts[n],
+            deltas,
+            splits,
+            grid,
+            basis_inv,
+            half2,
+            det_phi,
+            scan_cos,
+            scan_sin,
+            scan,
+            newton_iterations,
+            accept,
+            out_q[n],
+            out_res[n],
+            out_flags[n],
+        )
+
+
+#: The twelve loop splits, (forward, start joint); the first is the classic Raghavan-Roth one.
+SPLITS = np.array(
+    [
+        (1, 0),
+        (0, 5),
+        (1, 1),
+        (1, 2),
+        (1, 3),
+        (1, 4),
+        (1, 5),
+        (0, 0),
+        (0, 1),
+        (0, 2),
+        (0, 3),
+        (0, 4),
+    ],
+    dtype=np.int64,
+)
+
+
+class General6RSolver:
+    """All IK solutions of one 6R arm; construct once per arm (about 1 ms), then solve poses.
+
+    >>> solver = General6RSolver(arm)            # doctest: +SKIP
+    >>> result = solver.solve(T_target)          # IKResult, every real solution
+    >>> batch = solver.solve_batch(Ts)           # list of IKResult, one per pose (compiled loop)
+    """
+
+    def __init__(self, arm: SerialArm, *, newton_iterations: int = 12, accept: float = 1e-8):
+        if arm.n_joints != 6 or any(j.kind is not JointKind.REVOLUTE for j in arm.joints):
+            raise InvalidInputError(
+                f"model {arm.name!r}: the general solver needs six revolute joints "
+                f"(got {arm.n_joints} joints: "
+                f"{''.join('R' if j.kind is JointKind.REVOLUTE else 'P' for j in arm.joints)})"
+            )
+        self.arm = arm
+        C = z_axis_chain(arm)
+        shifts = [np.linalg.norm(C[k, :3, 3]) for k in range(1, 6)]
+        shifts += [np.linalg.norm(C[0, :3, 3]), np.linalg.norm(C[6, :3, 3])]
+        nonzero = [s for s in shifts if s > 1e-12]
+        #: Length scale (model unit) that makes the arm's translations of order one.
+        self.length_scale = float(np.mean(nonzero)) if nonzero else 1.0
+        C[:, :3, 3] /= self.length_scale
+        self._C = np.ascontiguousarray(C)
+        self._deltas = DEFAULT_DELTAS.copy()
+        self._P0 = lhs_coefficients(np.ascontiguousarray(C[2:6]), self._deltas, _GRID, _BASIS_INV)
+        self.newton_iterations = newton_iterations
+        self.accept = accept
+
+    def _scaled(self, Ts: FloatArray) -> FloatArray:
+        T = np.array(Ts, dtype=np.float64, copy=True)
+        if T.ndim != 3 or T.shape[1:] != (4, 4) or not np.isfinite(T).all():
+            raise InvalidInputError("target poses must be finite 4x4 matrices")
+        R = T[:, :3, :3]
+        ortho = np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max()
+        if ortho > 1e-6 or np.abs(T[:, 3] - (0.0, 0.0, 0.0, 1.0)).max() > 1e-12:
+            raise InvalidInputError("target poses must be rigid transforms (orthonormal rotation)")
+        if ortho > 1e-13:  # printed to a few digits: use the nearest rotation
+            U, _, Vt = np.linalg.svd(R)
+            T[:, :3, :3] = U @ Vt
+        T[:, :3, 3] /= self.length_scale
+        return T
+
+    def solve_batch(self, Ts: FloatArray) -> list[IKResult]:
+        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit)."""
+        T = self._scaled(np.asarray(Ts, dtype=np.float64).reshape(-1, 4, 4))
+        N = T.shape[0]
+        q = np.zeros((N, _CAP, 6))
+        res = np.zeros((N, _CAP, 2))
+        flags = np.zeros((N, _CAP), dtype=np.int64)
+        count = np.zeros(N, dtype=np.int64)
+        split = np.zeros(N, dtype=np.int64)
+        kernel = _solve_parallel if N >= 64 else _solve_serial
+        kernel(
+            self._C,
+            self._P0,
+            T,
+            self._deltas,
+            SPLITS,
+            _GRID,
+            _BASIS_INV,
+            _HALF2,
+            _DET_PHI,
+            _SCAN_COS,
+            _SCAN_SIN,
+            _SCAN,
+            self.newton_iterations,
+            self.accept,
+            q,
+            res,
+            flags,
+            count,
+            split,
+        )
+        out = []
+        for n in range(N):
+            k = int(count[n])
+            if split[n] < 0:
+                out.append(
+                    IKResult.empty(
+                        6,
+                        "raghavan-roth",
+                        "elimination degenerate in all 12 splits (a positive-dimensional "
+                        "solution set, e.g. aligned joint axes at this pose)",
+                    )
+                )
+                continue
+            method = f"raghavan-roth (split {SPLITS[split[n]].tolist()})"
+            if k == 0:
+                out.append(IKResult.empty(6, method, "no real solution: the pose is out of reach"))
+                continue
+            order = np.lexsort(q[n, :k].T[::-1])
+            out.append(
+                IKResult(
+                    solutions=q[n, order],
+                    position_residual=res[n, order, 0] * self.length_scale,
+                    rotation_residual_rad=res[n, order, 1],
+                    near_double=(flags[n, order] & 1) > 0,
+                    near_singular=(flags[n, order] & 2) > 0,
+                    method=method,
+                )
+            )
+        return out
+
+    def solve(self, T: FloatArray) -> IKResult:
+        """All real solutions of one pose (4x4, world frame, model unit)."""
+        return self.solve_batch(np.asarray(T, dtype=np.float64)[None])[0]

@@ -1,0 +1,144 @@
+"""Numerical IK: Levenberg-Marquardt (damped least squares) from many seeds at once.
+
+Works for any serial arm (revolute and prismatic joints, redundant or not), for full poses or
+positions only, inside the joint limits. It finds the solutions its seeds lead to, so it is the
+fallback where no complete method applies (arms with other than six joints, degenerate
+eliminations), not a proof that no other solution exists.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.errors import InvalidInputError
+from armpath.ik.result import IKResult
+from armpath.kinematics import forward_frames
+from armpath.model.serial_arm import JointKind, SerialArm
+
+FloatArray = NDArray[np.float64]
+
+
+def _errors_and_jacobians(
+    arm: SerialArm, q: FloatArray, T: FloatArray, position_only: bool
+) -> tuple[FloatArray, FloatArray]:
+    frames = forward_frames(arm, q)
+    tool = frames[:, -1]
+    S, n = q.shape
+    J = np.zeros((S, 6, n))
+    p = tool[:, :3, 3]
+    for i, joint in enumerate(arm.joints):
+        z = frames[:, i + 1, :3, :3] @ joint.axis
+        if joint.kind is JointKind.PRISMATIC:
+            J[:, :3, i] = z
+        else:
+            J[:, :3, i] = np.cross(z, p - frames[:, i + 1, :3, 3])
+            J[:, 3:, i] = z
+    err = np.zeros((S, 6))
+    err[:, :3] = T[:3, 3] - p
+    if not position_only:
+        err[:, 3:] = 0.5 * np.sum(
+            np.cross(tool[:, :3, :3], T[:3, :3], axisa=1, axisb=0, axisc=1), axis=2
+        )
+    if position_only:
+        return err[:, :3], J[:, :3]
+    return err, J
+
+
+def solve_numerical(
+    arm: SerialArm,
+    T_target: FloatArray,
+    *,
+    position_only: bool = False,
+    seeds: int = 48,
+    rng_seed: int = 0,
+    initial: FloatArray | None = None,
+    max_iterations: int = 200,
+    tol: float = 1e-10,
+) -> IKResult:
+    """Solutions of one target found by LM from ``seeds`` random starts (plus ``initial``).
+
+    ``T_target`` is a 4x4 pose, or a 3-vector position when ``position_only``. Seeds are drawn
+    uniformly inside the joint limits (``[-pi, pi]`` or ``[-1000, 1000]`` model units where
+    unlimited) with ``rng_seed``. A seed has converged when its position error is below
+    ``tol`` times the arm's size and its rotation error below ``tol`` rad. Steps are projected
+    onto the joint limits.
+    """
+    n = arm.n_joints
+    if position_only:
+        p = np.asarray(T_target, dtype=np.float64).reshape(-1)
+        if p.shape != (3,) or not np.isfinite(p).all():
+            raise InvalidInputError("a position target needs three finite numbers")
+        T = np.eye(4)
+        T[:3, 3] = p
+    else:
+        T = np.asarray(T_target, dtype=np.float64)
+        if T.shape != (4, 4) or not np.isfinite(T).all():
+            raise InvalidInputError("a pose target must be a finite 4x4 matrix")
+    lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+    hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+    lo = np.where(prismatic & ~np.isfinite(arm.lower), -1000.0, lo)
+    hi = np.where(prismatic & ~np.isfinite(arm.upper), 1000.0, hi)
+    rng = np.random.default_rng(rng_seed)
+    starts = rng.uniform(lo, hi, size=(seeds, n))
+    if initial is not None:
+        starts = np.vstack([np.asarray(initial, dtype=np.float64).reshape(1, n), starts])
+    size = 1.0 + float(np.max(np.abs(forward_frames(arm, arm.home)[:, :3, 3])))
+    q = starts.copy()
+    lam = np.full(q.shape[0], 1e-2)
+    err, J = _errors_and_jacobians(arm, q, T, position_only)
+    w = np.ones(err.shape[1])
+    w[:3] = 1.0 / size  # position in units of the arm size, rotation in rad
+    cost = np.sum((err * w) ** 2, axis=1)
+    for _ in range(max_iterations):
+        Jw = J * w[None, :, None]
+        ew = err * w
+        JtJ = np.swapaxes(Jw, 1, 2) @ Jw
+        g = np.einsum("sji,sj->si", Jw, ew)
+        A = JtJ + lam[:, None, None] * np.eye(n)
+        dq = np.linalg.solve(A, g[..., None])[..., 0]
+        q_new = np.clip(q + dq, arm.lower, arm.upper)
+        err_new, J_new = _errors_and_jacobians(arm, q_new, T, position_only)
+        cost_new = np.sum((err_new * w) ** 2, axis=1)
+        better = cost_new < cost
+        q[better] = q_new[better]
+        err[better] = err_new[better]
+        J[better] = J_new[better]
+        cost[better] = cost_new[better]
+        lam = np.where(better, np.maximum(lam / 3.0, 1e-12), np.minimum(lam * 4.0, 1e8))
+        if np.all(cost < (tol * 1e-2) ** 2):
+            break
+    pos_err = np.linalg.norm(err[:, :3], axis=1)
+    rot_err = np.zeros(q.shape[0]) if position_only else np.linalg.norm(err[:, 3:], axis=1)
+    ok = (pos_err <= tol * size) & (rot_err <= tol)
+    method = "levenberg-marquardt" + (" (position only)" if position_only else "")
+    if not np.any(ok):
+        best = int(np.argmin(pos_err + size * rot_err))
+        return IKResult.empty(
+            n,
+            method,
+            f"no seed converged ({q.shape[0]} seeds): the closest reached "
+            f"{pos_err[best]:.4g} {arm.length_unit} and {np.degrees(rot_err[best]):.4g} deg "
+            "from the target",
+        )
+    sols: list[FloatArray] = []
+    res_p: list[float] = []
+    res_r: list[float] = []
+    for k in np.flatnonzero(ok):
+        cand = q[k].copy()
+        if any(np.all(np.abs(_angle_diff(cand - s, prismatic)) < 1e-6) for s in sols):
+            continue
+        sols.append(cand)
+        res_p.append(float(pos_err[k]))
+        res_r.append(float(rot_err[k]))
+    order = np.lexsort(np.array(sols).T[::-1])
+    S = np.array(sols)[order]
+    false = np.zeros(len(sols), dtype=bool)
+    return IKResult(S, np.array(res_p)[order], np.array(res_r)[order], false, false.copy(), method)
+
+
+def _angle_diff(d: FloatArray, prismatic: NDArray[np.bool_]) -> FloatArray:
+    out = d.copy()
+    out[~prismatic] = (out[~prismatic] + np.pi) % (2.0 * np.pi) - np.pi
+    return out

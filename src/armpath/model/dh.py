@@ -1,0 +1,278 @@
+"""Serial arms from Denavit-Hartenberg tables (standard and modified) and robot files.
+
+Conventions (lengths in the table's unit, converted to mm; angles converted to rad):
+
+* **standard** (Denavit-Hartenberg 1955, as in Spong / Corke's ``DHRobot``):
+  ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``, pose ``T = base A_1 ... A_n tool``.
+* **modified** (Craig): ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``; row ``i`` holds
+  ``alpha_{i-1}, a_{i-1}, d_i`` exactly as Craig's tables and Corke's ``RevoluteMDH`` do.
+
+A revolute row moves ``theta_i = q_i + offset`` (``d`` fixed); a prismatic row moves
+``d_i = d + offset + q_i`` with the fixed angle ``theta`` (default 0). Both map onto the URDF-like
+:class:`~armpath.model.serial_arm.SerialArm`, so kinematics, IK and collision code never see the
+table again.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armpath.errors import InvalidInputError
+from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
+
+FloatArray = NDArray[np.float64]
+
+CONVENTIONS = ("standard", "modified")
+_LENGTH_TO_MM = {"mm": 1.0, "m": 1000.0}
+
+
+@dataclass(frozen=True)
+class DHRow:
+    """One row of a D-H table, in mm and rad.
+
+    ``limits`` is ``(lower, upper)`` of the joint variable ``q`` (rad, or mm for prismatic);
+    ``theta`` is the fixed joint angle of a prismatic row (ignored for revolute rows).
+    """
+
+    a: float
+    alpha: float
+    d: float
+    offset: float = 0.0
+    kind: JointKind = JointKind.REVOLUTE
+    limits: tuple[float, float] = (-np.inf, np.inf)
+    theta: float = 0.0
+
+
+def _rot_x(angle: float) -> FloatArray:
+    c, s = np.cos(angle), np.sin(angle)
+    T = np.eye(4)
+    T[1:3, 1:3] = [[c, -s], [s, c]]
+    return T
+
+
+def _rot_z(angle: float) -> FloatArray:
+    c, s = np.cos(angle), np.sin(angle)
+    T = np.eye(4)
+    T[0:2, 0:2] = [[c, -s], [s, c]]
+    return T
+
+
+def _trans(x: float = 0.0, z: float = 0.0) -> FloatArray:
+    T = np.eye(4)
+    T[0, 3] = x
+    T[2, 3] = z
+    return T
+
+
+def _fixed_along_z(row: DHRow) -> FloatArray:
+    """The part of ``Rz(theta) Tz(d)`` that does not move: offset angle or fixed angle/length."""
+    if row.kind is JointKind.PRISMATIC:
+        return _rot_z(row.theta) @ _trans(z=row.d + row.offset)
+    return _trans(z=row.d) @ _rot_z(row.offset)
+
+
+def dh_arm(
+    rows: Sequence[DHRow],
+    convention: str = "standard",
+    *,
+    name: str = "dh-arm",
+    T_world_base: ArrayLike | None = None,
+    T_flange_tool: ArrayLike | None = None,
+    home: ArrayLike | None = None,
+    link_radius_mm: float = 0.0,
+    parameters: tuple[tuple[str, float], ...] = (),
+) -> SerialArm:
+    """Build a :class:`SerialArm` (lengths mm) from D-H rows in ``convention``.
+
+    Joint ``i``'s frame is placed on its axis (z) so that the chain reproduces the D-H product
+    exactly; landmarks are the base, every joint frame and the tool, and consecutive distinct
+    landmarks are joined by capsule links of radius ``link_radius_mm``.
+    """
+    if convention not in CONVENTIONS:
+        raise InvalidInputError(f"convention must be one of {CONVENTIONS}, got {convention!r}")
+    if not rows:
+        raise InvalidInputError("a D-H table needs at least one row")
+    joints = []
+    carry = np.eye(4)  # standard D-H: the previous row's Tx(a) Rx(alpha)
+    for i, row in enumerate(rows):
+        values = (row.a, row.alpha, row.d, row.offset, row.theta)
+        if not all(np.isfinite(v) for v in values):
+            raise InvalidInputError(f"D-H row {i + 1}: a, alpha, d, offset must be finite numbers")
+        if convention == "standard":
+            T_parent = carry @ _fixed_along_z(row)
+            carry = _trans(x=row.a) @ _rot_x(row.alpha)
+        else:
+            T_parent = _rot_x(row.alpha) @ _trans(x=row.a) @ _fixed_along_z(row)
+        joints.append(
+            Joint(
+                name=f"q{i + 1}",
+                T_parent_joint=T_parent,
+                axis=np.array([0.0, 0.0, 1.0]),
+                kind=row.kind,
+                limits=row.limits,
+            )
+        )
+    tool = np.eye(4) if T_flange_tool is None else np.asarray(T_flange_tool, dtype=np.float64)
+    if convention == "standard":
+        tool = carry @ tool
+    n = len(rows)
+    if home is None:
+        lo = np.array([r.limits[0] for r in rows])
+        hi = np.array([r.limits[1] for r in rows])
+        home_q = np.clip(np.zeros(n), lo, hi)
+    else:
+        home_q = np.asarray(home, dtype=np.float64)
+    landmarks = (Landmark("base", 0), *(Landmark(f"J{i + 1}", i + 1) for i in range(n)))
+    landmarks = (*landmarks, Landmark("tool", n + 1))
+    links = tuple(
+        Link(f"L{k}", k, k + 1, link_radius_mm, checked=k > 0) for k in range(len(landmarks) - 1)
+    )
+    return SerialArm(
+        name=name,
+        joints=tuple(joints),
+        T_flange_tool=tool,
+        landmarks=landmarks,
+        links=links,
+        home=home_q,
+        length_unit="mm",
+        T_world_base=np.eye(4) if T_world_base is None else np.asarray(T_world_base, dtype=float),
+        parameters=parameters,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Robot files
+# ---------------------------------------------------------------------------------------------
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InvalidInputError(f"{where} must be a number, got {value!r}")
+    if not np.isfinite(value):
+        raise InvalidInputError(f"{where} must be finite, got {value!r}")
+    return float(value)
+
+
+def _transform(value: Any, where: str, length_scale: float) -> FloatArray:
+    arr = np.asarray(value, dtype=np.float64) if isinstance(value, list) else None
+    if arr is None or arr.shape not in ((4, 4), (16,)) or not np.all(np.isfinite(arr)):
+        raise InvalidInputError(f"{where} must be a 4x4 matrix (nested or 16 numbers, row-major)")
+    T = arr.reshape(4, 4).copy()
+    T[:3, 3] *= length_scale
+    return T
+
+
+def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
+    """Build an arm from the JSON robot-file shape.
+
+    ``{"convention": "standard" | "modified", "units": {"length": "mm" | "m", "angle": "deg" |
+    "rad"}, "links": [{"a", "alpha", "d", "offset", "type": "revolute" | "prismatic", "limits":
+    [lo, hi], "theta"}, ...], "base": 4x4, "tool": 4x4, "name": str}``. Only ``links`` is
+    required; ``units`` default to mm and deg, ``convention`` to standard. Limits are in the
+    joint's unit (angle unit for revolute, length unit for prismatic); ``null`` means unlimited.
+    """
+    if not isinstance(doc, Mapping):
+        raise InvalidInputError("a robot file must hold a JSON object")
+    known = {"convention", "units", "links", "base", "tool", "name", "home"}
+    unknown = sorted(set(doc) - known)
+    if unknown:
+        raise InvalidInputError(f"robot file: unknown key(s) {unknown}; known: {sorted(known)}")
+    convention = doc.get("convention", "standard")
+    if convention not in CONVENTIONS:
+        raise InvalidInputError(f"robot file: convention must be one of {CONVENTIONS}")
+    units = doc.get("units", {})
+    if not isinstance(units, Mapping):
+        raise InvalidInputError('robot file: units must be an object like {"length": "mm"}')
+    length_unit = units.get("length", "mm")
+    angle_unit = units.get("angle", "deg")
+    if length_unit not in _LENGTH_TO_MM:
+        raise InvalidInputError(
+            f"robot file: units.length must be 'mm' or 'm', got {length_unit!r}"
+        )
+    if angle_unit not in ("deg", "rad"):
+        raise InvalidInputError(
+            f"robot file: units.angle must be 'deg' or 'rad', got {angle_unit!r}"
+        )
+    L = _LENGTH_TO_MM[length_unit]
+    A = np.pi / 180.0 if angle_unit == "deg" else 1.0
+    links = doc.get("links")
+    if not isinstance(links, list) or not links:
+        raise InvalidInputError("robot file: 'links' must be a non-empty list of D-H rows")
+    rows = []
+    row_keys = {"a", "alpha", "d", "offset", "type", "limits", "theta"}
+    for i, link in enumerate(links):
+        where = f"robot file: links[{i}]"
+        if not isinstance(link, Mapping):
+            raise InvalidInputError(f"{where} must be an object with a, alpha, d")
+        bad = sorted(set(link) - row_keys)
+        if bad:
+            raise InvalidInputError(f"{where}: unknown key(s) {bad}; known: {sorted(row_keys)}")
+        kind_name = link.get("type", "revolute")
+        if kind_name not in ("revolute", "prismatic"):
+            raise InvalidInputError(f"{where}.type must be 'revolute' or 'prismatic'")
+        kind = JointKind(kind_name)
+        q_scale = A if kind is JointKind.REVOLUTE else L
+        limits_raw = link.get("limits", [None, None])
+        if not isinstance(limits_raw, list) or len(limits_raw) != 2:
+            raise InvalidInputError(f"{where}.limits must be [lower, upper]")
+        lo = -np.inf if limits_raw[0] is None else _number(limits_raw[0], f"{where}.limits[0]")
+        hi = np.inf if limits_raw[1] is None else _number(limits_raw[1], f"{where}.limits[1]")
+        if lo > hi:
+            raise InvalidInputError(f"{where}.limits: lower {lo} exceeds upper {hi}")
+        rows.append(
+            DHRow(
+                a=_number(link.get("a", 0.0), f"{where}.a") * L,
+                alpha=_number(link.get("alpha", 0.0), f"{where}.alpha") * A,
+                d=_number(link.get("d", 0.0), f"{where}.d") * L,
+                offset=_number(link.get("offset", 0.0), f"{where}.offset") * q_scale,
+                kind=kind,
+                limits=(lo * q_scale, hi * q_scale),
+                theta=_number(link.get("theta", 0.0), f"{where}.theta") * A,
+            )
+        )
+    base = _transform(doc["base"], "robot file: base", L) if "base" in doc else None
+    tool = _transform(doc["tool"], "robot file: tool", L) if "tool" in doc else None
+    home = None
+    if "home" in doc:
+        raw = doc["home"]
+        if not isinstance(raw, list) or len(raw) != len(rows):
+            raise InvalidInputError(f"robot file: home must list {len(rows)} joint values")
+        home = [
+            _number(v, f"robot file: home[{i}]") * (A if r.kind is JointKind.REVOLUTE else L)
+            for i, (v, r) in enumerate(zip(raw, rows, strict=True))
+        ]
+    label = doc.get("name", name)
+    return dh_arm(
+        rows,
+        convention,
+        name=str(label),
+        T_world_base=base,
+        T_flange_tool=tool,
+        home=home,
+    )
+
+
+def load_robot_file(path: str | Path) -> SerialArm:
+    """Load a robot from a JSON D-H file (``.json``) or a URDF (``.urdf``); lengths become mm."""
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInputError(f"robot file {str(p)!r} does not exist")
+    suffix = p.suffix.lower()
+    if suffix == ".urdf":
+        from armpath.model.urdf import arm_from_urdf
+
+        return arm_from_urdf(p)
+    if suffix != ".json":
+        raise InvalidInputError(f"robot file {p.name!r}: expected a .json D-H file or a .urdf")
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InvalidInputError(f"robot file {p.name!r} is not valid JSON: {exc}") from exc
+    return robot_from_dict(doc, name=p.stem)

@@ -1,0 +1,99 @@
+"""Serial arms from URDF files, parsed by ``yourdfpy`` (optional extra ``armpath[urdf]``).
+
+The chain runs from the root link to the deepest leaf; it must not branch on the way. Fixed joints
+fold into the next joint's placement (or the tool), ``continuous`` joints are unlimited revolute
+joints, and URDF metres become mm.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from armpath.errors import InvalidInputError
+from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
+
+_M_TO_MM = 1000.0
+
+
+def arm_from_urdf(path: str | Path, tip_link: str | None = None) -> SerialArm:
+    """Load the serial chain of a URDF (root link to ``tip_link``, default the deepest leaf)."""
+    try:
+        import yourdfpy
+    except ImportError as exc:  # pragma: no cover - depends on the installed extras
+        raise InvalidInputError(
+            "reading URDF needs the optional dependency yourdfpy: pip install 'armpath[urdf]'"
+        ) from exc
+    p = Path(path)
+    try:
+        urdf = yourdfpy.URDF.load(str(p), load_meshes=False, build_scene_graph=False)
+    except Exception as exc:  # yourdfpy raises many types for malformed XML
+        raise InvalidInputError(f"URDF {p.name!r} could not be parsed: {exc}") from exc
+    joints_by_child = {j.child: j for j in urdf.robot.joints}
+    children: dict[str, list[str]] = {}
+    for j in urdf.robot.joints:
+        children.setdefault(j.parent, []).append(j.child)
+    roots = [lk.name for lk in urdf.robot.links if lk.name not in joints_by_child]
+    if len(roots) != 1:
+        raise InvalidInputError(f"URDF {p.name!r}: expected one root link, found {roots}")
+
+    def depth(link: str) -> int:
+        n = 0
+        while link in joints_by_child:
+            link = joints_by_child[link].parent
+            n += 1
+        return n
+
+    leaves = [lk.name for lk in urdf.robot.links if lk.name not in children]
+    if tip_link is None:
+        tip_link = max(leaves, key=depth)
+    elif tip_link not in {lk.name for lk in urdf.robot.links}:
+        raise InvalidInputError(f"URDF {p.name!r}: no link named {tip_link!r}")
+    path_joints = []
+    link = tip_link
+    while link in joints_by_child:
+        path_joints.append(joints_by_child[link])
+        link = joints_by_child[link].parent
+    path_joints.reverse()
+
+    joints: list[Joint] = []
+    carry = np.eye(4)
+    for uj in path_joints:
+        origin = np.eye(4) if uj.origin is None else np.array(uj.origin, dtype=np.float64)
+        origin[:3, 3] *= _M_TO_MM
+        if uj.type == "fixed":
+            carry = carry @ origin
+            continue
+        if uj.type not in ("revolute", "continuous", "prismatic"):
+            raise InvalidInputError(
+                f"URDF {p.name!r}: joint {uj.name!r} of type {uj.type!r} is not supported "
+                "(revolute, continuous, prismatic, fixed)"
+            )
+        kind = JointKind.PRISMATIC if uj.type == "prismatic" else JointKind.REVOLUTE
+        scale = _M_TO_MM if kind is JointKind.PRISMATIC else 1.0
+        lo, hi = -np.inf, np.inf
+        if uj.type != "continuous" and uj.limit is not None:
+            if uj.limit.lower is not None:
+                lo = float(uj.limit.lower) * scale
+            if uj.limit.upper is not None:
+                hi = float(uj.limit.upper) * scale
+        axis = np.array([1.0, 0.0, 0.0]) if uj.axis is None else np.array(uj.axis, dtype=float)
+        joints.append(Joint(uj.name, carry @ origin, axis, kind, (lo, hi)))
+        carry = np.eye(4)
+    if not joints:
+        raise InvalidInputError(f"URDF {p.name!r}: the chain to {tip_link!r} has no moving joint")
+    n = len(joints)
+    landmarks = (*(Landmark(j.name, i + 1) for i, j in enumerate(joints)), Landmark("tool", n + 1))
+    links = tuple(Link(f"L{k + 1}", k, k + 1) for k in range(len(landmarks) - 1))
+    lo_all = np.array([j.limits[0] for j in joints])
+    hi_all = np.array([j.limits[1] for j in joints])
+    return SerialArm(
+        name=urdf.robot.name or p.stem,
+        joints=tuple(joints),
+        T_flange_tool=carry,
+        landmarks=landmarks,
+        links=links,
+        home=np.clip(np.zeros(n), lo_all, hi_all),
+        length_unit="mm",
+    )
