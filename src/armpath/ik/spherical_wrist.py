@@ -52,6 +52,25 @@ def _motion(T: FloatArray, value: float, prismatic: bool) -> FloatArray:
 
 
 @njit(cache=True)
+def _mv(R: FloatArray, x: FloatArray) -> FloatArray:
+    """3x3 (any layout) times a 3-vector, without BLAS."""
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = R[i, 0] * x[0] + R[i, 1] * x[1] + R[i, 2] * x[2]
+    return out
+
+
+@njit(cache=True)
+def _m3(A: FloatArray, B: FloatArray) -> FloatArray:
+    """3x3 times 3x3 (any layout), without BLAS."""
+    out = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+    return out
+
+
+@njit(cache=True)
 def _pose_and_jacobian(
     C: FloatArray, prismatic: NDArray[np.bool_], q: FloatArray, T: FloatArray, err: FloatArray
 ) -> FloatArray:
@@ -118,7 +137,7 @@ def _v(
     from the point ``(0, 0, h)`` of axis 1 nearest to axis 2."""
     A = _mm(_motion(C[1], q2, prismatic[1]), C[2])
     A = _mm(_motion(A, q3, prismatic[2]), C[3])
-    out = A[:3, :3] @ c4 + A[:3, 3]
+    out = _mv(A[:3, :3], c4) + A[:3, 3]
     out[2] -= h
     return out
 
@@ -137,7 +156,7 @@ def _abc(
     for i in range(3):
         q2 = i * 2.0 * np.pi / 3.0
         v = _v(C, prismatic, q2, q3, c4, h)
-        f[i, 0] = v @ v - t @ t
+        f[i, 0] = np.sum(v * v) - np.sum(t * t)
         f[i, 1] = v[2] - t[2]
     # Exact inversion of the 3-point grid {0, 120, 240} deg for {1, cos, sin}.
     out = np.empty((2, 3))
@@ -244,10 +263,10 @@ def _solve_pose(
     R6 = C[6][:3, :3]
     for i in range(3):
         C6inv_p[i] = -(R6[0, i] * C[6][0, 3] + R6[1, i] * C[6][1, 3] + R6[2, i] * C[6][2, 3])
-    p_w = T[:3, :3] @ (R6.T @ c6 + C6inv_p) + T[:3, 3]
+    p_w = _mv(T[:3, :3], _mv(R6.T, c6) + C6inv_p) + T[:3, 3]
     # ... in the frame of joint 1 before its rotation.
     R0 = C[0][:3, :3]
-    t = R0.T @ (p_w - C[0][:3, 3])
+    t = _mv(R0.T, p_w - C[0][:3, 3])
     t[2] -= h
     roots = np.empty(_CAP)
     doubles = np.zeros(_CAP, dtype=np.bool_)
@@ -334,7 +353,7 @@ def _solve_pose(
         d = a1 * b2 - a2 * b1
         n1 = np.hypot(a1, b1)
         n2 = np.hypot(a2, b2)
-        size = 1.0 + t @ t
+        size = 1.0 + np.sum(t * t)
         if n1 > 1e-10 * size and n2 > 1e-10 * size and abs(d) > 1e-7 * n1 * n2:
             pairs[npairs, 0] = q3
             pairs[npairs, 1] = np.arctan2((c1 * a2 - c2 * a1) / d, (b1 * c2 - b2 * c1) / d)
@@ -372,7 +391,7 @@ def _solve_pose(
         A = _mm(_motion(A, q2, prismatic[1]), C[2])
         A = _mm(_motion(A, q3, prismatic[2]), C[3])
         # W = rotation of joints 4..6: Rz(q4) R4 Rz(q5) R5 Rz(q6) = A^T R_T R6^T
-        W = A[:3, :3].T @ T[:3, :3] @ R6.T
+        W = _m3(_m3(A[:3, :3].T, T[:3, :3]), R6.T)
         R4 = C[4][:3, :3]
         R5 = C[5][:3, :3]
         u = R5[:, 2]
@@ -397,11 +416,11 @@ def _solve_pose(
         for q4 in q4s:
             c, s = np.cos(q4), np.sin(q4)
             Rz4t = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-            y = R4.T @ Rz4t @ w
+            y = _mv(_m3(R4.T, Rz4t), w)
             q5 = np.arctan2(y[1], y[0]) - np.arctan2(u[1], u[0])
             c5, s5 = np.cos(q5), np.sin(q5)
             Rz5 = np.array([[c5, -s5, 0.0], [s5, c5, 0.0], [0.0, 0.0, 1.0]])
-            M = (Rz4t.T @ R4 @ Rz5 @ R5).T @ W
+            M = _m3(_m3(_m3(_m3(Rz4t.T, R4), Rz5), R5).T, W)
             q6 = np.arctan2(M[1, 0], M[0, 0])
             q[0], q[1], q[2], q[3], q[4], q[5] = q1, q2, q3, q4, q5, q6
             pos, rot, jr = _polish(C, prismatic, T, q, 2)

@@ -1,0 +1,367 @@
+"""Models from D-H tables / robot files, and inverse kinematics with every solution.
+
+Truth comes from ``independent_dh`` (textbook D-H products and a brute-force multi-start
+least-squares IK written without armpath code) and from the generating joint vectors.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from armpath.errors import InvalidInputError
+from armpath.ik import General6RSolver, SphericalWristSolver, solve_ik, solve_numerical
+from armpath.kinematics import tool_pose
+from armpath.model.catalog import BUILTIN_MODELS, resolve_model
+from armpath.model.dh import DHRow, dh_arm, load_robot_file, robot_from_dict
+from armpath.model.serial_arm import JointKind
+from independent_dh import brute_force_ik, dh_pose, pose_residual
+
+
+def _wrap(x):
+    return (x + np.pi) % (2 * np.pi) - np.pi
+
+
+def _random_table(rng, n=6):
+    a = rng.uniform(-500, 500, n)
+    d = rng.uniform(-500, 500, n)
+    alpha = rng.uniform(-np.pi, np.pi, n)
+    return a, alpha, d
+
+
+def _arm(a, alpha, d, convention="standard"):
+    rows = [DHRow(a=x, alpha=y, d=z) for x, y, z in zip(a, alpha, d, strict=True)]
+    return dh_arm(rows, convention)
+
+
+def _contains(solutions, q, prismatic=None, tol=1e-6):
+    if len(solutions) == 0:
+        return False
+    diff = np.asarray(solutions) - q
+    mask = np.ones(len(q), bool) if prismatic is None else ~np.asarray(prismatic)
+    diff[:, mask] = _wrap(diff[:, mask])
+    return bool(np.any(np.all(np.abs(diff) < tol, axis=1)))
+
+
+# ------------------------------------------------------------------------------------------
+# Models
+# ------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_dh_models_match_textbook_products(convention):
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        a, alpha, d = _random_table(rng)
+        offset = rng.uniform(-1, 1, 6)
+        prismatic = rng.random(6) < 0.3
+        rows = [
+            DHRow(
+                a=a[i],
+                alpha=alpha[i],
+                d=d[i],
+                offset=offset[i],
+                kind=JointKind.PRISMATIC if prismatic[i] else JointKind.REVOLUTE,
+            )
+            for i in range(6)
+        ]
+        arm = dh_arm(rows, convention)
+        q = rng.uniform(-np.pi, np.pi, 6)
+        q[prismatic] = rng.uniform(-300, 300, prismatic.sum())
+        truth = dh_pose(
+            a, alpha, d, q, modified=convention == "modified", prismatic=prismatic, offset=offset
+        )
+        assert np.allclose(tool_pose(arm, q), truth, atol=1e-9)
+
+
+def test_robot_file_units_are_converted(tmp_path):
+    rng = np.random.default_rng(2)
+    a, alpha, d = _random_table(rng)
+    links_mm = [
+        {"a": x, "alpha": float(np.degrees(y)), "d": z, "limits": [-170, 170]}
+        for x, y, z in zip(a, alpha, d, strict=True)
+    ]
+    links_m = [
+        {"a": x / 1000, "alpha": y, "d": z / 1000, "type": "revolute", "limits": [-2.967, 2.967]}
+        for x, y, z in zip(a, alpha, d, strict=True)
+    ]
+    (tmp_path / "mm.json").write_text(json.dumps({"convention": "standard", "links": links_mm}))
+    doc_m = {"convention": "standard", "links": links_m, "units": {"length": "m", "angle": "rad"}}
+    (tmp_path / "m.json").write_text(json.dumps(doc_m))
+    arm_mm = load_robot_file(tmp_path / "mm.json")
+    arm_m = resolve_model(str(tmp_path / "m.json"))
+    q = rng.uniform(-2, 2, 6)
+    truth = dh_pose(a, alpha, d, q)
+    assert np.allclose(tool_pose(arm_mm, q), truth, atol=1e-9)
+    assert np.allclose(tool_pose(arm_m, q), truth, atol=1e-9)
+    assert np.degrees(arm_mm.upper[0]) == pytest.approx(170)
+    assert arm_m.upper[0] == pytest.approx(2.967)
+
+
+@pytest.mark.parametrize(
+    ("doc", "message"),
+    [
+        ({"links": []}, "non-empty list"),
+        ({"convention": "craig", "links": [{"a": 1}]}, "convention must be one of"),
+        ({"links": [{"a": 1, "limits": [10, -10]}]}, "lower 10.0 exceeds upper"),
+        ({"links": [{"a": "x"}]}, "links[0].a must be a number"),
+        ({"links": [{"a": 1, "twist": 2}]}, "unknown key(s) ['twist']"),
+        ({"links": [{"a": 1}], "units": {"length": "inch"}}, "units.length must be 'mm' or 'm'"),
+        ({"links": [{"a": 1, "type": "spherical"}]}, "type must be 'revolute' or 'prismatic'"),
+    ],
+)
+def test_robot_file_errors_name_the_field(doc, message):
+    with pytest.raises(InvalidInputError) as info:
+        robot_from_dict(doc)
+    assert message in str(info.value)
+
+
+def _urdf_from_dh(a, alpha, d):
+    """A URDF whose joints reproduce a standard D-H table, with a fixed tool joint (metres)."""
+
+    def rpy(R):
+        return (
+            np.arctan2(R[2, 1], R[2, 2]),
+            np.arcsin(-np.clip(R[2, 0], -1, 1)),
+            np.arctan2(R[1, 0], R[0, 0]),
+        )
+
+    links = "".join(f'<link name="l{i}"/>' for i in range(8))
+    joints = []
+    prev = np.eye(4)
+    for i in range(6):
+        origin = prev @ np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, d[i]], [0, 0, 0, 1.0]])
+        xyz = " ".join(f"{v / 1000:.17g}" for v in origin[:3, 3])
+        r = " ".join(f"{v:.17g}" for v in rpy(origin[:3, :3]))
+        kind = "continuous" if i == 5 else "revolute"
+        limit = '<limit lower="-3" upper="3" effort="1" velocity="1"/>' if i < 5 else ""
+        joints.append(
+            f'<joint name="j{i + 1}" type="{kind}"><parent link="l{i}"/><child link="l{i + 1}"/>'
+            f'<origin xyz="{xyz}" rpy="{r}"/><axis xyz="0 0 1"/>{limit}</joint>'
+        )
+        ca, sa = np.cos(alpha[i]), np.sin(alpha[i])
+        prev = np.array([[1, 0, 0, a[i]], [0, ca, -sa, 0], [0, sa, ca, 0], [0, 0, 0, 1.0]])
+    xyz = " ".join(f"{v / 1000:.17g}" for v in prev[:3, 3])
+    r = " ".join(f"{v:.17g}" for v in rpy(prev[:3, :3]))
+    joints.append(
+        f'<joint name="tool" type="fixed"><parent link="l6"/><child link="l7"/>'
+        f'<origin xyz="{xyz}" rpy="{r}"/></joint>'
+    )
+    return f'<robot name="dhbot">{links}{"".join(joints)}</robot>'
+
+
+def test_urdf_chain_matches_dh(tmp_path):
+    rng = np.random.default_rng(3)
+    a, alpha, d = _random_table(rng)
+    path = tmp_path / "bot.urdf"
+    path.write_text(_urdf_from_dh(a, alpha, d))
+    arm = load_robot_file(path)
+    assert arm.n_joints == 6 and arm.name == "dhbot"
+    assert np.isinf(arm.upper[5]) and arm.upper[0] == pytest.approx(3.0)
+    for q in rng.uniform(-2.5, 2.5, (10, 6)):
+        assert np.allclose(tool_pose(arm, q), dh_pose(a, alpha, d, q), atol=1e-9)
+    # and the complete IK works on the URDF model directly
+    q = rng.uniform(-2.5, 2.5, 6)
+    result = solve_ik(arm, dh_pose(a, alpha, d, q))
+    assert _contains(result.solutions, q)
+
+
+# ------------------------------------------------------------------------------------------
+# General 6R: Raghavan-Roth elimination
+# ------------------------------------------------------------------------------------------
+
+
+def test_general_6r_recovers_the_generating_solution_in_random_arms():
+    """4000 random general arms and poses: the generating joint vector is found in >= 99.9 %
+    and every returned solution reproduces the pose (checked with the textbook D-H product)."""
+    rng = np.random.default_rng(20261122)
+    misses = 0
+    total = 0
+    counts = []
+    for _ in range(400):
+        a, alpha, d = _random_table(rng)
+        solver = General6RSolver(_arm(a, alpha, d))
+        Q = rng.uniform(-np.pi, np.pi, (10, 6))
+        targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
+        for q, target, result in zip(Q, targets, solver.solve_batch(targets), strict=True):
+            total += 1
+            counts.append(result.count)
+            misses += not _contains(result.solutions, q)
+            assert result.count <= 16
+            for s in result.solutions:
+                pos, rot = pose_residual(dh_pose(a, alpha, d, s), target)
+                assert pos < 1e-6 and rot < 1e-9
+    assert total == 4000
+    assert misses <= 4, f"generating solution missed in {misses} of {total}"
+    assert 2.0 < np.mean(counts) < 8.0
+
+
+def test_general_6r_finds_what_brute_force_finds():
+    """Multi-start least squares (scipy, 150 starts) finds no solution the elimination lacks."""
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        a, alpha, d = _random_table(rng)
+        q = rng.uniform(-np.pi, np.pi, 6)
+        target = dh_pose(a, alpha, d, q)
+        ours = General6RSolver(_arm(a, alpha, d)).solve(target)
+        brute = brute_force_ik(a, alpha, d, target, starts=150)
+        assert len(brute) >= 2
+        for s in brute:
+            assert _contains(ours.solutions, s, tol=1e-5)
+        assert ours.count >= len(brute)
+
+
+# ------------------------------------------------------------------------------------------
+# Closed form: spherical wrist (Pieper)
+# ------------------------------------------------------------------------------------------
+
+
+def test_spherical_wrist_closed_form_matches_the_general_solver():
+    """Random arms with a spherical wrist (a4 = a5 = d5 = 0, oblique twists): the closed form
+    recovers every generating vector and returns the same set as the elimination."""
+    rng = np.random.default_rng(11)
+    compared = 0
+    for _ in range(40):
+        a, alpha, d = _random_table(rng)
+        a[3] = a[4] = d[4] = 0.0
+        arm = _arm(a, alpha, d)
+        closed = SphericalWristSolver(arm)
+        general = General6RSolver(arm)
+        Q = rng.uniform(-np.pi, np.pi, (10, 6))
+        targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
+        for q, target, c, g in zip(
+            Q, targets, closed.solve_batch(targets), general.solve_batch(targets), strict=True
+        ):
+            assert _contains(c.solutions, q)
+            for s in c.solutions:
+                pos, rot = pose_residual(dh_pose(a, alpha, d, s), target)
+                assert pos < 1e-6 and rot < 1e-9
+            if g.count and not g.near_double.any() and not c.near_double.any():
+                compared += 1
+                assert c.count == g.count
+                for s in g.solutions:
+                    assert _contains(c.solutions, s, tol=1e-5)
+    assert compared > 300
+
+
+@pytest.mark.parametrize("name", ["seed", "puma560", "welder003"])
+def test_builtin_spherical_wrist_arms(name):
+    arm = BUILTIN_MODELS[name]()
+    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+    rng = np.random.default_rng(5)
+    Q = rng.uniform(-np.pi, np.pi, (500, 6))
+    Q[:, prismatic] = rng.uniform(0, 700, (500, prismatic.sum()))
+    solver = SphericalWristSolver(arm)
+    targets = tool_pose(arm, Q)
+    results = solver.solve_batch(targets)
+    for q, target, result in zip(Q, targets, results, strict=True):
+        assert _contains(result.solutions, q, prismatic)
+        assert np.allclose(tool_pose(arm, result.solutions), target, atol=1e-6)
+        assert result.count <= (4 if prismatic.any() else 8)
+    if name == "puma560":  # generic poses of a PUMA have 8 solutions
+        assert np.mean([r.count == 8 for r in results]) > 0.95
+
+
+def test_ur5_and_painter_through_the_elimination():
+    rng = np.random.default_rng(8)
+    for name in ("ur5", "painter004"):
+        arm = BUILTIN_MODELS[name]()
+        Q = rng.uniform(-np.pi, np.pi, (300, 6))
+        results = General6RSolver(arm).solve_batch(tool_pose(arm, Q))
+        found = np.mean([_contains(r.solutions, q) for q, r in zip(Q, results, strict=True)])
+        assert found >= 0.99, (name, found)
+
+
+# ------------------------------------------------------------------------------------------
+# Numerical solver and the CLI
+# ------------------------------------------------------------------------------------------
+
+
+def test_numerical_solver_redundant_arm_and_position_only():
+    rng = np.random.default_rng(9)
+    a, alpha, d = _random_table(rng, 7)
+    rows = [
+        DHRow(a=x, alpha=y, d=z, limits=(-3.0, 3.0)) for x, y, z in zip(a, alpha, d, strict=True)
+    ]
+    arm = dh_arm(rows)
+    q = rng.uniform(-2.5, 2.5, 7)
+    target = tool_pose(arm, q)
+    result = solve_numerical(arm, target, seeds=24)
+    assert result.count >= 1
+    for s in result.solutions:
+        pos, rot = pose_residual(tool_pose(arm, s), target)
+        assert pos < 1e-6 and rot < 1e-9
+        assert np.all(np.abs(s) <= 3.0 + 1e-12)
+    seed = BUILTIN_MODELS["seed"]()
+    goal = np.array([300.0, 100.0, 200.0])
+    pos_only = solve_ik(seed, goal, position_only=True, seeds=16)
+    assert pos_only.count >= 1 and pos_only.within_limits is not None
+    assert np.allclose(tool_pose(seed, pos_only.solutions)[:, :3, 3], goal, atol=1e-6)
+    far = solve_numerical(seed, np.array([5000.0, 0, 0]), position_only=True, seeds=4)
+    assert far.count == 0 and "closest reached" in far.reason
+
+
+def _armpath(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "armpath", *args], capture_output=True, text=True, timeout=600
+    )
+
+
+def test_cli_ik_on_a_robot_file(tmp_path):
+    rng = np.random.default_rng(12)
+    a, alpha, d = _random_table(rng)
+    doc = {
+        "convention": "standard",
+        "units": {"length": "mm", "angle": "rad"},
+        "links": [{"a": x, "alpha": y, "d": z} for x, y, z in zip(a, alpha, d, strict=True)],
+    }
+    path = tmp_path / "robot.json"
+    path.write_text(json.dumps(doc))
+    q = rng.uniform(-np.pi, np.pi, 6)
+    target = dh_pose(a, alpha, d, q)
+    proc = _armpath(
+        "ik",
+        "--model",
+        str(path),
+        "--pose",
+        " ".join(str(float(v)) for v in target.ravel()),
+        "--json",
+    )
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["units"]["angle"] == "deg" and out["count"] == len(out["solutions"])
+    sols = np.radians(np.array(out["solutions"]))
+    assert _contains(sols, q)
+    for s, r in zip(sols, out["residuals"], strict=True):
+        assert r["position_mm"] < 1e-6
+        assert pose_residual(dh_pose(a, alpha, d, s), target)[0] < 1e-6
+    fk = _armpath("fk", "--model", str(path), *map(str, np.degrees(q)), "--json")
+    assert np.allclose(json.loads(fk.stdout)["pose"], target, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["ik", "--model", "puma560", "--pose", "1 2 3"], "expected 16 numbers"),
+        (["ik", "--model", "puma560", "--xyz", "1", "2", "3", "--pose", "1"], "exactly one"),
+        (["ik", "--model", "nosuch", "--xyz", "1", "2", "3"], "unknown model 'nosuch'"),
+        (
+            ["ik", "--model", "puma560", "--pose", "2 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1"],
+            "not a rotation",
+        ),
+        (
+            ["ik", "--model", "puma560", "--pose", "1 0 0 9000 0 1 0 0 0 0 1 0 0 0 0 1"],
+            "no solution",
+        ),
+        (["fk", "--model", "puma560", "1", "2"], "expected 6 numbers"),
+    ],
+)
+def test_cli_ik_errors(args, message):
+    proc = _armpath(*args)
+    assert proc.returncode == 1
+    assert message in proc.stderr
+    assert proc.stderr.count("\n") == 1
