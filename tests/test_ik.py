@@ -365,3 +365,61 @@ def test_cli_ik_errors(args, message):
     assert proc.returncode == 1
     assert message in proc.stderr
     assert proc.stderr.count("\n") == 1
+
+
+# ------------------------------------------------------------------------------------------
+# Seed 004: the painting robot's example
+# ------------------------------------------------------------------------------------------
+
+#: The pose printed in seed 004 for (20, 30, 20, 25, 80, 0) deg (mm).
+PAPER_POSE = np.array(
+    [
+        [-0.0478066, -0.774265, 0.631053, 1450.49],
+        [0.0998169, 0.62491, 0.77429, 528.48],
+        [-0.993857, 0.100006, 0.04741, 1023.93],
+        [0, 0, 0, 1],
+    ]
+)
+#: Seed 004's table 1: the real solutions (deg), rows 2 and 4 inside the joint ranges.
+PAPER_TABLE = np.array(
+    [
+        [20.0212, 129.852, -181.088, 154.534, -74.0757, 8.56948],
+        [20.0, 30.0, 20.0, 25.0, 80.0, 0.0],
+        [16.1045, 130.806, -175.564, -67.8718, 69.7369, 130.717],
+        [16.0113, 31.0786, 13.1693, -106.549, -76.0736, -118.13],
+    ]
+)
+
+
+def _deg_match(solutions_rad, row_deg, tol_deg):
+    diff = (np.degrees(solutions_rad) - row_deg + 180.0) % 360.0 - 180.0
+    hits = np.flatnonzero(np.all(np.abs(diff) < tol_deg, axis=1))
+    return int(hits[0]) if hits.size else -1
+
+
+def test_seed004_painter_reproduces_the_papers_pose_and_table():
+    arm = BUILTIN_MODELS["painter004"]()
+    T = tool_pose(arm, np.radians(PAPER_TABLE[1]))
+    assert np.abs(T[:3, :3] - PAPER_POSE[:3, :3]).max() < 1e-6  # printed to 6 digits
+    assert np.abs(T[:3, 3] - PAPER_POSE[:3, 3]).max() < 0.01  # printed to 0.01 mm
+    result = solve_ik(arm, T)
+    assert result.count == 4
+    # the table agrees with the exact solutions to 0.0012 deg (its row 3 is the least precise)
+    matched = [_deg_match(result.solutions, row, 2e-3) for row in PAPER_TABLE]
+    assert sorted(matched) == [0, 1, 2, 3]
+    assert [bool(result.within_limits[k]) for k in matched] == [False, True, False, True]
+    # every table row is a solution of the same pose (to the table's printed digits)
+    for row in PAPER_TABLE:
+        assert np.abs(tool_pose(arm, np.radians(row))[:3, 3] - T[:3, 3]).max() < 0.05
+
+
+def test_cli_ik_on_the_papers_printed_pose():
+    pose = " ".join(f"{v:g}" for v in PAPER_POSE.ravel())
+    proc = _armpath("ik", "--model", "painter004", "--pose", pose, "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["count"] == 4 and out["units"]["angle"] == "deg"
+    sols = np.radians(np.array(out["solutions"]))
+    for row in PAPER_TABLE:  # the printed pose has 6 digits: solutions agree to ~0.005 deg
+        assert _deg_match(sols, row, 0.01) >= 0
+    assert max(r["position_mm"] for r in out["residuals"]) < 1e-6

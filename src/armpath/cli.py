@@ -17,6 +17,7 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
+from rich import box
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
@@ -297,7 +298,8 @@ def ik(
                 title=escape(
                     f"{arm.name}: {result.count} solution(s), {result.method}; angles deg"
                     + (f", {unit_note}" if unit_note else "")
-                )
+                ),
+                box=box.SIMPLE_HEAD,
             )
             table.add_column("#", justify="right")
             for i in range(arm.n_joints):
@@ -314,11 +316,11 @@ def ik(
                     notes.append("near-singular")
                 table.add_row(
                     str(k + 1),
-                    *(f"{v:.3f}" for v in s),
+                    *(f"{v:.4f}" for v in s),
                     f"{result.position_residual[k]:.0e}",
                     ", ".join(notes),
                 )
-            out_console.print(table)
+            Console(highlight=False, width=max(out_console.width, 120)).print(table)
         if result.count == 0:
             raise InvalidInputError(f"no solution ({result.method}): {result.reason}")
 

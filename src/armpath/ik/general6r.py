@@ -258,6 +258,57 @@ def _lu_solve(A: FloatArray, rhs: FloatArray) -> tuple[FloatArray, float]:
 
 
 @njit(cache=True)
+def _householder(A: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Householder QR of a tall matrix (overwritten): reflector vectors, their betas and R."""
+    m, n = A.shape
+    V = np.zeros((n, m))
+    beta = np.zeros(n)
+    for k in range(n):
+        normx = 0.0
+        for i in range(k, m):
+            normx += A[i, k] * A[i, k]
+        normx = np.sqrt(normx)
+        if normx == 0.0:
+            continue
+        alpha = -normx if A[k, k] >= 0.0 else normx
+        vn = 0.0
+        for i in range(k, m):
+            V[k, i] = A[i, k]
+        V[k, k] -= alpha
+        for i in range(k, m):
+            vn += V[k, i] * V[k, i]
+        if vn == 0.0:
+            continue
+        beta[k] = 2.0 / vn
+        for j in range(k, n):
+            w = 0.0
+            for i in range(k, m):
+                w += V[k, i] * A[i, j]
+            w *= beta[k]
+            for i in range(k, m):
+                A[i, j] -= w * V[k, i]
+    R = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i, n):
+            R[i, j] = A[i, j]
+    return V, beta, R
+
+
+@njit(cache=True)
+def _reflect(V: FloatArray, beta: FloatArray, x: FloatArray, transpose: bool) -> None:
+    """x <- H^T x (transpose) or H x, with H = H_0 H_1 ... H_{n-1} the Householder product."""
+    n, m = V.shape
+    for step in range(n):
+        k = step if transpose else n - 1 - step
+        w = 0.0
+        for i in range(m):
+            w += V[k, i] * x[i]
+        w *= beta[k]
+        for i in range(m):
+            x[i] -= w * V[k, i]
+
+
+@njit(cache=True)
 def _null_vector(A: FloatArray) -> FloatArray:
     """Approximate null vector of a (near-)singular square matrix by complete-pivoting LU."""
     n = A.shape[0]
@@ -650,13 +701,21 @@ def _solve_split(
     pE = np.ascontiguousarray(Kinv5[:3, 3])
     R = _rhs_coefficients(_rigid_inv(K[0]), lE, pE, grid, basis_inv)
     Q = np.ascontiguousarray(R[:, 1:])
-    U, S, Vt = np.linalg.svd(Q)
-    if S[7] < 1e-9 * S[0]:
-        return -1
+    Vh, beta, Rq = _householder(Q.copy())
+    dmin = np.inf
+    dmax = 0.0
+    for k in range(8):
+        dmin = min(dmin, abs(Rq[k, k]))
+        dmax = max(dmax, abs(Rq[k, k]))
+    if dmin < 1e-9 * dmax:
+        return -1  # the eight products of p0, p1 cannot be eliminated: degenerate split
     Pm = P.copy()
     for q in range(14):
         Pm[0, q, 0] -= R[q, 0]
-    N = np.ascontiguousarray(U[:, 8:].T)  # 6 x 14, N @ Q = 0
+    N = np.zeros((6, 14))  # rows span the left null space: N @ Q = 0
+    for j in range(6):
+        N[j, 8 + j] = 1.0
+        _reflect(Vh, beta, N[j], False)
     # Sig[h] = N @ Pm[h] @ half2 (monomials x3^i x4^j, i, j in 0..2)
     Mh = np.zeros((3, 12, 12))
     for h in range(3):
@@ -704,13 +763,6 @@ def _solve_split(
     count = _trig_roots(a, b, scan_cos, scan_sin, scan, roots, doubles)
     if count < 0:
         return -1
-    # Pseudo-inverse of Q for the eliminated products.
-    pinvQ = np.zeros((8, 14))
-    for i in range(8):
-        for j in range(8):
-            if S[j] > 0.0:
-                for q in range(14):
-                    pinvQ[i, q] += Vt[j, i] * U[q, j] / S[j]
     v45 = np.empty(9)
     for c in range(count):
         p2 = roots[c]
@@ -743,7 +795,14 @@ def _solve_split(
         rhs = np.zeros(14)
         for h in range(3):
             rhs += b2[h] * (np.ascontiguousarray(Pm[h]) @ v45)
-        v = pinvQ @ rhs  # products of p0, p1 without the constant: index h0*3+h1-1
+        # Least-squares products of p0, p1 (index h0 * 3 + h1 - 1): R v = (H^T rhs)[:8].
+        _reflect(Vh, beta, rhs, True)
+        v = np.empty(8)
+        for k in range(7, -1, -1):
+            acc = rhs[k]
+            for j in range(k + 1, 8):
+                acc -= Rq[k, j] * v[j]
+            v[k] = acc / Rq[k, k]
         phis[c, 0] = np.arctan2(v[5], v[2])
         phis[c, 1] = np.arctan2(v[1], v[0])
         phis[c, 2] = p2 + deltas[0]

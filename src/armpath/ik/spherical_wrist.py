@@ -111,15 +111,15 @@ def _polish(
 ) -> tuple[float, float, float]:
     """Newton steps on the full pose; (position error, rotation error, Jacobian ratio)."""
     err = np.empty(6)
+    J = _pose_and_jacobian(C, prismatic, q, T, err)
     for _ in range(steps):
-        J = _pose_and_jacobian(C, prismatic, q, T, err)
-        if np.sqrt(np.sum(err * err)) < 1e-14:
-            break
-        dq, det = _lu_solve(J, err.copy())
+        if np.sqrt(np.sum(err * err)) < 1e-13:
+            break  # closed-form candidates are usually exact already
+        dq, det = _lu_solve(J.copy(), err.copy())
         if det == 0.0:
             break
         q += dq
-    J = _pose_and_jacobian(C, prismatic, q, T, err)
+        J = _pose_and_jacobian(C, prismatic, q, T, err)
     norms = 1.0
     for i in range(6):
         norms *= max(np.sqrt(np.sum(J[:, i] * J[:, i])), 1e-300)
@@ -452,8 +452,41 @@ def _solve_pose(
     return kept
 
 
+@njit(cache=True)
+def _solve_serial(
+    C: FloatArray,
+    prismatic: NDArray[np.bool_],
+    c4: FloatArray,
+    h: float,
+    c6: FloatArray,
+    q3_range: FloatArray,
+    mode: int,
+    Ts: FloatArray,
+    accept: float,
+    out_q: FloatArray,
+    out_res: FloatArray,
+    out_flags: NDArray[np.int64],
+    out_count: NDArray[np.int64],
+) -> None:
+    for n in range(Ts.shape[0]):
+        out_count[n] = _solve_pose(
+            C,
+            prismatic,
+            c4,
+            h,
+            c6,
+            q3_range,
+            mode,
+            Ts[n],
+            accept,
+            out_q[n],
+            out_res[n],
+            out_flags[n],
+        )
+
+
 @njit(cache=True, parallel=True)
-def _solve_many(
+def _solve_parallel(
     C: FloatArray,
     prismatic: NDArray[np.bool_],
     c4: FloatArray,
@@ -590,7 +623,8 @@ class SphericalWristSolver:
         res = np.zeros((N, _CAP, 2))
         flags = np.zeros((N, _CAP), dtype=np.int64)
         count = np.zeros(N, dtype=np.int64)
-        _solve_many(
+        kernel = _solve_parallel if N >= 256 else _solve_serial
+        kernel(
             self._C,
             self._prismatic,
             self._c4,

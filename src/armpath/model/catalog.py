@@ -7,10 +7,9 @@ Every length is mm and every angle rad. Sources:
   exactly as the report's table (``a1 = 500 mm``, prismatic ``d3`` in [0, 700] mm, ``d6 = 200``
   mm to the tool tip).
 * ``painter004``: seed 004's painting robot, standard D-H with the paper's lengths (``d1 = 842,
-  a1 = 400, a2 = 800, a3 = 130, d4 = 774, d5 = 98, d6 = 63`` mm) and its oblique wrist twist
-  ``alpha5 = 50 deg``; the other twists are ``alpha1 = -90, alpha2 = 0, alpha3 = -90,
-  alpha4 = 90, alpha6 = 0`` deg (see ``docs/seed004.md`` for why and what the paper's table
-  gives).
+  a1 = 400, a2 = 800, a3 = 130, d4 = 774, d5 = 98, d6 = 63`` mm), twists ``-90, 0, -90, -50,
+  +50, 0`` deg and joint offsets ``0, -90, 0, -90, 0, 180`` deg: the one model found that
+  reproduces the paper's pose and its table 1 (``docs/seed004.md``).
 * ``puma560``: Corke's standard D-H PUMA 560 (lengths in mm) with its joint limits.
 * ``ur5``: Universal Robots UR5, the maker's standard D-H parameters, joints +-360 deg.
 """
@@ -57,12 +56,23 @@ def welder003() -> SerialArm:
 
 
 def painter004() -> SerialArm:
-    """Seed 004's painting robot (standard D-H, mm) with the oblique 50 deg wrist twist."""
-    rows = _rows(
-        a=[400.0, 800.0, 130.0, 0.0, 0.0, 0.0],
-        alpha_deg=[-90.0, 0.0, -90.0, 90.0, 50.0, 0.0],
-        d=[842.0, 0.0, 0.0, 774.0, 98.0, 63.0],
-    )
+    """Seed 004's painting robot (standard D-H, mm): the model that reproduces the paper.
+
+    Lengths as printed; twists -90, 0, -90, -50, +50, 0 deg (the printed alpha5 = 50 deg and an
+    opposite alpha4 = -50 deg, the oblique wrist of the paper's figure); joint offsets 0, -90, 0,
+    -90, 0, 180 deg between the paper's angles q and the D-H angles theta = q + offset; the
+    paper's joint ranges. With these, (20, 30, 20, 25, 80, 0) deg gives the printed pose and
+    table 1's four real solutions (``docs/seed004.md``).
+    """
+    D = _D
+    lengths = [(400.0, 842.0), (800.0, 0.0), (130.0, 0.0), (0.0, 774.0), (0.0, 98.0), (0.0, 63.0)]
+    twists = [-90.0, 0.0, -90.0, -50.0, 50.0, 0.0]
+    offsets = [0.0, -90.0, 0.0, -90.0, 0.0, 180.0]
+    ranges = [(-90, 90), (-30, 90), (-70, 70), (-300, 300), (-180, 180), (-460, 460)]
+    rows = [
+        DHRow(a=a, alpha=al * D, d=d, offset=off * D, limits=(lo * D, hi * D))
+        for (a, d), al, off, (lo, hi) in zip(lengths, twists, offsets, ranges, strict=True)
+    ]
     return dh_arm(rows, "standard", name="painter004")
 
 
