@@ -1013,6 +1013,45 @@ def _solve_parallel(
         )
 
 
+@njit(cache=True)
+def _rigid_error(T: FloatArray) -> float:
+    """Largest |R R^T - I| entry of each pose (inf if not finite or the last row is wrong)."""
+    worst = 0.0
+    for n in range(T.shape[0]):
+        for i in range(4):
+            for j in range(4):
+                if not np.isfinite(T[n, i, j]):
+                    return np.inf
+        if T[n, 3, 0] != 0.0 or T[n, 3, 1] != 0.0 or T[n, 3, 2] != 0.0 or T[n, 3, 3] != 1.0:
+            return np.inf
+        for i in range(3):
+            for j in range(3):
+                dot = T[n, i, 0] * T[n, j, 0] + T[n, i, 1] * T[n, j, 1] + T[n, i, 2] * T[n, j, 2]
+                worst = max(worst, abs(dot - (1.0 if i == j else 0.0)))
+    return worst
+
+
+def prepare_targets(Ts: FloatArray, length_scale: float) -> FloatArray:
+    """Validated copies of target poses ``(N, 4, 4)`` with lengths divided by ``length_scale``.
+
+    Rotations within 1e-6 of orthonormal (poses printed to a few digits) are replaced by the
+    nearest rotation; anything else is rejected with :class:`InvalidInputError`.
+    """
+    T = np.array(Ts, dtype=np.float64).reshape(-1, 4, 4) if np.size(Ts) % 16 == 0 else None
+    if T is None or T.shape[0] == 0:
+        raise InvalidInputError("target poses must be 4x4 matrices")
+    err = _rigid_error(T)
+    if not err <= 1e-6:
+        raise InvalidInputError(
+            "target poses must be finite rigid transforms (orthonormal rotation, last row 0 0 0 1)"
+        )
+    if err > 1e-13:
+        U, _, Vt = np.linalg.svd(T[:, :3, :3])
+        T[:, :3, :3] = U @ Vt
+    T[:, :3, 3] /= length_scale
+    return T
+
+
 #: The twelve loop splits, (forward, start joint); the first is the classic Raghavan-Roth one.
 SPLITS = np.array(
     [
@@ -1062,23 +1101,9 @@ class General6RSolver:
         self.newton_iterations = newton_iterations
         self.accept = accept
 
-    def _scaled(self, Ts: FloatArray) -> FloatArray:
-        T = np.array(Ts, dtype=np.float64, copy=True)
-        if T.ndim != 3 or T.shape[1:] != (4, 4) or not np.isfinite(T).all():
-            raise InvalidInputError("target poses must be finite 4x4 matrices")
-        R = T[:, :3, :3]
-        ortho = np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max()
-        if ortho > 1e-6 or np.abs(T[:, 3] - (0.0, 0.0, 0.0, 1.0)).max() > 1e-12:
-            raise InvalidInputError("target poses must be rigid transforms (orthonormal rotation)")
-        if ortho > 1e-13:  # printed to a few digits: use the nearest rotation
-            U, _, Vt = np.linalg.svd(R)
-            T[:, :3, :3] = U @ Vt
-        T[:, :3, 3] /= self.length_scale
-        return T
-
     def solve_batch(self, Ts: FloatArray) -> list[IKResult]:
         """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit)."""
-        T = self._scaled(np.asarray(Ts, dtype=np.float64).reshape(-1, 4, 4))
+        T = prepare_targets(Ts, self.length_scale)
         N = T.shape[0]
         q = np.zeros((N, _CAP, 6))
         res = np.zeros((N, _CAP, 2))

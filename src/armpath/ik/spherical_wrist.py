@@ -26,7 +26,16 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.ik.general6r import _SCAN, _SCAN_COS, _SCAN_SIN, _lu_solve, _mm, _trig_roots, _wrap
+from armpath.ik.general6r import (
+    _SCAN,
+    _SCAN_COS,
+    _SCAN_SIN,
+    _lu_solve,
+    _mm,
+    _trig_roots,
+    _wrap,
+    prepare_targets,
+)
 from armpath.ik.result import IKResult
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -614,10 +623,7 @@ class SphericalWristSolver:
             self._mode = 2
 
     def solve_batch(self, Ts: FloatArray) -> list[IKResult]:
-        T = np.array(Ts, dtype=np.float64).reshape(-1, 4, 4)
-        if not np.isfinite(T).all():
-            raise InvalidInputError("target poses must be finite 4x4 matrices")
-        T[:, :3, 3] /= self.length_scale
+        T = prepare_targets(Ts, self.length_scale)
         N = T.shape[0]
         q = np.zeros((N, _CAP, 6))
         res = np.zeros((N, _CAP, 2))
