@@ -14,7 +14,13 @@ import numpy as np
 import pytest
 
 from armpath.errors import InvalidInputError
-from armpath.ik import General6RSolver, SphericalWristSolver, solve_ik, solve_numerical
+from armpath.ik import (
+    General6RSolver,
+    SphericalWristSolver,
+    complete_solver,
+    solve_ik,
+    solve_numerical,
+)
 from armpath.kinematics import tool_pose
 from armpath.model.catalog import BUILTIN_MODELS, resolve_model
 from armpath.model.dh import DHRow, dh_arm, load_robot_file, robot_from_dict
@@ -423,3 +429,55 @@ def test_cli_ik_on_the_papers_printed_pose():
     for row in PAPER_TABLE:  # the printed pose has 6 digits: solutions agree to ~0.005 deg
         assert _deg_match(sols, row, 0.01) >= 0
     assert max(r["position_mm"] for r in out["residuals"]) < 1e-6
+
+
+def test_solution_sets_agree_with_eaik():
+    """EAIK (subproblem decomposition, an independent analytic solver) on the geometries it
+    supports: PUMA 560, UR5 and random spherical-wrist arms whose first axes meet or are
+    parallel. Every solution EAIK returns is one of ours, and the counts agree wherever EAIK
+    itself finds the generating vector."""
+    from eaik.IK_DH import DhRobot
+
+    rng = np.random.default_rng(13)
+    tables = [
+        (
+            [0, 431.8, 20.32, 0, 0, 0],
+            np.radians([90, 0, -90, 90, -90, 0]),
+            [0, 0, 150.05, 431.8, 0, 0],
+        ),
+        (
+            [0, -425, -392.25, 0, 0, 0],
+            np.radians([90, 0, 0, 90, -90, 0]),
+            [89.159, 0, 0, 109.15, 94.65, 82.3],
+        ),
+    ]
+    for k in range(6):  # spherical wrists on random positioning arms with axes 1, 2 meeting
+        a, alpha, d = _random_table(rng)  # or axes 2, 3 parallel (EAIK's decompositions)
+        a[3] = a[4] = d[4] = 0.0
+        alpha[3], alpha[4] = np.pi / 2, -np.pi / 2
+        if k % 2:
+            alpha[1] = 0.0
+        else:
+            a[0] = 0.0
+        tables.append((a, alpha, d))
+    compared = equal = peer_misses = 0
+    for a, alpha, d in tables:
+        a, alpha, d = (np.asarray(x, float) for x in (a, alpha, d))
+        peer = DhRobot(alpha, a, d)
+        assert peer.hasKnownDecomposition()
+        solver = complete_solver(_arm(a, alpha, d))  # closed form or elimination, as for users
+        Q = rng.uniform(-np.pi, np.pi, (40, 6))
+        targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
+        for q, target, ours in zip(Q, targets, solver.solve_batch(targets), strict=True):
+            sol = peer.IK(target)
+            theirs = np.asarray(sol.Q, float).reshape(-1, 6)[~np.asarray(sol.is_LS, bool)]
+            assert _contains(ours.solutions, q)
+            for s in theirs:
+                assert _contains(ours.solutions, s, tol=1e-5)
+            compared += 1
+            if not _contains(theirs, q, tol=1e-5):
+                peer_misses += 1
+                continue
+            equal += ours.count == len(theirs)
+    assert compared == 320 and peer_misses <= 16, peer_misses
+    assert equal >= 0.97 * (compared - peer_misses), (equal, compared, peer_misses)

@@ -746,7 +746,7 @@ def _solve_split(
         dets[n] = _det_lu(A)
         if abs(dets[n]) > biggest:
             biggest = abs(dets[n])
-    if biggest < 1e-12:
+    if biggest < 1e-24:  # identically zero (rounding leaves ~1e-33; regular splits >~1e-15)
         return -1  # determinant vanishes identically: degenerate split
     a = np.zeros(9)
     b = np.zeros(9)
