@@ -1,10 +1,8 @@
 """All-solutions inverse kinematics: ours (``complete_solver``) against peer libraries.
 
 Run with ``python benchmarks/bench_ik.py`` (``--quick`` for a cheap subset, ``--help`` for the
-knobs) in an environment with the peers installed::
-
-    pip install -e . ssik==8.2.0 "roboticstoolbox-python[ik]==1.5.0" EAIK==1.2.2 ik-geo==1.0.3 \\
-        py-ikgeo-kinematics==0.0.2 ikdh==1.2.0
+knobs) in an environment with the peers installed (``pip install -e ".[bench-ik]"``; the
+versions of the committed results are pinned in ``PIP_PINNED``).
 
 A peer that is not installed is skipped (a row says so). In one run, on the same arms (PUMA 560,
 UR5 and random general 6R arms, standard D-H in mm) and the same poses (FK of random joint
@@ -36,9 +34,10 @@ from report import table
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "benchmarks" / "results" / "ik.md"
 LIBS = tuple(peers.ADAPTERS)
-PIP = (
-    'pip install -e . ssik==8.2.0 "roboticstoolbox-python[ik]==1.5.0" EAIK==1.2.2 '
-    "ik-geo==1.0.3 py-ikgeo-kinematics==0.0.2 ikdh==1.2.0"
+PIP_EXTRA = 'pip install -e ".[bench-ik]"'
+PIP_PINNED = (
+    'pip install -e . ssik==8.2.0 "roboticstoolbox-python[ik]==1.5.0" EAIK==1.2.2 ik-geo==1.0.3 '
+    "py-ikgeo-kinematics==0.0.2 ikdh==1.2.0"
 )
 PACKAGES = (
     "numpy",
@@ -328,7 +327,7 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
         "--quick",
         action="store_true",
         help="2 random arms, 50 poses, no rtb analytic_ik (minutes of symbolic set-up), no ssik "
-        "or rtb on general arms, LM on PUMA/UR5 with 10 poses",
+        "or rtb on general arms, LM on PUMA/UR5 with 10 poses, no compile probe",
     )
     ap.add_argument("--no-compile-probe", action="store_true", help="skip the cold-numba probe")
     ap.add_argument("--json", type=Path, default=None, help="also write the scores as JSON")
@@ -343,6 +342,7 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
         args.ssik_random = args.rtb_random = args.lm_random = 0
         args.lm_poses = min(args.lm_poses, 10)
         peers = [p for p in peers if p != "rtb_analytic"]
+        args.no_compile_probe = True
     args.peers = ["ours", *(p for p in LIBS if p in peers and p != "ours")]
     return args
 
@@ -351,6 +351,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parse(argv)
     t_run = time.perf_counter()
     load0 = os.getloadavg()
+    versions = report.versions(PACKAGES)  # the code measured is the code at the start
     arms = peers.test_arms(args.random)
     arm_dh = dict(arms)
     installed = {lib: peers.ADAPTERS[lib].installed() for lib in args.peers}
@@ -409,7 +410,6 @@ def main(argv: list[str] | None = None) -> int:
         if any(r["lib"] == lib and r["arm"] in rand_names and "sols" in r for r in recs)
     ]
     loads = [x for r in recs for x in r.get("load", [])]
-    versions = report.versions(PACKAGES)
     now = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     cpu = platform.machine()
     try:
@@ -430,7 +430,8 @@ def main(argv: list[str] | None = None) -> int:
     md = [
         "# Inverse kinematics: ours (`complete_solver`) vs peer all-solutions IK libraries",
         "",
-        f"Reproduce: `{PIP}`, then `python benchmarks/bench_ik.py` (about half an hour, most of "
+        f"Reproduce: `{PIP_EXTRA}` (this run's versions: `{PIP_PINNED}`), then "
+        "`python benchmarks/bench_ik.py` (about half an hour, most of "
         "it symbolic set-up of ssik and rtb on one general arm; `--quick` takes a few minutes, "
         "`--help` lists the knobs). Peers that are not installed are skipped.",
         "",
@@ -525,8 +526,7 @@ def main(argv: list[str] | None = None) -> int:
         md += [
             "### Random arms one by one",
             "",
-            "Cells: generating q found / poses · mean #sol · CPU median per call [us]. The mean "
-            "counts of the complete solvers agree arm by arm.",
+            "Cells: generating q found / poses · mean #sol · CPU median per call [us].",
             "",
             table(
                 ["arm", *(peers.ADAPTERS[lib].label for lib in rand_libs)],

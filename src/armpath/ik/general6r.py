@@ -521,51 +521,73 @@ def _trig_roots(
 
 
 @njit(cache=True)
-def _chain_pose(C: FloatArray, q: FloatArray) -> FloatArray:
-    T = C[0].copy()
-    for i in range(6):
-        T = _mm(_mrz(T, q[i]), C[i + 1])
-    out: FloatArray = T
-    return out
+def fk_error_jacobian(
+    C: FloatArray,
+    prismatic: NDArray[np.bool_],
+    q: FloatArray,
+    T: FloatArray,
+    err: FloatArray,
+    J: FloatArray,
+) -> None:
+    """Pose error ``[position; rotation vector]`` of FK(q) to ``T`` into ``err`` and the
+    geometric Jacobian into ``J`` (6 x n), for the chain ``C0 Z(q1) C1 ... Z(qn) Cn``.
 
-
-@njit(cache=True)
-def _pose_error(C: FloatArray, q: FloatArray, T: FloatArray, err: FloatArray) -> FloatArray:
-    """Pose error [position; rotation vector] of FK(q) to T, and the 6x6 geometric Jacobian."""
-    J = np.empty((6, 6))
-    frames = np.empty((6, 4, 4))
+    Allocation-light: it is the innermost loop of every complete solver's Newton polish.
+    """
+    n = q.shape[0]
     A = C[0].copy()
-    for i in range(6):
-        A = _mrz(A, q[i])
-        frames[i] = A
-        A = _mm(A, C[i + 1])
-    p = A[:3, 3]
-    for i in range(6):
-        z = frames[i][:3, 2]
-        o = frames[i][:3, 3]
-        r = p - o
-        J[0, i] = z[1] * r[2] - z[2] * r[1]
-        J[1, i] = z[2] * r[0] - z[0] * r[2]
-        J[2, i] = z[0] * r[1] - z[1] * r[0]
-        J[3, i] = z[0]
-        J[4, i] = z[1]
-        J[5, i] = z[2]
-    for k in range(3):
-        err[k] = T[k, 3] - A[k, 3]
-    # Rotation error: 0.5 * sum_k cross(R_k, Rt_k) over the columns (exact to first order).
+    B = np.empty((4, 4))
+    for i in range(n):
+        for r in range(3):
+            J[3 + r, i] = A[r, 2]  # axis, kept here until the position is known
+        v = q[i]
+        if prismatic[i]:
+            for r in range(3):
+                A[r, 3] += A[r, 2] * v
+        else:
+            c, sn = np.cos(v), np.sin(v)
+            for r in range(3):
+                a0 = A[r, 0]
+                a1 = A[r, 1]
+                A[r, 0] = a0 * c + a1 * sn
+                A[r, 1] = -a0 * sn + a1 * c
+        for r in range(3):
+            J[r, i] = A[r, 3]  # joint origin, likewise
+        K = C[i + 1]
+        for r in range(3):
+            for k in range(4):
+                B[r, k] = A[r, 0] * K[0, k] + A[r, 1] * K[1, k] + A[r, 2] * K[2, k]
+            B[r, 3] += A[r, 3]
+        for r in range(3):
+            for k in range(4):
+                A[r, k] = B[r, k]
+    px, py, pz = A[0, 3], A[1, 3], A[2, 3]
+    for i in range(n):
+        zx, zy, zz = J[3, i], J[4, i], J[5, i]
+        if prismatic[i]:
+            J[0, i], J[1, i], J[2, i] = zx, zy, zz
+            J[3, i] = J[4, i] = J[5, i] = 0.0
+            continue
+        rx, ry, rz = px - J[0, i], py - J[1, i], pz - J[2, i]
+        J[0, i] = zy * rz - zz * ry
+        J[1, i] = zz * rx - zx * rz
+        J[2, i] = zx * ry - zy * rx
+    err[0] = T[0, 3] - px
+    err[1] = T[1, 3] - py
+    err[2] = T[2, 3] - pz
     wx = 0.0
     wy = 0.0
     wz = 0.0
-    for k in range(3):
-        a0, a1, a2 = A[0, k], A[1, k], A[2, k]
-        t0, t1, t2 = T[0, k], T[1, k], T[2, k]
-        wx += a1 * t2 - a2 * t1
-        wy += a2 * t0 - a0 * t2
-        wz += a0 * t1 - a1 * t0
+    for k in range(3):  # 0.5 * sum_k cross(R_k, Rt_k) over the columns (exact to first order)
+        wx += A[1, k] * T[2, k] - A[2, k] * T[1, k]
+        wy += A[2, k] * T[0, k] - A[0, k] * T[2, k]
+        wz += A[0, k] * T[1, k] - A[1, k] * T[0, k]
     err[3] = 0.5 * wx
     err[4] = 0.5 * wy
     err[5] = 0.5 * wz
-    return J
+
+
+_ALL_REVOLUTE = np.zeros(6, dtype=np.bool_)
 
 
 @njit(cache=True)
@@ -584,15 +606,16 @@ def _refine(
     known one, which is how a near-double pair is split.
     """
     err = np.empty(6)
+    J = np.empty((6, 6))
     ratio = 0.0
     previous = np.inf
     for _ in range(iterations):
-        J = _pose_error(C, q, T, err)
+        fk_error_jacobian(C, _ALL_REVOLUTE, q, T, err, J)
         size = np.sqrt(np.sum(err * err))
         if size < 1e-14 or (size < 1e-11 and size > 0.25 * previous):
             break  # converged, or stalled at rounding level
         previous = size
-        dq, det = _lu_solve(J, err.copy())
+        dq, det = _lu_solve(J.copy(), err.copy())
         if det == 0.0:
             break
         if deflate:
@@ -611,7 +634,7 @@ def _refine(
         q += dq
         if norm < 1e-14:
             break
-    J = _pose_error(C, q, T, err)
+    fk_error_jacobian(C, _ALL_REVOLUTE, q, T, err, J)
     norms = 1.0
     for i in range(6):
         norms *= np.sqrt(np.sum(J[:, i] * J[:, i]))

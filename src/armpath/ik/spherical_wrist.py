@@ -34,6 +34,7 @@ from armpath.ik.general6r import (
     _mm,
     _trig_roots,
     _wrap,
+    fk_error_jacobian,
     prepare_targets,
 )
 from armpath.ik.result import IKResult
@@ -80,47 +81,13 @@ def _m3(A: FloatArray, B: FloatArray) -> FloatArray:
 
 
 @njit(cache=True)
-def _pose_and_jacobian(
-    C: FloatArray, prismatic: NDArray[np.bool_], q: FloatArray, T: FloatArray, err: FloatArray
-) -> FloatArray:
-    n = q.shape[0]
-    J = np.zeros((6, n))
-    origins = np.empty((n, 3))
-    axes = np.empty((n, 3))
-    A = C[0].copy()
-    for i in range(n):
-        axes[i] = A[:3, 2]
-        A = _motion(A, q[i], prismatic[i])
-        origins[i] = A[:3, 3]
-        A = _mm(A, C[i + 1])
-    for i in range(n):
-        z = axes[i]
-        if prismatic[i]:
-            J[0, i], J[1, i], J[2, i] = z[0], z[1], z[2]
-            continue
-        r = A[:3, 3] - origins[i]
-        J[0, i] = z[1] * r[2] - z[2] * r[1]
-        J[1, i] = z[2] * r[0] - z[0] * r[2]
-        J[2, i] = z[0] * r[1] - z[1] * r[0]
-        J[3, i], J[4, i], J[5, i] = z[0], z[1], z[2]
-    for k in range(3):
-        err[k] = T[k, 3] - A[k, 3]
-    w = np.zeros(3)
-    for k in range(3):
-        w[0] += A[1, k] * T[2, k] - A[2, k] * T[1, k]
-        w[1] += A[2, k] * T[0, k] - A[0, k] * T[2, k]
-        w[2] += A[0, k] * T[1, k] - A[1, k] * T[0, k]
-    err[3:] = 0.5 * w
-    return J
-
-
-@njit(cache=True)
 def _polish(
     C: FloatArray, prismatic: NDArray[np.bool_], T: FloatArray, q: FloatArray, steps: int
 ) -> tuple[float, float, float]:
     """Newton steps on the full pose; (position error, rotation error, Jacobian ratio)."""
     err = np.empty(6)
-    J = _pose_and_jacobian(C, prismatic, q, T, err)
+    J = np.empty((6, 6))
+    fk_error_jacobian(C, prismatic, q, T, err, J)
     for _ in range(steps):
         if np.sqrt(np.sum(err * err)) < 1e-13:
             break  # closed-form candidates are usually exact already
@@ -128,7 +95,7 @@ def _polish(
         if det == 0.0:
             break
         q += dq
-        J = _pose_and_jacobian(C, prismatic, q, T, err)
+        fk_error_jacobian(C, prismatic, q, T, err, J)
     norms = 1.0
     for i in range(6):
         norms *= max(np.sqrt(np.sum(J[:, i] * J[:, i])), 1e-300)
