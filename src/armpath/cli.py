@@ -269,7 +269,7 @@ def ik(
             result = solve_ik(arm, target, position_only=True, seeds=seeds)
         units = _joint_units(arm)
         sols = _to_display(arm, result.solutions)
-        inside = result.within_limits if result.within_limits is not None else []
+        inside: Any = result.within_limits if result.within_limits is not None else []
         doc = {
             "model": arm.name,
             "method": result.method,

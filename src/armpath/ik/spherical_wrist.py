@@ -392,8 +392,8 @@ def _solve_pose(
         for q4 in q4s:
             c, s = np.cos(q4), np.sin(q4)
             Rz4t = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-            y = _mv(_m3(R4.T, Rz4t), w)
-            q5 = np.arctan2(y[1], y[0]) - np.arctan2(u[1], u[0])
+            yw = _mv(_m3(R4.T, Rz4t), w)
+            q5 = np.arctan2(yw[1], yw[0]) - np.arctan2(u[1], u[0])
             c5, s5 = np.cos(q5), np.sin(q5)
             Rz5 = np.array([[c5, -s5, 0.0], [s5, c5, 0.0], [0.0, 0.0, 1.0]])
             M = _m3(_m3(_m3(_m3(Rz4t.T, R4), Rz5), R5).T, W)
