@@ -36,7 +36,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.ik.result import IKResult
+from armpath.ik.result import IKResult, chain_length_scale, solved_poses
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -1112,11 +1112,8 @@ class General6RSolver:
             )
         self.arm = arm
         C = z_axis_chain(arm)
-        shifts = [np.linalg.norm(C[k, :3, 3]) for k in range(1, 6)]
-        shifts += [np.linalg.norm(C[0, :3, 3]), np.linalg.norm(C[6, :3, 3])]
-        nonzero = [s for s in shifts if s > 1e-12]
         #: Length scale (model unit) that makes the arm's translations of order one.
-        self.length_scale = float(np.mean(nonzero)) if nonzero else 1.0
+        self.length_scale = chain_length_scale(C)
         C[:, :3, 3] /= self.length_scale
         self._C = np.ascontiguousarray(C)
         self._deltas = DEFAULT_DELTAS.copy()
@@ -1155,35 +1152,18 @@ class General6RSolver:
             count,
             split,
         )
-        out = []
-        for n in range(N):
-            k = int(count[n])
-            if split[n] < 0:
-                out.append(
-                    IKResult.empty(
-                        6,
-                        "raghavan-roth",
-                        "elimination degenerate in all 12 splits (a positive-dimensional "
-                        "solution set, e.g. aligned joint axes at this pose)",
-                    )
-                )
-                continue
-            method = f"raghavan-roth (split {SPLITS[split[n]].tolist()})"
-            if k == 0:
-                out.append(IKResult.empty(6, method, "no real solution: the pose is out of reach"))
-                continue
-            order = np.lexsort(q[n, :k].T[::-1])
-            out.append(
-                IKResult(
-                    solutions=q[n, order],
-                    position_residual=res[n, order, 0] * self.length_scale,
-                    rotation_residual_rad=res[n, order, 1],
-                    near_double=(flags[n, order] & 1) > 0,
-                    near_singular=(flags[n, order] & 2) > 0,
-                    method=method,
-                )
-            )
-        return out
+        degenerate = (
+            "elimination degenerate in all 12 splits (a positive-dimensional solution set, "
+            "e.g. aligned joint axes at this pose)"
+        )
+        method = [
+            f"raghavan-roth (split {SPLITS[k].tolist()})" if k >= 0 else "raghavan-roth"
+            for k in split
+        ]
+        reason = [
+            degenerate if k < 0 else "no real solution: the pose is out of reach" for k in split
+        ]
+        return solved_poses(q, res, flags, count, self.length_scale, method, reason)
 
     def solve(self, T: FloatArray) -> IKResult:
         """All real solutions of one pose (4x4, world frame, model unit)."""

@@ -49,3 +49,47 @@ class IKResult:
         return IKResult(
             np.zeros((0, n_joints)), z, z, z.astype(bool), z.astype(bool), method, reason
         )
+
+
+def solved_poses(
+    q: FloatArray,
+    residuals: FloatArray,
+    flags: NDArray[np.int64],
+    count: NDArray[np.int64],
+    length_scale: float,
+    method: list[str],
+    reason: list[str],
+) -> list[IKResult]:
+    """One :class:`IKResult` per pose from a compiled solver's padded output arrays.
+
+    ``q`` ``(N, cap, n)`` joint values in the model's units, ``residuals`` ``(N, cap, 2)``
+    scaled position and rotation residuals, ``flags`` bit 0 near-double, bit 1 near-singular;
+    ``method[i]`` and (for poses without a solution) ``reason[i]`` per pose. Solutions are sorted.
+    """
+    out = []
+    n_joints = q.shape[2]
+    for i in range(q.shape[0]):
+        k = int(count[i])
+        if k == 0:
+            out.append(IKResult.empty(n_joints, method[i], reason[i]))
+            continue
+        order = np.lexsort(q[i, :k].T[::-1])
+        out.append(
+            IKResult(
+                solutions=q[i, order],
+                position_residual=residuals[i, order, 0] * length_scale,
+                rotation_residual_rad=residuals[i, order, 1],
+                near_double=(flags[i, order] & 1) > 0,
+                near_singular=(flags[i, order] & 2) > 0,
+                method=method[i],
+            )
+        )
+    return out
+
+
+def chain_length_scale(C: FloatArray) -> float:
+    """Mean length of the non-zero translations of a chain's constants (model unit): dividing by
+    it makes every length of the arm of order one for the compiled solvers."""
+    shifts = [float(np.linalg.norm(T[:3, 3])) for T in C]
+    nonzero = [s for s in shifts if s > 1e-12]
+    return float(np.mean(nonzero)) if nonzero else 1.0

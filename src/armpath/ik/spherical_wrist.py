@@ -37,7 +37,7 @@ from armpath.ik.general6r import (
     fk_error_jacobian,
     prepare_targets,
 )
-from armpath.ik.result import IKResult
+from armpath.ik.result import IKResult, chain_length_scale, solved_poses
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -544,8 +544,7 @@ class SphericalWristSolver:
         self.arm = arm
         C = z_axis_chain(arm)
         shifts = [float(np.linalg.norm(C[k, :3, 3])) for k in range(7)]
-        nonzero = [s for s in shifts if s > 1e-12]
-        self.length_scale = float(np.mean(nonzero)) if nonzero else 1.0
+        self.length_scale = chain_length_scale(C)
         C[:, :3, 3] /= self.length_scale
         self._C = np.ascontiguousarray(C)
         self._prismatic = np.array([k is JointKind.PRISMATIC for k in kinds])
@@ -613,24 +612,15 @@ class SphericalWristSolver:
             count,
         )
         q[:, :, self._prismatic] *= self.length_scale
-        out = []
-        for n in range(N):
-            k = int(count[n])
-            if k == 0:
-                out.append(IKResult.empty(6, "spherical-wrist", "no real solution: out of reach"))
-                continue
-            order = np.lexsort(q[n, :k].T[::-1])
-            out.append(
-                IKResult(
-                    solutions=q[n, order],
-                    position_residual=res[n, order, 0] * self.length_scale,
-                    rotation_residual_rad=res[n, order, 1],
-                    near_double=(flags[n, order] & 1) > 0,
-                    near_singular=(flags[n, order] & 2) > 0,
-                    method="spherical-wrist",
-                )
-            )
-        return out
+        return solved_poses(
+            q,
+            res,
+            flags,
+            count,
+            self.length_scale,
+            ["spherical-wrist"] * N,
+            ["no real solution: the pose is out of reach"] * N,
+        )
 
     def solve(self, T: FloatArray) -> IKResult:
         return self.solve_batch(np.asarray(T, dtype=np.float64)[None])[0]
