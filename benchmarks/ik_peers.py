@@ -421,8 +421,8 @@ class SSIK(Adapter):
         module = f"bench_{arm_name}_ik"
         path = out / f"{module}.py"
         self.emit(kb=arm.kinbody, plan=arm.dispatch_plan, module_name=module, output_path=path)
-        if arm.solver_name == "ikgeo.general_6r":
-            self.native.bake_rr_tensor_npz(arm.kinbody, str(out / f"{module}_rr.npz"))
+        if arm.solver_name == "ikgeo.general_6r":  # the native sidecar: <stem without _ik>_rr.npz
+            self.native.bake_rr_tensor_npz(arm.kinbody, str(out / f"bench_{arm_name}_rr.npz"))
         spec = importlib.util.spec_from_file_location(module, path)
         mod = importlib.util.module_from_spec(spec)
         sys.modules[module] = mod
@@ -542,7 +542,9 @@ def measure(
     warnings.simplefilter("ignore")
     rec: dict[str, Any] = {"lib": lib, "arm": arm_name, "load": [os.getloadavg()[0]]}
     A = ADAPTERS[lib](opts)
+    t = time.perf_counter()
     A.load()
+    rec["load_s"] = time.perf_counter() - t
     c, t = time.process_time(), time.perf_counter()
     try:
         rec["info"] = A.setup(arm_name, dh)
