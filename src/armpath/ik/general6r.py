@@ -188,6 +188,16 @@ def _rhs_coefficients(
 
 
 @njit(cache=True)
+def _pencil_at(Mh: FloatArray, phi: float, out: FloatArray) -> None:
+    """``out = Mh[0] + cos(phi) Mh[1] + sin(phi) Mh[2]`` without temporaries."""
+    c, s = np.cos(phi), np.sin(phi)
+    n = out.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = Mh[0, i, j] + c * Mh[1, i, j] + s * Mh[2, i, j]
+
+
+@njit(cache=True)
 def _det_lu(A: FloatArray) -> float:
     """Determinant by LU with partial pivoting (A is overwritten)."""
     n = A.shape[0]
@@ -764,9 +774,10 @@ def _solve_split(
     ndet = det_phi.shape[0]
     dets = np.empty(ndet)
     biggest = 0.0
+    work = np.empty((12, 12))
     for n in range(ndet):
-        A = Mh[0] + np.cos(det_phi[n]) * Mh[1] + np.sin(det_phi[n]) * Mh[2]
-        dets[n] = _det_lu(A)
+        _pencil_at(Mh, det_phi[n], work)
+        dets[n] = _det_lu(work)
         if abs(dets[n]) > biggest:
             biggest = abs(dets[n])
     if biggest < 1e-24:  # identically zero (rounding leaves ~1e-33; regular splits >~1e-15)
@@ -789,7 +800,8 @@ def _solve_split(
     v45 = np.empty(9)
     for c in range(count):
         p2 = roots[c]
-        A = Mh[0] + np.cos(p2) * Mh[1] + np.sin(p2) * Mh[2]
+        A = np.empty((12, 12))
+        _pencil_at(Mh, p2, A)
         w = _null_vector(A)
         num = 0.0
         dlo = 0.0
@@ -842,7 +854,8 @@ def _solve_split(
 @njit(cache=True)
 def _solve_pose(
     C: FloatArray,
-    P0: FloatArray,
+    P_cached: FloatArray,
+    cached: NDArray[np.bool_],
     T: FloatArray,
     deltas: FloatArray,
     splits: NDArray[np.int64],
@@ -861,7 +874,8 @@ def _solve_pose(
 ) -> tuple[int, int]:
     """Every solution of one pose ``T`` (lengths scaled); returns (count, split index or -1).
 
-    ``splits[k] = (forward, start)``; split 0 uses the per-arm left side ``P0``.
+    ``splits[k] = (forward, start)``; ``P_cached[k]`` is the per-arm left side of split ``k``
+    where ``cached[k]`` (its left side does not involve the pose).
     Flags per solution: bit 0 near-double root, bit 1 near-singular Jacobian.
     """
     split_out = -1
@@ -874,8 +888,8 @@ def _solve_pose(
     for s in range(splits.shape[0]):
         forward = splits[s, 0] == 1
         K, order, sign = _loop_constants(C, T, forward, splits[s, 1])
-        if s == 0:
-            P = P0
+        if cached[s]:
+            P = P_cached[s]
         else:
             D = np.empty((4, 4, 4))
             for i in range(4):
@@ -949,7 +963,8 @@ def _solve_pose(
 @njit(cache=True)
 def _solve_serial(
     C: FloatArray,
-    P0: FloatArray,
+    P_cached: FloatArray,
+    cached: NDArray[np.bool_],
     Ts: FloatArray,
     deltas: FloatArray,
     splits: NDArray[np.int64],
@@ -972,7 +987,8 @@ def _solve_serial(
     for n in range(Ts.shape[0]):
         out_count[n], out_split[n] = _solve_pose(
             C,
-            P0,
+            P_cached,
+            cached,
             Ts[n],
             deltas,
             splits,
@@ -994,7 +1010,8 @@ def _solve_serial(
 @njit(cache=True, parallel=True)
 def _solve_parallel(
     C: FloatArray,
-    P0: FloatArray,
+    P_cached: FloatArray,
+    cached: NDArray[np.bool_],
     Ts: FloatArray,
     deltas: FloatArray,
     splits: NDArray[np.int64],
@@ -1017,7 +1034,8 @@ def _solve_parallel(
     for n in prange(Ts.shape[0]):
         out_count[n], out_split[n] = _solve_pose(
             C,
-            P0,
+            P_cached,
+            cached,
             Ts[n],
             deltas,
             splits,
@@ -1117,7 +1135,19 @@ class General6RSolver:
         C[:, :3, 3] /= self.length_scale
         self._C = np.ascontiguousarray(C)
         self._deltas = DEFAULT_DELTAS.copy()
-        self._P0 = lhs_coefficients(np.ascontiguousarray(C[2:6]), self._deltas, _GRID, _BASIS_INV)
+        # Left sides that do not involve the pose are measured once per arm: a split's loop
+        # holds the pose next to joint 6 (forward) or joint 1 (reversed); it must not sit
+        # between the three left-side joints.
+        self._P_cached = np.zeros((len(SPLITS), 3, 14, 9))
+        self._cached = np.zeros(len(SPLITS), dtype=np.bool_)
+        for k, (forward, start) in enumerate(SPLITS):
+            K, order, _ = _loop_constants(self._C, np.eye(4), bool(forward), int(start))
+            pose_slot = int(np.flatnonzero(order == (5 if forward else 0))[0])
+            if pose_slot in (0, 5):
+                self._P_cached[k] = lhs_coefficients(
+                    np.ascontiguousarray(K[1:5]), self._deltas, _GRID, _BASIS_INV
+                )
+                self._cached[k] = True
         self.newton_iterations = newton_iterations
         self.accept = accept
 
@@ -1133,7 +1163,8 @@ class General6RSolver:
         kernel = _solve_parallel if N >= 64 else _solve_serial
         kernel(
             self._C,
-            self._P0,
+            self._P_cached,
+            self._cached,
             T,
             self._deltas,
             SPLITS,
