@@ -182,17 +182,7 @@ def position_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
     Column ``i`` is ``z_i x (p_tool - p_i)`` for a revolute joint (length unit per rad) and ``z_i``
     for a prismatic one, with ``z_i`` the joint axis in the world.
     """
-    frames = forward_frames(arm, q)
-    p_tool = frames[..., -1, :3, 3]
-    cols = []
-    for i, joint in enumerate(arm.joints):
-        F = frames[..., i + 1, :, :]
-        z = F[..., :3, :3] @ joint.axis
-        if joint.kind is JointKind.PRISMATIC:
-            cols.append(z)
-        else:
-            cols.append(np.cross(z, p_tool - F[..., :3, 3]))
-    return np.stack(cols, axis=-1)
+    return jacobian_from_frames(arm, forward_frames(arm, q))[..., :3, :]
 
 
 def displacement_bounds(arm: SerialArm) -> FloatArray:
@@ -226,12 +216,15 @@ def geometric_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
     Rows 0-2: tool-point velocity (length unit per rad, or unitless for prismatic joints); rows
     3-5: angular velocity (rad per rad, zero for prismatic joints), all in the world frame.
     """
-    frames = forward_frames(arm, q)
+    return jacobian_from_frames(arm, forward_frames(arm, q))
+
+
+def jacobian_from_frames(arm: SerialArm, frames: FloatArray) -> FloatArray:
+    """:func:`geometric_jacobian` from frames already computed by :func:`forward_frames`."""
     p_tool = frames[..., -1, :3, 3]
     J = np.zeros((*frames.shape[:-3], 6, arm.n_joints))
     for i, joint in enumerate(arm.joints):
-        R = frames[..., i + 1, :3, :3]
-        z = R @ joint.axis
+        z = frames[..., i + 1, :3, :3] @ joint.axis
         if joint.kind is JointKind.PRISMATIC:
             J[..., :3, i] = z
         else:

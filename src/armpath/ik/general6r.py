@@ -37,13 +37,11 @@ from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.ik.result import IKResult, chain_length_scale, solved_poses
-from armpath.kinematics import z_axis_chain
+from armpath.kinematics import _affine_mul, z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
 
-#: Most real solutions a general 6R arm can have.
-MAX_SOLUTIONS = 16
 _CAP = 24  # candidate slots (a few spare for near-double pairs before de-duplication)
 _GRID: FloatArray = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
 _BASIS = np.stack([np.ones(3), np.cos(_GRID), np.sin(_GRID)], axis=1)  # [sample, harmonic]
@@ -60,10 +58,6 @@ _DET_PHI: FloatArray = np.asarray(np.arange(_N_DET) * (2.0 * np.pi / _N_DET), dt
 #: Fixed offsets of the three left-side angles (rad): keep half-angle monomials finite.
 DEFAULT_DELTAS = np.array([0.7123, -1.1379, 0.4518])
 
-# Status codes of one pose
-OK = 0
-DEGENERATE = 1  # every split degenerate (positive-dimensional set or special geometry)
-
 
 @njit(cache=True)
 def _rz(phi: float) -> FloatArray:
@@ -78,16 +72,9 @@ def _rz(phi: float) -> FloatArray:
 
 @njit(cache=True)
 def _mm(A: FloatArray, B: FloatArray) -> FloatArray:
-    """Product of two 4x4 rigid transforms (explicit loops: no BLAS call overhead)."""
+    """Product of two 4x4 rigid transforms as a new array (:func:`_affine_mul`)."""
     out = np.empty((4, 4))
-    for i in range(3):
-        for j in range(4):
-            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
-        out[i, 3] += A[i, 3]
-    out[3, 0] = 0.0
-    out[3, 1] = 0.0
-    out[3, 2] = 0.0
-    out[3, 3] = 1.0
+    _affine_mul(A, B, out)
     return out
 
 
@@ -563,14 +550,8 @@ def fk_error_jacobian(
                 A[r, 1] = -a0 * sn + a1 * c
         for r in range(3):
             J[r, i] = A[r, 3]  # joint origin, likewise
-        K = C[i + 1]
-        for r in range(3):
-            for k in range(4):
-                B[r, k] = A[r, 0] * K[0, k] + A[r, 1] * K[1, k] + A[r, 2] * K[2, k]
-            B[r, 3] += A[r, 3]
-        for r in range(3):
-            for k in range(4):
-                A[r, k] = B[r, k]
+        _affine_mul(A, C[i + 1], B)
+        A, B = B, A
     px, py, pz = A[0, 3], A[1, 3], A[2, 3]
     for i in range(n):
         zx, zy, zz = J[3, i], J[4, i], J[5, i]

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.ik.result import IKResult
-from armpath.kinematics import forward_frames
+from armpath.kinematics import forward_frames, jacobian_from_frames
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -24,16 +24,9 @@ def _errors_and_jacobians(
 ) -> tuple[FloatArray, FloatArray]:
     frames = forward_frames(arm, q)
     tool = frames[:, -1]
-    S, n = q.shape
-    J = np.zeros((S, 6, n))
+    J = jacobian_from_frames(arm, frames)
     p = tool[:, :3, 3]
-    for i, joint in enumerate(arm.joints):
-        z = frames[:, i + 1, :3, :3] @ joint.axis
-        if joint.kind is JointKind.PRISMATIC:
-            J[:, :3, i] = z
-        else:
-            J[:, :3, i] = np.cross(z, p - frames[:, i + 1, :3, 3])
-            J[:, 3:, i] = z
+    S = q.shape[0]
     err = np.zeros((S, 6))
     err[:, :3] = T[:3, 3] - p
     if not position_only:

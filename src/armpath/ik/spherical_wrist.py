@@ -43,7 +43,6 @@ from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
 _CAP = 16
-_G5 = np.arange(9) * (2.0 * np.pi / 9)  # samples for the degree-4 trigonometric polynomial
 
 
 @njit(cache=True)
