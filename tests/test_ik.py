@@ -17,6 +17,7 @@ from armpath.errors import InvalidInputError
 from armpath.ik import (
     General6RSolver,
     SphericalWristSolver,
+    ThreeParallelSolver,
     complete_solver,
     solve_ik,
     solve_numerical,
@@ -272,6 +273,66 @@ def test_builtin_spherical_wrist_arms(name):
         assert np.mean([r.count == 8 for r in results]) > 0.95
 
 
+def test_three_parallel_closed_form_matches_the_general_solver():
+    """Random arms with axes 2-4 parallel and axes 5, 6 meeting, and the reverse (axes 3-5
+    parallel, 1, 2 meeting): the closed form recovers every generating vector, reproduces the
+    pose by the textbook product and returns the same set as the elimination."""
+    rng = np.random.default_rng(12)
+    compared = 0
+    for k in range(24):
+        a, alpha, d = _random_table(rng)
+        if k % 2:
+            alpha[2] = alpha[3] = a[0] = 0.0
+        else:
+            alpha[1] = alpha[2] = a[4] = 0.0
+        if k % 3 == 0:  # right-angle twists elsewhere, as in real arms
+            alpha[[0, 4] if k % 2 else [0, 3]] = np.pi / 2
+        arm = _arm(a, alpha, d)
+        closed = complete_solver(arm)
+        assert isinstance(closed, ThreeParallelSolver)
+        assert closed.layout == ("reversed" if k % 2 else "forward")
+        general = General6RSolver(arm)
+        Q = rng.uniform(-np.pi, np.pi, (20, 6))
+        targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
+        for q, target, c, g in zip(
+            Q, targets, closed.solve_batch(targets), general.solve_batch(targets), strict=True
+        ):
+            assert _contains(c.solutions, q)
+            for s in c.solutions:
+                pos, rot = pose_residual(dh_pose(a, alpha, d, s), target)
+                assert pos < 1e-6 and rot < 1e-9
+            if g.count and not g.near_double.any() and not c.near_double.any():
+                compared += 1
+                assert c.count == g.count
+                for s in g.solutions:
+                    assert _contains(c.solutions, s, tol=1e-5)
+    assert compared > 400
+
+
+@pytest.mark.parametrize("name", ["puma560", "ur5", "painter004"])
+def test_batch_arrays_match_single_calls(name):
+    """``solve_batch`` returns padded arrays (NaN past each pose's count) whose per-pose views
+    equal what ``solve`` returns for that pose alone."""
+    arm = BUILTIN_MODELS[name]()
+    solver = complete_solver(arm)
+    Q = np.random.default_rng(4).uniform(-np.pi, np.pi, (12, 6))
+    targets = tool_pose(arm, Q)
+    batch = solver.solve_batch(targets)
+    assert len(batch) == 12 and batch.solutions.shape[0] == 12
+    for i in range(12):
+        k = int(batch.counts[i])
+        assert 0 < k <= batch.solutions.shape[1]
+        assert np.isnan(batch.solutions[i, k:]).all() and np.isfinite(batch.solutions[i, :k]).all()
+        single = solver.solve(targets[i])
+        assert single.count == k and single.method == batch[i].method
+        assert np.array_equal(single.solutions, batch[i].solutions)
+        assert np.array_equal(single.position_residual, batch[i].position_residual)
+        assert np.all(np.diff(single.solutions[:, 0]) >= 0)  # sorted
+    assert len(batch[2:5]) == 3 and batch[-1].count == batch.counts[-1]
+    with pytest.raises(IndexError):
+        batch[12]
+
+
 def test_ur5_and_painter_through_the_elimination():
     rng = np.random.default_rng(8)
     for name in ("ur5", "painter004"):
@@ -433,8 +494,8 @@ def test_cli_ik_on_the_papers_printed_pose():
 
 def test_solution_sets_agree_with_eaik():
     """EAIK (subproblem decomposition, an independent analytic solver) on the geometries it
-    supports: PUMA 560, UR5 and random spherical-wrist arms whose first axes meet or are
-    parallel. Every solution EAIK returns is one of ours, and the counts agree wherever EAIK
+    supports: PUMA 560, UR5, random spherical-wrist arms whose first axes meet or are
+    parallel, and random arms with three parallel axes (either way round). Every solution EAIK returns is one of ours, and the counts agree wherever EAIK
     itself finds the generating vector."""
     from eaik.IK_DH import DhRobot
 
@@ -460,6 +521,13 @@ def test_solution_sets_agree_with_eaik():
         else:
             a[0] = 0.0
         tables.append((a, alpha, d))
+    for k in range(4):  # three parallel axes: 2-4 with axes 5, 6 meeting, or 3-5 with 1, 2
+        a, alpha, d = _random_table(rng)
+        if k % 2:
+            alpha[2] = alpha[3] = a[0] = 0.0
+        else:
+            alpha[1] = alpha[2] = a[4] = 0.0
+        tables.append((a, alpha, d))
     compared = equal = peer_misses = 0
     for a, alpha, d in tables:
         a, alpha, d = (np.asarray(x, float) for x in (a, alpha, d))
@@ -479,5 +547,5 @@ def test_solution_sets_agree_with_eaik():
                 peer_misses += 1
                 continue
             equal += ours.count == len(theirs)
-    assert compared == 320 and peer_misses <= 16, peer_misses
+    assert compared == 480 and peer_misses <= 24, peer_misses
     assert equal >= 0.97 * (compared - peer_misses), (equal, compared, peer_misses)

@@ -243,15 +243,17 @@ def ik(
     ] = None,
     method: Annotated[
         str,
-        typer.Option(help="auto, spherical-wrist, general (Raghavan-Roth) or numerical."),
+        typer.Option(
+            help="auto, spherical-wrist, three-parallel, general (Raghavan-Roth) or numerical."
+        ),
     ] = "auto",
     seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver.")] = 48,
     json_out: JsonOption = False,
 ) -> None:
     """Inverse kinematics: every solution for a tool pose (or position), deg / mm.
 
-    Complete methods return every real solution: closed form for arms with a spherical wrist,
-    Raghavan-Roth elimination for any other 6R arm. Each solution carries its forward-kinematics
+    Complete methods return every real solution: closed form for arms with a spherical wrist
+    or three parallel axes (UR type), Raghavan-Roth elimination for any other 6R arm. Each solution carries its forward-kinematics
     residual. Exit status 1 if there is no solution.
     """
     with _cli_errors():

@@ -1,8 +1,9 @@
-"""Inverse kinematics: seed-arm position families, closed forms, Raghavan-Roth, numerical."""
+"""Inverse kinematics: seed-arm position families, closed forms (spherical wrist, three parallel
+axes), Raghavan-Roth, numerical."""
 
 from armpath.ik.general6r import General6RSolver
 from armpath.ik.numerical import solve_numerical
-from armpath.ik.result import IKResult
+from armpath.ik.result import IKBatch, IKResult
 from armpath.ik.seed_position import (
     FIXED_PAIRS,
     family_from_wrist,
@@ -11,13 +12,16 @@ from armpath.ik.seed_position import (
 )
 from armpath.ik.solve import METHODS, complete_solver, into_limits, solve_ik
 from armpath.ik.spherical_wrist import SphericalWristSolver, wrist_center
+from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
 
 __all__ = [
     "FIXED_PAIRS",
     "METHODS",
     "General6RSolver",
+    "IKBatch",
     "IKResult",
     "SphericalWristSolver",
+    "ThreeParallelSolver",
     "complete_solver",
     "family_from_wrist",
     "fingertip",
@@ -25,5 +29,6 @@ __all__ = [
     "solve_ik",
     "solve_numerical",
     "solve_with_fixed_pair",
+    "three_parallel_layout",
     "wrist_center",
 ]

@@ -36,7 +36,16 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.ik.result import IKResult, chain_length_scale, solved_poses
+from armpath.ik.kernels import (
+    fk_error_jacobian,
+    lu_solve,
+    prepare_targets,
+    scan_tables,
+    sort_solutions,
+    trig_roots,
+    wrap_angle,
+)
+from armpath.ik.result import IKBatch, IKResult, chain_length_scale, pose_result, solved_poses
 from armpath.kinematics import _affine_mul, z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -51,9 +60,7 @@ _HALF = np.array([[1.0, 0.0, 1.0], [1.0, 0.0, -1.0], [0.0, 2.0, 0.0]])
 _HALF2: FloatArray = np.asarray(np.kron(_HALF, _HALF), dtype=np.float64)
 _N_DET = 18  # determinant samples: 17 harmonics of the degree-8 polynomial (9..12 vanish)
 _N_SCAN = 360  # root-scan grid
-_SCAN: FloatArray = np.asarray(np.arange(_N_SCAN) * (2.0 * np.pi / _N_SCAN), dtype=np.float64)
-_SCAN_COS: FloatArray = np.cos(np.outer(_SCAN, np.arange(9)))
-_SCAN_SIN: FloatArray = np.sin(np.outer(_SCAN, np.arange(9)))
+_SCAN, _SCAN_COS, _SCAN_SIN = scan_tables(_N_SCAN, 9)
 _DET_PHI: FloatArray = np.asarray(np.arange(_N_DET) * (2.0 * np.pi / _N_DET), dtype=np.float64)
 #: Fixed offsets of the three left-side angles (rad): keep half-angle monomials finite.
 DEFAULT_DELTAS = np.array([0.7123, -1.1379, 0.4518])
@@ -215,46 +222,6 @@ def _det_lu(A: FloatArray) -> float:
 
 
 @njit(cache=True)
-def _lu_solve(A: FloatArray, rhs: FloatArray) -> tuple[FloatArray, float]:
-    """Solve ``A x = rhs`` by LU with partial pivoting (A, rhs overwritten); also det(A)."""
-    n = A.shape[0]
-    det = 1.0
-    for k in range(n):
-        piv = k
-        big = abs(A[k, k])
-        for r in range(k + 1, n):
-            if abs(A[r, k]) > big:
-                big = abs(A[r, k])
-                piv = r
-        if big == 0.0:
-            return np.zeros(n), 0.0
-        if piv != k:
-            for c in range(n):
-                tmp = A[k, c]
-                A[k, c] = A[piv, c]
-                A[piv, c] = tmp
-            tmp = rhs[k]
-            rhs[k] = rhs[piv]
-            rhs[piv] = tmp
-            det = -det
-        det *= A[k, k]
-        inv = 1.0 / A[k, k]
-        for r in range(k + 1, n):
-            f = A[r, k] * inv
-            if f != 0.0:
-                for c in range(k + 1, n):
-                    A[r, c] -= f * A[k, c]
-                rhs[r] -= f * rhs[k]
-    x = np.empty(n)
-    for k in range(n - 1, -1, -1):
-        acc = rhs[k]
-        for c in range(k + 1, n):
-            acc -= A[k, c] * x[c]
-        x[k] = acc / A[k, k]
-    return x, det
-
-
-@njit(cache=True)
 def _householder(A: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Householder QR of a tall matrix (overwritten): reflector vectors, their betas and R."""
     m, n = A.shape
@@ -353,231 +320,6 @@ def _null_vector(A: FloatArray) -> FloatArray:
     return out
 
 
-@njit(cache=True)
-def _half_angle_from_ratio(num: float, den_low: float, den_high: float) -> float:
-    """Angle p with tan(p/2) = num/den_low (or den_high/num), stable for any size of tan."""
-    if den_low >= den_high:
-        return float(2.0 * np.arctan2(num, den_low))
-    return float(2.0 * np.arctan2(den_high, num))
-
-
-@njit(cache=True)
-def _trig_eval(a: FloatArray, b: FloatArray, phi: float) -> tuple[float, float, float]:
-    """Value, first and second derivative of sum_k a_k cos k phi + b_k sin k phi."""
-    c1 = np.cos(phi)
-    s1 = np.sin(phi)
-    c = 1.0
-    s = 0.0
-    g = a[0]
-    d1 = 0.0
-    d2 = 0.0
-    for k in range(1, a.shape[0]):
-        c, s = c * c1 - s * s1, s * c1 + c * s1
-        t = a[k] * c + b[k] * s
-        g += t
-        d1 += k * (b[k] * c - a[k] * s)
-        d2 -= k * k * t
-    return g, d1, d2
-
-
-@njit(cache=True)
-def _bracketed_root(a: FloatArray, b: FloatArray, lo: float, hi: float, glo: float) -> float:
-    """Root of the trigonometric polynomial in [lo, hi] (sign change), safeguarded Newton."""
-    x = 0.5 * (lo + hi)
-    for _ in range(60):
-        g, d1, _d2 = _trig_eval(a, b, x)
-        if g == 0.0:
-            return x
-        if (g < 0.0) == (glo < 0.0):
-            lo = x
-            glo = g
-        else:
-            hi = x
-        step = g / d1 if d1 != 0.0 else 0.0
-        xn = x - step
-        if not (lo < xn < hi):
-            xn = 0.5 * (lo + hi)
-        if abs(xn - x) < 1e-14:
-            return xn
-        x = xn
-        if hi - lo < 1e-14:
-            break
-    return x
-
-
-@njit(cache=True)
-def _hidden_pair(dm: float, d0: float, d1: float, d2: float) -> bool:
-    """Whether g' sampled at four consecutive grid points may have two roots in the middle cell.
-
-    All four values share a sign and |g'| is smallest in the middle; a parabola through either
-    three-point window then predicts how low |g'| gets. Cells are sub-sampled only when it comes
-    below a quarter of the smaller end value (or crosses zero).
-    """
-    if not ((dm < 0.0) == (d0 < 0.0) == (d1 < 0.0) == (d2 < 0.0)):
-        return False
-    if not (abs(d0) <= abs(dm) and abs(d1) <= abs(d2)):
-        return False
-    low = min(abs(d0), abs(d1))
-    for y0, y1, y2 in ((abs(dm), abs(d0), abs(d1)), (abs(d0), abs(d1), abs(d2))):
-        curv = y0 - 2.0 * y1 + y2
-        if curv > 0.0:
-            slope = 0.5 * (y2 - y0)
-            vmin = y1 - slope * slope / (2.0 * curv)
-            if vmin < 0.25 * low:
-                return True
-    return False
-
-
-@njit(cache=True)
-def _trig_roots(
-    a: FloatArray,
-    b: FloatArray,
-    scan_cos: FloatArray,
-    scan_sin: FloatArray,
-    scan: FloatArray,
-    roots: FloatArray,
-    doubles: NDArray[np.bool_],
-) -> int:
-    """Real roots in [0, 2 pi) of g = sum a_k cos k p + b_k sin k p; their count (-1 if g = 0).
-
-    The critical points of g (sign changes of g' on the grid, refined by Newton) cut the circle
-    into pieces on which g is monotone; each piece holds at most one root, bracketed exactly.
-    Two roots closer than the grid step are thus still separated, and a critical point where g
-    touches zero is returned once and marked as a double root.
-    """
-    n = scan.shape[0]
-    m = a.shape[0]
-    kk = np.arange(m).astype(np.float64)
-    vals = scan_cos @ a + scan_sin @ b
-    der = scan_cos @ (kk * b) - scan_sin @ (kk * a)
-    scale = np.max(np.abs(vals))
-    if scale == 0.0:
-        return -1
-    h = 2.0 * np.pi / n
-    # Derivative coefficients: g' = sum (k b_k) cos + (-k a_k) sin.
-    da = kk * b
-    db = -kk * a
-    xs = np.empty(2 * n + 1)
-    gs = np.empty(2 * n + 1)
-    crit = np.zeros(2 * n + 1, dtype=np.bool_)
-    npts = 0
-    for i in range(n):
-        xs[npts] = scan[i]
-        gs[npts] = vals[i]
-        npts += 1
-        d0 = der[i]
-        d1 = der[(i + 1) % n]
-        if (d0 < 0.0) != (d1 < 0.0) and d1 != 0.0 and d0 != 0.0:
-            x = _bracketed_root(da, db, scan[i], scan[i] + h, d0)
-            g, _, _ = _trig_eval(a, b, x)
-            xs[npts] = x
-            gs[npts] = g
-            crit[npts] = True
-            npts += 1
-        elif _hidden_pair(der[(i - 1) % n], d0, d1, der[(i + 2) % n]):
-            # g' may cross zero twice inside this cell: sub-sample it.
-            sub = 24
-            hs = h / sub
-            xprev = scan[i]
-            dprev = d0
-            for k in range(1, sub + 1):
-                xk = scan[i] + k * hs
-                _, dk, _ = _trig_eval(a, b, xk)
-                if k == sub:
-                    dk = d1
-                if (dprev < 0.0) != (dk < 0.0) and dk != 0.0 and dprev != 0.0 and npts < 2 * n:
-                    x = _bracketed_root(da, db, xprev, xk, dprev)
-                    g, _, _ = _trig_eval(a, b, x)
-                    xs[npts] = x
-                    gs[npts] = g
-                    crit[npts] = True
-                    npts += 1
-                xprev = xk
-                dprev = dk
-    xs[npts] = 2.0 * np.pi
-    gs[npts] = vals[0]
-    count = 0
-    cap = roots.shape[0]
-    for i in range(npts):
-        g0 = gs[i]
-        g1 = gs[i + 1]
-        if g0 == 0.0 or (crit[i] and abs(g0) <= 1e-13 * scale):
-            if count < cap:
-                roots[count] = xs[i]
-                doubles[count] = crit[i]
-                count += 1
-            continue
-        if (g0 < 0.0) != (g1 < 0.0) and g1 != 0.0:
-            if crit[i + 1] and abs(g1) <= 1e-13 * scale:
-                continue  # the double root at the next point is taken there
-            if count < cap:
-                roots[count] = _bracketed_root(a, b, xs[i], xs[i + 1], g0)
-                doubles[count] = False
-                count += 1
-    return count
-
-
-@njit(cache=True)
-def fk_error_jacobian(
-    C: FloatArray,
-    prismatic: NDArray[np.bool_],
-    q: FloatArray,
-    T: FloatArray,
-    err: FloatArray,
-    J: FloatArray,
-) -> None:
-    """Pose error ``[position; rotation vector]`` of FK(q) to ``T`` into ``err`` and the
-    geometric Jacobian into ``J`` (6 x n), for the chain ``C0 Z(q1) C1 ... Z(qn) Cn``.
-
-    Allocation-light: it is the innermost loop of every complete solver's Newton polish.
-    """
-    n = q.shape[0]
-    A = C[0].copy()
-    B = np.empty((4, 4))
-    for i in range(n):
-        for r in range(3):
-            J[3 + r, i] = A[r, 2]  # axis, kept here until the position is known
-        v = q[i]
-        if prismatic[i]:
-            for r in range(3):
-                A[r, 3] += A[r, 2] * v
-        else:
-            c, sn = np.cos(v), np.sin(v)
-            for r in range(3):
-                a0 = A[r, 0]
-                a1 = A[r, 1]
-                A[r, 0] = a0 * c + a1 * sn
-                A[r, 1] = -a0 * sn + a1 * c
-        for r in range(3):
-            J[r, i] = A[r, 3]  # joint origin, likewise
-        _affine_mul(A, C[i + 1], B)
-        A, B = B, A
-    px, py, pz = A[0, 3], A[1, 3], A[2, 3]
-    for i in range(n):
-        zx, zy, zz = J[3, i], J[4, i], J[5, i]
-        if prismatic[i]:
-            J[0, i], J[1, i], J[2, i] = zx, zy, zz
-            J[3, i] = J[4, i] = J[5, i] = 0.0
-            continue
-        rx, ry, rz = px - J[0, i], py - J[1, i], pz - J[2, i]
-        J[0, i] = zy * rz - zz * ry
-        J[1, i] = zz * rx - zx * rz
-        J[2, i] = zx * ry - zy * rx
-    err[0] = T[0, 3] - px
-    err[1] = T[1, 3] - py
-    err[2] = T[2, 3] - pz
-    wx = 0.0
-    wy = 0.0
-    wz = 0.0
-    for k in range(3):  # 0.5 * sum_k cross(R_k, Rt_k) over the columns (exact to first order)
-        wx += A[1, k] * T[2, k] - A[2, k] * T[1, k]
-        wy += A[2, k] * T[0, k] - A[0, k] * T[2, k]
-        wz += A[0, k] * T[1, k] - A[1, k] * T[0, k]
-    err[3] = 0.5 * wx
-    err[4] = 0.5 * wy
-    err[5] = 0.5 * wz
-
-
 _ALL_REVOLUTE = np.zeros(6, dtype=np.bool_)
 
 
@@ -606,7 +348,7 @@ def _refine(
         if size < 1e-14 or (size < 1e-11 and size > 0.25 * previous):
             break  # converged, or stalled at rounding level
         previous = size
-        dq, det = _lu_solve(J.copy(), err.copy())
+        dq, det = lu_solve(J.copy(), err.copy())
         if det == 0.0:
             break
         if deflate:
@@ -630,7 +372,7 @@ def _refine(
     for i in range(6):
         norms *= np.sqrt(np.sum(J[:, i] * J[:, i]))
     if norms > 0.0:
-        ratio = abs(_lu_solve(J.copy(), err.copy())[1]) / norms
+        ratio = abs(lu_solve(J.copy(), err.copy())[1]) / norms
     pos = np.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
     rot = np.sqrt(err[3] ** 2 + err[4] ** 2 + err[5] ** 2)
     return pos, rot, ratio
@@ -649,11 +391,11 @@ def _keep(
 ) -> tuple[int, int]:
     """Store a converged solution unless it repeats one; returns (new kept, duplicate index)."""
     for i in range(6):
-        q[i] = _wrap(q[i])
+        q[i] = wrap_angle(q[i])
     for m in range(kept):
         same = True
         for i in range(6):
-            if abs(_wrap(out_q[m, i] - q[i])) > 1e-6:
+            if abs(wrap_angle(out_q[m, i] - q[i])) > 1e-6:
                 same = False
                 break
         if same:
@@ -669,8 +411,11 @@ def _keep(
 
 
 @njit(cache=True)
-def _wrap(x: float) -> float:
-    return (x + np.pi) % (2.0 * np.pi) - np.pi
+def _half_angle_from_ratio(num: float, den_low: float, den_high: float) -> float:
+    """Angle p with tan(p/2) = num/den_low (or den_high/num), stable for any size of tan."""
+    if den_low >= den_high:
+        return float(2.0 * np.arctan2(num, den_low))
+    return float(2.0 * np.arctan2(den_high, num))
 
 
 @njit(cache=True)
@@ -775,7 +520,7 @@ def _solve_split(
         a[k] = sc * f
         b[k] = ss * f
     roots = np.empty(phis.shape[0])
-    count = _trig_roots(a, b, scan_cos, scan_sin, scan, roots, doubles)
+    count = trig_roots(a, b, scan_cos, scan_sin, scan, roots, doubles)
     if count < 0:
         return -1
     v45 = np.empty(9)
@@ -937,8 +682,8 @@ def _solve_pose(
             break
         if tries >= 3:
             break
-    count_out = kept
-    return count_out, split_out
+    sort_solutions(out_q, out_res, out_flags, kept)
+    return kept, split_out
 
 
 @njit(cache=True)
@@ -1035,45 +780,6 @@ def _solve_parallel(
         )
 
 
-@njit(cache=True)
-def _rigid_error(T: FloatArray) -> float:
-    """Largest |R R^T - I| entry of each pose (inf if not finite or the last row is wrong)."""
-    worst = 0.0
-    for n in range(T.shape[0]):
-        for i in range(4):
-            for j in range(4):
-                if not np.isfinite(T[n, i, j]):
-                    return np.inf
-        if T[n, 3, 0] != 0.0 or T[n, 3, 1] != 0.0 or T[n, 3, 2] != 0.0 or T[n, 3, 3] != 1.0:
-            return np.inf
-        for i in range(3):
-            for j in range(3):
-                dot = T[n, i, 0] * T[n, j, 0] + T[n, i, 1] * T[n, j, 1] + T[n, i, 2] * T[n, j, 2]
-                worst = max(worst, abs(dot - (1.0 if i == j else 0.0)))
-    return worst
-
-
-def prepare_targets(Ts: FloatArray, length_scale: float) -> FloatArray:
-    """Validated copies of target poses ``(N, 4, 4)`` with lengths divided by ``length_scale``.
-
-    Rotations within 1e-6 of orthonormal (poses printed to a few digits) are replaced by the
-    nearest rotation; anything else is rejected with :class:`InvalidInputError`.
-    """
-    T = np.array(Ts, dtype=np.float64).reshape(-1, 4, 4) if np.size(Ts) % 16 == 0 else None
-    if T is None or T.shape[0] == 0:
-        raise InvalidInputError("target poses must be 4x4 matrices")
-    err = _rigid_error(T)
-    if not err <= 1e-6:
-        raise InvalidInputError(
-            "target poses must be finite rigid transforms (orthonormal rotation, last row 0 0 0 1)"
-        )
-    if err > 1e-13:
-        U, _, Vt = np.linalg.svd(T[:, :3, :3])
-        T[:, :3, :3] = U @ Vt
-    T[:, :3, 3] /= length_scale
-    return T
-
-
 #: The twelve loop splits, (forward, start joint); the first is the classic Raghavan-Roth one.
 SPLITS = np.array(
     [
@@ -1099,7 +805,7 @@ class General6RSolver:
 
     >>> solver = General6RSolver(arm)            # doctest: +SKIP
     >>> result = solver.solve(T_target)          # IKResult, every real solution
-    >>> batch = solver.solve_batch(Ts)           # list of IKResult, one per pose (compiled loop)
+    >>> batch = solver.solve_batch(Ts)           # IKBatch: padded arrays; batch[i] is an IKResult
     """
 
     def __init__(self, arm: SerialArm, *, newton_iterations: int = 12, accept: float = 1e-8):
@@ -1132,8 +838,17 @@ class General6RSolver:
         self.newton_iterations = newton_iterations
         self.accept = accept
 
-    def solve_batch(self, Ts: FloatArray) -> list[IKResult]:
-        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit)."""
+    _DEGENERATE = (
+        "elimination degenerate in all 12 splits (a positive-dimensional solution set, "
+        "e.g. aligned joint axes at this pose)"
+    )
+    _METHODS = (*(f"raghavan-roth (split {k.tolist()})" for k in SPLITS), "raghavan-roth")
+    _REASONS = ("no real solution: the pose is out of reach", _DEGENERATE)
+
+    def _run(
+        self, Ts: FloatArray
+    ) -> tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+        """Padded solutions, scaled residuals, flags, counts and the split used (-1: none)."""
         T = prepare_targets(Ts, self.length_scale)
         N = T.shape[0]
         q = np.zeros((N, _CAP, 6))
@@ -1164,19 +879,35 @@ class General6RSolver:
             count,
             split,
         )
-        degenerate = (
-            "elimination degenerate in all 12 splits (a positive-dimensional solution set, "
-            "e.g. aligned joint axes at this pose)"
+        return q, res, flags, count, split
+
+    def solve_batch(self, Ts: FloatArray) -> IKBatch:
+        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit),
+        as padded arrays; ``batch[i]`` is pose ``i``'s :class:`IKResult`."""
+        q, res, flags, count, split = self._run(Ts)
+        return solved_poses(
+            q,
+            res,
+            flags,
+            count,
+            self.length_scale,
+            self._METHODS,
+            np.where(split >= 0, split, len(SPLITS)),
+            self._REASONS,
+            (split < 0).astype(np.int64),
         )
-        method = [
-            f"raghavan-roth (split {SPLITS[k].tolist()})" if k >= 0 else "raghavan-roth"
-            for k in split
-        ]
-        reason = [
-            degenerate if k < 0 else "no real solution: the pose is out of reach" for k in split
-        ]
-        return solved_poses(q, res, flags, count, self.length_scale, method, reason)
 
     def solve(self, T: FloatArray) -> IKResult:
         """All real solutions of one pose (4x4, world frame, model unit)."""
-        return self.solve_batch(np.asarray(T, dtype=np.float64)[None])[0]
+        q, res, flags, count, split = self._run(np.asarray(T, dtype=np.float64)[None])
+        k = int(split[0])
+        return pose_result(
+            q[0],
+            res[0, :, 0] * self.length_scale,
+            res[0, :, 1],
+            (flags[0] & 1) > 0,
+            (flags[0] & 2) > 0,
+            int(count[0]),
+            self._METHODS[k],
+            self._REASONS[int(k < 0)],
+        )

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,40 +53,115 @@ class IKResult:
         )
 
 
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class IKBatch(Sequence[IKResult]):
+    """The solutions of N target poses in padded arrays: what the compiled solvers produce.
+
+    ``solutions`` has shape ``(N, cap, n)`` (model units, as in :class:`IKResult`), and row
+    ``i`` holds ``counts[i]`` solutions followed by NaN. ``position_residual`` (length unit),
+    ``rotation_residual_rad``, ``near_double`` and ``near_singular`` have shape ``(N, cap)``.
+    ``method_names[method_index[i]]`` names the solver of pose ``i`` and, if it has no solution,
+    ``failure_reasons[reason_index[i]]`` says why. Indexing or iterating gives one
+    :class:`IKResult` per pose (views of these arrays), built on demand. Each pose's solutions are
+    sorted lexicographically.
+    """
+
+    solutions: FloatArray
+    counts: IntArray
+    position_residual: FloatArray
+    rotation_residual_rad: FloatArray
+    near_double: BoolArray
+    near_singular: BoolArray
+    method_names: tuple[str, ...]
+    method_index: IntArray
+    failure_reasons: tuple[str, ...]
+    reason_index: IntArray
+
+    def __len__(self) -> int:
+        return int(self.counts.shape[0])
+
+    @overload
+    def __getitem__(self, i: int) -> IKResult: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[IKResult]: ...
+
+    def __getitem__(self, i: int | slice) -> IKResult | list[IKResult]:
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        if not -len(self) <= i < len(self):
+            raise IndexError(f"pose index {i} out of range for {len(self)} poses")
+        i = i % len(self)
+        return pose_result(
+            self.solutions[i],
+            self.position_residual[i],
+            self.rotation_residual_rad[i],
+            self.near_double[i],
+            self.near_singular[i],
+            int(self.counts[i]),
+            self.method_names[int(self.method_index[i])],
+            self.failure_reasons[int(self.reason_index[i])],
+        )
+
+
+def pose_result(
+    q: FloatArray,
+    position_residual: FloatArray,
+    rotation_residual_rad: FloatArray,
+    near_double: BoolArray,
+    near_singular: BoolArray,
+    count: int,
+    method: str,
+    reason: str,
+) -> IKResult:
+    """The :class:`IKResult` of one pose from its padded rows (the first ``count`` are valid,
+    sorted by the compiled solver)."""
+    if count == 0:
+        return IKResult.empty(q.shape[1], method, reason)
+    return IKResult(
+        solutions=q[:count],
+        position_residual=position_residual[:count],
+        rotation_residual_rad=rotation_residual_rad[:count],
+        near_double=near_double[:count],
+        near_singular=near_singular[:count],
+        method=method,
+    )
+
+
 def solved_poses(
     q: FloatArray,
     residuals: FloatArray,
-    flags: NDArray[np.int64],
-    count: NDArray[np.int64],
+    flags: IntArray,
+    count: IntArray,
     length_scale: float,
-    method: list[str],
-    reason: list[str],
-) -> list[IKResult]:
-    """One :class:`IKResult` per pose from a compiled solver's padded output arrays.
+    method_names: tuple[str, ...],
+    method_index: IntArray,
+    failure_reasons: tuple[str, ...],
+    reason_index: IntArray,
+) -> IKBatch:
+    """An :class:`IKBatch` from a compiled solver's padded output arrays (modified in place).
 
     ``q`` ``(N, cap, n)`` joint values in the model's units, ``residuals`` ``(N, cap, 2)``
-    scaled position and rotation residuals, ``flags`` bit 0 near-double, bit 1 near-singular;
-    ``method[i]`` and (for poses without a solution) ``reason[i]`` per pose. Solutions are sorted.
+    scaled position and rotation residuals, ``flags`` bit 0 near-double, bit 1 near-singular.
     """
-    out = []
-    n_joints = q.shape[2]
-    for i in range(q.shape[0]):
-        k = int(count[i])
-        if k == 0:
-            out.append(IKResult.empty(n_joints, method[i], reason[i]))
-            continue
-        order = np.lexsort(q[i, :k].T[::-1])
-        out.append(
-            IKResult(
-                solutions=q[i, order],
-                position_residual=residuals[i, order, 0] * length_scale,
-                rotation_residual_rad=residuals[i, order, 1],
-                near_double=(flags[i, order] & 1) > 0,
-                near_singular=(flags[i, order] & 2) > 0,
-                method=method[i],
-            )
-        )
-    return out
+    unused = np.arange(q.shape[1])[None, :] >= count[:, None]
+    q[unused] = np.nan
+    residuals[unused] = np.nan
+    return IKBatch(
+        solutions=q,
+        counts=count,
+        position_residual=residuals[:, :, 0] * length_scale,
+        rotation_residual_rad=residuals[:, :, 1],
+        near_double=(flags & 1) > 0,
+        near_singular=(flags & 2) > 0,
+        method_names=method_names,
+        method_index=method_index,
+        failure_reasons=failure_reasons,
+        reason_index=reason_index,
+    )
 
 
 def chain_length_scale(C: FloatArray) -> float:

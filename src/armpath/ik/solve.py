@@ -2,6 +2,8 @@
 
 * ``spherical-wrist``: closed form (Pieper) when axes 4-6 meet in a point and joints 1-3 are
   R, R, R|P (:mod:`armpath.ik.spherical_wrist`).
+* ``three-parallel``: closed form when axes 2-4 are parallel and axes 5, 6 meet (UR type), or
+  the same read from the tool (:mod:`armpath.ik.three_parallel`).
 * ``general``: Raghavan-Roth elimination for any other six-revolute arm
   (:mod:`armpath.ik.general6r`).
 * ``numerical``: Levenberg-Marquardt from many seeds (:mod:`armpath.ik.numerical`) for every
@@ -20,12 +22,13 @@ from armpath.ik.general6r import General6RSolver
 from armpath.ik.numerical import solve_numerical
 from armpath.ik.result import IKResult
 from armpath.ik.spherical_wrist import SphericalWristSolver, wrist_center
+from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
-METHODS = ("auto", "spherical-wrist", "general", "numerical")
+METHODS = ("auto", "spherical-wrist", "three-parallel", "general", "numerical")
 
-Solver = SphericalWristSolver | General6RSolver
+Solver = SphericalWristSolver | ThreeParallelSolver | General6RSolver
 
 
 def complete_solver(arm: SerialArm, method: str = "auto") -> Solver | None:
@@ -47,6 +50,13 @@ def complete_solver(arm: SerialArm, method: str = "auto") -> Solver | None:
     if method == "spherical-wrist":
         raise InvalidInputError(
             f"model {arm.name!r} has no spherical wrist (axes 4-6 must meet in a point)"
+        )
+    if method in ("auto", "three-parallel") and three_parallel_layout(arm) is not None:
+        return ThreeParallelSolver(arm)
+    if method == "three-parallel":
+        raise InvalidInputError(
+            f"model {arm.name!r} does not have three consecutive parallel axes next to two "
+            "meeting ones (axes 2-4 parallel and 5, 6 meeting, or 3-5 parallel and 1, 2 meeting)"
         )
     if arm.n_joints == 6 and all(k is JointKind.REVOLUTE for k in kinds):
         return General6RSolver(arm)

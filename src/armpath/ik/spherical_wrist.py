@@ -8,8 +8,9 @@ PUMA 560, most industrial 6-axis arms). The pose splits in two:
   distance and the height along axis 1, so ``F1(q2, q3) = |v|^2`` and ``F2(q2, q3) = v_z`` must
   match the target's. Both are of degree one in ``cos q2, sin q2``; eliminating them leaves one
   equation in ``q3``: a trigonometric polynomial of degree 4 (revolute) or a polynomial of
-  degree 4 (prismatic), whose real roots give up to four positions. Coefficients are measured
-  on small grids, not derived symbolically.
+  degree 6 (prismatic), whose real roots give the positions. The six coefficient functions of
+  ``q3`` are measured once per arm on small grids (not derived symbolically); a pose only
+  shifts two of them (by ``|t|^2`` and ``t_z``), so solving a pose allocates almost nothing.
 * **Orientation** from joints 4-6 with any twists (the oblique wrists of painting robots too):
   the direction of axis 6 fixes ``q4`` through ``a cos q4 + b sin q4 = c`` (two roots), then
   ``q5`` and ``q6`` follow in closed form.
@@ -26,139 +27,68 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.ik.general6r import (
-    _SCAN,
-    _SCAN_COS,
-    _SCAN_SIN,
-    _lu_solve,
-    _mm,
-    _trig_roots,
-    _wrap,
-    fk_error_jacobian,
+from armpath.ik.kernels import (
+    newton_polish,
     prepare_targets,
+    scan_tables,
+    sort_solutions,
+    trig_roots,
+    wrap_angle,
 )
-from armpath.ik.result import IKResult, chain_length_scale, solved_poses
+from armpath.ik.result import IKBatch, IKResult, chain_length_scale, pose_result, solved_poses
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
 _CAP = 16
+#: Root scan of the degree-4 trigonometric polynomial in q3 (3 deg steps; close pairs of roots
+#: are still separated by the critical points, see :func:`armpath.ik.kernels.trig_roots`).
+_SCAN, _SCAN_COS, _SCAN_SIN = scan_tables(120, 5)
+#: q3 samples of the revolute residual (9: harmonics 0..4) and their discrete Fourier transform
+#: (rows a0..a4, b1..b4).
+_RES_PHI = np.arange(9) * (2.0 * np.pi / 9.0)
+_RES_FIT_R = np.vstack(
+    [
+        np.cos(np.outer(np.arange(5), _RES_PHI)) * np.array([1.0, 2, 2, 2, 2])[:, None] / 9.0,
+        np.sin(np.outer(np.arange(1, 5), _RES_PHI)) * 2.0 / 9.0,
+    ]
+)
+#: Chebyshev nodes on [-1, 1] for the prismatic residual (a polynomial of degree <= 6).
+_RES_X_P = np.cos(np.pi * (np.arange(7) + 0.5) / 7.0)
+_RES_FIT_P = np.linalg.inv(np.vander(_RES_X_P, 7, increasing=True))
+#: Three samples for the single equations (modes 1, 2): {0, 120, 240} deg -> (c0, cos, sin), or
+#: x in {-1, 0, 1} -> polynomial coefficients.
+_MODE_PHI = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
+_MODE_FIT_R = np.linalg.inv(np.stack([np.ones(3), np.cos(_MODE_PHI), np.sin(_MODE_PHI)], axis=1))
+_MODE_X_P = np.array([-1.0, 0.0, 1.0])
+_MODE_FIT_P = np.linalg.inv(np.vander(_MODE_X_P, 3, increasing=True))
 
 
-@njit(cache=True)
-def _motion(T: FloatArray, value: float, prismatic: bool) -> FloatArray:
-    """``T @ Rz(value)`` or ``T @ Tz(value)``."""
-    out = T.copy()
+def _joint(T: FloatArray, value: float, prismatic: bool) -> FloatArray:
+    """``T @ Rz(value)`` or ``T @ Tz(value)`` (set-up only)."""
+    M = np.eye(4)
     if prismatic:
-        for i in range(3):
-            out[i, 3] += T[i, 2] * value
-        return out
-    c, s = np.cos(value), np.sin(value)
-    for i in range(3):
-        out[i, 0] = T[i, 0] * c + T[i, 1] * s
-        out[i, 1] = -T[i, 0] * s + T[i, 1] * c
-    return out
+        M[2, 3] = value
+    else:
+        c, s = np.cos(value), np.sin(value)
+        M[:2, :2] = [[c, -s], [s, c]]
+    return T @ M
 
 
-@njit(cache=True)
-def _mv(R: FloatArray, x: FloatArray) -> FloatArray:
-    """3x3 (any layout) times a 3-vector, without BLAS."""
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = R[i, 0] * x[0] + R[i, 1] * x[1] + R[i, 2] * x[2]
-    return out
-
-
-@njit(cache=True)
-def _m3(A: FloatArray, B: FloatArray) -> FloatArray:
-    """3x3 times 3x3 (any layout), without BLAS."""
-    out = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
-    return out
-
-
-@njit(cache=True)
-def _polish(
-    C: FloatArray, prismatic: NDArray[np.bool_], T: FloatArray, q: FloatArray, steps: int
-) -> tuple[float, float, float]:
-    """Newton steps on the full pose; (position error, rotation error, Jacobian ratio)."""
-    err = np.empty(6)
-    J = np.empty((6, 6))
-    fk_error_jacobian(C, prismatic, q, T, err, J)
-    for _ in range(steps):
-        if np.sqrt(np.sum(err * err)) < 1e-13:
-            break  # closed-form candidates are usually exact already
-        dq, det = _lu_solve(J.copy(), err.copy())
-        if det == 0.0:
-            break
-        q += dq
-        fk_error_jacobian(C, prismatic, q, T, err, J)
-    norms = 1.0
-    for i in range(6):
-        norms *= max(np.sqrt(np.sum(J[:, i] * J[:, i])), 1e-300)
-    ratio = abs(_lu_solve(J.copy(), err.copy())[1]) / norms
-    pos = np.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
-    rot = np.sqrt(err[3] ** 2 + err[4] ** 2 + err[5] ** 2)
-    return pos, rot, ratio
-
-
-@njit(cache=True)
-def _v(
-    C: FloatArray, prismatic: NDArray[np.bool_], q2: float, q3: float, c4: FloatArray, h: float
+def _position_functions(
+    C: FloatArray, prismatic: NDArray[np.bool_], c4: FloatArray, h: float, q3: float
 ) -> FloatArray:
-    """Wrist centre in the frame of joint 1 before its rotation (C1 Z2 C2 Z3 C3 c4), measured
-    from the point ``(0, 0, h)`` of axis 1 nearest to axis 2."""
-    A = _mm(_motion(C[1], q2, prismatic[1]), C[2])
-    A = _mm(_motion(A, q3, prismatic[2]), C[3])
-    out = _mv(A[:3, :3], c4) + A[:3, 3]
-    out[2] -= h
-    return out
-
-
-@njit(cache=True)
-def _abc(
-    C: FloatArray,
-    prismatic: NDArray[np.bool_],
-    q3: float,
-    c4: FloatArray,
-    h: float,
-    t: FloatArray,
-) -> tuple[float, float, float, float, float, float]:
-    """Coefficients of F1 - |t|^2 and F2 - t_z in (cos q2, sin q2, 1) at joint value q3."""
+    """The six functions (a1, b1, c1, a2, b2, c2) of ``q3`` for a target at the origin:
+    ``|v|^2 = a1 cos q2 + b1 sin q2 + c1`` and ``v_z = a2 cos q2 + b2 sin q2 + c2`` for the wrist
+    centre ``v = C1 Z(q2) C2 Z(q3) C3 c4`` measured from ``(0, 0, h)`` (set-up only)."""
     f = np.empty((3, 2))
-    for i in range(3):
-        q2 = i * 2.0 * np.pi / 3.0
-        v = _v(C, prismatic, q2, q3, c4, h)
-        f[i, 0] = np.sum(v * v) - np.sum(t * t)
-        f[i, 1] = v[2] - t[2]
-    # Exact inversion of the 3-point grid {0, 120, 240} deg for {1, cos, sin}.
-    out = np.empty((2, 3))
-    for k in range(2):
-        c0 = (f[0, k] + f[1, k] + f[2, k]) / 3.0
-        ca = (2.0 * f[0, k] - f[1, k] - f[2, k]) / 3.0
-        sb = (f[1, k] - f[2, k]) / np.sqrt(3.0)
-        out[k, 0] = ca
-        out[k, 1] = sb
-        out[k, 2] = c0
-    return out[0, 0], out[0, 1], out[0, 2], out[1, 0], out[1, 1], out[1, 2]
-
-
-@njit(cache=True)
-def _residual(
-    C: FloatArray,
-    prismatic: NDArray[np.bool_],
-    q3: float,
-    c4: FloatArray,
-    h: float,
-    t: FloatArray,
-) -> float:
-    a1, b1, c1, a2, b2, c2 = _abc(C, prismatic, q3, c4, h, t)
-    d = a1 * b2 - a2 * b1
-    x = b1 * c2 - b2 * c1
-    y = c1 * a2 - c2 * a1
-    return x * x + y * y - d * d
+    for i, q2 in enumerate(_MODE_PHI):
+        A = _joint(_joint(C[1], q2, False) @ C[2], q3, bool(prismatic[2])) @ C[3]
+        v = A[:3, :3] @ c4 + A[:3, 3]
+        v[2] -= h
+        f[i] = v @ v, v[2]
+    c0, ca, sb = _MODE_FIT_R @ f  # rows: constant, cos, sin
+    return np.array([ca[0], sb[0], c0[0], ca[1], sb[1], c0[1]])
 
 
 @njit(cache=True)
@@ -218,13 +148,27 @@ def _poly_real_roots(coef: FloatArray, lo: float, hi: float, out: FloatArray) ->
 
 
 @njit(cache=True)
+def _turn_then(A: FloatArray, phi: float, turn: bool, R: FloatArray, out: FloatArray) -> None:
+    """``out = A Rz(phi) R`` on the 3x3 rotation parts (``A R`` without ``turn``)."""
+    c, s = (np.cos(phi), np.sin(phi)) if turn else (1.0, 0.0)
+    for i in range(3):
+        x = A[i, 0] * c + A[i, 1] * s
+        y = -A[i, 0] * s + A[i, 1] * c
+        z = A[i, 2]
+        for j in range(3):
+            out[i, j] = x * R[0, j] + y * R[1, j] + z * R[2, j]
+
+
+@njit(cache=True)
 def _solve_pose(
     C: FloatArray,
     prismatic: NDArray[np.bool_],
-    c4: FloatArray,
-    h: float,
-    c6: FloatArray,
-    q3_range: FloatArray,
+    geometry: FloatArray,
+    coef: FloatArray,
+    res_tab: FloatArray,
+    res_fit: FloatArray,
+    mode_tab: FloatArray,
+    mode_fit: FloatArray,
     mode: int,
     T: FloatArray,
     accept: float,
@@ -232,103 +176,111 @@ def _solve_pose(
     out_res: FloatArray,
     out_flags: NDArray[np.int64],
 ) -> int:
-    """All solutions of one pose (lengths scaled). Flags: bit 1 near-singular family member."""
-    # Wrist centre: target frame, back through the tool constant, point c6 on axis 6.
-    C6inv_p = np.empty(3)
-    R6 = C[6][:3, :3]
+    """All solutions of one pose (lengths scaled). Flags: bit 0 near-double, bit 1 near-singular.
+
+    ``geometry`` = (k6 (3): wrist centre in the tool frame, p3 (3): wrist centre in the frame
+    after joint 3, h, q3 mid, q3 half-range); ``coef`` (5, 6): the six position functions of q3
+    in the basis (1, cos, sin, cos 2, sin 2) or, prismatic, (1, x, x^2) with
+    x = (q3 - mid) / half; ``res_tab``/``mode_tab`` the same functions at the residual's and the
+    single equation's samples, ``res_fit``/``mode_fit`` the maps from samples to coefficients.
+    """
+    h = geometry[6]
+    mid = geometry[7]
+    half = geometry[8]
+    prism3 = prismatic[2]
+    # Wrist centre in the frame of joint 1 before its rotation, from (0, 0, h).
+    t = np.empty(3)
     for i in range(3):
-        C6inv_p[i] = -(R6[0, i] * C[6][0, 3] + R6[1, i] * C[6][1, 3] + R6[2, i] * C[6][2, 3])
-    p_w = _mv(T[:3, :3], _mv(R6.T, c6) + C6inv_p) + T[:3, 3]
-    # ... in the frame of joint 1 before its rotation.
-    R0 = C[0][:3, :3]
-    t = _mv(R0.T, p_w - C[0][:3, 3])
+        t[i] = T[i, 0] * geometry[0] + T[i, 1] * geometry[1] + T[i, 2] * geometry[2] + T[i, 3]
+    t0 = t[0] - C[0, 0, 3]
+    t1 = t[1] - C[0, 1, 3]
+    t2 = t[2] - C[0, 2, 3]
+    for i in range(3):
+        t[i] = C[0, 0, i] * t0 + C[0, 1, i] * t1 + C[0, 2, i] * t2
     t[2] -= h
+    tt = t[0] * t[0] + t[1] * t[1] + t[2] * t[2]
+    tz = t[2]
     roots = np.empty(_CAP)
     doubles = np.zeros(_CAP, dtype=np.bool_)
+    nroots = 0
     if mode > 0:
         # One equation ignores q2 (mode 1: |v|, when axes 1 and 2 meet; mode 2: the height):
         # it alone fixes q3. Degree one in (cos q3, sin q3), or a quadratic in a prismatic q3.
         k = 2 if mode == 1 else 5
-        ys3 = np.empty(3)
-        xs3 = np.empty(3)
-        for i in range(3):
-            xs3[i] = (
-                (q3_range[0] + (q3_range[1] - q3_range[0]) * i / 2.0)
-                if prismatic[2]
-                else (i * 2.0 * np.pi / 3.0)
-            )
-            ys3[i] = _abc(C, prismatic, xs3[i], c4, h, t)[k]
-        nroots = 0
-        if prismatic[2]:
-            V = np.empty((3, 3))
-            for r in range(3):
-                for j in range(3):
-                    V[r, j] = xs3[r] ** j
-            coef, _ = _lu_solve(V, ys3.copy())
-            nroots = _poly_real_roots(coef, q3_range[0], q3_range[1], roots)
+        shift = tt if mode == 1 else tz
+        c3 = np.zeros(3)
+        for r in range(3):
+            for i in range(3):
+                c3[r] += mode_fit[r, i] * (mode_tab[i, k] - shift)
+        if prism3:
+            nroots = _poly_real_roots(c3, -1.0, 1.0, roots)
         else:
-            c0 = (ys3[0] + ys3[1] + ys3[2]) / 3.0
-            ca = (2.0 * ys3[0] - ys3[1] - ys3[2]) / 3.0
-            sb = (ys3[1] - ys3[2]) / np.sqrt(3.0)
-            amp = np.hypot(ca, sb)
-            if amp > 0.0 and abs(c0) <= amp * (1.0 + 1e-12):
-                base = np.arctan2(sb, ca)
-                off = np.arccos(min(1.0, max(-1.0, -c0 / amp)))
+            amp = np.hypot(c3[1], c3[2])
+            if amp > 0.0 and abs(c3[0]) <= amp * (1.0 + 1e-12):
+                base = np.arctan2(c3[2], c3[1])
+                off = np.arccos(min(1.0, max(-1.0, -c3[0] / amp)))
                 roots[0] = base + off
                 roots[1] = base - off
                 doubles[0] = doubles[1] = off < 1e-6
                 nroots = 2
-    elif prismatic[2]:
-        # Degree <= 6 in q3 (|v|^2 is quadratic, the height linear): 7 samples fix it.
-        xs = np.empty(7)
-        ys = np.empty(7)
-        lo, hi = q3_range[0], q3_range[1]
-        mid = 0.5 * (lo + hi)
-        half = 0.5 * (hi - lo)
-        for k in range(7):
-            xs[k] = np.cos(np.pi * (k + 0.5) / 7.0)  # Chebyshev nodes on [-1, 1]
-            ys[k] = _residual(C, prismatic, mid + half * xs[k], c4, h, t)
-        V = np.empty((7, 7))
-        for r in range(7):
-            for k in range(7):
-                V[r, k] = xs[r] ** k
-        coef, _ = _lu_solve(V, ys.copy())
-        nroots = _poly_real_roots(coef, -1.0, 1.0, roots)
+    else:
+        # Residual x^2 + y^2 - d^2 of eliminating (cos q2, sin q2) at the samples.
+        m = res_tab.shape[0]
+        ys = np.empty(m)
+        for n in range(m):
+            a1, b1, c1, a2, b2, c2 = (
+                res_tab[n, 0],
+                res_tab[n, 1],
+                res_tab[n, 2] - tt,
+                res_tab[n, 3],
+                res_tab[n, 4],
+                res_tab[n, 5] - tz,
+            )
+            d = a1 * b2 - a2 * b1
+            x = b1 * c2 - b2 * c1
+            y = c1 * a2 - c2 * a1
+            ys[n] = x * x + y * y - d * d
+        fit = np.zeros(res_fit.shape[0])
+        for r in range(res_fit.shape[0]):
+            for n in range(m):
+                fit[r] += res_fit[r, n] * ys[n]
+        if prism3:
+            nroots = _poly_real_roots(fit, -1.0, 1.0, roots)
+        else:
+            a = np.zeros(5)
+            b = np.zeros(5)
+            a[:] = fit[:5]
+            b[1:] = fit[5:]
+            nroots = max(0, trig_roots(a, b, _SCAN_COS, _SCAN_SIN, _SCAN, roots, doubles))
+    if prism3:
         for r in range(nroots):
             roots[r] = mid + half * roots[r]
-    else:
-        a = np.zeros(5)
-        b = np.zeros(5)
-        for n in range(9):
-            phi = n * 2.0 * np.pi / 9.0
-            y = _residual(C, prismatic, phi, c4, h, t)
-            for k in range(5):
-                f = 1.0 / 9.0 if k == 0 else 2.0 / 9.0
-                a[k] += f * y * np.cos(k * phi)
-                b[k] += f * y * np.sin(k * phi)
-        nroots = _trig_roots(
-            a,
-            b,
-            np.ascontiguousarray(_SCAN_COS[:, :5]),
-            np.ascontiguousarray(_SCAN_SIN[:, :5]),
-            _SCAN,
-            roots,
-            doubles,
-        )
-        if nroots < 0:
-            nroots = 0
-    kept = 0
-    q = np.empty(6)
+    # (q3, q2) pairs.
     pairs = np.empty((2 * nroots, 2))
-    npairs = 0
     pair_root = np.empty(2 * nroots, dtype=np.int64)
+    npairs = 0
+    size = 1.0 + tt
     for r in range(nroots):
         q3 = roots[r]
-        a1, b1, c1, a2, b2, c2 = _abc(C, prismatic, q3, c4, h, t)
+        if prism3:
+            x = (q3 - mid) / half
+            b0, b1_, b2_, b3, b4 = 1.0, x, x * x, 0.0, 0.0
+        else:
+            c, s = np.cos(q3), np.sin(q3)
+            b0, b1_, b2_, b3, b4 = 1.0, c, s, c * c - s * s, 2.0 * s * c
+        f = np.empty(6)
+        for j in range(6):
+            f[j] = (
+                coef[0, j] * b0
+                + coef[1, j] * b1_
+                + coef[2, j] * b2_
+                + coef[3, j] * b3
+                + coef[4, j] * b4
+            )
+        a1, b1, c1, a2, b2, c2 = f[0], f[1], f[2] - tt, f[3], f[4], f[5] - tz
         d = a1 * b2 - a2 * b1
         n1 = np.hypot(a1, b1)
         n2 = np.hypot(a2, b2)
-        size = 1.0 + np.sum(t * t)
         if n1 > 1e-10 * size and n2 > 1e-10 * size and abs(d) > 1e-7 * n1 * n2:
             pairs[npairs, 0] = q3
             pairs[npairs, 1] = np.arctan2((c1 * a2 - c2 * a1) / d, (b1 * c2 - b2 * c1) / d)
@@ -350,67 +302,104 @@ def _solve_pose(
             pairs[npairs, 1] = base + sg * off
             pair_root[npairs] = r
             npairs += 1
+    q = np.empty(6)
+    S1 = np.empty((3, 3))
+    S2 = np.empty((3, 3))
+    W = np.empty((3, 3))
+    scratch = np.empty((3, 6, 6))
+    R4 = C[4]
+    R5 = C[5]
+    R6 = C[6]
+    kept = 0
     for pi in range(npairs):
         q3 = pairs[pi, 0]
         q2 = pairs[pi, 1]
         r = pair_root[pi]
-        v = _v(C, prismatic, q2, q3, c4, h)
+        # Wrist centre v = C1 Z(q2) C2 Z(q3) p3 - (0, 0, h), for q1.
+        p0, p1, p2 = geometry[3], geometry[4], geometry[5]
+        if prism3:
+            p2 += q3
+        else:
+            c, s = np.cos(q3), np.sin(q3)
+            p0, p1 = c * p0 - s * p1, s * p0 + c * p1
+        w0 = C[2, 0, 0] * p0 + C[2, 0, 1] * p1 + C[2, 0, 2] * p2 + C[2, 0, 3]
+        w1 = C[2, 1, 0] * p0 + C[2, 1, 1] * p1 + C[2, 1, 2] * p2 + C[2, 1, 3]
+        w2 = C[2, 2, 0] * p0 + C[2, 2, 1] * p1 + C[2, 2, 2] * p2 + C[2, 2, 3]
+        c, s = np.cos(q2), np.sin(q2)
+        w0, w1 = c * w0 - s * w1, s * w0 + c * w1
+        v0 = C[1, 0, 0] * w0 + C[1, 0, 1] * w1 + C[1, 0, 2] * w2 + C[1, 0, 3]
+        v1 = C[1, 1, 0] * w0 + C[1, 1, 1] * w1 + C[1, 1, 2] * w2 + C[1, 1, 3]
         flag = 0
-        if np.hypot(v[0], v[1]) < 1e-9 or np.hypot(t[0], t[1]) < 1e-9:
+        if np.hypot(v0, v1) < 1e-9 or np.hypot(t[0], t[1]) < 1e-9:
             q1 = 0.0
             flag = 2  # wrist centre on axis 1: q1 is free
         else:
-            q1 = np.arctan2(t[1], t[0]) - np.arctan2(v[1], v[0])
-        A = _motion(C[0], q1, prismatic[0])
-        A = _mm(A, C[1])
-        A = _mm(_motion(A, q2, prismatic[1]), C[2])
-        A = _mm(_motion(A, q3, prismatic[2]), C[3])
-        # W = rotation of joints 4..6: Rz(q4) R4 Rz(q5) R5 Rz(q6) = A^T R_T R6^T
-        W = _m3(_m3(A[:3, :3].T, T[:3, :3]), R6.T)
-        R4 = C[4][:3, :3]
-        R5 = C[5][:3, :3]
-        u = R5[:, 2]
-        w = W[:, 2]
-        rr = R4[:, 2]
-        ca = rr[0] * w[0] + rr[1] * w[1]
-        cb = rr[0] * w[1] - rr[1] * w[0]
-        cc = u[2] - rr[2] * w[2]
+            q1 = np.arctan2(t[1], t[0]) - np.arctan2(v1, v0)
+        # Rotation of joints 1-3, then W = rotation of joints 4..6 = A^T R_T R6^T.
+        _turn_then(C[0], q1, True, C[1], S1)
+        _turn_then(S1, q2, True, C[2], S2)
+        _turn_then(S2, q3, not prism3, C[3], S1)
+        for i in range(3):
+            for j in range(3):
+                S2[i, j] = S1[0, i] * T[0, j] + S1[1, i] * T[1, j] + S1[2, i] * T[2, j]
+        for i in range(3):
+            for j in range(3):
+                W[i, j] = S2[i, 0] * R6[j, 0] + S2[i, 1] * R6[j, 1] + S2[i, 2] * R6[j, 2]
+        # Rz(q4) R4 Rz(q5) R5 Rz(q6) = W. Axis 6's direction: (R4 z)^T Rz(-q4) w = (R5 z)_z.
+        u0, u1, u2 = R5[0, 2], R5[1, 2], R5[2, 2]
+        x0, x1, x2 = W[0, 2], W[1, 2], W[2, 2]
+        ca = R4[0, 2] * x0 + R4[1, 2] * x1
+        cb = R4[0, 2] * x1 - R4[1, 2] * x0
+        cc = u2 - R4[2, 2] * x2
         amp = np.hypot(ca, cb)
+        nq4 = 1
+        q4a = 0.0
+        q4b = 0.0
+        wflag = 0
         if amp < 1e-9:
-            q4s = np.array([0.0])
             wflag = 2  # axes 4 and 6 aligned: q4 + q6 only is determined
         else:
             ratio = cc / amp
             if abs(ratio) > 1.0 + 1e-9:
                 continue
-            ratio = min(1.0, max(-1.0, ratio))
             base = np.arctan2(cb, ca)
-            off = np.arccos(ratio)
-            q4s = np.array([base + off, base - off])
-            wflag = 0
-        for q4 in q4s:
+            off = np.arccos(min(1.0, max(-1.0, ratio)))
+            q4a = base + off
+            q4b = base - off
+            nq4 = 2
+        for j4 in range(nq4):
+            q4 = q4a if j4 == 0 else q4b
             c, s = np.cos(q4), np.sin(q4)
-            Rz4t = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-            yw = _mv(_m3(R4.T, Rz4t), w)
-            q5 = np.arctan2(yw[1], yw[0]) - np.arctan2(u[1], u[0])
+            # y = R4^T Rz(-q4) w = Rz(q5) u
+            z0, z1 = c * x0 + s * x1, -s * x0 + c * x1
+            y0 = R4[0, 0] * z0 + R4[1, 0] * z1 + R4[2, 0] * x2
+            y1 = R4[0, 1] * z0 + R4[1, 1] * z1 + R4[2, 1] * x2
+            q5 = np.arctan2(y1, y0) - np.arctan2(u1, u0)
+            # First column of R5^T Rz(-q5) R4^T Rz(-q4) W = Rz(q6): (cos q6, sin q6, 0).
+            e0, e1, e2 = W[0, 0], W[1, 0], W[2, 0]
+            e0, e1 = c * e0 + s * e1, -s * e0 + c * e1
+            g0 = R4[0, 0] * e0 + R4[1, 0] * e1 + R4[2, 0] * e2
+            g1 = R4[0, 1] * e0 + R4[1, 1] * e1 + R4[2, 1] * e2
+            g2 = R4[0, 2] * e0 + R4[1, 2] * e1 + R4[2, 2] * e2
             c5, s5 = np.cos(q5), np.sin(q5)
-            Rz5 = np.array([[c5, -s5, 0.0], [s5, c5, 0.0], [0.0, 0.0, 1.0]])
-            M = _m3(_m3(_m3(_m3(Rz4t.T, R4), Rz5), R5).T, W)
-            q6 = np.arctan2(M[1, 0], M[0, 0])
+            g0, g1 = c5 * g0 + s5 * g1, -s5 * g0 + c5 * g1
+            k0 = R5[0, 0] * g0 + R5[1, 0] * g1 + R5[2, 0] * g2
+            k1 = R5[0, 1] * g0 + R5[1, 1] * g1 + R5[2, 1] * g2
+            q6 = np.arctan2(k1, k0)
             q[0], q[1], q[2], q[3], q[4], q[5] = q1, q2, q3, q4, q5, q6
-            pos, rot, jr = _polish(C, prismatic, T, q, 2)
+            pos, rot, jr = newton_polish(C, prismatic, T, q, 2, scratch)
             if not (pos <= accept and rot <= accept):
                 continue
             for i in range(6):
                 if not prismatic[i]:
-                    q[i] = _wrap(q[i])
+                    q[i] = wrap_angle(q[i])
             dup = False
-            for m in range(kept):
+            for mm in range(kept):
                 same = True
                 for i in range(6):
-                    diff = q[i] - out_q[m, i]
+                    diff = q[i] - out_q[mm, i]
                     if not prismatic[i]:
-                        diff = _wrap(diff)
+                        diff = wrap_angle(diff)
                     if abs(diff) > 1e-6:
                         same = False
                         break
@@ -424,6 +413,7 @@ def _solve_pose(
             out_res[kept, 1] = rot
             out_flags[kept] = flag | wflag | (2 if jr < 1e-6 else 0) | (1 if doubles[r] else 0)
             kept += 1
+    sort_solutions(out_q, out_res, out_flags, kept)
     return kept
 
 
@@ -431,10 +421,12 @@ def _solve_pose(
 def _solve_serial(
     C: FloatArray,
     prismatic: NDArray[np.bool_],
-    c4: FloatArray,
-    h: float,
-    c6: FloatArray,
-    q3_range: FloatArray,
+    geometry: FloatArray,
+    coef: FloatArray,
+    res_tab: FloatArray,
+    res_fit: FloatArray,
+    mode_tab: FloatArray,
+    mode_fit: FloatArray,
     mode: int,
     Ts: FloatArray,
     accept: float,
@@ -447,10 +439,12 @@ def _solve_serial(
         out_count[n] = _solve_pose(
             C,
             prismatic,
-            c4,
-            h,
-            c6,
-            q3_range,
+            geometry,
+            coef,
+            res_tab,
+            res_fit,
+            mode_tab,
+            mode_fit,
             mode,
             Ts[n],
             accept,
@@ -464,10 +458,12 @@ def _solve_serial(
 def _solve_parallel(
     C: FloatArray,
     prismatic: NDArray[np.bool_],
-    c4: FloatArray,
-    h: float,
-    c6: FloatArray,
-    q3_range: FloatArray,
+    geometry: FloatArray,
+    coef: FloatArray,
+    res_tab: FloatArray,
+    res_fit: FloatArray,
+    mode_tab: FloatArray,
+    mode_fit: FloatArray,
     mode: int,
     Ts: FloatArray,
     accept: float,
@@ -480,10 +476,12 @@ def _solve_parallel(
         out_count[n] = _solve_pose(
             C,
             prismatic,
-            c4,
-            h,
-            c6,
-            q3_range,
+            geometry,
+            coef,
+            res_tab,
+            res_fit,
+            mode_tab,
+            mode_fit,
             mode,
             Ts[n],
             accept,
@@ -547,47 +545,66 @@ class SphericalWristSolver:
         C[:, :3, 3] /= self.length_scale
         self._C = np.ascontiguousarray(C)
         self._prismatic = np.array([k is JointKind.PRISMATIC for k in kinds])
-        self._c4 = centre[0] / self.length_scale
+        c4 = centre[0] / self.length_scale
+        c6 = centre[1] / self.length_scale
         # Point of axis 1 (local z through the origin) nearest to axis 2 (o2 + u z2).
         o2, z2 = self._C[1, :3, 3], self._C[1, :3, 2]
-        ez = np.array([0.0, 0.0, 1.0])
-        cz = float(z2 @ ez)
-        self._h = (
-            0.0
-            if abs(1.0 - cz * cz) < 1e-12
-            else float((o2 @ ez - cz * (o2 @ z2)) / (1.0 - cz * cz))
-        )
-        self._c6 = centre[1] / self.length_scale
+        cz = float(z2[2])
+        h = 0.0 if abs(1.0 - cz * cz) < 1e-12 else float((o2[2] - cz * (o2 @ z2)) / (1.0 - cz * cz))
         lo, hi = arm.joints[2].limits
         if self._prismatic[2]:
             reach = 10.0 * (1.0 + float(np.sum(shifts)) / self.length_scale)
             lo = max(lo / self.length_scale, -reach) if np.isfinite(lo) else -reach
             hi = min(hi / self.length_scale, reach) if np.isfinite(hi) else reach
-        self._q3_range = np.array([lo, hi], dtype=np.float64)
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        R6, t6 = self._C[6, :3, :3], self._C[6, :3, 3]
+        R3, t3 = self._C[3, :3, :3], self._C[3, :3, 3]
+        self._geometry = np.concatenate([R6.T @ (c6 - t6), R3 @ c4 + t3, [h, mid, half]])
         self.accept = accept
+
+        # The six position functions of q3, measured on grids (exact: their degree is known).
+        def functions(q3s: FloatArray) -> FloatArray:
+            return np.array(
+                [_position_functions(self._C, self._prismatic, c4, h, float(x)) for x in q3s]
+            )
+
+        if self._prismatic[2]:
+            xs = np.array([-1.0, 0.0, 1.0])
+            self._coef = np.zeros((5, 6))
+            self._coef[:3] = np.linalg.solve(
+                np.vander(xs, 3, increasing=True), functions(mid + half * xs)
+            )
+            self._res_tab = functions(mid + half * _RES_X_P)
+            self._res_fit = _RES_FIT_P
+            self._mode_tab = functions(mid + half * _MODE_X_P)
+            self._mode_fit = _MODE_FIT_P
+        else:
+            phi = np.arange(5) * (2.0 * np.pi / 5.0)
+            basis = np.stack(
+                [np.ones(5), np.cos(phi), np.sin(phi), np.cos(2 * phi), np.sin(2 * phi)], 1
+            )
+            self._coef = np.linalg.solve(basis, functions(phi))
+            self._res_tab = functions(_RES_PHI)
+            self._res_fit = _RES_FIT_R
+            self._mode_tab = functions(_MODE_PHI)
+            self._mode_fit = _MODE_FIT_R
         # Does |v| (or the height) ignore q2 for every q3? Then the elimination squares a
         # factor and its roots turn double: solve that equation alone instead.
-        zero = np.zeros(3)
-        coefs = np.array(
-            [
-                _abc(self._C, self._prismatic, x, self._c4, self._h, zero)
-                for x in np.linspace(self._q3_range[0], self._q3_range[1], 5)
-                if np.isfinite(x)
-            ]
-            if self._prismatic[2]
-            else [
-                _abc(self._C, self._prismatic, x, self._c4, self._h, zero)
-                for x in (0.3, 1.7, 2.9, -2.1)
-            ]
-        )
-        size = 1.0 + float(np.max(np.abs(coefs)))
+        coefs = np.abs(self._coef)
+        size = 1.0 + float(np.max(coefs))
         self._mode = 0
-        if np.max(np.abs(coefs[:, 0:2])) <= 1e-10 * size:
+        if np.max(coefs[:, 0:2]) <= 1e-10 * size:
             self._mode = 1
-        elif np.max(np.abs(coefs[:, 3:5])) <= 1e-10 * size:
+        elif np.max(coefs[:, 3:5]) <= 1e-10 * size:
             self._mode = 2
 
-    def solve_batch(self, Ts: FloatArray) -> list[IKResult]:
+    _METHODS = ("spherical-wrist",)
+    _REASONS = ("no real solution: the pose is out of reach",)
+
+    def _run(
+        self, Ts: FloatArray
+    ) -> tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64]]:
+        """Padded solutions (model units), scaled residuals, flags and counts of each pose."""
         T = prepare_targets(Ts, self.length_scale)
         N = T.shape[0]
         q = np.zeros((N, _CAP, 6))
@@ -598,10 +615,12 @@ class SphericalWristSolver:
         kernel(
             self._C,
             self._prismatic,
-            self._c4,
-            self._h,
-            self._c6,
-            self._q3_range,
+            self._geometry,
+            self._coef,
+            self._res_tab,
+            self._res_fit,
+            self._mode_tab,
+            self._mode_fit,
             self._mode,
             T,
             self.accept,
@@ -610,16 +629,29 @@ class SphericalWristSolver:
             flags,
             count,
         )
-        q[:, :, self._prismatic] *= self.length_scale
+        if self._prismatic.any():
+            q[:, :, self._prismatic] *= self.length_scale
+        return q, res, flags, count
+
+    def solve_batch(self, Ts: FloatArray) -> IKBatch:
+        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit),
+        as padded arrays; ``batch[i]`` is pose ``i``'s :class:`IKResult`."""
+        q, res, flags, count = self._run(Ts)
+        zero = np.zeros(count.shape[0], dtype=np.int64)
         return solved_poses(
-            q,
-            res,
-            flags,
-            count,
-            self.length_scale,
-            ["spherical-wrist"] * N,
-            ["no real solution: the pose is out of reach"] * N,
+            q, res, flags, count, self.length_scale, self._METHODS, zero, self._REASONS, zero
         )
 
     def solve(self, T: FloatArray) -> IKResult:
-        return self.solve_batch(np.asarray(T, dtype=np.float64)[None])[0]
+        """All real solutions of one pose (4x4, world frame, model unit)."""
+        q, res, flags, count = self._run(np.asarray(T, dtype=np.float64)[None])
+        return pose_result(
+            q[0],
+            res[0, :, 0] * self.length_scale,
+            res[0, :, 1],
+            (flags[0] & 1) > 0,
+            (flags[0] & 2) > 0,
+            int(count[0]),
+            self._METHODS[0],
+            self._REASONS[0],
+        )
