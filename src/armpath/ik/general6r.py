@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from armpath.errors import InvalidInputError
 from armpath.ik.kernels import (
     fk_error_jacobian,
-    lu_solve,
+    lu_solve_into,
     prepare_targets,
     scan_tables,
     sort_solutions,
@@ -155,21 +155,39 @@ def lhs_coefficients(
 
 @njit(cache=True)
 def _rhs_coefficients(
-    E1: FloatArray, lE: FloatArray, pE: FloatArray, grid: FloatArray, basis_inv: FloatArray
-) -> FloatArray:
-    """Coefficients ``R[q, h0 * 3 + h1]`` of ``Z(-p1) E1 Z(-p0)`` applied to the line (lE, pE)."""
-    G = np.empty((3, 3, 14))
+    E1: FloatArray,
+    lE: FloatArray,
+    pE: FloatArray,
+    grid: FloatArray,
+    basis_inv: FloatArray,
+    G: FloatArray,
+    R: FloatArray,
+) -> None:
+    """Coefficients ``R[q, h0 * 3 + h1]`` of ``Z(-p1) E1 Z(-p0)`` applied to the line (lE, pE);
+    ``G`` is a (3, 3, 14) work array."""
     lv = np.empty(3)
     pv = np.empty(3)
     for i in range(3):
-        A = _mrz(E1, -grid[i])
+        c0, s0 = np.cos(grid[i]), np.sin(grid[i])
+        # Z(-p0) then E1: direction and point in E1's frame.
+        l0, l1 = c0 * lE[0] + s0 * lE[1], -s0 * lE[0] + c0 * lE[1]
+        x0, x1 = c0 * pE[0] + s0 * pE[1], -s0 * pE[0] + c0 * pE[1]
+        la = E1[0, 0] * l0 + E1[0, 1] * l1 + E1[0, 2] * lE[2]
+        lb = E1[1, 0] * l0 + E1[1, 1] * l1 + E1[1, 2] * lE[2]
+        lc = E1[2, 0] * l0 + E1[2, 1] * l1 + E1[2, 2] * lE[2]
+        pa = E1[0, 0] * x0 + E1[0, 1] * x1 + E1[0, 2] * pE[2] + E1[0, 3]
+        pb = E1[1, 0] * x0 + E1[1, 1] * x1 + E1[1, 2] * pE[2] + E1[1, 3]
+        pc = E1[2, 0] * x0 + E1[2, 1] * x1 + E1[2, 2] * pE[2] + E1[2, 3]
         for j in range(3):
-            M = _mm(_rz(-grid[j]), A)
-            for r in range(3):
-                lv[r] = M[r, 0] * lE[0] + M[r, 1] * lE[1] + M[r, 2] * lE[2]
-                pv[r] = M[r, 0] * pE[0] + M[r, 1] * pE[1] + M[r, 2] * pE[2] + M[r, 3]
+            c1, s1 = np.cos(grid[j]), np.sin(grid[j])
+            lv[0] = c1 * la + s1 * lb
+            lv[1] = -s1 * la + c1 * lb
+            lv[2] = lc
+            pv[0] = c1 * pa + s1 * pb
+            pv[1] = -s1 * pa + c1 * pb
+            pv[2] = pc
             _quantities(lv, pv, G[i, j])
-    R = np.zeros((14, 9))
+    R[:, :] = 0.0
     for a in range(3):
         for b in range(3):
             for i in range(3):
@@ -178,7 +196,6 @@ def _rhs_coefficients(
                     if w != 0.0:
                         for q in range(14):
                             R[q, a * 3 + b] += w * G[i, j, q]
-    return R
 
 
 @njit(cache=True)
@@ -273,10 +290,12 @@ def _reflect(V: FloatArray, beta: FloatArray, x: FloatArray, transpose: bool) ->
 
 
 @njit(cache=True)
-def _null_vector(A: FloatArray) -> FloatArray:
-    """Approximate null vector of a (near-)singular square matrix by complete-pivoting LU."""
+def _null_vector(A: FloatArray, cols: NDArray[np.int64], y: FloatArray, out: FloatArray) -> None:
+    """Unit null vector (approximate) of a (near-)singular square matrix into ``out``, by
+    complete-pivoting LU (A is overwritten; ``cols``, ``y`` are work arrays of its size)."""
     n = A.shape[0]
-    cols = np.arange(n)
+    for k in range(n):
+        cols[k] = k
     for k in range(n):
         pr, pc, big = k, k, -1.0
         for r in range(k, n):
@@ -306,18 +325,18 @@ def _null_vector(A: FloatArray) -> FloatArray:
                 for c in range(k + 1, n):
                     A[r, c] -= f * A[k, c]
     # Null vector of U: last (permuted) component 1, back substitution over the rest.
-    y = np.zeros(n)
     y[n - 1] = 1.0
     for k in range(n - 2, -1, -1):
         s = 0.0
         for c in range(k + 1, n):
             s += A[k, c] * y[c]
         y[k] = -s / A[k, k] if A[k, k] != 0.0 else 0.0
-    v = np.empty(n)
+    norm = 0.0
     for k in range(n):
-        v[cols[k]] = y[k]
-    out: FloatArray = v / np.sqrt(np.sum(v * v))
-    return out
+        norm += y[k] * y[k]
+    norm = np.sqrt(norm)
+    for k in range(n):
+        out[cols[k]] = y[k] / norm
 
 
 _ALL_REVOLUTE = np.zeros(6, dtype=np.bool_)
@@ -331,48 +350,68 @@ def _refine(
     iterations: int,
     q_known: FloatArray,
     deflate: bool,
+    scratch: FloatArray,
 ) -> tuple[float, float, float]:
     """Newton steps on the pose; returns (position error, rotation error, Jacobian ratio).
 
     Steps are clamped to 0.3 rad. With ``deflate`` the residual is divided by the distance to
     ``q_known`` (Brown / Farrell deflation), so that Newton finds a *second* solution next to a
-    known one, which is how a near-double pair is split.
+    known one, which is how a near-double pair is split. ``scratch``: a (3, 6, 6) work array.
     """
-    err = np.empty(6)
-    J = np.empty((6, 6))
+    J = scratch[0]
+    Jw = scratch[1]
+    err = scratch[2, 0]
+    ew = scratch[2, 1]
+    dq = scratch[2, 2]
     ratio = 0.0
     previous = np.inf
     for _ in range(iterations):
         fk_error_jacobian(C, _ALL_REVOLUTE, q, T, err, J)
-        size = np.sqrt(np.sum(err * err))
+        size = 0.0
+        for i in range(6):
+            size += err[i] * err[i]
+        size = np.sqrt(size)
         if size < 1e-14 or (size < 1e-11 and size > 0.25 * previous):
             break  # converged, or stalled at rounding level
         previous = size
-        dq, det = lu_solve(J.copy(), err.copy())
-        if det == 0.0:
+        Jw[:, :] = J
+        ew[:] = err
+        if lu_solve_into(Jw, ew, dq) == 0.0:
             break
         if deflate:
-            diff = q - q_known
-            r2 = np.sum(diff * diff)
+            r2 = 0.0
+            dot = 0.0
+            for i in range(6):
+                diff = q[i] - q_known[i]
+                r2 += diff * diff
+                dot += diff * dq[i]
             if r2 < 1e-30:
                 break
             m = 1.0 / r2 + 1.0
-            grad_dot = -2.0 * np.sum(diff * dq) / (r2 * r2)
-            denom = 1.0 - grad_dot / m
+            denom = 1.0 + 2.0 * dot / (r2 * r2) / m
             if abs(denom) > 1e-12:
-                dq = dq / denom
-        norm = np.sqrt(np.sum(dq * dq))
-        if norm > 0.3:
-            dq *= 0.3 / norm
-        q += dq
+                for i in range(6):
+                    dq[i] /= denom
+        norm = 0.0
+        for i in range(6):
+            norm += dq[i] * dq[i]
+        norm = np.sqrt(norm)
+        shrink = 0.3 / norm if norm > 0.3 else 1.0
+        for i in range(6):
+            q[i] += shrink * dq[i]
         if norm < 1e-14:
             break
     fk_error_jacobian(C, _ALL_REVOLUTE, q, T, err, J)
     norms = 1.0
     for i in range(6):
-        norms *= np.sqrt(np.sum(J[:, i] * J[:, i]))
+        col = 0.0
+        for r in range(6):
+            col += J[r, i] * J[r, i]
+        norms *= np.sqrt(col)
     if norms > 0.0:
-        ratio = abs(lu_solve(J.copy(), err.copy())[1]) / norms
+        Jw[:, :] = J
+        ew[:] = err
+        ratio = abs(lu_solve_into(Jw, ew, dq)) / norms
     pos = np.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
     rot = np.sqrt(err[3] ** 2 + err[4] ** 2 + err[5] ** 2)
     return pos, rot, ratio
@@ -458,9 +497,13 @@ def _solve_split(
     Kinv5 = _rigid_inv(K[5])
     lE = np.ascontiguousarray(Kinv5[:3, 2])
     pE = np.ascontiguousarray(Kinv5[:3, 3])
-    R = _rhs_coefficients(_rigid_inv(K[0]), lE, pE, grid, basis_inv)
-    Q = np.ascontiguousarray(R[:, 1:])
-    Vh, beta, Rq = _householder(Q.copy())
+    R = np.empty((14, 9))
+    _rhs_coefficients(_rigid_inv(K[0]), lE, pE, grid, basis_inv, np.empty((3, 3, 14)), R)
+    Q = np.empty((14, 8))
+    for r in range(14):
+        for c in range(8):
+            Q[r, c] = R[r, c + 1]
+    Vh, beta, Rq = _householder(Q)
     dmin = np.inf
     dmax = 0.0
     for k in range(8):
@@ -477,26 +520,35 @@ def _solve_split(
         _reflect(Vh, beta, N[j], False)
     # Sig[h] = N @ Pm[h] @ half2 (monomials x3^i x4^j, i, j in 0..2)
     Mh = np.zeros((3, 12, 12))
+    NP = np.empty((6, 9))
     for h in range(3):
-        Sg = N @ np.ascontiguousarray(Pm[h]) @ half2
         for r in range(6):
             for m in range(9):
+                acc = 0.0
+                for q in range(14):
+                    acc += N[r, q] * Pm[h, q, m]
+                NP[r, m] = acc
+        for r in range(6):
+            for m in range(9):
+                acc = 0.0
+                for k in range(9):
+                    acc += NP[r, k] * half2[k, m]
                 i = m // 3
                 j = m % 3
-                Mh[h, r, i * 3 + j] = Sg[r, m]
-                Mh[h, r + 6, (i + 1) * 3 + j] = Sg[r, m]
+                Mh[h, r, i * 3 + j] = acc
+                Mh[h, r + 6, (i + 1) * 3 + j] = acc
     # Row scaling (does not move roots).
     for r in range(12):
-        s = 0.0
+        sq = 0.0
         for h in range(3):
             for c in range(12):
-                s += Mh[h, r, c] * Mh[h, r, c]
-        if s == 0.0:
+                sq += Mh[h, r, c] * Mh[h, r, c]
+        if sq == 0.0:
             return -1
-        s = 1.0 / np.sqrt(s)
+        sq = 1.0 / np.sqrt(sq)
         for h in range(3):
             for c in range(12):
-                Mh[h, r, c] *= s
+                Mh[h, r, c] *= sq
     ndet = det_phi.shape[0]
     dets = np.empty(ndet)
     biggest = 0.0
@@ -510,25 +562,33 @@ def _solve_split(
         return -1  # determinant vanishes identically: degenerate split
     a = np.zeros(9)
     b = np.zeros(9)
+    for n in range(ndet):
+        c1, s1 = np.cos(det_phi[n]), np.sin(det_phi[n])
+        c, sn = 1.0, 0.0
+        for k in range(9):
+            a[k] += dets[n] * c
+            b[k] += dets[n] * sn
+            c, sn = c * c1 - sn * s1, sn * c1 + c * s1
     for k in range(9):
-        sc = 0.0
-        ss = 0.0
-        for n in range(ndet):
-            sc += dets[n] * np.cos(k * det_phi[n])
-            ss += dets[n] * np.sin(k * det_phi[n])
         f = 1.0 / ndet if k == 0 else 2.0 / ndet
-        a[k] = sc * f
-        b[k] = ss * f
+        a[k] *= f
+        b[k] *= f
     roots = np.empty(phis.shape[0])
     count = trig_roots(a, b, scan_cos, scan_sin, scan, roots, doubles)
     if count < 0:
         return -1
     v45 = np.empty(9)
+    w = np.empty(12)
+    cols = np.empty(12, dtype=np.int64)
+    y = np.empty(12)
+    rhs = np.empty(14)
+    v = np.empty(8)
+    M = np.empty((4, 4))
+    Mb = np.empty((4, 4))
     for c in range(count):
         p2 = roots[c]
-        A = np.empty((12, 12))
-        _pencil_at(Mh, p2, A)
-        w = _null_vector(A)
+        _pencil_at(Mh, p2, work)
+        _null_vector(work, cols, y, w)
         num = 0.0
         dlo = 0.0
         dhi = 0.0
@@ -553,12 +613,16 @@ def _solve_split(
         for i in range(3):
             for j in range(3):
                 v45[i * 3 + j] = b3[i] * b4[j]
-        rhs = np.zeros(14)
-        for h in range(3):
-            rhs += b2[h] * (np.ascontiguousarray(Pm[h]) @ v45)
+        for q in range(14):
+            acc = 0.0
+            for h in range(3):
+                row = 0.0
+                for m in range(9):
+                    row += Pm[h, q, m] * v45[m]
+                acc += b2[h] * row
+            rhs[q] = acc
         # Least-squares products of p0, p1 (index h0 * 3 + h1 - 1): R v = (H^T rhs)[:8].
         _reflect(Vh, beta, rhs, True)
-        v = np.empty(8)
         for k in range(7, -1, -1):
             acc = rhs[k]
             for j in range(k + 1, 8):
@@ -569,11 +633,22 @@ def _solve_split(
         phis[c, 2] = p2 + deltas[0]
         phis[c, 3] = p3 + deltas[1]
         phis[c, 4] = p4 + deltas[2]
-        M = np.eye(4)
+        # The loop closes with Z(p5) = (Z(p0) K0 ... Z(p4) K4)^-1 K5^-1: its first column.
+        M[:, :] = 0.0
+        for i in range(4):
+            M[i, i] = 1.0
         for i in range(5):
-            M = _mm(_mrz(M, phis[c, i]), K[i])
-        Z5 = _mm(_rigid_inv(M), _rigid_inv(K[5]))
-        phis[c, 5] = np.arctan2(Z5[1, 0], Z5[0, 0])
+            cz, sz = np.cos(phis[c, i]), np.sin(phis[c, i])
+            for r in range(3):
+                m0 = M[r, 0]
+                m1 = M[r, 1]
+                M[r, 0] = m0 * cz + m1 * sz
+                M[r, 1] = -m0 * sz + m1 * cz
+            _affine_mul(M, K[i], Mb)
+            M[:, :] = Mb
+        z0 = M[0, 0] * K[5, 0, 0] + M[1, 0] * K[5, 0, 1] + M[2, 0] * K[5, 0, 2]
+        z1 = M[0, 1] * K[5, 0, 0] + M[1, 1] * K[5, 0, 1] + M[2, 1] * K[5, 0, 2]
+        phis[c, 5] = np.arctan2(z1, z0)
     return count
 
 
@@ -611,6 +686,7 @@ def _solve_pose(
     doubles = np.zeros(_CAP, dtype=np.bool_)
     q = np.empty(6)
     guess = np.empty(6)
+    scratch = np.empty((3, 6, 6))
     for s in range(splits.shape[0]):
         forward = splits[s, 0] == 1
         K, order, sign = _loop_constants(C, T, forward, splits[s, 1])
@@ -645,7 +721,7 @@ def _solve_pose(
             for i in range(6):
                 guess[order[i]] = sign * phis[c, i]
             q[:] = guess
-            pos, rot, ratio = _refine(C, T, q, newton_iterations, guess, False)
+            pos, rot, ratio = _refine(C, T, q, newton_iterations, guess, False, scratch)
             if not (pos <= accept and rot <= accept):
                 suspicious = True
                 continue
@@ -660,9 +736,9 @@ def _solve_pose(
             # Two candidates met (or a near-double root): look for the partner by deflation.
             known = out_q[dup if dup >= 0 else kept - 1].copy()
             q[:] = guess
-            pos, rot, ratio = _refine(C, T, q, 4 * newton_iterations, known, True)
+            pos, rot, ratio = _refine(C, T, q, 4 * newton_iterations, known, True, scratch)
             if pos <= accept and rot <= accept:
-                pos, rot, ratio = _refine(C, T, q, newton_iterations, known, False)
+                pos, rot, ratio = _refine(C, T, q, newton_iterations, known, False, scratch)
                 if pos <= accept and rot <= accept:
                     kept, dup2 = _keep(
                         q,

@@ -97,9 +97,14 @@ def _trig_eval(a: FloatArray, b: FloatArray, phi: float) -> tuple[float, float, 
 
 
 @njit(cache=True)
-def _bracketed_root(a: FloatArray, b: FloatArray, lo: float, hi: float, glo: float) -> float:
-    """Root of the trigonometric polynomial in [lo, hi] (sign change), safeguarded Newton."""
-    x = 0.5 * (lo + hi)
+def _bracketed_root(
+    a: FloatArray, b: FloatArray, lo: float, hi: float, glo: float, ghi: float
+) -> float:
+    """Root of the trigonometric polynomial in [lo, hi] where its values ``glo``, ``ghi`` differ
+    in sign: safeguarded Newton from the secant point."""
+    x = lo + (hi - lo) * glo / (glo - ghi)
+    if not (lo < x < hi):
+        x = 0.5 * (lo + hi)
     for _ in range(60):
         g, d1, _d2 = _trig_eval(a, b, x)
         if g == 0.0:
@@ -111,10 +116,10 @@ def _bracketed_root(a: FloatArray, b: FloatArray, lo: float, hi: float, glo: flo
             hi = x
         step = g / d1 if d1 != 0.0 else 0.0
         xn = x - step
+        if abs(step) < 1e-12:  # quadratic convergence: this step lands at rounding level
+            return xn if lo <= xn <= hi else x
         if not (lo < xn < hi):
             xn = 0.5 * (lo + hi)
-        if abs(xn - x) < 1e-14:
-            return xn
         x = xn
         if hi - lo < 1e-14:
             break
@@ -144,6 +149,32 @@ def _hidden_pair(dm: float, d0: float, d1: float, d2: float) -> bool:
     return False
 
 
+@njit(cache=True, fastmath=True)
+def _scan_values(
+    a: FloatArray,
+    b: FloatArray,
+    da: FloatArray,
+    db: FloatArray,
+    scan_cos: FloatArray,
+    scan_sin: FloatArray,
+    vals: FloatArray,
+    der: FloatArray,
+) -> float:
+    """Values and derivatives of a trigonometric polynomial on the scan grid (only their signs
+    and sizes are used, so reassociated sums are fine); returns the largest |value|."""
+    scale = 0.0
+    for i in range(scan_cos.shape[0]):
+        v = 0.0
+        dv = 0.0
+        for k in range(a.shape[0]):
+            v += scan_cos[i, k] * a[k] + scan_sin[i, k] * b[k]
+            dv += scan_cos[i, k] * da[k] + scan_sin[i, k] * db[k]
+        vals[i] = v
+        der[i] = dv
+        scale = max(scale, abs(v))
+    return scale
+
+
 @njit(cache=True)
 def trig_roots(
     a: FloatArray,
@@ -171,16 +202,7 @@ def trig_roots(
         db[k] = -k * a[k]
     vals = np.empty(n)
     der = np.empty(n)
-    scale = 0.0
-    for i in range(n):
-        v = 0.0
-        dv = 0.0
-        for k in range(m):
-            v += scan_cos[i, k] * a[k] + scan_sin[i, k] * b[k]
-            dv += scan_cos[i, k] * da[k] + scan_sin[i, k] * db[k]
-        vals[i] = v
-        der[i] = dv
-        scale = max(scale, abs(v))
+    scale = _scan_values(a, b, da, db, scan_cos, scan_sin, vals, der)
     if scale == 0.0:
         return -1
     h = 2.0 * np.pi / n
@@ -195,7 +217,7 @@ def trig_roots(
         d0 = der[i]
         d1 = der[(i + 1) % n]
         if (d0 < 0.0) != (d1 < 0.0) and d1 != 0.0 and d0 != 0.0:
-            x = _bracketed_root(da, db, scan[i], scan[i] + h, d0)
+            x = _bracketed_root(da, db, scan[i], scan[i] + h, d0, d1)
             g, _, _ = _trig_eval(a, b, x)
             xs[npts] = x
             gs[npts] = g
@@ -213,7 +235,7 @@ def trig_roots(
                 if k == sub:
                     dk = d1
                 if (dprev < 0.0) != (dk < 0.0) and dk != 0.0 and dprev != 0.0 and npts < 2 * n:
-                    x = _bracketed_root(da, db, xprev, xk, dprev)
+                    x = _bracketed_root(da, db, xprev, xk, dprev, dk)
                     g, _, _ = _trig_eval(a, b, x)
                     xs[npts] = x
                     gs[npts] = g
@@ -238,7 +260,7 @@ def trig_roots(
             if crit[i + 1] and abs(g1) <= 1e-13 * scale:
                 continue  # the double root at the next point is taken there
             if count < cap:
-                roots[count] = _bracketed_root(a, b, xs[i], xs[i + 1], g0)
+                roots[count] = _bracketed_root(a, b, xs[i], xs[i + 1], g0, g1)
                 doubles[count] = False
                 count += 1
     return count
