@@ -232,7 +232,8 @@ class Adapter:
 
 
 class Ours(Adapter):
-    """armpath's ``complete_solver``: closed-form spherical wrist or Raghavan-Roth elimination."""
+    """armpath's ``complete_solver``: closed form (spherical wrist, three parallel axes) or
+    Raghavan-Roth elimination."""
 
     name, label, module, pip, batch = "ours", "armpath (ours)", "armpath", "-e .", True
 
@@ -243,7 +244,7 @@ class Ours(Adapter):
         self._complete, self._row, self._arm = complete_solver, DHRow, dh_arm
         # load every numba kernel from the disk cache (serial and parallel) before any timing
         Q = test_joints(300, seed=99)
-        for dh in (puma560(), random_arms(1)[0]):
+        for dh in (puma560(), ur5(), random_arms(1)[0]):
             solver = complete_solver(self._build("warm-up", dh))
             Ts = np.array([fk(dh, q) for q in Q])
             solver.solve(Ts[0])
@@ -270,7 +271,8 @@ class Ours(Adapter):
         return r.solutions
 
     def solve_batch(self, Ts: np.ndarray) -> list[np.ndarray]:
-        return [r.solutions for r in self.solver.solve_batch(Ts)]
+        batch = self.solver.solve_batch(Ts)  # padded arrays; per-pose views are free
+        return [batch.solutions[i, :k] for i, k in enumerate(batch.counts)]
 
     def describe(self) -> str:
         top = sorted(self.methods.items(), key=lambda kv: -kv[1])

@@ -545,6 +545,7 @@ class SphericalWristSolver:
         C[:, :3, 3] /= self.length_scale
         self._C = np.ascontiguousarray(C)
         self._prismatic = np.array([k is JointKind.PRISMATIC for k in kinds])
+        self._any_prismatic = bool(self._prismatic.any())
         c4 = centre[0] / self.length_scale
         c6 = centre[1] / self.length_scale
         # Point of axis 1 (local z through the origin) nearest to axis 2 (o2 + u z2).
@@ -611,7 +612,7 @@ class SphericalWristSolver:
         res = np.zeros((N, _CAP, 2))
         flags = np.zeros((N, _CAP), dtype=np.int64)
         count = np.zeros(N, dtype=np.int64)
-        kernel = _solve_parallel if N >= 256 else _solve_serial
+        kernel = _solve_parallel if N >= 128 else _solve_serial
         kernel(
             self._C,
             self._prismatic,
@@ -629,7 +630,7 @@ class SphericalWristSolver:
             flags,
             count,
         )
-        if self._prismatic.any():
+        if self._any_prismatic:
             q[:, :, self._prismatic] *= self.length_scale
         return q, res, flags, count
 

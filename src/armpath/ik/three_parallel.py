@@ -376,7 +376,7 @@ class ThreeParallelSolver:
         res = np.zeros((N, _CAP, 2))
         flags = np.zeros((N, _CAP), dtype=np.int64)
         count = np.zeros(N, dtype=np.int64)
-        kernel = _solve_parallel if N >= 256 else _solve_serial
+        kernel = _solve_parallel if N >= 128 else _solve_serial
         kernel(self._Cs, self._Cf, self._geo, self._reverse, T, self.accept, q, res, flags, count)
         return q, res, flags, count
 
