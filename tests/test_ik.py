@@ -495,8 +495,9 @@ def test_cli_ik_on_the_papers_printed_pose():
 def test_solution_sets_agree_with_eaik():
     """EAIK (subproblem decomposition, an independent analytic solver) on the geometries it
     supports: PUMA 560, UR5, random spherical-wrist arms whose first axes meet or are
-    parallel, and random arms with three parallel axes (either way round). Every solution EAIK returns is one of ours, and the counts agree wherever EAIK
-    itself finds the generating vector."""
+    parallel, and random arms with three parallel axes (either way round). Every solution EAIK
+    returns is one of ours, and the counts agree wherever EAIK itself finds the generating
+    vector."""
     from eaik.IK_DH import DhRobot
 
     rng = np.random.default_rng(13)

@@ -253,8 +253,8 @@ def ik(
     """Inverse kinematics: every solution for a tool pose (or position), deg / mm.
 
     Complete methods return every real solution: closed form for arms with a spherical wrist
-    or three parallel axes (UR type), Raghavan-Roth elimination for any other 6R arm. Each solution carries its forward-kinematics
-    residual. Exit status 1 if there is no solution.
+    or three parallel axes (UR type), Raghavan-Roth elimination for any other 6R arm. Each
+    solution carries its forward-kinematics residual. Exit status 1 if there is no solution.
     """
     with _cli_errors():
         if (pose is None) == (xyz is None):
