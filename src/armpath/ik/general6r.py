@@ -67,17 +67,6 @@ DEFAULT_DELTAS = np.array([0.7123, -1.1379, 0.4518])
 
 
 @njit(cache=True)
-def _rz(phi: float) -> FloatArray:
-    T = np.eye(4)
-    c, s = np.cos(phi), np.sin(phi)
-    T[0, 0] = c
-    T[0, 1] = -s
-    T[1, 0] = s
-    T[1, 1] = c
-    return T
-
-
-@njit(cache=True)
 def _mm(A: FloatArray, B: FloatArray) -> FloatArray:
     """Product of two 4x4 rigid transforms as a new array (:func:`_affine_mul`)."""
     out = np.empty((4, 4))

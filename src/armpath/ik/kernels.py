@@ -70,14 +70,6 @@ def lu_solve_into(A: FloatArray, rhs: FloatArray, x: FloatArray) -> float:
 
 
 @njit(cache=True)
-def lu_solve(A: FloatArray, rhs: FloatArray) -> tuple[FloatArray, float]:
-    """Solve ``A x = rhs`` (A, rhs overwritten); also det(A)."""
-    x = np.empty(A.shape[0])
-    det = lu_solve_into(A, rhs, x)
-    return x, det
-
-
-@njit(cache=True)
 def _trig_eval(a: FloatArray, b: FloatArray, phi: float) -> tuple[float, float, float]:
     """Value, first and second derivative of sum_k a_k cos k phi + b_k sin k phi."""
     c1 = np.cos(phi)
@@ -149,7 +141,7 @@ def _hidden_pair(dm: float, d0: float, d1: float, d2: float) -> bool:
     return False
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def _scan_values(
     a: FloatArray,
     b: FloatArray,
@@ -160,8 +152,8 @@ def _scan_values(
     vals: FloatArray,
     der: FloatArray,
 ) -> float:
-    """Values and derivatives of a trigonometric polynomial on the scan grid (only their signs
-    and sizes are used, so reassociated sums are fine); returns the largest |value|."""
+    """Values and derivatives (coefficients ``da``, ``db``) of a trigonometric polynomial on the
+    scan grid; returns the largest |value|."""
     scale = 0.0
     for i in range(scan_cos.shape[0]):
         v = 0.0
