@@ -553,11 +553,11 @@ def _solve_split(
     b = np.zeros(9)
     for n in range(ndet):
         c1, s1 = np.cos(det_phi[n]), np.sin(det_phi[n])
-        c, sn = 1.0, 0.0
+        ck, sk = 1.0, 0.0  # cos, sin of k * phi_n
         for k in range(9):
-            a[k] += dets[n] * c
-            b[k] += dets[n] * sn
-            c, sn = c * c1 - sn * s1, sn * c1 + c * s1
+            a[k] += dets[n] * ck
+            b[k] += dets[n] * sk
+            ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
     for k in range(9):
         f = 1.0 / ndet if k == 0 else 2.0 / ndet
         a[k] *= f

@@ -46,22 +46,28 @@ _CAP = 16
 _SCAN, _SCAN_COS, _SCAN_SIN = scan_tables(120, 5)
 #: q3 samples of the revolute residual (9: harmonics 0..4) and their discrete Fourier transform
 #: (rows a0..a4, b1..b4).
-_RES_PHI = np.arange(9) * (2.0 * np.pi / 9.0)
-_RES_FIT_R = np.vstack(
-    [
-        np.cos(np.outer(np.arange(5), _RES_PHI)) * np.array([1.0, 2, 2, 2, 2])[:, None] / 9.0,
-        np.sin(np.outer(np.arange(1, 5), _RES_PHI)) * 2.0 / 9.0,
-    ]
+_RES_PHI = np.asarray(np.arange(9) * (2.0 * np.pi / 9.0), dtype=np.float64)
+_RES_FIT_R = np.asarray(
+    np.vstack(
+        [
+            np.cos(np.outer(np.arange(5), _RES_PHI)) * np.array([1.0, 2, 2, 2, 2])[:, None] / 9.0,
+            np.sin(np.outer(np.arange(1, 5), _RES_PHI)) * 2.0 / 9.0,
+        ]
+    ),
+    dtype=np.float64,
 )
 #: Chebyshev nodes on [-1, 1] for the prismatic residual (a polynomial of degree <= 6).
-_RES_X_P = np.cos(np.pi * (np.arange(7) + 0.5) / 7.0)
-_RES_FIT_P = np.linalg.inv(np.vander(_RES_X_P, 7, increasing=True))
+_RES_X_P = np.asarray(np.cos(np.pi * (np.arange(7) + 0.5) / 7.0), dtype=np.float64)
+_RES_FIT_P = np.asarray(np.linalg.inv(np.vander(_RES_X_P, 7, increasing=True)), dtype=np.float64)
 #: Three samples for the single equations (modes 1, 2): {0, 120, 240} deg -> (c0, cos, sin), or
 #: x in {-1, 0, 1} -> polynomial coefficients.
-_MODE_PHI = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
-_MODE_FIT_R = np.linalg.inv(np.stack([np.ones(3), np.cos(_MODE_PHI), np.sin(_MODE_PHI)], axis=1))
-_MODE_X_P = np.array([-1.0, 0.0, 1.0])
-_MODE_FIT_P = np.linalg.inv(np.vander(_MODE_X_P, 3, increasing=True))
+_MODE_PHI: FloatArray = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
+_MODE_FIT_R = np.asarray(
+    np.linalg.inv(np.stack([np.ones(3), np.cos(_MODE_PHI), np.sin(_MODE_PHI)], axis=1)),
+    dtype=np.float64,
+)
+_MODE_X_P: FloatArray = np.array([-1.0, 0.0, 1.0])
+_MODE_FIT_P = np.asarray(np.linalg.inv(np.vander(_MODE_X_P, 3, increasing=True)), dtype=np.float64)
 
 
 def _joint(T: FloatArray, value: float, prismatic: bool) -> FloatArray:
@@ -570,8 +576,8 @@ class SphericalWristSolver:
             )
 
         if self._prismatic[2]:
-            xs = np.array([-1.0, 0.0, 1.0])
-            self._coef = np.zeros((5, 6))
+            xs: FloatArray = np.array([-1.0, 0.0, 1.0])
+            self._coef: FloatArray = np.zeros((5, 6))
             self._coef[:3] = np.linalg.solve(
                 np.vander(xs, 3, increasing=True), functions(mid + half * xs)
             )
@@ -580,11 +586,14 @@ class SphericalWristSolver:
             self._mode_tab = functions(mid + half * _MODE_X_P)
             self._mode_fit = _MODE_FIT_P
         else:
-            phi = np.arange(5) * (2.0 * np.pi / 5.0)
-            basis = np.stack(
-                [np.ones(5), np.cos(phi), np.sin(phi), np.cos(2 * phi), np.sin(2 * phi)], 1
+            phi = np.asarray(np.arange(5) * (2.0 * np.pi / 5.0), dtype=np.float64)
+            basis = np.asarray(
+                np.stack(
+                    [np.ones(5), np.cos(phi), np.sin(phi), np.cos(2 * phi), np.sin(2 * phi)], 1
+                ),
+                dtype=np.float64,
             )
-            self._coef = np.linalg.solve(basis, functions(phi))
+            self._coef = np.asarray(np.linalg.solve(basis, functions(phi)), dtype=np.float64)
             self._res_tab = functions(_RES_PHI)
             self._res_fit = _RES_FIT_R
             self._mode_tab = functions(_MODE_PHI)
