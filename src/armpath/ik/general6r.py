@@ -36,16 +36,16 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.ik.compiled import CompiledSolver, KernelOutput, padded_outputs
 from armpath.ik.kernels import (
     fk_error_jacobian,
+    keep_solution,
     lu_solve_into,
-    prepare_targets,
     scan_tables,
     sort_solutions,
     trig_roots,
-    wrap_angle,
 )
-from armpath.ik.result import IKBatch, IKResult, chain_length_scale, pose_result, solved_poses
+from armpath.ik.result import chain_length_scale
 from armpath.kinematics import _affine_mul, z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -407,38 +407,6 @@ def _refine(
 
 
 @njit(cache=True)
-def _keep(
-    q: FloatArray,
-    pos: float,
-    rot: float,
-    flag: int,
-    out_q: FloatArray,
-    out_res: FloatArray,
-    out_flags: NDArray[np.int64],
-    kept: int,
-) -> tuple[int, int]:
-    """Store a converged solution unless it repeats one; returns (new kept, duplicate index)."""
-    for i in range(6):
-        q[i] = wrap_angle(q[i])
-    for m in range(kept):
-        same = True
-        for i in range(6):
-            if abs(wrap_angle(out_q[m, i] - q[i])) > 1e-6:
-                same = False
-                break
-        if same:
-            out_flags[m] |= flag
-            return kept, m
-    if kept < out_q.shape[0]:
-        out_q[kept] = q
-        out_res[kept, 0] = pos
-        out_res[kept, 1] = rot
-        out_flags[kept] = flag
-        kept += 1
-    return kept, -1
-
-
-@njit(cache=True)
 def _half_angle_from_ratio(num: float, den_low: float, den_high: float) -> float:
     """Angle p with tan(p/2) = num/den_low (or den_high/num), stable for any size of tan."""
     if den_low >= den_high:
@@ -716,7 +684,9 @@ def _solve_pose(
                 continue
             flag = (1 if doubles[c] else 0) | (2 if ratio < 1e-6 else 0)
             before = kept
-            kept, dup = _keep(q, pos, rot, flag, out_q, out_res, out_flags, kept)
+            kept, dup = keep_solution(
+                q, _ALL_REVOLUTE, pos, rot, flag, out_q, out_res, out_flags, kept
+            )
             if dup < 0 and not doubles[c]:
                 continue
             if tries > 1 and dup >= 0 and before > 0:
@@ -729,8 +699,9 @@ def _solve_pose(
             if pos <= accept and rot <= accept:
                 pos, rot, ratio = _refine(C, T, q, newton_iterations, known, False, scratch)
                 if pos <= accept and rot <= accept:
-                    kept, dup2 = _keep(
+                    kept, dup2 = keep_solution(
                         q,
+                        _ALL_REVOLUTE,
                         pos,
                         rot,
                         1 | (2 if ratio < 1e-6 else 0),
@@ -865,7 +836,7 @@ SPLITS = np.array(
 )
 
 
-class General6RSolver:
+class General6RSolver(CompiledSolver):
     """All IK solutions of one 6R arm; construct once per arm (about 1 ms), then solve poses.
 
     >>> solver = General6RSolver(arm)            # doctest: +SKIP
@@ -903,23 +874,16 @@ class General6RSolver:
         self.newton_iterations = newton_iterations
         self.accept = accept
 
-    _DEGENERATE = (
+    method_names = (*(f"raghavan-roth (split {k.tolist()})" for k in SPLITS), "raghavan-roth")
+    failure_reasons = (
+        "no real solution: the pose is out of reach",
         "elimination degenerate in all 12 splits (a positive-dimensional solution set, "
-        "e.g. aligned joint axes at this pose)"
+        "e.g. aligned joint axes at this pose)",
     )
-    _METHODS = (*(f"raghavan-roth (split {k.tolist()})" for k in SPLITS), "raghavan-roth")
-    _REASONS = ("no real solution: the pose is out of reach", _DEGENERATE)
 
-    def _run(
-        self, Ts: FloatArray
-    ) -> tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
-        """Padded solutions, scaled residuals, flags, counts and the split used (-1: none)."""
-        T = prepare_targets(Ts, self.length_scale)
+    def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
-        q = np.zeros((N, _CAP, 6))
-        res = np.zeros((N, _CAP, 2))
-        flags = np.zeros((N, _CAP), dtype=np.int64)
-        count = np.zeros(N, dtype=np.int64)
+        q, res, flags, count = padded_outputs(N, _CAP)
         split = np.zeros(N, dtype=np.int64)
         kernel = _solve_parallel if N >= 64 else _solve_serial
         kernel(
@@ -944,35 +908,12 @@ class General6RSolver:
             count,
             split,
         )
-        return q, res, flags, count, split
-
-    def solve_batch(self, Ts: FloatArray) -> IKBatch:
-        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit),
-        as padded arrays; ``batch[i]`` is pose ``i``'s :class:`IKResult`."""
-        q, res, flags, count, split = self._run(Ts)
-        return solved_poses(
+        degenerate = split < 0
+        return (
             q,
             res,
             flags,
             count,
-            self.length_scale,
-            self._METHODS,
-            np.where(split >= 0, split, len(SPLITS)),
-            self._REASONS,
-            (split < 0).astype(np.int64),
-        )
-
-    def solve(self, T: FloatArray) -> IKResult:
-        """All real solutions of one pose (4x4, world frame, model unit)."""
-        q, res, flags, count, split = self._run(np.asarray(T, dtype=np.float64)[None])
-        k = int(split[0])
-        return pose_result(
-            q[0],
-            res[0, :, 0] * self.length_scale,
-            res[0, :, 1],
-            (flags[0] & 1) > 0,
-            (flags[0] & 2) > 0,
-            int(count[0]),
-            self._METHODS[k],
-            self._REASONS[int(k < 0)],
+            np.where(degenerate, len(SPLITS), split),
+            degenerate.astype(np.int64),
         )

@@ -428,3 +428,41 @@ def sort_solutions(q: FloatArray, res: FloatArray, flags: NDArray[np.int64], cou
                 res[j - 1, c], res[j, c] = res[j, c], res[j - 1, c]
             flags[j - 1], flags[j] = flags[j], flags[j - 1]
             j -= 1
+
+
+@njit(cache=True)
+def keep_solution(
+    q: FloatArray,
+    prismatic: NDArray[np.bool_],
+    pos: float,
+    rot: float,
+    flag: int,
+    out_q: FloatArray,
+    out_res: FloatArray,
+    out_flags: NDArray[np.int64],
+    kept: int,
+) -> tuple[int, int]:
+    """Store a verified solution (revolute angles wrapped in place) unless it repeats a stored
+    one to 1e-6, whose flags then gain ``flag``; returns (new count, index repeated or -1)."""
+    for i in range(q.shape[0]):
+        if not prismatic[i]:
+            q[i] = wrap_angle(q[i])
+    for m in range(kept):
+        same = True
+        for i in range(q.shape[0]):
+            diff = out_q[m, i] - q[i]
+            if not prismatic[i]:
+                diff = wrap_angle(diff)
+            if abs(diff) > 1e-6:
+                same = False
+                break
+        if same:
+            out_flags[m] |= flag
+            return kept, m
+    if kept < out_q.shape[0]:
+        out_q[kept] = q
+        out_res[kept, 0] = pos
+        out_res[kept, 1] = rot
+        out_flags[kept] = flag
+        kept += 1
+    return kept, -1

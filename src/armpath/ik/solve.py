@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.ik.compiled import CompiledSolver
 from armpath.ik.general6r import General6RSolver
 from armpath.ik.numerical import solve_numerical
 from armpath.ik.result import IKResult
@@ -28,10 +29,7 @@ from armpath.model.serial_arm import JointKind, SerialArm
 FloatArray = NDArray[np.float64]
 METHODS = ("auto", "spherical-wrist", "three-parallel", "general", "numerical")
 
-Solver = SphericalWristSolver | ThreeParallelSolver | General6RSolver
-
-
-def complete_solver(arm: SerialArm, method: str = "auto") -> Solver | None:
+def complete_solver(arm: SerialArm, method: str = "auto") -> CompiledSolver | None:
     """The all-solutions solver for ``arm`` (None if only the numerical one applies)."""
     if method not in METHODS:
         raise InvalidInputError(f"IK method must be one of {METHODS}, got {method!r}")

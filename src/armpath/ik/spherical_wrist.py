@@ -27,15 +27,15 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.ik.compiled import CompiledSolver, KernelOutput, padded_outputs
 from armpath.ik.kernels import (
+    keep_solution,
     newton_polish,
-    prepare_targets,
     scan_tables,
     sort_solutions,
     trig_roots,
-    wrap_angle,
 )
-from armpath.ik.result import IKBatch, IKResult, chain_length_scale, pose_result, solved_poses
+from armpath.ik.result import chain_length_scale
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -396,29 +396,8 @@ def _solve_pose(
             pos, rot, jr = newton_polish(C, prismatic, T, q, 2, scratch)
             if not (pos <= accept and rot <= accept):
                 continue
-            for i in range(6):
-                if not prismatic[i]:
-                    q[i] = wrap_angle(q[i])
-            dup = False
-            for mm in range(kept):
-                same = True
-                for i in range(6):
-                    diff = q[i] - out_q[mm, i]
-                    if not prismatic[i]:
-                        diff = wrap_angle(diff)
-                    if abs(diff) > 1e-6:
-                        same = False
-                        break
-                if same:
-                    dup = True
-                    break
-            if dup or kept >= out_q.shape[0]:
-                continue
-            out_q[kept] = q
-            out_res[kept, 0] = pos
-            out_res[kept, 1] = rot
-            out_flags[kept] = flag | wflag | (2 if jr < 1e-6 else 0) | (1 if doubles[r] else 0)
-            kept += 1
+            flags = flag | wflag | (2 if jr < 1e-6 else 0) | (1 if doubles[r] else 0)
+            kept, _ = keep_solution(q, prismatic, pos, rot, flags, out_q, out_res, out_flags, kept)
     sort_solutions(out_q, out_res, out_flags, kept)
     return kept
 
@@ -527,7 +506,7 @@ def wrist_center(arm: SerialArm, tol: float = 1e-9) -> FloatArray | None:
     return np.array([[0.0, 0.0, s4], [0.0, 0.0, float(np.dot(p - o6, z6))]])
 
 
-class SphericalWristSolver:
+class SphericalWristSolver(CompiledSolver):
     """Closed-form IK (all solutions) of a 6-joint arm whose last three axes meet in a point."""
 
     def __init__(self, arm: SerialArm, *, accept: float = 1e-8):
@@ -545,6 +524,7 @@ class SphericalWristSolver:
         if centre is None:
             raise InvalidInputError(f"model {arm.name!r}: axes 4, 5 and 6 do not meet in a point")
         self.arm = arm
+        self.method_names = ("spherical-wrist",)
         C = z_axis_chain(arm)
         shifts = [float(np.linalg.norm(C[k, :3, 3])) for k in range(7)]
         self.length_scale = chain_length_scale(C)
@@ -608,19 +588,9 @@ class SphericalWristSolver:
         elif np.max(coefs[:, 3:5]) <= 1e-10 * size:
             self._mode = 2
 
-    _METHODS = ("spherical-wrist",)
-    _REASONS = ("no real solution: the pose is out of reach",)
-
-    def _run(
-        self, Ts: FloatArray
-    ) -> tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64]]:
-        """Padded solutions (model units), scaled residuals, flags and counts of each pose."""
-        T = prepare_targets(Ts, self.length_scale)
+    def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
-        q = np.zeros((N, _CAP, 6))
-        res = np.zeros((N, _CAP, 2))
-        flags = np.zeros((N, _CAP), dtype=np.int64)
-        count = np.zeros(N, dtype=np.int64)
+        q, res, flags, count = padded_outputs(N, _CAP)
         kernel = _solve_parallel if N >= 128 else _solve_serial
         kernel(
             self._C,
@@ -641,27 +611,5 @@ class SphericalWristSolver:
         )
         if self._any_prismatic:
             q[:, :, self._prismatic] *= self.length_scale
-        return q, res, flags, count
-
-    def solve_batch(self, Ts: FloatArray) -> IKBatch:
-        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit),
-        as padded arrays; ``batch[i]`` is pose ``i``'s :class:`IKResult`."""
-        q, res, flags, count = self._run(Ts)
-        zero = np.zeros(count.shape[0], dtype=np.int64)
-        return solved_poses(
-            q, res, flags, count, self.length_scale, self._METHODS, zero, self._REASONS, zero
-        )
-
-    def solve(self, T: FloatArray) -> IKResult:
-        """All real solutions of one pose (4x4, world frame, model unit)."""
-        q, res, flags, count = self._run(np.asarray(T, dtype=np.float64)[None])
-        return pose_result(
-            q[0],
-            res[0, :, 0] * self.length_scale,
-            res[0, :, 1],
-            (flags[0] & 1) > 0,
-            (flags[0] & 2) > 0,
-            int(count[0]),
-            self._METHODS[0],
-            self._REASONS[0],
-        )
+        zero = np.zeros(N, dtype=np.int64)
+        return q, res, flags, count, zero, zero

@@ -27,8 +27,9 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.ik.kernels import newton_polish, prepare_targets, sort_solutions, wrap_angle
-from armpath.ik.result import IKBatch, IKResult, chain_length_scale, pose_result, solved_poses
+from armpath.ik.compiled import CompiledSolver, KernelOutput, padded_outputs
+from armpath.ik.kernels import keep_solution, newton_polish, sort_solutions
+from armpath.ik.result import chain_length_scale
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -101,6 +102,35 @@ def _two_roots(a: float, b: float, c: float, out: FloatArray) -> tuple[int, bool
     out[0] = base + off
     out[1] = base - off
     return 2, off < 1e-6
+
+
+@njit(cache=True)
+def _through_wrist(
+    M: FloatArray,
+    C5: FloatArray,
+    c5: float,
+    s5: float,
+    c6: float,
+    s6: float,
+    x0: float,
+    x1: float,
+    x2: float,
+    with_t5: float,
+) -> tuple[float, float, float]:
+    """``M Rz(-q6) R5^T (Rz(-q5) x + with_t5 * t5)``: a vector (0) or point (1) of joint 5's
+    frame carried out to the frame of joint 1."""
+    u0 = c5 * x0 + s5 * x1 + with_t5 * C5[0, 3]
+    u1 = -s5 * x0 + c5 * x1 + with_t5 * C5[1, 3]
+    u2 = x2 + with_t5 * C5[2, 3]
+    w0 = C5[0, 0] * u0 + C5[1, 0] * u1 + C5[2, 0] * u2
+    w1 = C5[0, 1] * u0 + C5[1, 1] * u1 + C5[2, 1] * u2
+    w2 = C5[0, 2] * u0 + C5[1, 2] * u1 + C5[2, 2] * u2
+    w0, w1 = c6 * w0 + s6 * w1, -s6 * w0 + c6 * w1
+    return (
+        M[0, 0] * w0 + M[0, 1] * w1 + M[0, 2] * w2,
+        M[1, 0] * w0 + M[1, 1] * w1 + M[1, 2] * w2,
+        M[2, 0] * w0 + M[2, 1] * w1 + M[2, 2] * w2,
+    )
 
 
 @njit(cache=True)
@@ -209,28 +239,13 @@ def _solve_pose(
                 q6 = np.arctan2(y1, y0) - np.arctan2(m1, m0)
             c6, s6_ = np.cos(q6), np.sin(q6)
             # Angle about h: N e1 with N = M Rz(-q6) R5^T Rz(-q5) R4^T G^T.
-            u0 = c5 * geo[13] + s5 * geo[14]
-            u1 = -s5 * geo[13] + c5 * geo[14]
-            u2 = geo[15]
-            w0 = C5[0, 0] * u0 + C5[1, 0] * u1 + C5[2, 0] * u2
-            w1 = C5[0, 1] * u0 + C5[1, 1] * u1 + C5[2, 1] * u2
-            w2 = C5[0, 2] * u0 + C5[1, 2] * u1 + C5[2, 2] * u2
-            w0, w1 = c6 * w0 + s6_ * w1, -s6_ * w0 + c6 * w1
-            n0 = M[0, 0] * w0 + M[0, 1] * w1 + M[0, 2] * w2
-            n1_ = M[1, 0] * w0 + M[1, 1] * w1 + M[1, 2] * w2
-            n2 = M[2, 0] * w0 + M[2, 1] * w1 + M[2, 2] * w2
+            n0, n1_, n2 = _through_wrist(M, C5, c5, s5, c6, s6_, geo[13], geo[14], geo[15], 0.0)
             theta = np.arctan2(f0 * n0 + f1 * n1_ + f2 * n2, e0 * n0 + e1 * n1_ + e2 * n2)
             # Origin of joint 4's frame: o - M Rz(-q6) R5^T (Rz(-q5) R4^T t4 + t5).
-            u0 = c5 * geo[16] + s5 * geo[17] + C5[0, 3]
-            u1 = -s5 * geo[16] + c5 * geo[17] + C5[1, 3]
-            u2 = geo[18] + C5[2, 3]
-            w0 = C5[0, 0] * u0 + C5[1, 0] * u1 + C5[2, 0] * u2
-            w1 = C5[0, 1] * u0 + C5[1, 1] * u1 + C5[2, 1] * u2
-            w2 = C5[0, 2] * u0 + C5[1, 2] * u1 + C5[2, 2] * u2
-            w0, w1 = c6 * w0 + s6_ * w1, -s6_ * w0 + c6 * w1
-            x0 = o0 - (M[0, 0] * w0 + M[0, 1] * w1 + M[0, 2] * w2) - C1[0, 3]
-            x1 = o1 - (M[1, 0] * w0 + M[1, 1] * w1 + M[1, 2] * w2) - C1[1, 3]
-            x2 = o2 - (M[2, 0] * w0 + M[2, 1] * w1 + M[2, 2] * w2) - C1[2, 3]
+            d0, d1, d2 = _through_wrist(M, C5, c5, s5, c6, s6_, geo[16], geo[17], geo[18], 1.0)
+            x0 = o0 - d0 - C1[0, 3]
+            x1 = o1 - d1 - C1[1, 3]
+            x2 = o2 - d2 - C1[2, 3]
             # ... in the frame of joint 2: y = C1^-1 o = Z(q2) (C2 Z(q3) t3).
             y0 = C1[0, 0] * x0 + C1[1, 0] * x1 + C1[2, 0] * x2
             y1 = C1[0, 1] * x0 + C1[1, 1] * x1 + C1[2, 1] * x2
@@ -260,27 +275,11 @@ def _solve_pose(
                 pos, rot, jr = newton_polish(Cf, _ALL_REVOLUTE, T, qf, 2, scratch)
                 if not (pos <= accept and rot <= accept):
                     continue
-                for i in range(6):
-                    qf[i] = wrap_angle(qf[i])
-                dup = False
-                for mm in range(kept):
-                    same = True
-                    for i in range(6):
-                        if abs(wrap_angle(qf[i] - out_q[mm, i])) > 1e-6:
-                            same = False
-                            break
-                    if same:
-                        dup = True
-                        break
-                if dup or kept >= out_q.shape[0]:
-                    continue
-                out_q[kept] = qf
-                out_res[kept, 0] = pos
-                out_res[kept, 1] = rot
                 double = dbl1 or dbl5 or dbl3
-                singular = flag1 | flag6 | flag2 | (2 if jr < 1e-6 else 0)
-                out_flags[kept] = singular | (1 if double else 0)
-                kept += 1
+                flags = flag1 | flag6 | flag2 | (2 if jr < 1e-6 else 0) | (1 if double else 0)
+                kept, _ = keep_solution(
+                    qf, _ALL_REVOLUTE, pos, rot, flags, out_q, out_res, out_flags, kept
+                )
     sort_solutions(out_q, out_res, out_flags, kept)
     return kept
 
@@ -323,11 +322,9 @@ def _solve_parallel(
         )
 
 
-class ThreeParallelSolver:
+class ThreeParallelSolver(CompiledSolver):
     """Closed-form IK (all solutions) of a 6R arm with axes 2-4 parallel and axes 5, 6 meeting
     (or, reversed, axes 3-5 parallel and axes 1, 2 meeting)."""
-
-    _REASONS = ("no real solution: the pose is out of reach",)
 
     def __init__(self, arm: SerialArm, *, accept: float = 1e-8):
         layout = three_parallel_layout(arm)
@@ -339,7 +336,7 @@ class ThreeParallelSolver:
             )
         self.arm = arm
         self.layout = layout
-        self._methods = ("three-parallel" + (" (reversed)" if layout == "reversed" else ""),)
+        self.method_names = ("three-parallel" + (" (reversed)" if layout == "reversed" else ""),)
         C = z_axis_chain(arm)
         self.length_scale = chain_length_scale(C)
         C[:, :3, 3] /= self.length_scale
@@ -367,38 +364,10 @@ class ThreeParallelSolver:
         )
         self.accept = accept
 
-    def _run(
-        self, Ts: FloatArray
-    ) -> tuple[FloatArray, FloatArray, NDArray[np.int64], NDArray[np.int64]]:
-        T = prepare_targets(Ts, self.length_scale)
+    def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
-        q = np.zeros((N, _CAP, 6))
-        res = np.zeros((N, _CAP, 2))
-        flags = np.zeros((N, _CAP), dtype=np.int64)
-        count = np.zeros(N, dtype=np.int64)
+        q, res, flags, count = padded_outputs(N, _CAP)
         kernel = _solve_parallel if N >= 128 else _solve_serial
         kernel(self._Cs, self._Cf, self._geo, self._reverse, T, self.accept, q, res, flags, count)
-        return q, res, flags, count
-
-    def solve_batch(self, Ts: FloatArray) -> IKBatch:
-        """All solutions of each pose in ``Ts`` (shape ``(N, 4, 4)``, world frame, model unit),
-        as padded arrays; ``batch[i]`` is pose ``i``'s :class:`IKResult`."""
-        q, res, flags, count = self._run(Ts)
-        zero = np.zeros(count.shape[0], dtype=np.int64)
-        return solved_poses(
-            q, res, flags, count, self.length_scale, self._methods, zero, self._REASONS, zero
-        )
-
-    def solve(self, T: FloatArray) -> IKResult:
-        """All real solutions of one pose (4x4, world frame, model unit)."""
-        q, res, flags, count = self._run(np.asarray(T, dtype=np.float64)[None])
-        return pose_result(
-            q[0],
-            res[0, :, 0] * self.length_scale,
-            res[0, :, 1],
-            (flags[0] & 1) > 0,
-            (flags[0] & 2) > 0,
-            int(count[0]),
-            self._methods[0],
-            self._REASONS[0],
-        )
+        zero = np.zeros(N, dtype=np.int64)
+        return q, res, flags, count, zero, zero
