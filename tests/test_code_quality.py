@@ -15,7 +15,7 @@ LAYERS = [
     {"geometry"},
     {"ik"},
     {"commands"},
-    {"scenes", "planning"},
+    {"scenes", "planning", "workspace"},
     {"tasks"},
     {"export", "viz", "cli", "__main__"},
 ]

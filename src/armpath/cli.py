@@ -37,7 +37,7 @@ from armpath.export import (
     write_sequence_files,
 )
 from armpath.ik import solve_ik
-from armpath.kinematics import landmark_positions, tool_pose
+from armpath.kinematics import landmark_positions, tool_pose, z_axis_chain
 from armpath.model.catalog import resolve_model
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -794,6 +794,119 @@ def trace(
         else:
             out_console.print(_trace_summary(doc))
             for path in folder.written if folder is not None else []:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+@app.command()
+def workspace(
+    model: ModelOption = "seed",
+    samples: Annotated[
+        int, typer.Option(help="Joint vectors to sample (streamed in chunks of --chunk).")
+    ] = 4_000_000,
+    voxel: Annotated[float, typer.Option(help="Voxel edge, mm.")] = 20.0,
+    method: Annotated[
+        str, typer.Option(help="uniform, or stratified (a Latin hypercube per chunk).")
+    ] = "uniform",
+    seed: Annotated[int, typer.Option(help="Random seed (same seed, same workspace).")] = 0,
+    chunk: Annotated[int, typer.Option(help="Samples per chunk (bounds the memory).")] = 1_000_000,
+    obstacles: Annotated[
+        bool,
+        typer.Option(
+            "--obstacles",
+            help="Keep only configurations that satisfy the scene's clearance rule "
+            "(obstacles and self-collision; the seed scene unless --scene).",
+        ),
+    ] = False,
+    scene_file: SceneOption = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out", help="Write workspace.npz, workspace.csv and workspace_sections.png here."
+        ),
+    ] = None,
+) -> None:
+    """Reachable workspace of the tool point by sampling joint space into voxels: volume,
+    bounding box and sections."""
+    import time
+
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from armpath.workspace import sample_workspace
+
+    with _cli_errors():
+        arm = resolve_model(model)
+        world = load_scene(scene_file).world if obstacles else None
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            t0 = time.perf_counter()
+            with Progress(
+                TextColumn("sampling"),
+                BarColumn(),
+                TextColumn("{task.completed:,}/{task.total:,}"),
+                TimeRemainingColumn(),
+                console=err_console,
+                transient=True,
+            ) as bar:
+                task = bar.add_task("sampling", total=samples)
+                grid = sample_workspace(
+                    arm,
+                    samples,
+                    voxel,
+                    seed=seed,
+                    method=method,
+                    chunk=chunk,
+                    world=world,
+                    progress=lambda done, total: bar.update(task, completed=done),
+                )
+            seconds = time.perf_counter() - t0
+            lo, hi = grid.bounding_box()
+            rows: list[tuple[str, str, str]] = [
+                ("model", arm.name, ""),
+                ("samples", f"{grid.samples}", ""),
+                *([("kept (clearance rule)", f"{grid.kept}", "")] if obstacles else []),
+                ("voxel", f"{grid.voxel:g}", "mm"),
+                ("occupied voxels", f"{grid.n_occupied}", ""),
+                ("volume", f"{grid.volume / 1e9:.4f}", "m^3"),
+                ("x range", f"{lo[0]:.0f} .. {hi[0]:.0f}", "mm"),
+                ("y range", f"{lo[1]:.0f} .. {hi[1]:.0f}", "mm"),
+                ("z range", f"{lo[2]:.0f} .. {hi[2]:.0f}", "mm"),
+                ("time", f"{seconds:.1f}", "s"),
+                ("rate", f"{grid.samples / seconds / 1e6:.2f}", "million samples/s"),
+            ]
+            table = Table(title=f"workspace of {arm.name}", box=box.SIMPLE)
+            for name in ("quantity", "value", "unit"):
+                table.add_column(name)
+            for row in rows:
+                table.add_row(*row)
+            out_console.print(table)
+            if folder is not None:
+                from armpath.viz.workspace_figures import plot_workspace_sections
+
+                np.savez_compressed(
+                    folder.file("workspace.npz"),
+                    occupied=grid.occupied,
+                    origin_mm=grid.origin,
+                    voxel_mm=grid.voxel,
+                    samples=grid.samples,
+                    kept=grid.kept,
+                )
+                folder.write_text(
+                    "workspace.csv",
+                    "quantity,value,unit\n"
+                    + "".join(f"{n},{v.replace(',', ' ')},{u}\n" for n, v, u in rows),
+                )
+                # vertical section through axis 1, horizontal one half-way up the workspace
+                centre = np.asarray(z_axis_chain(arm)[0, :3, 3]).copy()
+                centre[2] = 0.5 * (lo[2] + hi[2])
+                plot_workspace_sections(
+                    folder.file("workspace_sections.png"),
+                    grid,
+                    centre,
+                    f"{arm.name}: {grid.volume / 1e9:.4f} m^3 reachable "
+                    f"({grid.samples:,} samples, {grid.voxel:g} mm voxels)",
+                )
+        if out is not None and folder is not None:
+            for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)
 
 

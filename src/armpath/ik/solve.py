@@ -29,6 +29,7 @@ from armpath.model.serial_arm import JointKind, SerialArm
 FloatArray = NDArray[np.float64]
 METHODS = ("auto", "spherical-wrist", "three-parallel", "general", "numerical")
 
+
 def complete_solver(arm: SerialArm, method: str = "auto") -> CompiledSolver | None:
     """The all-solutions solver for ``arm`` (None if only the numerical one applies)."""
     if method not in METHODS:

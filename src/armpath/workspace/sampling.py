@@ -1,0 +1,284 @@
+"""Reachable workspace by sampling joint space into a voxel grid.
+
+Joint vectors are drawn inside the joint limits (uniform, or stratified: a Latin hypercube per
+chunk), seeded, in chunks of bounded size; a compiled kernel runs forward kinematics of the tool
+point and marks the voxel it falls in. Memory is the grid (one byte a voxel) plus one chunk, so
+10^8-10^9 samples run in bounded memory; a callback reports progress after each chunk. With a
+collision world, samples that break its clearance rule are dropped before they are marked.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+from armpath.errors import InvalidInputError
+from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import z_axis_chain
+from armpath.model.serial_arm import JointKind, SerialArm
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+METHODS = ("uniform", "stratified")
+#: Largest grid (voxels) a run may allocate: 2 GB at one byte per voxel.
+MAX_VOXELS = 2_000_000_000
+
+
+@dataclass(frozen=True)
+class VoxelGrid:
+    """Which voxels of an axis-aligned box the tool point reached (world frame, model unit).
+
+    Voxel ``(i, j, k)`` spans ``origin + voxel * [i, i+1) x [j, j+1) x [k, k+1)``.
+    ``samples`` joint vectors were drawn, ``kept`` of them passed the clearance rule (all of them
+    without a collision world).
+    """
+
+    origin: FloatArray
+    voxel: float
+    occupied: BoolArray
+    samples: int
+    kept: int
+
+    @property
+    def volume(self) -> float:
+        """Volume of the occupied voxels (model unit cubed, e.g. mm^3)."""
+        return float(np.count_nonzero(self.occupied)) * self.voxel**3
+
+    @property
+    def n_occupied(self) -> int:
+        return int(np.count_nonzero(self.occupied))
+
+    def centers(self, mask: BoolArray | None = None) -> FloatArray:
+        """Centres ``(k, 3)`` of the voxels in ``mask`` (default: the occupied ones)."""
+        idx = np.argwhere(self.occupied if mask is None else mask)
+        return np.asarray(self.origin + (idx + 0.5) * self.voxel, dtype=np.float64)
+
+    def boundary(self) -> BoolArray:
+        """Occupied voxels with at least one free face neighbour (or on the grid's edge)."""
+        occ = np.pad(self.occupied, 1, constant_values=False)
+        inner = occ[1:-1, 1:-1, 1:-1].copy()
+        for axis in range(3):
+            for shift in (1, -1):
+                inner &= np.roll(occ, shift, axis=axis)[1:-1, 1:-1, 1:-1]
+        return np.asarray(self.occupied & ~inner)
+
+    def bounding_box(self) -> FloatArray:
+        """``[[xmin, ymin, zmin], [xmax, ymax, zmax]]`` of the occupied voxels (model unit)."""
+        idx = np.argwhere(self.occupied)
+        if idx.size == 0:
+            raise InvalidInputError("no voxel is occupied")
+        return np.asarray(
+            [
+                self.origin + idx.min(axis=0) * self.voxel,
+                self.origin + (idx.max(axis=0) + 1) * self.voxel,
+            ]
+        )
+
+    def section(
+        self, axis: str, value: float
+    ) -> tuple[BoolArray, tuple[float, float, float, float]]:
+        """The slice of voxels containing the plane ``axis = value``: a 2-D mask indexed
+        ``[u, v]`` over the two other axes in order (x, y, z), and its extent
+        ``(u_min, u_max, v_min, v_max)``."""
+        if axis not in ("x", "y", "z"):
+            raise InvalidInputError(f"section axis must be 'x', 'y' or 'z', got {axis!r}")
+        a = "xyz".index(axis)
+        k = int(np.floor((value - self.origin[a]) / self.voxel))
+        if not 0 <= k < self.occupied.shape[a]:
+            raise InvalidInputError(f"{axis} = {value} lies outside the grid")
+        mask = np.take(self.occupied, k, axis=a)
+        u, v = [i for i in range(3) if i != a]
+        extent = (
+            float(self.origin[u]),
+            float(self.origin[u] + self.occupied.shape[u] * self.voxel),
+            float(self.origin[v]),
+            float(self.origin[v] + self.occupied.shape[v] * self.voxel),
+        )
+        return np.asarray(mask), extent
+
+    def contains(self, points: FloatArray) -> BoolArray:
+        """Whether each point ``(..., 3)`` lies in an occupied voxel."""
+        p = np.asarray(points, dtype=np.float64)
+        idx = np.floor((p - self.origin) / self.voxel).astype(np.int64)
+        shape = np.array(self.occupied.shape)
+        inside = np.all((idx >= 0) & (idx < shape), axis=-1)
+        out = np.zeros(p.shape[:-1], dtype=bool)
+        sel = idx[inside]
+        out[inside] = self.occupied[sel[:, 0], sel[:, 1], sel[:, 2]]
+        return out
+
+
+def joint_ranges(arm: SerialArm) -> FloatArray:
+    """Sampling range ``(n, 2)`` of each joint: its limits, a revolute joint without limits
+    over one turn. A prismatic joint without limits cannot be sampled."""
+    out = np.empty((arm.n_joints, 2))
+    for i, joint in enumerate(arm.joints):
+        lo, hi = joint.limits
+        if joint.kind is JointKind.REVOLUTE:
+            lo = lo if np.isfinite(lo) else -np.pi
+            hi = hi if np.isfinite(hi) else lo + 2.0 * np.pi
+        elif not (np.isfinite(lo) and np.isfinite(hi)):
+            raise InvalidInputError(
+                f"model {arm.name!r}: prismatic joint {i + 1} has no finite limits to sample"
+            )
+        out[i] = lo, hi
+    return out
+
+
+def reach_bound(arm: SerialArm) -> float:
+    """Upper bound on the tool point's distance from joint 1's frame origin (model unit): the
+    sum of the chain's fixed offsets beyond it plus each prismatic joint's largest extension."""
+    C = z_axis_chain(arm)
+    total = float(np.sum(np.linalg.norm(C[1:, :3, 3], axis=1)))
+    ranges = joint_ranges(arm)
+    for i, joint in enumerate(arm.joints):
+        if joint.kind is JointKind.PRISMATIC:
+            total += float(np.max(np.abs(ranges[i])))
+    return total
+
+
+@njit(cache=True)
+def _mark(
+    C: FloatArray,
+    prismatic: BoolArray,
+    q: FloatArray,
+    origin: FloatArray,
+    voxel: float,
+    occupied: NDArray[np.uint8],
+) -> int:
+    """Tool point of each joint vector (rows of ``q``) -> mark its voxel; returns how many fell
+    outside the grid (0 unless the reach bound is wrong)."""
+    n = q.shape[1]
+    nx, ny, nz = occupied.shape
+    outside = 0
+    for s in range(q.shape[0]):
+        # Tool point in the frame after the last joint, carried back to the world.
+        x, y, z = C[n, 0, 3], C[n, 1, 3], C[n, 2, 3]
+        for j in range(n - 1, -1, -1):
+            v = q[s, j]
+            if prismatic[j]:
+                z += v
+            else:
+                c, sn = np.cos(v), np.sin(v)
+                x, y = c * x - sn * y, sn * x + c * y
+            A = C[j]
+            x, y, z = (
+                A[0, 0] * x + A[0, 1] * y + A[0, 2] * z + A[0, 3],
+                A[1, 0] * x + A[1, 1] * y + A[1, 2] * z + A[1, 3],
+                A[2, 0] * x + A[2, 1] * y + A[2, 2] * z + A[2, 3],
+            )
+        i = int(np.floor((x - origin[0]) / voxel))
+        k = int(np.floor((y - origin[1]) / voxel))
+        m = int(np.floor((z - origin[2]) / voxel))
+        if 0 <= i < nx and 0 <= k < ny and 0 <= m < nz:
+            occupied[i, k, m] = 1
+        else:
+            outside += 1
+    return outside
+
+
+@njit(cache=True, parallel=True)
+def _mark_parallel(
+    C: FloatArray,
+    prismatic: BoolArray,
+    q: FloatArray,
+    origin: FloatArray,
+    voxel: float,
+    occupied: NDArray[np.uint8],
+    blocks: int,
+) -> int:
+    """:func:`_mark` over ``blocks`` slices of the rows in parallel (marks only set bytes to 1,
+    so concurrent writes agree)."""
+    size = (q.shape[0] + blocks - 1) // blocks
+    outside = np.zeros(blocks, dtype=np.int64)
+    for b in prange(blocks):
+        lo = b * size
+        hi = min(q.shape[0], lo + size)
+        if lo < hi:
+            outside[b] = _mark(C, prismatic, q[lo:hi], origin, voxel, occupied)
+    return int(outside.sum())
+
+
+@dataclass(frozen=True)
+class GridSpec:
+    """A cube of voxels around joint 1 that holds every reachable point."""
+
+    origin: FloatArray
+    voxel: float
+    shape: tuple[int, int, int]
+
+    @staticmethod
+    def for_arm(arm: SerialArm, voxel: float) -> GridSpec:
+        if not (np.isfinite(voxel) and voxel > 0):
+            raise InvalidInputError(f"voxel size must be a positive length, got {voxel}")
+        reach = reach_bound(arm) + voxel
+        centre = z_axis_chain(arm)[0, :3, 3]
+        n = int(np.ceil(2.0 * reach / voxel))
+        if n**3 > MAX_VOXELS:
+            raise InvalidInputError(
+                f"a {voxel:g} voxel grid over the reach ({reach:.0f}) needs {n}^3 voxels; "
+                f"use a voxel of at least {2.0 * reach / MAX_VOXELS ** (1 / 3):.3g}"
+            )
+        origin = centre - 0.5 * n * voxel
+        return GridSpec(np.asarray(origin, dtype=np.float64), float(voxel), (n, n, n))
+
+
+def joint_samples(ranges: FloatArray, n: int, rng: np.random.Generator, method: str) -> FloatArray:
+    """``n`` joint vectors in ``ranges`` (``(joints, 2)``): uniform, or a Latin hypercube
+    (each joint's range cut into ``n`` strata, one sample in each)."""
+    if method == "uniform":
+        u = rng.random((n, ranges.shape[0]))
+    elif method == "stratified":
+        strata = np.stack([rng.permutation(n) for _ in range(ranges.shape[0])], axis=1)
+        u = (strata + rng.random((n, ranges.shape[0]))) / n
+    else:
+        raise InvalidInputError(f"sampling method must be one of {METHODS}, got {method!r}")
+    return np.asarray(ranges[:, 0] + u * (ranges[:, 1] - ranges[:, 0]), dtype=np.float64)
+
+
+def sample_workspace(
+    arm: SerialArm,
+    samples: int,
+    voxel: float,
+    *,
+    seed: int = 0,
+    method: str = "uniform",
+    chunk: int = 1_000_000,
+    world: CollisionWorld | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> VoxelGrid:
+    """Reachable workspace of the tool point: ``samples`` joint vectors into voxels of edge
+    ``voxel`` (model unit).
+
+    ``world``: keep only joint vectors that satisfy its clearance rule (obstacles and self
+    collision). ``progress(done, total)`` is called after each chunk.
+    """
+    if samples < 1:
+        raise InvalidInputError(f"samples must be >= 1, got {samples}")
+    if chunk < 1:
+        raise InvalidInputError(f"chunk must be >= 1, got {chunk}")
+    ranges = joint_ranges(arm)
+    spec = GridSpec.for_arm(arm, voxel)
+    occupied = np.zeros(spec.shape, dtype=np.uint8)
+    C = np.ascontiguousarray(z_axis_chain(arm))
+    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+    rng = np.random.default_rng(seed)
+    done = kept = outside = 0
+    while done < samples:
+        n = min(chunk, samples - done)
+        q = joint_samples(ranges, n, rng, method)
+        if world is not None:
+            q = q[world.slack(arm, q) >= 0.0]
+        kept += q.shape[0]
+        if q.shape[0]:
+            outside += _mark_parallel(C, prismatic, q, spec.origin, spec.voxel, occupied, 64)
+        done += n
+        if progress is not None:
+            progress(done, samples)
+    if outside:
+        raise AssertionError(f"{outside} tool points fell outside the reach bound's grid")
+    return VoxelGrid(spec.origin, spec.voxel, occupied.view(np.bool_), samples, kept)

@@ -1,0 +1,206 @@
+"""Workspace sampling and dexterous points, against analytic shapes and textbook kinematics."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from armpath.errors import InvalidInputError
+from armpath.geometry.world import CollisionWorld
+from armpath.ik import complete_solver
+from armpath.kinematics import tool_pose
+from armpath.model.catalog import BUILTIN_MODELS
+from armpath.model.dh import DHRow, dh_arm
+from armpath.model.serial_arm import JointKind
+from armpath.scenes import seed_scene
+from armpath.workspace import GridSpec, joint_ranges, sample_workspace
+from armpath.workspace.dexterous import dexterity, orientation_grid
+from armpath.workspace.sampling import joint_samples
+from independent_dh import dh_pose
+
+ARMPATH = [sys.executable, "-m", "armpath"]
+
+
+def _shell_arm(r_in: float, r_out: float):
+    """Two revolute joints that point a prismatic joint in every direction: the tool point
+    sweeps the spherical shell r_in <= |p| <= r_out around the base."""
+    rows = [
+        DHRow(a=0.0, alpha=-np.pi / 2, d=0.0),
+        DHRow(a=0.0, alpha=np.pi / 2, d=0.0),
+        DHRow(a=0.0, alpha=0.0, d=0.0, kind=JointKind.PRISMATIC, limits=(r_in, r_out)),
+    ]
+    return dh_arm(rows, "standard", name="shell")
+
+
+def test_spherical_shell_voxels_match_the_analytic_shell():
+    r_in, r_out, voxel = 200.0, 500.0, 25.0
+    grid = sample_workspace(_shell_arm(r_in, r_out), 3_000_000, voxel, seed=1)
+    all_voxels = np.ones_like(grid.occupied)
+    rho = np.linalg.norm(grid.centers(all_voxels), axis=1).reshape(grid.occupied.shape)
+    half_diag = voxel * np.sqrt(3.0) / 2.0
+    surely_in = (rho > r_in + half_diag) & (rho < r_out - half_diag)
+    surely_out = (rho < r_in - half_diag) | (rho > r_out + half_diag)
+    assert surely_in.sum() > 20_000
+    assert grid.occupied[surely_in].all()  # every voxel well inside the shell is reached
+    assert not grid.occupied[surely_out].any()  # and none well outside
+    exact = 4.0 / 3.0 * np.pi * (r_out**3 - r_in**3)
+    assert surely_in.sum() * voxel**3 < grid.volume < (~surely_out).sum() * voxel**3
+    assert abs(grid.volume / exact - 1.0) < 0.12
+    # boundary voxels lie near the two spheres
+    rb = np.linalg.norm(grid.centers(grid.boundary()), axis=1)
+    assert np.all((np.abs(rb - r_in) < 2 * voxel) | (np.abs(rb - r_out) < 2 * voxel))
+    section, extent = grid.section("z", 0.0)
+    assert section.any() and extent[0] < -r_out and extent[1] > r_out
+
+
+def test_voxels_agree_with_textbook_forward_kinematics():
+    """The same joint samples through the textbook D-H product mark the same voxels."""
+    rng = np.random.default_rng(3)
+    a, d = rng.uniform(-300, 300, 6), rng.uniform(-300, 300, 6)
+    alpha = rng.uniform(-np.pi, np.pi, 6)
+    limits = [(-2.0, 2.5), (-1.0, 1.0), (-3.0, 0.5), (-np.pi, np.pi), (0.0, 2.0), (-1.0, 1.0)]
+    arm = dh_arm(
+        [DHRow(a=a[i], alpha=alpha[i], d=d[i], limits=limits[i]) for i in range(6)], "standard"
+    )
+    n, voxel = 20_000, 30.0
+    grid = sample_workspace(arm, n, voxel, seed=5, chunk=n)
+    q = joint_samples(joint_ranges(arm), n, np.random.default_rng(5), "uniform")
+    assert np.allclose(joint_ranges(arm), limits)
+    points = np.array([dh_pose(a, alpha, d, qi)[:3, 3] for qi in q])
+    spec = GridSpec.for_arm(arm, voxel)
+    idx = np.floor((points - spec.origin) / voxel).astype(int)
+    truth = np.zeros(spec.shape, dtype=bool)
+    truth[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+    assert grid.n_occupied == truth.sum() > 1000
+    assert np.array_equal(grid.occupied, truth)
+    assert grid.contains(points).all()
+
+
+def test_stratified_samples_fill_every_stratum():
+    ranges = np.array([[-1.0, 1.0], [0.0, 700.0], [-np.pi, np.pi]])
+    q = joint_samples(ranges, 1000, np.random.default_rng(0), "stratified")
+    for j in range(3):
+        cell = np.floor((q[:, j] - ranges[j, 0]) / (ranges[j, 1] - ranges[j, 0]) * 1000)
+        assert np.array_equal(np.sort(cell), np.arange(1000))
+
+
+def test_clearance_rule_only_removes_voxels():
+    arm = BUILTIN_MODELS["seed"]()
+    world: CollisionWorld = seed_scene().world
+    free = sample_workspace(arm, 20_000, 20.0, seed=2)
+    safe = sample_workspace(arm, 20_000, 20.0, seed=2, world=world)
+    q = joint_samples(joint_ranges(arm), 20_000, np.random.default_rng(2), "uniform")
+    assert safe.kept == int(np.sum(world.slack(arm, q) >= 0.0)) < 20_000
+    assert not (safe.occupied & ~free.occupied).any()
+    assert safe.n_occupied < free.n_occupied
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"samples": 0, "voxel": 10.0}, "samples"),
+        ({"samples": 10, "voxel": -1.0}, "voxel"),
+        ({"samples": 10, "voxel": 0.001}, "voxel of at least"),
+        ({"samples": 10, "voxel": 10.0, "method": "sobol"}, "sampling method"),
+    ],
+)
+def test_bad_sampling_requests(kwargs, message):
+    with pytest.raises(InvalidInputError, match=message):
+        sample_workspace(BUILTIN_MODELS["seed"](), **kwargs)
+
+
+def test_seed003_point_is_dexterous_in_all_9261_orientations():
+    """Seed 003's check: tool tip at (0.7, 0, 0.15) m, fixed angles in [-pi, pi] every 0.1 pi."""
+    arm = BUILTIN_MODELS["welder003"]()
+    rotations = orientation_grid(0.1 * np.pi)
+    result = dexterity(arm, [700.0, 0.0, 150.0], rotations)
+    assert result.n_tested == 9261 and result.n_reached == 9261 and result.dexterous
+    assert result.solutions.min() >= 1
+
+
+def _welder_dexterous_truth(p: np.ndarray, margin: float) -> bool | None:
+    """Geometry of welder003: the wrist centre sweeps the solid around the circle of radius
+    500 mm (axis 2's track) within 700 mm (d3 in [0, 700], joint 2 a full turn), and the tool
+    (200 mm) turns freely about it. Dexterous iff the 200 mm sphere around p lies in that solid.
+    None when within ``margin`` of the border (a finite orientation grid cannot decide)."""
+    u = np.random.default_rng(0).normal(size=(20_000, 3))
+    x = p + 200.0 * u / np.linalg.norm(u, axis=1, keepdims=True)
+    dist = np.hypot(np.hypot(x[:, 0], x[:, 1]) - 500.0, x[:, 2])
+    worst = dist.max()
+    if abs(worst - 700.0) < margin:
+        return None
+    return bool(worst < 700.0)
+
+
+def test_dexterity_matches_the_welders_geometry():
+    arm = BUILTIN_MODELS["welder003"]()
+    rotations = orientation_grid(0.25 * np.pi)
+    rng = np.random.default_rng(9)
+    decided = 0
+    for p in rng.uniform([-1300, -1300, -800], [1300, 1300, 800], (40, 3)):
+        truth = _welder_dexterous_truth(p, margin=40.0)
+        if truth is None:
+            continue
+        decided += 1
+        result = dexterity(arm, p, rotations)
+        assert result.dexterous == truth, (p, result.n_reached)
+    assert decided >= 25
+    # every solution counted is a real one: FK of the within-limits solutions hits the pose
+    result = dexterity(arm, [900.0, 0.0, 0.0], rotations)
+    assert result.dexterous
+    solver = complete_solver(arm)
+    assert solver is not None
+    T = np.zeros((len(rotations), 4, 4))
+    T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = rotations, [900.0, 0.0, 0.0], 1.0
+    out = solver.solve_batch(T)
+    for i in range(0, len(rotations), 50):
+        for s in out[i].solutions:
+            assert np.allclose(tool_pose(arm, s), T[i], atol=1e-6)
+
+
+def test_cli_workspace_writes_grid_table_and_figure(tmp_path):
+    out = tmp_path / "ws"
+    proc = subprocess.run(
+        [
+            *ARMPATH,
+            "workspace",
+            "--model",
+            "welder003",
+            "--samples",
+            "200000",
+            "--voxel",
+            "40",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    data = np.load(out / "workspace.npz")
+    occupied = data["occupied"]
+    volume_m3 = occupied.sum() * float(data["voxel_mm"]) ** 3 / 1e9
+    rows = dict(line.split(",")[:2] for line in (out / "workspace.csv").read_text().splitlines())
+    assert rows["samples"] == "200000" and rows["voxel"] == "40"
+    assert float(rows["volume"]) == pytest.approx(volume_m3, abs=1e-4)
+    assert f"{volume_m3:.4f}" in proc.stdout and "m^3" in proc.stdout
+    assert (out / "workspace_sections.png").stat().st_size > 10_000
+    # welder003 reaches 500 + 700 + 200 mm from axis 1 at most
+    assert float(rows["x range"].split("..")[1]) <= 1400 + 40
+
+
+def test_cli_workspace_bad_input_leaves_nothing(tmp_path):
+    out = tmp_path / "ws"
+    proc = subprocess.run(
+        [*ARMPATH, "workspace", "--samples", "0", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 1
+    assert proc.stderr.strip().splitlines() == ["error: samples must be >= 1, got 0"]
+    assert not out.exists()
