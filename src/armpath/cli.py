@@ -36,6 +36,7 @@ from armpath.export import (
     write_reach_files,
     write_sequence_files,
 )
+from armpath.geometry.primitives import SolidOfRevolution
 from armpath.ik import solve_ik
 from armpath.kinematics import landmark_positions, tool_pose, z_axis_chain
 from armpath.model.catalog import resolve_model
@@ -905,6 +906,132 @@ def workspace(
                     f"{arm.name}: {grid.volume / 1e9:.4f} m^3 reachable "
                     f"({grid.samples:,} samples, {grid.voxel:g} mm voxels)",
                 )
+        if out is not None and folder is not None:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+def _only_workpiece(scene: Scene) -> SolidOfRevolution:
+    if len(scene.workpieces) != 1:
+        raise InvalidInputError(
+            f"scene {scene.name!r} has {len(scene.workpieces)} hollow workpieces; "
+            "blind zones need exactly one"
+        )
+    return scene.workpieces[0]
+
+
+@app.command()
+def blindzones(
+    pixel: Annotated[float, typer.Option(help="Pixel edge of the plane maps, mm.")] = 5.0,
+    samples: Annotated[
+        int, typer.Option(help="Joint samples of each plane map (the 3-D meridian map: twice).")
+    ] = 2_000_000,
+    bands: Annotated[
+        int, typer.Option(help="Horizontal circles per workpiece face (0: skip the faces).")
+    ] = 9,
+    seed: Annotated[int, typer.Option(help="Random seed of the sampling.")] = 0,
+    wall: WallOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            help="Write blindzones.csv, blindzones.npz, blind_maps.png and face_blindness.png "
+            "here.",
+        ),
+    ] = None,
+) -> None:
+    """Blind zones of the seed arm: the central blind zone in the arm plane and in 3-D (areas
+    mm^2, volume mm^3), and the parts of the workpiece's outer and inner faces the fingertip
+    cannot reach without a collision (areas mm^2, fractions)."""
+    from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
+
+    with _cli_errors():
+        if samples < 1:
+            raise InvalidInputError(f"--samples must be >= 1, got {samples}")
+        if bands < 0:
+            raise InvalidInputError(f"--bands must be >= 0, got {bands}")
+        scene = _scene(None, wall)
+        arm = _arm(link_radius)
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            with err_console.status("blind zones: sampling the arm plane ...") as status:
+                plane = arm_plane_map(arm, pixel, samples, seed=seed)
+                status.update("blind zones: sampling the meridian map ...")
+                meridian = meridian_map(arm, pixel, 2 * samples, seed=seed + 1)
+                faces = (
+                    surface_blindness(
+                        arm,
+                        scene.world,
+                        _only_workpiece(scene),
+                        bands,
+                        progress=lambda msg: status.update(msg),
+                    )
+                    if bands > 0
+                    else []
+                )
+            table = Table(title="blind zones of the seed arm", box=box.SIMPLE)
+            for name in ("where", "blind", "of", "unit"):
+                table.add_column(name)
+            table.add_row(
+                "arm plane (joints 2, 3, 5)",
+                f"{plane.blind_area:.0f}",
+                f"{plane.reach_area:.0f} reachable",
+                "mm^2",
+            )
+            table.add_row(
+                "3-D, about the vertical axis",
+                f"{meridian.revolved_blind_volume():.4g}",
+                "",
+                "mm^3",
+            )
+            rows = []
+            for f in faces:
+                table.add_row(
+                    f"workpiece {f.face} face",
+                    f"{f.blind_area_mm2:.0f} ({100 * f.blind_fraction:.1f} %)",
+                    f"{f.area_mm2:.0f}",
+                    "mm^2",
+                )
+                for z, length, blind in zip(f.heights, f.length_mm, f.blind_mm, strict=True):
+                    rows.append(f"{f.face},{z:.2f},{length:.2f},{blind:.2f}")
+            out_console.print(table)
+            wall_convention = scene.wall_thickness
+            out_console.print(
+                f"scene {scene.name}: wall thickness measured "
+                f"{wall_convention.value if wall_convention else '-'}; {pixel:g} mm pixels; "
+                f"faces by {bands} horizontal circles each",
+                markup=False,
+            )
+            if folder is not None:
+                from armpath.viz.workspace_figures import plot_blind_maps, plot_face_blindness
+
+                folder.write_text(
+                    "blindzones.csv",
+                    "face,height_mm,circumference_mm,unreachable_mm\n"
+                    + "".join(r + "\n" for r in rows),
+                )
+                np.savez_compressed(
+                    folder.file("blindzones.npz"),
+                    plane_reach=plane.reach,
+                    plane_blind=plane.blind,
+                    plane_origin_mm=plane.origin,
+                    meridian_reach=meridian.reach,
+                    meridian_blind=meridian.blind,
+                    meridian_origin_mm=meridian.origin,
+                    pixel_mm=pixel,
+                )
+                plot_blind_maps(
+                    folder.file("blind_maps.png"),
+                    [(plane, "arm plane (y, z)"), (meridian, "about the axis (rho, z)")],
+                    "seed arm: reachable fingertip positions and enclosed blind zones",
+                )
+                if faces:
+                    plot_face_blindness(
+                        folder.file("face_blindness.png"),
+                        faces,
+                        "workpiece faces the fingertip cannot reach",
+                    )
         if out is not None and folder is not None:
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)

@@ -9,6 +9,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
 from armpath.workspace import VoxelGrid
+from armpath.workspace.blindzones import FaceBlindness, PlaneMap
 
 
 def plot_workspace_sections(
@@ -43,5 +44,59 @@ def plot_workspace_sections(
         ax.set_title(f"section {axis} = {value:.0f} mm")
         ax.grid(alpha=0.3)
     fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def plot_blind_maps(path: str | Path, maps: list[tuple[PlaneMap, str]], title: str = "") -> None:
+    """Reachable (blue) and enclosed blind (red) pixels of plane maps, side by side."""
+    cmap = ListedColormap(["white", "#9ecae1", "#de2d26"])
+    fig = Figure(figsize=(5.4 * len(maps), 5.4), dpi=110)
+    for k, (m, label) in enumerate(maps):
+        ax = fig.add_subplot(1, len(maps), k + 1)
+        image = m.reach.astype(int) + 2 * m.blind.astype(int)
+        nu, nv = m.reach.shape
+        extent = (
+            float(m.origin[0]),
+            float(m.origin[0] + nu * m.pixel),
+            float(m.origin[1]),
+            float(m.origin[1] + nv * m.pixel),
+        )
+        ax.imshow(
+            image.T,
+            origin="lower",
+            extent=extent,
+            cmap=cmap,
+            vmin=0,
+            vmax=2,
+            interpolation="nearest",
+        )
+        ax.set_xlabel(f"{m.axes[0]} [mm]")
+        ax.set_ylabel(f"{m.axes[1]} [mm]")
+        ax.set_aspect("equal")
+        ax.set_title(f"{label}\nblind (red) {m.blind_area / 100:.0f} cm^2")
+        ax.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def plot_face_blindness(path: str | Path, faces: list[FaceBlindness], title: str = "") -> None:
+    """Blind fraction of each horizontal circle against its height, per face."""
+    fig = Figure(figsize=(6.5, 4.5), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    for f in faces:
+        ax.plot(
+            100.0 * f.blind_mm / f.length_mm,
+            f.heights,
+            "o-",
+            label=f"{f.face} face: {100 * f.blind_fraction:.1f} % blind",
+        )
+    ax.set_xlabel("unreachable part of the circle [%]")
+    ax.set_ylabel("height z [mm]")
+    ax.set_xlim(0, 100)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    ax.set_title(title)
     fig.tight_layout()
     fig.savefig(path)

@@ -1,0 +1,270 @@
+"""Blind zones of the seed arm (seeds 000 section 6.2, 001 section 6.3.2).
+
+* **In the arm plane**: joints 2, 3 and 5 bend the arm in one vertical plane (joints 1, 4, 6 at
+  zero). Sampling them inside their limits marks the fingertip's reachable pixels; unreachable
+  pixels enclosed by reachable ones are the *central blind zone* (seed 000's figure 7: with the
+  default limits the fingertip cannot fold back to the base A or the shoulder B), the rest of the
+  unreachable plane lies *outside the reach*.
+* **In 3-D**: joint 1 turns that picture about the vertical axis, and joint 4 twists the wrist out
+  of the plane. Sampling joints 2-5 and keeping the fingertip's distance from the axis and height
+  gives the meridian map; its enclosed holes, turned about the axis, are the 3-D blind volume
+  (Pappus: each pixel contributes ``2 pi rho`` times its area).
+* **On the workpiece**: horizontal circles on the outer and inner faces of the hollow cone, each
+  checked by the curve-reachability search (every joint inside its limits, the clearance rule
+  kept, the tool coming from outside the surface), give the unreachable part of each circle;
+  integrating over height gives the blind area of each face and its fraction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import ndimage
+
+from armpath.errors import InvalidInputError
+from armpath.geometry.curves import ConeSection
+from armpath.geometry.primitives import SolidOfRevolution
+from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import tool_position
+from armpath.model.seed_arm import seed_geometry_of
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.curve_reach import curve_reachability
+from armpath.workspace.sampling import joint_ranges
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class PlaneMap:
+    """Reachable pixels of the fingertip in a plane (mm).
+
+    Pixel ``[i, j]`` spans ``u in origin[0] + pixel * [i, i+1)``, ``v in origin[1] + pixel *
+    [j, j+1)``; ``axes`` names u and v (``("y", "z")`` for the arm plane, ``("rho", "z")`` for the
+    meridian map, where negative rho is the mirror image).
+    """
+
+    origin: FloatArray
+    pixel: float
+    reach: BoolArray
+    axes: tuple[str, str]
+    samples: int
+
+    #: Enclosed unreachable regions smaller than this many pixels are sampling gaps, not blind
+    #: zones.
+    min_hole_pixels = 4
+
+    @property
+    def blind(self) -> BoolArray:
+        """Unreachable pixels enclosed by reachable ones (holes of the reachable set of at least
+        :attr:`min_hole_pixels` pixels)."""
+        holes = ndimage.binary_fill_holes(self.reach) & ~self.reach
+        labels, n = ndimage.label(holes)
+        if n == 0:
+            return np.zeros_like(self.reach)
+        sizes = np.bincount(labels.ravel())
+        keep = sizes >= self.min_hole_pixels
+        keep[0] = False
+        return np.asarray(keep[labels])
+
+    @property
+    def blind_area(self) -> float:
+        """Area of the enclosed blind pixels (mm^2)."""
+        return float(np.count_nonzero(self.blind)) * self.pixel**2
+
+    @property
+    def reach_area(self) -> float:
+        return float(np.count_nonzero(self.reach)) * self.pixel**2
+
+    def centers(self) -> tuple[FloatArray, FloatArray]:
+        """Pixel centre coordinates along u and v (mm)."""
+        nu, nv = self.reach.shape
+        return (
+            self.origin[0] + (np.arange(nu) + 0.5) * self.pixel,
+            self.origin[1] + (np.arange(nv) + 0.5) * self.pixel,
+        )
+
+    def at(self, u: float, v: float) -> tuple[int, int]:
+        i = int(np.floor((u - self.origin[0]) / self.pixel))
+        j = int(np.floor((v - self.origin[1]) / self.pixel))
+        return i, j
+
+    def revolved_blind_volume(self) -> float:
+        """Volume (mm^3) swept by the blind pixels of a meridian map turned about u = 0 (each
+        side counted once: the map is symmetric)."""
+        if self.axes[0] != "rho":
+            raise InvalidInputError("only a meridian map (rho, z) can be revolved")
+        u, _ = self.centers()
+        rho = np.abs(u)[:, None]
+        return float(np.sum(self.blind * np.pi * rho) * self.pixel**2)
+
+
+def _grid(
+    extent_u: tuple[float, float], extent_v: tuple[float, float], pixel: float
+) -> tuple[FloatArray, tuple[int, int]]:
+    if not (np.isfinite(pixel) and pixel > 0):
+        raise InvalidInputError(f"pixel size must be a positive length, got {pixel}")
+    lo = np.array([extent_u[0], extent_v[0]]) - pixel
+    n = np.ceil((np.array([extent_u[1], extent_v[1]]) + pixel - lo) / pixel).astype(int)
+    return lo, (int(n[0]), int(n[1]))
+
+
+def _mark(points: FloatArray, origin: FloatArray, pixel: float, reach: BoolArray) -> None:
+    idx = np.floor((points - origin) / pixel).astype(np.int64)
+    reach[idx[:, 0], idx[:, 1]] = True
+
+
+def arm_plane_map(
+    arm: SerialArm,
+    pixel: float = 5.0,
+    samples: int = 2_000_000,
+    *,
+    seed: int = 0,
+    chunk: int = 500_000,
+) -> PlaneMap:
+    """Reachable fingertip pixels in the arm plane (joints 1, 4, 6 at zero; u = y, v = z, mm)."""
+    g = seed_geometry_of(arm)
+    reach_mm = g.bc_mm + g.cd_mm + g.de_mm
+    origin, shape = _grid((-reach_mm, reach_mm), (g.ab_mm - reach_mm, g.ab_mm + reach_mm), pixel)
+    reach = np.zeros(shape, dtype=bool)
+    ranges = joint_ranges(arm)
+    rng = np.random.default_rng(seed)
+    done = 0
+    while done < samples:
+        n = min(chunk, samples - done)
+        q = np.zeros((n, 6))
+        for j in (1, 2, 4):
+            q[:, j] = rng.uniform(ranges[j, 0], ranges[j, 1], n)
+        _mark(tool_position(arm, q)[:, 1:], origin, pixel, reach)
+        done += n
+    return PlaneMap(origin, float(pixel), reach, ("y", "z"), samples)
+
+
+def meridian_map(
+    arm: SerialArm,
+    pixel: float = 5.0,
+    samples: int = 4_000_000,
+    *,
+    seed: int = 0,
+    chunk: int = 500_000,
+) -> PlaneMap:
+    """Reachable fingertip pixels in (distance from the vertical axis, height), mirrored to
+    negative distances: joints 2-5 sampled inside their limits, joint 1 turns it about the axis."""
+    g = seed_geometry_of(arm)
+    reach_mm = g.bc_mm + g.cd_mm + g.de_mm
+    origin, shape = _grid((-reach_mm, reach_mm), (g.ab_mm - reach_mm, g.ab_mm + reach_mm), pixel)
+    reach = np.zeros(shape, dtype=bool)
+    ranges = joint_ranges(arm)
+    rng = np.random.default_rng(seed)
+    done = 0
+    while done < samples:
+        n = min(chunk, samples - done)
+        q = np.zeros((n, 6))
+        for j in (1, 2, 3, 4):
+            q[:, j] = rng.uniform(ranges[j, 0], ranges[j, 1], n)
+        p = tool_position(arm, q)
+        rho = np.hypot(p[:, 0], p[:, 1])
+        for sign in (1.0, -1.0):
+            _mark(np.stack([sign * rho, p[:, 2]], axis=1), origin, pixel, reach)
+        done += n
+    return PlaneMap(origin, float(pixel), reach, ("rho", "z"), samples)
+
+
+@dataclass(frozen=True)
+class FaceBlindness:
+    """Unreachable part of one side face of a solid of revolution, by horizontal circles.
+
+    ``heights`` (mm) are the circles' heights, each the middle of a band of height
+    ``band_mm``; ``length_mm`` their circumferences, ``blind_mm`` their unreachable lengths and
+    ``reasons`` why (one text per unreachable arc). Areas follow by the bands' slant heights.
+    """
+
+    face: str
+    heights: FloatArray
+    band_mm: float
+    slant: float
+    length_mm: FloatArray
+    blind_mm: FloatArray
+    reasons: tuple[tuple[str, ...], ...]
+
+    @property
+    def area_mm2(self) -> float:
+        return float(np.sum(self.length_mm) * self.band_mm * self.slant)
+
+    @property
+    def blind_area_mm2(self) -> float:
+        return float(np.sum(self.blind_mm) * self.band_mm * self.slant)
+
+    @property
+    def blind_fraction(self) -> float:
+        return self.blind_area_mm2 / self.area_mm2
+
+
+def side_faces(solid: SolidOfRevolution) -> dict[str, int]:
+    """Profile edges of the outer and inner side faces (conical or cylindrical) of a hollow
+    solid: the outer one rises from the outermost bottom corner, the inner one is the other."""
+    prof = solid.profile
+    n = len(prof)
+    sides = [k for k in range(n) if prof[k][1] != prof[(k + 1) % n][1]]
+    bottom = int(np.argmax(np.where(prof[:, 1] == prof[:, 1].min(), prof[:, 0], -np.inf)))
+    inner = [k for k in sides if k != bottom and prof[k][0] > 0 and prof[(k + 1) % n][0] > 0]
+    if bottom not in sides or len(inner) != 1:
+        raise InvalidInputError(f"{solid.name!r} is not a hollow solid with one inner side face")
+    return {"outer": bottom, "inner": inner[0]}
+
+
+def surface_blindness(
+    arm: SerialArm,
+    world: CollisionWorld,
+    solid: SolidOfRevolution,
+    bands: int = 9,
+    *,
+    faces: tuple[str, ...] = ("outer", "inner"),
+    scan_step_mm: float = 8.0,
+    resolution_mm: float = 0.5,
+    progress: Callable[[str], None] | None = None,
+) -> list[FaceBlindness]:
+    """Blind parts of the side faces of ``solid`` (a hollow solid of revolution in ``world``):
+    ``bands`` horizontal bands per face, each represented by the circle at its middle height."""
+    if bands < 1:
+        raise InvalidInputError(f"bands must be >= 1, got {bands}")
+    edges = side_faces(solid)
+    out = []
+    for face in faces:
+        if face not in edges:
+            raise InvalidInputError(f"face must be one of {tuple(edges)}, got {face!r}")
+        k = edges[face]
+        (ra, za), (rb, zb) = solid.profile[k], solid.profile[(k + 1) % len(solid.profile)]
+        lo, hi = min(za, zb), max(za, zb)
+        band = (hi - lo) / bands
+        heights = lo + band * (np.arange(bands) + 0.5)
+        lengths, blind, reasons = [], [], []
+        for z in heights:
+            if progress is not None:
+                progress(f"blind zones: {face} face at z = {z:.1f} mm")
+            circle = ConeSection(
+                f"{face} face at z = {z:.1f} mm",
+                solid,
+                k,
+                solid.origin + z * solid.axis,
+                solid.axis,
+            )
+            result = curve_reachability(arm, world, circle, scan_step_mm, resolution_mm)
+            lengths.append(circle.length)
+            blind.append(sum(a.length_mm for a in result.unreachable))
+            reasons.append(tuple(a.reason for a in result.unreachable))
+        out.append(
+            FaceBlindness(
+                face,
+                heights,
+                float(band),
+                float(np.hypot(1.0, (rb - ra) / (zb - za))),
+                np.array(lengths),
+                np.array(blind, dtype=np.float64),
+                tuple(reasons),
+            )
+        )
+    return out

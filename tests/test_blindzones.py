@@ -1,0 +1,119 @@
+"""Blind zones of the seed arm, checked by an independent optimizer on the SPEC kinematics."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy import ndimage
+from scipy.optimize import minimize
+
+import independent
+from armpath.model import seed_arm
+from armpath.scenes import seed_scene
+from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
+
+ARMPATH = [sys.executable, "-m", "armpath"]
+LIMITS_DEG = ((-125.0, 125.0), (-138.0, 138.0), (-133.5, 133.5))  # joints 2, 3, 5 (SPEC)
+
+
+def _closest_in_plane(target_yz: np.ndarray, starts: int = 24) -> float:
+    """Smallest distance from the fingertip to a point of the arm plane over joints 2, 3, 5
+    within their limits (SPEC kinematics of tests/independent.py, multi-start L-BFGS-B)."""
+    rng = np.random.default_rng(0)
+
+    def dist(t):
+        e = independent.points(np.array([0.0, t[0], t[1], 0.0, t[2], 0.0]))[4]
+        return float(np.hypot(e[1] - target_yz[0], e[2] - target_yz[1]) + abs(e[0]))
+
+    best = np.inf
+    for _ in range(starts):
+        x0 = [rng.uniform(lo, hi) for lo, hi in LIMITS_DEG]
+        r = minimize(dist, x0, method="L-BFGS-B", bounds=LIMITS_DEG)
+        best = min(best, r.fun)
+    return best
+
+
+@pytest.fixture(scope="module")
+def plane():
+    return arm_plane_map(seed_arm(), 5.0, 1_500_000, seed=3)
+
+
+def test_central_blind_zone_is_unreachable_and_its_surroundings_reachable(plane):
+    """Pixels deep inside the blind zone are at least a few mm from every fingertip position an
+    independent optimizer finds; reachable pixels deep inside the reach have a fingertip within
+    the pixel."""
+    blind = plane.blind
+    i, j = plane.at(0.0, 140.0)  # the shoulder B
+    assert blind[i, j]
+    assert 30_000 < plane.blind_area < 60_000  # mm^2: a disc of radius ~115 mm around B
+    deep_blind = ndimage.binary_erosion(blind, iterations=2)
+    deep_reach = ndimage.binary_erosion(plane.reach, iterations=3)
+    u, v = plane.centers()
+    rng = np.random.default_rng(1)
+    for mask, inside in ((deep_blind, False), (deep_reach, True)):
+        idx = np.argwhere(mask)
+        for a, b in idx[rng.choice(len(idx), 8, replace=False)]:
+            d = _closest_in_plane(np.array([u[a], v[b]]))
+            if inside:
+                assert d < plane.pixel, (u[a], v[b], d)
+            else:
+                assert d > 5.0, (u[a], v[b], d)
+
+
+def test_three_d_blind_zone_lies_inside_the_plane_one(plane):
+    """Twisting the wrist (joint 4) only adds reach: every 3-D blind pixel (rho, z) two pixels
+    inside the blind zone (sampling blurs its edge) is unreachable in the arm plane at
+    (+-rho, z)."""
+    meridian = meridian_map(seed_arm(), 5.0, 2_000_000, seed=4)
+    assert np.array_equal(meridian.reach, meridian.reach[::-1])  # mirrored
+    blind3 = np.argwhere(ndimage.binary_erosion(meridian.blind, iterations=2))
+    assert len(blind3) > 500
+    u, v = meridian.centers()
+    bad = 0
+    for a, b in blind3:
+        for sign in (1.0, -1.0):
+            i, j = plane.at(sign * u[a], v[b])
+            bad += bool(plane.reach[i, j])
+    assert bad == 0
+    assert 0.0 < meridian.revolved_blind_volume() < 4.0 / 3.0 * np.pi * 130.0**3
+
+
+def test_face_blindness_integrates_the_cone_area():
+    scene = seed_scene()
+    wp = scene.workpieces[0]
+    (face,) = surface_blindness(seed_arm(), scene.world, wp, 2, faces=("inner",))
+    # midpoint circles integrate a linear radius exactly: the lateral area of the inner face
+    prof = wp.profile
+    (r_top, z_top), (r_bot, z_bot) = prof[3], prof[4]
+    slant = np.hypot(r_bot - r_top, z_top - z_bot)
+    assert face.area_mm2 == pytest.approx(np.pi * (r_top + r_bot) * slant, rel=1e-6)
+    assert np.all((face.blind_mm >= 0) & (face.blind_mm <= face.length_mm))
+    assert 0.0 < face.blind_fraction < 0.5
+    for blind, reasons in zip(face.blind_mm, face.reasons, strict=True):
+        assert (blind > 0) == (len(reasons) > 0)
+
+
+def test_cli_blindzones_writes_maps(tmp_path):
+    out = tmp_path / "bz"
+    proc = subprocess.run(
+        [*ARMPATH, "blindzones", "--bands", "0", "--samples", "300000", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "mm^2" in proc.stdout and "mm^3" in proc.stdout
+    data = np.load(out / "blindzones.npz")
+    assert data["plane_blind"].sum() > 0 and float(data["pixel_mm"]) == 5.0
+    assert (out / "blind_maps.png").stat().st_size > 10_000
+    bad = subprocess.run(
+        [*ARMPATH, "blindzones", "--pixel", "-1", "--out", str(tmp_path / "x")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert bad.returncode == 1 and bad.stderr.strip().startswith("error: pixel size")
+    assert not (tmp_path / "x").exists()
