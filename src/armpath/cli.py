@@ -1037,6 +1037,103 @@ def blindzones(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+@app.command("design-sweep")
+def design_sweep(
+    total: Annotated[
+        float, typer.Option(help="Total link length AB + BC + CD + DE of every candidate, mm.")
+    ] = 715.0,
+    samples: Annotated[int, typer.Option(help="Joint samples per candidate.")] = 1_000_000,
+    pixel: Annotated[float, typer.Option(help="Pixel edge of the meridian maps, mm.")] = 10.0,
+    seed: Annotated[int, typer.Option(help="Random seed (every candidate uses it).")] = 0,
+    jobs: Annotated[int, typer.Option(help="Local worker processes (-1: every core).")] = -1,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(help="Address of a Dask scheduler (e.g. tcp://host:8786) to run on."),
+    ] = None,
+    top: Annotated[int, typer.Option(help="Candidates listed, best first.")] = 10,
+    out: Annotated[
+        Path | None, typer.Option("--out", help="Write design_sweep.csv and design_sweep.png here.")
+    ] = None,
+) -> None:
+    """Design study of the seed arm: link lengths (AB, BC = CD, DE at a fixed total) and the
+    range of joint 3 against the reach volume above the table (m^3) and the central blind zone
+    (litres). Objective: the largest reach volume; ties (within 0.5 %) go to the smaller blind
+    zone."""
+    from armpath.workspace.design import design_grid, evaluate_design, ranked, sweep
+
+    with _cli_errors():
+        if samples < 1:
+            raise InvalidInputError(f"--samples must be >= 1, got {samples}")
+        if top < 1:
+            raise InvalidInputError(f"--top must be >= 1, got {top}")
+        candidates = design_grid(total)
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            where = f"Dask at {scheduler}" if scheduler else "joblib on this machine"
+            with err_console.status(f"evaluating {len(candidates)} designs ({where}) ..."):
+                results = ranked(
+                    sweep(
+                        candidates,
+                        pixel_mm=pixel,
+                        samples=samples,
+                        seed=seed,
+                        scheduler=scheduler,
+                        n_jobs=jobs,
+                    )
+                )
+                reference = evaluate_design(SeedArmGeometry(), pixel, samples, seed)
+            columns = list(reference.row())
+            shown = {
+                "AB_mm": "AB mm",
+                "BC_mm": "BC=CD mm",
+                "DE_mm": "DE mm",
+                "theta3_deg": "θ3 ±deg",
+                "reach_volume_m3": "reach m^3",
+                "blind_volume_l": "blind l",
+                "nearest_to_B_mm": "nearest to B mm",
+            }
+            table = Table(
+                title=f"seed-arm designs, total length {total:g} mm (best first)", box=box.SIMPLE
+            )
+            for name in ("#", *shown.values()):
+                table.add_column(name, justify="right")
+
+            def cells(r: dict[str, float]) -> list[str]:
+                return [f"{r[k]:.4g}" for k in shown]
+
+            for k, r in enumerate(results[:top]):
+                table.add_row(str(k + 1), *cells(r.row()))
+            table.add_row("seed", *cells(reference.row()))
+            out_console.print(table)
+            best = results[0]
+            out_console.print(
+                f"recommendation: AB {best.geometry.ab_mm:g}, BC = CD {best.geometry.bc_mm:g}, "
+                f"DE {best.geometry.de_mm:g} mm, joint 3 within ±{best.geometry.range_deg[2]:g}°: "
+                f"{best.reach_volume_mm3 / 1e9:.4f} m^3 above the table "
+                f"({100 * (best.reach_volume_mm3 / reference.reach_volume_mm3 - 1):+.1f} % on the "
+                f"seed arm), blind zone {best.blind_volume_mm3 / 1e6:.3g} l "
+                f"(seed arm {reference.blind_volume_mm3 / 1e6:.3g} l)",
+                markup=False,
+            )
+            if folder is not None:
+                from armpath.viz.workspace_figures import plot_design_sweep
+
+                folder.write_text(
+                    "design_sweep.csv",
+                    "rank,"
+                    + ",".join(columns)
+                    + "\n"
+                    + "".join(
+                        f"{k + 1}," + ",".join(f"{v:.6g}" for v in r.row().values()) + "\n"
+                        for k, r in enumerate(results)
+                    ),
+                )
+                plot_design_sweep(folder.file("design_sweep.png"), results, reference)
+        if out is not None and folder is not None:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
 @app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),

@@ -65,7 +65,8 @@ def seed_arm(geometry: SeedArmGeometry | None = None) -> SerialArm:
     """Build the seed arm (SPEC section 1) as a :class:`SerialArm`.
 
     Frames: 1 = joint 1 at A, 2 = joint 2 at B, 3 = joint 3 at C, 4 = joint 4 at C,
-    5 = joint 5 at D, 6 = joint 6 at D, 7 = tool at E.
+    5 = joint 5 at D, 6 = joint 6 at D, 7 = tool at E. The home pose is SPEC's initial pose,
+    clipped into the joint ranges when a design study narrows them.
     """
     g = geometry or SeedArmGeometry()
     ex, ez = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
@@ -106,7 +107,11 @@ def seed_arm(geometry: SeedArmGeometry | None = None) -> SerialArm:
         T_flange_tool=_tz(g.de_mm),
         landmarks=landmarks,
         links=links,
-        home=np.radians(SEED_HOME_DEG),
+        home=np.clip(
+            np.radians(SEED_HOME_DEG),
+            [j.limits[0] for j in joints],
+            [j.limits[1] for j in joints],
+        ),
         length_unit="mm",
         parameters=(
             ("AB_mm", g.ab_mm),

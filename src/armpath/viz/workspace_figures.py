@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,7 @@ from matplotlib.figure import Figure
 
 from armpath.workspace import VoxelGrid
 from armpath.workspace.blindzones import FaceBlindness, PlaneMap
+from armpath.workspace.design import DesignMetrics
 
 
 def plot_workspace_sections(
@@ -98,5 +100,43 @@ def plot_face_blindness(path: str | Path, faces: list[FaceBlindness], title: str
     ax.grid(alpha=0.3)
     ax.legend()
     ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def plot_design_sweep(
+    path: str | Path, results: Sequence[DesignMetrics], reference: DesignMetrics
+) -> None:
+    """Reach volume above the table against the central blind zone of each candidate design."""
+    fig = Figure(figsize=(7, 5), dpi=110)
+    ax = fig.add_subplot(1, 1, 1)
+    blind = [r.blind_volume_mm3 / 1e6 for r in results]
+    vol = [r.reach_volume_mm3 / 1e9 for r in results]
+    ab = [r.geometry.ab_mm for r in results]
+    sc = ax.scatter(blind, vol, c=ab, cmap="viridis")
+    fig.colorbar(sc, ax=ax, label="AB [mm]")
+    ax.scatter(
+        [reference.blind_volume_mm3 / 1e6],
+        [reference.reach_volume_mm3 / 1e9],
+        marker="*",
+        s=200,
+        c="red",
+        label="seed arm",
+    )
+    best = results[0]
+    ax.scatter(
+        [best.blind_volume_mm3 / 1e6],
+        [best.reach_volume_mm3 / 1e9],
+        marker="o",
+        s=160,
+        facecolors="none",
+        edgecolors="k",
+        label="recommended",
+    )
+    ax.set_xlabel("central blind zone [litres]")
+    ax.set_ylabel("reach volume above the table [m^3]")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    ax.set_title("seed-arm designs at a fixed total link length")
     fig.tight_layout()
     fig.savefig(path)

@@ -92,14 +92,18 @@ class PlaneMap:
         j = int(np.floor((v - self.origin[1]) / self.pixel))
         return i, j
 
-    def revolved_blind_volume(self) -> float:
-        """Volume (mm^3) swept by the blind pixels of a meridian map turned about u = 0 (each
-        side counted once: the map is symmetric)."""
+    def revolved_volume(self, mask: BoolArray) -> float:
+        """Volume (mm^3) swept by the pixels of ``mask`` of a meridian map turned about u = 0
+        (Pappus; the map is mirrored, so each side counts half)."""
         if self.axes[0] != "rho":
             raise InvalidInputError("only a meridian map (rho, z) can be revolved")
         u, _ = self.centers()
         rho = np.abs(u)[:, None]
-        return float(np.sum(self.blind * np.pi * rho) * self.pixel**2)
+        return float(np.sum(mask * np.pi * rho) * self.pixel**2)
+
+    def revolved_blind_volume(self) -> float:
+        """Volume (mm^3) of the 3-D blind zone: the blind pixels turned about the axis."""
+        return self.revolved_volume(self.blind)
 
 
 def _grid(
