@@ -151,6 +151,12 @@ def test_run_writes_every_task_and_a_summary(seed_run):
     assert "63" in stdout and str(weld["n_commands"]) in stdout
     summary = (out / "summary.md").read_text()
     assert "Task 1" in summary and "Task 3" in summary
+    # the blind-zone summary: the central blind zone and both workpiece faces
+    assert {"blind_maps.png", "face_blindness.png", "blindzones.csv"} <= names
+    assert "central blind zone" in summary and "inner face" in summary
+    assert "Blind zones: central blind zone" in stdout
+    rows = (out / "blindzones.csv").read_text().splitlines()
+    assert rows[0] == "face,height_mm,circumference_mm,unreachable_mm" and len(rows) == 7
 
 
 def test_spotweld_horizontal_wall_given_order(tmp_path):

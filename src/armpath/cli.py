@@ -8,6 +8,7 @@ usage errors exit with status 2.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import math
 import sys
@@ -920,6 +921,94 @@ def _only_workpiece(scene: Scene) -> SolidOfRevolution:
     return scene.workpieces[0]
 
 
+@dataclasses.dataclass(frozen=True)
+class _BlindZones:
+    plane: Any
+    meridian: Any
+    faces: list[Any]
+    pixel: float
+
+    def summary(self) -> list[str]:
+        """One line each: the central blind zone in the plane and in 3-D, each face."""
+        out = [
+            f"central blind zone: {self.plane.blind_area / 100:.0f} cm^2 in the arm plane "
+            f"(joints 2, 3, 5; {self.plane.reach_area / 100:.0f} cm^2 reachable), "
+            f"{self.meridian.revolved_blind_volume() / 1e6:.2f} litres in 3-D",
+        ]
+        out += [
+            f"workpiece {f.face} face: {f.blind_area_mm2 / 100:.1f} of {f.area_mm2 / 100:.1f} cm^2 "
+            f"unreachable ({100 * f.blind_fraction:.1f} %, {len(f.heights)} circles)"
+            for f in self.faces
+        ]
+        return out
+
+
+def _blind_zones(
+    arm: SerialArm,
+    scene: Scene,
+    pixel: float,
+    samples: int,
+    bands: int,
+    seed: int,
+    status: Any,
+    scan_step_mm: float = 8.0,
+) -> _BlindZones:
+    from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
+
+    status.update("blind zones: sampling the arm plane ...")
+    plane = arm_plane_map(arm, pixel, samples, seed=seed)
+    status.update("blind zones: sampling the meridian map ...")
+    meridian = meridian_map(arm, pixel, 2 * samples, seed=seed + 1)
+    faces = (
+        surface_blindness(
+            arm,
+            scene.world,
+            _only_workpiece(scene),
+            bands,
+            scan_step_mm=scan_step_mm,
+            resolution_mm=scan_step_mm / 16.0,
+            progress=lambda m: status.update(m),
+        )
+        if bands > 0
+        else []
+    )
+    return _BlindZones(plane, meridian, faces, pixel)
+
+
+def _write_blind_zones(folder: OutputFolder, bz: _BlindZones) -> None:
+    from armpath.viz.workspace_figures import plot_blind_maps, plot_face_blindness
+
+    rows = [
+        f"{f.face},{z:.2f},{length:.2f},{blind:.2f}\n"
+        for f in bz.faces
+        for z, length, blind in zip(f.heights, f.length_mm, f.blind_mm, strict=True)
+    ]
+    folder.write_text(
+        "blindzones.csv", "face,height_mm,circumference_mm,unreachable_mm\n" + "".join(rows)
+    )
+    np.savez_compressed(
+        folder.file("blindzones.npz"),
+        plane_reach=bz.plane.reach,
+        plane_blind=bz.plane.blind,
+        plane_origin_mm=bz.plane.origin,
+        meridian_reach=bz.meridian.reach,
+        meridian_blind=bz.meridian.blind,
+        meridian_origin_mm=bz.meridian.origin,
+        pixel_mm=bz.pixel,
+    )
+    plot_blind_maps(
+        folder.file("blind_maps.png"),
+        [(bz.plane, "arm plane (y, z)"), (bz.meridian, "about the axis (rho, z)")],
+        "seed arm: reachable fingertip positions and enclosed blind zones",
+    )
+    if bz.faces:
+        plot_face_blindness(
+            folder.file("face_blindness.png"),
+            bz.faces,
+            "workpiece faces the fingertip cannot reach",
+        )
+
+
 @app.command()
 def blindzones(
     pixel: Annotated[float, typer.Option(help="Pixel edge of the plane maps, mm.")] = 5.0,
@@ -944,8 +1033,6 @@ def blindzones(
     """Blind zones of the seed arm: the central blind zone in the arm plane and in 3-D (areas
     mm^2, volume mm^3), and the parts of the workpiece's outer and inner faces the fingertip
     cannot reach without a collision (areas mm^2, fractions)."""
-    from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
-
     with _cli_errors():
         if samples < 1:
             raise InvalidInputError(f"--samples must be >= 1, got {samples}")
@@ -955,46 +1042,30 @@ def blindzones(
         arm = _arm(link_radius)
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
-            with err_console.status("blind zones: sampling the arm plane ...") as status:
-                plane = arm_plane_map(arm, pixel, samples, seed=seed)
-                status.update("blind zones: sampling the meridian map ...")
-                meridian = meridian_map(arm, pixel, 2 * samples, seed=seed + 1)
-                faces = (
-                    surface_blindness(
-                        arm,
-                        scene.world,
-                        _only_workpiece(scene),
-                        bands,
-                        progress=lambda msg: status.update(msg),
-                    )
-                    if bands > 0
-                    else []
-                )
+            with err_console.status("blind zones ...") as status:
+                bz = _blind_zones(arm, scene, pixel, samples, bands, seed, status)
             table = Table(title="blind zones of the seed arm", box=box.SIMPLE)
             for name in ("where", "blind", "of", "unit"):
                 table.add_column(name)
             table.add_row(
                 "arm plane (joints 2, 3, 5)",
-                f"{plane.blind_area:.0f}",
-                f"{plane.reach_area:.0f} reachable",
+                f"{bz.plane.blind_area:.0f}",
+                f"{bz.plane.reach_area:.0f} reachable",
                 "mm^2",
             )
             table.add_row(
                 "3-D, about the vertical axis",
-                f"{meridian.revolved_blind_volume():.4g}",
+                f"{bz.meridian.revolved_blind_volume():.4g}",
                 "",
                 "mm^3",
             )
-            rows = []
-            for f in faces:
+            for f in bz.faces:
                 table.add_row(
                     f"workpiece {f.face} face",
                     f"{f.blind_area_mm2:.0f} ({100 * f.blind_fraction:.1f} %)",
                     f"{f.area_mm2:.0f}",
                     "mm^2",
                 )
-                for z, length, blind in zip(f.heights, f.length_mm, f.blind_mm, strict=True):
-                    rows.append(f"{f.face},{z:.2f},{length:.2f},{blind:.2f}")
             out_console.print(table)
             wall_convention = scene.wall_thickness
             out_console.print(
@@ -1004,34 +1075,7 @@ def blindzones(
                 markup=False,
             )
             if folder is not None:
-                from armpath.viz.workspace_figures import plot_blind_maps, plot_face_blindness
-
-                folder.write_text(
-                    "blindzones.csv",
-                    "face,height_mm,circumference_mm,unreachable_mm\n"
-                    + "".join(r + "\n" for r in rows),
-                )
-                np.savez_compressed(
-                    folder.file("blindzones.npz"),
-                    plane_reach=plane.reach,
-                    plane_blind=plane.blind,
-                    plane_origin_mm=plane.origin,
-                    meridian_reach=meridian.reach,
-                    meridian_blind=meridian.blind,
-                    meridian_origin_mm=meridian.origin,
-                    pixel_mm=pixel,
-                )
-                plot_blind_maps(
-                    folder.file("blind_maps.png"),
-                    [(plane, "arm plane (y, z)"), (meridian, "about the axis (rho, z)")],
-                    "seed arm: reachable fingertip positions and enclosed blind zones",
-                )
-                if faces:
-                    plot_face_blindness(
-                        folder.file("face_blindness.png"),
-                        faces,
-                        "workpiece faces the fingertip cannot reach",
-                    )
+                _write_blind_zones(folder, bz)
         if out is not None and folder is not None:
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)
@@ -1141,7 +1185,7 @@ def run(
     link_radius: LinkRadiusOption = 0.0,
 ) -> None:
     """Run the seed scene's three tasks: 1, reach the tool box; 2, trace the crack; 3, spot welds
-    inside the workpiece."""
+    inside the workpiece; then summarise the seed arm's blind zones."""
     with _cli_errors():
         scene = _scene(None, wall)
         arm = _arm(link_radius)
@@ -1159,6 +1203,9 @@ def run(
                 tour = spotweld_task(scene, arm, on_progress=lambda msg: status.update(msg))
             tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
             _write_tour(folder, tour, tour_doc, arm, scene)
+            with err_console.status("blind zones ...") as status:
+                blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, status, scan_step_mm=16.0)
+            _write_blind_zones(folder, blind)
             folder.write_text(
                 "summary.md",
                 _summary_markdown(
@@ -1167,7 +1214,11 @@ def run(
                         (titles["trace"], trace_doc),
                         (titles["spotweld"], tour_doc),
                     ]
-                ),
+                )
+                + "\n## Blind zones of the seed arm\n\n"
+                + "".join(f"- {line}\n" for line in blind.summary())
+                + "\n(3 circles a face scanned every 16 mm here; `armpath blindzones` for finer "
+                "maps.)\n",
             )
         written = folder.written
         table = Table(
@@ -1215,6 +1266,8 @@ def run(
             "* Task 3's bound: direct motions between the chosen goal states, obstacles ignored.",
             markup=False,
         )
+        for line in blind.summary():
+            out_console.print(f"Blind zones: {line}", markup=False, soft_wrap=True)
         out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
         for path in written:
             out_console.print(f"  {path.name}", markup=False)
