@@ -204,3 +204,24 @@ def test_cli_workspace_bad_input_leaves_nothing(tmp_path):
     assert proc.returncode == 1
     assert proc.stderr.strip().splitlines() == ["error: samples must be >= 1, got 0"]
     assert not out.exists()
+
+
+def test_seed003_torus_dexterous_workspace():
+    """The report's second arm (d3 up to 0.3 m): the wrist centre sweeps a solid torus of tube
+    radius 300 mm about the 500 mm circle of axis 2, so the tip (200 mm further) is dexterous
+    exactly within 100 mm of that circle: a torus of volume 2 pi^2 * 500 * 100^2 mm^3. Monte
+    Carlo over the report's half grid of orientations ([0, pi], steps of 0.2 pi) agrees."""
+    from armpath.model.catalog import welder003
+    from armpath.workspace.dexterous import dexterous_workspace
+
+    rotations = orientation_grid(0.2 * np.pi, 0.0, np.pi)
+    assert rotations.shape == (216, 3, 3)
+    sample = dexterous_workspace(
+        welder003(300.0), 2000, rotations, [-700, -700, -250], [700, 700, 250], seed=4
+    )
+    p = sample.points
+    dist = np.hypot(np.hypot(p[:, 0], p[:, 1]) - 500.0, p[:, 2])
+    assert sample.dexterous[dist < 95.0].all()
+    assert not sample.dexterous[dist > 130.0].any()
+    exact = 2.0 * np.pi**2 * 500.0 * 100.0**2
+    assert abs(sample.volume - exact) < 3.0 * sample.standard_error + 0.1 * exact

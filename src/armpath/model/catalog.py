@@ -42,17 +42,20 @@ def _rows(
     ]
 
 
-def welder003() -> SerialArm:
-    """Seed 003's RRP + spherical-wrist welding arm (modified D-H, mm)."""
+def welder003(d3_max_mm: float = 700.0) -> SerialArm:
+    """Seed 003's RRP + spherical-wrist welding arm (modified D-H, mm); the report also uses
+    ``d3_max_mm = 300`` to show its torus-shaped dexterous workspace."""
     rows = [
         DHRow(a=0.0, alpha=0.0, d=0.0),
         DHRow(a=500.0, alpha=-90 * _D, d=0.0),
-        DHRow(a=0.0, alpha=90 * _D, d=0.0, kind=JointKind.PRISMATIC, limits=(0.0, 700.0)),
+        DHRow(a=0.0, alpha=90 * _D, d=0.0, kind=JointKind.PRISMATIC, limits=(0.0, d3_max_mm)),
         DHRow(a=0.0, alpha=0.0, d=0.0),
         DHRow(a=0.0, alpha=-90 * _D, d=0.0),
         DHRow(a=0.0, alpha=90 * _D, d=200.0),
     ]
-    return dh_arm(rows, "modified", name="welder003", home=[0.0, 0.0, 350.0, 0.0, 0.0, 0.0])
+    return dh_arm(
+        rows, "modified", name="welder003", home=[0.0, 0.0, 0.5 * d3_max_mm, 0.0, 0.0, 0.0]
+    )
 
 
 def painter004() -> SerialArm:

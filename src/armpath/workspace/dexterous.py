@@ -8,6 +8,7 @@ point.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,3 +102,73 @@ def dexterity(
     batch = solver.solve_batch(T)
     inside = limits_mask(arm, batch.solutions)
     return Dexterity(p, np.asarray(inside.any(axis=1)), np.asarray(inside.sum(axis=1)))
+
+
+@dataclass(frozen=True)
+class DexterousSample:
+    """Monte-Carlo estimate of the dexterous workspace: ``points`` ``(N, 3)`` drawn uniformly
+    in the box ``[lo, hi]`` (model unit), ``dexterous`` whether each reached every one of
+    ``n_orientations`` orientations."""
+
+    points: FloatArray
+    dexterous: BoolArray
+    lo: FloatArray
+    hi: FloatArray
+    n_orientations: int
+
+    @property
+    def fraction(self) -> float:
+        return float(np.mean(self.dexterous))
+
+    @property
+    def volume(self) -> float:
+        """Estimated dexterous volume (model unit cubed): fraction times the box volume. A finite
+        orientation grid can miss small unreachable caps, so points just outside the true
+        dexterous set may count: an upper estimate."""
+        return self.fraction * float(np.prod(self.hi - self.lo))
+
+    @property
+    def standard_error(self) -> float:
+        """Standard error of :attr:`volume` from the binomial sampling (model unit cubed)."""
+        f = self.fraction
+        n = self.dexterous.shape[0]
+        return float(np.sqrt(f * (1.0 - f) / n) * np.prod(self.hi - self.lo))
+
+
+def dexterous_workspace(
+    arm: SerialArm,
+    n_points: int,
+    rotations: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    *,
+    seed: int = 0,
+    chunk_points: int = 500,
+    progress: Callable[[int, int], None] | None = None,
+) -> DexterousSample:
+    """Draw ``n_points`` uniformly in the box ``[lo, hi]`` and test each in every orientation of
+    ``rotations`` (seed 003's Monte-Carlo method), a chunk of points per batched IK call."""
+    if n_points < 1:
+        raise InvalidInputError(f"points must be >= 1, got {n_points}")
+    lo = np.asarray(lo, dtype=np.float64).reshape(3)
+    hi = np.asarray(hi, dtype=np.float64).reshape(3)
+    if not np.all(hi > lo):
+        raise InvalidInputError(f"the sampling box needs hi > lo, got {lo} .. {hi}")
+    solver = complete_solver(arm)
+    if solver is None:
+        raise InvalidInputError(f"model {arm.name!r} has no all-solutions IK")
+    R = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
+    pts = np.random.default_rng(seed).uniform(lo, hi, (n_points, 3))
+    dexterous = np.zeros(n_points, dtype=bool)
+    for start in range(0, n_points, chunk_points):
+        chunk = pts[start : start + chunk_points]
+        T = np.zeros((chunk.shape[0], R.shape[0], 4, 4))
+        T[:, :, :3, :3] = R[None]
+        T[:, :, :3, 3] = chunk[:, None, :]
+        T[:, :, 3, 3] = 1.0
+        batch = solver.solve_batch(T.reshape(-1, 4, 4))
+        reached = limits_mask(arm, batch.solutions).any(axis=1).reshape(chunk.shape[0], -1)
+        dexterous[start : start + chunk.shape[0]] = reached.all(axis=1)
+        if progress is not None:
+            progress(min(start + chunk_points, n_points), n_points)
+    return DexterousSample(pts, dexterous, lo, hi, R.shape[0])
