@@ -15,7 +15,7 @@ LAYERS = [
     {"geometry"},
     {"ik"},
     {"commands"},
-    {"scenes", "planning", "workspace"},
+    {"scenes", "planning", "workspace", "trajectory"},
     {"tasks"},
     {"export", "viz", "cli", "__main__"},
 ]

@@ -1,0 +1,130 @@
+"""Minimum-snap / minimum-jerk trajectories against closed forms and an independent QP solve."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.polynomial import polynomial as npoly
+from scipy.linalg import null_space
+
+from armpath.errors import InvalidInputError
+from armpath.trajectory import allocate_times, minimum_snap
+
+
+@pytest.mark.parametrize(
+    ("kind", "closed_form"),
+    [
+        ("jerk", lambda s: 10 * s**3 - 15 * s**4 + 6 * s**5),
+        ("snap", lambda s: 35 * s**4 - 84 * s**5 + 70 * s**6 - 20 * s**7),
+    ],
+)
+def test_single_rest_to_rest_segment_is_the_classic_polynomial(kind, closed_form):
+    traj = minimum_snap([[0.0], [2.0]], [1.0, 3.0], kind=kind)  # 2 s, amplitude 2
+    t = np.linspace(1.0, 3.0, 41)
+    assert np.allclose(traj.evaluate(t)[:, 0], 2.0 * closed_form((t - 1.0) / 2.0), atol=1e-12)
+
+
+def _pieces(traj, i, joint):
+    """Segment i of a joint as a polynomial in absolute time offset from its start."""
+    T = traj.times[i + 1] - traj.times[i]
+    return traj.coefficients[i, :, joint] / T ** np.arange(traj.coefficients.shape[1])
+
+
+@pytest.mark.parametrize("kind", ["jerk", "snap"])
+def test_waypoints_and_continuity_up_to_2r_minus_2(kind):
+    rng = np.random.default_rng(1)
+    W = rng.uniform(-2, 2, (7, 3))
+    t = np.concatenate([[0.0], np.cumsum(rng.uniform(0.3, 1.5, 6))])
+    traj = minimum_snap(W, t, kind=kind)
+    r = traj.order
+    assert np.allclose(traj.evaluate(t), W, atol=1e-10)
+    for j in range(3):
+        for i in range(5):
+            left, right = _pieces(traj, i, j), _pieces(traj, i + 1, j)
+            T = t[i + 1] - t[i]
+            for d in range(0, 2 * r - 1):  # the optimum is C^(2r-2) by itself
+                lv = npoly.polyval(T, npoly.polyder(left, d)) if d else npoly.polyval(T, left)
+                rv = right[d] * np.prod(np.arange(1, d + 1))
+                scale = 1.0 + abs(lv)
+                assert abs(lv - rv) < 1e-7 * scale, (kind, j, i, d, lv, rv)
+    start = traj.evaluate([t[0]], 1)
+    assert np.allclose(start, 0.0, atol=1e-9)  # rest to rest
+
+
+def _independent_qp(w, t, r, cont):
+    """The same problem in absolute-time monomials, solved by a dense null-space method."""
+    n_seg, n = len(w) - 1, 2 * r
+    T = np.diff(t)
+    Q = np.zeros((n_seg * n, n_seg * n))
+    rows, rhs = [], []
+    for i in range(n_seg):
+        for k in range(n):
+            for m in range(n):
+                ek = np.zeros(n)
+                em = np.zeros(n)
+                ek[k] = em[m] = 1.0
+                prod = npoly.polymul(npoly.polyder(ek, r), npoly.polyder(em, r))
+                integral = npoly.polyint(prod)
+                Q[i * n + k, i * n + m] = npoly.polyval(T[i], integral)
+
+    def deriv_row(i, d, x):
+        row = np.zeros(n_seg * n)
+        for k in range(d, n):
+            row[i * n + k] = np.prod(np.arange(k - d + 1, k + 1)) * x ** (k - d)
+        return row
+
+    for i in range(n_seg):
+        rows += [deriv_row(i, 0, 0.0), deriv_row(i, 0, T[i])]
+        rhs += [w[i], w[i + 1]]
+    for i in range(n_seg - 1):
+        for d in range(1, cont + 1):
+            rows.append(deriv_row(i, d, T[i]) - deriv_row(i + 1, d, 0.0))
+            rhs.append(0.0)
+    for d in range(1, r):
+        rows += [deriv_row(0, d, 0.0), deriv_row(n_seg - 1, d, T[-1])]
+        rhs += [0.0, 0.0]
+    A, b = np.array(rows), np.array(rhs)
+    x0 = np.linalg.lstsq(A, b, rcond=None)[0]
+    N = null_space(A)
+    z = np.linalg.solve(N.T @ Q @ N, -N.T @ Q @ x0)
+    x = x0 + N @ z
+    return float(x @ Q @ x)
+
+
+@pytest.mark.parametrize(("kind", "cont"), [("snap", 3), ("jerk", 2), ("snap", 5)])
+def test_cost_matches_an_independent_qp(kind, cont):
+    rng = np.random.default_rng(7)
+    w = rng.uniform(-1, 1, 5)
+    t = np.array([0.0, 0.7, 1.5, 1.9, 3.0])
+    traj = minimum_snap(w, t, kind=kind, continuity=cont)
+    ours = float(traj.cost()[0])
+    theirs = _independent_qp(w, t, traj.order, cont)
+    assert ours == pytest.approx(theirs, rel=1e-6)
+
+
+def test_given_boundary_derivatives_and_time_allocation():
+    W = np.array([[0.0, 0.0], [1.0, -2.0], [3.0, 0.5]])
+    start = np.array([[0.5, 0.0], [0.0, 0.1], [0.0, 0.0]])  # velocity, acceleration, jerk
+    t = allocate_times(W, max_velocity=[1.0, 2.0], max_acceleration=[2.0, 2.0])
+    assert t[0] == 0.0 and np.all(np.diff(t) > 0)
+    # segment 1: joint 0 moves 1 (trapezoid 1/1 + 1/2 = 1.5 s), joint 1 moves 2 (2/2 + 2/2 = 2 s)
+    assert t[1] == pytest.approx(2.0)
+    traj = minimum_snap(W, t, start_derivatives=start)
+    for d in (1, 2, 3):
+        assert np.allclose(traj.evaluate([0.0], d)[0], start[d - 1], atol=1e-9)
+        assert np.allclose(traj.evaluate([t[-1]], d)[0], 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("args", "kwargs", "message"),
+    [
+        (([0.0], [0.0]), {}, "at least 2 waypoints"),
+        (([0.0, 1.0], [1.0, 1.0]), {}, "strictly increasing"),
+        (([0.0, 1.0], [0.0, 1.0]), {"kind": "crackle"}, "kind must be"),
+        (([0.0, 1.0], [0.0, 1.0]), {"continuity": 9}, "continuity must be"),
+        (([0.0, 1.0], [0.0, 1.0]), {"continuity": 1}, "not unique"),
+    ],
+)
+def test_bad_trajectory_requests(args, kwargs, message):
+    with pytest.raises(InvalidInputError, match=message):
+        minimum_snap(*args, **kwargs)
