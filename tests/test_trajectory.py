@@ -128,3 +128,75 @@ def test_given_boundary_derivatives_and_time_allocation():
 def test_bad_trajectory_requests(args, kwargs, message):
     with pytest.raises(InvalidInputError, match=message):
         minimum_snap(*args, **kwargs)
+
+
+def _seed_trajectory(speed_deg_s=30.0):
+    W = np.radians(
+        [
+            [0, -90, 0, 0, -90, 0],
+            [40, -60, 30, 90, -45, 10],
+            [-30, -20, 90, -60, 30, 0],
+            [10, -90, 10, 0, -90, 20],
+        ]
+    )
+    t = allocate_times(W, np.radians(speed_deg_s), np.radians(60.0))
+    return minimum_snap(W, t)
+
+
+def test_commands_follow_the_trajectory_without_drift():
+    """Replayed independently (integer ticks), the lattice state is within half a tick of the
+    smooth trajectory at every controller period, over thousands of commands."""
+    import independent
+    from armpath.trajectory import quantize
+
+    traj = _seed_trajectory()
+    q = quantize(traj, 0.004)
+    assert q.split_periods == 0 and q.sequence.n_commands == len(q.sample_times) - 1 > 2000
+    assert np.abs(q.sequence.commands).max() <= 20
+    states_deg = independent.replay(q.sequence.start_ticks / 10.0, q.sequence.commands)
+    smooth_deg = np.degrees(traj.evaluate(q.sample_times))
+    assert np.abs(states_deg - smooth_deg).max() <= 0.05 + 1e-9
+    assert q.max_tick_error <= 0.5
+
+
+def test_too_fast_periods_are_split_into_legal_commands():
+    from armpath.trajectory import quantize
+
+    traj = _seed_trajectory(speed_deg_s=60.0)
+    q = quantize(traj, 0.2)  # up to ~12 deg a period
+    assert q.split_periods > 0
+    assert np.abs(q.sequence.commands).max() <= 20
+    states = q.sequence.states()[q.state_index] / 10.0
+    assert np.abs(states - np.degrees(traj.evaluate(q.sample_times))).max() <= 0.05 + 1e-9
+
+
+def test_tip_deviation_matches_the_independent_kinematics():
+    import independent
+    from armpath.model import seed_arm
+    from armpath.trajectory import quantize, tip_deviation
+
+    traj = _seed_trajectory()
+    q = quantize(traj, 0.01)
+    ours = tip_deviation(seed_arm(), traj, q, substeps=4)
+    states = np.degrees(q.sequence.states()[q.state_index] * np.pi / 1800.0)
+    s = np.arange(4) / 4
+    t = np.concatenate(
+        [
+            (q.sample_times[:-1, None] + s * np.diff(q.sample_times)[:, None]).ravel(),
+            q.sample_times[-1:],
+        ]
+    )
+    lattice = np.vstack(
+        [
+            (states[:-1, None] + s[None, :, None] * np.diff(states, axis=0)[:, None]).reshape(
+                -1, 6
+            ),
+            states[-1:],
+        ]
+    )
+    smooth = np.degrees(traj.evaluate(t))
+    theirs = np.linalg.norm(
+        independent.points(smooth)[:, 4] - independent.points(lattice)[:, 4], axis=1
+    ).max()
+    assert ours == pytest.approx(theirs, rel=1e-9)
+    assert 0.0 < ours < 2.0  # mm: half a tick on every joint moves the tip well under 2 mm

@@ -1,5 +1,15 @@
-"""Smooth joint trajectories: minimum-snap / minimum-jerk piecewise polynomials."""
+"""Smooth joint trajectories: minimum-snap / minimum-jerk piecewise polynomials, and their
+commands on the controller's lattice."""
 
 from armpath.trajectory.minsnap import ORDERS, PiecewisePolynomial, allocate_times, minimum_snap
+from armpath.trajectory.quantize import QuantizedTrajectory, quantize, tip_deviation
 
-__all__ = ["ORDERS", "PiecewisePolynomial", "allocate_times", "minimum_snap"]
+__all__ = [
+    "ORDERS",
+    "PiecewisePolynomial",
+    "QuantizedTrajectory",
+    "allocate_times",
+    "minimum_snap",
+    "quantize",
+    "tip_deviation",
+]
