@@ -200,3 +200,43 @@ def test_tip_deviation_matches_the_independent_kinematics():
     ).max()
     assert ours == pytest.approx(theirs, rel=1e-9)
     assert 0.0 < ours < 2.0  # mm: half a tick on every joint moves the tip well under 2 mm
+
+
+def test_fixed_point_rotation_keeps_the_tip_on_the_point():
+    """Seed 003's fixed-point rotation: the tip is on C0 = (900, 0, 0) mm at every waypoint
+    (checked by the textbook modified D-H product), the tool axis points from the wrist to C0,
+    and between waypoints the deviation shrinks like h^2 as the circle is sampled more finely."""
+    from armpath.model.catalog import welder003
+    from armpath.trajectory.rcm import fixed_point_rotation
+    from independent_dh import dh_pose
+
+    arm = welder003()
+    a, alpha, d = [0, 500, 0, 0, 0, 0], np.radians([0, -90, 90, 0, -90, 90]), [0, 0, 0, 0, 0, 200]
+    devs = []
+    for n in (24, 48):
+        rot = fixed_point_rotation(arm, [900.0, 0.0, 0.0], n_points=n)
+        for q, wrist in zip(
+            rot.waypoints, np.vstack([rot.wrist_points, rot.wrist_points[:1]]), strict=True
+        ):
+            T = dh_pose(
+                a, alpha, d, q, modified=True, prismatic=[False, False, True, False, False, False]
+            )
+            assert np.allclose(T[:3, 3], [900.0, 0.0, 0.0], atol=1e-6)
+            assert np.allclose(T[:3, 2], ([900.0, 0.0, 0.0] - wrist) / 200.0, atol=1e-9)
+        t = np.linspace(0.0, rot.trajectory.duration, 3000)
+        tips = np.array(
+            [
+                dh_pose(
+                    a,
+                    alpha,
+                    d,
+                    q,
+                    modified=True,
+                    prismatic=[False, False, True, False, False, False],
+                )[:3, 3]
+                for q in rot.trajectory.evaluate(t)
+            ]
+        )
+        devs.append(np.linalg.norm(tips - [900.0, 0.0, 0.0], axis=1).max())
+        assert devs[-1] == pytest.approx(rot.max_tip_deviation, rel=0.05)
+    assert devs[1] < devs[0] / 3.0 and devs[1] < 2.0  # mm
