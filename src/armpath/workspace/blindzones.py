@@ -121,15 +121,17 @@ def _mark(points: FloatArray, origin: FloatArray, pixel: float, reach: BoolArray
     reach[idx[:, 0], idx[:, 1]] = True
 
 
-def arm_plane_map(
+def _sample_map(
     arm: SerialArm,
-    pixel: float = 5.0,
-    samples: int = 2_000_000,
-    *,
-    seed: int = 0,
-    chunk: int = 500_000,
+    pixel: float,
+    samples: int,
+    seed: int,
+    chunk: int,
+    joints: tuple[int, ...],
+    meridian: bool,
 ) -> PlaneMap:
-    """Reachable fingertip pixels in the arm plane (joints 1, 4, 6 at zero; u = y, v = z, mm)."""
+    """Sample ``joints`` (0-based) inside their limits, the others at zero, and mark the
+    fingertip's (y, z) or, for the meridian map, its (+-rho, z) pixels."""
     g = seed_geometry_of(arm)
     reach_mm = g.bc_mm + g.cd_mm + g.de_mm
     origin, shape = _grid((-reach_mm, reach_mm), (g.ab_mm - reach_mm, g.ab_mm + reach_mm), pixel)
@@ -140,11 +142,30 @@ def arm_plane_map(
     while done < samples:
         n = min(chunk, samples - done)
         q = np.zeros((n, 6))
-        for j in (1, 2, 4):
+        for j in joints:
             q[:, j] = rng.uniform(ranges[j, 0], ranges[j, 1], n)
-        _mark(tool_position(arm, q)[:, 1:], origin, pixel, reach)
+        p = tool_position(arm, q)
+        if meridian:
+            rho = np.hypot(p[:, 0], p[:, 1])
+            for sign in (1.0, -1.0):
+                _mark(np.stack([sign * rho, p[:, 2]], axis=1), origin, pixel, reach)
+        else:
+            _mark(p[:, 1:], origin, pixel, reach)
         done += n
-    return PlaneMap(origin, float(pixel), reach, ("y", "z"), samples)
+    axes = ("rho", "z") if meridian else ("y", "z")
+    return PlaneMap(origin, float(pixel), reach, axes, samples)
+
+
+def arm_plane_map(
+    arm: SerialArm,
+    pixel: float = 5.0,
+    samples: int = 2_000_000,
+    *,
+    seed: int = 0,
+    chunk: int = 500_000,
+) -> PlaneMap:
+    """Reachable fingertip pixels in the arm plane (joints 1, 4, 6 at zero; u = y, v = z, mm)."""
+    return _sample_map(arm, pixel, samples, seed, chunk, (1, 2, 4), meridian=False)
 
 
 def meridian_map(
@@ -157,24 +178,7 @@ def meridian_map(
 ) -> PlaneMap:
     """Reachable fingertip pixels in (distance from the vertical axis, height), mirrored to
     negative distances: joints 2-5 sampled inside their limits, joint 1 turns it about the axis."""
-    g = seed_geometry_of(arm)
-    reach_mm = g.bc_mm + g.cd_mm + g.de_mm
-    origin, shape = _grid((-reach_mm, reach_mm), (g.ab_mm - reach_mm, g.ab_mm + reach_mm), pixel)
-    reach = np.zeros(shape, dtype=bool)
-    ranges = joint_ranges(arm)
-    rng = np.random.default_rng(seed)
-    done = 0
-    while done < samples:
-        n = min(chunk, samples - done)
-        q = np.zeros((n, 6))
-        for j in (1, 2, 3, 4):
-            q[:, j] = rng.uniform(ranges[j, 0], ranges[j, 1], n)
-        p = tool_position(arm, q)
-        rho = np.hypot(p[:, 0], p[:, 1])
-        for sign in (1.0, -1.0):
-            _mark(np.stack([sign * rho, p[:, 2]], axis=1), origin, pixel, reach)
-        done += n
-    return PlaneMap(origin, float(pixel), reach, ("rho", "z"), samples)
+    return _sample_map(arm, pixel, samples, seed, chunk, (1, 2, 3, 4), meridian=True)
 
 
 @dataclass(frozen=True)
