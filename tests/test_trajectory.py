@@ -240,3 +240,40 @@ def test_fixed_point_rotation_keeps_the_tip_on_the_point():
         devs.append(np.linalg.norm(tips - [900.0, 0.0, 0.0], axis=1).max())
         assert devs[-1] == pytest.approx(rot.max_tip_deviation, rel=0.05)
     assert devs[1] < devs[0] / 3.0 and devs[1] < 2.0  # mm
+
+
+def test_cli_trajectory_writes_samples_commands_and_plots(tmp_path):
+    import subprocess
+    import sys
+
+    import independent
+
+    wp = tmp_path / "wp.csv"
+    wp.write_text(
+        "t,q1,q2,q3,q4,q5,q6\n0,0,-90,0,0,-90,0\n2,40,-60,30,90,-45,10\n4,10,-90,10,0,-90,20\n"
+    )
+    out = tmp_path / "tr"
+    armpath = [sys.executable, "-m", "armpath", "trajectory"]
+    proc = subprocess.run(
+        [*armpath, "--waypoints", str(wp), "--period", "0.02", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    samples = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
+    at = [np.argmin(np.abs(samples[:, 0] - t)) for t in (0.0, 2.0, 4.0)]
+    assert np.allclose(
+        samples[at, 1:],
+        [[0, -90, 0, 0, -90, 0], [40, -60, 30, 90, -45, 10], [10, -90, 10, 0, -90, 20]],
+        atol=1e-6,
+    )
+    cmds = np.loadtxt(out / "commands.csv", delimiter=",", skiprows=1, dtype=int)[:, 1:]
+    assert cmds.shape == (200, 6) and np.abs(cmds).max() <= 20
+    replayed = independent.replay([0, -90, 0, 0, -90, 0], cmds)
+    assert np.abs(replayed[::10] - samples[::10, 1:]).max() <= 0.05 + 1e-9
+    assert (out / "trajectory.png").stat().st_size > 20_000
+    bad = subprocess.run(
+        [*armpath, "--waypoints", str(tmp_path / "none.csv")], capture_output=True, text=True
+    )
+    assert bad.returncode == 1 and bad.stderr.startswith("error: cannot read waypoints file")

@@ -1178,6 +1178,126 @@ def design_sweep(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
+    """Waypoints (deg) and optional times (s) from a CSV: one row per waypoint, joint angles in
+    deg; a first column named ``t`` or ``time_s`` gives the times."""
+    try:
+        lines = [ln.strip() for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
+    except OSError as exc:
+        raise InvalidInputError(f"cannot read waypoints file {path}: {exc.strerror}") from None
+    if not lines:
+        raise InvalidInputError(f"waypoints file {path} is empty")
+    header = [h.strip().lower() for h in lines[0].split(",")]
+    has_header = not all(_is_number(h) for h in header)
+    rows = lines[1:] if has_header else lines
+    try:
+        data = np.array([[float(v) for v in row.split(",")] for row in rows], dtype=np.float64)
+    except ValueError:
+        raise InvalidInputError(f"waypoints file {path}: every value must be a number") from None
+    if data.ndim != 2 or data.shape[0] < 2:
+        raise InvalidInputError(f"waypoints file {path}: need at least 2 rows of equal length")
+    if has_header and header[0] in ("t", "time_s"):
+        return data[:, 1:], data[:, 0]
+    return data, None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+@app.command()
+def trajectory(
+    waypoints: Annotated[
+        Path,
+        typer.Option(
+            "--waypoints",
+            help="CSV of joint waypoints in deg, one row each; a first column 't' (s) gives "
+            "their times, otherwise they are spaced by the velocity/acceleration limits.",
+        ),
+    ],
+    kind: Annotated[
+        str, typer.Option(help="snap or jerk: the derivative whose square is minimised.")
+    ] = "snap",
+    max_velocity: Annotated[
+        float, typer.Option(help="Joint speed for time allocation, deg/s.")
+    ] = 30.0,
+    max_acceleration: Annotated[
+        float, typer.Option(help="Joint acceleration for time allocation, deg/s^2.")
+    ] = 60.0,
+    period: Annotated[float, typer.Option(help="Controller period, s (one command each).")] = 0.01,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            help="Write trajectory.csv (deg, sampled every period), commands.csv (ticks of "
+            "0.1 deg) and trajectory.png here.",
+        ),
+    ] = None,
+) -> None:
+    """Minimum-snap (or minimum-jerk) joint trajectory through waypoints, rest to rest, and its
+    commands on the 0.1 deg / 2 deg lattice (error feedback: within half a tick at every
+    period)."""
+    from armpath.trajectory import allocate_times, minimum_snap, quantize
+
+    with _cli_errors():
+        W_deg, times = _read_waypoints(waypoints)
+        if not (max_velocity > 0 and max_acceleration > 0):
+            raise InvalidInputError("--max-velocity and --max-acceleration must be > 0")
+        W = np.radians(W_deg)
+        if times is None:
+            times = allocate_times(W, np.radians(max_velocity), np.radians(max_acceleration))
+        traj = minimum_snap(W, times, kind=kind)
+        quantized = quantize(traj, period)
+        t = quantized.sample_times
+        peaks = [np.degrees(np.abs(traj.evaluate(t, d)).max()) for d in (1, 2)]
+        table = Table(title=f"minimum-{kind} trajectory through {len(W)} waypoints", box=box.SIMPLE)
+        for name in ("quantity", "value", "unit"):
+            table.add_column(name)
+        for row in (
+            ("duration", f"{traj.duration:.3f}", "s"),
+            ("largest joint speed", f"{peaks[0]:.2f}", "deg/s"),
+            ("largest joint acceleration", f"{peaks[1]:.2f}", "deg/s^2"),
+            ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
+            ("periods split (faster than 2 deg)", str(quantized.split_periods), ""),
+            ("largest lattice error", f"{quantized.max_tick_error:.3f}", "ticks of 0.1 deg"),
+        ):
+            table.add_row(*row)
+        out_console.print(table)
+        if out is not None:
+            from armpath.viz.figures import plot_trajectory
+
+            with output_folder(out) as folder:
+                q_deg = np.degrees(traj.evaluate(t))
+                folder.write_text(
+                    "trajectory.csv",
+                    "t_s,"
+                    + ",".join(f"q{j + 1}_deg" for j in range(W.shape[1]))
+                    + "\n"
+                    + "".join(
+                        f"{ti:.6f}," + ",".join(f"{v:.6f}" for v in row) + "\n"
+                        for ti, row in zip(t, q_deg, strict=True)
+                    ),
+                )
+                cmds = quantized.sequence.commands
+                folder.write_text(
+                    "commands.csv",
+                    "step,"
+                    + ",".join(f"d{j + 1}_ticks" for j in range(W.shape[1]))
+                    + "\n"
+                    + "".join(
+                        f"{k + 1}," + ",".join(str(int(v)) for v in row) + "\n"
+                        for k, row in enumerate(cmds)
+                    ),
+                )
+                plot_trajectory(folder.file("trajectory.png"), traj, f"minimum-{kind} trajectory")
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
 @app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),

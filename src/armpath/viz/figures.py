@@ -17,6 +17,7 @@ from armpath.geometry.primitives import Box, HalfSpace, SolidOfRevolution, Spher
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.scenes import Scene
+from armpath.trajectory import PiecewisePolynomial
 
 
 def _draw_solid(ax: Axes3D, solid: SolidOfRevolution, n_theta: int = 48) -> np.ndarray:
@@ -483,3 +484,31 @@ def plot_trace_deviation(
     ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, fontsize=8, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
+
+def plot_trajectory(path: str | Path, traj: PiecewisePolynomial, title: str = "") -> None:
+    """Position, velocity, acceleration, jerk and snap of every joint (deg, deg/s, ...)."""
+    t = np.linspace(traj.times[0], traj.times[-1], 1500)
+    names = (
+        "position [deg]",
+        "velocity [deg/s]",
+        "acceleration [deg/s^2]",
+        "jerk [deg/s^3]",
+        "snap [deg/s^4]",
+    )
+    fig = Figure(figsize=(9, 11), dpi=100)
+    for d, name in enumerate(names):
+        ax = fig.add_subplot(len(names), 1, d + 1)
+        values = np.degrees(traj.evaluate(t, d))
+        for j in range(values.shape[1]):
+            ax.plot(t, values[:, j], lw=1.2, label=f"joint {j + 1}")
+        for tk in traj.times:
+            ax.axvline(tk, color="0.8", lw=0.6)
+        ax.set_ylabel(name)
+        ax.grid(alpha=0.3)
+        if d == 0:
+            ax.legend(ncol=6, fontsize=8, loc="upper right")
+    ax.set_xlabel("time [s]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path)
