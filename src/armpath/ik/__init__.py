@@ -10,7 +10,7 @@ from armpath.ik.seed_position import (
     fingertip,
     solve_with_fixed_pair,
 )
-from armpath.ik.solve import METHODS, complete_solver, into_limits, solve_ik
+from armpath.ik.solve import METHODS, complete_solver, into_limits, limits_mask, solve_ik
 from armpath.ik.spherical_wrist import SphericalWristSolver, wrist_center
 from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
 
@@ -26,6 +26,7 @@ __all__ = [
     "family_from_wrist",
     "fingertip",
     "into_limits",
+    "limits_mask",
     "solve_ik",
     "solve_numerical",
     "solve_with_fixed_pair",

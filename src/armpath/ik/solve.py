@@ -27,6 +27,7 @@ from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 METHODS = ("auto", "spherical-wrist", "three-parallel", "general", "numerical")
 
 
@@ -81,6 +82,22 @@ def into_limits(arm: SerialArm, result: IKResult) -> IKResult:
                         break
     inside = np.all((q >= lo - 1e-9) & (q <= hi + 1e-9), axis=1)
     return replace(result, solutions=q, within_limits=inside)
+
+
+def limits_mask(arm: SerialArm, q: FloatArray) -> BoolArray:
+    """Whether each joint vector ``(..., n)`` lies inside the joint limits, a revolute angle
+    shifted by whole turns where that helps; NaN rows (padding) are outside."""
+    q = np.asarray(q, dtype=np.float64)
+    ok = np.all(np.isfinite(q), axis=-1)
+    for i, joint in enumerate(arm.joints):
+        lo, hi = joint.limits
+        v = q[..., i]
+        if joint.kind is JointKind.REVOLUTE and hi - lo < 2.0 * np.pi:
+            # the shift that brings v closest above lo
+            v = lo + np.mod(v - lo, 2.0 * np.pi)
+        with np.errstate(invalid="ignore"):
+            ok &= (v >= lo - 1e-9) & (v <= hi + 1e-9)
+    return np.asarray(ok)
 
 
 def solve_ik(

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.ik import complete_solver
+from armpath.ik import complete_solver, limits_mask
 from armpath.kinematics import tool_pose
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.trajectory.minsnap import PiecewisePolynomial, minimum_snap
@@ -100,15 +100,11 @@ def fixed_point_rotation(
         T[k, 3, 3] = 1.0
     batch = solver.solve_batch(T)
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-    lo, hi = arm.lower, arm.upper
     chosen = np.zeros((n_points, arm.n_joints))
     previous: FloatArray | None = None
     for k in range(n_points):
         sols = batch[k].solutions
-        ok = np.all((sols >= lo - 1e-9) | ~prismatic, axis=1) & np.all(
-            (sols <= hi + 1e-9) | ~prismatic, axis=1
-        )
-        sols = sols[ok]
+        sols = sols[limits_mask(arm, sols)]
         if sols.shape[0] == 0:
             raise InvalidInputError(
                 f"no solution inside the limits for wrist point {k} ({wrist[k].round(1)}): "

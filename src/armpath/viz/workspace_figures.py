@@ -6,12 +6,28 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
 from armpath.workspace import VoxelGrid
 from armpath.workspace.blindzones import FaceBlindness, PlaneMap
 from armpath.workspace.design import DesignMetrics
+
+
+def _draw_levels(
+    ax: Axes, image: np.ndarray, extent: tuple[float, float, float, float], cmap: ListedColormap
+) -> None:
+    """A map of levels 0, 1, 2 (``image[u, v]``) over ``extent``, u to the right."""
+    ax.imshow(
+        image.T,
+        origin="lower",
+        extent=extent,
+        cmap=cmap,
+        vmin=0,
+        vmax=2,
+        interpolation="nearest",
+    )
 
 
 def plot_workspace_sections(
@@ -27,19 +43,8 @@ def plot_workspace_sections(
     ):
         ax = fig.add_subplot(1, 2, k + 1)
         occ, extent = grid.section(axis, float(value))
-        edge, _ = VoxelGrid(grid.origin, grid.voxel, boundary, grid.samples, grid.kept).section(
-            axis, float(value)
-        )
-        image = occ.astype(int) + edge.astype(int)
-        ax.imshow(
-            image.T,
-            origin="lower",
-            extent=extent,
-            cmap=cmap,
-            vmin=0,
-            vmax=2,
-            interpolation="nearest",
-        )
+        edge, _ = grid.section(axis, float(value), boundary)
+        _draw_levels(ax, occ.astype(int) + edge.astype(int), extent, cmap)
         ax.set_xlabel(labels[0])
         ax.set_ylabel(labels[1])
         ax.set_aspect("equal")
@@ -56,7 +61,6 @@ def plot_blind_maps(path: str | Path, maps: list[tuple[PlaneMap, str]], title: s
     fig = Figure(figsize=(5.4 * len(maps), 5.4), dpi=110)
     for k, (m, label) in enumerate(maps):
         ax = fig.add_subplot(1, len(maps), k + 1)
-        image = m.reach.astype(int) + 2 * m.blind.astype(int)
         nu, nv = m.reach.shape
         extent = (
             float(m.origin[0]),
@@ -64,15 +68,7 @@ def plot_blind_maps(path: str | Path, maps: list[tuple[PlaneMap, str]], title: s
             float(m.origin[1]),
             float(m.origin[1] + nv * m.pixel),
         )
-        ax.imshow(
-            image.T,
-            origin="lower",
-            extent=extent,
-            cmap=cmap,
-            vmin=0,
-            vmax=2,
-            interpolation="nearest",
-        )
+        _draw_levels(ax, m.reach.astype(int) + 2 * m.blind.astype(int), extent, cmap)
         ax.set_xlabel(f"{m.axes[0]} [mm]")
         ax.set_ylabel(f"{m.axes[1]} [mm]")
         ax.set_aspect("equal")

@@ -16,9 +16,9 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from armpath.errors import InvalidInputError
-from armpath.ik import complete_solver
+from armpath.ik import complete_solver, limits_mask
 from armpath.ik.compiled import CompiledSolver
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serial_arm import SerialArm
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -37,22 +37,6 @@ def orientation_grid(step: float, lo: float = -np.pi, hi: float = np.pi) -> Floa
     a, b, c = np.meshgrid(angles, angles, angles, indexing="ij")
     triples = np.stack([a.ravel(), b.ravel(), c.ravel()], axis=1)
     return np.asarray(Rotation.from_euler("xyz", triples).as_matrix(), dtype=np.float64)
-
-
-def limits_mask(arm: SerialArm, q: FloatArray) -> BoolArray:
-    """Whether each joint vector ``(..., n)`` lies inside the joint limits, a revolute angle
-    shifted by whole turns where that helps; NaN rows (padding) are outside."""
-    q = np.asarray(q, dtype=np.float64)
-    ok = np.all(np.isfinite(q), axis=-1)
-    for i, joint in enumerate(arm.joints):
-        lo, hi = joint.limits
-        v = q[..., i]
-        if joint.kind is JointKind.REVOLUTE and hi - lo < 2.0 * np.pi:
-            # the shift that brings v closest above lo
-            v = lo + np.mod(v - lo, 2.0 * np.pi)
-        with np.errstate(invalid="ignore"):
-            ok &= (v >= lo - 1e-9) & (v <= hi + 1e-9)
-    return np.asarray(ok)
 
 
 @dataclass(frozen=True)

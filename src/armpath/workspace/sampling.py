@@ -79,18 +79,19 @@ class VoxelGrid:
         )
 
     def section(
-        self, axis: str, value: float
+        self, axis: str, value: float, voxels: BoolArray | None = None
     ) -> tuple[BoolArray, tuple[float, float, float, float]]:
         """The slice of voxels containing the plane ``axis = value``: a 2-D mask indexed
         ``[u, v]`` over the two other axes in order (x, y, z), and its extent
-        ``(u_min, u_max, v_min, v_max)``."""
+        ``(u_min, u_max, v_min, v_max)``. ``voxels`` slices another mask of the grid's shape
+        (e.g. :meth:`boundary`) instead of the occupied voxels."""
         if axis not in ("x", "y", "z"):
             raise InvalidInputError(f"section axis must be 'x', 'y' or 'z', got {axis!r}")
         a = "xyz".index(axis)
         k = int(np.floor((value - self.origin[a]) / self.voxel))
         if not 0 <= k < self.occupied.shape[a]:
             raise InvalidInputError(f"{axis} = {value} lies outside the grid")
-        mask = np.take(self.occupied, k, axis=a)
+        mask = np.take(self.occupied if voxels is None else voxels, k, axis=a)
         u, v = [i for i in range(3) if i != a]
         extent = (
             float(self.origin[u]),
