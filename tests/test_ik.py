@@ -227,6 +227,27 @@ def test_general_6r_finds_what_brute_force_finds():
 # ------------------------------------------------------------------------------------------
 
 
+def _closed_form_agrees(a, alpha, d, closed, general, Q):
+    """For each joint vector of ``Q``: the closed form recovers it and reproduces the pose by
+    the textbook product; where neither solver flags a near-double root, both return the same
+    set. Returns how many poses were compared."""
+    compared = 0
+    targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
+    for q, target, c, g in zip(
+        Q, targets, closed.solve_batch(targets), general.solve_batch(targets), strict=True
+    ):
+        assert _contains(c.solutions, q)
+        for s in c.solutions:
+            pos, rot = pose_residual(dh_pose(a, alpha, d, s), target)
+            assert pos < 1e-6 and rot < 1e-9
+        if g.count and not g.near_double.any() and not c.near_double.any():
+            compared += 1
+            assert c.count == g.count
+            for s in g.solutions:
+                assert _contains(c.solutions, s, tol=1e-5)
+    return compared
+
+
 def test_spherical_wrist_closed_form_matches_the_general_solver():
     """Random arms with a spherical wrist (a4 = a5 = d5 = 0, oblique twists): the closed form
     recovers every generating vector and returns the same set as the elimination."""
@@ -239,19 +260,7 @@ def test_spherical_wrist_closed_form_matches_the_general_solver():
         closed = SphericalWristSolver(arm)
         general = General6RSolver(arm)
         Q = rng.uniform(-np.pi, np.pi, (10, 6))
-        targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
-        for q, target, c, g in zip(
-            Q, targets, closed.solve_batch(targets), general.solve_batch(targets), strict=True
-        ):
-            assert _contains(c.solutions, q)
-            for s in c.solutions:
-                pos, rot = pose_residual(dh_pose(a, alpha, d, s), target)
-                assert pos < 1e-6 and rot < 1e-9
-            if g.count and not g.near_double.any() and not c.near_double.any():
-                compared += 1
-                assert c.count == g.count
-                for s in g.solutions:
-                    assert _contains(c.solutions, s, tol=1e-5)
+        compared += _closed_form_agrees(a, alpha, d, closed, general, Q)
     assert compared > 300
 
 
@@ -293,19 +302,7 @@ def test_three_parallel_closed_form_matches_the_general_solver():
         assert closed.layout == ("reversed" if k % 2 else "forward")
         general = General6RSolver(arm)
         Q = rng.uniform(-np.pi, np.pi, (20, 6))
-        targets = np.array([dh_pose(a, alpha, d, q) for q in Q])
-        for q, target, c, g in zip(
-            Q, targets, closed.solve_batch(targets), general.solve_batch(targets), strict=True
-        ):
-            assert _contains(c.solutions, q)
-            for s in c.solutions:
-                pos, rot = pose_residual(dh_pose(a, alpha, d, s), target)
-                assert pos < 1e-6 and rot < 1e-9
-            if g.count and not g.near_double.any() and not c.near_double.any():
-                compared += 1
-                assert c.count == g.count
-                for s in g.solutions:
-                    assert _contains(c.solutions, s, tol=1e-5)
+        compared += _closed_form_agrees(a, alpha, d, closed, general, Q)
     assert compared > 400
 
 
