@@ -88,56 +88,80 @@ def _row(n: int, d: int, at_end: bool, T: float) -> FloatArray:
     return w / T**d
 
 
-def minimum_snap(
-    waypoints: ArrayLike,
-    times: ArrayLike,
-    *,
-    kind: str = "snap",
-    continuity: int | None = None,
-    start_derivatives: ArrayLike | None = None,
-    end_derivatives: ArrayLike | None = None,
-) -> PiecewisePolynomial:
-    """The minimum-snap (``kind="snap"``) or minimum-jerk (``"jerk"``) trajectory through
-    ``waypoints`` ``(m, joints)`` at ``times`` ``(m,)`` (s, increasing).
+@dataclass(frozen=True)
+class MotionLimits:
+    """Per-joint motion limits in the trajectory's joint unit (``None``: not limited).
 
-    ``continuity`` (``r - 1 .. 2 r - 2``): derivatives ``1 .. continuity`` are continuous at the
-    inner waypoints (default ``r - 1``: velocity, acceleration, jerk for snap; the optimum is then
-    smooth up to ``2 r - 2`` by itself). Boundary derivatives ``1 .. r - 1`` are zero (rest to
-    rest) unless ``start_derivatives`` / ``end_derivatives`` ``(r - 1, joints)`` give them.
+    ``lower`` / ``upper`` bound the position (unit); ``velocity`` (unit/s), ``acceleration``
+    (unit/s^2) and ``jerk`` (unit/s^3) bound the magnitude of the derivatives. Scalars apply to
+    every joint.
     """
-    if kind not in ORDERS:
-        raise InvalidInputError(f"kind must be one of {tuple(ORDERS)}, got {kind!r}")
-    r = ORDERS[kind]
-    W = np.asarray(waypoints, dtype=np.float64)
-    if W.ndim == 1:
-        W = W[:, None]
-    t = np.asarray(times, dtype=np.float64).reshape(-1)
-    if W.ndim != 2 or W.shape[0] < 2 or t.shape[0] != W.shape[0]:
-        raise InvalidInputError(
-            f"need at least 2 waypoints and one time per waypoint, got {W.shape[0]} waypoints "
-            f"and {t.shape[0]} times"
+
+    velocity: ArrayLike | None = None
+    acceleration: ArrayLike | None = None
+    jerk: ArrayLike | None = None
+    lower: ArrayLike | None = None
+    upper: ArrayLike | None = None
+
+    def per_joint(self, joints: int) -> dict[str, FloatArray]:
+        """The given limits broadcast to ``(joints,)``, by name; checked to be meaningful."""
+        out: dict[str, FloatArray] = {}
+        for name in ("velocity", "acceleration", "jerk", "lower", "upper"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            try:
+                v = np.broadcast_to(np.asarray(value, dtype=np.float64), (joints,)).copy()
+            except ValueError:
+                raise InvalidInputError(
+                    f"{name} limit needs 1 or {joints} values, got {np.shape(value)}"
+                ) from None
+            if name in ("velocity", "acceleration", "jerk") and not np.all(v > 0):
+                raise InvalidInputError(f"{name} limits must be > 0, got {v.tolist()}")
+            if name in ("lower", "upper") and not np.all(np.isfinite(v)):
+                raise InvalidInputError(f"{name} position limits must be finite")
+            out[name] = v
+        if "lower" in out and "upper" in out and np.any(out["lower"] >= out["upper"]):
+            raise InvalidInputError("lower position limits must be below the upper ones")
+        return out
+
+
+#: Which derivative each limit bounds.
+LIMIT_DERIVATIVE = {"lower": 0, "upper": 0, "velocity": 1, "acceleration": 2, "jerk": 3}
+QP_SOLVERS = ("clarabel", "osqp")
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """The equality-constrained problem: cost ``x' Q x`` (scaled), ``A x = B[:, joint]``."""
+
+    Q: sparse.csc_matrix
+    A: sparse.csc_matrix
+    B: FloatArray
+    n_seg: int
+    n: int
+    order: int
+    continuity: int
+
+    def pinned(self, d: int, seg: NDArray[np.int64], s: FloatArray) -> NDArray[np.bool_]:
+        """Points where the ``d``-th derivative is already fixed or repeated by the equality
+        constraints (waypoints, boundary derivatives, the left end of a continuous knot); a limit
+        row there adds nothing but a dependent constraint."""
+        at_start, at_end = s <= 0.0, s >= 1.0
+        if d == 0:
+            return np.asarray(at_start | at_end)
+        boundary = 1 <= d <= self.order - 1
+        return np.asarray(
+            (at_start & (((seg > 0) & (d <= self.continuity)) | ((seg == 0) & boundary)))
+            | (at_end & (seg == self.n_seg - 1) & boundary)
         )
-    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)):
-        raise InvalidInputError("waypoints must be finite and times strictly increasing")
-    cont = r - 1 if continuity is None else int(continuity)
-    if not r - 1 <= cont <= 2 * r - 2:
-        raise InvalidInputError(
-            f"continuity must be in {r - 1}..{2 * r - 2} for {kind} (below {r - 1} the optimum is "
-            f"not unique), got {cont}"
-        )
+
+
+def _equality_problem(
+    W: FloatArray, t: FloatArray, r: int, cont: int, bounds: list[FloatArray]
+) -> _Problem:
     n_seg, n, J = W.shape[0] - 1, 2 * r, W.shape[1]
     durations = np.diff(t)
-    bounds = []
-    for given in (start_derivatives, end_derivatives):
-        if given is None:
-            bounds.append(np.zeros((r - 1, J)))
-        else:
-            g = np.asarray(given, dtype=np.float64).reshape(r - 1, -1)
-            if g.shape[1] != J or not np.all(np.isfinite(g)):
-                raise InvalidInputError(
-                    f"boundary derivatives must be {r - 1} finite rows of {J} values"
-                )
-            bounds.append(g)
     r_idx: list[int] = []
     c_idx: list[int] = []
     vals: list[float] = []
@@ -172,16 +196,299 @@ def minimum_snap(
     Q = sparse.block_diag([_cost_matrix(n, r) * T ** (1 - 2 * r) for T in durations], format="csc")
     # Scale the cost so its entries are comparable to the constraints' (does not move the optimum).
     Q = Q / max(abs(Q).max(), 1e-300)
-    K = sparse.bmat([[2.0 * Q, A.T], [A, None]], format="csc")
-    rhs = np.vstack([np.zeros((n_seg * n, J)), np.array(b)])
+    # Rows scaled to unit largest entry (same solution, better conditioned for the QP solvers).
+    row_scale = 1.0 / np.asarray(abs(A).max(axis=1).todense()).ravel()
+    A = sparse.diags(row_scale) @ A
+    B = np.array(b) * row_scale[:, None]
+    return _Problem(sparse.csc_matrix(Q), sparse.csc_matrix(A), B, n_seg, n, r, cont)
+
+
+def _derivative_rows(
+    t: FloatArray, n: int, d: int, seg: NDArray[np.int64], s: FloatArray
+) -> sparse.csr_matrix:
+    """Rows giving the ``d``-th time derivative at normalised times ``s`` of segments ``seg``."""
+    T = (t[seg + 1] - t[seg])[:, None]
+    k = np.arange(n)
+    weights = np.array([_falling(int(kk), d) for kk in k])[None, :]
+    power = np.clip(k - d, 0, None)[None, :]
+    vals = np.where(k[None, :] >= d, weights * s[:, None] ** power, 0.0) / T**d
+    rows = np.repeat(np.arange(len(seg)), n)
+    cols = (seg[:, None] * n + k[None, :]).ravel()
+    return sparse.csr_matrix((vals.ravel(), (rows, cols)), shape=(len(seg), (len(t) - 1) * n))
+
+
+def _limit_rows(
+    problem: _Problem,
+    t: FloatArray,
+    limits: dict[str, FloatArray],
+    joint: int,
+    seg: NDArray[np.int64],
+    s: FloatArray,
+) -> tuple[sparse.csr_matrix, FloatArray]:
+    """``G x <= h`` at the given points (those not pinned by equalities) for every limit of one
+    joint, rows scaled to ``h = +-1`` (velocity, acceleration, jerk: both signs; positions: one
+    side each)."""
+    blocks, rhs = [], []
+    for name, value in limits.items():
+        d = LIMIT_DERIVATIVE[name]
+        keep = ~problem.pinned(d, seg, s)
+        D = _derivative_rows(t, problem.n, d, seg[keep], s[keep])
+        v = float(value[joint])
+        if name == "lower":
+            scale = max(abs(v), 1.0)
+            blocks.append(-D / scale)
+            rhs.append(np.full(D.shape[0], -v / scale))
+        elif name == "upper":
+            scale = max(abs(v), 1.0)
+            blocks.append(D / scale)
+            rhs.append(np.full(D.shape[0], v / scale))
+        else:
+            blocks += [D / v, -D / v]
+            rhs += [np.ones(D.shape[0]), np.ones(D.shape[0])]
+    return sparse.csr_matrix(sparse.vstack(blocks)), np.concatenate(rhs)
+
+
+def _solve_qp(
+    problem: _Problem,
+    G: sparse.csr_matrix,
+    h: FloatArray,
+    b: FloatArray,
+    solver: str,
+    cost_scale: float,
+) -> tuple[FloatArray | None, str]:
+    """One joint's QP: its solution, or ``None`` and the solver's status. ``cost_scale`` makes
+    the cost of order one (the solvers' optimality tolerances are absolute)."""
+    import warnings
+
+    from qpsolvers import Problem, solve_problem
+
+    kwargs: dict[str, float] = (
+        {"eps_abs": 1e-8, "eps_rel": 1e-8, "max_iter": 200000, "polish": True}
+        if solver == "osqp"
+        else {"tol_gap_abs": 1e-10, "tol_gap_rel": 1e-10, "tol_feas": 1e-10}
+    )
+    qp = Problem(
+        (2.0 * cost_scale) * problem.Q,
+        np.zeros(problem.Q.shape[0]),
+        sparse.csc_matrix(G),
+        h,
+        problem.A,
+        b,
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the status is reported in our own error instead
+        solution = solve_problem(qp, solver, None, False, **kwargs)
+    info = solution.extras.get("info")
+    status = str(getattr(info, "status", None) or solution.extras.get("status", "failed"))
+    x = solution.x
+    if x is None or not np.all(np.isfinite(x)) or not solution.found:
+        return None, status
+    return np.asarray(x), status
+
+
+def minimum_snap(
+    waypoints: ArrayLike,
+    times: ArrayLike,
+    *,
+    kind: str = "snap",
+    continuity: int | None = None,
+    start_derivatives: ArrayLike | None = None,
+    end_derivatives: ArrayLike | None = None,
+    limits: MotionLimits | None = None,
+    solver: str = "clarabel",
+    samples_per_segment: int = 16,
+) -> PiecewisePolynomial:
+    """The minimum-snap (``kind="snap"``) or minimum-jerk (``"jerk"``) trajectory through
+    ``waypoints`` ``(m, joints)`` at ``times`` ``(m,)`` (s, increasing).
+
+    ``continuity`` (``r - 1 .. 2 r - 2``): derivatives ``1 .. continuity`` are continuous at the
+    inner waypoints (default ``r - 1``: velocity, acceleration, jerk for snap; the optimum is then
+    smooth up to ``2 r - 2`` by itself). Boundary derivatives ``1 .. r - 1`` are zero (rest to
+    rest) unless ``start_derivatives`` / ``end_derivatives`` ``(r - 1, joints)`` give them.
+
+    Without ``limits`` the optimum is one sparse KKT solve for all joints. With ``limits``
+    (position, velocity, acceleration, jerk; in the waypoints' unit) each joint is a QP solved by
+    ``solver`` (``"clarabel"`` or ``"osqp"``, through qpsolvers). The limits are imposed at
+    ``samples_per_segment`` evenly spaced times per segment; the result is then checked at every
+    local extreme of each bounded derivative (found on a grid 8 times finer and refined by
+    Newton steps), violated extremes are added and the QP solved again (at most 8 solves), so
+    each limit holds along the whole trajectory to 1e-6 of its value. Raises
+    ``InvalidInputError`` when the limits cannot be met with these segment times (lengthen them,
+    e.g. ``allocate_times``).
+    """
+    if kind not in ORDERS:
+        raise InvalidInputError(f"kind must be one of {tuple(ORDERS)}, got {kind!r}")
+    r = ORDERS[kind]
+    W = np.asarray(waypoints, dtype=np.float64)
+    if W.ndim == 1:
+        W = W[:, None]
+    t = np.asarray(times, dtype=np.float64).reshape(-1)
+    if W.ndim != 2 or W.shape[0] < 2 or t.shape[0] != W.shape[0]:
+        raise InvalidInputError(
+            f"need at least 2 waypoints and one time per waypoint, got {W.shape[0]} waypoints "
+            f"and {t.shape[0]} times"
+        )
+    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)):
+        raise InvalidInputError("waypoints must be finite and times strictly increasing")
+    cont = r - 1 if continuity is None else int(continuity)
+    if not r - 1 <= cont <= 2 * r - 2:
+        raise InvalidInputError(
+            f"continuity must be in {r - 1}..{2 * r - 2} for {kind} (below {r - 1} the optimum is "
+            f"not unique), got {cont}"
+        )
+    J = W.shape[1]
+    bounds = []
+    for given in (start_derivatives, end_derivatives):
+        if given is None:
+            bounds.append(np.zeros((r - 1, J)))
+        else:
+            g = np.asarray(given, dtype=np.float64).reshape(r - 1, -1)
+            if g.shape[1] != J or not np.all(np.isfinite(g)):
+                raise InvalidInputError(
+                    f"boundary derivatives must be {r - 1} finite rows of {J} values"
+                )
+            bounds.append(g)
+    per_joint = limits.per_joint(J) if limits is not None else {}
+    if per_joint and solver not in QP_SOLVERS:
+        raise InvalidInputError(f"solver must be one of {QP_SOLVERS}, got {solver!r}")
+    if samples_per_segment < 2:
+        raise InvalidInputError("samples_per_segment must be >= 2")
+    _check_fixed_values(per_joint, W, bounds)
+    problem = _equality_problem(W, t, r, cont, bounds)
+    if not per_joint:
+        coeffs = _kkt_solve(problem)
+    else:
+        coeffs = _bounded_solve(problem, t, per_joint, solver, samples_per_segment)
+    return PiecewisePolynomial(t.copy(), coeffs, r)
+
+
+def _check_fixed_values(
+    limits: dict[str, FloatArray], W: FloatArray, bounds: list[FloatArray]
+) -> None:
+    """Waypoints and given boundary derivatives must themselves respect the limits."""
+    tol = 1e-9
+    if "lower" in limits and np.any(limits["lower"] - tol > W):
+        raise InvalidInputError("a waypoint lies below the lower position limit")
+    if "upper" in limits and np.any(limits["upper"] + tol < W):
+        raise InvalidInputError("a waypoint lies above the upper position limit")
+    for name in ("velocity", "acceleration", "jerk"):
+        d = LIMIT_DERIVATIVE[name]
+        if name in limits and d <= bounds[0].shape[0]:
+            for given in bounds:
+                if np.any(np.abs(given[d - 1]) > limits[name] * (1 + tol)):
+                    raise InvalidInputError(f"a given boundary {name} exceeds its limit")
+
+
+def _kkt_solve(problem: _Problem) -> FloatArray:
+    K = sparse.bmat([[2.0 * problem.Q, problem.A.T], [problem.A, None]], format="csc")
+    rhs = np.vstack([np.zeros((problem.Q.shape[0], problem.B.shape[1])), problem.B])
     try:
         sol = splu(K).solve(rhs)
     except RuntimeError as exc:
         raise InvalidInputError(f"the waypoint constraints are inconsistent ({exc})") from None
     if not np.all(np.isfinite(sol)):
         raise InvalidInputError("the KKT system of the trajectory is singular")
-    coeffs = sol[: n_seg * n].reshape(n_seg, n, J)
-    return PiecewisePolynomial(t.copy(), coeffs, r)
+    return np.asarray(sol[: problem.Q.shape[0]].reshape(problem.n_seg, problem.n, -1))
+
+
+def _derivative_in_s(c: FloatArray, d: int) -> FloatArray:
+    """Coefficients (in s) of the ``d``-th s-derivative of polynomials ``c`` ``(..., n)``."""
+    n = c.shape[-1]
+    if d >= n:
+        return np.zeros((*c.shape[:-1], 1))
+    w = np.array([_falling(k + d, d) for k in range(n - d)])
+    return np.asarray(c[..., d:] * w)
+
+
+def _horner(c: FloatArray, s: FloatArray) -> FloatArray:
+    """Values of polynomials ``c`` ``(m, n)`` at ``s`` ``(m, p)`` (one row of points each)."""
+    out = np.zeros(s.shape)
+    for k in range(c.shape[-1] - 1, -1, -1):
+        out = out * s + c[:, k : k + 1]
+    return out
+
+
+def _peak_points(c: FloatArray, d: int, fine: FloatArray) -> tuple[NDArray[np.int64], FloatArray]:
+    """Segments and normalised times of the local maxima of ``|d^d p / ds^d|`` on every segment
+    of one joint (``c``: ``(n_seg, n)``): grid maxima on ``fine`` refined by Newton steps on the
+    next derivative, kept inside [0, 1]."""
+    p, p1, p2 = (_derivative_in_s(c, d + e) for e in range(3))
+    a = np.abs(_horner(p, np.broadcast_to(fine, (c.shape[0], fine.size))))
+    padded = np.pad(a, ((0, 0), (1, 1)), constant_values=-1.0)
+    peak = (a >= padded[:, :-2]) & (a >= padded[:, 2:])
+    seg, idx = np.nonzero(peak)
+    s = fine[idx].copy()
+    for _ in range(6):
+        f = _horner(p1[seg], s[:, None])[:, 0]
+        fp = _horner(p2[seg], s[:, None])[:, 0]
+        step = np.where(np.abs(fp) > 1e-300, f / np.where(fp == 0.0, 1.0, fp), 0.0)
+        trial = np.clip(s - step, 0.0, 1.0)
+        # Keep a Newton step only where it does not lower |value| (stays on the peak).
+        better = np.abs(_horner(p[seg], trial[:, None])[:, 0]) >= np.abs(
+            _horner(p[seg], s[:, None])[:, 0]
+        )
+        s = np.where(better, trial, s)
+    return seg.astype(np.int64), s
+
+
+def _bounded_solve(
+    problem: _Problem,
+    t: FloatArray,
+    limits: dict[str, FloatArray],
+    solver: str,
+    samples: int,
+) -> FloatArray:
+    n_seg, n = problem.n_seg, problem.n
+    grid = np.linspace(0.0, 1.0, samples)
+    seg = np.repeat(np.arange(n_seg), samples)
+    s = np.tile(grid, n_seg)
+    fine = np.linspace(0.0, 1.0, 8 * (samples - 1) + 1)
+    coeffs = np.empty((n_seg, n, problem.B.shape[1]))
+    free = _kkt_solve(problem)
+    for j in range(problem.B.shape[1]):
+        G, h = _limit_rows(problem, t, limits, j, seg, s)
+        # Start from the sample points where the unbounded optimum comes within half of a limit;
+        # the rounds below add any other point that turns out to matter.
+        x_free = free[:, :, j].ravel()
+        near = np.flatnonzero(G @ x_free - h > -0.5)
+        cost_scale = 1.0 / max(float(x_free @ problem.Q @ x_free), 1e-12)
+        G, h = G[near], h[near]
+        for _ in range(8):
+            x, status = (
+                (x_free, "unbounded optimum")
+                if G.shape[0] == 0
+                else _solve_qp(problem, G, h, problem.B[:, j], solver, cost_scale)
+            )
+            if x is None:
+                if "infeasib" in status.lower():
+                    raise InvalidInputError(
+                        f"joint {j + 1}: the limits cannot be met with these segment times "
+                        f"(the trajectory lasts {t[-1] - t[0]:.4g} s); lengthen the segments"
+                    )
+                raise InvalidInputError(
+                    f"joint {j + 1}: the {solver} QP solver stopped without a solution "
+                    f"(status: {status}); try the other solver of {QP_SOLVERS}"
+                )
+            # Check every limit at the local extremes of its derivative; add those violated.
+            new_G, new_h = [], []
+            for name in limits:
+                pseg, ps = _peak_points(x.reshape(n_seg, n), LIMIT_DERIVATIVE[name], fine)
+                Gp, hp = _limit_rows(problem, t, {name: limits[name]}, j, pseg, ps)
+                bad = np.flatnonzero(Gp @ x - hp > 1e-6)
+                if bad.size:
+                    new_G.append(Gp[bad])
+                    new_h.append(hp[bad])
+            if not new_G:
+                break
+            G = sparse.csr_matrix(sparse.vstack([G, *new_G]))
+            h = np.concatenate([h, *new_h])
+        else:
+            raise InvalidInputError(
+                f"joint {j + 1}: the {solver} QP did not meet the limits between its sample "
+                "points after 8 rounds"
+            )
+        coeffs[:, :, j] = x.reshape(n_seg, n)
+    return coeffs
 
 
 def allocate_times(
