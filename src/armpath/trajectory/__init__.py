@@ -1,5 +1,6 @@
-"""Smooth joint trajectories: minimum-snap / minimum-jerk piecewise polynomials, and their
-commands on the controller's lattice."""
+"""Smooth joint trajectories: minimum-snap / minimum-jerk piecewise polynomials (with or without
+motion limits), their retiming (uniform scaling, bounded QP, toppra, ruckig) and their commands on
+the controller's lattice."""
 
 from armpath.trajectory.minsnap import (
     ORDERS,
@@ -10,15 +11,33 @@ from armpath.trajectory.minsnap import (
     minimum_snap,
 )
 from armpath.trajectory.quantize import QuantizedTrajectory, quantize, tip_deviation
+from armpath.trajectory.retime import (
+    RETIMING_METHODS,
+    JointTrajectory,
+    Retimed,
+    compare_retimings,
+    ruckig_retime,
+    scaled,
+    shortest_bounded,
+    toppra_retime,
+)
 
 __all__ = [
     "ORDERS",
     "QP_SOLVERS",
+    "RETIMING_METHODS",
+    "JointTrajectory",
     "MotionLimits",
     "PiecewisePolynomial",
     "QuantizedTrajectory",
+    "Retimed",
     "allocate_times",
+    "compare_retimings",
     "minimum_snap",
     "quantize",
+    "ruckig_retime",
+    "scaled",
+    "shortest_bounded",
     "tip_deviation",
+    "toppra_retime",
 ]

@@ -40,6 +40,10 @@ class PiecewisePolynomial:
     order: int
 
     @property
+    def start(self) -> float:
+        return float(self.times[0])
+
+    @property
     def duration(self) -> float:
         return float(self.times[-1] - self.times[0])
 
@@ -59,6 +63,27 @@ class PiecewisePolynomial:
                 * self.coefficients[seg, k, :]
             )
         return np.asarray(out / (T**derivative)[:, None])
+
+    def peak(self, derivative: int = 1) -> FloatArray:
+        """Largest ``|d^derivative q / dt^derivative|`` of each joint over the whole trajectory
+        (at the local extremes of every segment, refined by Newton steps; unit/s^derivative)."""
+        fine = np.linspace(0.0, 1.0, 129)
+        T = np.diff(self.times)
+        out = np.zeros(self.coefficients.shape[2])
+        for j in range(out.size):
+            seg, s = _peak_points(self.coefficients[:, :, j], derivative, fine)
+            c = _derivative_in_s(self.coefficients[seg, :, j], derivative)
+            values = _horner(c, s[:, None])[:, 0] / T[seg] ** derivative
+            out[j] = float(np.max(np.abs(values)))
+        return out
+
+    def time_scaled(self, factor: float) -> PiecewisePolynomial:
+        """The same path ``factor`` times slower (velocities / factor, accelerations /
+        factor^2, ...); the coefficients, kept in normalised segment time, are unchanged."""
+        if not (np.isfinite(factor) and factor > 0):
+            raise InvalidInputError(f"time scale factor must be > 0, got {factor}")
+        times = self.times[0] + factor * (self.times - self.times[0])
+        return PiecewisePolynomial(times, self.coefficients, self.order)
 
     def cost(self) -> FloatArray:
         """Integral of the squared ``order``-th derivative per joint (unit^2 / s^(2 order - 1))."""
@@ -129,6 +154,9 @@ class MotionLimits:
 #: Which derivative each limit bounds.
 LIMIT_DERIVATIVE = {"lower": 0, "upper": 0, "velocity": 1, "acceleration": 2, "jerk": 3}
 QP_SOLVERS = ("clarabel", "osqp")
+#: A limit counts as met when exceeded by at most this fraction of it.
+LIMIT_RTOL = 1e-5
+MAX_QP_ROUNDS = 12
 
 
 @dataclass(frozen=True)
@@ -311,8 +339,9 @@ def minimum_snap(
     ``solver`` (``"clarabel"`` or ``"osqp"``, through qpsolvers). The limits are imposed at
     ``samples_per_segment`` evenly spaced times per segment; the result is then checked at every
     local extreme of each bounded derivative (found on a grid 8 times finer and refined by
-    Newton steps), violated extremes are added and the QP solved again (at most 8 solves), so
-    each limit holds along the whole trajectory to 1e-6 of its value. Raises
+    Newton steps), violated extremes are added and the QP solved again (at most
+    ``MAX_QP_ROUNDS`` solves), so each limit holds along the whole trajectory to ``LIMIT_RTOL``
+    (1e-5) of its value. Raises
     ``InvalidInputError`` when the limits cannot be met with these segment times (lengthen them,
     e.g. ``allocate_times``).
     """
@@ -443,6 +472,9 @@ def _bounded_solve(
     seg = np.repeat(np.arange(n_seg), samples)
     s = np.tile(grid, n_seg)
     fine = np.linspace(0.0, 1.0, 8 * (samples - 1) + 1)
+    # Interior-point Clarabel converges faster with the moving peak bracketed by close rows;
+    # OSQP (ADMM) slows down badly on such nearly parallel rows, so it gets the peak alone.
+    bracket = 0.25 * fine[1] if solver == "clarabel" else 0.0
     coeffs = np.empty((n_seg, n, problem.B.shape[1]))
     free = _kkt_solve(problem)
     for j in range(problem.B.shape[1]):
@@ -453,7 +485,7 @@ def _bounded_solve(
         near = np.flatnonzero(G @ x_free - h > -0.5)
         cost_scale = 1.0 / max(float(x_free @ problem.Q @ x_free), 1e-12)
         G, h = G[near], h[near]
-        for _ in range(8):
+        for _ in range(MAX_QP_ROUNDS):
             x, status = (
                 (x_free, "unbounded optimum")
                 if G.shape[0] == 0
@@ -472,12 +504,21 @@ def _bounded_solve(
             # Check every limit at the local extremes of its derivative; add those violated.
             new_G, new_h = [], []
             for name in limits:
-                pseg, ps = _peak_points(x.reshape(n_seg, n), LIMIT_DERIVATIVE[name], fine)
+                d = LIMIT_DERIVATIVE[name]
+                pseg, ps = _peak_points(x.reshape(n_seg, n), d, fine)
+                keep = ~problem.pinned(d, pseg, ps)
+                pseg, ps = pseg[keep], ps[keep]
                 Gp, hp = _limit_rows(problem, t, {name: limits[name]}, j, pseg, ps)
-                bad = np.flatnonzero(Gp @ x - hp > 1e-6)
+                excess = (Gp @ x - hp).reshape(-1, ps.size).max(axis=0)
+                bad = np.flatnonzero(excess > LIMIT_RTOL)
                 if bad.size:
-                    new_G.append(Gp[bad])
-                    new_h.append(hp[bad])
+                    # The peak moves as the QP adjusts; bracket it so it converges in few rounds.
+                    offsets = np.array([-bracket, 0.0, bracket]) if bracket else np.zeros(1)
+                    near_seg = np.repeat(pseg[bad], offsets.size)
+                    near_s = np.clip((ps[bad][:, None] + offsets).ravel(), 0.0, 1.0)
+                    Gb, hb = _limit_rows(problem, t, {name: limits[name]}, j, near_seg, near_s)
+                    new_G.append(Gb)
+                    new_h.append(hb)
             if not new_G:
                 break
             G = sparse.csr_matrix(sparse.vstack([G, *new_G]))
@@ -485,7 +526,8 @@ def _bounded_solve(
         else:
             raise InvalidInputError(
                 f"joint {j + 1}: the {solver} QP did not meet the limits between its sample "
-                "points after 8 rounds"
+                f"points after {MAX_QP_ROUNDS} rounds; the segment times are at the edge of "
+                "feasibility, lengthen them slightly"
             )
         coeffs[:, :, j] = x.reshape(n_seg, n)
     return coeffs
