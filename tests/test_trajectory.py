@@ -464,3 +464,97 @@ def test_compare_retimings_reports_every_method():
     assert rows["toppra"].duration_s < rows["scaled"].duration_s
     with pytest.raises(InvalidInputError, match="unknown retiming"):
         compare_retimings(W, t, limits, methods=("magic",))
+
+
+def test_cli_trajectory_bounded_and_retimed(tmp_path):
+    import subprocess
+    import sys
+
+    wp = tmp_path / "wp.csv"
+    wp.write_text("q1,q2,q3\n0,-90,0\n40,-60,30\n-30,-20,90\n10,-90,10\n")
+    out = tmp_path / "tr"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "armpath",
+            "trajectory",
+            "--waypoints",
+            str(wp),
+            "--bounded",
+            "--max-velocity",
+            "30",
+            "--max-acceleration",
+            "60",
+            "--max-jerk",
+            "300",
+            "--retime",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    samples = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
+    t, q = samples[:, 0], samples[:, 1:]
+    # Finite differences of the sampled trajectory respect the limits (deg/s, deg/s^2).
+    v = np.diff(q, axis=0) / np.diff(t)[:, None]
+    a = np.diff(v, axis=0) / np.diff(t)[1:, None]
+    assert np.abs(v).max() <= 30.0 * (1 + 1e-3) and np.abs(a).max() <= 60.0 * (1 + 1e-2)
+    rows = {
+        line.split(",")[0]: line.split(",")
+        for line in (out / "retiming.csv").read_text().splitlines()[1:]
+    }
+    assert set(rows) == {"scaled", "bounded", "toppra", "ruckig"}
+    # The bounded trajectory written is the shortest bounded one in the comparison.
+    assert float(rows["bounded"][1]) == pytest.approx(t[-1], abs=0.011)
+    assert float(rows["ruckig"][4]) <= 300.0 * 1.001 and rows["ruckig"][5:8] == ["True"] * 3
+    assert float(rows["toppra"][1]) < float(rows["scaled"][1])
+
+
+def test_cli_rcm_writes_the_rotation_and_its_commands(tmp_path):
+    import subprocess
+    import sys
+
+    from PIL import Image
+
+    from independent_dh import dh_pose
+
+    out = tmp_path / "rcm"
+    proc = subprocess.run(
+        [sys.executable, "-m", "armpath", "rcm", "--points", "24", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    data = np.loadtxt(out / "rcm.csv", delimiter=",", skiprows=1)
+    assert data.shape == (801, 1 + 6 + 4)  # 8 s every 0.01 s
+    q_show, tips, dev = data[:, 1:7], data[:, 7:10], data[:, 10]
+    a, alpha, d = [0, 500, 0, 0, 0, 0], np.radians([0, -90, 90, 0, -90, 90]), [0, 0, 0, 0, 0, 200]
+    prismatic = [False, False, True, False, False, False]
+    q = np.where(prismatic, q_show, np.radians(q_show))
+    theirs = np.array(
+        [dh_pose(a, alpha, d, row, modified=True, prismatic=prismatic)[:3, 3] for row in q]
+    )
+    assert np.allclose(tips, theirs, atol=1e-4)
+    assert np.allclose(dev, np.linalg.norm(theirs - [900.0, 0.0, 0.0], axis=1), atol=1e-4)
+    assert 2.0 < dev.max() < 6.0  # mm: 4.4 mm with 24 waypoints
+    # Commands: 0.1 deg ticks for revolute joints, 0.1 mm for the prismatic one; replayed from
+    # the first sample rounded to ticks they stay within half a tick of every sample.
+    cmds = np.loadtxt(out / "commands.csv", delimiter=",", skiprows=1, dtype=int)[:, 1:]
+    assert cmds.shape == (800, 6) and np.abs(cmds).max() <= 20
+    states = np.rint(q_show[0] / 0.1) + np.vstack([np.zeros(6), np.cumsum(cmds, axis=0)])
+    assert np.abs(states * 0.1 - q_show).max() <= 0.05 + 1e-6
+    gif = Image.open(out / "rcm.gif")
+    assert gif.n_frames == 96 and gif.size[0] >= 400
+    assert (out / "rcm_tip_deviation.png").stat().st_size > 20_000
+    assert "largest tip deviation, smooth trajectory" in proc.stdout
+    bad = subprocess.run(
+        [sys.executable, "-m", "armpath", "rcm", "--centre", "900,0", "--out", str(tmp_path / "x")],
+        capture_output=True,
+        text=True,
+    )
+    assert bad.returncode == 1 and "--centre" in bad.stderr and not (tmp_path / "x").exists()

@@ -10,7 +10,13 @@ from armpath.trajectory.minsnap import (
     allocate_times,
     minimum_snap,
 )
-from armpath.trajectory.quantize import QuantizedTrajectory, quantize, tip_deviation
+from armpath.trajectory.quantize import (
+    QuantizedTrajectory,
+    joint_ticks,
+    lattice_motion,
+    quantize,
+    tip_deviation,
+)
 from armpath.trajectory.retime import (
     RETIMING_METHODS,
     JointTrajectory,
@@ -33,6 +39,8 @@ __all__ = [
     "Retimed",
     "allocate_times",
     "compare_retimings",
+    "joint_ticks",
+    "lattice_motion",
     "minimum_snap",
     "quantize",
     "ruckig_retime",

@@ -79,13 +79,17 @@ def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
     return np.asarray(corners)
 
 
-def _draw_table(ax: Axes3D) -> None:
-    """The plane z = 0 across the current x and y limits."""
+def draw_table(ax: Axes3D, scene: Scene) -> None:
+    """The table (plane z = 0) across the current x and y limits, if the scene has one; call
+    after framing the axes."""
+    if not any(isinstance(o, HalfSpace) for o in scene.world.obstacles):
+        return
     X, Y = np.meshgrid(np.array(ax.get_xlim()), np.array(ax.get_ylim()))
     ax.plot_surface(X, Y, np.zeros_like(X), color="0.8", alpha=0.2, linewidth=0)
 
 
-def _set_equal(ax: Axes3D, pts: np.ndarray) -> None:
+def set_equal_axes(ax: Axes3D, pts: np.ndarray) -> None:
+    """Equal scales on x, y, z framing ``pts`` (floor at z = -10 mm)."""
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     center = (lo + hi) / 2
     half = max(float((hi - lo).max()) / 2, 1.0)
@@ -95,7 +99,7 @@ def _set_equal(ax: Axes3D, pts: np.ndarray) -> None:
     ax.set_box_aspect((1, 1, 1))
 
 
-def _draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
+def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
     """Draw every bounded obstacle the 3-D figures know how to draw (solids of revolution,
     spheres, boxes); returns their drawn points for framing the view."""
     drawn = []
@@ -124,7 +128,7 @@ def plot_motion_3d(
     motion = landmark_positions(arm, seq.sample_motion(8))
     states = landmark_positions(arm, ticks_to_rad(seq.states()))
     pts = [motion.reshape(-1, 3), np.zeros((1, 3))]
-    pts += _draw_obstacles(ax, scene)
+    pts += draw_obstacles(ax, scene)
     step = max(1, len(states) // 12)
     for k in range(0, len(states), step):
         ax.plot(*states[k].T, color="0.6", alpha=0.35, linewidth=1)
@@ -140,9 +144,8 @@ def plot_motion_3d(
         pts.append(t)
     for name, p in zip(arm.landmark_names, states[-1], strict=True):
         ax.text(*p, f" {name}", fontsize=8, color="tab:blue")
-    _set_equal(ax, np.vstack(pts))
-    if any(isinstance(o, HalfSpace) for o in scene.world.obstacles):
-        _draw_table(ax)
+    set_equal_axes(ax, np.vstack(pts))
+    draw_table(ax, scene)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")
@@ -296,7 +299,7 @@ def plot_trace_3d(
     states = landmark_positions(arm, ticks_to_rad(sequence.states()))
     first = spans[0][0] if spans else 0
     pts = [tip, curve, states[[first, -1]].reshape(-1, 3)]
-    pts += _draw_obstacles(ax, scene)
+    pts += draw_obstacles(ax, scene)
     ax.plot(
         *states[-1].T,
         "-o",
@@ -371,9 +374,8 @@ def plot_trace_3d(
             *q, color="k", marker="s", s=28, depthshade=False, label="pass end" if k == 0 else None
         )
         ax.text(*p, f"  {k + 1}", fontsize=10, fontweight="bold")
-    _set_equal(ax, np.vstack(pts))
-    if any(isinstance(o, HalfSpace) for o in scene.world.obstacles):
-        _draw_table(ax)
+    set_equal_axes(ax, np.vstack(pts))
+    draw_table(ax, scene)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")
@@ -512,3 +514,23 @@ def plot_trajectory(path: str | Path, traj: PiecewisePolynomial, title: str = ""
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path)
+
+
+def plot_tip_deviation(
+    path: str | Path,
+    series: Sequence[tuple[np.ndarray, np.ndarray, str]],
+    title: str = "",
+) -> None:
+    """Distance of the tool tip from where it should be (mm) against time (s), one line per
+    ``(times_s, distance_mm, label)``."""
+    fig = Figure(figsize=(8, 4))
+    ax = fig.add_subplot()
+    for times, dist, label in series:
+        ax.plot(times, dist, lw=1.2, label=f"{label} (max {np.max(dist):.2f} mm)")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("tip distance from the point [mm]")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
