@@ -105,14 +105,6 @@ def _cost_matrix(n: int, r: int) -> FloatArray:
     return Q
 
 
-def _row(n: int, d: int, at_end: bool, T: float) -> FloatArray:
-    """Coefficients' weights in the ``d``-th time derivative at s = 0 or s = 1."""
-    w = np.zeros(n)
-    for k in range(d, n):
-        w[k] = _falling(k, d) * (1.0 if at_end else (1.0 if k == d else 0.0))
-    return w / T**d
-
-
 @dataclass(frozen=True)
 class MotionLimits:
     """Per-joint motion limits in the trajectory's joint unit (``None``: not limited).
@@ -189,45 +181,36 @@ def _equality_problem(
     W: FloatArray, t: FloatArray, r: int, cont: int, bounds: list[FloatArray]
 ) -> _Problem:
     n_seg, n, J = W.shape[0] - 1, 2 * r, W.shape[1]
-    durations = np.diff(t)
-    r_idx: list[int] = []
-    c_idx: list[int] = []
-    vals: list[float] = []
-    b: list[FloatArray] = []
-
-    def constraint(entries: list[tuple[int, FloatArray]], rhs: FloatArray) -> None:
-        row = len(b)
-        for seg, w in entries:
-            for k in np.flatnonzero(w):
-                r_idx.append(row)
-                c_idx.append(seg * n + int(k))
-                vals.append(float(w[k]))
-        b.append(rhs)
-
-    for i in range(n_seg):
-        T = durations[i]
-        constraint([(i, _row(n, 0, False, T))], W[i])
-        constraint([(i, _row(n, 0, True, T))], W[i + 1])
-    for i in range(n_seg - 1):
-        for d in range(1, cont + 1):
-            constraint(
-                [
-                    (i, _row(n, d, True, durations[i])),
-                    (i + 1, -_row(n, d, False, durations[i + 1])),
-                ],
-                np.zeros(J),
-            )
-    for d in range(1, r):
-        constraint([(0, _row(n, d, False, durations[0]))], bounds[0][d - 1])
-        constraint([(n_seg - 1, _row(n, d, True, durations[-1]))], bounds[1][d - 1])
-    A = sparse.csc_matrix((vals, (r_idx, c_idx)), shape=(len(b), n_seg * n))
-    Q = sparse.block_diag([_cost_matrix(n, r) * T ** (1 - 2 * r) for T in durations], format="csc")
+    segs = np.arange(n_seg)
+    zeros, ones = np.zeros(n_seg), np.ones(n_seg)
+    first, last = np.array([0]), np.array([n_seg - 1])
+    blocks = [
+        _derivative_rows(t, n, 0, segs, zeros),  # each segment starts at its waypoint
+        _derivative_rows(t, n, 0, segs, ones),  # and ends at the next
+    ]
+    rhs = [W[:-1], W[1:]]
+    for d in range(1, cont + 1):  # derivative d continuous at the inner waypoints
+        blocks.append(
+            _derivative_rows(t, n, d, segs[:-1], ones[:-1])
+            - _derivative_rows(t, n, d, segs[1:], zeros[1:])
+        )
+        rhs.append(np.zeros((n_seg - 1, J)))
+    for d in range(1, r):  # boundary derivatives
+        blocks += [
+            _derivative_rows(t, n, d, first, zeros[:1]),
+            _derivative_rows(t, n, d, last, ones[:1]),
+        ]
+        rhs += [bounds[0][d - 1][None, :], bounds[1][d - 1][None, :]]
+    A = sparse.csr_matrix(sparse.vstack(blocks))
+    A.eliminate_zeros()
+    b = np.vstack(rhs)
+    Q = sparse.kron(sparse.diags(np.diff(t) ** (1 - 2 * r)), _cost_matrix(n, r), format="csc")
     # Scale the cost so its entries are comparable to the constraints' (does not move the optimum).
     Q = Q / max(abs(Q).max(), 1e-300)
     # Rows scaled to unit largest entry (same solution, better conditioned for the QP solvers).
     row_scale = 1.0 / np.asarray(abs(A).max(axis=1).todense()).ravel()
     A = sparse.diags(row_scale) @ A
-    B = np.array(b) * row_scale[:, None]
+    B = b * row_scale[:, None]
     return _Problem(sparse.csc_matrix(Q), sparse.csc_matrix(A), B, n_seg, n, r, cont)
 
 
