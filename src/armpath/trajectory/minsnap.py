@@ -184,24 +184,43 @@ def _equality_problem(
     segs = np.arange(n_seg)
     zeros, ones = np.zeros(n_seg), np.ones(n_seg)
     first, last = np.array([0]), np.array([n_seg - 1])
-    blocks = [
-        _derivative_rows(t, n, 0, segs, zeros),  # each segment starts at its waypoint
-        _derivative_rows(t, n, 0, segs, ones),  # and ends at the next
-    ]
-    rhs = [W[:-1], W[1:]]
+    # Each entry: the rows' indices, their segments, the weights (rows, n) and the right-hand side.
+    parts: list[tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]] = []
+    rhs: list[FloatArray] = []
+    count = 0
+
+    def add(terms: list[tuple[NDArray[np.int64], FloatArray]], b: FloatArray) -> None:
+        nonlocal count
+        rows = count + np.arange(b.shape[0])
+        parts.extend((rows, seg, weights) for seg, weights in terms)
+        rhs.append(b)
+        count += b.shape[0]
+
+    # each segment starts at its waypoint and ends at the next
+    add([(segs, _derivative_weights(t, n, 0, segs, zeros))], W[:-1])
+    add([(segs, _derivative_weights(t, n, 0, segs, ones))], W[1:])
     for d in range(1, cont + 1):  # derivative d continuous at the inner waypoints
-        blocks.append(
-            _derivative_rows(t, n, d, segs[:-1], ones[:-1])
-            - _derivative_rows(t, n, d, segs[1:], zeros[1:])
+        add(
+            [
+                (segs[:-1], _derivative_weights(t, n, d, segs[:-1], ones[:-1])),
+                (segs[1:], -_derivative_weights(t, n, d, segs[1:], zeros[1:])),
+            ],
+            np.zeros((n_seg - 1, J)),
         )
-        rhs.append(np.zeros((n_seg - 1, J)))
     for d in range(1, r):  # boundary derivatives
-        blocks += [
-            _derivative_rows(t, n, d, first, zeros[:1]),
-            _derivative_rows(t, n, d, last, ones[:1]),
-        ]
-        rhs += [bounds[0][d - 1][None, :], bounds[1][d - 1][None, :]]
-    A = sparse.csr_matrix(sparse.vstack(blocks))
+        add([(first, _derivative_weights(t, n, d, first, zeros[:1]))], bounds[0][d - 1][None, :])
+        add([(last, _derivative_weights(t, n, d, last, ones[:1]))], bounds[1][d - 1][None, :])
+    k = np.arange(n)
+    A = sparse.csr_matrix(
+        (
+            np.concatenate([w.ravel() for _, _, w in parts]),
+            (
+                np.concatenate([np.repeat(rows, n) for rows, _, _ in parts]),
+                np.concatenate([(seg[:, None] * n + k).ravel() for _, seg, _ in parts]),
+            ),
+        ),
+        shape=(count, n_seg * n),
+    )
     A.eliminate_zeros()
     b = np.vstack(rhs)
     Q = sparse.kron(sparse.diags(np.diff(t) ** (1 - 2 * r)), _cost_matrix(n, r), format="csc")
@@ -214,17 +233,25 @@ def _equality_problem(
     return _Problem(sparse.csc_matrix(Q), sparse.csc_matrix(A), B, n_seg, n, r, cont)
 
 
-def _derivative_rows(
+def _derivative_weights(
     t: FloatArray, n: int, d: int, seg: NDArray[np.int64], s: FloatArray
-) -> sparse.csr_matrix:
-    """Rows giving the ``d``-th time derivative at normalised times ``s`` of segments ``seg``."""
+) -> FloatArray:
+    """Weights ``(len(seg), n)`` of segment coefficients in the ``d``-th time derivative at
+    normalised times ``s`` of segments ``seg``."""
     T = (t[seg + 1] - t[seg])[:, None]
     k = np.arange(n)
     weights = np.array([_falling(int(kk), d) for kk in k])[None, :]
     power = np.clip(k - d, 0, None)[None, :]
-    vals = np.where(k[None, :] >= d, weights * s[:, None] ** power, 0.0) / T**d
+    return np.asarray(np.where(k[None, :] >= d, weights * s[:, None] ** power, 0.0) / T**d)
+
+
+def _derivative_rows(
+    t: FloatArray, n: int, d: int, seg: NDArray[np.int64], s: FloatArray
+) -> sparse.csr_matrix:
+    """Rows giving the ``d``-th time derivative at normalised times ``s`` of segments ``seg``."""
+    vals = _derivative_weights(t, n, d, seg, s)
     rows = np.repeat(np.arange(len(seg)), n)
-    cols = (seg[:, None] * n + k[None, :]).ravel()
+    cols = (seg[:, None] * n + np.arange(n)[None, :]).ravel()
     return sparse.csr_matrix((vals.ravel(), (rows, cols)), shape=(len(seg), (len(t) - 1) * n))
 
 
