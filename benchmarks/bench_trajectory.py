@@ -257,9 +257,9 @@ def main() -> int:
             [
                 "method",
                 "duration [s]",
-                "peak |v| [deg/s]",
-                "peak |a| [deg/s^2]",
-                "peak |j| [deg/s^3]",
+                "peak speed [deg/s]",
+                "peak accel. [deg/s^2]",
+                "peak jerk [deg/s^3]",
                 "limits met",
                 "compute [ms]",
             ],
