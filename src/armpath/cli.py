@@ -135,6 +135,9 @@ ModelOption = Annotated[
 ]
 
 
+PeriodOption = Annotated[float, typer.Option(help="Controller period, s (one command each).")]
+
+
 def _joint_units(arm: SerialArm) -> list[str]:
     return ["mm" if j.kind is JointKind.PRISMATIC else "deg" for j in arm.joints]
 
@@ -1259,7 +1262,7 @@ def trajectory(
             "between the waypoints); writes retiming.csv with --out.",
         ),
     ] = False,
-    period: Annotated[float, typer.Option(help="Controller period, s (one command each).")] = 0.01,
+    period: PeriodOption = 0.01,
     out: Annotated[
         Path | None,
         typer.Option(
@@ -1364,16 +1367,12 @@ def _retiming_table(retimed: list[Any], limits: Any) -> Table:
     ):
         table.add_column(name, justify="right")
     for r in retimed:
-        met = r.within(limits)
+        peaks = np.degrees([r.peak_velocity.max(), r.peak_acceleration.max(), r.peak_jerk.max()])
         table.add_row(
             r.method,
             f"{r.duration_s:.3f}",
-            f"{np.degrees(r.peak_velocity.max()):.2f}",
-            f"{np.degrees(r.peak_acceleration.max()):.2f}",
-            f"{np.degrees(r.peak_jerk.max()):.1f}",
-            "met"
-            if all(met.values())
-            else "exceeds " + ", ".join(k for k, ok in met.items() if not ok),
+            *(f"{v:.2f}" for v in peaks),
+            r.verdict(limits),
             f"{1e3 * r.compute_s:.0f}",
         )
     return table
@@ -1429,7 +1428,7 @@ def rcm(
     points: Annotated[int, typer.Option(help="Waypoints on the circle.")] = 24,
     duration: Annotated[float, typer.Option(help="Time for one turn, s.")] = 8.0,
     kind: Annotated[str, typer.Option(help="snap or jerk.")] = "snap",
-    period: Annotated[float, typer.Option(help="Controller period, s (one command each).")] = 0.01,
+    period: PeriodOption = 0.01,
     out: Annotated[
         Path | None,
         typer.Option(

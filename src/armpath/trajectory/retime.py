@@ -57,6 +57,11 @@ class Retimed:
     peak_jerk: FloatArray
     compute_s: float
 
+    def verdict(self, limits: MotionLimits) -> str:
+        """``"met"``, or which limits are exceeded (e.g. ``"exceeds jerk"``)."""
+        over = [name for name, ok in self.within(limits).items() if not ok]
+        return "exceeds " + ", ".join(over) if over else "met"
+
     def within(self, limits: MotionLimits, rtol: float = 1e-3) -> dict[str, bool]:
         """Whether each given derivative limit holds (to ``rtol``)."""
         given = limits.per_joint(self.peak_velocity.size)
