@@ -1,6 +1,7 @@
 """The command line as a user runs it: real subprocesses, exit codes, files."""
 
 import json
+import re
 import subprocess
 import sys
 
@@ -151,6 +152,11 @@ def test_run_writes_every_task_and_a_summary(seed_run):
     assert "63" in stdout and str(weld["n_commands"]) in stdout
     summary = (out / "summary.md").read_text()
     assert "Task 1" in summary and "Task 3" in summary
+    # the report shows every figure and animation it names, and they were written
+    for name in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", summary):
+        assert name in names, name
+    assert {"reach.gif", "trace.gif", "spotweld.gif"} <= names
+    assert "## Task 2: trace the crack" in summary and "unreachable 382.8" in summary
     # the blind-zone summary: the central blind zone and both workpiece faces
     assert {"blind_maps.png", "face_blindness.png", "blindzones.csv"} <= names
     assert "central blind zone" in summary and "inner face" in summary

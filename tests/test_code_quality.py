@@ -17,7 +17,7 @@ LAYERS = [
     {"commands"},
     {"scenes", "planning", "workspace", "trajectory"},
     {"tasks"},
-    {"export", "viz", "cli", "__main__"},
+    {"export", "results", "report", "viz", "viewer", "cli", "__main__"},
 ]
 
 

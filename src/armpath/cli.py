@@ -12,6 +12,7 @@ import dataclasses
 import json
 import math
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
@@ -24,7 +25,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from armpath import __version__
-from armpath.commands import deg_to_ticks, ticks_to_deg
+from armpath.commands import CommandSequence, deg_to_ticks, ticks_to_deg
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.export import (
     OutputFolder,
@@ -47,6 +48,7 @@ from armpath.planning.motion import MotionOptions, MotionPlan, Objective, plan_m
 from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
 from armpath.planning.tour import TourResult
 from armpath.planning.trace import TraceOptions, TraceResult
+from armpath.report import passes_text, summary_html, summary_markdown
 from armpath.scenes import Scene, load_scene
 from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
 
@@ -82,6 +84,40 @@ ObjectiveOption = Annotated[
     ),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print the result JSON on stdout.")]
+AnimateOption = Annotated[
+    bool,
+    typer.Option(
+        "--animate", help="Also write an animation of the motion (<task>.gif) into --out."
+    ),
+]
+
+
+def _animate_into(
+    folder: OutputFolder,
+    stem: str,
+    arm: SerialArm,
+    scene: Scene,
+    seq: CommandSequence,
+    title: str,
+    targets: np.ndarray | None = None,
+    curve: np.ndarray | None = None,
+) -> None:
+    """Write ``stem.gif``: the arm through the commands, the targets and the curve."""
+    from armpath.viz.animation import sequence_animation, write_animation
+
+    with err_console.status(f"animating {stem} ..."):
+        write_animation(
+            folder.file(f"{stem}.gif"),
+            sequence_animation(arm, scene, seq, title, targets, curve),
+            max_frames=96,
+        )
+
+
+def _animate_needs_out(animate: bool, out: Path | None) -> None:
+    if animate and out is None:
+        raise InvalidInputError("--animate needs --out FOLDER to write the GIF into")
+
+
 SeedOption = Annotated[int, typer.Option(help="Random seed of the planner (same seed, same plan).")]
 
 
@@ -367,7 +403,12 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
 
 
 def _write_reach(
-    folder: OutputFolder, stem: str, result: ReachResult, arm: SerialArm, scene: Scene
+    folder: OutputFolder,
+    stem: str,
+    result: ReachResult,
+    arm: SerialArm,
+    scene: Scene,
+    animate: bool = False,
 ) -> None:
     from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
@@ -380,6 +421,8 @@ def _write_reach(
         folder.file(f"{stem}_motion.png"), arm, scene, result.sequence, result.target_mm, title
     )
     plot_joint_angles(folder.file(f"{stem}_joints.png"), result.sequence, title)
+    if animate:
+        _animate_into(folder, stem, arm, scene, result.sequence, title, result.target_mm)
 
 
 @app.command(context_settings=LOOSE)
@@ -405,6 +448,7 @@ def reach(
     wall: WallOption = None,
     scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = 0.0,
+    animate: AnimateOption = False,
 ) -> None:
     """Reach a point with the fingertip in the fewest commands, then the smallest error.
 
@@ -419,12 +463,13 @@ def reach(
             _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
         )
         options = ReachOptions(tolerance_mm=tolerance)
+        _animate_needs_out(animate, out)
         scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             result = plan_reach(arm, scene.world, start_ticks, xyz, options)
             if folder is not None:
-                _write_reach(folder, "reach", result, arm, scene)
+                _write_reach(folder, "reach", result, arm, scene, animate)
         written = folder.written if folder is not None else []
         if json_out:
             typer.echo(json_text(reach_result_dict(result, arm, scene)), nl=False)
@@ -472,11 +517,12 @@ def _plan_to_point(
     folder: OutputFolder | None,
     json_out: bool,
     stem: str,
+    animate: bool = False,
 ) -> None:
     goals, _ = goal_states(arm, scene.world, start_ticks, xyz, tolerance)
     plan = plan_motion(arm, scene.world, start_ticks, goals, options)
     doc = plan_result_dict(plan, arm, scene, options.objective.value, xyz, tolerance)
-    _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz)
+    _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz, animate)
 
 
 def _emit_plan(
@@ -488,6 +534,7 @@ def _emit_plan(
     json_out: bool,
     stem: str,
     target: np.ndarray | None,
+    animate: bool = False,
 ) -> None:
     if folder is not None:
         from armpath.viz.figures import plot_joint_angles, plot_motion_3d
@@ -496,6 +543,8 @@ def _emit_plan(
         title = f"{stem}: {plan.sequence.n_commands} commands ({plan.method})"
         plot_motion_3d(folder.file(f"{stem}_motion.png"), arm, scene, plan.sequence, target, title)
         plot_joint_angles(folder.file(f"{stem}_joints.png"), plan.sequence, title)
+        if animate:
+            _animate_into(folder, stem, arm, scene, plan.sequence, title, target)
     if json_out:
         typer.echo(json_text(doc), nl=False)
     else:
@@ -545,6 +594,7 @@ def plan(
             "the best is kept.",
         ),
     ] = 1,
+    animate: AnimateOption = False,
 ) -> None:
     """Plan a collision-free command sequence to a joint goal or a fingertip point.
 
@@ -555,6 +605,7 @@ def plan(
     with _cli_errors():
         if (to is None) == (to_xyz is None):
             raise InvalidInputError("give exactly one goal: --to θ1 … θ6 or --to-xyz X Y Z")
+        _animate_needs_out(animate, out)
         arm = _arm(link_radius)
         theta = list(start) if start is not None else list(np.degrees(arm.home))
         start_ticks = deg_to_ticks(
@@ -572,7 +623,16 @@ def plan(
             if to_xyz is not None:
                 xyz = np.array(_numbers([str(v) for v in to_xyz], 3, "--to-xyz X Y Z (mm)"))
                 _plan_to_point(
-                    arm, scene, start_ticks, xyz, tolerance, options, folder, json_out, "plan"
+                    arm,
+                    scene,
+                    start_ticks,
+                    xyz,
+                    tolerance,
+                    options,
+                    folder,
+                    json_out,
+                    "plan",
+                    animate,
                 )
             else:
                 assert to is not None
@@ -581,7 +641,7 @@ def plan(
                 )
                 result = plan_motion(arm, scene.world, start_ticks, goal[None, :], options)
                 doc = plan_result_dict(result, arm, scene, objective.value, None, None)
-                _emit_plan(result, doc, arm, scene, folder, json_out, "plan", None)
+                _emit_plan(result, doc, arm, scene, folder, json_out, "plan", None, animate)
         if folder is not None and not json_out:
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)
@@ -622,7 +682,12 @@ def _tour_summary(doc: dict[str, Any]) -> Table:
 
 
 def _write_tour(
-    folder: OutputFolder, result: TourResult, doc: dict[str, Any], arm: SerialArm, scene: Scene
+    folder: OutputFolder,
+    result: TourResult,
+    doc: dict[str, Any],
+    arm: SerialArm,
+    scene: Scene,
+    animate: bool = False,
 ) -> None:
     from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
@@ -631,6 +696,8 @@ def _write_tour(
     targets = np.array(doc["targets"])  # labelled 1..N as listed in the scene
     plot_motion_3d(folder.file("spotweld_motion.png"), arm, scene, result.sequence, targets, title)
     plot_joint_angles(folder.file("spotweld_joints.png"), result.sequence, title)
+    if animate:
+        _animate_into(folder, "spotweld", arm, scene, result.sequence, title, targets)
 
 
 @app.command()
@@ -653,6 +720,7 @@ def spotweld(
     scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = 0.0,
     seed: SeedOption = 0,
+    animate: AnimateOption = False,
 ) -> None:
     """Task 3: reach the spot welds on the workpiece's inner wall through the open top."""
     with _cli_errors():
@@ -661,6 +729,7 @@ def spotweld(
         arm = _arm(link_radius)
         scene = _scene(scene_file, wall)
         options = MotionOptions(objective=objective, seed=seed)
+        _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             with err_console.status("planning the spot welds ...") as status:
@@ -670,17 +739,13 @@ def spotweld(
                 )  # fmt: skip
             doc = tour_result_dict(result, arm, scene, objective.value)
             if folder is not None:
-                _write_tour(folder, result, doc, arm, scene)
+                _write_tour(folder, result, doc, arm, scene, animate)
         if json_out:
             typer.echo(json_text(doc), nl=False)
         else:
             out_console.print(_tour_summary(doc))
             for path in folder.written if folder is not None else []:
                 out_console.print(f"wrote {path}", markup=False)
-
-
-def _passes(n: int) -> str:
-    return f"{n} pass" if n == 1 else f"{n} passes"
 
 
 def _trace_summary(doc: dict[str, Any]) -> Table:
@@ -732,14 +797,19 @@ def _trace_summary(doc: dict[str, Any]) -> Table:
 
 
 def _write_trace(
-    folder: OutputFolder, result: TraceResult, doc: dict[str, Any], arm: SerialArm, scene: Scene
+    folder: OutputFolder,
+    result: TraceResult,
+    doc: dict[str, Any],
+    arm: SerialArm,
+    scene: Scene,
+    animate: bool = False,
 ) -> None:
     from armpath.viz.figures import plot_trace_3d, plot_trace_deviation
 
     write_sequence_files(folder, "trace", doc, arm, result.sequence)
     curve = result.curve
     title = (
-        f"trace: {result.n_commands} commands, {_passes(len(result.passes))}, "
+        f"trace: {result.n_commands} commands, {passes_text(len(result.passes))}, "
         f"largest deviation {result.max_deviation_mm:.3f} mm"
     )
     unreachable = result.reachability.unreachable
@@ -763,6 +833,8 @@ def _write_trace(
         curve.length,
         title,
     )
+    if animate:
+        _animate_into(folder, "trace", arm, scene, result.sequence, title, None, curve.sample(801))
 
 
 @app.command()
@@ -780,6 +852,7 @@ def trace(
     scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = 0.0,
     seed: SeedOption = 0,
+    animate: AnimateOption = False,
 ) -> None:
     """Task 2: go once around the scene's curve (the crack) with the fingertip, every reachable
     part, fewest passes and commands; report the unreachable arcs and why."""
@@ -787,13 +860,14 @@ def trace(
         arm = _arm(link_radius)
         scene = _scene(scene_file, wall)
         options = TraceOptions(tolerance_mm=tolerance, motion=MotionOptions(seed=seed))
+        _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             with err_console.status("tracing the curve ...") as status:
                 result = trace_task(scene, arm, options, lambda msg: status.update(msg))
             doc = trace_result_dict(result, arm, scene)
             if folder is not None:
-                _write_trace(folder, result, doc, arm, scene)
+                _write_trace(folder, result, doc, arm, scene, animate)
         if json_out:
             typer.echo(json_text(doc), nl=False)
         else:
@@ -1541,13 +1615,111 @@ def rcm(
 
 
 @app.command()
+def view(
+    model: ModelOption = "seed",
+    scene_file: SceneOption = None,
+    result: Annotated[
+        Path | None,
+        typer.Option(
+            "--result",
+            help="A result JSON (reach, trace, spotweld, plan) to replay; its model and scene "
+            "come with it.",
+        ),
+    ] = None,
+    host: Annotated[str, typer.Option(help="Address to serve on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port to serve on.")] = 8080,
+    export_html: Annotated[
+        Path | None,
+        typer.Option(
+            "--export-html",
+            help="Write a self-contained HTML replay of --result to this file and exit "
+            "(opens offline in any browser).",
+        ),
+    ] = None,
+    fps: Annotated[float, typer.Option(help="Commands per second in the HTML replay.")] = 15.0,
+) -> None:
+    """Interactive 3D viewer in the browser: the arm in its scene, a slider per joint (0.1
+    steps within the limits), live fingertip position and clearance (collisions in red), a
+    target point to plan a reach to, and the replay of a result (play, pause, step,
+    timeline)."""
+    from armpath.results import load_result
+
+    with _cli_errors():
+        loaded = load_result(result, scene_file) if result is not None else None
+        if export_html is not None:
+            if loaded is None:
+                raise InvalidInputError("--export-html needs --result FILE")
+            if export_html.suffix.lower() not in (".html", ".htm"):
+                raise InvalidInputError(f"--export-html must end in .html, got {export_html.name}")
+            from armpath.viewer.app import replay_html
+
+            with err_console.status("recording the replay ..."):
+                page = replay_html(loaded, fps=fps)
+            with output_folder(export_html.parent) as folder:
+                folder.write_text(export_html.name, page)
+            out_console.print(f"wrote {export_html}", markup=False)
+            return
+        if not (0 < port < 65536):
+            raise InvalidInputError(f"--port must be in 1..65535, got {port}")
+        from armpath.viewer.app import ArmViewer
+
+        if loaded is not None:
+            arm, scene = loaded.arm, loaded.scene
+        else:
+            arm = seed_arm() if model == "seed" else resolve_model(model)
+            scene = _scene(scene_file, None)
+        viewer = ArmViewer(arm, scene, host=host, port=port, result=loaded)
+        out_console.print(
+            f"armpath viewer on http://{host}:{viewer.server.get_port()} (Ctrl-C to stop)",
+            markup=False,
+        )
+        try:
+            while True:
+                time.sleep(3600)
+        except KeyboardInterrupt:
+            viewer.stop()
+
+
+@app.command()
+def animate(
+    result: Annotated[Path, typer.Argument(help="A result JSON (reach, trace, spotweld, plan).")],
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="GIF or MP4 file to write. Default: the result's name, .gif."),
+    ] = None,
+    scene_file: SceneOption = None,
+    fps: Annotated[int, typer.Option(help="Frames per second.")] = 15,
+    frames: Annotated[int, typer.Option(help="Largest number of frames.")] = 120,
+) -> None:
+    """Animate a result: the arm through its commands in the scene, the fingertip's path, the
+    targets and the curve (GIF with Pillow, MP4 with ffmpeg)."""
+    from armpath.results import load_result
+    from armpath.viz.animation import result_animation, write_animation
+
+    with _cli_errors():
+        if fps < 1 or frames < 2:
+            raise InvalidInputError("--fps must be >= 1 and --frames >= 2")
+        loaded = load_result(result, scene_file)
+        target = out if out is not None else result.with_suffix(".gif")
+        with output_folder(target.parent) as folder, err_console.status("animating ..."):
+            n = write_animation(
+                folder.file(target.name), result_animation(loaded), fps=fps, max_frames=frames
+            )
+        out_console.print(f"wrote {target} ({n} frames)", markup=False)
+
+
+@app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
     wall: WallOption = None,
     link_radius: LinkRadiusOption = 0.0,
+    html: Annotated[
+        bool, typer.Option("--html", help="Also write the report as summary.html.")
+    ] = False,
 ) -> None:
     """Run the seed scene's three tasks: 1, reach the tool box; 2, trace the crack; 3, spot welds
-    inside the workpiece; then summarise the seed arm's blind zones."""
+    inside the workpiece; then summarise the seed arm's blind zones. Writes each task's result
+    (JSON, CSV, XLSX), figures and animations (GIF), and a one-page report summary.md."""
     with _cli_errors():
         scene = _scene(None, wall)
         arm = _arm(link_radius)
@@ -1555,33 +1727,28 @@ def run(
         with output_folder(out) as folder:
             with err_console.status(f"{titles['reach']} ..."):
                 result = reach_task(scene, arm)
-            _write_reach(folder, "reach", result, arm, scene)
+            _write_reach(folder, "reach", result, arm, scene, animate=True)
             reach_doc = reach_result_dict(result, arm, scene)
             with err_console.status(f"{titles['trace']} ...") as status:
                 traced = trace_task(scene, arm, on_progress=lambda msg: status.update(msg))
             trace_doc = trace_result_dict(traced, arm, scene)
-            _write_trace(folder, traced, trace_doc, arm, scene)
+            _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
             with err_console.status(f"{titles['spotweld']} ...") as status:
                 tour = spotweld_task(scene, arm, on_progress=lambda msg: status.update(msg))
             tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
-            _write_tour(folder, tour, tour_doc, arm, scene)
+            _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
             with err_console.status("blind zones ...") as status:
                 blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, status, scan_step_mm=16.0)
             _write_blind_zones(folder, blind)
-            folder.write_text(
-                "summary.md",
-                _summary_markdown(
-                    [
-                        (titles["reach"], reach_doc),
-                        (titles["trace"], trace_doc),
-                        (titles["spotweld"], tour_doc),
-                    ]
-                )
-                + "\n## Blind zones of the seed arm\n\n"
-                + "".join(f"- {line}\n" for line in blind.summary())
-                + "\n(3 circles a face scanned every 16 mm here; `armpath blindzones` for finer "
-                "maps.)\n",
-            )
+            tasks = [
+                (titles["reach"], reach_doc),
+                (titles["trace"], trace_doc),
+                (titles["spotweld"], tour_doc),
+            ]
+            report = summary_markdown(tasks, blind.summary(), [*folder.staged(), "summary.md"])
+            folder.write_text("summary.md", report)
+            if html:
+                folder.write_text("summary.html", summary_html(report))
         written = folder.written
         table = Table(
             title=f"armpath {__version__}: seed tasks, scene {scene.name}, "
@@ -1598,7 +1765,7 @@ def run(
         )
         cov = trace_doc["coverage"]
         table.add_row(
-            f"2 trace the crack, {_passes(len(trace_doc['passes']))}",
+            f"2 trace the crack, {passes_text(len(trace_doc['passes']))}",
             str(trace_doc["n_commands"]),
             "-",
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
@@ -1633,53 +1800,6 @@ def run(
         out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
         for path in written:
             out_console.print(f"  {path.name}", markup=False)
-
-
-def _summary_markdown(tasks: list[tuple[str, dict[str, Any]]]) -> str:
-    lines = [
-        f"# armpath {__version__}: seed tasks",
-        "",
-        "| task | commands | lower bound | fingertip error [mm] | min clearance [mm] | wall |",
-        "|---|---:|---:|---:|---:|---|",
-    ]
-    notes = []
-    for title, doc in tasks:
-        if doc["task"] == "trace":
-            body = doc["clearance"]["min_body_clearance_mm"]
-            cov = doc["coverage"]
-            lines.append(
-                f"| {title} | {doc['n_commands']} | - | {doc['max_deviation_mm']:.4f} (largest "
-                f"deviation of the continuous path) | {doc['min_clearance_mm']:.3f} (tool tip) / "
-                f"{body:.3f} (links) | {doc['wall_thickness']} |"
-            )
-            gaps = "; ".join(
-                f"{u['start_mm']:.2f}..{u['end_mm']:.2f} mm ({u['length_mm']:.2f} mm: "
-                f"{u['reason']})"
-                for u in doc["unreachable"]
-            )
-            notes.append(
-                f"Task 2: {_passes(len(doc['passes']))} cover {cov['covered_mm']:.2f} mm of the "
-                f"{cov['reachable_mm']:.2f} mm reachable ({100 * cov['of_reachable']:.2f} %) of "
-                f"the {cov['curve_mm']:.2f} mm crack; unreachable: {gaps or 'none'}."
-            )
-            continue
-        bound, error = str(doc["lower_bound_commands"]), f"{doc['error_mm']:.4f}"
-        clearance = f"{doc['min_clearance_mm']:.3f}"
-        if doc["task"] == "spotweld":
-            bound += "*"
-            error += " (largest)"
-            body = doc["clearance"]["min_body_clearance_mm"]
-            clearance = f"{clearance} (tool tip) / {body:.3f} (links)"
-            order = " → ".join(str(i) for i in doc["order"])
-            notes.append(
-                f"\\* Task 3, order {order}: the bound counts direct motions between the chosen "
-                "goal states, obstacles ignored; the tool tip touches the wall at each weld."
-            )
-        lines.append(
-            f"| {title} | {doc['n_commands']} | {bound} | {error} | {clearance} | "
-            f"{doc['wall_thickness']} |"
-        )
-    return "\n".join([*lines, "", *notes]) + "\n"
 
 
 @app.callback(invoke_without_command=True)

@@ -435,6 +435,10 @@ class OutputFolder:
     def write_text(self, name: str, text: str) -> None:
         self.file(name).write_text(text, encoding="utf-8")
 
+    def staged(self) -> list[str]:
+        """Names of the files staged so far."""
+        return sorted(p.name for p in self._staging.iterdir())
+
     def commit(self) -> list[Path]:
         """Move every staged file into the destination folder; returns their final paths."""
         try:

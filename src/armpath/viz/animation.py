@@ -14,9 +14,11 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
+from armpath.results import PlannedResult
 from armpath.scenes import Scene
 from armpath.viz.figures import draw_obstacles, draw_table, set_equal_axes
 
@@ -37,21 +39,61 @@ class Overlay:
 @dataclass(frozen=True)
 class Animation:
     """What to animate: joint states ``q`` ``(frames, n)`` (rad, or model unit if prismatic) at
-    ``times_s``; optional scene, overlays and a per-frame caption."""
+    ``times`` (s, or command number with ``clock="command {:.0f}"``); optional scene, overlays
+    and a per-frame caption."""
 
     arm: SerialArm
     q: FloatArray
-    times_s: FloatArray
+    times: FloatArray
     title: str = ""
     scene: Scene | None = None
     overlays: Sequence[Overlay] = field(default_factory=tuple)
     caption: Callable[[int], str] | None = None
+    clock: str = "t = {:7.2f} s"
 
 
-def frames_for(times_s: ArrayLike, max_frames: int) -> NDArray[np.int64]:
-    """Indices of at most ``max_frames`` samples evenly spread over ``times_s`` (first and last
+def sequence_animation(
+    arm: SerialArm,
+    scene: Scene | None,
+    sequence: CommandSequence,
+    title: str,
+    targets_mm: ArrayLike | None = None,
+    curve_mm: ArrayLike | None = None,
+    substeps: int = 4,
+) -> Animation:
+    """The arm through every command of ``sequence`` (``substeps`` frames a command before
+    thinning) in its scene, with the targets and the curve drawn."""
+    q = sequence.sample_motion(substeps)
+    steps = np.linspace(0.0, sequence.n_commands, q.shape[0])
+    overlays: list[Overlay] = []
+    if curve_mm is not None:
+        overlays.append(Overlay(np.asarray(curve_mm, dtype=float), "curve", "line", "tab:orange"))
+    targets = np.zeros((0, 3)) if targets_mm is None else np.asarray(targets_mm, float)
+    targets = targets.reshape(-1, 3)
+    if len(targets):
+        overlays.append(Overlay(targets, "target" if len(targets) == 1 else "targets", "points"))
+    return Animation(
+        arm, q, steps, title, scene=scene, overlays=tuple(overlays), clock="command {:4.0f}"
+    )
+
+
+def result_animation(result: PlannedResult, substeps: int = 4) -> Animation:
+    """The animation of a result document read back (``armpath.results.load_result``)."""
+    return sequence_animation(
+        result.arm,
+        result.scene,
+        result.sequence,
+        result.title(),
+        result.targets_mm,
+        result.curve_mm,
+        substeps,
+    )
+
+
+def frames_for(times: ArrayLike, max_frames: int) -> NDArray[np.int64]:
+    """Indices of at most ``max_frames`` samples evenly spread over ``times`` (first and last
     included)."""
-    n = len(np.asarray(times_s))
+    n = len(np.asarray(times))
     if n == 0:
         raise InvalidInputError("nothing to animate: no states")
     return np.unique(np.linspace(0, n - 1, min(n, max(2, max_frames))).round().astype(np.int64))
@@ -74,12 +116,12 @@ def write_animation(
     if out.suffix == ".mp4" and shutil.which("ffmpeg") is None:
         raise InvalidInputError("MP4 needs ffmpeg on the PATH; write a .gif instead")
     q = np.asarray(anim.q, dtype=np.float64)
-    if q.ndim != 2 or q.shape[1] != anim.arm.n_joints or q.shape[0] != len(anim.times_s):
+    if q.ndim != 2 or q.shape[1] != anim.arm.n_joints or q.shape[0] != len(anim.times):
         raise InvalidInputError(
             f"need one state of {anim.arm.n_joints} joints per time, got {q.shape} for "
-            f"{len(anim.times_s)} times"
+            f"{len(anim.times)} times"
         )
-    idx = frames_for(anim.times_s, max_frames)
+    idx = frames_for(anim.times, max_frames)
     arms = landmark_positions(anim.arm, q[idx])
     tips = tool_position(anim.arm, q)
     fig = Figure(figsize=(6.4, 5.6))
@@ -91,7 +133,9 @@ def write_animation(
     for overlay in anim.overlays:
         pts = np.asarray(overlay.points, dtype=np.float64).reshape(-1, 3)
         if overlay.style == "points":
-            ax.scatter(*pts.T, color=overlay.color, s=40, marker="*", label=overlay.label)
+            ax.scatter(
+                *pts.T, color=overlay.color, s=40, marker="*", label=overlay.label, depthshade=False
+            )
         else:
             ax.plot(*pts.T, color=overlay.color, lw=1.2, label=overlay.label)
         framing.append(pts)
@@ -112,7 +156,7 @@ def write_animation(
         k = int(idx[frame])
         arm_line.set_data_3d(*arms[frame].T)
         trail.set_data_3d(*tips[: k + 1].T)
-        text = f"t = {anim.times_s[k]:7.2f} s"
+        text = anim.clock.format(anim.times[k])
         if anim.caption is not None:
             text += "   " + anim.caption(k)
         caption.set_text(text)

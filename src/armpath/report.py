@@ -1,0 +1,163 @@
+"""The one-page report of ``armpath run``: the three seed tasks and the blind zones, numbers
+first, then one short section per task with its figures and animation (Markdown, and HTML on
+request)."""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+from typing import Any
+
+from armpath import __version__
+
+FILES = {
+    "reach.json": "Task 1 result (commands, lower bound, clearance)",
+    "trace.json": "Task 2 result (passes, coverage, unreachable arcs and why)",
+    "spotweld.json": "Task 3 result (order, visits, per-weld error)",
+    "*.csv / *.xlsx": "the commands (ticks of 0.1 deg), joint angles and fingertip after each",
+    "*.gif": "animations of the three motions",
+    "blindzones.csv / .npz": "blind parts of the workpiece faces; the arm-plane and meridian maps",
+}
+
+
+def passes_text(n: int) -> str:
+    """'1 pass', '2 passes'."""
+    return f"{n} pass" + ("" if n == 1 else "es")
+
+
+def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], list[str]]:
+    lines = [
+        "| task | commands | lower bound | fingertip error [mm] | min clearance [mm] | wall |",
+        "|---|---:|---:|---:|---:|---|",
+    ]
+    notes = []
+    for title, doc in tasks:
+        if doc["task"] == "trace":
+            body = doc["clearance"]["min_body_clearance_mm"]
+            lines.append(
+                f"| {title} | {doc['n_commands']} | - | {doc['max_deviation_mm']:.4f} (largest "
+                f"deviation of the continuous path) | {doc['min_clearance_mm']:.3f} (tool tip) / "
+                f"{body:.3f} (links) | {doc['wall_thickness']} |"
+            )
+            continue
+        bound, error = str(doc["lower_bound_commands"]), f"{doc['error_mm']:.4f}"
+        clearance = f"{doc['min_clearance_mm']:.3f}"
+        if doc["task"] == "spotweld":
+            bound += "*"
+            error += " (largest)"
+            body = doc["clearance"]["min_body_clearance_mm"]
+            clearance = f"{clearance} (tool tip) / {body:.3f} (links)"
+            order = " → ".join(str(i) for i in doc["order"])
+            notes.append(
+                f"\\* Task 3, order {order}: the bound counts direct motions between the chosen "
+                "goal states, obstacles ignored; the tool tip touches the wall at each weld."
+            )
+        lines.append(
+            f"| {title} | {doc['n_commands']} | {bound} | {error} | {clearance} | "
+            f"{doc['wall_thickness']} |"
+        )
+    return lines, notes
+
+
+def _figures(names: Sequence[str], available: set[str]) -> str:
+    shown = [n for n in names if n in available]
+    return " ".join(f"![{n}]({n})" for n in shown)
+
+
+def summary_markdown(
+    tasks: Sequence[tuple[str, dict[str, Any]]],
+    blind_zone_lines: Sequence[str] = (),
+    files: Sequence[str] = (),
+) -> str:
+    """The report: ``tasks`` are (title, result document) for reach, trace and spot welds;
+    ``blind_zone_lines`` the blind-zone summary; ``files`` the names written beside it (figures
+    are shown when present)."""
+    available = set(files)
+    glance, notes = _glance(tasks)
+    wall = next((doc["wall_thickness"] for _, doc in tasks), None)
+    out = [
+        f"# armpath {__version__}: seed tasks",
+        "",
+        f"Seed arm and scene, workpiece wall measured {wall}. Lengths in mm, angles in deg, "
+        "commands in ticks of 0.1 deg (at most 20 per joint and command).",
+        "",
+        *glance,
+        "",
+        *notes,
+    ]
+    for title, doc in tasks:
+        out += ["", f"## {title}", ""]
+        c = doc["clearance"]
+        clearance = (
+            f"closest approach {c['min_clearance_mm']:.3f} mm ({c['closest_part']} to "
+            f"{c['closest_obstacle']}) over the whole continuous motion"
+        )
+        if doc["task"] == "reach":
+            fewest = "provably the fewest" if doc.get("provably_fewest") else "not proven fewest"
+            out.append(
+                f"- {doc['n_commands']} commands ({fewest}; lower bound "
+                f"{doc['lower_bound_commands']}) to ({', '.join(f'{v:g}' for v in doc['target'])})"
+                f" mm, fingertip error {doc['error_mm']:.4f} mm; {clearance}."
+            )
+            figs = ["reach_motion.png", "reach_joints.png", "reach.gif"]
+        elif doc["task"] == "trace":
+            cov = doc["coverage"]
+            out.append(
+                f"- {doc['n_commands']} commands in {passes_text(len(doc['passes']))}; "
+                f"{cov['covered_mm']:.2f} of {cov['reachable_mm']:.2f} mm reachable covered "
+                f"({100 * cov['of_curve']:.1f} % of the {cov['curve_mm']:.2f} mm curve); largest "
+                f"deviation {doc['max_deviation_mm']:.4f} mm (bound "
+                f"{doc['max_deviation_bound_mm']:.4f} mm); {clearance}."
+            )
+            for u in doc["unreachable"]:
+                out.append(
+                    f"- unreachable {u['start_mm']:.2f}..{u['end_mm']:.2f} mm: {u['reason']}."
+                )
+            figs = ["trace_3d.png", "trace_deviation.png", "trace.gif"]
+        else:
+            order = " → ".join(str(i) for i in doc["order"])
+            errors = ", ".join(f"{v['error_mm']:.4f}" for v in doc["visits"])
+            out.append(
+                f"- order {order}: {doc['n_commands']} commands (bound "
+                f"{doc['lower_bound_commands']} for this order); weld errors {errors} mm in "
+                f"visiting order; {clearance}."
+            )
+            figs = ["spotweld_motion.png", "spotweld_joints.png", "spotweld.gif"]
+        shown = _figures(figs, available)
+        if shown:
+            out += ["", shown]
+    if blind_zone_lines:
+        out += ["", "## Blind zones of the seed arm", ""]
+        out += [f"- {line}" for line in blind_zone_lines]
+        out += [
+            "",
+            "(3 circles a face scanned every 16 mm here; `armpath blindzones` for finer maps.)",
+        ]
+        shown = _figures(["blind_maps.png", "face_blindness.png"], available)
+        if shown:
+            out += ["", shown]
+    out += ["", "## Files", ""]
+    out += [f"- `{name}`: {what}" for name, what in FILES.items()]
+    return "\n".join(out) + "\n"
+
+
+CSS = """
+body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }
+table { border-collapse: collapse; margin: 1em 0; }
+th, td { border: 1px solid #ccc; padding: 4px 8px; }
+th { background: #f3f3f3; }
+img { max-width: 32%; vertical-align: top; margin: 2px; border: 1px solid #eee; }
+code { background: #f5f5f5; padding: 0 3px; }
+"""
+
+
+def summary_html(markdown_text: str, title: str = "armpath report") -> str:
+    """The report as a standalone HTML page (figures linked beside it)."""
+    from markdown_it import MarkdownIt
+
+    body = MarkdownIt("commonmark").enable("table").render(markdown_text)
+    return (
+        "<!doctype html>\n<html><head><meta charset='utf-8'>"
+        f"<title>{html.escape(title)}</title><style>{CSS}</style></head>\n"
+        f"<body>\n{body}</body></html>\n"
+    )

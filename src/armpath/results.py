@@ -1,0 +1,135 @@
+"""Reading result JSON documents back (``armpath reach/trace/spotweld/plan/run`` output), for
+replays and animations: the arm and scene they were planned in, and every lattice state."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.commands import CommandSequence, ticks_to_rad
+from armpath.errors import InvalidInputError
+from armpath.kinematics import tool_position
+from armpath.model.seed_arm import SeedArmGeometry, seed_arm
+from armpath.model.serial_arm import SerialArm
+from armpath.scenes import Scene, load_scene
+
+FloatArray = NDArray[np.float64]
+RESULT_TASKS = ("reach", "trace", "spotweld", "plan")
+
+
+@dataclass(frozen=True)
+class PlannedResult:
+    """A result document with what it needs to be replayed: the arm, the scene, the command
+    sequence, the targets (``(K, 3)`` mm; empty if none) and the curve (``(M, 3)`` mm, trace
+    results only)."""
+
+    path: Path
+    task: str
+    doc: dict[str, Any]
+    arm: SerialArm
+    scene: Scene
+    sequence: CommandSequence
+    targets_mm: FloatArray
+    curve_mm: FloatArray | None
+
+    @property
+    def states_rad(self) -> FloatArray:
+        """Joint angles after each command, ``(n_commands + 1, 6)`` rad."""
+        return ticks_to_rad(self.sequence.states())
+
+    @property
+    def tip_path_mm(self) -> FloatArray:
+        """Fingertip position after each command, ``(n_commands + 1, 3)`` mm."""
+        return tool_position(self.arm, self.states_rad)
+
+    def title(self) -> str:
+        n = self.sequence.n_commands
+        return f"{self.task}: {n} commands ({self.path.name})"
+
+
+def _arm(model: dict[str, Any]) -> SerialArm:
+    if model.get("name") != "seed":
+        raise InvalidInputError(
+            f"result documents of model {model.get('name')!r} cannot be replayed; only the seed "
+            "arm's"
+        )
+    p = model.get("parameters", {})
+    limits = model.get("joint_limits_deg") or [None] * 6
+    ranges = tuple(float("inf") if lim is None else float(lim[1]) for lim in limits)
+    try:
+        geometry = SeedArmGeometry(
+            ab_mm=float(p["AB_mm"]),
+            bc_mm=float(p["BC_mm"]),
+            cd_mm=float(p["CD_mm"]),
+            de_mm=float(p["DE_mm"]),
+            range_deg=ranges,  # type: ignore[arg-type]
+            link_radius_mm=float(p.get("link_radius_mm", 0.0)),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InvalidInputError(f"the result's model parameters are incomplete: {exc}") from None
+    return seed_arm(geometry)
+
+
+def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
+    if isinstance(scene, Scene):
+        return scene
+    if scene is not None:
+        return load_scene(scene)
+    described = doc.get("scene", {})
+    source = described.get("source", "")
+    wall = doc.get("wall_thickness") or described.get("wall_thickness")
+    if source == "built-in seed.toml":
+        loaded = load_scene(None)
+    elif source and Path(source).is_file():
+        loaded = load_scene(source)
+    else:
+        raise InvalidInputError(
+            f"the result was planned in scene {source!r}, which is not found here; give the "
+            "scene file (--scene)"
+        )
+    return loaded.with_wall_thickness(wall) if wall else loaded
+
+
+def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> PlannedResult:
+    """Read a result JSON document; its scene comes from ``scene`` or, if omitted, from the
+    source the document names (the built-in seed scene or a scene file that still exists)."""
+    p = Path(path)
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InvalidInputError(f"cannot read result file {p}: {exc.strerror}") from None
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"result file {p} is not valid JSON: {exc.msg}") from None
+    if not isinstance(doc, dict) or doc.get("task") not in RESULT_TASKS:
+        raise InvalidInputError(
+            f"result file {p}: expected an armpath result with task one of {RESULT_TASKS}"
+        )
+    try:
+        start = np.rint(np.asarray(doc["initial_deg"], dtype=float) * 10.0).astype(np.int64)
+        commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, 6)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None
+    arm = _arm(doc.get("model", {}))
+    sequence = CommandSequence(start, commands)
+    if "targets" in doc:
+        targets = np.asarray(doc["targets"], dtype=float).reshape(-1, 3)
+    elif doc.get("target") is not None:
+        targets = np.asarray(doc["target"], dtype=float).reshape(-1, 3)
+    else:
+        targets = np.zeros((0, 3))
+    curve = doc.get("curve", {}).get("points_mm")
+    return PlannedResult(
+        p,
+        str(doc["task"]),
+        doc,
+        arm,
+        _scene(doc, scene),
+        sequence,
+        targets,
+        None if curve is None else np.asarray(curve, dtype=float).reshape(-1, 3),
+    )

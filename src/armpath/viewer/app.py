@@ -1,0 +1,380 @@
+"""The interactive viewer: a viser server showing the arm in its scene.
+
+The page has one slider per joint (0.1 deg steps, within the joint's limits), a live readout of
+the fingertip position and the clearance (the violating parts turn red), a target-point input
+that runs the reach planner from the current pose, and a replay of any result (play, pause,
+step, timeline) with the fingertip's path and the result's curve and targets drawn.
+
+The scene is shown in metres (viser's unit); every number on the page is in mm and deg.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import threading
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.commands import CommandSequence
+from armpath.errors import ArmpathError, InvalidInputError
+from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import landmark_positions, tool_position
+from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.results import PlannedResult
+from armpath.scenes import Scene
+from armpath.trajectory.quantize import joint_ticks
+from armpath.viewer.meshes import obstacle_mesh
+
+FloatArray = NDArray[np.float64]
+MM = 1e-3  # display scale: mm -> m
+LINK_COLOR = (25, 80, 170)
+COLLISION_COLOR = (220, 30, 30)
+OBSTACLE_COLOR = (210, 180, 140)
+PATH_COLOR = (220, 60, 60)
+CURVE_COLOR = (255, 140, 0)
+TARGET_COLOR = (30, 160, 60)
+
+
+@dataclass
+class ViewerState:
+    """What the page shows: the joint state (ticks of 0.1 deg, or 0.1 mm for prismatic joints)
+    and its readouts (fingertip mm, smallest clearance mm and its pair, colliding parts)."""
+
+    ticks: NDArray[np.int64]
+    tip_mm: FloatArray = field(default_factory=lambda: np.zeros(3))
+    clearance_mm: float = float("inf")
+    closest: str = ""
+    colliding_parts: tuple[str, ...] = ()
+
+
+class ArmViewer:
+    """Serve the arm and scene on ``http://host:port``; see the module docstring."""
+
+    def __init__(
+        self,
+        arm: SerialArm,
+        scene: Scene,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        result: PlannedResult | None = None,
+        start_ticks: NDArray[np.int64] | None = None,
+    ) -> None:
+        import viser
+
+        self.arm = arm
+        self.scene = scene
+        self.world: CollisionWorld = scene.world
+        self._lock = threading.RLock()
+        self._updating = False
+        # viser prints a banner of its own; the CLI prints the address instead.
+        with contextlib.redirect_stdout(io.StringIO()):
+            self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server.scene.set_up_direction("+z")
+        pts = landmark_positions(arm, arm.home) * MM
+        size = max(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()), 0.2)
+        self.server.initial_camera.look_at = (0.0, 0.0, 0.3 * size)
+        self.server.initial_camera.position = (1.1 * size, -1.3 * size, 0.9 * size)
+        self._tick = joint_ticks(arm)  # rad per tick (revolute) or mm per tick (prismatic)
+        home = np.rint(arm.home / self._tick).astype(np.int64)
+        ticks = home if start_ticks is None else np.asarray(start_ticks, dtype=np.int64)
+        self.state = ViewerState(ticks=ticks)
+        self._parts = self.world.parts(arm)
+        self._pairs = self.world.pairs(arm)
+        self._draw_scene()
+        self._build_gui()
+        self._replay: CommandSequence | None = None
+        self._playing = False
+        self._player: threading.Thread | None = None
+        if result is not None:
+            self.load_replay(result)
+        self.set_ticks(ticks)
+
+    # --- scene -----------------------------------------------------------------------------
+
+    def _draw_scene(self) -> None:
+        scene = self.server.scene
+        reach = float(
+            sum(
+                np.linalg.norm(np.diff(landmark_positions(self.arm, self.arm.home), axis=0), axis=1)
+            )
+        )
+        for k, obstacle in enumerate(self.world.obstacles):
+            vertices, faces = obstacle_mesh(obstacle, np.zeros(3), 1.3 * reach)
+            is_plane = obstacle.__class__.__name__ == "HalfSpace"
+            scene.add_mesh_simple(
+                f"/obstacles/{k}_{obstacle.name}",
+                vertices * MM,
+                faces,
+                color=(200, 200, 200) if is_plane else OBSTACLE_COLOR,
+                opacity=0.35 if is_plane else 0.6,
+                side="double",
+            )
+        scene.add_frame("/base", axes_length=0.1, axes_radius=0.003)
+        thickness = max(2.0 * max((p.radius for p in self._parts), default=0.0), 18.0) * MM
+        n = len(self._parts)
+        self._links = scene.add_line_segments(
+            "/arm/links",
+            np.zeros((n, 2, 3)),
+            np.tile(np.array(LINK_COLOR, dtype=np.uint8), (n, 2, 1)),
+            thickness=thickness,
+        )
+        self._joints = scene.add_point_cloud(
+            "/arm/joints",
+            np.zeros((len(self.arm.landmarks), 3)),
+            (30, 30, 30),
+            point_size=1.3 * thickness,
+            point_shape="circle",
+        )
+        self._tip = scene.add_icosphere("/arm/tip", radius=6 * MM, color=(0, 0, 0))
+        self._path = scene.add_line_segments(
+            "/replay/path", np.zeros((1, 2, 3)), PATH_COLOR, thickness=3 * MM, visible=False
+        )
+        self._target_marker = scene.add_icosphere(
+            "/target", radius=8 * MM, color=TARGET_COLOR, visible=False
+        )
+
+    # --- gui -------------------------------------------------------------------------------
+
+    def _build_gui(self) -> None:
+        gui = self.server.gui
+        gui.configure_theme(control_width="large")
+        units = ["mm" if j.kind is JointKind.PRISMATIC else "deg" for j in self.arm.joints]
+        with gui.add_folder(f"Joints ({', '.join(sorted(set(units)))}; 0.1 steps)"):
+            self.sliders = []
+            for i, joint in enumerate(self.arm.joints):
+                prismatic = joint.kind is JointKind.PRISMATIC
+                if joint.is_limited:
+                    lo, hi = joint.limits if prismatic else np.degrees(joint.limits)
+                else:
+                    lo, hi = (-1000.0, 1000.0) if prismatic else (-180.0, 180.0)
+                lo, hi = np.ceil(lo * 10) / 10, np.floor(hi * 10) / 10
+                slider = gui.add_slider(
+                    f"{'d' if prismatic else 'θ'}{i + 1} [{units[i]}]",
+                    min=float(lo),
+                    max=float(hi),
+                    step=0.1,
+                    initial_value=float(np.clip(self.state.ticks[i] / 10, lo, hi)),
+                )
+                slider.on_update(lambda _event: self._on_slider())
+                self.sliders.append(slider)
+        self.readout = gui.add_markdown("")
+        with gui.add_folder("Reach a point (mm)"):
+            self.target_input = gui.add_vector3("target", (300.0, -170.0, 15.0), step=1.0)
+            self.reach_button = gui.add_button("Plan reach from here")
+            self.reach_status = gui.add_markdown("")
+            self.reach_button.on_click(lambda _event: self._on_reach())
+        with gui.add_folder("Replay"):
+            self.replay_info = gui.add_markdown("no result loaded")
+            self.timeline = gui.add_slider("command", min=0, max=1, step=1, initial_value=0)
+            self.timeline.on_update(lambda _event: self._on_timeline())
+            self.play_buttons = gui.add_button_group("", ("◀ step", "play", "pause", "step ▶"))
+            self.play_buttons.on_click(lambda event: self._on_play_button(event.target.value))
+            self.speed = gui.add_slider("commands / s", min=1, max=60, step=1, initial_value=15)
+
+    # --- state -----------------------------------------------------------------------------
+
+    def set_ticks(self, ticks: NDArray[np.int64]) -> ViewerState:
+        """Show the arm at ``ticks`` (0.1 deg, or 0.1 mm, per tick); updates the sliders and
+        readouts."""
+        with self._lock:
+            ticks = np.asarray(ticks, dtype=np.int64)
+            q = ticks * self._tick
+            pts = landmark_positions(self.arm, q)
+            p0, p1 = self.world.part_segments(self.arm, q)
+            values, _ = self.world.pair_clearances(self.arm, q)
+            required = np.array([p.required for p in self._pairs])
+            slack = values - required
+            n_obs = len(self.world.obstacles)
+            part_slack = slack[: len(self._parts) * n_obs].reshape(len(self._parts), n_obs)
+            colliding = tuple(
+                part.name
+                for part, s in zip(self._parts, part_slack.min(axis=1), strict=True)
+                if s < 0
+            )
+            k = int(np.argmin(slack)) if slack.size else -1
+            tip = tool_position(self.arm, q)
+            self.state = ViewerState(
+                ticks=ticks,
+                tip_mm=tip,
+                clearance_mm=float(values[k]) if k >= 0 else float("inf"),
+                closest=self._pairs[k].label if k >= 0 else "",
+                colliding_parts=colliding,
+            )
+            colors = np.array(
+                [COLLISION_COLOR if p.name in colliding else LINK_COLOR for p in self._parts],
+                dtype=np.uint8,
+            )
+            with self.server.atomic():
+                self._links.points = (np.stack([p0, p1], axis=1) * MM).astype(np.float32)
+                self._links.colors = np.repeat(colors[:, None, :], 2, axis=1)
+                self._joints.points = (pts * MM).astype(np.float32)
+                self._tip.position = tuple(tip * MM)
+                self._updating = True
+                try:
+                    for slider, t in zip(self.sliders, ticks, strict=True):
+                        value = round(float(t) / 10, 1)
+                        if slider.value != value:
+                            slider.value = value  # type: ignore[misc]
+                finally:
+                    self._updating = False
+                self.readout.content = self._readout_text()
+            return self.state
+
+    def _readout_text(self) -> str:
+        s = self.state
+        x, y, z = s.tip_mm
+        status = (
+            f"**collision**: {', '.join(s.colliding_parts)}"
+            if s.colliding_parts
+            else "no collision"
+        )
+        return (
+            f"**Fingertip** x = {x:.2f}, y = {y:.2f}, z = {z:.2f} mm  \n"
+            f"**Clearance** {s.clearance_mm:.2f} mm ({s.closest})  \n{status}"
+        )
+
+    def _on_slider(self) -> None:
+        if self._updating:
+            return
+        ticks = np.array([round(s.value * 10) for s in self.sliders], dtype=np.int64)
+        self.set_ticks(ticks)
+
+    # --- reach -----------------------------------------------------------------------------
+
+    def _on_reach(self) -> None:
+        from armpath.planning.reach import ReachOptions, plan_reach
+
+        target = np.array(self.target_input.value, dtype=float)
+        self._target_marker.position = tuple(target * MM)
+        self._target_marker.visible = True
+        self.reach_status.content = f"planning to {np.round(target, 1).tolist()} mm ..."
+        self.reach_button.disabled = True
+        try:
+            result = plan_reach(
+                self.arm, self.world, self.state.ticks, target, ReachOptions(tolerance_mm=0.05)
+            )
+        except ArmpathError as exc:
+            self.reach_status.content = f"**not reached**: {exc}"
+            return
+        finally:
+            self.reach_button.disabled = False
+        self.reach_status.content = (
+            f"{result.n_commands} commands, error {result.error_mm:.4f} mm, "
+            f"min clearance {result.clearance.min_clearance:.2f} mm"
+        )
+        self._start_replay(
+            result.sequence,
+            f"reach {np.round(target, 1).tolist()} mm: {result.n_commands} commands",
+        )
+
+    # --- replay ----------------------------------------------------------------------------
+
+    def load_replay(self, result: PlannedResult) -> None:
+        """Replay a result document: its commands, fingertip path, curve and targets."""
+        if result.curve_mm is not None and len(result.curve_mm) > 1:
+            c = result.curve_mm * MM
+            self.server.scene.add_line_segments(
+                "/replay/curve", np.stack([c[:-1], c[1:]], axis=1), CURVE_COLOR, thickness=2 * MM
+            )
+        for k, p in enumerate(result.targets_mm):
+            self.server.scene.add_icosphere(
+                f"/replay/targets/{k}", radius=6 * MM, color=TARGET_COLOR, position=tuple(p * MM)
+            )
+        self._start_replay(result.sequence, result.title())
+
+    def _start_replay(self, seq: CommandSequence, title: str) -> None:
+        self._playing = False
+        self._replay = seq
+        tip = tool_position(self.arm, seq.sample_motion(4)) * MM
+        segments = np.stack([tip[:-1], tip[1:]], axis=1) if len(tip) > 1 else np.zeros((1, 2, 3))
+        self._path.points = segments.astype(np.float32)
+        self._path.visible = True
+        self.timeline.max = max(seq.n_commands, 1)
+        self.timeline.value = 0  # type: ignore[misc]
+        self.replay_info.content = f"**{title}**"
+        self.show_command(0)
+
+    def show_command(self, k: int) -> None:
+        """Show the state after command ``k`` of the replayed sequence (0: the start)."""
+        if self._replay is None:
+            raise InvalidInputError("no replay loaded")
+        states = self._replay.states()
+        k = int(np.clip(k, 0, len(states) - 1))
+        self.set_ticks(states[k])
+        if self.timeline.value != k:
+            self._updating = True
+            try:
+                self.timeline.value = k  # type: ignore[misc]
+            finally:
+                self._updating = False
+
+    def _on_timeline(self) -> None:
+        if self._updating or self._replay is None:
+            return
+        self.show_command(int(self.timeline.value))
+
+    def _on_play_button(self, label: str) -> None:
+        if self._replay is None:
+            return
+        k = int(self.timeline.value)
+        if label.startswith("◀"):
+            self._playing = False
+            self.show_command(k - 1)
+        elif label.endswith("▶"):
+            self._playing = False
+            self.show_command(k + 1)
+        elif label == "pause":
+            self._playing = False
+        elif label == "play" and not self._playing:
+            self._playing = True
+            if k >= self._replay.n_commands:
+                self.show_command(0)
+            self._player = threading.Thread(target=self._play, daemon=True)
+            self._player.start()
+
+    def _play(self) -> None:
+        while self._playing and self._replay is not None:
+            k = int(self.timeline.value) + 1
+            if k > self._replay.n_commands:
+                self._playing = False
+                break
+            self.show_command(k)
+            time.sleep(1.0 / max(float(self.speed.value), 1.0))
+
+    def stop(self) -> None:
+        self._playing = False
+        with contextlib.redirect_stdout(io.StringIO()):
+            self.server.stop()
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A TCP port nothing listens on right now."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+def replay_html(result: PlannedResult, *, fps: float = 15.0, max_frames: int = 600) -> str:
+    """A self-contained HTML page (viser's client with the recording embedded) that replays
+    ``result``: the scene, the curve and targets, the fingertip's path and the arm moving through
+    the commands at ``fps`` commands per second (at most ``max_frames`` states, evenly spread)."""
+    if not fps > 0:
+        raise InvalidInputError(f"fps must be > 0, got {fps}")
+    viewer = ArmViewer(result.arm, result.scene, port=free_port(), result=result)
+    try:
+        states = result.sequence.states()
+        idx = np.unique(np.linspace(0, len(states) - 1, min(len(states), max_frames)).round())
+        serializer = viewer.server.get_scene_serializer()
+        for k in idx.astype(int):
+            viewer.show_command(k)
+            serializer.insert_sleep(1.0 / fps)
+        return str(serializer.as_html())
+    finally:
+        viewer.stop()
