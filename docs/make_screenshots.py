@@ -15,7 +15,7 @@ from pathlib import Path
 from playwright.sync_api import sync_playwright
 
 from armpath.results import load_result
-from armpath.viewer.app import ArmViewer, free_port
+from armpath.viewer.app import HEADLESS_CHROMIUM_ARGS, ArmViewer, free_port
 
 OUT = Path(__file__).resolve().parent / "viewer.png"
 
@@ -32,14 +32,7 @@ def main(result_path: str, command: int = 40) -> int:
         with sync_playwright() as p:
             browser = p.chromium.launch(
                 executable_path=chromium,
-                args=[
-                    "--no-sandbox",
-                    "--disable-gpu",
-                    "--disable-background-networking",
-                    "--disable-component-update",
-                    "--disable-sync",
-                    "--no-first-run",
-                ],
+                args=list(HEADLESS_CHROMIUM_ARGS),
             )
             page = browser.new_page(viewport={"width": 1280, "height": 760})
             page.goto(f"http://127.0.0.1:{port}")

@@ -18,7 +18,7 @@ from armpath.geometry.primitives import Box, Capsule, cone_frustum
 from armpath.model.seed_arm import seed_arm
 from armpath.results import load_result
 from armpath.scenes import seed_scene
-from armpath.viewer.app import ArmViewer, free_port, replay_html
+from armpath.viewer.app import HEADLESS_CHROMIUM_ARGS, ArmViewer, free_port, replay_html
 from armpath.viewer.meshes import box_mesh, capsule_mesh, revolve, sphere_mesh
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -183,14 +183,7 @@ def test_viewer_in_headless_chromium(seed_run, tmp_path):
         with sync_api.sync_playwright() as p:
             browser = p.chromium.launch(
                 executable_path=CHROMIUM,
-                args=[
-                    "--no-sandbox",
-                    "--disable-gpu",
-                    "--disable-background-networking",
-                    "--disable-component-update",
-                    "--disable-sync",
-                    "--no-first-run",
-                ],
+                args=list(HEADLESS_CHROMIUM_ARGS),
             )
             page = browser.new_page(viewport={"width": 1280, "height": 800})
             deadline = time.time() + 60
@@ -237,17 +230,26 @@ def test_viewer_in_headless_chromium(seed_run, tmp_path):
             assert np.allclose(_readout_tip(page.inner_text("body")), expected, atol=0.006)
             shot = tmp_path / "viewer.png"
             page.screenshot(path=str(shot))
+            # The exported replay plays offline from the file alone.
+            html = tmp_path / "replay.html"
+            html.write_text(replay_html(result, fps=30.0, max_frames=60))
+            offline = browser.new_page(viewport={"width": 1280, "height": 800})
+            offline.goto(html.as_uri())
+            offline.wait_for_timeout(6000)
+            replay_shot = tmp_path / "replay.png"
+            offline.screenshot(path=str(replay_shot))
             browser.close()
         from PIL import Image
 
-        img = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
-        assert img.shape == (800, 1280, 3)
-        # The 3-D view (left of the panel, below the notification) shows the workpiece (tan),
-        # the fingertip path (red) and the arm's links (blue).
-        r, g, b = (img[150:, :850, k] for k in range(3))
-        assert ((r - b > 35) & (r > 150) & (g > 120) & (r > g)).sum() > 2000
-        assert ((r > 180) & (g < 130) & (b < 130)).sum() > 200
-        assert (b - r > 60).sum() > 300
+        for picture in (shot, replay_shot):
+            img = np.asarray(Image.open(picture).convert("RGB"), dtype=int)
+            assert img.shape == (800, 1280, 3)
+            # The 3-D view (left of the panel, below the notification) shows the workpiece
+            # (tan), the fingertip path (red) and the arm's links (blue).
+            r, g, b = (img[150:700, :850, k] for k in range(3))
+            assert ((r - b > 35) & (r > 150) & (g > 120) & (r > g)).sum() > 2000, picture
+            assert ((r > 180) & (g < 130) & (b < 130)).sum() > 200, picture
+            assert (b - r > 60).sum() > 300, picture
     finally:
         server.terminate()
         server.wait(timeout=30)

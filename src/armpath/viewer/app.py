@@ -37,6 +37,16 @@ OBSTACLE_COLOR = (210, 180, 140)
 PATH_COLOR = (220, 60, 60)
 CURVE_COLOR = (255, 140, 0)
 TARGET_COLOR = (30, 160, 60)
+#: Flags for Debian's Chromium run headless on a machine without outside network (the browser
+#: test and docs/make_screenshots.py): no sandbox as root, no GPU, no background connections.
+HEADLESS_CHROMIUM_ARGS = (
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+)
 
 
 @dataclass
