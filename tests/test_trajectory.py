@@ -549,7 +549,7 @@ def test_cli_rcm_writes_the_rotation_and_its_commands(tmp_path):
     states = np.rint(q_show[0] / 0.1) + np.vstack([np.zeros(6), np.cumsum(cmds, axis=0)])
     assert np.abs(states * 0.1 - q_show).max() <= 0.05 + 1e-6
     gif = Image.open(out / "rcm.gif")
-    assert gif.n_frames == 96 and gif.size[0] >= 400
+    assert gif.n_frames == 64 and gif.size[0] >= 400
     assert (out / "rcm_tip_deviation.png").stat().st_size > 20_000
     assert "largest tip deviation, smooth trajectory" in proc.stdout
     bad = subprocess.run(

@@ -109,7 +109,7 @@ def _animate_into(
         write_animation(
             folder.file(f"{stem}.gif"),
             sequence_animation(arm, scene, seq, title, targets, curve),
-            max_frames=96,
+            max_frames=64,
         )
 
 
@@ -1608,7 +1608,7 @@ def rcm(
                                 ),
                                 caption=lambda k: f"tip off the point {smooth_dev[k]:6.2f} mm",
                             ),
-                            max_frames=96,
+                            max_frames=64,
                         )
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)

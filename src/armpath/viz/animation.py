@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 from matplotlib.artist import Artist
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
 
@@ -145,6 +146,8 @@ def write_animation(
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(4))  # fewer labels: each is redrawn every frame
     ax.view_init(elev=22, azim=-60)
     (arm_line,) = ax.plot([], [], [], "-o", color="tab:blue", lw=2.5, ms=4, label="arm")
     (trail,) = ax.plot([], [], [], color="tab:red", lw=1.2, label="fingertip path")
