@@ -1,0 +1,184 @@
+"""What every ``armpath`` command shares: the typer app, the consoles, option types, error
+handling and the small parsing and formatting helpers (deg / mm on the command line)."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich.console import Console
+
+from armpath.commands import CommandSequence
+from armpath.errors import ArmpathError, InvalidInputError
+from armpath.export import (
+    OutputFolder,
+)
+from armpath.model.seed_arm import SeedArmGeometry, seed_arm
+from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.motion import Objective
+from armpath.scenes import Scene, load_scene
+
+app = typer.Typer(
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    no_args_is_help=True,
+    help=(
+        "Motion design for serial arms driven by quantized joint commands "
+        "(0.1 deg ticks, at most 2 deg per joint per command). Angles in deg, lengths in mm."
+    ),
+)
+out_console = Console(highlight=False)
+err_console = Console(stderr=True, highlight=False)
+
+LOOSE = {"ignore_unknown_options": True}  # lets negative numbers through as arguments
+
+WallOption = Annotated[
+    str | None, typer.Option(help="Workpiece wall thickness measured 'normal' or 'horizontal'.")
+]
+LinkRadiusOption = Annotated[
+    float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
+]
+SceneOption = Annotated[
+    Path | None,
+    typer.Option("--scene", help="Scene file (TOML or YAML). Default: the seed scene."),
+]
+ObjectiveOption = Annotated[
+    Objective,
+    typer.Option(
+        help="What to minimise: number of commands, fingertip path length, or weighted joint "
+        "travel (energy). Every plan reports all three."
+    ),
+]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result JSON on stdout.")]
+AnimateOption = Annotated[
+    bool,
+    typer.Option(
+        "--animate", help="Also write an animation of the motion (<task>.gif) into --out."
+    ),
+]
+
+
+def _animate_into(
+    folder: OutputFolder,
+    stem: str,
+    arm: SerialArm,
+    scene: Scene,
+    seq: CommandSequence,
+    title: str,
+    targets: np.ndarray | None = None,
+    curve: np.ndarray | None = None,
+) -> None:
+    """Write ``stem.gif``: the arm through the commands, the targets and the curve."""
+    from armpath.viz.animation import sequence_animation, write_animation
+
+    with err_console.status(f"animating {stem} ..."):
+        write_animation(
+            folder.file(f"{stem}.gif"),
+            sequence_animation(arm, scene, seq, title, targets, curve),
+            max_frames=64,
+        )
+
+
+def _animate_needs_out(animate: bool, out: Path | None) -> None:
+    if animate and out is None:
+        raise InvalidInputError("--animate needs --out FOLDER to write the GIF into")
+
+
+SeedOption = Annotated[int, typer.Option(help="Random seed of the planner (same seed, same plan).")]
+
+
+@contextlib.contextmanager
+def _cli_errors() -> Iterator[None]:
+    """Turn armpath's errors into a one-line message and exit status 1."""
+    try:
+        yield
+    except ArmpathError as exc:
+        err_console.print(f"error: {exc}", markup=False, soft_wrap=True)
+        raise typer.Exit(1) from None
+
+
+def _numbers(values: list[str], count: int, what: str) -> list[float]:
+    if len(values) != count:
+        raise InvalidInputError(f"{what}: expected {count} numbers, got {len(values)}: {values}")
+    out = []
+    for v in values:
+        try:
+            x = float(v)
+        except ValueError:
+            raise InvalidInputError(f"{what}: {v!r} is not a number") from None
+        if not math.isfinite(x):
+            raise InvalidInputError(f"{what}: {v!r} is not a finite number")
+        out.append(x)
+    return out
+
+
+def _scene(scene_file: Path | None, wall: str | None) -> Scene:
+    scene = load_scene(scene_file)
+    return scene.with_wall_thickness(wall) if wall else scene
+
+
+def _arm(link_radius_mm: float) -> SerialArm:
+    if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
+        raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
+    return seed_arm(SeedArmGeometry(link_radius_mm=link_radius_mm))
+
+
+def _fmt(v: Any, digits: int = 4) -> str:
+    return "(" + ", ".join(f"{x:.{digits}f}" for x in np.asarray(v, dtype=float)) + ")"
+
+
+ModelOption = Annotated[
+    str,
+    typer.Option(
+        "--model",
+        help="Built-in model (seed, welder003, painter004, puma560, ur5) or a robot file "
+        "(.json D-H table or .urdf).",
+    ),
+]
+
+
+PeriodOption = Annotated[float, typer.Option(help="Controller period, s (one command each).")]
+
+
+def _joint_units(arm: SerialArm) -> list[str]:
+    return ["mm" if j.kind is JointKind.PRISMATIC else "deg" for j in arm.joints]
+
+
+def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
+    """Joint values for output: deg for revolute joints, mm for prismatic ones."""
+    out = np.array(q, dtype=float, copy=True)
+    for i, j in enumerate(arm.joints):
+        if j.kind is JointKind.REVOLUTE:
+            out[..., i] = np.degrees(out[..., i])
+    return out
+
+
+def _from_display(arm: SerialArm, values: list[float]) -> np.ndarray:
+    q = np.array(values, dtype=float)
+    for i, j in enumerate(arm.joints):
+        if j.kind is JointKind.REVOLUTE:
+            q[i] = np.radians(q[i])
+    return q
+
+
+def _commands_csv(sequence: Any) -> str:
+    """``step, d1..dn`` in ticks, one row per command."""
+    cmds = sequence.commands
+    return _csv_rows(
+        ["step"] + [f"d{j + 1}_ticks" for j in range(cmds.shape[1])],
+        np.column_stack([np.arange(1, len(cmds) + 1), cmds]),
+        "{:d}",
+    )
+
+
+def _csv_rows(header: list[str], rows: np.ndarray, fmt: str = "{:.6f}") -> str:
+    return (
+        ",".join(header)
+        + "\n"
+        + "".join(",".join(fmt.format(v) for v in row) + "\n" for row in rows)
+    )

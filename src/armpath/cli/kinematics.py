@@ -1,0 +1,205 @@
+"""``armpath fk`` and ``armpath ik``: forward and inverse kinematics of any model."""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich import box
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from armpath.cli.common import (
+    LOOSE,
+    JsonOption,
+    ModelOption,
+    _cli_errors,
+    _fmt,
+    _from_display,
+    _joint_units,
+    _numbers,
+    _to_display,
+    app,
+    err_console,
+    out_console,
+)
+from armpath.errors import ArmpathError, InvalidInputError
+from armpath.ik import solve_ik
+from armpath.kinematics import landmark_positions, tool_pose
+from armpath.model.catalog import resolve_model
+
+
+@app.command(context_settings=LOOSE)
+def fk(
+    angles: Annotated[
+        list[str],
+        typer.Argument(
+            help="Joint values: deg for revolute joints, mm for prismatic ones",
+            show_default=False,
+            metavar="q1 … qn",
+        ),
+    ],
+    model: ModelOption = "seed",
+    json_out: Annotated[bool, typer.Option("--json", help="Print JSON on stdout.")] = False,
+) -> None:
+    """Forward kinematics: the arm's joint points and the tool pose (mm, deg).
+
+    For the seed arm the points are A–E and the fingertip; for other models the joint frame
+    origins and the tool frame (4x4 pose, row-major).
+    """
+    with _cli_errors():
+        arm = resolve_model(model)
+        units = _joint_units(arm)
+        what = f"joint values q1 … q{arm.n_joints} ({', '.join(units)})"
+        q = _from_display(arm, _numbers(angles, arm.n_joints, what))
+        pts = landmark_positions(arm, q)
+        pose = tool_pose(arm, q)
+        names = arm.landmark_names
+        if json_out:
+            doc = {
+                "model": arm.name,
+                "joints": [float(v) for v in _to_display(arm, q)],
+                "points": {n: [float(c) for c in p] for n, p in zip(names, pts, strict=True)},
+                "tip": [float(c) for c in pose[:3, 3]],
+                "pose": [[float(c) for c in row] for row in pose],
+                "units": {"length": "mm", "angle": "deg", "joints": units},
+            }
+            typer.echo(json.dumps(doc))
+        else:
+            shown = _fmt(_to_display(arm, q), 1)
+            table = Table(title=f"{arm.name}, q = {shown} ({', '.join(sorted(set(units)))})")
+            for col in ("point", "x [mm]", "y [mm]", "z [mm]"):
+                table.add_column(escape(col), justify="right")
+            for n, p in zip(names, pts, strict=True):
+                table.add_row(n, *(f"{c:.4f}" for c in p))
+            if arm.name == "seed":
+                table.add_row("tip", *(f"{c:.4f}" for c in pts[-1]))
+            out_console.print(table)
+            if arm.name != "seed":
+                rows = "\n".join("  " + "  ".join(f"{c:11.6f}" for c in r) for r in pose)
+                out_console.print(f"tool pose (rotation | position mm):\n{rows}")
+        warnings = []
+        try:
+            arm.check_limits(q, what="pose")
+        except ArmpathError as exc:
+            warnings.append(str(exc))
+        if arm.name == "seed" and np.min(pts[1:, 2]) < 0:
+            warnings.append("part of the arm is below the table (z < 0)")
+        for w in warnings:
+            err_console.print(f"warning: {w}", markup=False, soft_wrap=True)
+
+
+def _pose_argument(text: str) -> np.ndarray:
+    values = _numbers(text.replace(",", " ").split(), 16, "--pose (row-major 4x4)")
+    T = np.array(values).reshape(4, 4)
+    if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+        raise InvalidInputError(f"--pose: the last row must be 0 0 0 1, got {T[3].tolist()}")
+    R = T[:3, :3]
+    err = float(np.abs(R @ R.T - np.eye(3)).max())
+    if err > 1e-4 or np.linalg.det(R) < 0:
+        raise InvalidInputError(
+            f"--pose: the upper-left 3x3 block is not a rotation (|R R^T - I| = {err:.2g})"
+        )
+    U, _, Vt = np.linalg.svd(R)
+    T[:3, :3] = U @ Vt  # nearest rotation: poses are often printed to a few digits
+    return T
+
+
+@app.command(context_settings=LOOSE)
+def ik(
+    model: ModelOption = "seed",
+    pose: Annotated[
+        str | None,
+        typer.Option(help="Target tool pose: 16 numbers, row-major 4x4, lengths mm."),
+    ] = None,
+    xyz: Annotated[
+        tuple[float, float, float] | None,
+        typer.Option(help="Target tool position only, mm (numerical solver)."),
+    ] = None,
+    method: Annotated[
+        str,
+        typer.Option(
+            help="auto, spherical-wrist, three-parallel, general (Raghavan-Roth) or numerical."
+        ),
+    ] = "auto",
+    seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver.")] = 48,
+    json_out: JsonOption = False,
+) -> None:
+    """Inverse kinematics: every solution for a tool pose (or position), deg / mm.
+
+    Complete methods return every real solution: closed form for arms with a spherical wrist
+    or three parallel axes (UR type), Raghavan-Roth elimination for any other 6R arm. Each
+    solution carries its forward-kinematics residual. Exit status 1 if there is no solution.
+    """
+    with _cli_errors():
+        if (pose is None) == (xyz is None):
+            raise InvalidInputError("give exactly one target: --pose '16 numbers' or --xyz X Y Z")
+        if seeds < 1:
+            raise InvalidInputError(f"--seeds must be >= 1, got {seeds}")
+        arm = resolve_model(model)
+        if pose is not None:
+            target = _pose_argument(pose)
+            result = solve_ik(arm, target, method=method, seeds=seeds)
+        else:
+            assert xyz is not None
+            target = np.array(_numbers([str(v) for v in xyz], 3, "--xyz"))
+            result = solve_ik(arm, target, position_only=True, seeds=seeds)
+        units = _joint_units(arm)
+        sols = _to_display(arm, result.solutions)
+        inside: Any = result.within_limits if result.within_limits is not None else []
+        doc = {
+            "model": arm.name,
+            "method": result.method,
+            "target": (
+                {"pose": [[float(c) for c in r] for r in target]}
+                if pose is not None
+                else {"position": [float(c) for c in target]}
+            ),
+            "count": result.count,
+            "solutions": [[float(v) for v in s] for s in sols],
+            "residuals": [
+                {"position_mm": float(p), "rotation_deg": float(np.degrees(r))}
+                for p, r in zip(result.position_residual, result.rotation_residual_rad, strict=True)
+            ],
+            "within_limits": [bool(v) for v in inside],
+            "near_double": [bool(v) for v in result.near_double],
+            "near_singular": [bool(v) for v in result.near_singular],
+            "reason": result.reason,
+            "units": {"length": "mm", "angle": "deg", "joints": units},
+        }
+        if json_out:
+            typer.echo(json.dumps(doc))
+        else:
+            unit_note = ", ".join(f"q{i + 1} {u}" for i, u in enumerate(units) if u != "deg")
+            table = Table(
+                title=escape(
+                    f"{arm.name}: {result.count} solution(s), {result.method}; angles deg"
+                    + (f", {unit_note}" if unit_note else "")
+                ),
+                box=box.SIMPLE_HEAD,
+            )
+            table.add_column("#", justify="right")
+            for i in range(arm.n_joints):
+                table.add_column(f"q{i + 1}", justify="right")
+            table.add_column("resid. mm", justify="right")
+            table.add_column("notes")
+            for k, s in enumerate(sols):
+                notes = []
+                if len(inside) and not inside[k]:
+                    notes.append("off limits")
+                if result.near_double[k]:
+                    notes.append("near-double")
+                if result.near_singular[k]:
+                    notes.append("near-singular")
+                table.add_row(
+                    str(k + 1),
+                    *(f"{v:.4f}" for v in s),
+                    f"{result.position_residual[k]:.0e}",
+                    ", ".join(notes),
+                )
+            Console(highlight=False, width=max(out_console.width, 120)).print(table)
+        if result.count == 0:
+            raise InvalidInputError(f"no solution ({result.method}): {result.reason}")

@@ -1,0 +1,660 @@
+"""The planning commands: ``reach``, ``plan``, ``spotweld``, ``trace``, and ``run`` (the seed
+scene's three tasks, the blind zones and the report)."""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from armpath import __version__
+from armpath.cli.common import (
+    LOOSE,
+    AnimateOption,
+    JsonOption,
+    LinkRadiusOption,
+    ObjectiveOption,
+    SceneOption,
+    SeedOption,
+    WallOption,
+    _animate_into,
+    _animate_needs_out,
+    _arm,
+    _cli_errors,
+    _fmt,
+    _numbers,
+    _scene,
+    app,
+    err_console,
+    out_console,
+)
+from armpath.commands import deg_to_ticks, ticks_to_deg
+from armpath.errors import InvalidInputError
+from armpath.export import (
+    OutputFolder,
+    json_text,
+    output_folder,
+    plan_result_dict,
+    reach_result_dict,
+    tour_result_dict,
+    trace_result_dict,
+    write_reach_files,
+    write_sequence_files,
+)
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.motion import MotionOptions, MotionPlan, Objective, plan_motion
+from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
+from armpath.planning.tour import TourResult
+from armpath.planning.trace import TraceOptions, TraceResult
+from armpath.report import passes_text, summary_html, summary_markdown
+from armpath.scenes import Scene
+from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
+
+
+def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
+    seq = result.sequence
+    lb = result.lower_bound
+    c = result.clearance
+    table = Table(title="reach", show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    table.add_row("target", f"{_fmt(result.target_mm, 3)} mm")
+    table.add_row("start", f"{_fmt(ticks_to_deg(seq.start_ticks), 1)} deg")
+    proof = "provably fewest" if result.is_provably_fewest else "not proven fewest"
+    table.add_row("commands", f"{result.n_commands}  (lower bound {lb.commands}: {proof})")
+    if result.method != "direct":
+        table.add_row("method", f"{result.method} (every direct motion is blocked)")
+    table.add_row(
+        "fingertip error", f"{result.error_mm:.4f} mm  (tolerance {result.tolerance_mm} mm)"
+    )
+    table.add_row("final joints", f"{_fmt(ticks_to_deg(seq.final_ticks), 1)} deg")
+    table.add_row("fingertip", f"{_fmt(result.tip_mm, 4)} mm")
+    table.add_row(
+        "largest joint change",
+        f"{np.abs(seq.final_ticks - seq.start_ticks).max() / 10:.1f} deg "
+        f"(least possible {lb.max_joint_change_deg:.3f} deg)",
+    )
+    where = "start state" if c.worst_command == 0 else f"command {c.worst_command}"
+    table.add_row(
+        "min clearance",
+        f"{c.min_clearance:.3f} mm  ({c.worst_part} to {c.worst_obstacle}, {where}; whole "
+        f"continuous motion, proven >= {c.min_clearance_lower_bound:.3f} mm)",
+    )
+    wall = scene.wall_thickness
+    table.add_row("scene", f"{scene.name}; wall thickness measured {wall.value if wall else '-'}")
+    return table
+
+
+def _write_reach(
+    folder: OutputFolder,
+    stem: str,
+    result: ReachResult,
+    arm: SerialArm,
+    scene: Scene,
+    animate: bool = False,
+) -> None:
+    from armpath.viz.figures import plot_joint_angles, plot_motion_3d
+
+    write_reach_files(folder, stem, result, arm, scene)
+    title = (
+        f"reach {_fmt(result.target_mm, 0)} mm: {result.n_commands} commands, "
+        f"error {result.error_mm:.4f} mm"
+    )
+    plot_motion_3d(
+        folder.file(f"{stem}_motion.png"), arm, scene, result.sequence, result.target_mm, title
+    )
+    plot_joint_angles(folder.file(f"{stem}_joints.png"), result.sequence, title)
+    if animate:
+        _animate_into(folder, stem, arm, scene, result.sequence, title, result.target_mm)
+
+
+@app.command(context_settings=LOOSE)
+def reach(
+    target: Annotated[
+        list[str],
+        typer.Argument(help="X Y Z of the target in mm", show_default=False, metavar="X Y Z"),
+    ],
+    start: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option(
+            "--from",
+            help="Start joint angles θ1 … θ6 in deg (multiples of 0.1). "
+            "Default: the arm's initial pose (0 -90 0 0 -90 0).",
+        ),
+    ] = None,
+    json_out: JsonOption = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write reach.json, reach.csv, reach.xlsx and PNG figures here."),
+    ] = None,
+    tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
+    wall: WallOption = None,
+    scene_file: SceneOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    animate: AnimateOption = False,
+) -> None:
+    """Reach a point with the fingertip in the fewest commands, then the smallest error.
+
+    When every direct motion is blocked, the motion is planned around the obstacles instead
+    (the summary's method says so).
+    """
+    with _cli_errors():
+        arm = _arm(link_radius)
+        xyz = _numbers(target, 3, "target X Y Z (mm)")
+        theta = list(start) if start is not None else list(np.degrees(arm.home))
+        start_ticks = deg_to_ticks(
+            _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
+        )
+        options = ReachOptions(tolerance_mm=tolerance)
+        _animate_needs_out(animate, out)
+        scene = _scene(scene_file, wall)
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            result = plan_reach(arm, scene.world, start_ticks, xyz, options)
+            if folder is not None:
+                _write_reach(folder, "reach", result, arm, scene, animate)
+        written = folder.written if folder is not None else []
+        if json_out:
+            typer.echo(json_text(reach_result_dict(result, arm, scene)), nl=False)
+        else:
+            out_console.print(_reach_summary(result, arm, scene))
+            for path in written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+def _plan_summary(doc: dict[str, Any], title: str) -> Table:
+    table = Table(title=title, show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    m = doc["metrics"]
+    table.add_row(
+        "commands", f"{doc['n_commands']}  (direct-motion bound {doc['lower_bound_commands']})"
+    )
+    if "error_mm" in doc:
+        table.add_row(
+            "fingertip error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
+        )
+    table.add_row("method", str(doc["method"]))
+    table.add_row(
+        "objectives",
+        f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
+        f"joint travel {m['energy_deg']:.1f} deg (objective: {doc['objective']})",
+    )
+    table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} deg")
+    c = doc["clearance"]
+    table.add_row(
+        "min clearance",
+        f"{c['min_clearance_mm']:.3f} mm  ({c['closest_part']} to {c['closest_obstacle']}; "
+        f"body {c['min_body_clearance_mm']:.3f} mm; whole continuous motion, certified)",
+    )
+    return table
+
+
+def _plan_to_point(
+    arm: SerialArm,
+    scene: Scene,
+    start_ticks: np.ndarray,
+    xyz: np.ndarray,
+    tolerance: float,
+    options: MotionOptions,
+    folder: OutputFolder | None,
+    json_out: bool,
+    stem: str,
+    animate: bool = False,
+) -> None:
+    goals, _ = goal_states(arm, scene.world, start_ticks, xyz, tolerance)
+    plan = plan_motion(arm, scene.world, start_ticks, goals, options)
+    doc = plan_result_dict(plan, arm, scene, options.objective.value, xyz, tolerance)
+    _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz, animate)
+
+
+def _emit_plan(
+    plan: MotionPlan,
+    doc: dict[str, Any],
+    arm: SerialArm,
+    scene: Scene,
+    folder: OutputFolder | None,
+    json_out: bool,
+    stem: str,
+    target: np.ndarray | None,
+    animate: bool = False,
+) -> None:
+    if folder is not None:
+        from armpath.viz.figures import plot_joint_angles, plot_motion_3d
+
+        write_sequence_files(folder, stem, doc, arm, plan.sequence)
+        title = f"{stem}: {plan.sequence.n_commands} commands ({plan.method})"
+        plot_motion_3d(folder.file(f"{stem}_motion.png"), arm, scene, plan.sequence, target, title)
+        plot_joint_angles(folder.file(f"{stem}_joints.png"), plan.sequence, title)
+        if animate:
+            _animate_into(folder, stem, arm, scene, plan.sequence, title, target)
+    if json_out:
+        typer.echo(json_text(doc), nl=False)
+    else:
+        out_console.print(_plan_summary(doc, stem))
+
+
+@app.command(context_settings=LOOSE)
+def plan(
+    scene_file: SceneOption = None,
+    start: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option(
+            "--from",
+            help="Start joint angles θ1 … θ6 in deg (multiples of 0.1). Default: the arm's "
+            "initial pose.",
+        ),
+    ] = None,
+    to: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option("--to", help="Goal joint angles θ1 … θ6 in deg (multiples of 0.1)."),
+    ] = None,
+    to_xyz: Annotated[
+        tuple[float, float, float] | None,
+        typer.Option("--to-xyz", help="Goal point X Y Z of the fingertip, mm."),
+    ] = None,
+    objective: ObjectiveOption = Objective.COMMANDS,
+    weights: Annotated[
+        tuple[float, float, float, float, float, float] | None,
+        typer.Option(help="Energy weights of joints 1 … 6 (default all 1)."),
+    ] = None,
+    tolerance: Annotated[
+        float, typer.Option(help="Largest fingertip error accepted with --to-xyz, mm.")
+    ] = 0.05,
+    json_out: JsonOption = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write plan.json, plan.csv, plan.xlsx and PNG figures here."),
+    ] = None,
+    wall: WallOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    seed: SeedOption = 0,
+    searches: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            help="Successful searches (seeds) to try when the direct motion is blocked; "
+            "the best is kept.",
+        ),
+    ] = 1,
+    animate: AnimateOption = False,
+) -> None:
+    """Plan a collision-free command sequence to a joint goal or a fingertip point.
+
+    Obstacles and the clearance rule come from the scene file. The direct motion is used when
+    it is clear; otherwise RRT-Connect with shortcuts finds a path, which is put on the command
+    lattice and certified along its whole continuous motion.
+    """
+    with _cli_errors():
+        if (to is None) == (to_xyz is None):
+            raise InvalidInputError("give exactly one goal: --to θ1 … θ6 or --to-xyz X Y Z")
+        _animate_needs_out(animate, out)
+        arm = _arm(link_radius)
+        theta = list(start) if start is not None else list(np.degrees(arm.home))
+        start_ticks = deg_to_ticks(
+            _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
+        )
+        options = MotionOptions(
+            objective=objective,
+            energy_weights=tuple(weights) if weights else None,
+            seed=seed,
+            searches=searches,
+        )
+        scene = _scene(scene_file, wall)
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            if to_xyz is not None:
+                xyz = np.array(_numbers([str(v) for v in to_xyz], 3, "--to-xyz X Y Z (mm)"))
+                _plan_to_point(
+                    arm,
+                    scene,
+                    start_ticks,
+                    xyz,
+                    tolerance,
+                    options,
+                    folder,
+                    json_out,
+                    "plan",
+                    animate,
+                )
+            else:
+                assert to is not None
+                goal = deg_to_ticks(
+                    _numbers([str(t) for t in to], 6, "--to θ1 … θ6 (deg)"), what="--to angles"
+                )
+                result = plan_motion(arm, scene.world, start_ticks, goal[None, :], options)
+                doc = plan_result_dict(result, arm, scene, objective.value, None, None)
+                _emit_plan(result, doc, arm, scene, folder, json_out, "plan", None, animate)
+        if folder is not None and not json_out:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+def _tour_summary(doc: dict[str, Any]) -> Table:
+    table = Table(title="spot welds", show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    table.add_row(
+        "commands",
+        f"{doc['n_commands']}  (bound for the chosen goal states and order: "
+        f"{doc['lower_bound_commands']})",
+    )
+    table.add_row("order", " → ".join(str(i) for i in doc["order"]))
+    for v in doc["visits"]:
+        table.add_row(
+            f"  weld {_fmt(v['target'], 2)} mm",
+            f"after command {v['after_command']}, error {v['error_mm']:.4f} mm",
+        )
+    table.add_row(
+        "largest error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
+    )
+    c = doc["clearance"]
+    table.add_row(
+        "min clearance",
+        f"{c['min_clearance_mm']:.3f} mm (tool tip, may touch); links "
+        f"{c['min_body_clearance_mm']:.3f} mm; whole continuous motion, certified",
+    )
+    m = doc["metrics"]
+    table.add_row(
+        "objectives",
+        f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
+        f"joint travel {m['energy_deg']:.1f} deg",
+    )
+    table.add_row("wall thickness", f"measured {doc['wall_thickness']}")
+    return table
+
+
+def _write_tour(
+    folder: OutputFolder,
+    result: TourResult,
+    doc: dict[str, Any],
+    arm: SerialArm,
+    scene: Scene,
+    animate: bool = False,
+) -> None:
+    from armpath.viz.figures import plot_joint_angles, plot_motion_3d
+
+    write_sequence_files(folder, "spotweld", doc, arm, result.sequence)
+    title = f"spot welds: {result.n_commands} commands, largest error {result.max_error_mm:.4f} mm"
+    targets = np.array(doc["targets"])  # labelled 1..N as listed in the scene
+    plot_motion_3d(folder.file("spotweld_motion.png"), arm, scene, result.sequence, targets, title)
+    plot_joint_angles(folder.file("spotweld_joints.png"), result.sequence, title)
+    if animate:
+        _animate_into(folder, "spotweld", arm, scene, result.sequence, title, targets)
+
+
+@app.command()
+def spotweld(
+    order: Annotated[
+        str,
+        typer.Option(help="Visiting order: 'auto' (best over all orders) or 'given' (as listed)."),
+    ] = "auto",
+    return_home: Annotated[
+        bool, typer.Option("--return", help="Return to the initial pose at the end.")
+    ] = False,
+    json_out: JsonOption = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write spotweld.json, .csv, .xlsx and PNG figures here."),
+    ] = None,
+    tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
+    objective: ObjectiveOption = Objective.COMMANDS,
+    wall: WallOption = None,
+    scene_file: SceneOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    seed: SeedOption = 0,
+    animate: AnimateOption = False,
+) -> None:
+    """Task 3: reach the spot welds on the workpiece's inner wall through the open top."""
+    with _cli_errors():
+        if order not in ("auto", "given"):
+            raise InvalidInputError(f"--order must be 'auto' or 'given', got {order!r}")
+        arm = _arm(link_radius)
+        scene = _scene(scene_file, wall)
+        options = MotionOptions(objective=objective, seed=seed)
+        _animate_needs_out(animate, out)
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            with err_console.status("planning the spot welds ...") as status:
+                result = spotweld_task(
+                    scene, arm, order, return_home, tolerance, options,
+                    on_progress=lambda msg: status.update(msg),
+                )  # fmt: skip
+            doc = tour_result_dict(result, arm, scene, objective.value)
+            if folder is not None:
+                _write_tour(folder, result, doc, arm, scene, animate)
+        if json_out:
+            typer.echo(json_text(doc), nl=False)
+        else:
+            out_console.print(_tour_summary(doc))
+            for path in folder.written if folder is not None else []:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+def _trace_summary(doc: dict[str, Any]) -> Table:
+    table = Table(
+        title=f"trace {doc['curve']['definition'].get('name', 'curve')}", show_header=False
+    )
+    table.add_column("quantity", style="bold")
+    table.add_column("value")
+    transit = sum(t["commands"] for t in doc["transits"])
+    table.add_row(
+        "commands",
+        f"{doc['n_commands']}  ({transit} moving onto the curve or between passes, "
+        f"{doc['n_commands'] - transit} tracing)",
+    )
+    table.add_row("passes", str(len(doc["passes"])))
+    for p in doc["pass_details"]:
+        table.add_row(
+            f"  states {p['states'][0]}-{p['states'][1]}",
+            f"arc {p['start_mm']:.2f} .. {p['end_mm']:.2f} mm ({p['length_mm']:.2f} mm), "
+            f"largest deviation {p['max_deviation_mm']:.4f} mm",
+        )
+    cov = doc["coverage"]
+    table.add_row(
+        "covered",
+        f"{cov['covered_mm']:.2f} mm of {cov['reachable_mm']:.2f} mm reachable "
+        f"({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
+    )
+    for u in doc["unreachable"]:
+        table.add_row(
+            "unreachable",
+            f"arc {u['start_mm']:.2f} .. {u['end_mm']:.2f} mm ({u['length_mm']:.2f} mm), "
+            f"from {_fmt(u['start_point_mm'], 2)} to {_fmt(u['end_point_mm'], 2)} mm: "
+            f"{u['reason']}",
+        )
+    table.add_row(
+        "largest deviation",
+        f"{doc['max_deviation_mm']:.4f} mm (proven <= {doc['max_deviation_bound_mm']:.4f}; "
+        f"tolerance {doc['tolerance_mm']} mm; continuous tip path)",
+    )
+    c = doc["clearance"]
+    table.add_row(
+        "min clearance",
+        f"{c['min_clearance_mm']:.3f} mm (tool tip, may touch); links "
+        f"{c['min_body_clearance_mm']:.3f} mm; whole continuous motion, "
+        f"{'certified' if c['certified'] else 'NOT certified'}",
+    )
+    table.add_row("wall thickness", f"measured {doc['wall_thickness']}")
+    return table
+
+
+def _write_trace(
+    folder: OutputFolder,
+    result: TraceResult,
+    doc: dict[str, Any],
+    arm: SerialArm,
+    scene: Scene,
+    animate: bool = False,
+) -> None:
+    from armpath.viz.figures import plot_trace_3d, plot_trace_deviation
+
+    write_sequence_files(folder, "trace", doc, arm, result.sequence)
+    curve = result.curve
+    title = (
+        f"trace: {result.n_commands} commands, {passes_text(len(result.passes))}, "
+        f"largest deviation {result.max_deviation_mm:.3f} mm"
+    )
+    unreachable = result.reachability.unreachable
+    gaps = [curve.at_arc_length(np.linspace(a.start_mm, a.end_mm, 200)) for a in unreachable]
+    plot_trace_3d(
+        folder.file("trace_3d.png"),
+        arm,
+        scene,
+        result.sequence,
+        curve.sample(2001),
+        [(p.first, p.last) for p in result.passes],
+        gaps,
+        title,
+    )
+    plot_trace_deviation(
+        folder.file("trace_deviation.png"),
+        curve.wrap(result.deviation_s_mm),
+        result.deviation_mm,
+        result.tolerance_mm,
+        [(a.start_mm, a.end_mm) for a in unreachable],
+        curve.length,
+        title,
+    )
+    if animate:
+        _animate_into(folder, "trace", arm, scene, result.sequence, title, None, curve.sample(801))
+
+
+@app.command()
+def trace(
+    tolerance: Annotated[
+        float,
+        typer.Option(help="Largest distance of the continuous fingertip path from the curve, mm."),
+    ] = 0.1,
+    json_out: JsonOption = False,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write trace.json, .csv, .xlsx and PNG figures here."),
+    ] = None,
+    wall: WallOption = None,
+    scene_file: SceneOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    seed: SeedOption = 0,
+    animate: AnimateOption = False,
+) -> None:
+    """Task 2: go once around the scene's curve (the crack) with the fingertip, every reachable
+    part, fewest passes and commands; report the unreachable arcs and why."""
+    with _cli_errors():
+        arm = _arm(link_radius)
+        scene = _scene(scene_file, wall)
+        options = TraceOptions(tolerance_mm=tolerance, motion=MotionOptions(seed=seed))
+        _animate_needs_out(animate, out)
+        staged = output_folder(out) if out is not None else contextlib.nullcontext()
+        with staged as folder:
+            with err_console.status("tracing the curve ...") as status:
+                result = trace_task(scene, arm, options, lambda msg: status.update(msg))
+            doc = trace_result_dict(result, arm, scene)
+            if folder is not None:
+                _write_trace(folder, result, doc, arm, scene, animate)
+        if json_out:
+            typer.echo(json_text(doc), nl=False)
+        else:
+            out_console.print(_trace_summary(doc))
+            for path in folder.written if folder is not None else []:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+@app.command()
+def run(
+    out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
+    wall: WallOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    html: Annotated[
+        bool, typer.Option("--html", help="Also write the report as summary.html.")
+    ] = False,
+) -> None:
+    """Run the seed scene's three tasks: 1, reach the tool box; 2, trace the crack; 3, spot welds
+    inside the workpiece; then summarise the seed arm's blind zones. Writes each task's result
+    (JSON, CSV, XLSX), figures and animations (GIF), and a one-page report summary.md."""
+    from armpath.cli.workspace import _blind_zones, _write_blind_zones
+
+    with _cli_errors():
+        scene = _scene(None, wall)
+        arm = _arm(link_radius)
+        titles = dict(SEED_TASKS)
+        with output_folder(out) as folder:
+            with err_console.status(f"{titles['reach']} ..."):
+                result = reach_task(scene, arm)
+            _write_reach(folder, "reach", result, arm, scene, animate=True)
+            reach_doc = reach_result_dict(result, arm, scene)
+            with err_console.status(f"{titles['trace']} ...") as status:
+                traced = trace_task(scene, arm, on_progress=lambda msg: status.update(msg))
+            trace_doc = trace_result_dict(traced, arm, scene)
+            _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
+            with err_console.status(f"{titles['spotweld']} ...") as status:
+                tour = spotweld_task(scene, arm, on_progress=lambda msg: status.update(msg))
+            tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
+            _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
+            with err_console.status("blind zones ...") as status:
+                blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, status, scan_step_mm=16.0)
+            _write_blind_zones(folder, blind)
+            tasks = [
+                (titles["reach"], reach_doc),
+                (titles["trace"], trace_doc),
+                (titles["spotweld"], tour_doc),
+            ]
+            report = summary_markdown(tasks, blind.summary(), [*folder.staged(), "summary.md"])
+            folder.write_text("summary.md", report)
+            if html:
+                folder.write_text("summary.html", summary_html(report))
+        written = folder.written
+        table = Table(
+            title=f"armpath {__version__}: seed tasks, scene {scene.name}, "
+            f"wall thickness {reach_doc['wall_thickness']}"
+        )
+        for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
+            table.add_column(escape(col), justify="left" if col == "task" else "right")
+        table.add_row(
+            f"1 reach {_fmt(reach_doc['target'], 0)} mm",
+            str(reach_doc["n_commands"]),
+            str(reach_doc["lower_bound_commands"]),
+            f"{reach_doc['error_mm']:.4f}",
+            f"{reach_doc['min_clearance_mm']:.3f}",
+        )
+        cov = trace_doc["coverage"]
+        table.add_row(
+            f"2 trace the crack, {passes_text(len(trace_doc['passes']))}",
+            str(trace_doc["n_commands"]),
+            "-",
+            f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
+            f"{trace_doc['min_clearance_mm']:.3f} (tip); "
+            f"{trace_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
+        )
+        table.add_row(
+            f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
+            str(tour_doc["n_commands"]),
+            f"{tour_doc['lower_bound_commands']}*",
+            f"{tour_doc['error_mm']:.4f} (largest)",
+            f"{tour_doc['min_clearance_mm']:.3f} (tip); "
+            f"{tour_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
+        )
+        out_console.print(table)
+        out_console.print(
+            f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm reachable "
+            f"covered; error column = largest deviation of the continuous fingertip path; "
+            + "; ".join(
+                f"unreachable {u['start_mm']:.2f}..{u['end_mm']:.2f} mm ({u['reason']})"
+                for u in trace_doc["unreachable"]
+            ),
+            markup=False,
+            soft_wrap=True,
+        )
+        out_console.print(
+            "* Task 3's bound: direct motions between the chosen goal states, obstacles ignored.",
+            markup=False,
+        )
+        for line in blind.summary():
+            out_console.print(f"Blind zones: {line}", markup=False, soft_wrap=True)
+        out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
+        for path in written:
+            out_console.print(f"  {path.name}", markup=False)

@@ -1,0 +1,119 @@
+"""``armpath view`` and ``armpath animate``: the 3D viewer, HTML replays and animations."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from armpath.cli.common import (
+    ModelOption,
+    SceneOption,
+    _cli_errors,
+    _scene,
+    app,
+    err_console,
+    out_console,
+)
+from armpath.errors import InvalidInputError
+from armpath.export import (
+    output_folder,
+)
+from armpath.model.catalog import resolve_model
+from armpath.model.seed_arm import seed_arm
+
+
+@app.command()
+def view(
+    model: ModelOption = "seed",
+    scene_file: SceneOption = None,
+    result: Annotated[
+        Path | None,
+        typer.Option(
+            "--result",
+            help="A result JSON (reach, trace, spotweld, plan) to replay; its model and scene "
+            "come with it.",
+        ),
+    ] = None,
+    host: Annotated[str, typer.Option(help="Address to serve on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port to serve on.")] = 8080,
+    export_html: Annotated[
+        Path | None,
+        typer.Option(
+            "--export-html",
+            help="Write a self-contained HTML replay of --result to this file and exit "
+            "(opens offline in any browser).",
+        ),
+    ] = None,
+    fps: Annotated[float, typer.Option(help="Commands per second in the HTML replay.")] = 15.0,
+) -> None:
+    """Interactive 3D viewer in the browser: the arm in its scene, a slider per joint (0.1
+    steps within the limits), live fingertip position and clearance (collisions in red), a
+    target point to plan a reach to, and the replay of a result (play, pause, step,
+    timeline)."""
+    from armpath.results import load_result
+
+    with _cli_errors():
+        loaded = load_result(result, scene_file) if result is not None else None
+        if export_html is not None:
+            if loaded is None:
+                raise InvalidInputError("--export-html needs --result FILE")
+            if export_html.suffix.lower() not in (".html", ".htm"):
+                raise InvalidInputError(f"--export-html must end in .html, got {export_html.name}")
+            from armpath.viewer.app import replay_html
+
+            with err_console.status("recording the replay ..."):
+                page = replay_html(loaded, fps=fps)
+            with output_folder(export_html.parent) as folder:
+                folder.write_text(export_html.name, page)
+            out_console.print(f"wrote {export_html}", markup=False)
+            return
+        if not (0 < port < 65536):
+            raise InvalidInputError(f"--port must be in 1..65535, got {port}")
+        from armpath.viewer.app import ArmViewer
+
+        if loaded is not None:
+            arm, scene = loaded.arm, loaded.scene
+        else:
+            arm = seed_arm() if model == "seed" else resolve_model(model)
+            scene = _scene(scene_file, None)
+        viewer = ArmViewer(arm, scene, host=host, port=port, result=loaded)
+        out_console.print(
+            f"armpath viewer on http://{host}:{viewer.server.get_port()} (Ctrl-C to stop)",
+            markup=False,
+        )
+        try:
+            while True:
+                time.sleep(3600)
+        except KeyboardInterrupt:
+            viewer.stop()
+
+
+@app.command()
+def animate(
+    result: Annotated[Path, typer.Argument(help="A result JSON (reach, trace, spotweld, plan).")],
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="GIF or MP4 file to write. Default: the result's name, .gif."),
+    ] = None,
+    scene_file: SceneOption = None,
+    fps: Annotated[int, typer.Option(help="Frames per second.")] = 15,
+    frames: Annotated[int, typer.Option(help="Largest number of frames.")] = 120,
+) -> None:
+    """Animate a result: the arm through its commands in the scene, the fingertip's path, the
+    targets and the curve (GIF with Pillow, MP4 with ffmpeg)."""
+    from armpath.results import load_result
+    from armpath.viz.animation import result_animation, write_animation
+
+    with _cli_errors():
+        if fps < 1 or frames < 2:
+            raise InvalidInputError("--fps must be >= 1 and --frames >= 2")
+        loaded = load_result(result, scene_file)
+        target = out if out is not None else result.with_suffix(".gif")
+        with output_folder(target.parent) as folder, err_console.status("animating ..."):
+            n = write_animation(
+                folder.file(target.name), result_animation(loaded), fps=fps, max_frames=frames
+            )
+        out_console.print(f"wrote {target} ({n} frames)", markup=False)

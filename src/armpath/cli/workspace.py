@@ -1,0 +1,417 @@
+"""``armpath workspace``, ``blindzones`` and ``design-sweep``: reach, blind zones and the design
+study."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+from rich import box
+from rich.table import Table
+
+from armpath.cli.common import (
+    LinkRadiusOption,
+    ModelOption,
+    SceneOption,
+    WallOption,
+    _arm,
+    _cli_errors,
+    _scene,
+    app,
+    err_console,
+    out_console,
+)
+from armpath.errors import InvalidInputError
+from armpath.export import (
+    OutputFolder,
+    output_folder,
+)
+from armpath.geometry.primitives import SolidOfRevolution
+from armpath.kinematics import z_axis_chain
+from armpath.model.catalog import resolve_model
+from armpath.model.seed_arm import SeedArmGeometry
+from armpath.model.serial_arm import SerialArm
+from armpath.scenes import Scene, load_scene
+
+
+@app.command()
+def workspace(
+    model: ModelOption = "seed",
+    samples: Annotated[
+        int, typer.Option(help="Joint vectors to sample (streamed in chunks of --chunk).")
+    ] = 4_000_000,
+    voxel: Annotated[float, typer.Option(help="Voxel edge, mm.")] = 20.0,
+    method: Annotated[
+        str, typer.Option(help="uniform, or stratified (a Latin hypercube per chunk).")
+    ] = "uniform",
+    seed: Annotated[int, typer.Option(help="Random seed (same seed, same workspace).")] = 0,
+    chunk: Annotated[int, typer.Option(help="Samples per chunk (bounds the memory).")] = 1_000_000,
+    obstacles: Annotated[
+        bool,
+        typer.Option(
+            "--obstacles",
+            help="Keep only configurations that satisfy the scene's clearance rule "
+            "(obstacles and self-collision; the seed scene unless --scene).",
+        ),
+    ] = False,
+    scene_file: SceneOption = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out", help="Write workspace.npz, workspace.csv and workspace_sections.png here."
+        ),
+    ] = None,
+) -> None:
+    """Reachable workspace of the tool point by sampling joint space into voxels: volume,
+    bounding box and sections."""
+
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from armpath.workspace import sample_workspace
+
+    with _cli_errors():
+        arm = resolve_model(model)
+        world = load_scene(scene_file).world if obstacles else None
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            t0 = time.perf_counter()
+            with Progress(
+                TextColumn("sampling"),
+                BarColumn(),
+                TextColumn("{task.completed:,}/{task.total:,}"),
+                TimeRemainingColumn(),
+                console=err_console,
+                transient=True,
+            ) as bar:
+                task = bar.add_task("sampling", total=samples)
+                grid = sample_workspace(
+                    arm,
+                    samples,
+                    voxel,
+                    seed=seed,
+                    method=method,
+                    chunk=chunk,
+                    world=world,
+                    progress=lambda done, total: bar.update(task, completed=done),
+                )
+            seconds = time.perf_counter() - t0
+            lo, hi = grid.bounding_box()
+            rows: list[tuple[str, str, str]] = [
+                ("model", arm.name, ""),
+                ("samples", f"{grid.samples}", ""),
+                *([("kept (clearance rule)", f"{grid.kept}", "")] if obstacles else []),
+                ("voxel", f"{grid.voxel:g}", "mm"),
+                ("occupied voxels", f"{grid.n_occupied}", ""),
+                ("volume", f"{grid.volume / 1e9:.4f}", "m^3"),
+                ("x range", f"{lo[0]:.0f} .. {hi[0]:.0f}", "mm"),
+                ("y range", f"{lo[1]:.0f} .. {hi[1]:.0f}", "mm"),
+                ("z range", f"{lo[2]:.0f} .. {hi[2]:.0f}", "mm"),
+                ("time", f"{seconds:.1f}", "s"),
+                ("rate", f"{grid.samples / seconds / 1e6:.2f}", "million samples/s"),
+            ]
+            table = Table(title=f"workspace of {arm.name}", box=box.SIMPLE)
+            for name in ("quantity", "value", "unit"):
+                table.add_column(name)
+            for row in rows:
+                table.add_row(*row)
+            out_console.print(table)
+            if folder is not None:
+                from armpath.viz.workspace_figures import plot_workspace_sections
+
+                np.savez_compressed(
+                    folder.file("workspace.npz"),
+                    occupied=grid.occupied,
+                    origin_mm=grid.origin,
+                    voxel_mm=grid.voxel,
+                    samples=grid.samples,
+                    kept=grid.kept,
+                )
+                folder.write_text(
+                    "workspace.csv",
+                    "quantity,value,unit\n"
+                    + "".join(f"{n},{v.replace(',', ' ')},{u}\n" for n, v, u in rows),
+                )
+                # vertical section through axis 1, horizontal one half-way up the workspace
+                centre = np.asarray(z_axis_chain(arm)[0, :3, 3]).copy()
+                centre[2] = 0.5 * (lo[2] + hi[2])
+                plot_workspace_sections(
+                    folder.file("workspace_sections.png"),
+                    grid,
+                    centre,
+                    f"{arm.name}: {grid.volume / 1e9:.4f} m^3 reachable "
+                    f"({grid.samples:,} samples, {grid.voxel:g} mm voxels)",
+                )
+        if out is not None and folder is not None:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+def _only_workpiece(scene: Scene) -> SolidOfRevolution:
+    if len(scene.workpieces) != 1:
+        raise InvalidInputError(
+            f"scene {scene.name!r} has {len(scene.workpieces)} hollow workpieces; "
+            "blind zones need exactly one"
+        )
+    return scene.workpieces[0]
+
+
+@dataclasses.dataclass(frozen=True)
+class _BlindZones:
+    plane: Any
+    meridian: Any
+    faces: list[Any]
+    pixel: float
+
+    def summary(self) -> list[str]:
+        """One line each: the central blind zone in the plane and in 3-D, each face."""
+        out = [
+            f"central blind zone: {self.plane.blind_area / 100:.0f} cm^2 in the arm plane "
+            f"(joints 2, 3, 5; {self.plane.reach_area / 100:.0f} cm^2 reachable), "
+            f"{self.meridian.revolved_blind_volume() / 1e6:.2f} litres in 3-D",
+        ]
+        out += [
+            f"workpiece {f.face} face: {f.blind_area_mm2 / 100:.1f} of {f.area_mm2 / 100:.1f} cm^2 "
+            f"unreachable ({100 * f.blind_fraction:.1f} %, {len(f.heights)} circles)"
+            for f in self.faces
+        ]
+        return out
+
+
+def _blind_zones(
+    arm: SerialArm,
+    scene: Scene,
+    pixel: float,
+    samples: int,
+    bands: int,
+    seed: int,
+    status: Any,
+    scan_step_mm: float = 8.0,
+) -> _BlindZones:
+    from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
+
+    status.update("blind zones: sampling the arm plane ...")
+    plane = arm_plane_map(arm, pixel, samples, seed=seed)
+    status.update("blind zones: sampling the meridian map ...")
+    meridian = meridian_map(arm, pixel, 2 * samples, seed=seed + 1)
+    faces = (
+        surface_blindness(
+            arm,
+            scene.world,
+            _only_workpiece(scene),
+            bands,
+            scan_step_mm=scan_step_mm,
+            resolution_mm=scan_step_mm / 16.0,
+            progress=lambda m: status.update(m),
+        )
+        if bands > 0
+        else []
+    )
+    return _BlindZones(plane, meridian, faces, pixel)
+
+
+def _write_blind_zones(folder: OutputFolder, bz: _BlindZones) -> None:
+    from armpath.viz.workspace_figures import plot_blind_maps, plot_face_blindness
+
+    rows = [
+        f"{f.face},{z:.2f},{length:.2f},{blind:.2f}\n"
+        for f in bz.faces
+        for z, length, blind in zip(f.heights, f.length_mm, f.blind_mm, strict=True)
+    ]
+    folder.write_text(
+        "blindzones.csv", "face,height_mm,circumference_mm,unreachable_mm\n" + "".join(rows)
+    )
+    np.savez_compressed(
+        folder.file("blindzones.npz"),
+        plane_reach=bz.plane.reach,
+        plane_blind=bz.plane.blind,
+        plane_origin_mm=bz.plane.origin,
+        meridian_reach=bz.meridian.reach,
+        meridian_blind=bz.meridian.blind,
+        meridian_origin_mm=bz.meridian.origin,
+        pixel_mm=bz.pixel,
+    )
+    plot_blind_maps(
+        folder.file("blind_maps.png"),
+        [(bz.plane, "arm plane (y, z)"), (bz.meridian, "about the axis (rho, z)")],
+        "seed arm: reachable fingertip positions and enclosed blind zones",
+    )
+    if bz.faces:
+        plot_face_blindness(
+            folder.file("face_blindness.png"),
+            bz.faces,
+            "workpiece faces the fingertip cannot reach",
+        )
+
+
+@app.command()
+def blindzones(
+    pixel: Annotated[float, typer.Option(help="Pixel edge of the plane maps, mm.")] = 5.0,
+    samples: Annotated[
+        int, typer.Option(help="Joint samples of each plane map (the 3-D meridian map: twice).")
+    ] = 2_000_000,
+    bands: Annotated[
+        int, typer.Option(help="Horizontal circles per workpiece face (0: skip the faces).")
+    ] = 9,
+    seed: Annotated[int, typer.Option(help="Random seed of the sampling.")] = 0,
+    wall: WallOption = None,
+    link_radius: LinkRadiusOption = 0.0,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            help="Write blindzones.csv, blindzones.npz, blind_maps.png and face_blindness.png "
+            "here.",
+        ),
+    ] = None,
+) -> None:
+    """Blind zones of the seed arm: the central blind zone in the arm plane and in 3-D (areas
+    mm^2, volume mm^3), and the parts of the workpiece's outer and inner faces the fingertip
+    cannot reach without a collision (areas mm^2, fractions)."""
+    with _cli_errors():
+        if samples < 1:
+            raise InvalidInputError(f"--samples must be >= 1, got {samples}")
+        if bands < 0:
+            raise InvalidInputError(f"--bands must be >= 0, got {bands}")
+        scene = _scene(None, wall)
+        arm = _arm(link_radius)
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            with err_console.status("blind zones ...") as status:
+                bz = _blind_zones(arm, scene, pixel, samples, bands, seed, status)
+            table = Table(title="blind zones of the seed arm", box=box.SIMPLE)
+            for name in ("where", "blind", "of", "unit"):
+                table.add_column(name)
+            table.add_row(
+                "arm plane (joints 2, 3, 5)",
+                f"{bz.plane.blind_area:.0f}",
+                f"{bz.plane.reach_area:.0f} reachable",
+                "mm^2",
+            )
+            table.add_row(
+                "3-D, about the vertical axis",
+                f"{bz.meridian.revolved_blind_volume():.4g}",
+                "",
+                "mm^3",
+            )
+            for f in bz.faces:
+                table.add_row(
+                    f"workpiece {f.face} face",
+                    f"{f.blind_area_mm2:.0f} ({100 * f.blind_fraction:.1f} %)",
+                    f"{f.area_mm2:.0f}",
+                    "mm^2",
+                )
+            out_console.print(table)
+            wall_convention = scene.wall_thickness
+            out_console.print(
+                f"scene {scene.name}: wall thickness measured "
+                f"{wall_convention.value if wall_convention else '-'}; {pixel:g} mm pixels; "
+                f"faces by {bands} horizontal circles each",
+                markup=False,
+            )
+            if folder is not None:
+                _write_blind_zones(folder, bz)
+        if out is not None and folder is not None:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
+
+
+@app.command("design-sweep")
+def design_sweep(
+    total: Annotated[
+        float, typer.Option(help="Total link length AB + BC + CD + DE of every candidate, mm.")
+    ] = 715.0,
+    samples: Annotated[int, typer.Option(help="Joint samples per candidate.")] = 1_000_000,
+    pixel: Annotated[float, typer.Option(help="Pixel edge of the meridian maps, mm.")] = 10.0,
+    seed: Annotated[int, typer.Option(help="Random seed (every candidate uses it).")] = 0,
+    jobs: Annotated[int, typer.Option(help="Local worker processes (-1: every core).")] = -1,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(help="Address of a Dask scheduler (e.g. tcp://host:8786) to run on."),
+    ] = None,
+    top: Annotated[int, typer.Option(help="Candidates listed, best first.")] = 10,
+    out: Annotated[
+        Path | None, typer.Option("--out", help="Write design_sweep.csv and design_sweep.png here.")
+    ] = None,
+) -> None:
+    """Design study of the seed arm: link lengths (AB, BC = CD, DE at a fixed total) and the
+    range of joint 3 against the reach volume above the table (m^3) and the central blind zone
+    (litres). Objective: the largest reach volume; ties (within 0.5 %) go to the smaller blind
+    zone."""
+    from armpath.workspace.design import design_grid, evaluate_design, ranked, sweep
+
+    with _cli_errors():
+        if samples < 1:
+            raise InvalidInputError(f"--samples must be >= 1, got {samples}")
+        if top < 1:
+            raise InvalidInputError(f"--top must be >= 1, got {top}")
+        candidates = design_grid(total)
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            where = f"Dask at {scheduler}" if scheduler else "joblib on this machine"
+            with err_console.status(f"evaluating {len(candidates)} designs ({where}) ..."):
+                results = ranked(
+                    sweep(
+                        candidates,
+                        pixel_mm=pixel,
+                        samples=samples,
+                        seed=seed,
+                        scheduler=scheduler,
+                        n_jobs=jobs,
+                    )
+                )
+                reference = evaluate_design(SeedArmGeometry(), pixel, samples, seed)
+            columns = list(reference.row())
+            shown = {
+                "AB_mm": "AB mm",
+                "BC_mm": "BC=CD mm",
+                "DE_mm": "DE mm",
+                "theta3_deg": "θ3 ±deg",
+                "reach_volume_m3": "reach m^3",
+                "blind_volume_l": "blind l",
+                "nearest_to_B_mm": "nearest to B mm",
+            }
+            table = Table(
+                title=f"seed-arm designs, total length {total:g} mm (best first)", box=box.SIMPLE
+            )
+            for name in ("#", *shown.values()):
+                table.add_column(name, justify="right")
+
+            def cells(r: dict[str, float]) -> list[str]:
+                return [f"{r[k]:.4g}" for k in shown]
+
+            for k, r in enumerate(results[:top]):
+                table.add_row(str(k + 1), *cells(r.row()))
+            table.add_row("seed", *cells(reference.row()))
+            out_console.print(table)
+            best = results[0]
+            out_console.print(
+                f"recommendation: AB {best.geometry.ab_mm:g}, BC = CD {best.geometry.bc_mm:g}, "
+                f"DE {best.geometry.de_mm:g} mm, joint 3 within ±{best.geometry.range_deg[2]:g}°: "
+                f"{best.reach_volume_mm3 / 1e9:.4f} m^3 above the table "
+                f"({100 * (best.reach_volume_mm3 / reference.reach_volume_mm3 - 1):+.1f} % on the "
+                f"seed arm), blind zone {best.blind_volume_mm3 / 1e6:.3g} l "
+                f"(seed arm {reference.blind_volume_mm3 / 1e6:.3g} l)",
+                markup=False,
+            )
+            if folder is not None:
+                from armpath.viz.workspace_figures import plot_design_sweep
+
+                folder.write_text(
+                    "design_sweep.csv",
+                    "rank,"
+                    + ",".join(columns)
+                    + "\n"
+                    + "".join(
+                        f"{k + 1}," + ",".join(f"{v:.6g}" for v in r.row().values()) + "\n"
+                        for k, r in enumerate(results)
+                    ),
+                )
+                plot_design_sweep(folder.file("design_sweep.png"), results, reference)
+        if out is not None and folder is not None:
+            for path in folder.written:
+                out_console.print(f"wrote {path}", markup=False)
