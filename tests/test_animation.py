@@ -39,3 +39,18 @@ def test_bad_animation_requests(tmp_path):
     with pytest.raises(InvalidInputError, match="one state of 6 joints per time"):
         write_animation(tmp_path / "a.gif", Animation(arm, q[:, :5], np.arange(3.0)))
     assert not (tmp_path / "a.gif").exists()
+
+
+def test_mp4_is_written_with_ffmpeg_or_refused_clearly(tmp_path):
+    import shutil
+
+    arm = seed_arm()
+    q = np.linspace(np.radians([0, -90, 0, 0, -90, 0]), np.radians([40, -60, 30, 90, -45, 10]), 6)
+    anim = Animation(arm, q, np.arange(6.0))
+    if shutil.which("ffmpeg") is None:
+        with pytest.raises(InvalidInputError, match="MP4 needs ffmpeg"):
+            write_animation(tmp_path / "a.mp4", anim)
+        assert not (tmp_path / "a.mp4").exists()
+    else:
+        assert write_animation(tmp_path / "a.mp4", anim) == 6
+        assert (tmp_path / "a.mp4").read_bytes()[4:8] == b"ftyp"
