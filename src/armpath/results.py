@@ -11,10 +11,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from armpath.commands import CommandSequence, ticks_to_rad
+from armpath.commands import CommandSequence, deg_to_ticks, ticks_to_rad
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
-from armpath.model.seed_arm import SeedArmGeometry, seed_arm
+from armpath.model.seed_arm import seed_arm, seed_geometry_from
 from armpath.model.serial_arm import SerialArm
 from armpath.scenes import Scene, load_scene
 
@@ -62,14 +62,7 @@ def _arm(model: dict[str, Any]) -> SerialArm:
     limits = model.get("joint_limits_deg") or [None] * 6
     ranges = tuple(float("inf") if lim is None else float(lim[1]) for lim in limits)
     try:
-        geometry = SeedArmGeometry(
-            ab_mm=float(p["AB_mm"]),
-            bc_mm=float(p["BC_mm"]),
-            cd_mm=float(p["CD_mm"]),
-            de_mm=float(p["DE_mm"]),
-            range_deg=ranges,  # type: ignore[arg-type]
-            link_radius_mm=float(p.get("link_radius_mm", 0.0)),
-        )
+        geometry = seed_geometry_from(p, ranges)
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"the result's model parameters are incomplete: {exc}") from None
     return seed_arm(geometry)
@@ -110,7 +103,7 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Pl
             f"result file {p}: expected an armpath result with task one of {RESULT_TASKS}"
         )
     try:
-        start = np.rint(np.asarray(doc["initial_deg"], dtype=float) * 10.0).astype(np.int64)
+        start = deg_to_ticks(doc["initial_deg"], what=f"result file {p}: initial_deg")
         commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, 6)
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None

@@ -15,9 +15,7 @@ from rich.console import Console
 
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
-from armpath.export import (
-    OutputFolder,
-)
+from armpath.export import OutputFolder, csv_text
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.motion import Objective
@@ -177,8 +175,5 @@ def _commands_csv(sequence: Any) -> str:
 
 
 def _csv_rows(header: list[str], rows: np.ndarray, fmt: str = "{:.6f}") -> str:
-    return (
-        ",".join(header)
-        + "\n"
-        + "".join(",".join(fmt.format(v) for v in row) + "\n" for row in rows)
-    )
+    """CSV text of a numeric table, every value written with ``fmt``."""
+    return csv_text(header, [[fmt.format(v) for v in row] for row in rows])

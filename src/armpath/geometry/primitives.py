@@ -260,6 +260,16 @@ class HalfSpace(Obstacle):
         }
 
 
+def orthonormal_frame(axis: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Unit vectors ``u``, ``v`` with ``(u, v, axis)`` right-handed, for a unit ``axis``:
+    ``u = axis x h`` normalised (``h`` = x, or y when ``axis`` is close to x), ``v = axis x u``."""
+    a = np.asarray(axis, dtype=np.float64)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(a, helper)
+    u /= np.linalg.norm(u)
+    return u, np.cross(a, u)
+
+
 def _vector3(value: ArrayLike, what: str) -> FloatArray:
     v = np.array(value, dtype=np.float64)
     if v.shape != (3,) or not np.all(np.isfinite(v)):

@@ -11,6 +11,7 @@ Lengths are mm. Joint 6 turns the tool and does not move E.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -123,6 +124,21 @@ def seed_arm(geometry: SeedArmGeometry | None = None) -> SerialArm:
     )
 
 
+def seed_geometry_from(
+    parameters: Mapping[str, float], range_deg: Sequence[float]
+) -> SeedArmGeometry:
+    """The geometry named by a seed arm's ``parameters`` (``AB_mm`` ... ``DE_mm``, optional
+    ``link_radius_mm``; a missing link raises ``KeyError``) and its six joint ranges (deg)."""
+    return SeedArmGeometry(
+        ab_mm=float(parameters["AB_mm"]),
+        bc_mm=float(parameters["BC_mm"]),
+        cd_mm=float(parameters["CD_mm"]),
+        de_mm=float(parameters["DE_mm"]),
+        range_deg=tuple(float(r) for r in range_deg),  # type: ignore[arg-type]
+        link_radius_mm=float(parameters.get("link_radius_mm", 0.0)),
+    )
+
+
 def seed_geometry_of(arm: SerialArm) -> SeedArmGeometry:
     """Recover the :class:`SeedArmGeometry` of an arm built by :func:`seed_arm`.
 
@@ -139,14 +155,7 @@ def seed_geometry_of(arm: SerialArm) -> SeedArmGeometry:
         round(float(np.degrees(j.limits[1])), 9) if j.is_limited else float("inf")
         for j in arm.joints
     )
-    geometry = SeedArmGeometry(
-        ab_mm=params["AB_mm"],
-        bc_mm=params["BC_mm"],
-        cd_mm=params["CD_mm"],
-        de_mm=params["DE_mm"],
-        range_deg=ranges,  # type: ignore[arg-type]
-        link_radius_mm=params.get("link_radius_mm", 0.0),
-    )
+    geometry = seed_geometry_from(params, ranges)
     rebuilt = seed_arm(geometry)
     if not all(a.same_as(b) for a, b in zip(rebuilt.joints, arm.joints, strict=True)) or not (
         np.allclose(rebuilt.T_flange_tool, arm.T_flange_tool)

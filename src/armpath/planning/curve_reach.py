@@ -34,7 +34,7 @@ from scipy.optimize import minimize
 
 from armpath.errors import InvalidInputError
 from armpath.geometry.curves import Curve
-from armpath.geometry.primitives import Obstacle
+from armpath.geometry.primitives import Obstacle, orthonormal_frame
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.seed_position import family_from_wrist
 from armpath.kinematics import landmark_positions
@@ -297,9 +297,7 @@ class CurveFamily:
     ) -> tuple[FloatArray, float]:
         c, _, n = self.frame(s)
         axis = -n if self.surface is not None else np.array([0.0, 0.0, 1.0])
-        e1 = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
-        e1 /= np.linalg.norm(e1)
-        e2 = np.cross(axis, e1)
+        e1, e2 = orthonormal_frame(axis)
         # the direction E - D of each candidate, as polar angles about ``axis``
         pts_d = self._wrist_dirs(q, c)
 

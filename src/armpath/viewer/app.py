@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
+from armpath.geometry.primitives import HalfSpace
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -85,8 +86,10 @@ class ArmViewer:
         with contextlib.redirect_stdout(io.StringIO()):
             self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.scene.set_up_direction("+z")
-        pts = landmark_positions(arm, arm.home) * MM
-        size = max(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()), 0.2)
+        home_pts = landmark_positions(arm, arm.home)
+        # the arm's length along its links at home (mm): frames the camera and the table patch
+        self._reach_mm = float(np.linalg.norm(np.diff(home_pts, axis=0), axis=1).sum())
+        size = max(self._reach_mm * MM, 0.2)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.3 * size)
         self.server.initial_camera.position = (1.1 * size, -1.3 * size, 0.9 * size)
         self._tick = joint_ticks(arm)  # rad per tick (revolute) or mm per tick (prismatic)
@@ -95,6 +98,7 @@ class ArmViewer:
         self.state = ViewerState(ticks=ticks)
         self._parts = self.world.parts(arm)
         self._pairs = self.world.pairs(arm)
+        self._required = self.world.required(arm)
         self._draw_scene()
         self._build_gui()
         self._replay: CommandSequence | None = None
@@ -108,14 +112,9 @@ class ArmViewer:
 
     def _draw_scene(self) -> None:
         scene = self.server.scene
-        reach = float(
-            sum(
-                np.linalg.norm(np.diff(landmark_positions(self.arm, self.arm.home), axis=0), axis=1)
-            )
-        )
         for k, obstacle in enumerate(self.world.obstacles):
-            vertices, faces = obstacle_mesh(obstacle, np.zeros(3), 1.3 * reach)
-            is_plane = obstacle.__class__.__name__ == "HalfSpace"
+            vertices, faces = obstacle_mesh(obstacle, np.zeros(3), 1.3 * self._reach_mm)
+            is_plane = isinstance(obstacle, HalfSpace)
             scene.add_mesh_simple(
                 f"/obstacles/{k}_{obstacle.name}",
                 vertices * MM,
@@ -197,8 +196,7 @@ class ArmViewer:
             pts = landmark_positions(self.arm, q)
             p0, p1 = self.world.part_segments(self.arm, q)
             values, _ = self.world.pair_clearances(self.arm, q)
-            required = np.array([p.required for p in self._pairs])
-            slack = values - required
+            slack = values - self._required
             n_obs = len(self.world.obstacles)
             part_slack = slack[: len(self._parts) * n_obs].reshape(len(self._parts), n_obs)
             colliding = tuple(

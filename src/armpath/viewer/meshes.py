@@ -15,6 +15,7 @@ from armpath.geometry.primitives import (
     Obstacle,
     SolidOfRevolution,
     Sphere,
+    orthonormal_frame,
 )
 
 FloatArray = NDArray[np.float64]
@@ -22,20 +23,12 @@ IntArray = NDArray[np.int64]
 TriangleMesh = tuple[FloatArray, IntArray]
 
 
-def _frame(axis: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Two unit vectors completing ``axis`` to a right-handed frame."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(axis, helper)
-    u /= np.linalg.norm(u)
-    return u, np.cross(axis, u)
-
-
 def revolve(
     origin: FloatArray, axis: FloatArray, profile: FloatArray, n_theta: int = 64
 ) -> TriangleMesh:
     """The surface swept by the profile polygon's edges ``(r, z)`` revolved about ``axis``
     through ``origin``; edges lying on the axis (both ends at r = 0) are skipped."""
-    u, v = _frame(axis / np.linalg.norm(axis))
+    u, v = orthonormal_frame(axis / np.linalg.norm(axis))
     theta = np.linspace(0.0, 2.0 * np.pi, n_theta, endpoint=False)
     ring = np.cos(theta)[:, None] * u + np.sin(theta)[:, None] * v  # (n, 3)
     vertices, faces = [], []
@@ -94,7 +87,7 @@ def half_space_patch(plane: HalfSpace, centre: FloatArray, half_size: float) -> 
     projection of ``centre``."""
     n = plane.normal / np.linalg.norm(plane.normal)
     c = centre - float(np.dot(centre - plane.point, n)) * n
-    u, v = _frame(n)
+    u, v = orthonormal_frame(n)
     corners = np.array(
         [c + half_size * (su * u + sv * v) for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
     )

@@ -13,7 +13,13 @@ from numpy.typing import ArrayLike
 
 from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
 from armpath.errors import InvalidInputError
-from armpath.geometry.primitives import Box, HalfSpace, SolidOfRevolution, Sphere
+from armpath.geometry.primitives import (
+    Box,
+    HalfSpace,
+    SolidOfRevolution,
+    Sphere,
+    orthonormal_frame,
+)
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.scenes import Scene
@@ -27,10 +33,7 @@ def _draw_solid(ax: Axes3D, solid: SolidOfRevolution, n_theta: int = 48) -> np.n
     """
     drawn = []
     axis = solid.axis
-    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(axis, helper)
-    u /= np.linalg.norm(u)
-    v = np.cross(axis, u)
+    u, v = orthonormal_frame(axis)
     theta = np.linspace(0.0, 2.0 * np.pi, n_theta)
     prof = solid.profile
     for a, b, keep in zip(prof, np.roll(prof, -1, axis=0), solid.boundary_edges, strict=True):
