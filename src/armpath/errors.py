@@ -39,5 +39,9 @@ class PlanningError(ArmpathError):
     """A planner could not produce a plan that meets all requirements."""
 
 
+class TimeLimitError(ArmpathError):
+    """The time limit set for a computation (``--time-limit``) ran out before it finished."""
+
+
 class OutputError(ArmpathError):
     """Results could not be written (for example an unwritable output folder)."""

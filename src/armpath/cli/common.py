@@ -5,14 +5,17 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 
+from armpath.budget import time_limit
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.export import OutputFolder, csv_text
@@ -89,15 +92,55 @@ def _animate_needs_out(animate: bool, out: Path | None) -> None:
 
 SeedOption = Annotated[int, typer.Option(help="Random seed of the planner (same seed, same plan).")]
 
+TimeLimitOption = Annotated[
+    float | None,
+    typer.Option(
+        "--time-limit",
+        metavar="SECONDS",
+        help="Stop with an error if the computation takes longer than this (s). "
+        "Default: no limit (every search still ends by its own budget).",
+        show_default=False,
+    ),
+]
+
 
 @contextlib.contextmanager
-def _cli_errors() -> Iterator[None]:
-    """Turn armpath's errors into a one-line message and exit status 1."""
+def _cli_errors(time_limit_s: float | None = None) -> Iterator[None]:
+    """Turn armpath's errors into a one-line message and exit status 1; run the block under
+    ``time_limit_s`` (see :mod:`armpath.budget`)."""
     try:
-        yield
+        with time_limit(time_limit_s):
+            yield
     except ArmpathError as exc:
         err_console.print(f"error: {exc}", markup=False, soft_wrap=True)
         raise typer.Exit(1) from None
+
+
+@contextlib.contextmanager
+def progress(title: str) -> Iterator[Callable[[str], None]]:
+    """Report progress on stderr: a live status line on a terminal; otherwise one line per new
+    message (``armpath: [12.3 s] message``), so logs and pipes show what is under way.
+
+    Yields the callback that takes each progress message.
+    """
+    if err_console.is_terminal:
+        with err_console.status(title) as status:
+            yield lambda msg: status.update(escape(msg))
+        return
+    started = time.monotonic()
+    last = [""]
+
+    def say(msg: str) -> None:
+        if msg != last[0]:
+            last[0] = msg
+            err_console.print(
+                f"armpath: [{time.monotonic() - started:6.1f} s] {msg}",
+                markup=False,
+                soft_wrap=True,
+            )
+
+    say(title)
+    yield say
 
 
 def _numbers(values: list[str], count: int, what: str) -> list[float]:

@@ -1,0 +1,137 @@
+"""Bounds on the work a call may do: wall-clock time limits and size limits.
+
+Every search loop in armpath ends by design (a progress measure that provably decreases, or an
+explicit iteration budget). On top of that a caller may set a **time limit**: inside
+``with time_limit(seconds):`` long loops call :func:`check_time`, which raises
+:class:`~armpath.errors.TimeLimitError` once the limit has run out. The limit is held in a
+context variable, so nested calls and threads started inside see it; without one,
+:func:`check_time` costs one lookup.
+
+**Size limits** refuse inputs that would need more memory or work than the machine has before
+any work starts: :func:`check_size` compares a count (samples, voxels, periods, ...) with its
+named limit and says which option to change. The limits live here, one place for each.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import math
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from armpath.errors import InvalidInputError, TimeLimitError
+
+#: Largest number of configurations (or points) sampled by one workspace-type computation.
+MAX_SAMPLES = 200_000_000
+#: Largest number of cells of a voxel grid or a pixel map.
+MAX_GRID_CELLS = 50_000_000
+#: Largest number of controller periods of one trajectory (one joint state each).
+MAX_PERIODS = 5_000_000
+#: Largest number of commands of one command sequence a planner or converter produces.
+MAX_COMMANDS = 1_000_000
+#: Largest number of candidate designs of a design sweep.
+MAX_DESIGNS = 10_000
+#: Largest number of parallel jobs.
+MAX_JOBS = 256
+#: Largest time limit accepted (s): one week.
+MAX_TIME_LIMIT_S = 7 * 24 * 3600.0
+
+
+@dataclass(frozen=True)
+class Deadline:
+    """A time limit: ``seconds`` from ``started`` (``time.monotonic``)."""
+
+    seconds: float
+    started: float
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self.started
+
+    @property
+    def remaining(self) -> float:
+        return self.seconds - self.elapsed
+
+
+_deadline: contextvars.ContextVar[Deadline | None] = contextvars.ContextVar(
+    "armpath_deadline", default=None
+)
+
+
+def check_time_limit_value(seconds: float | None, option: str = "--time-limit") -> None:
+    """Refuse a time limit that is not a positive finite number of seconds (at most a week)."""
+    if seconds is None:
+        return
+    if not (math.isfinite(seconds) and 0 < seconds <= MAX_TIME_LIMIT_S):
+        raise InvalidInputError(
+            f"{option} must be a number of seconds in (0, {MAX_TIME_LIMIT_S:g}], got {seconds}"
+        )
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float | None) -> Iterator[Deadline | None]:
+    """Within the block, :func:`check_time` raises once ``seconds`` have passed (``None``: no
+    limit). An enclosing, earlier deadline stays in force."""
+    check_time_limit_value(seconds, "time limit")
+    outer = _deadline.get()
+    if seconds is None:
+        yield outer
+        return
+    mine = Deadline(float(seconds), time.monotonic())
+    if outer is not None and outer.remaining < mine.seconds:
+        mine = outer
+    token = _deadline.set(mine)
+    try:
+        yield mine
+    finally:
+        _deadline.reset(token)
+
+
+def current_deadline() -> Deadline | None:
+    """The time limit in force, if any."""
+    return _deadline.get()
+
+
+def check_time(doing: str = "") -> None:
+    """Raise :class:`TimeLimitError` if the time limit in force has run out.
+
+    ``doing`` says what was under way ("tracing pass 2"); it goes into the message.
+    """
+    d = _deadline.get()
+    if d is None or d.remaining > 0:
+        return
+    what = f" while {doing}" if doing else ""
+    raise TimeLimitError(
+        f"the time limit of {d.seconds:g} s ran out{what} (after {d.elapsed:.1f} s); "
+        "raise --time-limit or make the problem smaller"
+    )
+
+
+def check_size(count: float, limit: float, what: str, option: str) -> None:
+    """Refuse work of ``count`` units (``what``) above ``limit``, naming ``option`` to change.
+
+    ``count`` may be a float (an estimate that could overflow an integer)."""
+    if not math.isfinite(count) or count > limit:
+        shown = f"{count:.3g}" if math.isfinite(count) else "an unbounded number of"
+        raise InvalidInputError(
+            f"{what}: this would need {shown} (the limit is {limit:,.0f}); change {option}"
+        )
+
+
+__all__ = [
+    "MAX_COMMANDS",
+    "MAX_DESIGNS",
+    "MAX_GRID_CELLS",
+    "MAX_JOBS",
+    "MAX_PERIODS",
+    "MAX_SAMPLES",
+    "MAX_TIME_LIMIT_S",
+    "Deadline",
+    "check_size",
+    "check_time",
+    "check_time_limit_value",
+    "current_deadline",
+    "time_limit",
+]
