@@ -383,7 +383,12 @@ def _write_tour(
     title = f"spot welds: {result.n_commands} commands, largest error {result.max_error_mm:.4f} mm"
     targets = np.array(doc["targets"])  # labelled 1..N as listed in the scene
     plot_motion_3d(folder.file("spotweld_motion.png"), arm, scene, result.sequence, targets, title)
-    plot_joint_angles(folder.file("spotweld_joints.png"), result.sequence, title)
+    plot_joint_angles(
+        folder.file("spotweld_joints.png"),
+        result.sequence,
+        title,
+        marks=[(v.after_command, f"weld {v.target_index + 1}") for v in result.visits],
+    )
     if animate:
         _animate_into(folder, "spotweld", arm, scene, result.sequence, title, targets)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import textwrap
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -10,7 +11,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 from matplotlib.artist import Artist
+from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
 from matplotlib.figure import Figure
+from matplotlib.text import Text
 from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
@@ -21,10 +24,23 @@ from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.results import PlannedResult
 from armpath.scenes import Scene
-from armpath.viz.figures import draw_obstacles, draw_table, set_equal_axes
+from armpath.viz.figures import (
+    POINT_LABEL,
+    draw_obstacles,
+    draw_table,
+    label_axes_3d,
+    set_equal_axes,
+)
 
 FloatArray = NDArray[np.float64]
 ANIMATION_FORMATS = (".gif", ".mp4")
+
+#: Resolution of the frames (dots per inch of the 6.4 x 5.6 inch figure: 640 x 560 pixels).
+ANIMATION_DPI = 100
+#: Font sizes (points) in the frames; at :data:`ANIMATION_DPI` the smallest, 10 pt, is 14 px.
+TITLE_PT = 12.0
+TEXT_PT = 10.5
+TICK_PT = 10.0
 
 
 @dataclass(frozen=True)
@@ -68,7 +84,8 @@ def sequence_animation(
     steps = np.linspace(0.0, sequence.n_commands, q.shape[0])
     overlays: list[Overlay] = []
     if curve_mm is not None:
-        overlays.append(Overlay(np.asarray(curve_mm, dtype=float), "curve", "line", "tab:orange"))
+        # dark and thin: the red fingertip path drawn over it shows how far it is traced
+        overlays.append(Overlay(np.asarray(curve_mm, dtype=float), "curve", "line", "0.15"))
     targets = np.zeros((0, 3)) if targets_mm is None else np.asarray(targets_mm, float)
     targets = targets.reshape(-1, 3)
     if len(targets):
@@ -100,22 +117,42 @@ def frames_for(times: ArrayLike, max_frames: int) -> NDArray[np.int64]:
     return np.unique(np.linspace(0, n - 1, min(n, max(2, max_frames))).round().astype(np.int64))
 
 
-def write_animation(
-    path: str | Path,
-    anim: Animation,
-    *,
-    fps: int = 15,
-    max_frames: int = 120,
-    dpi: int = 80,
-) -> int:
-    """Write ``anim`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg); returns the
-    number of frames. At most ``max_frames`` evenly spread states are drawn; the fingertip's
-    path so far is traced in red."""
-    out = Path(path)
-    if out.suffix not in ANIMATION_FORMATS:
-        raise InvalidInputError(f"animation must be one of {ANIMATION_FORMATS}, got {out.name!r}")
-    if out.suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise InvalidInputError("MP4 needs ffmpeg on the PATH; write a .gif instead")
+@dataclass(frozen=True)
+class AnimationFrames:
+    """The figure of an animation and how to draw its frames: ``draw(i)`` puts frame ``i``
+    (state ``state_index[i]`` of the animation) into ``figure`` and returns the artists it
+    changed."""
+
+    figure: Figure
+    axes: Axes3D
+    state_index: NDArray[np.int64]
+    draw: Callable[[int], list[Artist]]
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.state_index)
+
+
+def _fit_width(fig: Figure, text: Text, renderer: RendererAgg) -> None:
+    """Wrap ``text`` onto more lines until it fits inside the figure's width (2 % margins)."""
+    limit = 0.96 * fig.bbox.width
+    original = text.get_text()
+    width = len(original)
+    while width > 10 and text.get_window_extent(renderer).width > limit:
+        width = int(width * 0.85)
+        text.set_text(textwrap.fill(original, width))
+
+
+def animation_frames(
+    anim: Animation, max_frames: int = 120, dpi: int = ANIMATION_DPI
+) -> AnimationFrames:
+    """Build the figure of ``anim`` (at most ``max_frames`` evenly spread states) at ``dpi``.
+
+    Title on top (wrapped to the width), the legend in a row under it, the 3-D view below and
+    the caption (clock, ``anim.caption``) at the bottom. The axis limits frame everything any
+    frame draws: every state's arm, the whole fingertip path, the overlays and the scene's
+    obstacles, with equal scales on x, y and z.
+    """
     q = np.asarray(anim.q, dtype=np.float64)
     if q.ndim != 2 or q.shape[1] != anim.arm.n_joints or q.shape[0] != len(anim.times):
         raise InvalidInputError(
@@ -125,8 +162,10 @@ def write_animation(
     idx = frames_for(anim.times, max_frames)
     arms = landmark_positions(anim.arm, q[idx])
     tips = tool_position(anim.arm, q)
-    fig = Figure(figsize=(6.4, 5.6))
-    ax = fig.add_subplot(projection="3d")
+    fig = Figure(figsize=(6.4, 5.6), dpi=dpi)
+    # to measure the title and the legend
+    renderer = FigureCanvasAgg(fig).get_renderer()  # type: ignore[no-untyped-call]
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0), projection="3d")
     assert isinstance(ax, Axes3D)
     framing = [arms.reshape(-1, 3), tips, np.zeros((1, 3))]
     if anim.scene is not None:
@@ -134,26 +173,44 @@ def write_animation(
     for overlay in anim.overlays:
         pts = np.asarray(overlay.points, dtype=np.float64).reshape(-1, 3)
         if overlay.style == "points":
-            ax.scatter(
-                *pts.T, color=overlay.color, s=40, marker="*", label=overlay.label, depthshade=False
-            )
+            ax.plot(*pts.T, "*", color=overlay.color, ms=10, label=overlay.label)
+            for k, p in enumerate(pts if len(pts) > 1 else []):
+                ax.text(*p, f"{k + 1}", **{**POINT_LABEL, "fontsize": TEXT_PT})
         else:
             ax.plot(*pts.T, color=overlay.color, lw=1.2, label=overlay.label)
         framing.append(pts)
-    set_equal_axes(ax, np.vstack(framing))
+    set_equal_axes(ax, np.vstack(framing), zoom=1.1)
     if anim.scene is not None:
         draw_table(ax, anim.scene)
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_zlabel("z [mm]")
+    label_axes_3d(ax, fontsize=TEXT_PT, labelpad=9.0)
+    ax.tick_params(labelsize=TICK_PT)
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
         axis.set_major_locator(MaxNLocator(4))  # fewer labels: each is redrawn every frame
     ax.view_init(elev=22, azim=-60)
-    (arm_line,) = ax.plot([], [], [], "-o", color="tab:blue", lw=2.5, ms=4, label="arm")
-    (trail,) = ax.plot([], [], [], color="tab:red", lw=1.2, label="fingertip path")
-    ax.legend(loc="upper left", fontsize=7)
-    caption = fig.text(0.02, 0.02, "", fontsize=9, family="monospace")
-    fig.suptitle(anim.title, fontsize=10)
+    (arm_line,) = ax.plot([], [], [], "-o", color="tab:blue", lw=2.5, ms=5, label="arm")
+    (trail,) = ax.plot([], [], [], color="tab:red", lw=1.8, label="fingertip path")
+
+    # layout, measured from the top: title, legend, 3-D view, caption
+    title = fig.suptitle(anim.title, fontsize=TITLE_PT, y=0.985, va="top")
+    _fit_width(fig, title, renderer)
+    below_title = title.get_window_extent(renderer).y0 / fig.bbox.height if anim.title else 0.99
+    handles, labels = ax.get_legend_handles_labels()
+    legend = fig.legend(
+        handles,
+        labels,
+        loc="upper center",
+        bbox_to_anchor=(0.5, below_title),
+        ncol=min(len(labels), 4),
+        fontsize=TEXT_PT,
+        frameon=False,
+        handlelength=1.6,
+        columnspacing=1.2,
+    )
+    below_legend = legend.get_window_extent(renderer).y0 / fig.bbox.height
+    caption = fig.text(0.02, 0.015, "", fontsize=TEXT_PT + 0.5, family="monospace")
+    bottom = 0.08
+    # the 3-D box leaves room around itself for its tick and axis labels
+    ax.set_position((0.03, bottom, 0.94, below_legend - bottom))
 
     def draw(frame: int) -> list[Artist]:
         k = int(idx[frame])
@@ -165,7 +222,27 @@ def write_animation(
         caption.set_text(text)
         return [arm_line, trail, caption]
 
-    animation = FuncAnimation(fig, draw, frames=len(idx), blit=False)
+    return AnimationFrames(fig, ax, idx, draw)
+
+
+def write_animation(
+    path: str | Path,
+    anim: Animation,
+    *,
+    fps: int = 15,
+    max_frames: int = 120,
+    dpi: int = ANIMATION_DPI,
+) -> int:
+    """Write ``anim`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg); returns the
+    number of frames. At most ``max_frames`` evenly spread states are drawn
+    (:func:`animation_frames`); the fingertip's path so far is traced in red."""
+    out = Path(path)
+    if out.suffix not in ANIMATION_FORMATS:
+        raise InvalidInputError(f"animation must be one of {ANIMATION_FORMATS}, got {out.name!r}")
+    if out.suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise InvalidInputError("MP4 needs ffmpeg on the PATH; write a .gif instead")
+    frames = animation_frames(anim, max_frames, dpi)
+    animation = FuncAnimation(frames.figure, frames.draw, frames=frames.n_frames, blit=False)
     writer = PillowWriter(fps=fps) if out.suffix == ".gif" else FFMpegWriter(fps=fps)
     animation.save(str(out), writer=writer, dpi=dpi)
-    return len(idx)
+    return frames.n_frames

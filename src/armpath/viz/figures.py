@@ -5,9 +5,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike
 
@@ -91,15 +95,37 @@ def draw_table(ax: Axes3D, scene: Scene) -> None:
     ax.plot_surface(X, Y, np.zeros_like(X), color="0.8", alpha=0.2, linewidth=0)
 
 
-def set_equal_axes(ax: Axes3D, pts: np.ndarray) -> None:
-    """Equal scales on x, y, z framing ``pts`` (floor at z = -10 mm)."""
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
+def set_equal_axes(
+    ax: Axes3D, pts: np.ndarray, floor: float | None = -10.0, zoom: float = 1.0
+) -> None:
+    """Equal scales on x, y, z framing every point of ``pts`` ``(K, 3)`` (NaN rows ignored).
+
+    The limits are a cube around the points; with ``floor`` (mm) the empty part of the cube
+    below ``min(floor, lowest point)`` is cut off (the table scenes need nothing far below
+    z = 0), never a drawn point. The box aspect follows the limits, so one millimetre has the
+    same length on every axis; ``zoom`` goes to ``Axes3D.set_box_aspect``.
+    """
+    lo, hi = np.nanmin(pts, axis=0), np.nanmax(pts, axis=0)
     center = (lo + hi) / 2
     half = max(float((hi - lo).max()) / 2, 1.0)
+    z_lo = center[2] - half
+    if floor is not None:
+        z_lo = max(z_lo, min(floor, float(lo[2])))
+    z_hi = center[2] + half
     ax.set_xlim(center[0] - half, center[0] + half)
     ax.set_ylim(center[1] - half, center[1] + half)
-    ax.set_zlim(max(center[2] - half, -10.0), center[2] + half)
-    ax.set_box_aspect((1, 1, 1))
+    ax.set_zlim(z_lo, z_hi)
+    ax.set_box_aspect((2 * half, 2 * half, z_hi - z_lo), zoom=zoom)
+
+
+def label_axes_3d(ax: Axes3D, fontsize: float | None = None, labelpad: float = 4.0) -> None:
+    """Label x, y, z in mm (``labelpad`` points from the tick labels); the z label is kept
+    upright (read bottom to top) whatever the view, where matplotlib would turn it upside down
+    for some azimuths."""
+    ax.set_xlabel("x [mm]", fontsize=fontsize, labelpad=labelpad)
+    ax.set_ylabel("y [mm]", fontsize=fontsize, labelpad=labelpad)
+    ax.zaxis.set_rotate_label(False)
+    ax.set_zlabel("z [mm]", rotation=90, fontsize=fontsize, labelpad=labelpad)
 
 
 def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
@@ -123,8 +149,9 @@ def plot_motion_3d(
     seq: CommandSequence,
     target: ArrayLike | None = None,
     title: str = "",
-) -> None:
-    """3-D view: obstacles, the arm at start (grey) and end (blue), the continuous tip path."""
+) -> Figure:
+    """3-D view: obstacles, the arm at start (grey) and end (blue), the continuous tip path;
+    several targets are numbered 1, 2, ... in the order given. Returns the figure written."""
     fig = Figure(figsize=(8, 7))
     ax = fig.add_subplot(projection="3d")
     assert isinstance(ax, Axes3D)
@@ -140,40 +167,132 @@ def plot_motion_3d(
     ax.plot(*motion[:, -1].T, color="tab:red", linewidth=1.5, label="fingertip path")
     if target is not None:
         t = np.asarray(target, dtype=float).reshape(-1, 3)
-        label = "target" if len(t) == 1 else "targets"
+        label = "target" if len(t) == 1 else "targets (numbered)"
         ax.scatter(*t.T, color="tab:green", s=60, marker="*", label=label, depthshade=False)
         for k, p in enumerate(t if len(t) > 1 else []):
-            ax.text(*p, f" {k + 1}", fontsize=9, color="tab:green")
+            ax.text(*p, f"{k + 1}", **POINT_LABEL, color="darkgreen")
         pts.append(t)
     for name, p in zip(arm.landmark_names, states[-1], strict=True):
-        ax.text(*p, f" {name}", fontsize=8, color="tab:blue")
+        ax.text(*p, f" {name}", fontsize=9, color="tab:blue")
     set_equal_axes(ax, np.vstack(pts))
     draw_table(ax, scene)
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_zlabel("z [mm]")
+    label_axes_3d(ax)
     ax.set_title(title or f"{seq.n_commands} commands")
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper left", fontsize=9)
     ax.view_init(elev=22, azim=-60)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+    return fig
 
 
-def plot_joint_angles(path: str | Path, seq: CommandSequence, title: str = "") -> None:
-    """Joint angles (deg) after each command, one line per joint."""
+#: Style of numbers written next to points in 3-D views: above and right of the point (which
+#: stays visible), bold on a light box, readable over the translucent solids and the lines.
+POINT_LABEL: dict[str, Any] = {
+    "horizontalalignment": "left",
+    "verticalalignment": "bottom",
+    "fontsize": 11,
+    "fontweight": "bold",
+    "zorder": 10,
+    "bbox": {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7, "linewidth": 0},
+}
+
+#: One colour per joint, shared by the joint figures.
+JOINT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+#: One dash pattern per joint: where two joints' curves coincide both stay visible.
+JOINT_STYLES: tuple[Any, ...] = (
+    "-",
+    (0, (5, 2)),
+    (0, (7, 2, 1.5, 2)),
+    (0, (1.5, 1.5)),
+    (0, (7, 2, 1.5, 2, 1.5, 2)),
+    (0, (3, 3)),
+)
+_MIN_SPAN_DEG = 10.0  # smallest y range of a joint panel: a constant joint shows as flat
+
+
+def _check_marks(marks: Sequence[tuple[int, str]], n_commands: int) -> list[tuple[int, str]]:
+    out = [(int(k), str(label)) for k, label in marks]
+    for k, label in out:
+        if not 0 <= k <= n_commands:
+            raise InvalidInputError(
+                f"mark {label!r} at command {k} is outside the sequence (0 .. {n_commands})"
+            )
+    return sorted(out)
+
+
+def _label_marks(ax: Axes, marks: list[tuple[int, str]], x_span: float) -> None:
+    """Write each mark's label just above ``ax`` at its x; labels closer than 9 % of the x
+    range to the previous one go one line higher, so neighbours do not overlap."""
+    last_x = -np.inf
+    level = 0
+    for k, label in marks:
+        level = 1 - level if k - last_x < 0.09 * x_span else 0
+        last_x = k
+        ax.annotate(
+            label,
+            xy=(k, 1.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(0, 2 + 12 * level),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=9,
+            color="0.2",
+        )
+
+
+def plot_joint_angles(
+    path: str | Path,
+    seq: CommandSequence,
+    title: str = "",
+    marks: Sequence[tuple[int, str]] = (),
+) -> Figure:
+    """Joint angles (deg) after each command, one panel per joint sharing the command axis, so
+    joints with equal angles never hide each other. Returns the figure written.
+
+    Parameters
+    ----------
+    path
+        PNG file to write.
+    seq
+        The command sequence; x = k is the state after command k (0: the start).
+    title
+        Figure title (default: "joint angles after each command").
+    marks
+        ``(k, label)`` pairs, e.g. the command after which each weld is reached: a dotted
+        vertical line at x = k through every panel, labelled above the top panel.
+    """
     degs = ticks_to_deg(seq.states())
-    fig = Figure(figsize=(8, 4.5))
-    ax = fig.add_subplot()
+    n_joints = degs.shape[1]
     steps = np.arange(degs.shape[0])
-    for i in range(degs.shape[1]):
-        ax.plot(steps, degs[:, i], label=f"θ{i + 1}", linewidth=1.6)
-    ax.set_xlabel("command (0 = start)")
-    ax.set_ylabel("joint angle [deg]")
-    ax.set_title(title or "joint angles per command")
-    ax.grid(alpha=0.3)
-    ax.legend(ncol=6, fontsize=8, loc="best")
-    fig.tight_layout()
+    checked = _check_marks(marks, seq.n_commands)
+    fig = Figure(figsize=(9, 1.2 + 1.2 * n_joints), layout="constrained")
+    axes = fig.subplots(n_joints, 1, sharex=True, squeeze=False)[:, 0]
+    x_span = max(seq.n_commands, 1)
+    for i, ax in enumerate(axes):
+        ax.plot(
+            steps,
+            degs[:, i],
+            color=JOINT_COLOURS[i % len(JOINT_COLOURS)],
+            lw=1.6,
+            label=f"θ{i + 1}",
+        )
+        lo, hi = float(degs[:, i].min()), float(degs[:, i].max())
+        if hi - lo < _MIN_SPAN_DEG:
+            mid = (lo + hi) / 2
+            ax.set_ylim(mid - 0.5 * _MIN_SPAN_DEG, mid + 0.5 * _MIN_SPAN_DEG)
+        for k, _ in checked:
+            ax.axvline(k, color="0.3", linestyle=":", linewidth=1.2, gid="mark")
+        ax.set_ylabel(f"θ{i + 1} [deg]")
+        ax.yaxis.set_major_locator(MaxNLocator(4))
+        ax.grid(alpha=0.3)
+    _label_marks(axes[0], checked, x_span)
+    # a little room on both sides: a mark at the first or last command is not hidden by a spine
+    axes[-1].set_xlim(-0.015 * x_span, 1.015 * x_span)
+    axes[-1].set_xlabel("command (0 = start; the angles after each command)")
+    fig.suptitle(title or "joint angles after each command")
     fig.savefig(path, dpi=110)
+    return fig
 
 
 _PASS_COLOURS = ("tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:cyan", "tab:olive")
@@ -263,8 +382,10 @@ def plot_trace_3d(
     passes: Sequence[tuple[int, int]],
     unreachable_points: Sequence[ArrayLike] = (),
     title: str = "",
-) -> None:
-    """3-D view of a curve trace (all lengths in mm, the seed arm's unit).
+    curve_name: str = "",
+) -> Figure:
+    """3-D view of a curve trace (all lengths in mm, the seed arm's unit); returns the figure
+    written.
 
     Seen from the arm's side (elevation 24°, azimuth -140°) with equal axes; lines are drawn
     over the translucent obstacles, and the parts of them behind an obstacle are faded.
@@ -279,7 +400,7 @@ def plot_trace_3d(
         The whole command sequence; state 0 is its start, state ``k`` the state after command
         ``k``.
     curve_points
-        ``(M, 3)`` points along the curve (the crack), drawn as a thin dark line.
+        ``(M, 3)`` points along the curve, drawn as a thin dark line.
     passes
         ``(i, j)`` state-index ranges during which the fingertip traces the curve; the continuous
         tip path over commands ``i+1 .. j`` is drawn thick, one colour per pass. Every other
@@ -288,6 +409,9 @@ def plot_trace_3d(
         One ``(K, 3)`` array of curve points per arc that cannot be traced, drawn in red.
     title
         Figure title (default: command and pass counts).
+    curve_name
+        The curve's name (``Curve.name``, e.g. "crack") for the legend: "curve (name)"; empty:
+        "curve".
     """
     spans = _check_passes(passes, sequence.n_commands)
     curve = np.asarray(curve_points, dtype=np.float64).reshape(-1, 3)
@@ -361,7 +485,12 @@ def plot_trace_3d(
         )
     # the curve over the passes: a thin dark centre line in each coloured band
     _plot_depth_cued(
-        ax, curve, _hidden(curve, scene, eye), color="0.1", linewidth=0.8, label="curve (crack)"
+        ax,
+        curve,
+        _hidden(curve, scene, eye),
+        color="0.1",
+        linewidth=0.8,
+        label=f"curve ({curve_name})" if curve_name else "curve",
     )
     for k, (i, j) in enumerate(spans):
         p, q = tip[i * _SUBSTEPS], tip[j * _SUBSTEPS]
@@ -376,22 +505,20 @@ def plot_trace_3d(
         ax.scatter(
             *q, color="k", marker="s", s=28, depthshade=False, label="pass end" if k == 0 else None
         )
-        ax.text(*p, f"  {k + 1}", fontsize=10, fontweight="bold")
-    set_equal_axes(ax, np.vstack(pts))
+        ax.text(*p, f"{k + 1}", **POINT_LABEL)
+    set_equal_axes(ax, np.vstack(pts), zoom=1.15)
     draw_table(ax, scene)
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_zlabel("z [mm]")
+    label_axes_3d(ax)
     n_pass = f"{len(spans)} pass" + ("" if len(spans) == 1 else "es")
     ax.set_title(title or f"curve trace: {sequence.n_commands} commands, {n_pass}")
     ax.view_init(elev=_TRACE_VIEW[0], azim=_TRACE_VIEW[1])
-    ax.set_box_aspect((1, 1, 1), zoom=1.15)
     fig.legend(loc="lower center", ncol=3, fontsize=8, frameon=False)
     fig.text(
         0.99, 0.01, "faded: behind an obstacle", ha="right", va="bottom", fontsize=7, color="0.4"
     )
     fig.tight_layout(rect=(0.0, 0.08, 1.0, 1.0))
     fig.savefig(path, dpi=110)
+    return fig
 
 
 def plot_trace_deviation(
@@ -402,8 +529,9 @@ def plot_trace_deviation(
     unreachable: Sequence[tuple[float, float]] = (),
     curve_length_mm: float | None = None,
     title: str = "",
-) -> None:
-    """Deviation of the continuous tip path from the curve along the curve's arc length.
+) -> Figure:
+    """Deviation of the continuous tip path from the curve along the curve's arc length;
+    returns the figure written.
 
     Parameters
     ----------
@@ -489,51 +617,82 @@ def plot_trace_deviation(
     ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, fontsize=8, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+    return fig
 
 
-def plot_trajectory(path: str | Path, traj: PiecewisePolynomial, title: str = "") -> None:
-    """Position, velocity, acceleration, jerk and snap of every joint (deg, deg/s, ...)."""
+def plot_trajectory(path: str | Path, traj: PiecewisePolynomial, title: str = "") -> Figure:
+    """Position, velocity, acceleration, jerk and snap of every joint (deg, deg/s, ...), one
+    colour and dash pattern per joint (coinciding joints stay visible), the waypoint times as
+    grey vertical lines; returns the figure written."""
     t = np.linspace(traj.times[0], traj.times[-1], 1500)
     names = (
         "position [deg]",
         "velocity [deg/s]",
-        "acceleration [deg/s^2]",
-        "jerk [deg/s^3]",
-        "snap [deg/s^4]",
+        "acceleration [deg/s²]",
+        "jerk [deg/s³]",
+        "snap [deg/s⁴]",
     )
-    fig = Figure(figsize=(9, 11), dpi=100)
-    for d, name in enumerate(names):
-        ax = fig.add_subplot(len(names), 1, d + 1)
+    fig = Figure(figsize=(9, 11.5), dpi=100, layout="constrained")
+    axes = fig.subplots(len(names), 1, sharex=True)
+    for d, (ax, name) in enumerate(zip(axes, names, strict=True)):
         values = np.degrees(traj.evaluate(t, d))
-        for j in range(values.shape[1]):
-            ax.plot(t, values[:, j], lw=1.2, label=f"joint {j + 1}")
         for tk in traj.times:
-            ax.axvline(tk, color="0.8", lw=0.6)
+            ax.axvline(tk, color="0.75", lw=0.8, zorder=0)
+        for j in range(values.shape[1]):
+            ax.plot(
+                t,
+                values[:, j],
+                lw=1.5,
+                color=JOINT_COLOURS[j % len(JOINT_COLOURS)],
+                linestyle=JOINT_STYLES[j % len(JOINT_STYLES)],
+                label=f"joint {j + 1}",
+            )
         ax.set_ylabel(name)
         ax.grid(alpha=0.3)
-        if d == 0:
-            ax.legend(ncol=6, fontsize=8, loc="upper right")
-    ax.set_xlabel("time [s]")
+    axes[-1].set_xlabel("time [s]")
+    handles, labels = axes[0].get_legend_handles_labels()
+    handles.append(Line2D([], [], color="0.75", lw=0.8))
+    labels.append("waypoint time")
+    # above the top panel, under the title: never over the curves
+    axes[0].legend(
+        handles,
+        labels,
+        loc="lower center",
+        bbox_to_anchor=(0.5, 1.0),
+        ncol=4,
+        fontsize=9,
+        frameon=False,
+    )
     fig.suptitle(title)
-    fig.tight_layout()
     fig.savefig(path)
+    return fig
 
 
 def plot_tip_deviation(
     path: str | Path,
     series: Sequence[tuple[np.ndarray, np.ndarray, str]],
     title: str = "",
-) -> None:
+) -> Figure:
     """Distance of the tool tip from where it should be (mm) against time (s), one line per
-    ``(times_s, distance_mm, label)``."""
-    fig = Figure(figsize=(8, 4))
+    ``(times_s, distance_mm, label)``; earlier series are drawn over later ones (a smooth
+    reference stays visible over the jagged quantized motion). Returns the figure written."""
+    fig = Figure(figsize=(8, 4.4), layout="constrained")
     ax = fig.add_subplot()
-    for times, dist, label in series:
-        ax.plot(times, dist, lw=1.2, label=f"{label} (max {np.max(dist):.2f} mm)")
+    colours = ("tab:blue", "tab:orange", "tab:green", "tab:red")
+    for k, (times, dist, label) in enumerate(series):
+        ax.plot(
+            times,
+            dist,
+            lw=1.6 if k == 0 else 1.0,
+            color=colours[k % len(colours)],
+            zorder=2 + len(series) - k,
+            label=f"{label} (max {np.max(dist):.2f} mm)",
+        )
     ax.set_xlabel("time [s]")
     ax.set_ylabel("tip distance from the point [mm]")
-    ax.set_title(title)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    # above the axes, under the title: never over the data
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=9, frameon=False)
+    fig.suptitle(title)
     fig.savefig(path, dpi=110)
+    return fig

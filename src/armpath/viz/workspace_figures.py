@@ -9,10 +9,23 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
+from matplotlib.patches import Patch
 
 from armpath.workspace import VoxelGrid
 from armpath.workspace.blindzones import FaceBlindness, PlaneMap
 from armpath.workspace.design import DesignMetrics
+
+
+def pretty_units(text: str) -> str:
+    """``mm^2``, ``m^3`` ... written with superscripts (mm², m³) for figure text."""
+    return text.replace("^2", "²").replace("^3", "³")
+
+
+def _axis_label(name: str) -> str:
+    """Axis label of a plane-map coordinate: ``rho`` is the signed distance from axis 1."""
+    if name == "rho":
+        return "±ρ, distance from axis 1 [mm] (mirrored)"
+    return f"{name} [mm]"
 
 
 def _draw_levels(
@@ -32,12 +45,14 @@ def _draw_levels(
 
 def plot_workspace_sections(
     path: str | Path, grid: VoxelGrid, centre: np.ndarray, title: str = ""
-) -> None:
+) -> Figure:
     """Two sections of the reachable voxels through ``centre`` (mm): the vertical plane
-    y = centre_y (x-z) and the horizontal plane z = centre_z (x-y); boundary voxels darker."""
+    y = centre_y (x-z) and the horizontal plane z = centre_z (x-y); boundary voxels darker,
+    explained in a legend at the bottom. Returns the figure written."""
     boundary = grid.boundary()
-    fig = Figure(figsize=(11, 5.2), dpi=110)
-    cmap = ListedColormap(["white", "#9ecae1", "#08519c"])
+    fig = Figure(figsize=(11, 5.6), dpi=110, layout="constrained")
+    colours = ["white", "#9ecae1", "#08519c"]
+    cmap = ListedColormap(colours)
     for k, (axis, value, labels) in enumerate(
         (("y", centre[1], ("x [mm]", "z [mm]")), ("z", centre[2], ("x [mm]", "y [mm]")))
     ):
@@ -50,15 +65,24 @@ def plot_workspace_sections(
         ax.set_aspect("equal")
         ax.set_title(f"section {axis} = {value:.0f} mm")
         ax.grid(alpha=0.3)
-    fig.suptitle(title)
-    fig.tight_layout()
+    fig.suptitle(pretty_units(title))
+    _level_legend(fig, colours, ("not reached", "reachable voxel", "boundary voxel"))
     fig.savefig(path)
+    return fig
 
 
-def plot_blind_maps(path: str | Path, maps: list[tuple[PlaneMap, str]], title: str = "") -> None:
-    """Reachable (blue) and enclosed blind (red) pixels of plane maps, side by side."""
-    cmap = ListedColormap(["white", "#9ecae1", "#de2d26"])
-    fig = Figure(figsize=(5.4 * len(maps), 5.4), dpi=110)
+def _level_legend(fig: Figure, colours: Sequence[str], names: Sequence[str]) -> None:
+    """A legend of the map colours (edged squares), in a row at the bottom."""
+    handles = [Patch(facecolor=c, edgecolor="0.4", linewidth=0.6) for c in colours]
+    fig.legend(handles, names, loc="outside lower center", ncol=len(names), frameon=False)
+
+
+def plot_blind_maps(path: str | Path, maps: list[tuple[PlaneMap, str]], title: str = "") -> Figure:
+    """Reachable (blue) and enclosed blind (red) pixels of plane maps, side by side, with a
+    legend of the colours at the bottom. Returns the figure written."""
+    colours = ["white", "#9ecae1", "#de2d26"]
+    cmap = ListedColormap(colours)
+    fig = Figure(figsize=(5.4 * len(maps), 6.0), dpi=110, layout="constrained")
     for k, (m, label) in enumerate(maps):
         ax = fig.add_subplot(1, len(maps), k + 1)
         nu, nv = m.reach.shape
@@ -69,19 +93,21 @@ def plot_blind_maps(path: str | Path, maps: list[tuple[PlaneMap, str]], title: s
             float(m.origin[1] + nv * m.pixel),
         )
         _draw_levels(ax, m.reach.astype(int) + 2 * m.blind.astype(int), extent, cmap)
-        ax.set_xlabel(f"{m.axes[0]} [mm]")
-        ax.set_ylabel(f"{m.axes[1]} [mm]")
+        ax.set_xlabel(_axis_label(m.axes[0]))
+        ax.set_ylabel(_axis_label(m.axes[1]))
         ax.set_aspect("equal")
-        ax.set_title(f"{label}\nblind (red) {m.blind_area / 100:.0f} cm^2")
+        ax.set_title(pretty_units(f"{label}\nblind (red) {m.blind_area / 100:.0f} cm^2"))
         ax.grid(alpha=0.3)
-    fig.suptitle(title)
-    fig.tight_layout()
+    fig.suptitle(pretty_units(title))
+    _level_legend(fig, colours, ("not reached", "reachable", "blind: enclosed, not reached"))
     fig.savefig(path)
+    return fig
 
 
-def plot_face_blindness(path: str | Path, faces: list[FaceBlindness], title: str = "") -> None:
-    """Blind fraction of each horizontal circle against its height, per face."""
-    fig = Figure(figsize=(6.5, 4.5), dpi=110)
+def plot_face_blindness(path: str | Path, faces: list[FaceBlindness], title: str = "") -> Figure:
+    """Blind fraction of each horizontal circle against its height, per face; returns the
+    figure written."""
+    fig = Figure(figsize=(6.5, 4.5), dpi=110, layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
     for f in faces:
         ax.plot(
@@ -92,19 +118,20 @@ def plot_face_blindness(path: str | Path, faces: list[FaceBlindness], title: str
         )
     ax.set_xlabel("unreachable part of the circle [%]")
     ax.set_ylabel("height z [mm]")
-    ax.set_xlim(0, 100)
+    ax.set_xlim(-2, 102)  # markers at 0 % and 100 % drawn whole
     ax.grid(alpha=0.3)
     ax.legend()
-    ax.set_title(title)
-    fig.tight_layout()
+    ax.set_title(pretty_units(title))
     fig.savefig(path)
+    return fig
 
 
 def plot_design_sweep(
     path: str | Path, results: Sequence[DesignMetrics], reference: DesignMetrics
-) -> None:
-    """Reach volume above the table against the central blind zone of each candidate design."""
-    fig = Figure(figsize=(7, 5), dpi=110)
+) -> Figure:
+    """Reach volume above the table against the central blind zone of each candidate design;
+    returns the figure written."""
+    fig = Figure(figsize=(7, 5), dpi=110, layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
     blind = [r.blind_volume_mm3 / 1e6 for r in results]
     vol = [r.reach_volume_mm3 / 1e9 for r in results]
@@ -130,9 +157,10 @@ def plot_design_sweep(
         label="recommended",
     )
     ax.set_xlabel("central blind zone [litres]")
-    ax.set_ylabel("reach volume above the table [m^3]")
+    ax.set_ylabel("reach volume above the table [m³]")
+    ax.margins(0.06)  # markers at the extremes drawn whole
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(loc="best")
     ax.set_title("seed-arm designs at a fixed total link length")
-    fig.tight_layout()
     fig.savefig(path)
+    return fig
