@@ -6,7 +6,26 @@ on (clearance >= 0) while every other part must keep ``margin`` (SPEC section 3)
 not neighbours in the chain must also keep ``self_margin`` from each other (self-collision).
 
 Every clearance the rule constrains is one *pair* (:class:`ClearancePair`): a part against an
-obstacle, or two non-adjacent links. Batched evaluation returns one column per pair.
+obstacle, or two links. Batched evaluation returns one column per pair.
+
+Which links are checked is decided once per arm (:func:`link_analysis`) from the arm's
+geometry, on a fixed sample of configurations within the joint limits (landmark positions are
+analytic in the joints, so what holds on the sample holds at every configuration):
+
+* landmarks that coincide at every configuration are one point; a link whose two ends are one
+  point has zero length and is dropped (no obstacle part, no self pair);
+* two links are not checked against each other when
+
+  1. both are part of the fixed base (``Link.checked`` False);
+  2. they share an end point (neighbours, also through coincident landmarks);
+  3. they are joined by a chain of links of fixed length whose total is shorter than their radii
+     plus ``self_margin``: their end points are then closer than that at every configuration,
+     so the pair breaks the rule everywhere and says nothing (a chain of zero-length links, the
+     typical case, is rule 2);
+  4. they belong to one rigid body (their end points keep their distances at every
+     configuration): motion cannot change their clearance.
+
+The seed arm has no zero-length link and its pairs are AB-CD, AB-DE and BC-DE.
 """
 
 from __future__ import annotations
@@ -20,7 +39,7 @@ from armpath.errors import InvalidInputError
 from armpath.geometry.kernels import segment_segment_distance, segments_to_point
 from armpath.geometry.primitives import Obstacle
 from armpath.kinematics import landmark_positions
-from armpath.model.serial_arm import SerialArm
+from armpath.model.serial_arm import JointKind, Link, SerialArm
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +71,88 @@ class ClearancePair:
     @property
     def label(self) -> str:
         return f"{self.part} - {self.other}"
+
+
+@dataclass(frozen=True, eq=False)
+class LinkAnalysis:
+    """What the clearance rule needs to know about an arm's links (see the module docstring).
+
+    ``point_of`` gives each landmark's point (landmarks coinciding at every configuration share
+    one); ``degenerate`` marks zero-length links; ``length`` is each link's length where it is
+    the same at every configuration (``inf`` where a prismatic joint changes it); ``chain`` is
+    the shortest chain of fixed-length links between two points (``inf`` if none); ``rigid``
+    marks link pairs in one rigid body.
+    """
+
+    point_of: NDArray[np.int64]
+    degenerate: NDArray[np.bool_]
+    length: FloatArray
+    chain: FloatArray
+    rigid: NDArray[np.bool_]
+
+    def ends(self, link: Link) -> tuple[int, int]:
+        return int(self.point_of[link.start]), int(self.point_of[link.end])
+
+
+#: Configurations sampled to analyse an arm's links, and the random seed that draws them.
+_ANALYSIS_SAMPLES = 32
+_ANALYSIS_SEED = 20240517
+
+
+def _analysis_configurations(arm: SerialArm) -> FloatArray:
+    """Joint vectors spread over the joint limits (a turn for unlimited revolute joints, a
+    metre for unlimited prismatic ones); a fixed sample, so the analysis is deterministic."""
+    bounds = []
+    for joint in arm.joints:
+        lo, hi = joint.limits
+        span = 2.0 * np.pi if joint.kind is JointKind.REVOLUTE else 2000.0
+        if np.isfinite(lo) and np.isfinite(hi):
+            bounds.append((lo, hi))
+        elif np.isfinite(lo):
+            bounds.append((lo, lo + span))
+        elif np.isfinite(hi):
+            bounds.append((hi - span, hi))
+        else:
+            bounds.append((-span / 2, span / 2))
+    lo_f, hi_f = np.array(bounds).T
+    u = np.random.default_rng(_ANALYSIS_SEED).uniform(0.0, 1.0, (_ANALYSIS_SAMPLES, arm.n_joints))
+    return np.asarray(lo_f + u * (hi_f - lo_f), dtype=np.float64)
+
+
+def link_analysis(arm: SerialArm) -> LinkAnalysis:
+    """Points, zero-length links, fixed lengths, chains and rigid pairs of ``arm``'s links
+    (computed once per arm and kept on it)."""
+    cached = arm.__dict__.get("_link_analysis")
+    if isinstance(cached, LinkAnalysis):
+        return cached
+    pts = landmark_positions(arm, _analysis_configurations(arm))  # (K, L, 3)
+    scale = max(1.0, float(np.abs(pts).max()))
+    tol = 1e-9 * scale
+    n_lm = len(arm.landmarks)
+    gap = np.linalg.norm(pts[:, :, None, :] - pts[:, None, :, :], axis=-1)  # (K, L, L)
+    same = gap.max(axis=0) <= tol
+    point_of = np.array([int(np.argmax(same[i])) for i in range(n_lm)], dtype=np.int64)
+    links = arm.links
+    n = len(links)
+    degenerate = np.array([point_of[lk.start] == point_of[lk.end] for lk in links], dtype=bool)
+    seg = np.array([gap[:, lk.start, lk.end] for lk in links]).reshape(n, -1)
+    length = np.where(np.ptp(seg, axis=1) <= tol, seg.mean(axis=1), np.inf)
+    chain = np.full((n_lm, n_lm), np.inf)
+    np.fill_diagonal(chain, 0.0)
+    for k, lk in enumerate(links):
+        a, b = point_of[lk.start], point_of[lk.end]
+        chain[a, b] = chain[b, a] = min(chain[a, b], length[k])
+    for m in range(n_lm):  # Floyd-Warshall over the (few) points
+        chain = np.minimum(chain, chain[:, m : m + 1] + chain[m : m + 1, :])
+    spread = gap.max(axis=0) - gap.min(axis=0)  # how much each landmark distance varies
+    rigid = np.zeros((n, n), dtype=bool)
+    for i in range(n):
+        for j in range(n):
+            ends = [links[i].start, links[i].end, links[j].start, links[j].end]
+            rigid[i, j] = bool(spread[np.ix_(ends, ends)].max() <= tol)
+    out = LinkAnalysis(point_of, degenerate, length, chain, rigid)
+    arm.__dict__["_link_analysis"] = out
+    return out
 
 
 @dataclass(frozen=True)
@@ -92,9 +193,16 @@ class CollisionWorld:
     def obstacle_names(self) -> tuple[str, ...]:
         return tuple(o.name for o in self.obstacles)
 
+    @staticmethod
+    def _checked_links(arm: SerialArm) -> list[Link]:
+        """Links checked against obstacles: not part of the fixed base, not of zero length."""
+        degenerate = link_analysis(arm).degenerate
+        return [lk for lk, z in zip(arm.links, degenerate, strict=True) if lk.checked and not z]
+
     def parts(self, arm: SerialArm) -> tuple[Part, ...]:
-        """The capsules checked: every checked link, the last one split into body and tip."""
-        checked = [link for link in arm.links if link.checked]
+        """The capsules checked against obstacles: every checked link of non-zero length, the
+        last one split into body and tip."""
+        checked = self._checked_links(arm)
         out: list[Part] = []
         for k, link in enumerate(checked):
             last = k == len(checked) - 1
@@ -106,20 +214,30 @@ class CollisionWorld:
     def self_pairs(self, arm: SerialArm) -> tuple[tuple[int, int], ...]:
         """Indices into ``arm.links`` of link pairs checked for self-collision.
 
-        Links that share a landmark (neighbours) are skipped; so are pairs of two unchecked links
-        (both part of the fixed base).
+        Zero-length links take no part; pairs are skipped by the four rules of the module
+        docstring (both fixed base, a shared end point, a chain shorter than their radii plus
+        ``self_margin``, one rigid body). Computed once per arm and margin.
         """
+        cache: dict[float, tuple[tuple[int, int], ...]] = arm.__dict__.setdefault("_self_pairs", {})
+        if self.self_margin in cache:
+            return cache[self.self_margin]
+        info = link_analysis(arm)
         links = arm.links
         out = []
         for i in range(len(links)):
             for j in range(i + 1, len(links)):
                 a, b = links[i], links[j]
-                if {a.start, a.end} & {b.start, b.end}:
+                if info.degenerate[i] or info.degenerate[j] or not (a.checked or b.checked):
                     continue
-                if not (a.checked or b.checked):
+                ends_a, ends_b = info.ends(a), info.ends(b)
+                if set(ends_a) & set(ends_b) or info.rigid[i, j]:
+                    continue
+                chain = min(info.chain[p, r] for p in ends_a for r in ends_b)
+                if chain < a.radius + b.radius + self.self_margin:
                     continue
                 out.append((i, j))
-        return tuple(out)
+        cache[self.self_margin] = tuple(out)
+        return cache[self.self_margin]
 
     def pairs(self, arm: SerialArm) -> tuple[ClearancePair, ...]:
         """Every constrained clearance: each part against each obstacle, then link pairs."""
@@ -139,7 +257,7 @@ class CollisionWorld:
         return self._segments(arm, landmark_positions(arm, q))
 
     def _segments(self, arm: SerialArm, pts: FloatArray) -> tuple[FloatArray, FloatArray]:
-        checked = [link for link in arm.links if link.checked]
+        checked = self._checked_links(arm)
         starts, ends = [], []
         for k, link in enumerate(checked):
             a, b = pts[..., link.start, :], pts[..., link.end, :]

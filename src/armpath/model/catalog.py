@@ -12,6 +12,11 @@ Every length is mm and every angle rad. Sources:
   reproduces the paper's pose and its table 1 (``docs/seed004.md``).
 * ``puma560``: Corke's standard D-H PUMA 560 (lengths in mm) with its joint limits.
 * ``ur5``: Universal Robots UR5, the maker's standard D-H parameters, joints +-360 deg.
+
+Collision links are each model's physical skeleton (:mod:`armpath.model.skeleton`) with the
+capsule radii below (mm; the fixed base first, then the link each joint moves; zero-length
+links have none). They are round numbers sized on the machines' published outlines, to keep the
+links' bodies apart, not exact envelopes; a robot file sets its own (``link_radii_mm``).
 """
 
 from __future__ import annotations
@@ -27,6 +32,20 @@ from armpath.model.seed_arm import seed_arm
 from armpath.model.serial_arm import JointKind, SerialArm
 
 _D = np.pi / 180.0
+
+#: Capsule radii (mm): the fixed base, then the link each joint moves (see the module docstring).
+#: welder003: the 500 mm arm, the boom, the 200 mm torch.
+WELDER003_LINK_RADII_MM = (0.0, 60.0, 50.0, 0.0, 0.0, 25.0, 0.0)
+#: painter004: the 842 mm column, the 400 mm shoulder, the 800 mm arm, the forearm, the wrist.
+PAINTER004_LINK_RADII_MM = (150.0, 120.0, 100.0, 80.0, 60.0, 50.0, 0.0)
+#: puma560: the trunk, the upper arm (with the elbow's 150 mm offset), the forearm (with the
+#: spherical wrist at its end: links 4-6 have zero length).
+PUMA560_LINK_RADII_MM = (100.0, 0.0, 80.0, 55.0, 0.0, 0.0, 0.0)
+#: The PUMA 560's trunk: its D-H base frame is at the shoulder, 26.45 in above the mounting
+#: surface.
+PUMA560_PEDESTAL_MM = 26.45 * 25.4
+#: ur5: the base column, the upper arm, the forearm (with wrist 1's 109 mm housing), wrists 2, 3.
+UR5_LINK_RADII_MM = (75.0, 0.0, 60.0, 50.0, 45.0, 45.0, 0.0)
 
 
 def _rows(
@@ -54,7 +73,11 @@ def welder003(d3_max_mm: float = 700.0) -> SerialArm:
         DHRow(a=0.0, alpha=90 * _D, d=200.0),
     ]
     return dh_arm(
-        rows, "modified", name="welder003", home=[0.0, 0.0, 0.5 * d3_max_mm, 0.0, 0.0, 0.0]
+        rows,
+        "modified",
+        name="welder003",
+        home=[0.0, 0.0, 0.5 * d3_max_mm, 0.0, 0.0, 0.0],
+        link_radii_mm=WELDER003_LINK_RADII_MM,
     )
 
 
@@ -76,7 +99,7 @@ def painter004() -> SerialArm:
         DHRow(a=a, alpha=al * D, d=d, offset=off * D, limits=(lo * D, hi * D))
         for (a, d), al, off, (lo, hi) in zip(lengths, twists, offsets, ranges, strict=True)
     ]
-    return dh_arm(rows, "standard", name="painter004")
+    return dh_arm(rows, "standard", name="painter004", link_radii_mm=PAINTER004_LINK_RADII_MM)
 
 
 def puma560() -> SerialArm:
@@ -87,7 +110,13 @@ def puma560() -> SerialArm:
         d=[0.0, 0.0, 150.05, 431.8, 0.0, 0.0],
         limits_deg=[(-160, 160), (-45, 225), (-225, 45), (-110, 170), (-100, 100), (-266, 266)],
     )
-    return dh_arm(rows, "standard", name="puma560")
+    return dh_arm(
+        rows,
+        "standard",
+        name="puma560",
+        link_radii_mm=PUMA560_LINK_RADII_MM,
+        pedestal_mm=PUMA560_PEDESTAL_MM,
+    )
 
 
 def ur5() -> SerialArm:
@@ -98,7 +127,7 @@ def ur5() -> SerialArm:
         d=[89.159, 0.0, 0.0, 109.15, 94.65, 82.3],
         limits_deg=[(-360, 360)] * 6,
     )
-    return dh_arm(rows, "standard", name="ur5")
+    return dh_arm(rows, "standard", name="ur5", link_radii_mm=UR5_LINK_RADII_MM)
 
 
 BUILTIN_MODELS: dict[str, Callable[[], SerialArm]] = {

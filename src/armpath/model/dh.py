@@ -25,7 +25,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
+from armpath.model.serial_arm import Joint, JointKind, SerialArm
+from armpath.model.skeleton import link_radii, physical_links
 
 FloatArray = NDArray[np.float64]
 
@@ -86,14 +87,19 @@ def dh_arm(
     T_world_base: ArrayLike | None = None,
     T_flange_tool: ArrayLike | None = None,
     home: ArrayLike | None = None,
-    link_radius_mm: float = 0.0,
+    link_radii_mm: float | Sequence[float] = 0.0,
+    pedestal_mm: float = 0.0,
     parameters: tuple[tuple[str, float], ...] = (),
 ) -> SerialArm:
     """Build a :class:`SerialArm` (lengths mm) from D-H rows in ``convention``.
 
     Joint ``i``'s frame is placed on its axis (z) so that the chain reproduces the D-H product
-    exactly; landmarks are the base, every joint frame and the tool, and consecutive distinct
-    landmarks are joined by capsule links of radius ``link_radius_mm``.
+    exactly. The landmarks are the base, every joint frame and the tool (in that order), then
+    the corners the links turn at; the links are the physical skeleton of
+    :func:`~armpath.model.skeleton.physical_links`: the table's ``a`` and ``d`` legs, zero-length
+    ones dropped. ``link_radii_mm`` is one capsule radius for every link or ``n + 1`` of them
+    (the fixed base, then the link each joint moves); ``pedestal_mm`` adds a base column below
+    the base frame.
     """
     if convention not in CONVENTIONS:
         raise InvalidInputError(f"convention must be one of {CONVENTIONS}, got {convention!r}")
@@ -129,11 +135,9 @@ def dh_arm(
         home_q = np.clip(np.zeros(n), lo, hi)
     else:
         home_q = np.asarray(home, dtype=np.float64)
-    landmarks = (Landmark("base", 0), *(Landmark(f"J{i + 1}", i + 1) for i in range(n)))
-    landmarks = (*landmarks, Landmark("tool", n + 1))
-    links = tuple(
-        Link(f"L{k}", k, k + 1, link_radius_mm, checked=k > 0) for k in range(len(landmarks) - 1)
-    )
+    names = ("base", *(f"J{i + 1}" for i in range(n)), "tool")
+    radii = link_radii(link_radii_mm, n, "link radii")
+    landmarks, links = physical_links(joints, tool, names, radii, pedestal=pedestal_mm)
     return SerialArm(
         name=name,
         joints=tuple(joints),
@@ -174,13 +178,17 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
 
     ``{"convention": "standard" | "modified", "units": {"length": "mm" | "m", "angle": "deg" |
     "rad"}, "links": [{"a", "alpha", "d", "offset", "type": "revolute" | "prismatic", "limits":
-    [lo, hi], "theta"}, ...], "base": 4x4, "tool": 4x4, "name": str}``. Only ``links`` is
-    required; ``units`` default to mm and deg, ``convention`` to standard. Limits are in the
-    joint's unit (angle unit for revolute, length unit for prismatic); ``null`` means unlimited.
+    [lo, hi], "theta"}, ...], "base": 4x4, "tool": 4x4, "home": [q1, ...], "name": str,
+    "link_radii_mm": r | [r0, r1, ..., rn]}``. Only ``links`` is required; ``units`` default to
+    mm and deg, ``convention`` to standard. Limits are in the joint's unit (angle unit for
+    revolute, length unit for prismatic); ``"limits": null`` (or leaving it out) means unlimited,
+    and ``null`` for one bound leaves that side unlimited. ``link_radii_mm`` (always mm, default
+    0) is the links' capsule radius: one for every link, or ``n + 1`` (the fixed base, then the
+    link each joint moves; see :func:`~armpath.model.skeleton.physical_links`).
     """
     if not isinstance(doc, Mapping):
         raise InvalidInputError("a robot file must hold a JSON object")
-    known = {"convention", "units", "links", "base", "tool", "name", "home"}
+    known = {"convention", "units", "links", "base", "tool", "name", "home", "link_radii_mm"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise InvalidInputError(f"robot file: unknown key(s) {unknown}; known: {sorted(known)}")
@@ -219,9 +227,14 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
             raise InvalidInputError(f"{where}.type must be 'revolute' or 'prismatic'")
         kind = JointKind(kind_name)
         q_scale = A if kind is JointKind.REVOLUTE else L
-        limits_raw = link.get("limits", [None, None])
+        limits_raw = link.get("limits")
+        if limits_raw is None:  # absent or null: unlimited
+            limits_raw = [None, None]
         if not isinstance(limits_raw, list) or len(limits_raw) != 2:
-            raise InvalidInputError(f"{where}.limits must be [lower, upper]")
+            raise InvalidInputError(
+                f"{where}.limits must be [lower, upper] (null for an unlimited side) or null "
+                f"for an unlimited joint, got {limits_raw!r}"
+            )
         lo = -np.inf if limits_raw[0] is None else _number(limits_raw[0], f"{where}.limits[0]")
         hi = np.inf if limits_raw[1] is None else _number(limits_raw[1], f"{where}.limits[1]")
         if lo > hi:
@@ -248,6 +261,15 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
             _number(v, f"robot file: home[{i}]") * (A if r.kind is JointKind.REVOLUTE else L)
             for i, (v, r) in enumerate(zip(raw, rows, strict=True))
         ]
+    radii: float | list[float] = 0.0
+    if "link_radii_mm" in doc:
+        raw = doc["link_radii_mm"]
+        where = "robot file: link_radii_mm"
+        if isinstance(raw, list):
+            values = [_number(v, f"{where}[{i}]") for i, v in enumerate(raw)]
+        else:
+            values = [_number(raw, where)]
+        radii = link_radii(values if isinstance(raw, list) else values[0], len(rows), where)
     label = doc.get("name", name)
     return dh_arm(
         rows,
@@ -256,6 +278,7 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
         T_world_base=base,
         T_flange_tool=tool,
         home=home,
+        link_radii_mm=radii,
     )
 
 

@@ -6,8 +6,10 @@ own frame. Standard and modified D-H tables map onto this form, so later model s
 without touching kinematics.
 
 Frames are numbered ``0`` (world/base), ``1 .. n`` (joint ``i`` after its motion) and ``n + 1``
-(tool). Named *landmarks* pick frame origins along the arm (for the seed arm A, B, C, D, E);
-consecutive landmarks bound the *links* used for collision checking.
+(tool). Named *landmarks* are points fixed in one frame (its origin, or an offset in it) along the
+arm (for the seed arm A, B, C, D, E); *links* are straight segments between two landmarks, checked
+for collision as capsules (see :mod:`armpath.model.skeleton` for how models from D-H tables and
+URDF get theirs).
 
 Angles are radians, lengths are in the model's ``length_unit``; nothing is converted silently.
 """
@@ -104,18 +106,31 @@ class Joint:
 
 @dataclass(frozen=True)
 class Landmark:
-    """A named point of the arm: the origin of frame ``frame`` (0 base, i joint i, n+1 tool)."""
+    """A named point of the arm, fixed in frame ``frame`` (0 base, i joint i, n+1 tool).
+
+    ``offset`` is the point in that frame's coordinates (length unit); the default is the
+    frame's origin.
+    """
 
     name: str
     frame: int
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        off = tuple(float(v) for v in self.offset)
+        if len(off) != 3 or not all(np.isfinite(off)):
+            raise InvalidInputError(f"landmark {self.name!r}: offset must be 3 finite numbers")
+        object.__setattr__(self, "offset", off)
 
 
 @dataclass(frozen=True)
 class Link:
-    """A straight link between two consecutive landmarks, checked for collision as a capsule.
+    """A straight link between two landmarks (indices into ``SerialArm.landmarks``), checked for
+    collision as a capsule.
 
     ``radius`` is in the model's length unit. ``checked`` is False for a link that is part of the
-    fixed base (it stands on the table and never moves), e.g. the seed arm's column AB.
+    fixed base (it stands on the table and never moves), e.g. the seed arm's column AB: it is not
+    checked against obstacles, only against the moving links.
     """
 
     name: str

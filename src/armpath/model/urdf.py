@@ -2,23 +2,36 @@
 
 The chain runs from the root link to the deepest leaf; it must not branch on the way. Fixed joints
 fold into the next joint's placement (or the tool), ``continuous`` joints are unlimited revolute
-joints, and URDF metres become mm.
+joints, and URDF metres become mm. Collision links are the chain's physical skeleton
+(:func:`~armpath.model.skeleton.physical_links`); the URDF's own collision shapes are not read,
+so their radii are ``link_radii_mm`` (default 0).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from armpath.errors import InvalidInputError
-from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
+from armpath.model.serial_arm import Joint, JointKind, SerialArm
+from armpath.model.skeleton import link_radii, physical_links
 
 _M_TO_MM = 1000.0
 
 
-def arm_from_urdf(path: str | Path, tip_link: str | None = None) -> SerialArm:
-    """Load the serial chain of a URDF (root link to ``tip_link``, default the deepest leaf)."""
+def arm_from_urdf(
+    path: str | Path,
+    tip_link: str | None = None,
+    *,
+    link_radii_mm: float | Sequence[float] = 0.0,
+) -> SerialArm:
+    """Load the serial chain of a URDF (root link to ``tip_link``, default the deepest leaf).
+
+    ``link_radii_mm``: the links' capsule radius, one for every link or ``n + 1`` (the fixed
+    base, then the link each moving joint moves).
+    """
     try:
         import yourdfpy
     except ImportError as exc:  # pragma: no cover - depends on the installed extras
@@ -84,8 +97,9 @@ def arm_from_urdf(path: str | Path, tip_link: str | None = None) -> SerialArm:
     if not joints:
         raise InvalidInputError(f"URDF {p.name!r}: the chain to {tip_link!r} has no moving joint")
     n = len(joints)
-    landmarks = (*(Landmark(j.name, i + 1) for i, j in enumerate(joints)), Landmark("tool", n + 1))
-    links = tuple(Link(f"L{k + 1}", k, k + 1) for k in range(len(landmarks) - 1))
+    names = ("base", *(j.name for j in joints), "tool")
+    radii = link_radii(link_radii_mm, n, f"URDF {p.name!r}: link radii")
+    landmarks, links = physical_links(joints, carry, names, radii)
     lo_all = np.array([j.limits[0] for j in joints])
     hi_all = np.array([j.limits[1] for j in joints])
     return SerialArm(
