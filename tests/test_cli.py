@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import independent
+from cli_checks import error_lines, usage_text
 
 ARMPATH = [sys.executable, "-m", "armpath"]
 
@@ -54,14 +55,13 @@ def test_fk_human_output_and_below_table_warning():
         (["reach", "20", "-200", "120", "--from", "-90", "-90", "0", "0", "-90", "0"], "collision"),
         (["reach", "20", "-200", "120", "--from", "0", "-90.05", "0", "0", "-90", "0"], "0.1 deg"),
         (["reach", "20", "-200"], "expected 3 numbers"),
-        (["reach", "20", "-200", "120", "--wall", "diagonal"], "wall thickness"),
         (["reach", "20", "-200", "120", "--tolerance", "0"], "tolerance"),
     ],
 )
 def test_bad_input_gives_one_line_and_nonzero_exit(args, message, tmp_path):
     r = run(*args, "--out", str(tmp_path / "out")) if args[0] == "reach" else run(*args)
     assert r.returncode == 1, r.stdout + r.stderr
-    lines = r.stderr.strip().splitlines()
+    lines = error_lines(r.stderr)
     assert len(lines) == 1 and lines[0].startswith("error: ")
     assert message in lines[0]
     assert not (tmp_path / "out").exists()
@@ -84,13 +84,9 @@ def test_reach_writes_json_csv_xlsx_and_figures(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "provably fewest" in r.stdout
     names = sorted(p.name for p in out.iterdir())
-    assert names == [
-        "reach.csv",
-        "reach.json",
-        "reach.xlsx",
-        "reach_joints.png",
-        "reach_motion.png",
-    ]
+    written = ["reach.csv", "reach.json", "reach.xlsx", "reach_joints.png", "reach_motion.png"]
+    assert names == [".armpath-files", *written]
+    assert (out / ".armpath-files").read_text().split() == written
     doc = json.loads((out / "reach.json").read_text())
     for key in (
         "initial_deg",
@@ -129,6 +125,21 @@ def test_reach_writes_json_csv_xlsx_and_figures(tmp_path):
     wb = load_workbook(out / "reach.xlsx")
     assert wb["commands"].max_row == doc["n_commands"] + 1
     assert (out / "reach_motion.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_second_run_into_the_same_folder_leaves_no_stale_files(tmp_path):
+    out = tmp_path / "res"
+    first = run("plan", "--to", "10", "-80", "10", "0", "-80", "0", "--out", str(out), "--animate")
+    assert first.returncode == 0, first.stderr
+    (out / "my_notes.txt").write_text("mine")
+    assert (out / "plan.gif").exists()
+    second = run("plan", "--to", "20", "-80", "10", "0", "-80", "0", "--out", str(out))
+    assert second.returncode == 0, second.stderr
+    names = sorted(p.name for p in out.iterdir())
+    # the earlier run's animation is gone (this run wrote none); the user's file stays
+    assert "plan.gif" not in names and "my_notes.txt" in names
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["final_deg"] == [20.0, -80.0, 10.0, 0.0, -80.0, 0.0]
 
 
 def test_reach_json_on_stdout_from_another_start():
@@ -184,15 +195,34 @@ def test_spotweld_horizontal_wall_given_order(tmp_path):
     assert doc["clearance"]["certified"]
 
 
+def test_choices_are_listed_and_a_wrong_one_is_a_usage_error(tmp_path):
+    r = run("reach", "20", "-200", "120", "--wall", "diagonal", "--out", str(tmp_path / "o"))
+    assert r.returncode == 2
+    assert "'diagonal' is not one of 'normal', 'horizontal'" in usage_text(r.stderr)
+    assert list(tmp_path.iterdir()) == []
+    h = run("reach", "--help")
+    assert "<normal|horizontal>" in h.stdout and "<bool>" not in h.stdout
+    assert "NUM NUM NUM NUM NUM NUM" in h.stdout  # --from takes six separate numbers
+    assert "float,float" not in h.stdout
+
+
 def test_plan_and_spotweld_errors():
-    r = run("spotweld", "--order", "random")
-    assert r.returncode == 1 and r.stderr.startswith("error: --order must be")
+    r = run("spotweld", "--order", "random")  # a usage error: the parser's status 2
+    assert r.returncode == 2 and "'random' is not one of 'auto', 'given'" in usage_text(r.stderr)
     r = run("plan", "--to", "0", "-90", "0", "0", "-90", "0", "--to-xyz", "1", "2", "3")
     assert r.returncode == 1 and "exactly one goal" in r.stderr
     r = run("plan", "--to", "0", "120", "60", "0", "0", "0")
     assert r.returncode == 1 and "goal state is in collision" in r.stderr
-    r = run("plan", "--to-xyz", "0", "0", "900")
-    assert r.returncode == 1 and "out of reach" in r.stderr
+    r = run("plan", "--to-xyz", "5000", "0", "0")
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: target (5000, 0, 0) mm is out of reach within the joint limits: the nearest "
+        "reachable point (574.77, 0.00, 123.91) mm is 4426.960 mm away"
+    ]
+    # the nearest point of the seed arm's reach sphere (B + 575 mm toward the target), by hand
+    b = np.array([0.0, 0.0, 140.0])
+    d = np.array([5000.0, 0.0, 0.0]) - b
+    assert np.linalg.norm(d) - 575.0 == pytest.approx(4426.960, abs=1e-3)
+    np.testing.assert_allclose(b + 575.0 * d / np.linalg.norm(d), [574.77, 0.0, 123.91], atol=5e-3)
 
 
 def test_help_texts_state_units():

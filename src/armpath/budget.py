@@ -35,6 +35,9 @@ MAX_COMMANDS = 1_000_000
 MAX_DESIGNS = 10_000
 #: Largest number of parallel jobs.
 MAX_JOBS = 256
+#: Largest coordinate or size a scene or curve may use (mm): 1000 km. Beyond it squared
+#: distances lose every digit a 0.01 mm clearance needs (and overflow near 1e154 mm).
+MAX_COORDINATE_MM = 1e9
 #: Largest time limit accepted (s): one week.
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0
 
@@ -122,6 +125,7 @@ def check_size(count: float, limit: float, what: str, option: str) -> None:
 
 __all__ = [
     "MAX_COMMANDS",
+    "MAX_COORDINATE_MM",
     "MAX_DESIGNS",
     "MAX_GRID_CELLS",
     "MAX_JOBS",
@@ -135,3 +139,29 @@ __all__ = [
     "current_deadline",
     "time_limit",
 ]
+
+
+# Added for the non-planning commands (workspace, blind zones, design sweep, trajectories).
+
+#: Largest number of waypoints of one trajectory (rows of a waypoints file, points of a circle).
+MAX_WAYPOINTS = 10_000
+#: Largest number of joints (columns) of a joint-space trajectory.
+MAX_JOINTS = 64
+#: Largest number of samples (joint vectors, points) held in memory at once: one chunk.
+MAX_CHUNK = 4_000_000
+#: Largest number of horizontal circles per workpiece face of a blind-zone survey.
+MAX_BANDS = 1_000
+#: Largest number of tool orientations tested at one point (a dexterity grid).
+MAX_ORIENTATIONS = 1_000_000
+
+__all__ += [
+    "MAX_BANDS",
+    "MAX_CHUNK",
+    "MAX_JOINTS",
+    "MAX_ORIENTATIONS",
+    "MAX_WAYPOINTS",
+]
+#: Largest number of points at which one curve is scanned (a circle of a blind-zone survey).
+MAX_CURVE_POINTS = 1_000_000
+
+__all__ += ["MAX_CURVE_POINTS"]

@@ -61,15 +61,17 @@ def model_dict(arm: SerialArm) -> dict[str, Any]:
 
 
 def clearance_dict(c: MotionClearance) -> dict[str, Any]:
+    """The clearance of a whole motion; a clearance with nothing to measure it against (no
+    obstacle, no pair of links) is null, and so are its part and obstacle."""
     return {
-        "min_clearance_mm": c.min_clearance,
-        "min_clearance_lower_bound_mm": c.min_clearance_lower_bound,
+        "min_clearance_mm": _finite_or_none(c.min_clearance),
+        "min_clearance_lower_bound_mm": _finite_or_none(c.min_clearance_lower_bound),
         "min_body_clearance_mm": _finite_or_none(c.min_body_clearance),
         "min_tool_tip_clearance_mm": _finite_or_none(c.min_tip_clearance),
         "min_self_clearance_mm": _finite_or_none(c.min_self_clearance),
         "certified": c.certified_ok,
-        "closest_part": c.worst_part,
-        "closest_obstacle": c.worst_obstacle,
+        "closest_part": c.worst_part or None,
+        "closest_obstacle": c.worst_obstacle or None,
         "during_command": c.worst_command,
         "configurations_evaluated": c.evaluations,
         "method": (
@@ -117,7 +119,7 @@ def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict
             "configuration_deg": list(lb.configuration_deg),
             "method": lb.method,
         },
-        "min_clearance_mm": result.clearance.min_clearance,
+        "min_clearance_mm": _finite_or_none(result.clearance.min_clearance),
         "clearance": clearance_dict(result.clearance),
         "search": {
             "lattice_states_examined": result.lattice_states_examined,
@@ -175,13 +177,16 @@ def tour_result_dict(
                 "states, not over every configuration"
             ),
         },
+        "orders_ranked": len(result.order_lower_bounds),
         "orders": [
             {
                 "order": [i + 1 for i in o],
                 "lower_bound_commands": b,
                 "planned_commands": result.orders_planned.get(o),
+                "not_planned_because": result.orders_not_planned.get(o),
             }
             for o, b in sorted(result.order_lower_bounds.items(), key=lambda kv: (kv[1], kv[0]))
+            if o in result.orders_planned or o in result.orders_not_planned
         ],
         "legs": [
             {
@@ -192,7 +197,7 @@ def tour_result_dict(
             }
             for leg in result.legs
         ],
-        "min_clearance_mm": result.clearance.min_clearance,
+        "min_clearance_mm": _finite_or_none(result.clearance.min_clearance),
         "clearance": clearance_dict(result.clearance),
     }
 
@@ -282,7 +287,7 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
             "of_curve": covered / L,
         },
         "metrics": metrics_dict(result.metrics),
-        "min_clearance_mm": result.clearance.min_clearance,
+        "min_clearance_mm": _finite_or_none(result.clearance.min_clearance),
         "clearance": clearance_dict(result.clearance),
     }
 
@@ -308,7 +313,7 @@ def plan_result_dict(
         "lower_bound_commands": plan.direct_commands,
         "method": plan.method,
         "search_samples": plan.searched_samples,
-        "min_clearance_mm": plan.clearance.min_clearance,
+        "min_clearance_mm": _finite_or_none(plan.clearance.min_clearance),
         "clearance": clearance_dict(plan.clearance),
     }
     if target_mm is not None:
@@ -400,8 +405,35 @@ def summary_rows(doc: dict[str, Any]) -> list[list[Any]]:
     return rows
 
 
+#: Significant digits of the floats written to result files: enough for a nanometre in a
+#: kilometre, few enough to drop binary noise (29.999999999999996 is written 30.0).
+JSON_DIGITS = 12
+
+
+def _tidy(value: Any) -> Any:
+    """``value`` with every float rounded to :data:`JSON_DIGITS` significant digits and every
+    non-finite float (no obstacle to measure against) replaced by null."""
+    if isinstance(value, float | np.floating):
+        x = float(value)
+        return float(f"{x:.{JSON_DIGITS}g}") if np.isfinite(x) else None
+    if isinstance(value, dict):
+        return {k: _tidy(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_tidy(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _tidy(value.tolist())
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
 def json_text(doc: dict[str, Any]) -> str:
-    return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    """A result document as JSON text: floats tidied (see :func:`_tidy`), never NaN or inf."""
+    return json.dumps(_tidy(doc), indent=2, allow_nan=False) + "\n"
+
+
+#: The file in an output folder that lists what armpath wrote there last.
+MANIFEST = ".armpath-files"
 
 
 class OutputFolder:
@@ -440,12 +472,21 @@ class OutputFolder:
         return sorted(p.name for p in self._staging.iterdir())
 
     def commit(self) -> list[Path]:
-        """Move every staged file into the destination folder; returns their final paths."""
+        """Move every staged file into the destination folder; returns their final paths.
+
+        Files an earlier armpath run wrote into the same folder (listed in its
+        :data:`MANIFEST`) that this run did not write again are removed, so the folder never
+        mixes two runs' results; files armpath did not write are left alone.
+        """
         try:
             self.path.mkdir(parents=True, exist_ok=True)
             names = sorted(p.name for p in self._staging.iterdir())
+            earlier = self._earlier_files()
             for name in names:
                 os.replace(self._staging / name, self.path / name)
+            for name in sorted(earlier - set(names)):
+                (self.path / name).unlink(missing_ok=True)
+            (self.path / MANIFEST).write_text("\n".join(names) + "\n", encoding="utf-8")
             self.written = [self.path / n for n in names]
         except OSError as exc:
             raise OutputError(
@@ -454,6 +495,14 @@ class OutputFolder:
         finally:
             self.discard()
         return self.written
+
+    def _earlier_files(self) -> set[str]:
+        """Names an earlier run listed in the folder's manifest (plain names only)."""
+        try:
+            text = (self.path / MANIFEST).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            return set()
+        return {n for n in text.split() if n and Path(n).name == n and n != MANIFEST}
 
     def discard(self) -> None:
         shutil.rmtree(self._staging, ignore_errors=True)
@@ -465,6 +514,13 @@ def output_folder(path: str | Path) -> Iterator[OutputFolder]:
     folder = OutputFolder(path)
     try:
         yield folder
+    except OSError as exc:  # a full disk or an unwritable file while writing the results
+        folder.discard()
+        where = f" ({Path(exc.filename).name})" if exc.filename else ""
+        raise OutputError(
+            f"cannot write the results{where}: {exc.strerror or exc}; nothing was written to "
+            f"{folder.path}"
+        ) from None
     except BaseException:
         folder.discard()
         raise

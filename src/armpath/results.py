@@ -16,7 +16,7 @@ from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
 from armpath.model.seed_arm import seed_arm, seed_geometry_from
 from armpath.model.serial_arm import SerialArm
-from armpath.scenes import Scene, load_scene
+from armpath.scenes import Scene, load_scene, scene_from_dict
 
 FloatArray = NDArray[np.float64]
 RESULT_TASKS = ("reach", "trace", "spotweld", "plan")
@@ -76,6 +76,9 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     described = doc.get("scene", {})
     source = described.get("source", "")
     wall = doc.get("wall_thickness") or described.get("wall_thickness")
+    definition = described.get("definition")
+    if isinstance(definition, dict) and definition:
+        return scene_from_dict(definition, f"{source} (as stored in the result)")
     if source == "built-in seed.toml":
         loaded = load_scene(None)
     elif source and Path(source).is_file():
@@ -90,7 +93,8 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
 
 def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> PlannedResult:
     """Read a result JSON document; its scene comes from ``scene`` or, if omitted, from the
-    source the document names (the built-in seed scene or a scene file that still exists)."""
+    scene definition the document carries (older documents: the source it names, the built-in
+    seed scene or a scene file that still exists)."""
     p = Path(path)
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))

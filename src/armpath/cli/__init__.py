@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import importlib
 import sys
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -33,13 +33,48 @@ def _root(
         raise typer.Exit(0)
 
 
+def _tidy_help(command: Any) -> Any:
+    """Help conventions for every command, in one place: an on/off flag (``--help`` included)
+    shows no value type (typer would print ``<bool>``); an option that takes several separate
+    numbers shows one ``NUM`` per number rather than a comma-joined type list, unless it names
+    them itself; an argument with a metavar (``X Y Z``) shows no type column."""
+    commands = getattr(command, "commands", {})
+    for sub in commands.values():
+        _tidy_help(sub)
+    for param in command.params:
+        if param.param_type_name == "argument" and param.metavar:
+            # the metavar (X Y Z) already names the values; no type column
+            param.display_type_rich = lambda ctx: ""
+        if param.param_type_name != "option":
+            continue
+        if param.is_flag:
+            param.metavar = ""
+        elif param.nargs > 1 and param.metavar is None:
+            param.metavar = " ".join(["NUM"] * param.nargs)
+    help_option = command.get_help_option
+
+    def get_help_option(ctx: Any) -> Any:
+        option = help_option(ctx)
+        if option is not None:
+            option.metavar = ""
+        return option
+
+    command.get_help_option = get_help_option
+    return command
+
+
+def cli_command() -> Any:
+    """The ``armpath`` command (all subcommands registered, help conventions applied)."""
+    return _tidy_help(typer.main.get_command(app))
+
+
 def main() -> None:
     """Console entry point."""
     try:
-        app()
+        cli_command()()
     except ArmpathError as exc:  # pragma: no cover - commands already convert these
         err_console.print(f"error: {exc}", markup=False)
         sys.exit(1)
 
 
-__all__ = ["app", "main"]
+__all__ = ["app", "cli_command", "main"]

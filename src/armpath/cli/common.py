@@ -8,17 +8,18 @@ import math
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, NoReturn
 
 import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
 
-from armpath.budget import time_limit
+from armpath.budget import check_time_limit_value, time_limit
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.export import OutputFolder, csv_text
+from armpath.geometry import WallThickness
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.motion import Objective
@@ -39,7 +40,12 @@ err_console = Console(stderr=True, highlight=False)
 LOOSE = {"ignore_unknown_options": True}  # lets negative numbers through as arguments
 
 WallOption = Annotated[
-    str | None, typer.Option(help="Workpiece wall thickness measured 'normal' or 'horizontal'.")
+    WallThickness | None,
+    typer.Option(
+        help="How the hollow workpiece's wall thickness is measured: normal to the wall, or "
+        "horizontally (the seed papers' reading). Default: as the scene file says.",
+        show_default=False,
+    ),
 ]
 LinkRadiusOption = Annotated[
     float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
@@ -109,17 +115,37 @@ def _cli_errors(time_limit_s: float | None = None) -> Iterator[None]:
     """Turn armpath's errors into a one-line message and exit status 1; run the block under
     ``time_limit_s`` (see :mod:`armpath.budget`)."""
     try:
+        check_time_limit_value(time_limit_s, "--time-limit")
         with time_limit(time_limit_s):
             yield
     except ArmpathError as exc:
-        err_console.print(f"error: {exc}", markup=False, soft_wrap=True)
-        raise typer.Exit(1) from None
+        _error_line(str(exc))
+    except OSError as exc:  # the machine, not the input: a full disk, a closed pipe, ...
+        where = f" ({exc.filename})" if exc.filename else ""
+        _error_line(f"{exc.strerror or exc}{where}")
+    except MemoryError:
+        _error_line(
+            "out of memory: the problem is too large for this machine; make it smaller "
+            "(fewer samples, coarser grids, shorter motions)"
+        )
+
+
+def _error_line(message: str) -> NoReturn:
+    """Print ``error: message`` as one line on stderr and exit with status 1."""
+    err_console.print(f"error: {' '.join(message.split())}", markup=False, soft_wrap=True)
+    raise typer.Exit(1)
+
+
+#: Seconds before progress lines start when stderr is not a terminal: quick commands (and
+#: input refused up front) print nothing but their result or their one error line.
+PROGRESS_DELAY_S = 2.0
 
 
 @contextlib.contextmanager
 def progress(title: str) -> Iterator[Callable[[str], None]]:
-    """Report progress on stderr: a live status line on a terminal; otherwise one line per new
-    message (``armpath: [12.3 s] message``), so logs and pipes show what is under way.
+    """Report progress on stderr: a live status line on a terminal; otherwise, once the work
+    has run for :data:`PROGRESS_DELAY_S`, one line per new message
+    (``armpath: [12.3 s] message``), so logs and pipes show what a long command is doing.
 
     Yields the callback that takes each progress message.
     """
@@ -128,18 +154,15 @@ def progress(title: str) -> Iterator[Callable[[str], None]]:
             yield lambda msg: status.update(escape(msg))
         return
     started = time.monotonic()
-    last = [""]
+    last = [title, ""]  # latest message, last printed
 
     def say(msg: str) -> None:
-        if msg != last[0]:
-            last[0] = msg
-            err_console.print(
-                f"armpath: [{time.monotonic() - started:6.1f} s] {msg}",
-                markup=False,
-                soft_wrap=True,
-            )
+        last[0] = msg
+        elapsed = time.monotonic() - started
+        if elapsed >= PROGRESS_DELAY_S and msg != last[1]:
+            last[1] = msg
+            err_console.print(f"armpath: [{elapsed:6.1f} s] {msg}", markup=False, soft_wrap=True)
 
-    say(title)
     yield say
 
 
@@ -158,7 +181,7 @@ def _numbers(values: list[str], count: int, what: str) -> list[float]:
     return out
 
 
-def _scene(scene_file: Path | None, wall: str | None) -> Scene:
+def _scene(scene_file: Path | None, wall: WallThickness | str | None) -> Scene:
     scene = load_scene(scene_file)
     return scene.with_wall_thickness(wall) if wall else scene
 

@@ -28,6 +28,8 @@ from armpath.cli.common import (
 )
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.ik import solve_ik
+from armpath.ik.numerical import MAX_SEEDS as MAX_IK_SEEDS
+from armpath.ik.solve import METHODS as IK_METHODS
 from armpath.kinematics import landmark_positions, tool_pose
 from armpath.model.catalog import resolve_model
 
@@ -122,7 +124,8 @@ def ik(
     method: Annotated[
         str,
         typer.Option(
-            help="auto, spherical-wrist, three-parallel, general (Raghavan-Roth) or numerical."
+            help="auto, spherical-wrist, three-parallel, general (Raghavan-Roth) or numerical "
+            "(--xyz: auto or numerical)."
         ),
     ] = "auto",
     seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver.")] = 48,
@@ -137,8 +140,17 @@ def ik(
     with _cli_errors():
         if (pose is None) == (xyz is None):
             raise InvalidInputError("give exactly one target: --pose '16 numbers' or --xyz X Y Z")
-        if seeds < 1:
-            raise InvalidInputError(f"--seeds must be >= 1, got {seeds}")
+        if method not in IK_METHODS:
+            raise InvalidInputError(
+                f"--method must be one of {', '.join(IK_METHODS)}, got {method!r}"
+            )
+        if xyz is not None and method not in ("auto", "numerical"):
+            raise InvalidInputError(
+                f"--method {method} solves full poses (--pose); a position (--xyz) is solved by "
+                "the numerical method (--method auto or numerical)"
+            )
+        if not 1 <= seeds <= MAX_IK_SEEDS:
+            raise InvalidInputError(f"--seeds must be in [1, {MAX_IK_SEEDS}], got {seeds}")
         arm = resolve_model(model)
         if pose is not None:
             target = _pose_argument(pose)

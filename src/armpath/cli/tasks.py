@@ -21,6 +21,7 @@ from armpath.cli.common import (
     ObjectiveOption,
     SceneOption,
     SeedOption,
+    TimeLimitOption,
     WallOption,
     _animate_into,
     _animate_needs_out,
@@ -32,11 +33,13 @@ from armpath.cli.common import (
     app,
     err_console,
     out_console,
+    progress,
 )
 from armpath.commands import deg_to_ticks, ticks_to_deg
 from armpath.errors import InvalidInputError
 from armpath.export import (
     OutputFolder,
+    clearance_dict,
     json_text,
     output_folder,
     plan_result_dict,
@@ -49,11 +52,49 @@ from armpath.export import (
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, Objective, plan_motion
 from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
-from armpath.planning.tour import TourResult
+from armpath.planning.tour import TourResult, VisitOrder
 from armpath.planning.trace import TraceOptions, TraceResult
 from armpath.report import passes_text, summary_html, summary_markdown
 from armpath.scenes import Scene
 from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
+
+
+def _mm(value: float | None, digits: int = 3) -> str:
+    """A length in mm, or a dash when there was nothing to measure (null in the JSON)."""
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
+def _clearance_text(c: dict[str, Any], proven: bool = False) -> str:
+    """The clearance of a whole continuous motion in words (mm): the closest approach and what
+    it is between, the links, the tool tip and the links to each other."""
+    verdict = "certified" if c["certified"] else "NOT certified"
+    if c["min_clearance_mm"] is None and c["min_self_clearance_mm"] is None:
+        return f"no obstacles and no link pairs to keep apart; {verdict}"
+    parts = []
+    if c["min_clearance_mm"] is not None:
+        bound = (
+            f", proven >= {_mm(c['min_clearance_lower_bound_mm'])} mm"
+            if proven and c["min_clearance_lower_bound_mm"] is not None
+            else ""
+        )
+        where = "the start state" if c["during_command"] == 0 else f"command {c['during_command']}"
+        parts.append(
+            f"{_mm(c['min_clearance_mm'])} mm ({c['closest_part']} to {c['closest_obstacle']}, "
+            f"{where}{bound})"
+        )
+        parts.append(f"links {_mm(c['min_body_clearance_mm'])} mm")
+        if c["min_tool_tip_clearance_mm"] is not None:
+            parts.append(f"tool tip {_mm(c['min_tool_tip_clearance_mm'])} mm (may touch)")
+    else:
+        parts.append("no obstacles")
+    if c["min_self_clearance_mm"] is not None:
+        parts.append(f"links to each other {_mm(c['min_self_clearance_mm'])} mm")
+    return "; ".join(parts) + f"; whole continuous motion, {verdict}"
+
+
+def _scene_text(name: str, wall: str | None) -> str:
+    """The scene's name and, when it has a hollow workpiece, how its wall is measured."""
+    return f"{name}; workpiece wall measured {wall}" if wall else f"{name} (no hollow workpiece)"
 
 
 def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
@@ -79,14 +120,9 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
         f"{np.abs(seq.final_ticks - seq.start_ticks).max() / 10:.1f} deg "
         f"(least possible {lb.max_joint_change_deg:.3f} deg)",
     )
-    where = "start state" if c.worst_command == 0 else f"command {c.worst_command}"
-    table.add_row(
-        "min clearance",
-        f"{c.min_clearance:.3f} mm  ({c.worst_part} to {c.worst_obstacle}, {where}; whole "
-        f"continuous motion, proven >= {c.min_clearance_lower_bound:.3f} mm)",
-    )
+    table.add_row("min clearance", _clearance_text(clearance_dict(c), proven=True))
     wall = scene.wall_thickness
-    table.add_row("scene", f"{scene.name}; wall thickness measured {wall.value if wall else '-'}")
+    table.add_row("scene", _scene_text(scene.name, wall.value if wall else None))
     return table
 
 
@@ -137,13 +173,14 @@ def reach(
     scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = 0.0,
     animate: AnimateOption = False,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Reach a point with the fingertip in the fewest commands, then the smallest error.
 
     When every direct motion is blocked, the motion is planned around the obstacles instead
     (the summary's method says so).
     """
-    with _cli_errors():
+    with _cli_errors(time_limit):
         arm = _arm(link_radius)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
         theta = list(start) if start is not None else list(np.degrees(arm.home))
@@ -155,7 +192,8 @@ def reach(
         scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
-            result = plan_reach(arm, scene.world, start_ticks, xyz, options)
+            with progress("planning the reach ..."):
+                result = plan_reach(arm, scene.world, start_ticks, xyz, options)
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene, animate)
         written = folder.written if folder is not None else []
@@ -186,12 +224,7 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
         f"joint travel {m['energy_deg']:.1f} deg (objective: {doc['objective']})",
     )
     table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} deg")
-    c = doc["clearance"]
-    table.add_row(
-        "min clearance",
-        f"{c['min_clearance_mm']:.3f} mm  ({c['closest_part']} to {c['closest_obstacle']}; "
-        f"body {c['min_body_clearance_mm']:.3f} mm; whole continuous motion, certified)",
-    )
+    table.add_row("min clearance", _clearance_text(doc["clearance"]))
     return table
 
 
@@ -207,8 +240,10 @@ def _plan_to_point(
     stem: str,
     animate: bool = False,
 ) -> None:
-    goals, _ = goal_states(arm, scene.world, start_ticks, xyz, tolerance)
-    plan = plan_motion(arm, scene.world, start_ticks, goals, options)
+    with progress("planning ...") as say:
+        say("goal states at the target")
+        goals, _ = goal_states(arm, scene.world, start_ticks, xyz, tolerance)
+        plan = plan_motion(arm, scene.world, start_ticks, goals, options, on_progress=say)
     doc = plan_result_dict(plan, arm, scene, options.objective.value, xyz, tolerance)
     _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz, animate)
 
@@ -283,6 +318,7 @@ def plan(
         ),
     ] = 1,
     animate: AnimateOption = False,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Plan a collision-free command sequence to a joint goal or a fingertip point.
 
@@ -290,7 +326,7 @@ def plan(
     it is clear; otherwise RRT-Connect with shortcuts finds a path, which is put on the command
     lattice and certified along its whole continuous motion.
     """
-    with _cli_errors():
+    with _cli_errors(time_limit):
         if (to is None) == (to_xyz is None):
             raise InvalidInputError("give exactly one goal: --to θ1 … θ6 or --to-xyz X Y Z")
         _animate_needs_out(animate, out)
@@ -327,7 +363,10 @@ def plan(
                 goal = deg_to_ticks(
                     _numbers([str(t) for t in to], 6, "--to θ1 … θ6 (deg)"), what="--to angles"
                 )
-                result = plan_motion(arm, scene.world, start_ticks, goal[None, :], options)
+                with progress("planning ...") as say:
+                    result = plan_motion(
+                        arm, scene.world, start_ticks, goal[None, :], options, on_progress=say
+                    )
                 doc = plan_result_dict(result, arm, scene, objective.value, None, None)
                 _emit_plan(result, doc, arm, scene, folder, json_out, "plan", None, animate)
         if folder is not None and not json_out:
@@ -353,19 +392,14 @@ def _tour_summary(doc: dict[str, Any]) -> Table:
     table.add_row(
         "largest error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
     )
-    c = doc["clearance"]
-    table.add_row(
-        "min clearance",
-        f"{c['min_clearance_mm']:.3f} mm (tool tip, may touch); links "
-        f"{c['min_body_clearance_mm']:.3f} mm; whole continuous motion, certified",
-    )
+    table.add_row("min clearance", _clearance_text(doc["clearance"]))
     m = doc["metrics"]
     table.add_row(
         "objectives",
         f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
         f"joint travel {m['energy_deg']:.1f} deg",
     )
-    table.add_row("wall thickness", f"measured {doc['wall_thickness']}")
+    table.add_row("scene", _scene_text(doc["scene"]["name"], doc["wall_thickness"]))
     return table
 
 
@@ -396,9 +430,12 @@ def _write_tour(
 @app.command()
 def spotweld(
     order: Annotated[
-        str,
-        typer.Option(help="Visiting order: 'auto' (best over all orders) or 'given' (as listed)."),
-    ] = "auto",
+        VisitOrder,
+        typer.Option(
+            help="Visiting order: auto (every order ranked by its lower bound, the best planned; "
+            "up to 8 welds) or given (as listed)."
+        ),
+    ] = VisitOrder.AUTO,
     return_home: Annotated[
         bool, typer.Option("--return", help="Return to the initial pose at the end.")
     ] = False,
@@ -414,22 +451,20 @@ def spotweld(
     link_radius: LinkRadiusOption = 0.0,
     seed: SeedOption = 0,
     animate: AnimateOption = False,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Task 3: reach the spot welds on the workpiece's inner wall through the open top."""
-    with _cli_errors():
-        if order not in ("auto", "given"):
-            raise InvalidInputError(f"--order must be 'auto' or 'given', got {order!r}")
+    with _cli_errors(time_limit):
         arm = _arm(link_radius)
         scene = _scene(scene_file, wall)
         options = MotionOptions(objective=objective, seed=seed)
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
-            with err_console.status("planning the spot welds ...") as status:
+            with progress("planning the spot welds ...") as say:
                 result = spotweld_task(
-                    scene, arm, order, return_home, tolerance, options,
-                    on_progress=lambda msg: status.update(msg),
-                )  # fmt: skip
+                    scene, arm, order, return_home, tolerance, options, on_progress=say
+                )
             doc = tour_result_dict(result, arm, scene, objective.value)
             if folder is not None:
                 _write_tour(folder, result, doc, arm, scene, animate)
@@ -478,14 +513,8 @@ def _trace_summary(doc: dict[str, Any]) -> Table:
         f"{doc['max_deviation_mm']:.4f} mm (proven <= {doc['max_deviation_bound_mm']:.4f}; "
         f"tolerance {doc['tolerance_mm']} mm; continuous tip path)",
     )
-    c = doc["clearance"]
-    table.add_row(
-        "min clearance",
-        f"{c['min_clearance_mm']:.3f} mm (tool tip, may touch); links "
-        f"{c['min_body_clearance_mm']:.3f} mm; whole continuous motion, "
-        f"{'certified' if c['certified'] else 'NOT certified'}",
-    )
-    table.add_row("wall thickness", f"measured {doc['wall_thickness']}")
+    table.add_row("min clearance", _clearance_text(doc["clearance"]))
+    table.add_row("scene", _scene_text(doc["scene"]["name"], doc["wall_thickness"]))
     return table
 
 
@@ -516,6 +545,7 @@ def _write_trace(
         [(p.first, p.last) for p in result.passes],
         gaps,
         title,
+        curve_name=curve.name,
     )
     plot_trace_deviation(
         folder.file("trace_deviation.png"),
@@ -546,18 +576,19 @@ def trace(
     link_radius: LinkRadiusOption = 0.0,
     seed: SeedOption = 0,
     animate: AnimateOption = False,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Task 2: go once around the scene's curve (the crack) with the fingertip, every reachable
     part, fewest passes and commands; report the unreachable arcs and why."""
-    with _cli_errors():
+    with _cli_errors(time_limit):
         arm = _arm(link_radius)
         scene = _scene(scene_file, wall)
         options = TraceOptions(tolerance_mm=tolerance, motion=MotionOptions(seed=seed))
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
-            with err_console.status("tracing the curve ...") as status:
-                result = trace_task(scene, arm, options, lambda msg: status.update(msg))
+            with progress("tracing the curve ...") as say:
+                result = trace_task(scene, arm, options, say)
             doc = trace_result_dict(result, arm, scene)
             if folder is not None:
                 _write_trace(folder, result, doc, arm, scene, animate)
@@ -577,27 +608,28 @@ def run(
     html: Annotated[
         bool, typer.Option("--html", help="Also write the report as summary.html.")
     ] = False,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Run the seed scene's three tasks: 1, reach the tool box; 2, trace the crack; 3, spot welds
     inside the workpiece; then summarise the seed arm's blind zones. Writes each task's result
     (JSON, CSV, XLSX), figures and animations (GIF), and a one-page report summary.md."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
 
-    with _cli_errors():
+    with _cli_errors(time_limit):
         scene = _scene(None, wall)
         arm = _arm(link_radius)
         titles = dict(SEED_TASKS)
         with output_folder(out) as folder:
-            with err_console.status(f"{titles['reach']} ..."):
+            with progress(f"{titles['reach']} ..."):
                 result = reach_task(scene, arm)
             _write_reach(folder, "reach", result, arm, scene, animate=True)
             reach_doc = reach_result_dict(result, arm, scene)
-            with err_console.status(f"{titles['trace']} ...") as status:
-                traced = trace_task(scene, arm, on_progress=lambda msg: status.update(msg))
+            with progress(f"{titles['trace']} ...") as say:
+                traced = trace_task(scene, arm, on_progress=say)
             trace_doc = trace_result_dict(traced, arm, scene)
             _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
-            with err_console.status(f"{titles['spotweld']} ...") as status:
-                tour = spotweld_task(scene, arm, on_progress=lambda msg: status.update(msg))
+            with progress(f"{titles['spotweld']} ...") as say:
+                tour = spotweld_task(scene, arm, on_progress=say)
             tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
             _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
             with err_console.status("blind zones ...") as status:

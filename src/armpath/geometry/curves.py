@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from armpath.budget import MAX_COORDINATE_MM
 from armpath.errors import InvalidInputError
 from armpath.geometry.expressions import Expression, parse_expression
 from armpath.geometry.primitives import SolidOfRevolution
@@ -48,13 +49,28 @@ class Curve(ABC):
     def describe(self) -> dict[str, object]:
         """The curve's definition for result files (plain JSON types)."""
 
+    def parameter_text(self, u: float) -> str:
+        """Where parameter ``u`` lies, in the terms the curve was given in (for messages)."""
+        return f"{100.0 * u:.1f} % of the way along it"
+
     @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         u = np.linspace(0.0, 1.0, TABLE_SAMPLES)
-        p = self.points(u)
-        if not np.all(np.isfinite(p)):
-            raise InvalidInputError(f"curve {self.name!r} is not finite everywhere on [0, 1]")
+        with np.errstate(all="ignore"):
+            p = self.points(u)
+        bad = ~np.all(np.isfinite(p), axis=-1)
+        if np.any(bad):
+            where = self.parameter_text(float(u[int(np.argmax(bad))]))
+            raise InvalidInputError(f"curve {self.name!r} is not finite at {where}")
+        big = float(np.abs(p).max())
+        if big > MAX_COORDINATE_MM:
+            raise InvalidInputError(
+                f"curve {self.name!r} reaches a coordinate of {big:.3g} mm, beyond the largest "
+                f"a scene may use ({MAX_COORDINATE_MM:g} mm)"
+            )
         s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=-1))]
+        if not s[-1] > 0:
+            raise InvalidInputError(f"curve {self.name!r} has zero length (a single point)")
         return u, p, s
 
     @cached_property
@@ -159,12 +175,17 @@ class ParametricCurve(Curve):
             raise InvalidInputError(f"curve {self.name!r}: need finite t0 < t1")
         exprs = tuple(parse_expression(e, "t") for e in (self.x, self.y, self.z))
         object.__setattr__(self, "_exprs", exprs)
-        ends = self.points(np.array([0.0, 1.0]))
-        object.__setattr__(self, "closed", bool(np.linalg.norm(ends[1] - ends[0]) < 1e-9))
+        with np.errstate(all="ignore"):
+            ends = self.points(np.array([0.0, 1.0]))
+            closed = bool(np.linalg.norm(ends[1] - ends[0]) < 1e-9)
+        object.__setattr__(self, "closed", closed)
 
     def points(self, u: ArrayLike) -> FloatArray:
         t = self.t0 + np.asarray(u, dtype=np.float64) * (self.t1 - self.t0)
         return np.stack([e(t) for e in self._exprs], axis=-1)
+
+    def parameter_text(self, u: float) -> str:
+        return f"t = {self.t0 + u * (self.t1 - self.t0):.6g}"
 
     def describe(self) -> dict[str, object]:
         return {

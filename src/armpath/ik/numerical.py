@@ -38,6 +38,10 @@ def _errors_and_jacobians(
     return err, J
 
 
+#: Most random starts of one numerical solve (each runs up to ``max_iterations`` LM steps).
+MAX_SEEDS = 100_000
+
+
 def solve_numerical(
     arm: SerialArm,
     T_target: FloatArray,
@@ -58,6 +62,10 @@ def solve_numerical(
     onto the joint limits.
     """
     n = arm.n_joints
+    if not 1 <= seeds <= MAX_SEEDS:
+        raise InvalidInputError(
+            f"seeds of the numerical IK must be in [1, {MAX_SEEDS}], got {seeds}"
+        )
     if position_only:
         p = np.asarray(T_target, dtype=np.float64).reshape(-1)
         if p.shape != (3,) or not np.isfinite(p).all():

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import minimize
 
+from armpath.budget import check_size, check_time
 from armpath.errors import InvalidInputError
 from armpath.geometry.curves import Curve
 from armpath.geometry.primitives import Obstacle, orthonormal_frame
@@ -49,6 +50,8 @@ TOUCH_MM = 1e-6
 _PAST_TANGENT = 0.02
 #: Branches of :func:`family_from_wrist` that differ geometrically (wrist flip dropped).
 _BRANCHES = (0, 2, 4, 6)
+#: Most scan points of one reachability analysis (a 400 m curve at the default 4 mm step).
+MAX_SCAN_POINTS = 100_000
 
 
 def fibonacci_directions(count: int) -> FloatArray:
@@ -352,21 +355,33 @@ def curve_reachability(
     on_progress: Callable[[str], None] | None = None,
 ) -> CurveReachability:
     """Reachable and unreachable arcs of ``curve`` (ends located to ``resolution_mm``)."""
-    if not (scan_step_mm > 0 and resolution_mm > 0):
-        raise InvalidInputError("scan step and resolution must be > 0 mm")
+    if not (np.isfinite(scan_step_mm) and scan_step_mm > 0):
+        raise InvalidInputError(f"scan step must be > 0 mm, got {scan_step_mm}")
+    if not (np.isfinite(resolution_mm) and resolution_mm >= 1e-6):
+        raise InvalidInputError(f"resolution must be >= 1e-6 mm, got {resolution_mm}")
     fam = CurveFamily(arm, world, curve)
     say = on_progress or (lambda _m: None)
     L = curve.length
+    check_size(
+        L / scan_step_mm,
+        MAX_SCAN_POINTS,
+        f"scanning the {L:.4g} mm curve {curve.name!r} every {scan_step_mm:g} mm",
+        "the curve (shorter) or the scan step (larger)",
+    )
     n = max(int(np.ceil(L / scan_step_mm)), 4)
     s_scan = np.linspace(0.0, L, n + 1)
     if curve.closed:
         s_scan = s_scan[:-1]
     say(f"reachability: scanning {s_scan.size} points of {curve.name!r}")
-    scores = np.array([fam.best(float(s)).score for s in s_scan])
+    scores = np.empty(s_scan.size)
+    for i, s in enumerate(s_scan):
+        check_time("scanning the curve for reachable points")
+        scores[i] = fam.best(float(s)).score
     ok = scores >= 0.0
     # a coarse "no" might be a fine "yes": re-check the scan points next to a change
     for i in range(s_scan.size):
         if not ok[i]:
+            check_time("scanning the curve for reachable points")
             nb = [i - 1, i + 1] if curve.closed else [j for j in (i - 1, i + 1) if 0 <= j < n + 1]
             if any(ok[j % s_scan.size] for j in nb) or scores[i] > -0.5:
                 v = fam.best(float(s_scan[i]), fine=True)
@@ -374,9 +389,14 @@ def curve_reachability(
     say("reachability: locating the ends of the unreachable arcs")
 
     def boundary(s_in: float, s_out: float) -> tuple[float, Verdict]:
-        """Bisect between a reachable and an unreachable arc length."""
+        """Bisect between a reachable and an unreachable arc length (the gap halves each step,
+        so at most ``log2(gap / resolution)`` steps)."""
         last = fam.best(s_in, fine=True)
-        while abs(s_out - s_in) > resolution_mm:
+        steps = int(np.ceil(np.log2(max(abs(s_out - s_in), resolution_mm) / resolution_mm))) + 1
+        for _ in range(steps):
+            if abs(s_out - s_in) <= resolution_mm:
+                break
+            check_time("locating the ends of the unreachable arcs")
             mid = 0.5 * (s_in + s_out)
             v = fam.best(mid)  # a coarse witness proves reachability; only "no" is refined
             if not v.reachable:
@@ -488,6 +508,7 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
         return v if v.score < -0.5 or v.score >= 0 else fam.best(s, True, limits, obstacles)
 
     for s in map(float, s_inside):
+        check_time("finding why an arc is unreachable")
         v = verdict(s, True, ())
         if v.out_of_reach:
             tag = "out of reach"

@@ -32,6 +32,7 @@ from enum import StrEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import check_time
 from armpath.commands import (
     MAX_INCREMENT_TICKS,
     TICK_RAD,
@@ -261,8 +262,9 @@ def path_to_sequence(path_ticks: FloatArray, start: IntArray, goal: IntArray) ->
     seg = np.max(np.abs(np.diff(p, axis=0)), axis=1)
     arc = np.r_[0.0, np.cumsum(seg)]
     total = float(arc[-1])
-    n = max(int(np.ceil(total / MAX_INCREMENT_TICKS - 1e-9)), 1)
-    while True:
+    fewest = max(int(np.ceil(total / MAX_INCREMENT_TICKS - 1e-9)), 1)
+    # steps of at most 19 ticks round to at most 20, so n never passes ceil(total / 19)
+    for n in range(fewest, max(int(np.ceil(total / (MAX_INCREMENT_TICKS - 1))), fewest) + 1):
         s = np.linspace(0.0, total, n + 1)
         states = np.empty((n + 1, p.shape[1]))
         for j in range(p.shape[1]):
@@ -272,7 +274,7 @@ def path_to_sequence(path_ticks: FloatArray, start: IntArray, goal: IntArray) ->
         cmds = np.diff(ticks, axis=0)
         if np.all(np.abs(cmds) <= MAX_INCREMENT_TICKS):
             return CommandSequence(start, cmds)
-        n += 1
+    raise AssertionError("unreachable: steps of 19 ticks always round to legal commands")
 
 
 def merge_commands(
@@ -387,8 +389,13 @@ def plan_motion(
     upper = np.where(np.isfinite(hi), np.minimum(hi, span_hi), span_hi)
     lower = np.where(active, lower, s_rad)
     upper = np.where(active, upper, s_rad)
-    # goals whose tool tip touches a surface are approached from a retracted pre-goal
+    # goals whose tool tip touches a surface are approached from a retracted pre-goal; a start
+    # whose tool tip touches one (the end of a weld) first backs away from it the same way
     pre = np.array([retracted_pre_goal(arm, world, g, active, opts.approach_mm) for g in g_rad])
+    lead = _retreat(arm, world, start, active, opts.approach_mm)
+    if lead.n_commands:
+        start = lead.final_ticks
+        s_rad = ticks_to_rad(start)
     # inactive joints move straight from start to goal; plan with them at the start value
     goals_search = np.where(active, pre, s_rad)
 
@@ -412,6 +419,7 @@ def plan_motion(
     for attempt in range(opts.attempts + opts.searches - 1):
         if len(found) >= opts.searches:
             break
+        check_time("planning a collision-free motion")
         rng = np.random.default_rng([opts.seed, attempt])
         check = edge_checker(arm, world, buffer, spacing)
         say(f"searching (search {attempt + 1}, buffer {buffer:g} mm)")
@@ -430,6 +438,8 @@ def plan_motion(
             main = merge_commands(path_to_sequence(path / TICK_RAD, start, pre_ticks), check)
             last = CommandSequence.straight(pre_ticks, goals[gi])
             seq = CommandSequence(start, np.vstack([main.commands, last.commands]))
+        if lead.n_commands:
+            seq = CommandSequence(lead.start_ticks, np.vstack([lead.commands, seq.commands]))
         mc = motion_clearance(arm, world, seq)
         if mc.certified_ok:
             found.append(
@@ -456,6 +466,28 @@ def plan_motion(
     if found:
         return min(found, key=lambda plan: score(plan.sequence))
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
+
+
+def _retreat(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start: IntArray,
+    active: NDArray[np.bool_],
+    distance_mm: float,
+) -> CommandSequence:
+    """Commands that back the tool tip straight away from the surface it touches at ``start``
+    (:func:`retracted_pre_goal` on the lattice), or none when it touches nothing or the retreat
+    is not certified clear. A search from a touching start could not prove its first edge."""
+    none = CommandSequence(start, np.zeros((0, start.size), dtype=np.int64))
+    q = ticks_to_rad(start)
+    back = retracted_pre_goal(arm, world, q, active, distance_mm)
+    if np.array_equal(back, q):
+        return none
+    back_ticks = np.round(back / TICK_RAD).astype(np.int64)
+    if not arm.within_limits(ticks_to_rad(back_ticks)):
+        return none
+    seq = CommandSequence.straight(start, back_ticks)
+    return seq if motion_clearance(arm, world, seq).certified_ok else none
 
 
 def retracted_pre_goal(

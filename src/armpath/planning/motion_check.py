@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.budget import check_time
 from armpath.commands import CommandSequence, ticks_to_rad
 from armpath.errors import CollisionError
 from armpath.geometry.world import CollisionWorld
@@ -116,7 +117,8 @@ def motion_clearance(
 
     certified = False
     obstacle_cols = ~is_self
-    while n > 0 and pairs:
+    while n > 0 and pairs:  # ends: every round evaluates new instants within the budget
+        check_time("certifying the clearance of a motion")
         lb, half_delta = bounds()
         if np.min(V - required) < 0:
             break  # a sampled instant violates the rule: the motion is rejected

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
 
 from armpath.angles import nearest_equivalent, wrap_to_pi
+from armpath.budget import check_time
 from armpath.commands import (
     MAX_INCREMENT_TICKS,
     TICK_RAD,
@@ -251,6 +252,28 @@ def _family_samples(p: _Problem, step_deg: float) -> tuple[FloatArray, FloatArra
     inside = np.all((q >= ticks_to_rad(p.lo_ticks)) & (q <= ticks_to_rad(p.hi_ticks)), axis=-1)
     change = np.where(inside & np.isfinite(change), change, np.inf)
     return q, change
+
+
+def _reachable_family(p: _Problem, step_deg: float, tolerance_mm: float, seed: int) -> _Family:
+    """The target's solution family sampled every ``step_deg``; raises
+    :class:`UnreachableError` naming the nearest reachable point and its distance when no
+    configuration within the joint limits comes within ``tolerance_mm`` of the target."""
+    fam = _family(p, step_deg)
+    if np.isfinite(fam.change).any():
+        return fam
+    # no sample of the family within the limits
+    dist, q_near = _nearest_reachable(p, np.random.default_rng(seed))
+    if dist > tolerance_mm:
+        tip = tool_position(p.arm, p.full(q_near))
+        raise UnreachableError(
+            f"target ({', '.join(f'{v:g}' for v in p.target)}) mm is out of reach within the "
+            f"joint limits: the nearest reachable point "
+            f"({', '.join(f'{round(v, 2) + 0.0:.2f}' for v in tip)}) "
+            f"mm is {dist:.3f} mm away"
+        )
+    # the grid missed a thin sliver of the family: keep the optimizer's solution
+    q_near = p.normalize(q_near)
+    return fam.with_point(q_near, float(np.max(np.abs(q_near - p.start_rad))))
 
 
 def _nearest_reachable(p: _Problem, rng: np.random.Generator) -> tuple[float, FloatArray]:
@@ -554,19 +577,7 @@ def plan_reach(
     """
     opts = options or ReachOptions()
     p = _validated_problem(arm, world, start_ticks, target_mm)
-    fam = _family(p, opts.sphere_step_deg)
-    if not np.isfinite(fam.change).any():  # no sample of the family within the limits
-        dist, q_near = _nearest_reachable(p, np.random.default_rng(seed))
-        if dist > opts.tolerance_mm:
-            tip = tool_position(arm, p.full(q_near))
-            raise UnreachableError(
-                f"target ({', '.join(f'{v:g}' for v in p.target)}) mm is out of reach within the "
-                f"joint limits: the nearest reachable point ({', '.join(f'{v:.2f}' for v in tip)}) "
-                f"is {dist:.3f} mm away"
-            )
-        # the grid missed a thin sliver of the family: keep the optimizer's solution
-        q_near = p.normalize(q_near)
-        fam = fam.with_point(q_near, float(np.max(np.abs(q_near - p.start_rad))))
+    fam = _reachable_family(p, opts.sphere_step_deg, opts.tolerance_mm, seed)
     bound = _lower_bound(p, fam, opts.tolerance_mm)
 
     examined, checks = 0, 0
@@ -591,6 +602,7 @@ def plan_reach(
 
     failures: list[str] = []
     for n in range(bound.commands, bound.commands + opts.extra_commands + 1):
+        check_time(f"searching the lattice for {n} commands")
         cands, errs = _lattice_candidates(p, fam, n, opts.tolerance_mm, opts.polish_candidates)
         examined += cands.shape[0]
         within = errs <= opts.tolerance_mm
@@ -611,6 +623,7 @@ def plan_reach(
             continue
         blocked = ""
         for i in order:
+            check_time(f"checking the direct motions of {n} commands")
             goal = np.r_[cands[i], p.start_ticks[TIP_JOINTS:]]
             seq = CommandSequence.straight(p.start_ticks, goal)
             checks += 1
@@ -664,9 +677,8 @@ def goal_states(
     exists.
     """
     p = _validated_problem(arm, world, start_ticks, target_mm)
-    return _goal_states(
-        p, _family(p, sphere_step_deg), tolerance_mm, count, body_buffer_mm, spread_deg
-    )
+    fam = _reachable_family(p, sphere_step_deg, tolerance_mm, 0)
+    return _goal_states(p, fam, tolerance_mm, count, body_buffer_mm, spread_deg)
 
 
 def _goal_states(
@@ -713,6 +725,7 @@ def _goal_states(
     offsets = offsets.reshape(-1, 2)
     corners = np.array([[(c >> b) & 1 for b in range(3)] for c in range(8)])
     for q_star in picks:
+        check_time("finding goal states")
         t_star = q_star / TICK_RAD
         cands: list[IntArray] = []
         for pair in FIXED_PAIRS:

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.budget import check_time
+
 FloatArray = NDArray[np.float64]
 
 #: ``edges_clear(a (M, n), b (M, n)) -> (M,) bool``: are straight segments a -> b clear?
@@ -109,6 +111,7 @@ def rrt_connect(
         g = int(np.argmax(direct))
         return RrtResult(True, np.vstack([start, goals[g]]), g, 0, (1, goals.shape[0]))
     for it in range(opts.max_samples):
+        check_time("searching for a collision-free path")
         a, b = trees[it % 2], trees[(it + 1) % 2]
         if rng.random() < opts.goal_bias:
             target = (goals if it % 2 == 0 else start[None, :])[
@@ -121,7 +124,8 @@ def rrt_connect(
         if not edges_clear(a.q[i_near][None], new[None])[0]:
             continue
         i_new = a.add(new, i_near)
-        # connect: b extends greedily toward the new node until blocked or joined
+        # connect: b extends greedily toward the new node until blocked or joined; each step
+        # brings it one step closer (largest joint change), so this ends
         j = b.nearest(new)
         while True:
             nxt = _steer(b.q[j], new, opts.step)
@@ -175,6 +179,7 @@ def shortcut(
         i = j
     p = _densify(np.array(out), 16)
     for _ in range(rounds):
+        check_time("shortening the path")
         if len(p) < 3:
             break
         i, j = sorted(rng.choice(len(p), size=2, replace=False))

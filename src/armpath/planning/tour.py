@@ -12,14 +12,17 @@ with the fewest planned commands wins.
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.commands import CommandSequence, ticks_to_rad
-from armpath.errors import InvalidInputError, PlanningError
+from armpath.budget import check_time
+from armpath.commands import MAX_INCREMENT_TICKS, CommandSequence, ticks_to_rad
+from armpath.errors import ArmpathError, InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
@@ -62,6 +65,7 @@ class TourResult:
     order_lower_bounds: dict[tuple[int, ...], int]
     orders_planned: dict[tuple[int, ...], int]
     tolerance_mm: float
+    orders_not_planned: dict[tuple[int, ...], str] = field(default_factory=dict)
 
     @property
     def n_commands(self) -> int:
@@ -72,19 +76,53 @@ class TourResult:
         return max(v.error_mm for v in self.visits)
 
 
-def _order_bound(start: IntArray, goals: list[IntArray], order: tuple[int, ...], back: bool) -> int:
-    """Fewest direct-motion commands through one goal state per target in ``order``."""
-    # cost[k] = best commands to be at goal k of the current layer
-    cost = np.array([0.0])
-    prev = start[None, :]
-    for t in order:
-        g = goals[t]
-        step = np.ceil(np.max(np.abs(g[None, :, :] - prev[:, None, :]), axis=-1) / 20.0)
-        cost = np.min(cost[:, None] + step, axis=0)
-        prev = g
-    if back:
-        cost = cost + np.ceil(np.max(np.abs(prev - start), axis=-1) / 20.0)
-    return int(np.min(cost))
+class VisitOrder(StrEnum):
+    """How a tour orders its targets."""
+
+    AUTO = "auto"  # every order ranked by its lower bound, the best planned
+    GIVEN = "given"  # as listed
+
+
+#: Most targets whose visiting orders are all ranked (``order="auto"``): 8! = 40,320 orders.
+MAX_AUTO_ORDER_TARGETS = 8
+#: Most targets of one tour (``order="given"``).
+MAX_TOUR_TARGETS = 500
+#: Orders listed with their bounds in a result (the best-ranked first).
+LISTED_ORDERS = 24
+
+
+def _direct_commands(a: IntArray, b: IntArray) -> FloatArray:
+    """Fewest direct-motion commands from each state of ``a`` ``(A, n)`` to each of ``b``
+    ``(B, n)``: ``(A, B)``."""
+    span = np.max(np.abs(b[None, :, :] - a[:, None, :]), axis=-1)
+    return np.asarray(np.ceil(span / MAX_INCREMENT_TICKS), dtype=np.float64)
+
+
+def _order_bounds(
+    start: IntArray, goals: list[IntArray], orders: list[tuple[int, ...]], back: bool
+) -> dict[tuple[int, ...], int]:
+    """For every order, the fewest direct-motion commands through one goal state per target
+    (a shortest path through the layers of goal states; obstacles ignored, so a lower bound for
+    these goal states). The step costs between targets are computed once."""
+    first = [_direct_commands(start[None, :], g)[0] for g in goals]
+    between = {
+        (i, j): _direct_commands(goals[i], goals[j])
+        for i in range(len(goals))
+        for j in range(len(goals))
+        if i != j
+    }
+    home = [_direct_commands(g, start[None, :])[:, 0] for g in goals]
+    out: dict[tuple[int, ...], int] = {}
+    for k, order in enumerate(orders):
+        if k % 1024 == 0:
+            check_time("ranking the visiting orders")
+        cost = first[order[0]]
+        for a, b in itertools.pairwise(order):
+            cost = np.min(cost[:, None] + between[(a, b)], axis=0)
+        if back:
+            cost = cost + home[order[-1]]
+        out[order] = int(np.min(cost))
+    return out
 
 
 def plan_tour(
@@ -92,7 +130,7 @@ def plan_tour(
     world: CollisionWorld,
     start_ticks: ArrayLike,
     targets_mm: ArrayLike,
-    order: str = "auto",
+    order: VisitOrder | str = VisitOrder.AUTO,
     return_to_start: bool = False,
     tolerance_mm: float = 0.05,
     goals_per_target: int = 16,
@@ -103,34 +141,64 @@ def plan_tour(
     """Plan a clear tour from ``start_ticks`` through every target (mm), optionally back.
 
     ``order`` is ``"auto"`` (every order ranked by its lower bound, the ``orders_to_plan`` best
-    planned) or ``"given"`` (the targets' order). Raises :class:`PlanningError` when a target
-    cannot be reached clear of the obstacles.
+    planned; at most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
+    at most :data:`MAX_TOUR_TARGETS`). Raises :class:`PlanningError` when a target cannot be
+    reached clear of the obstacles. ``orders_not_planned`` of the result says, for each ranked
+    order that has no planned command count, why.
     """
-    if order not in ("auto", "given"):
-        raise InvalidInputError(f"order must be 'auto' or 'given', got {order!r}")
+    try:
+        order = VisitOrder(order)
+    except ValueError:
+        valid = ", ".join(o.value for o in VisitOrder)
+        raise InvalidInputError(f"order must be one of {valid}, got {order!r}") from None
     pts = np.asarray(targets_mm, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] == 0 or not np.all(np.isfinite(pts)):
         raise InvalidInputError(f"targets must be a list of finite (x, y, z) mm, got {pts.shape}")
+    if order == "auto" and pts.shape[0] > MAX_AUTO_ORDER_TARGETS:
+        raise InvalidInputError(
+            f"{pts.shape[0]} targets have {math.factorial(pts.shape[0]):,} visiting orders; "
+            f"order 'auto' ranks them all for at most {MAX_AUTO_ORDER_TARGETS} targets: use "
+            "order 'given' (--order given) for more"
+        )
+    if pts.shape[0] > MAX_TOUR_TARGETS:
+        raise InvalidInputError(
+            f"a tour visits at most {MAX_TOUR_TARGETS} targets, got {pts.shape[0]}"
+        )
+    if not 1 <= orders_to_plan <= 100:
+        raise InvalidInputError(f"orders to plan must be in [1, 100], got {orders_to_plan}")
     start = np.asarray(start_ticks, dtype=np.int64)
     say = on_progress or (lambda _msg: None)
     opts = options or MotionOptions()
     goals: list[IntArray] = []
     for i, p in enumerate(pts):
         say(f"goal states for target {i + 1} ({', '.join(f'{v:.2f}' for v in p)}) mm")
-        g, _ = goal_states(arm, world, start, p, tolerance_mm, goals_per_target)
+        try:
+            g, _ = goal_states(arm, world, start, p, tolerance_mm, goals_per_target)
+        except ArmpathError as exc:
+            raise type(exc)(f"target {i + 1}: {exc}") from None
         goals.append(g)
     orders = (
         [tuple(range(len(pts)))]
         if order == "given"
         else list(itertools.permutations(range(len(pts))))
     )
-    bounds = {o: _order_bound(start, goals, o, return_to_start) for o in orders}
-    ranked = sorted(orders, key=lambda o: (bounds[o], o))[: max(1, orders_to_plan)]
+    say(f"ranking {len(orders):,} visiting order(s) by their lower bounds")
+    bounds = _order_bounds(start, goals, orders, return_to_start)
+    ranking = sorted(orders, key=lambda o: (bounds[o], o))
+    ranked = ranking[:orders_to_plan]
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
     planned: dict[tuple[int, ...], int] = {}
+    not_planned: dict[tuple[int, ...], str] = {}
     failures: list[str] = []
     for o in ranked:
-        say(f"planning order {[i + 1 for i in o]} (lower bound {bounds[o]} commands)")
+        name = "-".join(str(i + 1) for i in o)
+        if best is not None and bounds[o] >= best[0]:
+            not_planned[o] = (
+                f"not planned: its bound {bounds[o]} is no fewer than the {best[0]} commands "
+                f"planned for order {'-'.join(str(i + 1) for i in best[2])}"
+            )
+            continue
+        say(f"planning order {name} (lower bound {bounds[o]} commands)")
         legs: list[MotionPlan] = []
         state = start
         try:
@@ -139,15 +207,24 @@ def plan_tour(
                 legs.append(leg)
                 state = leg.sequence.final_ticks
             if return_to_start:
+                say(f"planning order {name}: back to the start")
                 leg = plan_motion(arm, world, state, start[None, :], opts)
                 legs.append(leg)
         except PlanningError as exc:
-            failures.append(f"order {[i + 1 for i in o]}: {exc}")
+            failures.append(f"order {name}: {exc}")
+            not_planned[o] = f"planning failed: {exc}"
             continue
         total = sum(leg.sequence.n_commands for leg in legs)
         planned[o] = total
         if best is None or total < best[0]:
             best = (total, legs, o)
+    for o in ranking[orders_to_plan : orders_to_plan + LISTED_ORDERS]:
+        why = f"not planned: only the {orders_to_plan} best-ranked order(s) are planned"
+        if best is not None and bounds[o] >= best[0]:
+            why += f"; its bound {bounds[o]} cannot beat the {best[0]} commands planned"
+        elif best is not None:
+            why += f"; its bound {bounds[o]} is below the {best[0]} commands planned"
+        not_planned[o] = why
     if best is None:
         raise PlanningError("no order could be planned: " + "; ".join(failures))
     _, legs, chosen = best
@@ -179,4 +256,5 @@ def plan_tour(
         order_lower_bounds=bounds,
         orders_planned=planned,
         tolerance_mm=tolerance_mm,
+        orders_not_planned=not_planned,
     )

@@ -31,6 +31,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.budget import check_time
 from armpath.commands import MAX_INCREMENT_TICKS, TICK_RAD, CommandSequence, ticks_to_rad
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.curves import Curve
@@ -71,6 +72,9 @@ _BODY_BUFFER_MM = 0.02
 _MAX_LAYER_STEP_DEG = 12.0
 #: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
 _LIFT_OFF_DEG = 120.0
+#: Least advance of the tip along the curve that one tracing command must make (mm): the
+#: progress measure that makes every pass end.
+_MIN_ADVANCE_MM = 0.05
 #: Candidate advances along the curve per command (mm), tried largest first.
 _ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
 
@@ -265,6 +269,7 @@ def _reference_pieces(
     # not half of them) takes every third, which keeps the DP's work alike
     dirs = fam.coarse_dirs if fam.surface is not None else fam.coarse_dirs[::3]
     for s in np.linspace(a + inset, b - inset, n + 1):
+        check_time("choosing the reference path along the curve")
         q = fam.configs(float(s), dirs)
         if q.shape[0] == 0:
             continue
@@ -438,7 +443,8 @@ class _Tracer:
         if cand.shape[0] == 0:
             return cand, np.zeros(0)
         d, s, sd = self.tip_checks(tool_position(self.arm, ticks_to_rad(cand)), sk)
-        ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > 0.05) & (sign * (s - goal) <= self.tol)
+        ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > _MIN_ADVANCE_MM)
+        ok &= sign * (s - goal) <= self.tol
         cand, s = cand[ok], s[ok]
         if cand.shape[0] == 0:
             return cand, s
@@ -461,7 +467,7 @@ class _Tracer:
         last = None
         for adv in _ADVANCES_MM:
             s1 = sk + sign * min(adv, abs(goal - sk))
-            if abs(s1 - sk) <= 0.05 or s1 == last:
+            if abs(s1 - sk) <= _MIN_ADVANCE_MM or s1 == last:
                 continue
             last = s1
             drift = self.q_ref(s1) - self.q_ref(sk)
@@ -551,13 +557,28 @@ class _Tracer:
         )
 
     def run(self, q_start: IntArray, s_start: float, goal: float) -> tuple[list[IntArray], float]:
-        """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes)."""
+        """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes).
+
+        Terminates by design: the direction is fixed at the start, every accepted command
+        advances the tip by more than :data:`_MIN_ADVANCE_MM` in that direction (see
+        :meth:`valid_ends`), and the pass ends once the tip is within that distance of the goal
+        or past it. So the distance left decreases strictly and the number of commands is at
+        most ``(|goal - s_start| + tolerance) / _MIN_ADVANCE_MM``.
+        """
+        direction = 1.0 if goal >= s_start else -1.0
         states, sk, qk = [q_start], s_start, q_start
-        while abs(goal - sk) > 0.05:
+        budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
+        for _ in range(budget):
+            if direction * (goal - sk) <= _MIN_ADVANCE_MM:
+                break
+            check_time(f"tracing {self.arc.start_mm:.1f}..{self.arc.end_mm:.1f} mm of the curve")
             nxt = self.step(qk, sk, goal)
             if nxt is None:
                 break
-            qk, sk = nxt
+            q_next, s_next = nxt
+            if direction * (s_next - sk) <= _MIN_ADVANCE_MM:  # cannot happen: valid_ends
+                raise AssertionError("tracer made no progress: step rule broken")
+            qk, sk = q_next, s_next
             states.append(qk)
         return states, sk
 
@@ -641,6 +662,7 @@ def plan_trace(
     queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
     queue[-1] = (queue[-1][0], overlap)
     while queue:
+        check_time("tracing the curve")
         arc, run_on = queue.pop(0)
         pieces = _reference_pieces(fam, arc, opts.layer_step_mm, ticks_to_rad(states[-1]))
         for k, piece in enumerate(pieces):
@@ -674,9 +696,14 @@ def plan_trace(
                 TracePass(first, len(states) - 1, float(ps.min()), float(ps.max()), dev, dev_bound)
             )
             if s_reached < piece.arc.end_mm - 0.5:
-                # stuck: the rest of the arc gets new passes (skipping ahead a little if this
-                # pass made no progress, so the loop ends)
-                resume = s_reached if s_reached > piece.arc.start_mm + 1.0 else s_reached + 2.0
+                # stuck: the rest of the arc gets new passes. The rest starts at least 1 mm past
+                # this piece's start (skipping 2 mm if this pass made no progress), so every
+                # arc put back is shorter by 1 mm or more and the loop ends.
+                resume = (
+                    s_reached
+                    if s_reached > piece.arc.start_mm + 1.0
+                    else max(s_reached, piece.arc.start_mm) + 2.0
+                )
                 if resume < arc.end_mm - 0.5:
                     queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
                 break
@@ -720,6 +747,7 @@ def _lift_off(
         return np.asarray((values - need).min(axis=-1), dtype=np.float64)
 
     for _ in range(12):
+        check_time("lifting off the curve")
         here = states[-1]
         if float(slack(here[None])[0]) >= 0.0:
             break

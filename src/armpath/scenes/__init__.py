@@ -7,16 +7,18 @@ for its numbers. Files are validated with pydantic and every problem is reported
 
 from __future__ import annotations
 
+import copy
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from armpath.budget import MAX_COORDINATE_MM
 from armpath.errors import InvalidInputError, SceneError
 from armpath.geometry import (
     Box,
@@ -40,14 +42,25 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+def _check_number(x: float) -> None:
+    if not np.isfinite(x):
+        raise ValueError("must be a finite number")
+    if abs(x) > MAX_COORDINATE_MM:
+        raise ValueError(
+            f"{x:g} is beyond the largest coordinate or size a scene may use "
+            f"({MAX_COORDINATE_MM:g} mm)"
+        )
+
+
 class _FiniteVec(_Strict):
     @field_validator("*", mode="after")
     @classmethod
     def _finite(cls, v: object) -> object:
-        values = v if isinstance(v, tuple) else (v,)
+        values = v if isinstance(v, tuple | list) else (v,)
         for x in values:
-            if isinstance(x, float) and not np.isfinite(x):
-                raise ValueError("must be a finite number")
+            for y in x if isinstance(x, tuple | list) else (x,):
+                if isinstance(y, float | int) and not isinstance(y, bool):
+                    _check_number(float(y))
         return v
 
 
@@ -155,7 +168,7 @@ class ReachTaskSpec(_FiniteVec):
     target_mm: Vec3
 
 
-class SpotweldTaskSpec(_Strict):
+class SpotweldTaskSpec(_FiniteVec):
     """Points on the inner wall of a hollow obstacle, given by their projections on xy."""
 
     workpiece: str = Field(description="name of the hollow_frustum obstacle")
@@ -173,7 +186,7 @@ class PlaneSectionCurveSpec(_FiniteVec):
     plane_normal: Vec3
 
 
-class ParametricCurveSpec(_Strict):
+class ParametricCurveSpec(_FiniteVec):
     """``x(t), y(t), z(t)`` (mm) as expressions in ``t`` (numbers, + - * / ^ **, sin, cos, ...)."""
 
     type: Literal["parametric"]
@@ -184,7 +197,7 @@ class ParametricCurveSpec(_Strict):
     t: tuple[float, float] = (0.0, 1.0)
 
 
-class PolylineCurveSpec(_Strict):
+class PolylineCurveSpec(_FiniteVec):
     type: Literal["polyline"]
     name: str = "curve"
     points_mm: list[Vec3] = Field(min_length=2)
@@ -229,6 +242,9 @@ class Scene:
     source: str
     spotweld: SpotweldTaskSpec | None = None
     trace: TraceTaskSpec | None = None
+    #: The validated scene file as plain JSON types (mesh paths made absolute): results carry
+    #: it, so a result replays in its scene from any folder (:func:`scene_from_dict`).
+    definition: dict[str, Any] = field(default_factory=dict)
 
     def spotweld_targets_mm(self) -> NDArray[np.float64]:
         """Task 3's points ``(N, 3)`` mm: each xy projection lifted onto the inner wall of the
@@ -291,15 +307,22 @@ class Scene:
             _rebuild_frustum(o, conv) if isinstance(o, HollowFrustum) else o
             for o in self.world.obstacles
         )
-        return replace(self, world=replace(self.world, obstacles=obstacles))
+        definition = copy.deepcopy(self.definition)
+        for spec in definition.get("obstacles", []):
+            if spec.get("type") == "hollow_frustum":
+                spec["wall_thickness"] = conv.value
+        return replace(self, world=replace(self.world, obstacles=obstacles), definition=definition)
 
     def describe(self) -> dict[str, object]:
+        """The scene for result files: name, source, wall convention, the obstacles and the
+        clearance rule, and ``definition`` (what :func:`scene_from_dict` rebuilds it from)."""
         wall = self.wall_thickness
         return {
             "name": self.name,
             "source": self.source,
             "wall_thickness": wall.value if wall else None,
             **self.world.describe(),
+            "definition": self.definition,
         }
 
 
@@ -381,7 +404,8 @@ def scene_from_dict(
     except ValidationError as exc:
         first = exc.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
-        raise SceneError(f"scene {source}: {where}: {first['msg']}") from None
+        msg = str(first["msg"]).removeprefix("Value error, ")
+        raise SceneError(f"scene {source}: {where}: {msg}") from None
     try:
         obstacles = tuple(_build_obstacle(o, base_dir) for o in spec.obstacles)
         world = CollisionWorld(
@@ -393,8 +417,19 @@ def scene_from_dict(
     except InvalidInputError as exc:
         raise SceneError(f"scene {source}: {exc}") from None
     reach = spec.tasks.reach.target_mm if spec.tasks.reach else None
+    definition = spec.model_dump(mode="json")
+    for o_spec, o in zip(definition["obstacles"], obstacles, strict=True):
+        if o_spec["type"] == "mesh":
+            o_spec["file"] = str(Path(getattr(o, "source", None) or o_spec["file"]).resolve())
     scene = Scene(
-        spec.name, spec.description, world, reach, source, spec.tasks.spotweld, spec.tasks.trace
+        spec.name,
+        spec.description,
+        world,
+        reach,
+        source,
+        spec.tasks.spotweld,
+        spec.tasks.trace,
+        definition,
     )
     if scene.spotweld is not None:
         scene.spotweld_targets_mm()  # validates the workpiece name and the points
@@ -419,6 +454,10 @@ def load_scene(path: str | Path | None = None) -> Scene:
             text = p.read_text("utf-8")
         except OSError as exc:
             raise SceneError(f"cannot read scene file {p}: {exc.strerror}") from None
+        except UnicodeDecodeError as exc:
+            raise SceneError(
+                f"scene file {p} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+            ) from None
         source = str(p)
         base_dir = p.parent
     data: object
