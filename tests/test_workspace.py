@@ -202,7 +202,7 @@ def test_cli_workspace_bad_input_leaves_nothing(tmp_path):
         timeout=600,
     )
     assert proc.returncode == 1
-    assert proc.stderr.strip().splitlines() == ["error: samples must be >= 1, got 0"]
+    assert proc.stderr.strip().splitlines() == ["error: --samples must be >= 1, got 0"]
     assert not out.exists()
 
 

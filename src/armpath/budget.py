@@ -154,14 +154,14 @@ MAX_BANDS = 1_000
 #: Largest number of tool orientations tested at one point (a dexterity grid).
 MAX_ORIENTATIONS = 1_000_000
 
+#: Largest number of points at which one curve is scanned (a circle of a blind-zone survey).
+MAX_CURVE_POINTS = 1_000_000
+
 __all__ += [
     "MAX_BANDS",
     "MAX_CHUNK",
+    "MAX_CURVE_POINTS",
     "MAX_JOINTS",
     "MAX_ORIENTATIONS",
     "MAX_WAYPOINTS",
 ]
-#: Largest number of points at which one curve is scanned (a circle of a blind-zone survey).
-MAX_CURVE_POINTS = 1_000_000
-
-__all__ += ["MAX_CURVE_POINTS"]

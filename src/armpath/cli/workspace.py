@@ -1,11 +1,17 @@
 """``armpath workspace``, ``blindzones`` and ``design-sweep``: reach, blind zones and the design
-study."""
+study.
+
+Every size option is checked against the limits of :mod:`armpath.budget` before any work (one
+``error:`` line naming the option); ``--time-limit`` bounds the wall-clock time, and progress
+goes to stderr (lines when stderr is not a terminal).
+"""
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -14,17 +20,24 @@ import typer
 from rich import box
 from rich.table import Table
 
+from armpath.budget import (
+    MAX_BANDS,
+    MAX_CHUNK,
+    MAX_SAMPLES,
+    check_size,
+)
 from armpath.cli.common import (
     LinkRadiusOption,
     ModelOption,
     SceneOption,
+    TimeLimitOption,
     WallOption,
     _arm,
     _cli_errors,
     _scene,
     app,
-    err_console,
     out_console,
+    progress,
 )
 from armpath.errors import InvalidInputError
 from armpath.export import (
@@ -37,6 +50,26 @@ from armpath.model.catalog import resolve_model
 from armpath.model.seed_arm import SeedArmGeometry
 from armpath.model.serial_arm import SerialArm
 from armpath.scenes import Scene, load_scene
+from armpath.workspace.sampling import METHODS, GridSpec, check_count
+
+
+def _check_seed(seed: int) -> None:
+    if seed < 0:
+        raise InvalidInputError(f"--seed must be >= 0, got {seed}")
+
+
+def _check_length(value: float, option: str) -> None:
+    if not (np.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{option} must be a positive length in mm, got {value}")
+
+
+def _percent_steps(say: Callable[[str], None], what: str) -> Callable[[int, int], None]:
+    """A ``progress(done, total)`` callback that reports ``what`` in steps of 5 %."""
+
+    def report(done: int, total: int) -> None:
+        say(f"{what}: {5 * (20 * done // max(total, 1)):d} % of {total:,}")
+
+    return report
 
 
 @app.command()
@@ -66,29 +99,27 @@ def workspace(
             "--out", help="Write workspace.npz, workspace.csv and workspace_sections.png here."
         ),
     ] = None,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Reachable workspace of the tool point by sampling joint space into voxels: volume,
-    bounding box and sections."""
-
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
+    bounding box and sections. At most 200,000,000 samples, 4,000,000 a chunk and 50,000,000
+    voxels."""
     from armpath.workspace import sample_workspace
 
-    with _cli_errors():
+    with _cli_errors(time_limit):
+        check_count(samples, "--samples", MAX_SAMPLES, "joint samples")
+        check_count(chunk, "--chunk", MAX_CHUNK, "joint samples a chunk")
+        if method not in METHODS:
+            raise InvalidInputError(f"--method must be one of {METHODS}, got {method!r}")
+        _check_seed(seed)
+        _check_length(voxel, "--voxel")
         arm = resolve_model(model)
+        GridSpec.for_arm(arm, voxel, "--voxel")
         world = load_scene(scene_file).world if obstacles else None
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
             t0 = time.perf_counter()
-            with Progress(
-                TextColumn("sampling"),
-                BarColumn(),
-                TextColumn("{task.completed:,}/{task.total:,}"),
-                TimeRemainingColumn(),
-                console=err_console,
-                transient=True,
-            ) as bar:
-                task = bar.add_task("sampling", total=samples)
+            with progress(f"sampling the workspace of {arm.name} ...") as say:
                 grid = sample_workspace(
                     arm,
                     samples,
@@ -97,7 +128,7 @@ def workspace(
                     method=method,
                     chunk=chunk,
                     world=world,
-                    progress=lambda done, total: bar.update(task, completed=done),
+                    progress=_percent_steps(say, "sampling"),
                 )
             seconds = time.perf_counter() - t0
             lo, hi = grid.bounding_box()
@@ -182,6 +213,25 @@ class _BlindZones:
         return out
 
 
+def _check_blind_zone_sizes(
+    arm: SerialArm, pixel: float, samples: int, bands: int, seed: int, scan_step_mm: float = 8.0
+) -> None:
+    """Refuse, naming the option, what :func:`_blind_zones` could not do within the budget."""
+    from armpath.workspace.blindzones import map_shape
+
+    check_count(samples, "--samples", MAX_SAMPLES)
+    check_size(
+        3.0 * samples,
+        MAX_SAMPLES,
+        "joint samples (--samples for the arm plane, twice that for the meridian map)",
+        "--samples",
+    )
+    check_count(bands, "--bands", MAX_BANDS, "circles a workpiece face", least=0)
+    _check_seed(seed)
+    _check_length(pixel, "--pixel")
+    map_shape(arm, pixel, "--pixel")
+
+
 def _blind_zones(
     arm: SerialArm,
     scene: Scene,
@@ -189,14 +239,18 @@ def _blind_zones(
     samples: int,
     bands: int,
     seed: int,
-    status: Any,
+    status: Callable[[str], None] | Any,
     scan_step_mm: float = 8.0,
 ) -> _BlindZones:
+    """The maps and, with ``bands`` > 0, the faces. ``status`` takes the progress messages: a
+    callback (as from :func:`~armpath.cli.common.progress`) or an object with ``update``."""
     from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
 
-    status.update("blind zones: sampling the arm plane ...")
+    say: Callable[[str], None] = status.update if hasattr(status, "update") else status
+    _check_blind_zone_sizes(arm, pixel, samples, bands, seed, scan_step_mm)
+    say("blind zones: sampling the arm plane ...")
     plane = arm_plane_map(arm, pixel, samples, seed=seed)
-    status.update("blind zones: sampling the meridian map ...")
+    say("blind zones: sampling the meridian map ...")
     meridian = meridian_map(arm, pixel, 2 * samples, seed=seed + 1)
     faces = (
         surface_blindness(
@@ -206,7 +260,7 @@ def _blind_zones(
             bands,
             scan_step_mm=scan_step_mm,
             resolution_mm=scan_step_mm / 16.0,
-            progress=lambda m: status.update(m),
+            progress=say,
         )
         if bands > 0
         else []
@@ -268,21 +322,20 @@ def blindzones(
             "here.",
         ),
     ] = None,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Blind zones of the seed arm: the central blind zone in the arm plane and in 3-D (areas
     mm^2, volume mm^3), and the parts of the workpiece's outer and inner faces the fingertip
-    cannot reach without a collision (areas mm^2, fractions)."""
-    with _cli_errors():
-        if samples < 1:
-            raise InvalidInputError(f"--samples must be >= 1, got {samples}")
-        if bands < 0:
-            raise InvalidInputError(f"--bands must be >= 0, got {bands}")
+    cannot reach without a collision (areas mm^2, fractions). At most 50,000,000 pixels a map,
+    200,000,000 samples in all (3 x --samples) and 1000 circles a face."""
+    with _cli_errors(time_limit):
         scene = _scene(None, wall)
         arm = _arm(link_radius)
+        _check_blind_zone_sizes(arm, pixel, samples, bands, seed)
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
-            with err_console.status("blind zones ...") as status:
-                bz = _blind_zones(arm, scene, pixel, samples, bands, seed, status)
+            with progress("blind zones ...") as say:
+                bz = _blind_zones(arm, scene, pixel, samples, bands, seed, say)
             table = Table(title="blind zones of the seed arm", box=box.SIMPLE)
             for name in ("where", "blind", "of", "unit"):
                 table.add_column(name)
@@ -337,23 +390,38 @@ def design_sweep(
     out: Annotated[
         Path | None, typer.Option("--out", help="Write design_sweep.csv and design_sweep.png here.")
     ] = None,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Design study of the seed arm: link lengths (AB, BC = CD, DE at a fixed total) and the
     range of joint 3 against the reach volume above the table (m^3) and the central blind zone
     (litres). Objective: the largest reach volume; ties (within 0.5 %) go to the smaller blind
-    zone."""
-    from armpath.workspace.design import design_grid, evaluate_design, ranked, sweep
+    zone. At most 200,000,000 samples over the sweep (--samples x 41 designs), 50,000,000 pixels
+    a map and 256 jobs; under --time-limit the designs go out one per worker at a time."""
+    from armpath.workspace.design import (
+        check_jobs,
+        check_sweep_size,
+        design_grid,
+        evaluate_design,
+        ranked,
+        sweep,
+    )
 
-    with _cli_errors():
-        if samples < 1:
-            raise InvalidInputError(f"--samples must be >= 1, got {samples}")
+    with _cli_errors(time_limit):
+        check_jobs(jobs, "--jobs")
+        check_count(samples, "--samples", MAX_SAMPLES, "joint samples a design")
         if top < 1:
             raise InvalidInputError(f"--top must be >= 1, got {top}")
+        _check_seed(seed)
+        _check_length(total, "--total")
+        _check_length(pixel, "--pixel")
         candidates = design_grid(total)
+        check_sweep_size(
+            candidates, pixel, samples, seed, extra=1, options=("--pixel or --total", "--samples")
+        )
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
             where = f"Dask at {scheduler}" if scheduler else "joblib on this machine"
-            with err_console.status(f"evaluating {len(candidates)} designs ({where}) ..."):
+            with progress(f"evaluating {len(candidates)} designs ({where}) ...") as say:
                 results = ranked(
                     sweep(
                         candidates,
@@ -364,6 +432,7 @@ def design_sweep(
                         n_jobs=jobs,
                     )
                 )
+                say("evaluating the seed arm ...")
                 reference = evaluate_design(SeedArmGeometry(), pixel, samples, seed)
             columns = list(reference.row())
             shown = {

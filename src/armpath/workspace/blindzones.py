@@ -13,6 +13,11 @@
   checked by the curve-reachability search (every joint inside its limits, the clearance rule
   kept, the tool coming from outside the surface), give the unreachable part of each circle;
   integrating over height gives the blind area of each face and its fraction.
+
+Sizes are checked before any work (:mod:`armpath.budget`): a map has at most
+``MAX_GRID_CELLS`` pixels and ``MAX_SAMPLES`` samples (``MAX_CHUNK`` held at once), a face at
+most ``MAX_BANDS`` circles of at most ``MAX_CURVE_POINTS`` scan points. The time limit in force
+is checked after every chunk of samples and before every circle.
 """
 
 from __future__ import annotations
@@ -24,6 +29,15 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from armpath.budget import (
+    MAX_BANDS,
+    MAX_CHUNK,
+    MAX_CURVE_POINTS,
+    MAX_GRID_CELLS,
+    MAX_SAMPLES,
+    check_size,
+    check_time,
+)
 from armpath.errors import InvalidInputError
 from armpath.geometry.curves import ConeSection
 from armpath.geometry.primitives import SolidOfRevolution
@@ -32,7 +46,7 @@ from armpath.kinematics import tool_position
 from armpath.model.seed_arm import seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.curve_reach import curve_reachability
-from armpath.workspace.sampling import joint_ranges
+from armpath.workspace.sampling import check_count, joint_ranges, random_generator
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -107,13 +121,36 @@ class PlaneMap:
 
 
 def _grid(
-    extent_u: tuple[float, float], extent_v: tuple[float, float], pixel: float
+    extent_u: tuple[float, float],
+    extent_v: tuple[float, float],
+    pixel: float,
+    option: str = "the pixel size",
 ) -> tuple[FloatArray, tuple[int, int]]:
+    """Origin and shape of a pixel grid over the extents with a pixel of margin; refused
+    (naming ``option``) above ``MAX_GRID_CELLS`` pixels."""
     if not (np.isfinite(pixel) and pixel > 0):
         raise InvalidInputError(f"pixel size must be a positive length, got {pixel}")
     lo = np.array([extent_u[0], extent_v[0]]) - pixel
-    n = np.ceil((np.array([extent_u[1], extent_v[1]]) + pixel - lo) / pixel).astype(int)
+    n = np.ceil((np.array([extent_u[1], extent_v[1]]) + pixel - lo) / pixel)  # floats
+    cells = float(n[0]) * float(n[1])  # Python floats: inf rather than an overflow warning
+    check_size(cells, MAX_GRID_CELLS, f"pixels of a {pixel:g} mm map", option)
     return lo, (int(n[0]), int(n[1]))
+
+
+def _map_extent(arm: SerialArm) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The (u, v) box every fingertip position of the plane and meridian maps lies in (mm):
+    the reach from the shoulder B."""
+    g = seed_geometry_of(arm)
+    reach_mm = g.bc_mm + g.cd_mm + g.de_mm
+    if not (np.isfinite(reach_mm) and np.isfinite(g.ab_mm) and reach_mm > 0):
+        raise InvalidInputError(f"the arm's link lengths must be finite, got reach {reach_mm}")
+    return (-reach_mm, reach_mm), (g.ab_mm - reach_mm, g.ab_mm + reach_mm)
+
+
+def map_shape(arm: SerialArm, pixel: float, option: str = "the pixel size") -> tuple[int, int]:
+    """Pixels ``(nu, nv)`` of a plane or meridian map of ``arm`` with ``pixel`` mm pixels,
+    without allocating it; refused above ``MAX_GRID_CELLS`` pixels, naming ``option``."""
+    return _grid(*_map_extent(arm), pixel, option)[1]
 
 
 def _mark(points: FloatArray, origin: FloatArray, pixel: float, reach: BoolArray) -> None:
@@ -132,14 +169,16 @@ def _sample_map(
 ) -> PlaneMap:
     """Sample ``joints`` (0-based) inside their limits, the others at zero, and mark the
     fingertip's (y, z) or, for the meridian map, its (+-rho, z) pixels."""
-    g = seed_geometry_of(arm)
-    reach_mm = g.bc_mm + g.cd_mm + g.de_mm
-    origin, shape = _grid((-reach_mm, reach_mm), (g.ab_mm - reach_mm, g.ab_mm + reach_mm), pixel)
+    samples = check_count(samples, "samples", MAX_SAMPLES, "joint samples of a map")
+    chunk = check_count(chunk, "chunk", MAX_CHUNK, "samples a chunk")
+    rng = random_generator(seed)
+    origin, shape = _grid(*_map_extent(arm), pixel)
     reach = np.zeros(shape, dtype=bool)
     ranges = joint_ranges(arm)
-    rng = np.random.default_rng(seed)
+    what = "the meridian map" if meridian else "the arm-plane map"
     done = 0
-    while done < samples:
+    while done < samples:  # done grows by n >= 1 each time
+        check_time(f"sampling {what} ({done:,} of {samples:,} samples)")
         n = min(chunk, samples - done)
         q = np.zeros((n, 6))
         for j in joints:
@@ -179,6 +218,10 @@ def meridian_map(
     """Reachable fingertip pixels in (distance from the vertical axis, height), mirrored to
     negative distances: joints 2-5 sampled inside their limits, joint 1 turns it about the axis."""
     return _sample_map(arm, pixel, samples, seed, chunk, (1, 2, 3, 4), meridian=True)
+
+
+#: Finest location of the ends of an unreachable arc on a face (mm).
+MIN_RESOLUTION_MM = 1e-6
 
 
 @dataclass(frozen=True)
@@ -236,14 +279,35 @@ def surface_blindness(
     progress: Callable[[str], None] | None = None,
 ) -> list[FaceBlindness]:
     """Blind parts of the side faces of ``solid`` (a hollow solid of revolution in ``world``):
-    ``bands`` horizontal bands per face, each represented by the circle at its middle height."""
-    if bands < 1:
-        raise InvalidInputError(f"bands must be >= 1, got {bands}")
+    ``bands`` horizontal bands per face (at most ``MAX_BANDS``), each represented by the circle
+    at its middle height. Each circle is scanned every ``scan_step_mm`` and the ends of its
+    unreachable arcs located to ``resolution_mm`` (at least ``MIN_RESOLUTION_MM``, so the
+    bisection ends well above the floating-point resolution of the arc length). The time limit
+    in force is checked before every circle."""
+    bands = check_count(bands, "bands", MAX_BANDS, "circles a face")
+    if not (np.isfinite(resolution_mm) and resolution_mm >= MIN_RESOLUTION_MM):
+        raise InvalidInputError(
+            f"resolution must be at least {MIN_RESOLUTION_MM:g} mm, got {resolution_mm}"
+        )
+    if not (np.isfinite(scan_step_mm) and scan_step_mm >= resolution_mm):
+        raise InvalidInputError(
+            f"scan step must be a length of at least the resolution ({resolution_mm:g} mm), "
+            f"got {scan_step_mm}"
+        )
     edges = side_faces(solid)
-    out = []
     for face in faces:
         if face not in edges:
             raise InvalidInputError(f"face must be one of {tuple(edges)}, got {face!r}")
+        k = edges[face]
+        widest = max(abs(solid.profile[k][0]), abs(solid.profile[(k + 1) % len(solid.profile)][0]))
+        check_size(
+            2.0 * np.pi * widest / scan_step_mm,
+            MAX_CURVE_POINTS,
+            f"scan points of a circle on the {face} face",
+            "the scan step",
+        )
+    out = []
+    for face in faces:
         k = edges[face]
         (ra, za), (rb, zb) = solid.profile[k], solid.profile[(k + 1) % len(solid.profile)]
         lo, hi = min(za, zb), max(za, zb)
@@ -251,6 +315,7 @@ def surface_blindness(
         heights = lo + band * (np.arange(bands) + 0.5)
         lengths, blind, reasons = [], [], []
         for z in heights:
+            check_time(f"scanning the {face} face at z = {z:.1f} mm")
             if progress is not None:
                 progress(f"blind zones: {face} face at z = {z:.1f} mm")
             circle = ConeSection(

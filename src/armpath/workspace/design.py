@@ -9,19 +9,39 @@ unreachable); ties go to the smaller blind volume. Every candidate is evaluated 
 
 :func:`sweep` runs the candidates in parallel on this machine (joblib) or, given the address of
 a Dask scheduler, on that cluster: the same function on the same inputs either way.
+
+Bounds (:mod:`armpath.budget`): at most ``MAX_DESIGNS`` candidates, ``MAX_JOBS`` local jobs,
+``MAX_SAMPLES`` joint samples over the whole sweep and ``MAX_GRID_CELLS`` pixels a map, all
+checked before any work. Under a time limit the candidates go out in batches of one per worker;
+each worker runs under what is left of the limit, and the caller checks it between batches, so
+the sweep ends with the caller's :class:`~armpath.errors.TimeLimitError` soon after the limit.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+import multiprocessing
+import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from itertools import product
+from typing import Any
 
 import numpy as np
 
-from armpath.errors import InvalidInputError
+from armpath.budget import (
+    MAX_DESIGNS,
+    MAX_JOBS,
+    MAX_SAMPLES,
+    check_size,
+    check_time,
+    current_deadline,
+    time_limit,
+)
+from armpath.errors import InvalidInputError, TimeLimitError
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
-from armpath.workspace.blindzones import meridian_map
+from armpath.workspace.blindzones import map_shape, meridian_map
+from armpath.workspace.sampling import check_count, random_generator
 
 
 @dataclass(frozen=True)
@@ -79,7 +99,19 @@ def design_grid(
     base: SeedArmGeometry | None = None,
 ) -> list[SeedArmGeometry]:
     """Candidates with ``AB + BC + CD + DE = total_mm`` and ``BC = CD``; the other ranges as in
-    ``base`` (default: the seed arm's)."""
+    ``base`` (default: the seed arm's). At most ``MAX_DESIGNS`` combinations (refused before
+    any is built)."""
+    if not (math.isfinite(total_mm) and total_mm > 0):
+        raise InvalidInputError(f"the total length must be a positive length in mm, got {total_mm}")
+    for name, values in (("AB", ab_mm), ("DE", de_mm), ("joint 3 range", theta3_deg)):
+        if not all(math.isfinite(v) and v > 0 for v in values):
+            raise InvalidInputError(f"every {name} of the grid must be > 0, got {list(values)}")
+    check_size(
+        len(ab_mm) * len(de_mm) * len(theta3_deg),
+        MAX_DESIGNS,
+        "candidate designs (AB x DE x joint 3 values)",
+        "the grid's values",
+    )
     base = base or SeedArmGeometry()
     out = []
     for ab, de, t3 in product(ab_mm, de_mm, theta3_deg):
@@ -96,6 +128,100 @@ def design_grid(
     return out
 
 
+def check_jobs(n_jobs: int, option: str = "n_jobs") -> int:
+    """``n_jobs`` if it is -1 (every core) or a number of processes from 1 to ``MAX_JOBS``;
+    refused otherwise, naming ``option``."""
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, int | np.integer):
+        raise InvalidInputError(f"{option} must be a whole number, got {n_jobs!r}")
+    if n_jobs == -1:
+        return -1
+    if n_jobs < 1:
+        raise InvalidInputError(
+            f"{option} must be -1 (every core) or a number of processes from 1 to {MAX_JOBS}, "
+            f"got {n_jobs}"
+        )
+    check_size(int(n_jobs), MAX_JOBS, "parallel jobs", option)
+    return int(n_jobs)
+
+
+def check_sweep_size(
+    candidates: Sequence[SeedArmGeometry],
+    pixel_mm: float,
+    samples: int,
+    seed: int,
+    *,
+    extra: int = 0,
+    options: tuple[str, str] = ("pixel_mm", "samples"),
+) -> None:
+    """Refuse a sweep before any work: more than ``MAX_DESIGNS`` candidates, a map of more than
+    ``MAX_GRID_CELLS`` pixels for some candidate, more than ``MAX_SAMPLES`` joint samples over
+    the candidates and ``extra`` further evaluations, or a bad seed. ``options`` name the pixel
+    and samples options in the messages."""
+    check_size(len(candidates), MAX_DESIGNS, "candidate designs", "the candidates")
+    random_generator(seed)
+    samples = check_count(samples, options[1], MAX_SAMPLES, "joint samples a design")
+    check_size(
+        float(samples) * (len(candidates) + extra),
+        MAX_SAMPLES,
+        f"joint samples of the sweep ({samples:,} for each of {len(candidates) + extra} designs)",
+        options[1],
+    )
+    for g in candidates:
+        map_shape(seed_arm(g), pixel_mm, options[0])
+
+
+def _evaluate_within(
+    ends_at: float | None, geometry: SeedArmGeometry, pixel_mm: float, samples: int, seed: int
+) -> DesignMetrics:
+    """:func:`evaluate_design` under a time limit that ends at ``ends_at`` (``time.time()``,
+    which every process and host share, unlike the monotonic clock); run by the workers, so
+    their start-up counts too."""
+    if ends_at is None:
+        return evaluate_design(geometry, pixel_mm, samples, seed)
+    with time_limit(max(ends_at - time.time(), 1e-3)):
+        check_time("starting a design evaluation")
+        return evaluate_design(geometry, pixel_mm, samples, seed)
+
+
+def _ends_at() -> float | None:
+    """When the time limit in force runs out, in ``time.time()`` (``None``: no limit)."""
+    deadline = current_deadline()
+    return None if deadline is None else time.time() + deadline.remaining
+
+
+def _in_batches(
+    candidates: list[SeedArmGeometry],
+    workers: int,
+    run: Callable[[list[SeedArmGeometry], float | None], list[DesignMetrics]],
+) -> list[DesignMetrics]:
+    """``run(batch, ends_at)`` on batches of ``workers`` candidates (all of them at once
+    without a time limit), checking the time limit between batches. A worker that ran out of
+    time, or a wait for the workers that timed out (a ``TimeoutError``), ends the sweep with the
+    caller's own time-limit error."""
+    size = max(len(candidates) if current_deadline() is None else workers, 1)
+    out: list[DesignMetrics] = []
+    try:
+        for start in range(0, len(candidates), size):
+            check_time(f"evaluating designs ({start} of {len(candidates)} done)")
+            out += run(candidates[start : start + size], _ends_at())
+    except (TimeLimitError, TimeoutError, multiprocessing.TimeoutError) as exc:
+        check_time(f"evaluating designs ({len(out)} of {len(candidates)} done)")
+        if isinstance(exc, TimeLimitError):
+            raise
+        raise TimeLimitError(
+            "the time limit ran out while waiting for the design evaluations; raise "
+            "--time-limit or make the problem smaller"
+        ) from None
+    check_time(f"evaluating designs ({len(out)} of {len(candidates)} done)")
+    return out
+
+
+def _wait_limit() -> float | None:
+    """How long to wait for a batch of workers (s): what is left of the time limit in force."""
+    deadline = current_deadline()
+    return None if deadline is None else max(deadline.remaining, 1e-3)
+
+
 def sweep(
     candidates: Sequence[SeedArmGeometry],
     *,
@@ -107,10 +233,16 @@ def sweep(
 ) -> list[DesignMetrics]:
     """:func:`evaluate_design` of every candidate, in the candidates' order: on the Dask
     scheduler at ``scheduler`` (e.g. ``tcp://host:8786``) or with joblib on ``n_jobs`` local
-    processes."""
+    processes (-1: every core; at most ``MAX_JOBS``). Sizes are checked first
+    (:func:`check_sweep_size`). Under a time limit the candidates go out one batch per round
+    of workers, with the limit checked between batches; the workers run under the same limit,
+    and waiting for them stops when it runs out (joblib's ``timeout``, Dask's ``wait``)."""
+    candidates = list(candidates)
+    n_jobs = check_jobs(n_jobs)
+    check_sweep_size(candidates, pixel_mm, samples, seed)
     if scheduler is not None:
         try:
-            from distributed import Client
+            from distributed import Client, wait
         except ImportError:
             raise InvalidInputError("--scheduler needs Dask: pip install 'armpath[dask]'") from None
         try:
@@ -120,22 +252,37 @@ def sweep(
                 f"cannot reach the Dask scheduler at {scheduler}: {exc}"
             ) from None
         with client:
-            futures = client.map(
-                evaluate_design,
-                list(candidates),
-                pixel_mm=pixel_mm,
-                samples=samples,
-                seed=seed,
-                pure=True,
-            )
-            return list(client.gather(futures))  # type: ignore[no-untyped-call]
-    from joblib import Parallel, delayed
+            threads = sum(client.nthreads().values())  # type: ignore[no-untyped-call]
 
-    return list(
-        Parallel(n_jobs=n_jobs)(
-            delayed(evaluate_design)(g, pixel_mm, samples, seed) for g in candidates
-        )
-    )
+            def on_dask(batch: list[SeedArmGeometry], ends_at: float | None) -> list[Any]:
+                futures = client.map(
+                    _evaluate_within,
+                    [ends_at] * len(batch),
+                    batch,
+                    pixel_mm=pixel_mm,
+                    samples=samples,
+                    seed=seed,
+                    pure=True,
+                )
+                try:
+                    wait(futures, timeout=_wait_limit())  # type: ignore[no-untyped-call]
+                    return list(client.gather(futures))  # type: ignore[no-untyped-call]
+                finally:
+                    client.cancel(futures)  # type: ignore[no-untyped-call]
+
+            return _in_batches(candidates, threads, on_dask)
+    from joblib import Parallel, delayed, effective_n_jobs
+
+    with Parallel(n_jobs=n_jobs, timeout=_wait_limit()) as parallel:
+
+        def on_joblib(batch: list[SeedArmGeometry], ends_at: float | None) -> list[Any]:
+            return list(
+                parallel(
+                    delayed(_evaluate_within)(ends_at, g, pixel_mm, samples, seed) for g in batch
+                )
+            )
+
+        return _in_batches(candidates, effective_n_jobs(n_jobs), on_joblib)
 
 
 def ranked(results: Sequence[DesignMetrics], tie: float = 0.005) -> list[DesignMetrics]:

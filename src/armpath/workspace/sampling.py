@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from armpath.budget import MAX_CHUNK, MAX_GRID_CELLS, MAX_SAMPLES, check_size, check_time
 from armpath.errors import InvalidInputError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import z_axis_chain
@@ -24,8 +25,10 @@ from armpath.model.serial_arm import JointKind, SerialArm
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 METHODS = ("uniform", "stratified")
-#: Largest grid (voxels) a run may allocate: 2 GB at one byte per voxel.
-MAX_VOXELS = 2_000_000_000
+#: Largest grid (voxels) a run may allocate, one byte each (the budget's ``MAX_GRID_CELLS``).
+MAX_VOXELS = MAX_GRID_CELLS
+#: Joint vectors checked against the obstacles at once (bounds the clearance test's memory).
+OBSTACLE_BATCH = 65_536
 
 
 @dataclass(frozen=True)
@@ -213,19 +216,35 @@ class GridSpec:
     shape: tuple[int, int, int]
 
     @staticmethod
-    def for_arm(arm: SerialArm, voxel: float) -> GridSpec:
+    def for_arm(arm: SerialArm, voxel: float, option: str = "the voxel size") -> GridSpec:
+        """The grid for ``arm`` with voxels of edge ``voxel``; refused (naming ``option``) when
+        it would have more than ``MAX_VOXELS`` voxels."""
         if not (np.isfinite(voxel) and voxel > 0):
             raise InvalidInputError(f"voxel size must be a positive length, got {voxel}")
         reach = reach_bound(arm) + voxel
         centre = z_axis_chain(arm)[0, :3, 3]
-        n = int(np.ceil(2.0 * reach / voxel))
-        if n**3 > MAX_VOXELS:
-            raise InvalidInputError(
-                f"a {voxel:g} voxel grid over the reach ({reach:.0f}) needs {n}^3 voxels; "
-                f"use a voxel of at least {2.0 * reach / MAX_VOXELS ** (1 / 3):.3g}"
-            )
+        edge = np.ceil(2.0 * reach / voxel)  # a float: may be beyond any integer
+        check_size(
+            edge**3,
+            MAX_VOXELS,
+            f"voxels of a {voxel:g} grid over the reach ({reach:.0f}; use a voxel of at least "
+            f"{2.0 * reach / MAX_VOXELS ** (1 / 3):.3g})",
+            option,
+        )
+        n = int(edge)
         origin = centre - 0.5 * n * voxel
         return GridSpec(np.asarray(origin, dtype=np.float64), float(voxel), (n, n, n))
+
+
+def _clear_samples(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> FloatArray:
+    """The rows of ``q`` that satisfy the clearance rule of ``world``, tested
+    ``OBSTACLE_BATCH`` rows at a time (the time limit checked between them)."""
+    keep = np.empty(q.shape[0], dtype=bool)
+    for start in range(0, q.shape[0], OBSTACLE_BATCH):
+        check_time("checking samples against the obstacles")
+        part = q[start : start + OBSTACLE_BATCH]
+        keep[start : start + part.shape[0]] = world.slack(arm, part) >= 0.0
+    return q[keep]
 
 
 def joint_samples(ranges: FloatArray, n: int, rng: np.random.Generator, method: str) -> FloatArray:
@@ -239,6 +258,25 @@ def joint_samples(ranges: FloatArray, n: int, rng: np.random.Generator, method: 
     else:
         raise InvalidInputError(f"sampling method must be one of {METHODS}, got {method!r}")
     return np.asarray(ranges[:, 0] + u * (ranges[:, 1] - ranges[:, 0]), dtype=np.float64)
+
+
+def check_count(value: int, option: str, limit: float, what: str = "", least: int = 1) -> int:
+    """``value`` as an int, refused unless it is a whole number in ``[least, limit]``: the
+    messages name ``option`` (the argument or command-line option to change) and ``what`` is
+    counted (the upper end goes through :func:`armpath.budget.check_size`)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise InvalidInputError(f"{option} must be a whole number, got {value!r}")
+    if value < least:
+        raise InvalidInputError(f"{option} must be >= {least}, got {value}")
+    check_size(int(value), limit, what or option, option)
+    return int(value)
+
+
+def random_generator(seed: int) -> np.random.Generator:
+    """numpy's generator for a non-negative integer seed (refused otherwise)."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InvalidInputError(f"the random seed must be a whole number >= 0, got {seed!r}")
+    return np.random.default_rng(int(seed))
 
 
 def sample_workspace(
@@ -257,23 +295,28 @@ def sample_workspace(
 
     ``world``: keep only joint vectors that satisfy its clearance rule (obstacles and self
     collision). ``progress(done, total)`` is called after each chunk.
+
+    Refused before any work: more than ``MAX_SAMPLES`` samples, a chunk of more than
+    ``MAX_CHUNK``, a grid of more than ``MAX_VOXELS`` voxels. The time limit in force
+    (:func:`armpath.budget.check_time`) is checked after every chunk.
     """
-    if samples < 1:
-        raise InvalidInputError(f"samples must be >= 1, got {samples}")
-    if chunk < 1:
-        raise InvalidInputError(f"chunk must be >= 1, got {chunk}")
+    samples = check_count(samples, "samples", MAX_SAMPLES, "joint samples")
+    chunk = check_count(chunk, "chunk", MAX_CHUNK, "samples a chunk")
+    if method not in METHODS:
+        raise InvalidInputError(f"sampling method must be one of {METHODS}, got {method!r}")
+    rng = random_generator(seed)
     ranges = joint_ranges(arm)
     spec = GridSpec.for_arm(arm, voxel)
     occupied = np.zeros(spec.shape, dtype=np.uint8)
     C = np.ascontiguousarray(z_axis_chain(arm))
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-    rng = np.random.default_rng(seed)
     done = kept = outside = 0
-    while done < samples:
+    while done < samples:  # done grows by n >= 1 each time
+        check_time(f"sampling the workspace ({done:,} of {samples:,} samples)")
         n = min(chunk, samples - done)
         q = joint_samples(ranges, n, rng, method)
         if world is not None:
-            q = q[world.slack(arm, q) >= 0.0]
+            q = _clear_samples(arm, world, q)
         kept += q.shape[0]
         if q.shape[0]:
             outside += _mark_parallel(C, prismatic, q, spec.origin, spec.voxel, occupied, 64)
@@ -282,4 +325,5 @@ def sample_workspace(
             progress(done, samples)
     if outside:
         raise AssertionError(f"{outside} tool points fell outside the reach bound's grid")
+    check_time("sampling the workspace")
     return VoxelGrid(spec.origin, spec.voxel, occupied.view(np.bool_), samples, kept)
