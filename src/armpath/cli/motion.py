@@ -1,22 +1,42 @@
 """``armpath trajectory`` and ``armpath rcm``: smooth joint trajectories, their retiming and
-commands, and seed 003's fixed-point rotation."""
+commands, and seed 003's fixed-point rotation.
+
+Every input that sets the size of the work is checked before any work, each refusal one
+``error:`` line naming the option (:mod:`armpath.budget`): the waypoints file is read line by
+line (at most ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of ``MAX_LINE_BYTES``
+bytes), the controller periods (duration / period) are at most ``MAX_PERIODS`` and the
+commands (one a period at least, and a joint's net motion at 20 ticks a command) at most
+``MAX_COMMANDS``; the motion limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The
+per-period CSV files are written ``CSV_CHUNK`` rows at a time.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import math
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
 import typer
+from numpy.typing import NDArray
 from rich import box
 from rich.table import Table
 
+from armpath.budget import (
+    MAX_COMMANDS,
+    MAX_JOINTS,
+    MAX_PERIODS,
+    MAX_WAYPOINTS,
+    check_size,
+    check_time,
+)
 from armpath.cli.common import (
     ModelOption,
     PeriodOption,
+    TimeLimitOption,
     _cli_errors,
-    _commands_csv,
-    _csv_rows,
     _fmt,
     _joint_units,
     _numbers,
@@ -24,36 +44,132 @@ from armpath.cli.common import (
     app,
     err_console,
     out_console,
+    progress,
 )
+from armpath.commands import MAX_INCREMENT_TICKS, TICK_DEG
 from armpath.errors import InvalidInputError
-from armpath.export import (
-    output_folder,
-)
+from armpath.export import OutputFolder, output_folder
 from armpath.kinematics import tool_position
 from armpath.model.catalog import resolve_model
+from armpath.workspace.sampling import check_count
+
+#: Largest joint speed limit accepted (deg/s).
+MAX_VELOCITY_DEG_S = 1e6
+#: Largest joint acceleration limit accepted (deg/s^2).
+MAX_ACCELERATION_DEG_S2 = 1e9
+#: Largest joint jerk limit accepted (deg/s^3).
+MAX_JERK_DEG_S3 = 1e12
+#: Longest line of a waypoints file (bytes).
+MAX_LINE_BYTES = 65_536
+#: Rows of a per-period CSV file formatted at once.
+CSV_CHUNK = 50_000
+#: Largest number of points of a line in a plot (longer series keep the largest value of each
+#: stretch) and of states handed to an animation.
+PLOT_POINTS = 20_000
+ANIMATION_STATES = 2_048
 
 
 def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
     """Waypoints (deg) and optional times (s) from a CSV: one row per waypoint, joint angles in
-    deg; a first column named ``t`` or ``time_s`` gives the times."""
+    deg; a first column named ``t`` or ``time_s`` gives the times (strictly increasing).
+
+    The file is read a line at a time and refused at the first line past a limit: at most
+    ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of at most ``MAX_LINE_BYTES``
+    bytes, UTF-8 text (a byte-order mark is skipped), every value a finite number and every
+    row as long as the first. Each error names the line (and column)."""
+    name = f"waypoints file {path}"
+    header: list[str] | None = None
+    rows: list[list[float]] = []
+    width = 0
     try:
-        lines = [ln.strip() for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
+        with path.open("rb") as fh:
+            for number, raw in enumerate(_lines(fh, name), start=1):
+                line = _decoded(raw, number, name).strip()
+                if not line:
+                    continue
+                cells = [c.strip() for c in line.split(",")]
+                check_size(
+                    len(cells),
+                    MAX_JOINTS + 1,
+                    f"{name}: columns of line {number} (a time and up to {MAX_JOINTS} joints)",
+                    "--waypoints",
+                )
+                if header is None and not rows and not all(_is_number(c) for c in cells):
+                    header = [c.lower() for c in cells]
+                    width = len(cells)
+                    continue
+                if width and len(cells) != width:
+                    raise InvalidInputError(
+                        f"{name}: line {number} has {len(cells)} values, "
+                        f"{'the header has' if header else 'the first row has'} {width}"
+                    )
+                width = len(cells)
+                if len(rows) == MAX_WAYPOINTS:  # refused at the first row past the limit
+                    raise InvalidInputError(
+                        f"{name}: more than {MAX_WAYPOINTS:,} waypoints (rows; the limit is "
+                        f"{MAX_WAYPOINTS:,}); change --waypoints"
+                    )
+                rows.append([_number(c, number, k + 1, name) for k, c in enumerate(cells)])
     except OSError as exc:
-        raise InvalidInputError(f"cannot read waypoints file {path}: {exc.strerror}") from None
-    if not lines:
-        raise InvalidInputError(f"waypoints file {path} is empty")
-    header = [h.strip().lower() for h in lines[0].split(",")]
-    has_header = not all(_is_number(h) for h in header)
-    rows = lines[1:] if has_header else lines
-    try:
-        data = np.array([[float(v) for v in row.split(",")] for row in rows], dtype=np.float64)
-    except ValueError:
-        raise InvalidInputError(f"waypoints file {path}: every value must be a number") from None
-    if data.ndim != 2 or data.shape[0] < 2:
-        raise InvalidInputError(f"waypoints file {path}: need at least 2 rows of equal length")
-    if has_header and header[0] in ("t", "time_s"):
-        return data[:, 1:], data[:, 0]
+        raise InvalidInputError(f"cannot read {name}: {exc.strerror or exc}") from None
+    if not rows:
+        raise InvalidInputError(f"{name} has no waypoint rows" if header else f"{name} is empty")
+    if len(rows) < 2:
+        raise InvalidInputError(f"{name}: need at least 2 waypoint rows, got 1")
+    data = np.array(rows, dtype=np.float64)
+    timed = header is not None and header[0] in ("t", "time_s")
+    if timed and data.shape[1] < 2:
+        raise InvalidInputError(f"{name}: a time column and no joint column")
+    check_size(data.shape[1] - timed, MAX_JOINTS, f"{name}: joints (columns)", "--waypoints")
+    if header is not None and timed:
+        t = data[:, 0]
+        bad = np.flatnonzero(np.diff(t) <= 0)
+        if bad.size:
+            raise InvalidInputError(
+                f"{name}: the times ({header[0]}) must increase strictly from row to row; "
+                f"waypoint {bad[0] + 2} is at {t[bad[0] + 1]:g} s after {t[bad[0]]:g} s"
+            )
+        return data[:, 1:], t
     return data, None
+
+
+def _lines(fh: Any, name: str) -> Iterator[bytes]:
+    """The lines of a binary file, refusing one longer than ``MAX_LINE_BYTES``."""
+    number = 0
+    while True:
+        raw = fh.readline(MAX_LINE_BYTES + 2)
+        if not raw:
+            return
+        number += 1
+        if len(raw.rstrip(b"\r\n")) > MAX_LINE_BYTES:
+            raise InvalidInputError(
+                f"{name}: line {number} is longer than {MAX_LINE_BYTES:,} bytes"
+            )
+        yield raw
+
+
+def _decoded(raw: bytes, number: int, name: str) -> str:
+    try:
+        return raw.decode("utf-8-sig" if number == 1 else "utf-8")
+    except UnicodeDecodeError as exc:
+        raise InvalidInputError(
+            f"{name}: line {number} is not UTF-8 text (byte 0x{raw[exc.start]:02x} at "
+            f"position {exc.start + 1}); save it as UTF-8 CSV"
+        ) from None
+
+
+def _number(text: str, line: int, column: int, name: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise InvalidInputError(
+            f"{name}: line {line}, column {column}: {text!r} is not a number"
+        ) from None
+    if not math.isfinite(x):
+        raise InvalidInputError(
+            f"{name}: line {line}, column {column}: {text!r} is not a finite number"
+        )
+    return x
 
 
 def _is_number(text: str) -> bool:
@@ -62,6 +178,93 @@ def _is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _check_choice(value: str, choices: Any, option: str) -> None:
+    if value not in choices:
+        raise InvalidInputError(f"{option} must be one of {tuple(choices)}, got {value!r}")
+
+
+def _check_rate(value: float, option: str, largest: float, unit: str) -> None:
+    """A motion limit must be a finite number in ``(0, largest]``."""
+    if not (math.isfinite(value) and 0 < value <= largest):
+        raise InvalidInputError(
+            f"{option} must be a number in (0, {largest:g}] {unit}, got {value}"
+        )
+
+
+def _check_seconds(value: float, option: str) -> None:
+    if not (math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{option} must be a positive number of seconds, got {value}")
+
+
+def _check_periods(duration_s: float, period_s: float, options: str) -> None:
+    """Refuse a trajectory of ``duration_s`` with more controller periods than
+    ``MAX_PERIODS``, or more than ``MAX_COMMANDS`` commands at one a period."""
+    ratio = duration_s / period_s
+    periods = max(1.0, float(np.ceil(ratio - 1e-9))) if math.isfinite(ratio) else math.inf
+    how = f"{duration_s:.6g} s in periods of {period_s:g} s"
+    check_size(periods, MAX_PERIODS, f"controller periods ({how})", options)
+    check_size(periods, MAX_COMMANDS, f"commands (at least one a period: {how})", options)
+
+
+def _check_net_motion(waypoints_deg: np.ndarray, option: str) -> None:
+    """Refuse waypoints whose first and last rows are more commands apart than
+    ``MAX_COMMANDS`` (20 ticks of 0.1 deg a command)."""
+    net = float(np.max(np.abs(waypoints_deg[-1] - waypoints_deg[0]))) / TICK_DEG
+    check_size(
+        float(np.ceil((net - 1.0) / MAX_INCREMENT_TICKS)),
+        MAX_COMMANDS,
+        f"commands (a joint moves {net:.4g} ticks from the first waypoint to the last, at most "
+        f"{MAX_INCREMENT_TICKS} a command)",
+        option,
+    )
+
+
+def _write_csv(
+    folder: OutputFolder,
+    name: str,
+    header: list[str],
+    rows: Callable[[int, int], np.ndarray],
+    n_rows: int,
+    fmt: str,
+) -> None:
+    """Write ``name``: the header, then ``rows(start, stop)`` for every stretch of
+    ``CSV_CHUNK`` rows, each value formatted with ``fmt`` (printf style)."""
+    with folder.file(name).open("w", encoding="utf-8", newline="") as fh:
+        fh.write(",".join(header) + "\n")
+        for start in range(0, n_rows, CSV_CHUNK):
+            check_time(f"writing {name}")
+            np.savetxt(fh, rows(start, min(start + CSV_CHUNK, n_rows)), fmt=fmt, delimiter=",")
+
+
+def _write_commands_csv(folder: OutputFolder, sequence: Any) -> None:
+    """``commands.csv``: ``step, d1..dn`` in ticks, one row per command."""
+    cmds = sequence.commands
+    _write_csv(
+        folder,
+        "commands.csv",
+        ["step"] + [f"d{j + 1}_ticks" for j in range(cmds.shape[1])],
+        lambda a, b: np.column_stack([np.arange(a + 1, b + 1), cmds[a:b]]),
+        cmds.shape[0],
+        "%d",
+    )
+
+
+def _envelope(t: np.ndarray, y: np.ndarray, points: int = PLOT_POINTS) -> tuple[Any, Any]:
+    """At most about ``points`` of the series ``(t, y)`` for a plot: the largest ``y`` of each
+    stretch (so the peaks, and the largest value, stay)."""
+    if t.size <= points:
+        return t, y
+    step = -(-t.size // points)
+    starts = np.arange(0, t.size, step)
+    pick = starts + np.array([np.argmax(y[a : a + step]) for a in starts])
+    return t[pick], y[pick]
+
+
+def _evenly(n: int, count: int) -> NDArray[np.int64]:
+    """At most ``count`` indices spread evenly over ``0 .. n - 1``, both ends included."""
+    return np.unique(np.linspace(0, n - 1, min(n, count)).round().astype(np.int64))
 
 
 @app.command()
@@ -123,85 +326,124 @@ def trajectory(
             "0.1 deg) and trajectory.png here.",
         ),
     ] = None,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Minimum-snap (or minimum-jerk) joint trajectory through waypoints, rest to rest, and its
     commands on the 0.1 deg / 2 deg lattice (error feedback: within half a tick at every
-    period)."""
-    from armpath.trajectory import MotionLimits, allocate_times, minimum_snap, quantize
+    period). At most 10,000 waypoints of 64 joints, 5,000,000 periods and 1,000,000 commands;
+    limits up to 1e6 deg/s, 1e9 deg/s^2 and 1e12 deg/s^3."""
+    from armpath.trajectory import (
+        ORDERS,
+        QP_SOLVERS,
+        MotionLimits,
+        allocate_times,
+        minimum_snap,
+        quantize,
+    )
+    from armpath.trajectory.minsnap import segment_durations_ok
 
-    with _cli_errors():
+    with _cli_errors(time_limit):
+        _check_choice(kind, ORDERS, "--kind")
+        _check_choice(solver, QP_SOLVERS, "--solver")
+        _check_rate(max_velocity, "--max-velocity", MAX_VELOCITY_DEG_S, "deg/s")
+        _check_rate(max_acceleration, "--max-acceleration", MAX_ACCELERATION_DEG_S2, "deg/s^2")
+        if max_jerk is not None:
+            _check_rate(max_jerk, "--max-jerk", MAX_JERK_DEG_S3, "deg/s^3")
+        _check_seconds(period, "--period")
         W_deg, times = _read_waypoints(waypoints)
-        if not (max_velocity > 0 and max_acceleration > 0):
-            raise InvalidInputError("--max-velocity and --max-acceleration must be > 0")
-        if max_jerk is not None and not max_jerk > 0:
-            raise InvalidInputError("--max-jerk must be > 0")
         W = np.radians(W_deg)
         allocated = times is None
         if times is None:
             times = allocate_times(W, np.radians(max_velocity), np.radians(max_acceleration))
+            options = "--period (or --max-velocity, --max-acceleration)"
+        else:
+            options = "--period (or the times in --waypoints)"
+            if not segment_durations_ok(np.diff(times), ORDERS[kind]):
+                raise InvalidInputError(
+                    f"waypoints file {waypoints}: segment times from {np.diff(times).min():.3g} "
+                    f"to {np.diff(times).max():.3g} s are outside what the {kind} solve can take"
+                )
+        # The size of the work, before any: the duration (at the shortest feasible one, when
+        # --bounded compresses the times, at least each segment's largest move at full speed).
+        if bounded and allocated:
+            duration = float(np.sum(np.max(np.abs(np.diff(W_deg, axis=0)), axis=1))) / max_velocity
+        else:
+            duration = float(times[-1] - times[0])
+        _check_periods(duration, period, options)
+        _check_net_motion(W_deg, "--waypoints")
         limits = MotionLimits(
             velocity=np.radians(max_velocity),
             acceleration=np.radians(max_acceleration),
             jerk=None if max_jerk is None else np.radians(max_jerk),
         )
-        if bounded and allocated:
-            # No times given: the shortest duration at which the bounded QP is feasible.
-            from armpath.trajectory import shortest_bounded
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            with progress(f"minimum-{kind} trajectory through {len(W)} waypoints ...") as say:
+                if bounded and allocated:
+                    # No times given: the shortest duration at which the bounded QP is feasible.
+                    from armpath.trajectory import shortest_bounded
 
-            with err_console.status("finding the shortest feasible duration ..."):
-                traj = shortest_bounded(W, times, limits, kind=kind, solver=solver)
-        elif bounded:
-            traj = minimum_snap(W, times, kind=kind, limits=limits, solver=solver)
-        else:
-            traj = minimum_snap(W, times, kind=kind)
-        quantized = quantize(traj, period)
-        t = quantized.sample_times
-        peaks = [np.degrees(traj.peak(d).max()) for d in (1, 2, 3)]
-        how = "limits imposed" if bounded else "no limits imposed"
-        table = Table(
-            title=f"minimum-{kind} trajectory through {len(W)} waypoints ({how})", box=box.SIMPLE
-        )
-        for name in ("quantity", "value", "unit"):
-            table.add_column(name)
-        for row in (
-            ("duration", f"{traj.duration:.3f}", "s"),
-            ("largest joint speed", f"{peaks[0]:.2f}", "deg/s"),
-            ("largest joint acceleration", f"{peaks[1]:.2f}", "deg/s^2"),
-            ("largest joint jerk", f"{peaks[2]:.2f}", "deg/s^3"),
-            ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
-            ("periods split (faster than 2 deg)", str(quantized.split_periods), ""),
-            ("largest lattice error", f"{quantized.max_tick_error:.3f}", "ticks of 0.1 deg"),
-        ):
-            table.add_row(*row)
-        out_console.print(table)
-        retimed = []
-        if retime:
-            from armpath.trajectory import compare_retimings
+                    say("finding the shortest feasible duration ...")
+                    traj = shortest_bounded(W, times, limits, kind=kind, solver=solver)
+                elif bounded:
+                    traj = minimum_snap(W, times, kind=kind, limits=limits, solver=solver)
+                else:
+                    traj = minimum_snap(W, times, kind=kind)
+                say("converting to commands ...")
+                quantized = quantize(traj, period, option=options)
+                peaks = [np.degrees(traj.peak(d).max()) for d in (1, 2, 3)]
+            how = "limits imposed" if bounded else "no limits imposed"
+            table = Table(
+                title=f"minimum-{kind} trajectory through {len(W)} waypoints ({how})",
+                box=box.SIMPLE,
+            )
+            for name in ("quantity", "value", "unit"):
+                table.add_column(name)
+            for row in (
+                ("duration", f"{traj.duration:.3f}", "s"),
+                ("largest joint speed", f"{peaks[0]:.2f}", "deg/s"),
+                ("largest joint acceleration", f"{peaks[1]:.2f}", "deg/s^2"),
+                ("largest joint jerk", f"{peaks[2]:.2f}", "deg/s^3"),
+                ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
+                ("periods split (> 20 ticks: 2 deg)", str(quantized.split_periods), ""),
+                ("largest lattice error", f"{quantized.max_tick_error:.3f}", "ticks of 0.1 deg"),
+            ):
+                table.add_row(*row)
+            out_console.print(table)
+            retimed = []
+            if retime:
+                from armpath.trajectory import compare_retimings
 
-            if max_jerk is None:
-                limits = MotionLimits(
-                    velocity=limits.velocity,
-                    acceleration=limits.acceleration,
-                    jerk=10.0 * np.radians(max_acceleration),
-                )
-            with err_console.status("retiming ..."):
-                retimed = compare_retimings(W, times, limits, kind=kind)
-            out_console.print(_retiming_table(retimed, limits))
-        if out is not None:
-            from armpath.viz.figures import plot_trajectory
+                if max_jerk is None:
+                    limits = MotionLimits(
+                        velocity=limits.velocity,
+                        acceleration=limits.acceleration,
+                        jerk=10.0 * np.radians(max_acceleration),
+                    )
+                with progress("retiming ..."):
+                    retimed = compare_retimings(W, times, limits, kind=kind)
+                out_console.print(_retiming_table(retimed, limits))
+            if folder is not None:
+                from armpath.viz.figures import plot_trajectory
 
-            with output_folder(out) as folder:
-                folder.write_text(
-                    "trajectory.csv",
-                    _csv_rows(
+                with progress("writing the files ...") as say:
+                    t = quantized.sample_times
+                    _write_csv(
+                        folder,
+                        "trajectory.csv",
                         ["t_s"] + [f"q{j + 1}_deg" for j in range(W.shape[1])],
-                        np.column_stack([t, np.degrees(traj.evaluate(t))]),
-                    ),
-                )
-                folder.write_text("commands.csv", _commands_csv(quantized.sequence))
-                plot_trajectory(folder.file("trajectory.png"), traj, f"minimum-{kind} trajectory")
-                if retimed:
-                    folder.write_text("retiming.csv", _retiming_csv(retimed, limits))
+                        lambda a, b: np.column_stack([t[a:b], np.degrees(traj.evaluate(t[a:b]))]),
+                        t.size,
+                        "%.6f",
+                    )
+                    _write_commands_csv(folder, quantized.sequence)
+                    say("plotting ...")
+                    plot_trajectory(
+                        folder.file("trajectory.png"), traj, f"minimum-{kind} trajectory"
+                    )
+                    if retimed:
+                        folder.write_text("retiming.csv", _retiming_csv(retimed, limits))
+        if folder is not None:
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)
 
@@ -274,101 +516,147 @@ def rcm(
     animate: Annotated[
         bool, typer.Option("--animate/--no-animate", help="Write rcm.gif (with --out).")
     ] = True,
+    time_limit: TimeLimitOption = None,
 ) -> None:
     """Fixed-point rotation (seed 003): the tool tip stays on CENTRE while the tool turns once
     round a circle of directions (Rodrigues rotations, closed-form IK on the nearest branch,
     minimum-snap joints); prints how far the tip leaves the point, on the smooth trajectory and
-    under the quantized commands."""
-    from armpath.trajectory import joint_ticks, lattice_motion, quantize
+    under the quantized commands. At most 9,999 points, 5,000,000 periods (duration / period)
+    and 1,000,000 commands."""
+    from armpath.trajectory import ORDERS, joint_ticks, lattice_motion, quantize
+    from armpath.trajectory.minsnap import segment_durations_ok
+    from armpath.trajectory.quantize import MOTION_CHUNK
     from armpath.trajectory.rcm import fixed_point_rotation
 
-    with _cli_errors():
-        arm = resolve_model(model)
+    with _cli_errors(time_limit):
+        _check_choice(kind, ORDERS, "--kind")
+        _check_seconds(period, "--period")
+        _check_seconds(duration, "--duration")
+        check_count(points, "--points", MAX_WAYPOINTS - 1, "points on the circle", least=3)
+        if not (0.0 < cone <= 90.0):
+            raise InvalidInputError(f"--cone must be in (0, 90] deg, got {cone}")
+        options = "--period or --duration"
+        _check_periods(duration, period, options)
+        if not segment_durations_ok([duration / points], ORDERS[kind]):
+            raise InvalidInputError(
+                f"--duration {duration:g} s over {points} points gives segments of "
+                f"{duration / points:.3g} s, outside what the {kind} solve can take"
+            )
         c0 = np.array(_numbers(centre.split(","), 3, "--centre"))
         a = np.array(_numbers(axis.split(","), 3, "--axis"))
-        if np.linalg.norm(a) == 0:
+        if not np.any(a):
             raise InvalidInputError("--axis must not be zero")
-        if not (duration > 0):
-            raise InvalidInputError(f"--duration must be > 0 s, got {duration}")
-        with err_console.status("planning the rotation ..."):
-            plan = fixed_point_rotation(
-                arm,
-                c0,
-                circle_axis=a,
-                cone_deg=cone,
-                n_points=points,
-                duration_s=duration,
-                kind=kind,
+        arm = resolve_model(model)
+        folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        with folder_cm as folder:
+            with progress("planning the rotation ...") as say:
+                plan = fixed_point_rotation(
+                    arm,
+                    c0,
+                    circle_axis=a,
+                    cone_deg=cone,
+                    n_points=points,
+                    duration_s=duration,
+                    kind=kind,
+                )
+                traj = plan.trajectory
+                say("converting to commands ...")
+                quantized = quantize(traj, period, joint_ticks(arm), option=options)
+                t = quantized.sample_times
+                say("measuring the tip deviation ...")
+                smooth_tip = np.vstack(
+                    [
+                        tool_position(arm, traj.evaluate(t[k : k + MOTION_CHUNK]))
+                        for k in range(0, t.size, MOTION_CHUNK)
+                    ]
+                )
+                smooth_dev = np.linalg.norm(smooth_tip - c0, axis=1)
+                lattice = []
+                n = quantized.n_periods
+                for k in range(0, n, MOTION_CHUNK):
+                    check_time("measuring the tip deviation of the commands")
+                    t_part, q_part = lattice_motion(quantized, 8, k, min(k + MOTION_CHUNK, n))
+                    dev = np.linalg.norm(tool_position(arm, q_part) - c0, axis=1)
+                    lattice.append((t_part, dev))
+                t_lat = np.concatenate([tp for tp, _ in lattice])
+                lattice_dev = np.concatenate([d for _, d in lattice])
+            table = Table(
+                title=f"{arm.name}: tool tip held on {_fmt(c0, 1)} mm, one turn in {duration:g} s",
+                box=box.SIMPLE,
             )
-            traj = plan.trajectory
-            quantized = quantize(traj, period, joint_ticks(arm))
-            t = quantized.sample_times
-            smooth_tip = tool_position(arm, traj.evaluate(t))
-            t_lat, q_lat = lattice_motion(quantized)
-            lattice_dev = np.linalg.norm(tool_position(arm, q_lat) - c0, axis=1)
-        smooth_dev = np.linalg.norm(smooth_tip - c0, axis=1)
-        table = Table(
-            title=f"{arm.name}: tool tip held on {_fmt(c0, 1)} mm, one turn in {duration:g} s",
-            box=box.SIMPLE,
-        )
-        for name in ("quantity", "value", "unit"):
-            table.add_column(name)
-        for row in (
-            ("tool length (sphere radius)", f"{plan.radius:.1f}", "mm"),
-            ("waypoints on the circle", str(points), ""),
-            ("tip error at the waypoints", f"{plan.waypoint_tip_error:.2e}", "mm"),
-            ("largest tip deviation, smooth trajectory", f"{plan.max_tip_deviation:.3f}", "mm"),
-            ("largest tip deviation, quantized commands", f"{lattice_dev.max():.3f}", "mm"),
-            ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
-            ("periods split (faster than 2 ticks)", str(quantized.split_periods), ""),
-        ):
-            table.add_row(*row)
-        out_console.print(table)
-        if plan.max_tip_deviation > 0.1 * plan.radius:
-            err_console.print(
-                "the tip leaves the point by more than a tenth of the tool length: the circle "
-                "probably crosses the wrist singularity (tool axis along joint 4)",
-                markup=False,
-            )
-        if out is not None:
-            from armpath.viz.animation import Animation, Overlay, write_animation
-            from armpath.viz.figures import plot_tip_deviation
+            for name in ("quantity", "value", "unit"):
+                table.add_column(name)
+            for row in (
+                ("tool length (sphere radius)", f"{plan.radius:.1f}", "mm"),
+                ("waypoints on the circle", str(points), ""),
+                ("tip error at the waypoints", f"{plan.waypoint_tip_error:.2e}", "mm"),
+                ("largest tip deviation, smooth trajectory", f"{plan.max_tip_deviation:.3f}", "mm"),
+                ("largest tip deviation, quantized commands", f"{lattice_dev.max():.3f}", "mm"),
+                ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
+                ("periods split (> 20 ticks: 2 deg, 2 mm)", str(quantized.split_periods), ""),
+            ):
+                table.add_row(*row)
+            out_console.print(table)
+            if plan.max_tip_deviation > 0.1 * plan.radius:
+                err_console.print(
+                    "the tip leaves the point by more than a tenth of the tool length: the circle "
+                    "probably crosses the wrist singularity (tool axis along joint 4)",
+                    markup=False,
+                )
+            if folder is not None:
+                from armpath.viz.animation import Animation, Overlay, write_animation
+                from armpath.viz.figures import plot_tip_deviation
 
-            units = _joint_units(arm)
-            with output_folder(out) as folder:
-                q_show = _to_display(arm, traj.evaluate(t))
-                folder.write_text(
-                    "rcm.csv",
-                    _csv_rows(
+                units = _joint_units(arm)
+                with progress("writing the files ...") as say:
+                    _write_csv(
+                        folder,
+                        "rcm.csv",
                         ["t_s"]
                         + [f"q{j + 1}_{u}" for j, u in enumerate(units)]
                         + ["tip_x_mm", "tip_y_mm", "tip_z_mm", "tip_deviation_mm"],
-                        np.column_stack([t, q_show, smooth_tip, smooth_dev]),
-                    ),
-                )
-                folder.write_text("commands.csv", _commands_csv(quantized.sequence))
-                plot_tip_deviation(
-                    folder.file("rcm_tip_deviation.png"),
-                    [(t, smooth_dev, "smooth trajectory"), (t_lat, lattice_dev, "commands")],
-                    f"{arm.name}: tool tip distance from the fixed point",
-                )
-                if animate:
-                    ring = np.vstack([plan.wrist_points, plan.wrist_points[:1]])
-                    with err_console.status("writing rcm.gif ..."):
+                        lambda a, b: np.column_stack(
+                            [
+                                t[a:b],
+                                _to_display(arm, traj.evaluate(t[a:b])),
+                                smooth_tip[a:b],
+                                smooth_dev[a:b],
+                            ]
+                        ),
+                        t.size,
+                        "%.6f",
+                    )
+                    _write_commands_csv(folder, quantized.sequence)
+                    say("plotting ...")
+                    plot_tip_deviation(
+                        folder.file("rcm_tip_deviation.png"),
+                        [
+                            (*_envelope(t, smooth_dev), "smooth trajectory"),
+                            (*_envelope(t_lat, lattice_dev), "commands"),
+                        ],
+                        f"{arm.name}: tool tip distance from the fixed point",
+                    )
+                    if animate:
+                        say("writing rcm.gif ...")
+                        ring = np.vstack([plan.wrist_points, plan.wrist_points[:1]])
+                        shown = _evenly(t.size, ANIMATION_STATES)
                         write_animation(
                             folder.file("rcm.gif"),
                             Animation(
                                 arm,
-                                traj.evaluate(t),
-                                t,
+                                traj.evaluate(t[shown]),
+                                t[shown],
                                 f"{arm.name}: fixed-point rotation about {_fmt(c0, 0)} mm",
                                 overlays=(
                                     Overlay(c0[None, :], "fixed point", "points"),
                                     Overlay(ring, "wrist circle", "line", "tab:purple"),
                                 ),
-                                caption=lambda k: f"tip off the point {smooth_dev[k]:6.2f} mm",
+                                caption=lambda k: (
+                                    f"tip off the point {smooth_dev[shown[k]]:6.2f} mm"
+                                ),
                             ),
                             max_frames=64,
                         )
+        if folder is not None:
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)

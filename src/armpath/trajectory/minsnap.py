@@ -7,6 +7,10 @@ continuity`` at the inner waypoints and the boundary derivatives (rest, or given
 equality constraints. The optimum solves one sparse KKT system, factorised once and solved for
 every joint. Coefficients are kept in the normalised time ``s = t / T_i`` of each segment, so the
 system stays well conditioned for any segment durations.
+
+Bounds (:mod:`armpath.budget`): at most ``MAX_WAYPOINTS`` waypoints of ``MAX_JOINTS`` joints,
+checked before any work; the bounded QP re-solves at most ``MAX_QP_ROUNDS`` times a joint and
+checks the time limit in force before every solve.
 """
 
 from __future__ import annotations
@@ -19,10 +23,16 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 from scipy.sparse.linalg import splu
 
+from armpath.budget import MAX_JOINTS, MAX_WAYPOINTS, check_size, check_time
 from armpath.errors import InvalidInputError
 
 FloatArray = NDArray[np.float64]
 ORDERS = {"jerk": 3, "snap": 4}
+
+
+class InfeasibleLimitsError(InvalidInputError):
+    """The motion limits cannot be met with the given segment times (the bounded QP is
+    infeasible, or at the edge of feasibility)."""
 
 
 def _falling(k: int, d: int) -> float:
@@ -133,8 +143,10 @@ class MotionLimits:
                 raise InvalidInputError(
                     f"{name} limit needs 1 or {joints} values, got {np.shape(value)}"
                 ) from None
-            if name in ("velocity", "acceleration", "jerk") and not np.all(v > 0):
-                raise InvalidInputError(f"{name} limits must be > 0, got {v.tolist()}")
+            if name in ("velocity", "acceleration", "jerk") and not np.all(
+                np.isfinite(v) & (v > 0)
+            ):
+                raise InvalidInputError(f"{name} limits must be > 0 and finite, got {v.tolist()}")
             if name in ("lower", "upper") and not np.all(np.isfinite(v)):
                 raise InvalidInputError(f"{name} position limits must be finite")
             out[name] = v
@@ -146,6 +158,8 @@ class MotionLimits:
 #: Which derivative each limit bounds.
 LIMIT_DERIVATIVE = {"lower": 0, "upper": 0, "velocity": 1, "acceleration": 2, "jerk": 3}
 QP_SOLVERS = ("clarabel", "osqp")
+#: Largest number of limit sample points per segment of the bounded QP.
+MAX_SAMPLES_PER_SEGMENT = 256
 #: A limit counts as met when exceeded by at most this fraction of it.
 LIMIT_RTOL = 1e-5
 MAX_QP_ROUNDS = 12
@@ -351,9 +365,12 @@ def minimum_snap(
     local extreme of each bounded derivative (found on a grid 8 times finer and refined by
     Newton steps), violated extremes are added and the QP solved again (at most
     ``MAX_QP_ROUNDS`` solves), so each limit holds along the whole trajectory to ``LIMIT_RTOL``
-    (1e-5) of its value. Raises
-    ``InvalidInputError`` when the limits cannot be met with these segment times (lengthen them,
-    e.g. ``allocate_times``).
+    (1e-5) of its value. Raises ``InfeasibleLimitsError`` (an ``InvalidInputError``) when the
+    limits cannot be met with these segment times (lengthen them, e.g. ``allocate_times``).
+
+    At most ``MAX_WAYPOINTS`` waypoints of ``MAX_JOINTS`` joints; segment durations must keep
+    their ``(2 r - 1)``-th powers within the floating-point range (see
+    :func:`segment_durations_ok`).
     """
     if kind not in ORDERS:
         raise InvalidInputError(f"kind must be one of {tuple(ORDERS)}, got {kind!r}")
@@ -362,13 +379,22 @@ def minimum_snap(
     if W.ndim == 1:
         W = W[:, None]
     t = np.asarray(times, dtype=np.float64).reshape(-1)
-    if W.ndim != 2 or W.shape[0] < 2 or t.shape[0] != W.shape[0]:
+    if W.ndim != 2 or W.shape[0] < 2 or t.shape[0] != W.shape[0] or W.shape[1] < 1:
         raise InvalidInputError(
-            f"need at least 2 waypoints and one time per waypoint, got {W.shape[0]} waypoints "
-            f"and {t.shape[0]} times"
+            f"need at least 2 waypoints of at least 1 joint and one time per waypoint, got "
+            f"{W.shape[0]} waypoints of {W.shape[1] if W.ndim == 2 else 0} joints and "
+            f"{t.shape[0]} times"
         )
+    check_size(W.shape[0], MAX_WAYPOINTS, "waypoints", "the waypoints")
+    check_size(W.shape[1], MAX_JOINTS, "joints", "the waypoints")
     if not (np.all(np.isfinite(W)) and np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)):
         raise InvalidInputError("waypoints must be finite and times strictly increasing")
+    if not segment_durations_ok(np.diff(t), r):
+        lo, hi = _duration_range(r)
+        raise InvalidInputError(
+            f"segment durations must lie within {lo:.1e} .. {hi:.1e} s for minimum {kind}, got "
+            f"{np.diff(t).min():.3g} .. {np.diff(t).max():.3g} s"
+        )
     cont = r - 1 if continuity is None else int(continuity)
     if not r - 1 <= cont <= 2 * r - 2:
         raise InvalidInputError(
@@ -390,8 +416,11 @@ def minimum_snap(
     per_joint = limits.per_joint(J) if limits is not None else {}
     if per_joint and solver not in QP_SOLVERS:
         raise InvalidInputError(f"solver must be one of {QP_SOLVERS}, got {solver!r}")
-    if samples_per_segment < 2:
-        raise InvalidInputError("samples_per_segment must be >= 2")
+    if not 2 <= samples_per_segment <= MAX_SAMPLES_PER_SEGMENT:
+        raise InvalidInputError(
+            f"samples_per_segment must be in 2..{MAX_SAMPLES_PER_SEGMENT}, got "
+            f"{samples_per_segment}"
+        )
     _check_fixed_values(per_joint, W, bounds)
     problem = _equality_problem(W, t, r, cont, bounds)
     if not per_joint:
@@ -399,6 +428,23 @@ def minimum_snap(
     else:
         coeffs = _bounded_solve(problem, t, per_joint, solver, samples_per_segment)
     return PiecewisePolynomial(t.copy(), coeffs, r)
+
+
+def _duration_range(r: int) -> tuple[float, float]:
+    """Shortest and longest segment durations (s) whose ``(2 r - 1)``-th power is a normal,
+    finite float."""
+    info = np.finfo(np.float64)
+    p = 1.0 / (2 * r - 1)
+    return float(info.tiny) ** p, float(info.max) ** p
+
+
+def segment_durations_ok(durations: ArrayLike, r: int) -> bool:
+    """Whether every segment duration (s) can be used by the solve of order ``r`` (4: snap,
+    3: jerk): its cost weight ``T^(1 - 2 r)`` and the derivative scales ``T^-d`` (d < 2 r)
+    neither overflow nor vanish."""
+    T = np.asarray(durations, dtype=np.float64)
+    lo, hi = _duration_range(r)
+    return bool(np.all(np.isfinite(T) & (lo <= T) & (hi >= T)))
 
 
 def _check_fixed_values(
@@ -495,7 +541,8 @@ def _bounded_solve(
         near = np.flatnonzero(G @ x_free - h > -0.5)
         cost_scale = 1.0 / max(float(x_free @ problem.Q @ x_free), 1e-12)
         G, h = G[near], h[near]
-        for _ in range(MAX_QP_ROUNDS):
+        for round_ in range(MAX_QP_ROUNDS):
+            check_time(f"solving the bounded QP (joint {j + 1}, round {round_ + 1})")
             x, status = (
                 (x_free, "unbounded optimum")
                 if G.shape[0] == 0
@@ -503,7 +550,7 @@ def _bounded_solve(
             )
             if x is None:
                 if "infeasib" in status.lower():
-                    raise InvalidInputError(
+                    raise InfeasibleLimitsError(
                         f"joint {j + 1}: the limits cannot be met with these segment times "
                         f"(the trajectory lasts {t[-1] - t[0]:.4g} s); lengthen the segments"
                     )
@@ -534,7 +581,7 @@ def _bounded_solve(
             G = sparse.csr_matrix(sparse.vstack([G, *new_G]))
             h = np.concatenate([h, *new_h])
         else:
-            raise InvalidInputError(
+            raise InfeasibleLimitsError(
                 f"joint {j + 1}: the {solver} QP did not meet the limits between its sample "
                 f"points after {MAX_QP_ROUNDS} rounds; the segment times are at the edge of "
                 "feasibility, lengthen them slightly"
@@ -553,8 +600,10 @@ def allocate_times(
         W = W[:, None]
     v = np.broadcast_to(np.asarray(max_velocity, dtype=np.float64), (W.shape[1],))
     a = np.broadcast_to(np.asarray(max_acceleration, dtype=np.float64), (W.shape[1],))
-    if not (np.all(v > 0) and np.all(a > 0)):
-        raise InvalidInputError("velocity and acceleration limits must be > 0")
+    if not (np.all(np.isfinite(v) & (v > 0)) and np.all(np.isfinite(a) & (a > 0))):
+        raise InvalidInputError("velocity and acceleration limits must be finite and > 0")
+    if not np.all(np.isfinite(W)):
+        raise InvalidInputError("waypoints must be finite")
     d = np.abs(np.diff(W, axis=0))
     trapezoid = np.where(d > v**2 / a, d / v + v / a, 2.0 * np.sqrt(d / a))
     seg = np.maximum(trapezoid.max(axis=1), 1e-3)

@@ -16,13 +16,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import MAX_WAYPOINTS, check_size, check_time
 from armpath.errors import InvalidInputError
 from armpath.ik import complete_solver, limits_mask
 from armpath.kinematics import tool_pose
 from armpath.model.serial_arm import JointKind, SerialArm
-from armpath.trajectory.minsnap import PiecewisePolynomial, minimum_snap
+from armpath.trajectory.minsnap import ORDERS, PiecewisePolynomial, minimum_snap
 
 FloatArray = NDArray[np.float64]
+#: Most instants at which the smooth trajectory's tip deviation is measured.
+MAX_CHECK_SAMPLES = 1_000_000
 
 
 def rodrigues_z_to(k: FloatArray) -> FloatArray:
@@ -69,23 +72,40 @@ def fixed_point_rotation(
     round the circle of points at angle ``cone_deg`` from ``circle_axis`` on the sphere of radius
     ``d6`` (90 deg: a great circle; the report's circle with theta fixed is the great circle
     normal to ``(-sin theta0, cos theta0, 0)``). A circle whose tool axis passes along axis 4
-    (the wrist singularity) makes the wrist flip between waypoints; the deviation shows it."""
-    if n_points < 3:
+    (the wrist singularity) makes the wrist flip between waypoints; the deviation shows it.
+
+    At most ``MAX_WAYPOINTS`` points (``n_points + 1`` waypoints) and ``MAX_CHECK_SAMPLES``
+    check samples, refused before any work."""
+    if isinstance(n_points, bool) or not isinstance(n_points, int | np.integer) or n_points < 3:
         raise InvalidInputError(f"the circle needs at least 3 points, got {n_points}")
+    check_size(n_points + 1, MAX_WAYPOINTS, "waypoints of the circle (points + 1)", "the points")
     if not (0.0 < cone_deg <= 90.0):
         raise InvalidInputError(f"cone angle must be in (0, 90] deg, got {cone_deg}")
+    if not (np.isfinite(duration_s) and duration_s > 0):
+        raise InvalidInputError(f"the duration must be > 0 s, got {duration_s}")
+    if kind not in ORDERS:
+        raise InvalidInputError(f"kind must be one of {tuple(ORDERS)}, got {kind!r}")
+    if not 2 <= check_samples <= MAX_CHECK_SAMPLES:
+        raise InvalidInputError(
+            f"check_samples must be in 2..{MAX_CHECK_SAMPLES}, got {check_samples}"
+        )
+    c0 = np.asarray(centre, dtype=np.float64).reshape(3)
+    a = np.asarray(circle_axis, dtype=np.float64).reshape(3)
+    if not (np.all(np.isfinite(c0)) and np.all(np.isfinite(a))):
+        raise InvalidInputError("the centre and the circle's axis must be finite")
+    if not np.any(a):
+        raise InvalidInputError("the circle's axis must not be zero")
+    a = a / np.max(np.abs(a))  # no overflow or underflow in the norm
+    a /= np.linalg.norm(a)
     solver = complete_solver(arm)
     if solver is None:
         raise InvalidInputError(f"model {arm.name!r} has no all-solutions IK")
-    c0 = np.asarray(centre, dtype=np.float64).reshape(3)
     # the tool length: distance from the wrist centre to the tool point at any pose
     flange_to_tip = float(np.linalg.norm(arm.T_flange_tool[:3, 3]))
     last = arm.joints[-1].T_parent_joint[:3, 3]
     radius = flange_to_tip if flange_to_tip > 0 else float(np.linalg.norm(last))
     if radius <= 0:
         raise InvalidInputError(f"model {arm.name!r} has no tool length to rotate about")
-    a = np.asarray(circle_axis, dtype=np.float64)
-    a /= np.linalg.norm(a)
     e1 = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 0.0, 1.0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(a, e1)
@@ -103,6 +123,8 @@ def fixed_point_rotation(
     chosen = np.zeros((n_points, arm.n_joints))
     previous: FloatArray | None = None
     for k in range(n_points):
+        if k % 256 == 0:
+            check_time("choosing the joint solutions round the circle")
         sols = batch[k].solutions
         sols = sols[limits_mask(arm, sols)]
         if sols.shape[0] == 0:

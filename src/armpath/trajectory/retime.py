@@ -14,6 +14,11 @@ velocity, acceleration, jerk in the waypoints' unit per s, s^2, s^3):
   waypoint with the velocity and acceleration the ``scaled`` trajectory has there (the free
   ruckig computes state-to-state motions only; intermediate waypoints are its paid feature).
   The path between waypoints is ruckig's own, not the minimum-snap curve.
+
+Every loop has a budget: the bisection at most ``MAX_BISECTIONS`` steps (and it stops when the
+scale factors no longer differ in floating point), toppra at most ``rounds`` runs, ruckig one
+motion a segment. The time limit in force is checked before every QP, toppra run and ruckig
+segment.
 """
 
 from __future__ import annotations
@@ -25,11 +30,26 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import check_time
 from armpath.errors import InvalidInputError
-from armpath.trajectory.minsnap import MotionLimits, PiecewisePolynomial, minimum_snap
+from armpath.trajectory.minsnap import (
+    ORDERS,
+    InfeasibleLimitsError,
+    MotionLimits,
+    PiecewisePolynomial,
+    minimum_snap,
+    segment_durations_ok,
+)
 
 FloatArray = NDArray[np.float64]
 RETIMING_METHODS = ("scaled", "bounded", "toppra", "ruckig")
+#: Most halvings of the time scale below the scaled optimum's (the bounded optimum is rarely
+#: more than 2-4 times faster).
+MAX_HALVINGS = 8
+#: Most bisection steps of the shortest bounded duration (rtol >= MIN_RTOL needs about 35).
+MAX_BISECTIONS = 64
+#: Finest relative tolerance of the shortest bounded duration.
+MIN_RTOL = 1e-9
 
 
 class JointTrajectory(Protocol):
@@ -92,21 +112,28 @@ def _retimed(method: str, traj: JointTrajectory, started: float, exact: bool) ->
 
 
 def slowest_factor(traj: PiecewisePolynomial, limits: MotionLimits) -> float:
-    """The uniform time-scale factor (> 0) at which ``traj`` just meets the derivative limits
-    (velocity scales as 1/f, acceleration 1/f^2, jerk 1/f^3); < 1 means it could go faster."""
+    """The uniform time-scale factor at which ``traj`` just meets the derivative limits
+    (velocity scales as 1/f, acceleration 1/f^2, jerk 1/f^3); < 1 means it could go faster,
+    0 that it does not move (any time scale meets the limits)."""
     given = limits.per_joint(traj.coefficients.shape[2])
-    factor = 0.0
-    for name, d in (("velocity", 1), ("acceleration", 2), ("jerk", 3)):
-        if name in given:
-            factor = max(factor, float(np.max(traj.peak(d) / given[name])) ** (1.0 / d))
-    if factor == 0.0:
+    names = [name for name in ("velocity", "acceleration", "jerk") if name in given]
+    if not names:
         raise InvalidInputError("retiming needs a velocity, acceleration or jerk limit")
+    factor = 0.0
+    for name in names:
+        d = ("velocity", "acceleration", "jerk").index(name) + 1
+        ratio = float(np.max(traj.peak(d) / given[name]))
+        if not np.isfinite(ratio):
+            raise InvalidInputError(f"the trajectory's peak {name} is not finite")
+        factor = max(factor, ratio ** (1.0 / d))
     return factor
 
 
 def scaled(traj: PiecewisePolynomial, limits: MotionLimits) -> PiecewisePolynomial:
-    """``traj`` uniformly slowed (or sped up) until its tightest derivative limit is met."""
-    return traj.time_scaled(slowest_factor(traj, limits))
+    """``traj`` uniformly slowed (or sped up) until its tightest derivative limit is met; a
+    trajectory that does not move is returned as it is."""
+    factor = slowest_factor(traj, limits)
+    return traj if factor == 0.0 else traj.time_scaled(factor)
 
 
 def shortest_bounded(
@@ -119,33 +146,48 @@ def shortest_bounded(
     rtol: float = 1e-3,
 ) -> PiecewisePolynomial:
     """The bounded minimum-snap QP on ``times`` uniformly compressed to the shortest duration
-    at which it is still feasible (bisection on the scale factor to ``rtol``)."""
+    at which it is still feasible (bisection on the scale factor to ``rtol``, at least
+    ``MIN_RTOL``). Waypoints that do not move give the free optimum unchanged.
+
+    The search ends by design: at most ``MAX_HALVINGS`` halvings of the scale, then at most
+    ``MAX_BISECTIONS`` bisection steps, each halving ``log(hi / lo)`` (and stopping when the
+    midpoint no longer differs from the ends in floating point). Scale factors whose segment
+    durations leave the solvable range count as infeasible."""
+    if not (np.isfinite(rtol) and MIN_RTOL <= rtol < 1.0):
+        raise InvalidInputError(f"rtol must be in [{MIN_RTOL:g}, 1), got {rtol}")
     t = np.asarray(times, dtype=np.float64)
     free = minimum_snap(waypoints, t, kind=kind)
     hi = slowest_factor(free, limits)  # feasible: the scaled free optimum meets the limits
+    if hi == 0.0:
+        return free  # nothing moves: every duration meets the limits
+    r = ORDERS[kind]
 
     def solve(f: float) -> PiecewisePolynomial | None:
+        check_time("finding the shortest feasible duration")
+        scaled_t = t[0] + f * (t - t[0])
+        if not segment_durations_ok(np.diff(scaled_t), r):
+            return None
         try:
-            return minimum_snap(
-                waypoints, t[0] + f * (t - t[0]), kind=kind, limits=limits, solver=solver
-            )
-        except InvalidInputError as exc:
-            if "cannot be met" in str(exc) or "edge of feasibility" in str(exc):
-                return None
-            raise
+            return minimum_snap(waypoints, scaled_t, kind=kind, limits=limits, solver=solver)
+        except InfeasibleLimitsError:
+            return None
 
     best = solve(hi * (1 + 1e-9))
     if best is None:
         raise InvalidInputError("the bounded QP failed where the scaled optimum is feasible")
     lo = hi
-    for _ in range(8):  # the bounded optimum is rarely more than 2-4 times faster
+    for _ in range(MAX_HALVINGS):
         lo /= 2.0
         found = solve(lo)
         if found is None:
             break
         hi, best = lo, found
-    while hi / lo > 1 + rtol:
+    for _ in range(MAX_BISECTIONS):
+        if hi / lo <= 1 + rtol:
+            break
         mid = float(np.sqrt(hi * lo))
+        if not lo < mid < hi:
+            break  # hi and lo are neighbouring floats
         found = solve(mid)
         if found is None:
             lo = mid
@@ -224,7 +266,8 @@ def toppra_retime(
     grid = np.linspace(float(start), float(end), gridpoints + 1)
     v_lim, a_lim = given["velocity"].copy(), given["acceleration"].copy()
     result: ToppraTrajectory | None = None
-    for _ in range(rounds):
+    for round_ in range(max(rounds, 1)):
+        check_time(f"retiming with toppra (run {round_ + 1})")
         instance = algorithm.TOPPRA(
             [
                 constraint.JointVelocityConstraint(np.stack([-v_lim, v_lim], axis=1)),
@@ -296,6 +339,7 @@ def ruckig_retime(traj: PiecewisePolynomial, limits: MotionLimits) -> RuckigTraj
     pieces: list[Any] = []
     durations = []
     for i in range(len(traj.times) - 1):
+        check_time(f"retiming with ruckig (segment {i + 1})")
         inp = InputParameter(J)
         inp.current_position, inp.current_velocity, inp.current_acceleration = (
             q[i].tolist(),
@@ -341,6 +385,7 @@ def compare_retimings(
     if "scaled" in methods:
         out.append(_retimed("scaled", base, started, exact=True))
     if "bounded" in methods:
+        check_time("retiming")
         started = time.perf_counter()
         out.append(
             _retimed(
@@ -348,9 +393,11 @@ def compare_retimings(
             )
         )
     if "toppra" in methods:
+        check_time("retiming")
         started = time.perf_counter()
         out.append(_retimed("toppra", toppra_retime(base, limits), started, exact=False))
     if "ruckig" in methods:
+        check_time("retiming")
         started = time.perf_counter()
         out.append(_retimed("ruckig", ruckig_retime(base, limits), started, exact=False))
     return out
