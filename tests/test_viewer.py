@@ -15,11 +15,20 @@ import numpy as np
 import pytest
 
 import independent
-from armpath.geometry.primitives import Box, Capsule, cone_frustum
+from armpath.errors import InvalidInputError
+from armpath.geometry.primitives import Box, Capsule, HalfSpace, Sphere, cone_frustum
+from armpath.geometry.world import CollisionWorld
+from armpath.model.catalog import puma560
 from armpath.model.seed_arm import seed_arm
 from armpath.results import load_result
-from armpath.scenes import seed_scene
-from armpath.viewer.app import HEADLESS_CHROMIUM_ARGS, ArmViewer, free_port, replay_html
+from armpath.scenes import Scene, scene_from_dict, seed_scene
+from armpath.viewer.app import (
+    HEADLESS_CHROMIUM_ARGS,
+    ArmViewer,
+    check_address,
+    free_port,
+    replay_html,
+)
 from armpath.viewer.meshes import box_mesh, capsule_mesh, revolve, sphere_mesh
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -145,6 +154,178 @@ def test_cli_view_export_and_animate(seed_run, tmp_path):
     bad = _cli("animate", str(tmp_path / "missing.json"))
     assert bad.returncode == 1 and bad.stderr.startswith("error: cannot read result file")
     assert not (tmp_path / "x.html").exists()
+
+
+# --- empty and far-away scenes, bad addresses -----------------------------------------------
+
+EMPTY_SCENE = 'name = "empty"\n'
+FAR_SCENE = """name = "far"
+[[obstacles]]
+type = "sphere"
+name = "far_ball"
+center = [5e8, 0, 0]
+radius = 10
+[[obstacles]]
+type = "box"
+name = "huge_wall"
+center = [0, 3000, 0]
+size = [1e8, 10, 1e8]
+"""
+
+
+def _segment_gap(p, q, r, s, n=2001):
+    """Distance of two segments by dense sampling (mm), and its sampling allowance."""
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    a, b = p + t * (q - p), r + t * (s - r)
+    gap = np.linalg.norm(a[:, None] - b[None], axis=-1).min()
+    return gap, (np.linalg.norm(q - p) + np.linalg.norm(s - r)) / (n - 1)
+
+
+def test_viewer_with_an_empty_scene_reads_out_self_clearance():
+    empty = scene_from_dict({"name": "empty"})
+    viewer = ArmViewer(seed_arm(), empty, port=free_port())
+    try:
+        rng = np.random.default_rng(8)
+        for _ in range(5):
+            deg = np.round(rng.uniform(-120, 120, 6), 1)
+            state = viewer.set_ticks(np.rint(deg * 10).astype(np.int64))
+            A, B, C, D, E = independent.points(deg)
+            pairs = {"AB - CD": (A, B, C, D), "AB - DE": (A, B, D, E), "BC - DE": (B, C, D, E)}
+            gaps = {k: _segment_gap(*v) for k, v in pairs.items()}
+            closest = min(gaps, key=lambda k: gaps[k][0])
+            assert state.closest == closest
+            assert gaps[closest][0] - gaps[closest][1] <= state.clearance_mm <= gaps[closest][0]
+            assert state.colliding_parts == () or state.clearance_mm < 1.0
+        assert "Clearance" in viewer.readout.content
+    finally:
+        viewer.stop()
+    # an arm with no self pair in an empty scene: nothing to keep clear of
+    one_link = scene_from_dict({"name": "empty", "clearance": {"self_margin_mm": 1.0}})
+    viewer = ArmViewer(puma560(), one_link, port=free_port())
+    try:
+        state = viewer.set_ticks(np.zeros(6, dtype=np.int64))
+        assert state.colliding_parts == () and state.clearance_mm > 1.0
+        # folded: the forearm comes down onto the trunk; the forearm turns red
+        state = viewer.set_ticks(np.array([0, 900, 900, 0, 0, 0]))
+        assert state.closest == "L0p - L3b" and state.clearance_mm < 0
+        assert "L3b" in state.colliding_parts and "collision" in viewer.readout.content
+    finally:
+        viewer.stop()
+
+
+def test_viewer_skips_obstacles_far_outside_the_view_box():
+    far = (
+        Sphere("far", np.array([1e300, 0.0, 0.0]), 10.0),
+        Box("far_box", np.array([0.0, -1e300, 0.0]), np.array([10.0, 10.0, 10.0])),
+        HalfSpace("far_plane", np.array([0.0, 0.0, -1e300]), np.array([0.0, 0.0, 1.0])),
+        Box("wall", np.array([0.0, 3000.0, 0.0]), np.array([1e7, 5.0, 1e7])),
+        Sphere("near", np.array([0.0, 300.0, 300.0]), 50.0),
+    )
+    scene = Scene("far", "", CollisionWorld(far), None, "<test>")
+    with np.errstate(all="raise"):  # no overflow on the way
+        viewer = ArmViewer(seed_arm(), scene, port=free_port())
+    try:
+        notes = " ".join(viewer.notes)
+        for name in ("far", "far_box", "far_plane"):
+            assert f"obstacle {name!r} is not drawn: it lies outside the view box" in notes
+        assert "obstacle 'wall' is drawn cut to the view box (±7150 mm about the base)" in notes
+        assert len(viewer.notes) == 4
+        with np.errstate(all="raise"):
+            state = viewer.set_ticks(np.array([0, -900, 0, 0, -900, 0]))
+        _, B, C, D, E = independent.points([0, -90, 0, 0, -90, 0])
+        centre = np.array([0.0, 300.0, 300.0])
+        nearest = min(_segment_gap(p, q, centre, centre)[0] for p, q in ((B, C), (C, D), (D, E)))
+        assert state.closest.endswith("near")
+        assert state.clearance_mm == pytest.approx(nearest - 50.0, abs=0.2)
+    finally:
+        viewer.stop()
+
+
+@pytest.fixture(scope="module")
+def small_reach(tmp_path_factory):
+    out = tmp_path_factory.mktemp("small_reach")
+    proc = _cli("reach", "300", "250", "300", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    return out / "reach.json"
+
+
+def test_cli_view_serves_and_exports_empty_and_far_scenes(small_reach, tmp_path):
+    import urllib.request
+
+    (tmp_path / "empty.toml").write_text(EMPTY_SCENE)
+    (tmp_path / "far.toml").write_text(FAR_SCENE)
+    port = free_port()
+    scene = str(tmp_path / "empty.toml")
+    server = subprocess.Popen(
+        [sys.executable, "-m", "armpath", "view", "--scene", scene, "--port", str(port)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        deadline = time.time() + 90
+        while True:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5) as page:
+                    assert page.status == 200
+                break
+            except OSError:
+                assert server.poll() is None, server.communicate()[1]
+                assert time.time() < deadline
+                time.sleep(0.5)
+    finally:
+        server.terminate()
+        server.communicate(timeout=30)
+    for scene in ("empty", "far"):
+        html = tmp_path / f"{scene}.html"
+        proc = _cli(
+            "view",
+            "--result",
+            str(small_reach),
+            "--scene",
+            str(tmp_path / f"{scene}.toml"),
+            "--export-html",
+            str(html),
+        )
+        assert proc.returncode == 0, proc.stderr
+        assert "__VISER_EMBED_DATA__" in html.read_text()
+        warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning:")]
+        if scene == "far":
+            assert warnings == [
+                "warning: obstacle 'far_ball' is not drawn: it lies outside the view box "
+                "(±7150 mm about the base)",
+                "warning: obstacle 'huge_wall' is drawn cut to the view box "
+                "(±7150 mm about the base)",
+            ]
+        else:
+            assert warnings == []
+
+
+def test_cli_view_refuses_bad_addresses_at_once(tmp_path):
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        taken = busy.getsockname()[1]
+        cases = [
+            (["--host", "256.1.1.1"], "is not a valid IPv4 address"),
+            (["--host", "bad..name"], "neither an IPv4/IPv6 address nor a host name"),
+            (["--host", "192.0.2.1"], "is not available on this machine"),
+            (["--port", "0"], "--port must be in 1..65535, got 0"),
+            (["--port", "70000"], "--port must be in 1..65535, got 70000"),
+            (["--port", str(taken)], f"port {taken} on 127.0.0.1 is in use"),
+        ]
+        for args, message in cases:
+            proc = _cli("view", *args, timeout=60)  # a hang fails here
+            assert proc.returncode == 1, (args, proc.stderr)
+            lines = proc.stderr.strip().splitlines()
+            assert len(lines) == 1 and lines[0].startswith("error: "), (args, proc.stderr)
+            assert message in lines[0] and proc.stdout == ""
+        with pytest.raises(InvalidInputError, match="in use"):
+            check_address("127.0.0.1", taken)
+    check_address("127.0.0.1", free_port())
+    check_address("localhost", free_port())
 
 
 # --- in a real browser ---------------------------------------------------------------------

@@ -56,6 +56,12 @@ def view(
     from armpath.results import load_result
 
     with _cli_errors():
+        if export_html is None:  # where to serve, before any work
+            if not (0 < port < 65536):
+                raise InvalidInputError(f"--port must be in 1..65535, got {port}")
+            from armpath.viewer.app import check_address
+
+            check_address(host, port)
         loaded = load_result(result, scene_file) if result is not None else None
         if export_html is not None:
             if loaded is None:
@@ -64,14 +70,15 @@ def view(
                 raise InvalidInputError(f"--export-html must end in .html, got {export_html.name}")
             from armpath.viewer.app import replay_html
 
+            notes: list[str] = []
             with err_console.status("recording the replay ..."):
-                page = replay_html(loaded, fps=fps)
+                page = replay_html(loaded, fps=fps, notes=notes)
+            for note in notes:
+                err_console.print(f"warning: {note}", markup=False, soft_wrap=True)
             with output_folder(export_html.parent) as folder:
                 folder.write_text(export_html.name, page)
             out_console.print(f"wrote {export_html}", markup=False)
             return
-        if not (0 < port < 65536):
-            raise InvalidInputError(f"--port must be in 1..65535, got {port}")
         from armpath.viewer.app import ArmViewer
 
         if loaded is not None:
@@ -80,6 +87,8 @@ def view(
             arm = seed_arm() if model == "seed" else resolve_model(model)
             scene = _scene(scene_file, None)
         viewer = ArmViewer(arm, scene, host=host, port=port, result=loaded)
+        for note in viewer.notes:
+            err_console.print(f"warning: {note}", markup=False, soft_wrap=True)
         out_console.print(
             f"armpath viewer on http://{host}:{viewer.server.get_port()} (Ctrl-C to stop)",
             markup=False,

@@ -11,7 +11,12 @@ The scene is shown in metres (viser's unit); every number on the page is in mm a
 from __future__ import annotations
 
 import contextlib
+import errno
 import io
+import ipaddress
+import logging
+import re
+import socket
 import threading
 import time
 from dataclasses import dataclass, field
@@ -22,16 +27,23 @@ from numpy.typing import NDArray
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.geometry.primitives import HalfSpace
-from armpath.geometry.world import CollisionWorld
+from armpath.geometry.world import CollisionWorld, link_analysis
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.results import PlannedResult
 from armpath.scenes import Scene
 from armpath.trajectory.quantize import joint_ticks
-from armpath.viewer.meshes import obstacle_mesh
+from armpath.viewer.meshes import TriangleMesh, obstacle_mesh
 
 FloatArray = NDArray[np.float64]
+logger = logging.getLogger(__name__)
 MM = 1e-3  # display scale: mm -> m
+#: Obstacles are drawn within a cube about the base of this many times the arm's length (at
+#: least VIEW_BOX_MIN_MM): farther ones are skipped, larger ones cut to the cube.
+VIEW_BOX_REACHES = 10.0
+VIEW_BOX_MIN_MM = 2000.0
+#: Seconds to wait for a host name to resolve.
+RESOLVE_TIMEOUT_S = 5.0
 LINK_COLOR = (25, 80, 170)
 COLLISION_COLOR = (220, 30, 30)
 OBSTACLE_COLOR = (210, 180, 140)
@@ -77,18 +89,33 @@ class ArmViewer:
     ) -> None:
         import viser
 
+        check_address(host, port)
         self.arm = arm
         self.scene = scene
         self.world: CollisionWorld = scene.world
         self._lock = threading.RLock()
         self._updating = False
+        #: What the page leaves out or simplifies (obstacles outside the view box); also logged
+        #: (logger ``armpath.viewer.app``, level INFO); ``armpath view`` prints them.
+        self.notes: list[str] = []
         # viser prints a banner of its own; the CLI prints the address instead.
         with contextlib.redirect_stdout(io.StringIO()):
             self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        if port != 0 and self.server.get_port() != port:  # viser moved on: taken meanwhile
+            taken = self.server.get_port()
+            self.stop()
+            raise InvalidInputError(
+                f"port {port} on {host} is in use (viser would have taken {taken}); "
+                "choose another --port"
+            )
         self.server.scene.set_up_direction("+z")
         home_pts = landmark_positions(arm, arm.home)
         # the arm's length along its links at home (mm): frames the camera and the table patch
-        self._reach_mm = float(np.linalg.norm(np.diff(home_pts, axis=0), axis=1).sum())
+        self._reach_mm = float(
+            sum(np.linalg.norm(home_pts[lk.end] - home_pts[lk.start]) for lk in arm.links)
+        )
+        self._base_mm = np.asarray(arm.T_world_base[:3, 3], dtype=np.float64)
+        self._view_half_mm = max(VIEW_BOX_REACHES * self._reach_mm, VIEW_BOX_MIN_MM)
         size = max(self._reach_mm * MM, 0.2)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.3 * size)
         self.server.initial_camera.position = (1.1 * size, -1.3 * size, 0.9 * size)
@@ -99,6 +126,22 @@ class ArmViewer:
         self._parts = self.world.parts(arm)
         self._pairs = self.world.pairs(arm)
         self._required = self.world.required(arm)
+        # drawn: the parts (checked links, the last split at the tool tip), then the fixed base's
+        # links (checked against the moving links only) of non-zero length
+        degenerate = link_analysis(arm).degenerate
+        self._base_links = [
+            lk for lk, zero in zip(arm.links, degenerate, strict=True) if not (lk.checked or zero)
+        ]
+        names = [p.name for p in self._parts] + [lk.name for lk in self._base_links]
+        links = [p.link for p in self._parts] + [lk.name for lk in self._base_links]
+        # per pair, the drawn segments it turns red when broken: the part against an obstacle,
+        # every segment of both links of a self pair
+        self._pair_drawn = [
+            [k for k, link in enumerate(links) if link in (pair.part, pair.other)]
+            if pair.is_self
+            else [names.index(pair.part)]
+            for pair in self._pairs
+        ]
         self._draw_scene()
         self._build_gui()
         self._replay: CommandSequence | None = None
@@ -110,10 +153,39 @@ class ArmViewer:
 
     # --- scene -----------------------------------------------------------------------------
 
+    def _note(self, message: str) -> None:
+        self.notes.append(message)
+        logger.info(message)
+
+    def _view_mesh(self, name: str, mesh: TriangleMesh) -> TriangleMesh | None:
+        """The part of an obstacle's display mesh the page can show: ``None`` (and a note) when
+        it lies wholly outside the view box or is not finite, its vertices cut to the box (and
+        a note) when it reaches beyond it."""
+        vertices, faces = mesh
+        lo, hi = self._base_mm - self._view_half_mm, self._base_mm + self._view_half_mm
+        box = f"the view box (±{self._view_half_mm:.0f} mm about the base)"
+        with np.errstate(all="ignore"):
+            finite = bool(np.all(np.isfinite(vertices)))
+            outside = finite and bool(
+                np.any(vertices.min(axis=0) > hi) or np.any(vertices.max(axis=0) < lo)
+            )
+        if not finite or outside:
+            self._note(f"obstacle {name!r} is not drawn: it lies outside {box}")
+            return None
+        clipped = np.clip(vertices, lo, hi)
+        if not np.array_equal(clipped, vertices):
+            self._note(f"obstacle {name!r} is drawn cut to {box}")
+        return clipped, faces
+
     def _draw_scene(self) -> None:
         scene = self.server.scene
         for k, obstacle in enumerate(self.world.obstacles):
-            vertices, faces = obstacle_mesh(obstacle, np.zeros(3), 1.3 * self._reach_mm)
+            with np.errstate(all="ignore"):
+                mesh = obstacle_mesh(obstacle, self._base_mm, 1.3 * self._reach_mm)
+            shown = self._view_mesh(obstacle.name, mesh)
+            if shown is None:
+                continue
+            vertices, faces = shown
             is_plane = isinstance(obstacle, HalfSpace)
             scene.add_mesh_simple(
                 f"/obstacles/{k}_{obstacle.name}",
@@ -125,7 +197,7 @@ class ArmViewer:
             )
         scene.add_frame("/base", axes_length=0.1, axes_radius=0.003)
         thickness = max(2.0 * max((p.radius for p in self._parts), default=0.0), 18.0) * MM
-        n = len(self._parts)
+        n = len(self._parts) + len(self._base_links)
         self._links = scene.add_line_segments(
             "/arm/links",
             np.zeros((n, 2, 3)),
@@ -197,13 +269,8 @@ class ArmViewer:
             p0, p1 = self.world.part_segments(self.arm, q)
             values, _ = self.world.pair_clearances(self.arm, q)
             slack = values - self._required
-            n_obs = len(self.world.obstacles)
-            part_slack = slack[: len(self._parts) * n_obs].reshape(len(self._parts), n_obs)
-            colliding = tuple(
-                part.name
-                for part, s in zip(self._parts, part_slack.min(axis=1), strict=True)
-                if s < 0
-            )
+            broken = {k for b in np.flatnonzero(slack < 0) for k in self._pair_drawn[b]}
+            colliding = tuple(part.name for k, part in enumerate(self._parts) if k in broken)
             k = int(np.argmin(slack)) if slack.size else -1
             tip = tool_position(self.arm, q)
             self.state = ViewerState(
@@ -213,13 +280,19 @@ class ArmViewer:
                 closest=self._pairs[k].label if k >= 0 else "",
                 colliding_parts=colliding,
             )
+            n_drawn = len(self._parts) + len(self._base_links)
             colors = np.array(
-                [COLLISION_COLOR if p.name in colliding else LINK_COLOR for p in self._parts],
+                [COLLISION_COLOR if k in broken else LINK_COLOR for k in range(n_drawn)],
                 dtype=np.uint8,
+            ).reshape(-1, 3)
+            base = [(pts[lk.start], pts[lk.end]) for lk in self._base_links]
+            segments = np.concatenate(
+                [np.stack([p0, p1], axis=1), np.array(base, dtype=np.float64).reshape(-1, 2, 3)]
             )
             with self.server.atomic():
-                self._links.points = (np.stack([p0, p1], axis=1) * MM).astype(np.float32)
-                self._links.colors = np.repeat(colors[:, None, :], 2, axis=1)
+                if n_drawn:
+                    self._links.points = (segments * MM).astype(np.float32)
+                    self._links.colors = np.repeat(colors[:, None, :], 2, axis=1)
                 self._joints.points = (pts * MM).astype(np.float32)
                 self._tip.position = tuple(tip * MM)
                 self._updating = True
@@ -241,10 +314,12 @@ class ArmViewer:
             if s.colliding_parts
             else "no collision"
         )
-        return (
-            f"**Fingertip** x = {x:.2f}, y = {y:.2f}, z = {z:.2f} mm  \n"
-            f"**Clearance** {s.clearance_mm:.2f} mm ({s.closest})  \n{status}"
+        clearance = (
+            f"**Clearance** {s.clearance_mm:.2f} mm ({s.closest})"
+            if s.closest
+            else "**Clearance** nothing to keep clear of"
         )
+        return f"**Fingertip** x = {x:.2f}, y = {y:.2f}, z = {z:.2f} mm  \n{clearance}  \n{status}"
 
     def _on_slider(self) -> None:
         if self._updating:
@@ -360,6 +435,78 @@ class ArmViewer:
             self.server.stop()
 
 
+_HOST_NAME = re.compile(
+    r"(?=.{1,253}\.?$)[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?"
+    r"(\.[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?)*\.?"
+)
+
+
+def _resolve(host: str) -> list[tuple[int, tuple[object, ...]]]:
+    """``(family, address)`` of every TCP address ``host`` names, resolved in a helper thread
+    that is given up after ``RESOLVE_TIMEOUT_S``."""
+    found: list[list[tuple[int, tuple[object, ...]]]] = []
+    failed: list[OSError] = []
+
+    def look_up() -> None:
+        try:
+            infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+            found.append([(int(info[0]), tuple(info[4])) for info in infos])
+        except OSError as exc:
+            failed.append(exc)
+
+    worker = threading.Thread(target=look_up, daemon=True)
+    worker.start()
+    worker.join(RESOLVE_TIMEOUT_S)
+    if found and found[0]:
+        return found[0]
+    why = f" ({failed[0]})" if failed else f" (no answer in {RESOLVE_TIMEOUT_S:g} s)"
+    raise InvalidInputError(f"--host {host!r} does not resolve to an address{why}")
+
+
+def check_address(host: str, port: int) -> None:
+    """Refuse, with :class:`InvalidInputError`, what the viewer could not serve on: a host that
+    is neither an IPv4/IPv6 address nor a resolvable name, a port outside 1..65535 (0: any free
+    port), an address this machine does not have, a port in use or not allowed."""
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+        raise InvalidInputError(f"--port must be in 1..65535, got {port}")
+    name = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    try:
+        ip = ipaddress.ip_address(name)
+        family = socket.AF_INET6 if ip.version == 6 else socket.AF_INET
+        addresses: list[tuple[int, tuple[object, ...]]] = [(int(family), (str(ip), 0))]
+    except ValueError:
+        if re.fullmatch(r"[0-9.]+", name):
+            raise InvalidInputError(
+                f"--host {host!r} is not a valid IPv4 address (four numbers 0..255)"
+            ) from None
+        if not _HOST_NAME.fullmatch(name):
+            raise InvalidInputError(
+                f"--host {host!r} is neither an IPv4/IPv6 address nor a host name"
+            ) from None
+        addresses = _resolve(name)
+    for family_id, address in addresses:
+        with socket.socket(family_id, socket.SOCK_STREAM) as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                s.bind((str(address[0]), port, *address[2:]))
+            except OSError as exc:
+                if exc.errno == errno.EADDRINUSE:
+                    raise InvalidInputError(
+                        f"port {port} on {host} is in use; choose another --port"
+                    ) from None
+                if exc.errno == errno.EADDRNOTAVAIL:
+                    raise InvalidInputError(
+                        f"--host {host!r}: address {address[0]} is not available on this "
+                        "machine (use 127.0.0.1, 0.0.0.0 or one of its own addresses)"
+                    ) from None
+                if exc.errno == errno.EACCES:
+                    raise InvalidInputError(
+                        f"port {port} on {host} is not allowed (ports below 1024 need "
+                        "privileges); choose another --port"
+                    ) from None
+                raise InvalidInputError(f"cannot serve on {host} port {port}: {exc}") from None
+
+
 def free_port(host: str = "127.0.0.1") -> int:
     """A TCP port nothing listens on right now."""
     import socket
@@ -369,13 +516,22 @@ def free_port(host: str = "127.0.0.1") -> int:
         return int(s.getsockname()[1])
 
 
-def replay_html(result: PlannedResult, *, fps: float = 15.0, max_frames: int = 600) -> str:
+def replay_html(
+    result: PlannedResult,
+    *,
+    fps: float = 15.0,
+    max_frames: int = 600,
+    notes: list[str] | None = None,
+) -> str:
     """A self-contained HTML page (viser's client with the recording embedded) that replays
     ``result``: the scene, the curve and targets, the fingertip's path and the arm moving through
-    the commands at ``fps`` commands per second (at most ``max_frames`` states, evenly spread)."""
+    the commands at ``fps`` commands per second (at most ``max_frames`` states, evenly spread).
+    What the page leaves out (:attr:`ArmViewer.notes`) is appended to ``notes``."""
     if not fps > 0:
         raise InvalidInputError(f"fps must be > 0, got {fps}")
     viewer = ArmViewer(result.arm, result.scene, port=free_port(), result=result)
+    if notes is not None:
+        notes.extend(viewer.notes)
     try:
         states = result.sequence.states()
         idx = np.unique(np.linspace(0, len(states) - 1, min(len(states), max_frames)).round())
