@@ -9,6 +9,9 @@ models, a robot file, a URDF and an arm built by hand with zero-length links.
 from __future__ import annotations
 
 import json
+import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -16,7 +19,7 @@ import pytest
 from armpath.errors import InvalidInputError
 from armpath.geometry.primitives import Box, HalfSpace
 from armpath.geometry.world import CollisionWorld, link_analysis
-from armpath.kinematics import forward_frames, landmark_positions
+from armpath.kinematics import displacement_bounds, forward_frames, landmark_positions
 from armpath.model.catalog import BUILTIN_MODELS, puma560, ur5
 from armpath.model.dh import load_robot_file, robot_from_dict
 from armpath.model.serial_arm import JointKind, Landmark, Link, SerialArm
@@ -287,6 +290,38 @@ def test_short_chains_and_rigid_pairs_are_skipped_by_rule():
     assert info.rigid[k["L2b"], k["L3b"]] and not info.rigid[k["L2a"], k["L3b"]]
     names = {(arm.links[i].name, arm.links[j].name) for i, j in SELF_ONLY.self_pairs(arm)}
     assert names == {("L0p", "L2b"), ("L0p", "L3a"), ("L0p", "L3b"), ("L2a", "L3a"), ("L2a", "L3b")}
+
+
+@pytest.mark.parametrize("name", ARM_NAMES)
+def test_displacement_bound_holds_for_every_landmark(arms, name):
+    """The planners' certificate: no landmark (corners and pedestal included) moves farther
+    than ``sum |dq_i| R_i``."""
+    arm = arms[name]
+    R = displacement_bounds(arm)
+    rng = np.random.default_rng(7)
+    q = _within_limits(arm, 2000, seed=7)
+    dq = rng.uniform(-0.05, 0.05, q.shape)
+    moved = np.linalg.norm(_points_by_frames(arm, q + dq) - _points_by_frames(arm, q), axis=-1)
+    assert np.all(moved.max(axis=-1) <= np.abs(dq) @ R + 1e-9)
+
+
+def test_cli_workspace_with_obstacles_keeps_puma_configurations(tmp_path):
+    scene = tmp_path / "cell.toml"
+    scene.write_text(
+        'name = "puma_cell"\n[[obstacles]]\ntype = "half_space"\nname = "floor"\n'
+        "point = [0.0, 0.0, -671.83]\nnormal = [0.0, 0.0, 1.0]\n"
+    )
+    args = ["--model", "puma560", "--obstacles", "--scene", str(scene), "--samples", "20000"]
+    proc = subprocess.run(
+        [sys.executable, "-m", "armpath", "workspace", *args, "--chunk", "20000", "--voxel", "40"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    kept = re.search(r"kept[^\d]*(\d+)", proc.stdout)
+    assert kept is not None, proc.stdout
+    assert int(kept.group(1)) > 0.7 * 20000
 
 
 def test_workspace_with_obstacles_finds_valid_puma_configurations():
