@@ -15,8 +15,9 @@ Every length is mm and every angle rad. Sources:
 
 Collision links are each model's physical skeleton (:mod:`armpath.model.skeleton`) with the
 capsule radii below (mm; the fixed base first, then the link each joint moves; zero-length
-links have none). They are round numbers sized on the machines' published outlines, to keep the
-links' bodies apart, not exact envelopes; a robot file sets its own (``link_radii_mm``).
+links have none): round numbers of the order of each machine's link thickness, to keep the
+links' bodies apart, not measured envelopes. A robot file sets its own (``link_radii_mm``); the
+seed arm keeps its zero radius (SPEC).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ PAINTER004_LINK_RADII_MM = (150.0, 120.0, 100.0, 80.0, 60.0, 50.0, 0.0)
 #: spherical wrist at its end: links 4-6 have zero length).
 PUMA560_LINK_RADII_MM = (100.0, 0.0, 80.0, 55.0, 0.0, 0.0, 0.0)
 #: The PUMA 560's trunk: its D-H base frame is at the shoulder, 26.45 in above the mounting
-#: surface.
+#: surface (the height Corke's Python Robotics Toolbox gives).
 PUMA560_PEDESTAL_MM = 26.45 * 25.4
 #: ur5: the base column, the upper arm, the forearm (with wrist 1's 109 mm housing), wrists 2, 3.
 UR5_LINK_RADII_MM = (75.0, 0.0, 60.0, 50.0, 45.0, 45.0, 0.0)
