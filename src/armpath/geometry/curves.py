@@ -318,16 +318,40 @@ class ConeSection(Curve):
 
 
 def plane_section(
-    name: str, solid: SolidOfRevolution, plane_point: ArrayLike, plane_normal: ArrayLike
+    name: str,
+    solid: SolidOfRevolution,
+    plane_point: ArrayLike,
+    plane_normal: ArrayLike,
+    face: str = "outer",
 ) -> ConeSection:
-    """Where a plane cuts the outer side face of ``solid``: the profile edge that rises from the
-    outermost bottom corner (for the seed workpiece, its outer conical face)."""
+    """Where a plane cuts a side face of ``solid``.
+
+    ``face="outer"``: the profile edge that rises from the outermost bottom corner (for the
+    seed workpiece, its outer conical face). ``face="inner"``: the inner side face of a hollow
+    solid (the other side edge off the axis, the tallest if there are several).
+    """
     prof = solid.profile
     bottom = int(np.argmax(np.where(prof[:, 1] == prof[:, 1].min(), prof[:, 0], -np.inf)))
+    if face == "outer":
+        return ConeSection(
+            name,
+            solid,
+            bottom,
+            np.asarray(plane_point, dtype=np.float64),
+            np.asarray(plane_normal, dtype=np.float64),
+        )
+    if face != "inner":
+        raise InvalidInputError(f"curve {name!r}: face must be 'outer' or 'inner', got {face!r}")
+    nxt = np.roll(prof, -1, axis=0)
+    side = (prof[:, 1] != nxt[:, 1]) & ((prof[:, 0] > 0) | (nxt[:, 0] > 0))
+    side[bottom] = False
+    if not np.any(side):
+        raise InvalidInputError(f"curve {name!r}: {solid.name!r} has no inner side face")
+    height = np.where(side, np.abs(nxt[:, 1] - prof[:, 1]), -np.inf)
     return ConeSection(
         name,
         solid,
-        bottom,
+        int(np.argmax(height)),
         np.asarray(plane_point, dtype=np.float64),
         np.asarray(plane_normal, dtype=np.float64),
     )

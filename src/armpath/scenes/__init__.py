@@ -27,6 +27,7 @@ from armpath.geometry import (
     HalfSpace,
     HollowFrustum,
     Obstacle,
+    SolidOfRevolution,
     Sphere,
     WallThickness,
     cone_frustum,
@@ -177,11 +178,13 @@ class SpotweldTaskSpec(_FiniteVec):
 
 
 class PlaneSectionCurveSpec(_FiniteVec):
-    """Where a plane cuts the outer side face of a hollow_frustum obstacle (the seed crack)."""
+    """Where a plane cuts a side face of a solid of revolution obstacle (hollow_frustum,
+    cylinder, cone_frustum): its outer face (the seed crack) or a hollow solid's inner face."""
 
     type: Literal["plane_section"]
     name: str = "curve"
-    solid: str = Field(description="name of the hollow_frustum obstacle")
+    solid: str = Field(description="name of the hollow_frustum, cylinder or cone_frustum")
+    face: Literal["outer", "inner"] = "outer"
     plane_point: Vec3
     plane_normal: Vec3
 
@@ -254,7 +257,13 @@ class Scene:
             raise SceneError(f"scene {self.source} defines no [tasks.spotweld]")
         spec = self.spotweld
         found = [o for o in self.world.obstacles if o.name == spec.workpiece]
-        if not found or not isinstance(found[0], HollowFrustum):
+        if not found:
+            names = ", ".join(repr(o.name) for o in self.world.obstacles) or "none"
+            raise SceneError(
+                f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is not an "
+                f"obstacle of the scene (obstacles: {names})"
+            )
+        if not isinstance(found[0], HollowFrustum):
             raise SceneError(
                 f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is not a "
                 "hollow_frustum obstacle"
@@ -270,12 +279,20 @@ class Scene:
         try:
             if isinstance(spec, PlaneSectionCurveSpec):
                 found = [o for o in self.world.obstacles if o.name == spec.solid]
-                if not found or not isinstance(found[0], HollowFrustum):
+                if not found:
+                    names = ", ".join(repr(o.name) for o in self.world.obstacles) or "none"
+                    raise SceneError(
+                        f"scene {self.source}: tasks.trace.curve.solid {spec.solid!r} is not an "
+                        f"obstacle of the scene (obstacles: {names})"
+                    )
+                if not isinstance(found[0], SolidOfRevolution):
                     raise SceneError(
                         f"scene {self.source}: tasks.trace.curve.solid {spec.solid!r} is not a "
-                        "hollow_frustum obstacle"
+                        "hollow_frustum, cylinder or cone_frustum"
                     )
-                return plane_section(spec.name, found[0], spec.plane_point, spec.plane_normal)
+                return plane_section(
+                    spec.name, found[0], spec.plane_point, spec.plane_normal, spec.face
+                )
             if isinstance(spec, ParametricCurveSpec):
                 return ParametricCurve(spec.name, spec.x, spec.y, spec.z, spec.t[0], spec.t[1])
             return Polyline(spec.name, np.array(spec.points_mm), spec.closed)

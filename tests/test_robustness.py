@@ -1,0 +1,410 @@
+"""Issue 17: every planning command ends, handles any valid scene and says clearly what is wrong.
+
+Each defect found is pinned by a test named after it; results are replayed by the independent
+implementation of the seed arm and workpiece (tests/independent.py, tests/independent_trace.py).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import independent
+import independent_trace as it
+from armpath.budget import check_time, time_limit
+from armpath.commands import deg_to_ticks
+from armpath.errors import InvalidInputError, SceneError, TimeLimitError, UnreachableError
+from armpath.model.seed_arm import seed_arm
+from armpath.planning.tour import MAX_AUTO_ORDER_TARGETS, plan_tour
+from armpath.planning.trace import TraceOptions, _Tracer, plan_trace
+from armpath.results import load_result
+from armpath.scenes import load_scene, scene_from_dict, seed_scene
+from cli_checks import error_lines
+
+HOME = [0, -90, 0, 0, -90, 0]
+SEED = {
+    "name": "seed-like",
+    "obstacles": [
+        {"type": "half_space", "name": "table", "point": [0, 0, 0], "normal": [0, 0, 1]},
+        {
+            "type": "hollow_frustum",
+            "name": "workpiece",
+            "base_center": [210, 0, 0],
+            "height": 180,
+            "r_bottom": 168,
+            "r_top": 96,
+            "wall": 8,
+        },
+    ],
+}
+RING_Z = 100.0
+RING_R = 168.0 - 0.4 * RING_Z  # the outer cone's radius at that height
+
+
+def run(*args: str, cwd=None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "armpath", *args],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        cwd=cwd,
+    )
+
+
+# -- 1. the tracer ends --------------------------------------------------------------------------
+def test_tracer_stops_at_the_goal_instead_of_stepping_across_it():
+    """The defect: the stop rule took |goal - s| <= 0.05 mm while a command could overshoot the
+    goal by up to the tolerance, so the tracer went back and forth across the goal for ever. A
+    stub step that always jumps 0.08 mm across the goal must end the pass after one command."""
+    tracer = _Tracer.__new__(_Tracer)
+    tracer.tol = 0.1
+    tracer.arc = type("Arc", (), {"start_mm": 0.0, "end_mm": 10.0})()
+    calls = []
+
+    def across(qk, sk, goal):
+        calls.append(sk)
+        return qk + 1, goal + 0.08 if sk < goal else goal - 0.08
+
+    tracer.step = across
+    states, s_end = tracer.run(np.zeros(6, dtype=np.int64), 9.9, 10.0)
+    assert len(calls) == 1 and len(states) == 2 and s_end == pytest.approx(10.08)
+
+
+def test_tracer_refuses_a_step_that_makes_no_progress():
+    tracer = _Tracer.__new__(_Tracer)
+    tracer.tol = 0.1
+    tracer.arc = type("Arc", (), {"start_mm": 0.0, "end_mm": 10.0})()
+    tracer.step = lambda qk, sk, goal: (qk, sk + 0.01)  # breaks the step rule
+    with pytest.raises(AssertionError, match="no progress"):
+        tracer.run(np.zeros(6, dtype=np.int64), 0.0, 10.0)
+
+
+def ring_distance(p: np.ndarray) -> np.ndarray:
+    """Distance from points (..., 3) to the horizontal ring on the outer cone (closed form)."""
+    rho = np.hypot(p[..., 0] - 210.0, p[..., 1])
+    return np.hypot(rho - RING_R, p[..., 2] - RING_Z)
+
+
+@pytest.fixture(scope="module")
+def ring_trace():
+    """The defect's case: a horizontal circle on the workpiece's outer cone."""
+    spec = {
+        **SEED,
+        "tasks": {
+            "trace": {
+                "curve": {
+                    "type": "plane_section",
+                    "name": "ring",
+                    "solid": "workpiece",
+                    "plane_point": [0, 0, RING_Z],
+                    "plane_normal": [0, 0, 1],
+                }
+            }
+        },
+    }
+    scene = scene_from_dict(spec)
+    with time_limit(600):  # a regression ends in a clear error, not a hung test run
+        return plan_trace(
+            seed_arm(), scene.world, deg_to_ticks(HOME), scene.trace_curve(), TraceOptions()
+        )
+
+
+def test_ring_on_the_outer_cone_is_traced_and_replays(ring_trace):
+    r = ring_trace
+    assert r.passes and r.reachability.unreachable
+    states = r.sequence.states()
+    assert np.abs(np.diff(states, axis=0)).max() <= 20
+    deg = states / 10.0
+    assert np.all(np.abs(deg) <= it.TICK_LIMITS / 10.0)
+    # the continuous fingertip path of every pass, 100 instants per command, independent FK
+    t = np.linspace(0.0, 1.0, 101)
+    swept = []
+    for p in r.passes:
+        a, b = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]).reshape(-1, 6) / 10.0
+        tip = independent.points(q)[:, 4]
+        dev = ring_distance(tip)
+        assert dev.max() <= r.tolerance_mm
+        assert dev.max() == pytest.approx(p.max_deviation_mm, abs=3e-3)
+        # the fingertip works from outside the workpiece
+        assert independent.Workpiece("normal").distance(tip).min() >= -1e-9
+        swept.append(np.unwrap(np.arctan2(tip[:, 1], tip[:, 0] - 210.0)))
+    # links keep 1 mm to the table and the workpiece along the whole motion (the last 5 mm of
+    # the tool only must not enter), sampled every 1 mm of every link
+    pts = independent.motion_points(deg[0], np.diff(states, axis=0), 12)
+    samples, is_tip = independent.link_samples(pts, spacing=1.0)
+    wp = independent.Workpiece("normal").distance(samples.reshape(-1, 3)).reshape(samples.shape[:2])
+    clearance = np.minimum(wp, samples[..., 2])
+    is_tip = np.broadcast_to(is_tip, clearance.shape)
+    assert clearance[~is_tip].min() >= 1.0 - 1e-6
+    assert clearance[is_tip].min() >= -1e-6
+    # every reachable arc is covered: arc length on the ring is RING_R times the angle
+    L = r.curve.length
+    assert abs(L - 2 * np.pi * RING_R) <= 1e-6 * L
+    start_angle = np.arctan2(*(r.curve.at_arc_length(0.0)[[1, 0]] - [0.0, 210.0]))
+    for arc in r.reachability.reachable:
+        need = (np.array([arc.start_mm, arc.end_mm]) / RING_R + start_angle) % (2 * np.pi)
+        covered = any(
+            np.any(
+                np.abs(np.angle(np.exp(1j * (sw[:, None] - need[None, :])))) <= 0.2 / RING_R
+            ).all()
+            and np.ptp(sw) >= (arc.end_mm - arc.start_mm) / RING_R - 0.4 / RING_R
+            for sw in swept
+        )
+        assert covered, arc
+
+
+def test_ring_unreachable_arc_is_explained_and_true(ring_trace):
+    """The unreachable arc has a reason, and the independent search of the solution family
+    agrees: no configuration reaches its middle, every one of the reported reachable arcs'
+    points 1 mm from the ends is reachable."""
+    r = ring_trace
+    curve = r.curve
+    for arc in r.reachability.unreachable:
+        assert arc.reason and "joint" in arc.reason
+        mid = curve.at_arc_length(0.5 * (arc.start_mm + arc.end_mm))
+        assert it.reach_margin(mid, stop_positive=True).value < 0
+        for s in (arc.start_mm - 1.0, arc.end_mm + 1.0):
+            assert it.reach_margin(curve.at_arc_length(s), stop_positive=True).value >= 0
+
+
+# -- 2. any scene --------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def empty_scene_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("scenes") / "empty.toml"
+    path.write_text('name = "empty"\n')
+    return path
+
+
+def test_reach_in_an_empty_scene_writes_valid_json(empty_scene_file):
+    r = run("reach", "20", "-200", "120", "--scene", str(empty_scene_file), "--json")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
+    c = doc["clearance"]
+    assert c["min_clearance_mm"] is None and c["closest_obstacle"] is None
+    # the links still keep apart from each other: checked independently
+    states = independent.replay(doc["initial_deg"], doc["commands"])
+    tip = independent.points(states[-1])[4]
+    assert np.linalg.norm(tip - [20, -200, 120]) == pytest.approx(doc["error_mm"], abs=1e-9)
+    assert doc["n_commands"] == 63 and c["min_self_clearance_mm"] > 1.0
+
+
+def test_plan_in_an_empty_scene_prints_its_summary(empty_scene_file):
+    r = run("plan", "--scene", str(empty_scene_file), "--to", "10", "-80", "10", "0", "-80", "0")
+    assert r.returncode == 0, r.stderr
+    assert "no obstacles" in r.stdout and "certified" in r.stdout
+
+
+def test_huge_coordinates_and_non_utf8_scene_files_are_one_line_errors(tmp_path):
+    far = tmp_path / "far.toml"
+    far.write_text(
+        'name = "far"\n[[obstacles]]\ntype = "sphere"\nname = "ball"\n'
+        "center = [1e300, 0, 0]\nradius = 1\n"
+    )
+    r = run("reach", "20", "-200", "120", "--scene", str(far))
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        f"error: scene {far}: obstacles.0.sphere.center: 1e+300 is beyond the largest coordinate "
+        "or size a scene may use (1e+09 mm)"
+    ]
+    bad = tmp_path / "bad.toml"
+    bad.write_bytes(b'name = "x\xff"\n')
+    r = run("plan", "--scene", str(bad), "--to", "0", "-90", "0", "0", "-90", "0")
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        f"error: scene file {bad} is not UTF-8 text (byte 9: invalid start byte)"
+    ]
+
+
+def test_a_curve_on_a_missing_solid_is_a_clear_error():
+    spec = {
+        **SEED,
+        "tasks": {
+            "trace": {
+                "curve": {
+                    "type": "plane_section",
+                    "solid": "bowl",
+                    "plane_point": [0, 0, 50],
+                    "plane_normal": [0, 0, 1],
+                }
+            }
+        },
+    }
+    with pytest.raises(SceneError, match=r"'bowl' is not an obstacle of the scene .*'workpiece'"):
+        scene_from_dict(spec)
+    spec["tasks"]["trace"]["curve"].update(solid="table")
+    with pytest.raises(SceneError, match="not a hollow_frustum, cylinder or cone_frustum"):
+        scene_from_dict(spec)
+
+
+def test_plane_sections_of_inner_faces_lie_on_the_inner_wall():
+    spec = {
+        **SEED,
+        "tasks": {
+            "trace": {
+                "curve": {
+                    "type": "plane_section",
+                    "solid": "workpiece",
+                    "face": "inner",
+                    "plane_point": [0, 0, 120],
+                    "plane_normal": [0.1, 0, 1],
+                }
+            }
+        },
+    }
+    curve = scene_from_dict(spec).trace_curve()
+    p = curve.sample(500)
+    wp = independent.Workpiece("normal")
+    np.testing.assert_allclose(
+        np.hypot(p[:, 0] - 210, p[:, 1]), wp.r_in(p[:, 2]), atol=1e-9
+    )  # on the inner cone
+    np.testing.assert_allclose(p @ [0.1, 0, 1], 120.0, atol=1e-9)  # in the plane
+    spec["obstacles"] = [*SEED["obstacles"][:1], {**SEED["obstacles"][1], "type": "cone_frustum"}]
+    spec["obstacles"][1].pop("wall")
+    with pytest.raises(SceneError, match="no inner side face"):
+        scene_from_dict(spec)
+
+
+# -- 3. spotweld --return ------------------------------------------------------------------------
+def test_spot_welds_and_back_home_replay_independently():
+    """The defect: the way back always failed (the search could not leave the wall). Two welds
+    in the given order, then back to the start."""
+    scene = seed_scene()
+    targets = scene.spotweld_targets_mm()[[3, 1]]
+    with time_limit(600):
+        tour = plan_tour(
+            seed_arm(), scene.world, deg_to_ticks(HOME), targets, "given", return_to_start=True
+        )
+    states = independent.replay(HOME, tour.sequence.commands)
+    np.testing.assert_array_equal(states[-1], HOME)
+    assert np.abs(tour.sequence.commands).max() <= 20
+    for v in tour.visits:
+        tip = independent.points(states[v.after_command])[4]
+        assert np.linalg.norm(tip - v.target_mm) <= 0.05
+    pts = independent.motion_points(HOME, tour.sequence.commands, 12)
+    samples, is_tip = independent.link_samples(pts, spacing=1.0)
+    wp = independent.Workpiece("normal").distance(samples.reshape(-1, 3)).reshape(samples.shape[:2])
+    clearance = np.minimum(wp, samples[..., 2])
+    is_tip = np.broadcast_to(is_tip, clearance.shape)
+    assert clearance[~is_tip].min() >= 1.0 and clearance[is_tip].min() >= -1e-9
+    assert tour.legs[-1].sequence.final_ticks.tolist() == deg_to_ticks(HOME).tolist()
+
+
+def test_tour_limits_and_reasons():
+    scene = seed_scene()
+    many = np.tile(scene.spotweld_targets_mm()[:1], (MAX_AUTO_ORDER_TARGETS + 1, 1))
+    with pytest.raises(InvalidInputError, match="--order given"):
+        plan_tour(seed_arm(), scene.world, deg_to_ticks(HOME), many)
+    with pytest.raises(UnreachableError, match=r"target 1: .* is [\d.]+ mm away"):
+        plan_tour(seed_arm(), scene.world, deg_to_ticks(HOME), [[2000.0, 0.0, 100.0]])
+
+
+def test_unplanned_orders_say_why(seed_run):
+    out, _ = seed_run
+    doc = json.loads((out / "spotweld.json").read_text())
+    for o in doc["orders"]:
+        assert (o["planned_commands"] is None) == (o["not_planned_because"] is not None)
+        if o["planned_commands"] is None:
+            assert o["not_planned_because"].startswith(("not planned", "planning failed"))
+
+
+# -- 4. time limits ------------------------------------------------------------------------------
+def test_time_limit_ends_a_long_command_with_one_line_and_no_files(tmp_path):
+    r = run("trace", "--time-limit", "1", "--out", str(tmp_path / "out"))
+    assert r.returncode == 1
+    lines = error_lines(r.stderr)
+    assert len(lines) == 1 and lines[0].startswith("error: the time limit of 1 s ran out while")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_time_limits_nest_and_are_checked():
+    with time_limit(100.0) as outer:
+        with time_limit(1000.0) as inner:
+            assert inner is outer  # the earlier deadline stays in force
+        check_time("idle")
+    with time_limit(1e-9), pytest.raises(TimeLimitError, match="while testing"):
+        check_time("testing")
+    check_time("after")  # no limit outside
+
+
+@pytest.mark.parametrize("bad", ["0", "-1", "nan", "1e9"])
+def test_time_limit_values_are_checked(bad):
+    r = run("reach", "20", "-200", "120", "--time-limit", bad)
+    assert r.returncode == 1 and error_lines(r.stderr)[0].startswith("error: --time-limit must")
+
+
+# -- 6. tracebacks become one line ---------------------------------------------------------------
+def test_a_full_disk_while_writing_is_one_line_and_leaves_nothing(tmp_path, monkeypatch):
+    import armpath.export
+    from armpath.cli import app
+
+    def full(path, sheets):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(armpath.export, "write_xlsx", full)
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(
+        app, ["plan", "--to", "10", "-80", "10", "0", "-80", "0", "--out", "o"]
+    )
+    assert result.exit_code == 1
+    lines = error_lines(result.stderr)
+    assert lines == [
+        "error: cannot write the results (plan.xlsx): No space left on device; nothing was "
+        "written to o"
+    ]
+    assert not (tmp_path / "o").exists()
+
+
+def test_ik_method_is_checked():
+    r = run("ik", "--method", "bogus", "--xyz", "100", "100", "100")
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: --method must be one of auto, spherical-wrist, three-parallel, general, "
+        "numerical, got 'bogus'"
+    ]
+    r = run("ik", "--method", "general", "--xyz", "100", "100", "100")
+    assert r.returncode == 1 and "--method auto or numerical" in r.stderr
+
+
+# -- 7. results replay anywhere, floats tidy ----------------------------------------------------
+def test_a_result_replays_from_another_folder_after_its_scene_file_is_gone(tmp_path):
+    scene_file = tmp_path / "cell" / "post.toml"
+    scene_file.parent.mkdir()
+    scene_file.write_text(
+        'name = "post"\n[[obstacles]]\ntype = "box"\nname = "post"\n'
+        "center = [-330, 330, 100]\nsize = [60, 60, 200]\n"
+    )
+    r = run(
+        "plan",
+        "--scene",
+        "post.toml",
+        "--to",
+        "10",
+        "-80",
+        "10",
+        "0",
+        "-80",
+        "0",
+        "--out",
+        "res",
+        cwd=scene_file.parent,
+    )
+    assert r.returncode == 0, r.stderr
+    scene_file.unlink()
+    loaded = load_result(tmp_path / "cell" / "res" / "plan.json")
+    (box,) = loaded.scene.world.obstacles
+    np.testing.assert_allclose(box.center, [-330, 330, 100])
+    assert loaded.sequence.final_ticks.tolist() == [100, -800, 100, 0, -800, 0]
+    text = (tmp_path / "cell" / "res" / "plan.json").read_text()
+    # no float carries binary noise: at most 12 significant digits
+    for number in json.loads(text, parse_float=str)["tip"]:
+        assert len(number.lstrip("-").replace(".", "").lstrip("0").split("e")[0]) <= 12
+
+
+def test_wall_convention_of_a_scene_without_workpiece_is_not_none():
+    scene = load_scene(None)
+    assert scene.describe()["definition"]["obstacles"][1]["wall_thickness"] == "normal"
+    horizontal = scene.with_wall_thickness("horizontal")
+    assert horizontal.describe()["definition"]["obstacles"][1]["wall_thickness"] == "horizontal"
