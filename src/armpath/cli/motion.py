@@ -77,7 +77,7 @@ def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
     ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of at most ``MAX_LINE_BYTES``
     bytes, UTF-8 text (a byte-order mark is skipped), every value a finite number and every
     row as long as the first. Each error names the line (and column)."""
-    name = f"waypoints file {path}"
+    name = f"--waypoints {path}"
     header: list[str] | None = None
     rows: list[list[float]] = []
     width = 0
@@ -360,7 +360,7 @@ def trajectory(
             options = "--period (or the times in --waypoints)"
             if not segment_durations_ok(np.diff(times), ORDERS[kind]):
                 raise InvalidInputError(
-                    f"waypoints file {waypoints}: segment times from {np.diff(times).min():.3g} "
+                    f"--waypoints {waypoints}: segment times from {np.diff(times).min():.3g} "
                     f"to {np.diff(times).max():.3g} s are outside what the {kind} solve can take"
                 )
         # The size of the work, before any: the duration (at the shortest feasible one, when

@@ -5,8 +5,10 @@ the controller's lattice."""
 from armpath.trajectory.minsnap import (
     ORDERS,
     QP_SOLVERS,
+    InfeasibleLimitsError,
     MotionLimits,
     PiecewisePolynomial,
+    QPSolverError,
     allocate_times,
     minimum_snap,
 )
@@ -32,9 +34,11 @@ __all__ = [
     "ORDERS",
     "QP_SOLVERS",
     "RETIMING_METHODS",
+    "InfeasibleLimitsError",
     "JointTrajectory",
     "MotionLimits",
     "PiecewisePolynomial",
+    "QPSolverError",
     "QuantizedTrajectory",
     "Retimed",
     "allocate_times",

@@ -35,6 +35,10 @@ class InfeasibleLimitsError(InvalidInputError):
     infeasible, or at the edge of feasibility)."""
 
 
+class QPSolverError(InvalidInputError):
+    """The QP solver stopped without a solution (neither solved nor proved infeasible)."""
+
+
 def _falling(k: int, d: int) -> float:
     """k (k-1) ... (k-d+1): the factor of s^(k-d) in the d-th derivative of s^k."""
     return float(factorial(k) // factorial(k - d)) if k >= d else 0.0
@@ -554,7 +558,7 @@ def _bounded_solve(
                         f"joint {j + 1}: the limits cannot be met with these segment times "
                         f"(the trajectory lasts {t[-1] - t[0]:.4g} s); lengthen the segments"
                     )
-                raise InvalidInputError(
+                raise QPSolverError(
                     f"joint {j + 1}: the {solver} QP solver stopped without a solution "
                     f"(status: {status}); try the other solver of {QP_SOLVERS}"
                 )

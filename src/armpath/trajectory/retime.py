@@ -37,6 +37,7 @@ from armpath.trajectory.minsnap import (
     InfeasibleLimitsError,
     MotionLimits,
     PiecewisePolynomial,
+    QPSolverError,
     minimum_snap,
     segment_durations_ok,
 )
@@ -151,8 +152,10 @@ def shortest_bounded(
 
     The search ends by design: at most ``MAX_HALVINGS`` halvings of the scale, then at most
     ``MAX_BISECTIONS`` bisection steps, each halving ``log(hi / lo)`` (and stopping when the
-    midpoint no longer differs from the ends in floating point). Scale factors whose segment
-    durations leave the solvable range count as infeasible."""
+    midpoint no longer differs from the ends in floating point). Below the scaled optimum's
+    factor, a scale whose segment durations leave the solvable range, or at which the QP solver
+    stops without a solution (near the edge of feasibility it may neither solve nor prove
+    infeasibility), counts as infeasible."""
     if not (np.isfinite(rtol) and MIN_RTOL <= rtol < 1.0):
         raise InvalidInputError(f"rtol must be in [{MIN_RTOL:g}, 1), got {rtol}")
     t = np.asarray(times, dtype=np.float64)
@@ -161,8 +164,13 @@ def shortest_bounded(
     if hi == 0.0:
         return free  # nothing moves: every duration meets the limits
     r = ORDERS[kind]
+    if not segment_durations_ok(np.diff(t) * hi, r):
+        raise InvalidInputError(
+            f"the waypoints move so little against the limits that the scaled optimum lasts "
+            f"{hi * (t[-1] - t[0]):.3g} s, outside what the {kind} solve can take"
+        )
 
-    def solve(f: float) -> PiecewisePolynomial | None:
+    def solve(f: float, first: bool = False) -> PiecewisePolynomial | None:
         check_time("finding the shortest feasible duration")
         scaled_t = t[0] + f * (t - t[0])
         if not segment_durations_ok(np.diff(scaled_t), r):
@@ -171,8 +179,12 @@ def shortest_bounded(
             return minimum_snap(waypoints, scaled_t, kind=kind, limits=limits, solver=solver)
         except InfeasibleLimitsError:
             return None
+        except QPSolverError:
+            if first:
+                raise
+            return None
 
-    best = solve(hi * (1 + 1e-9))
+    best = solve(hi * (1 + 1e-9), first=True)
     if best is None:
         raise InvalidInputError("the bounded QP failed where the scaled optimum is feasible")
     lo = hi

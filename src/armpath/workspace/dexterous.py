@@ -47,8 +47,10 @@ def orientation_grid(step: float, lo: float = -np.pi, hi: float = np.pi) -> Floa
         raise InvalidInputError(
             f"orientation grid needs a finite step > 0 and hi >= lo, got {step}, {lo}, {hi}"
         )
-    per_axis = np.floor((hi - lo) / step + 1e-9) + 1.0  # a float: may be beyond any integer
-    check_size(per_axis**3, MAX_ORIENTATIONS, "orientations of the grid", "the step")
+    per_axis = float(np.floor((hi - lo) / step + 1e-9)) + 1.0  # may be beyond any integer
+    check_size(  # Python floats: inf rather than an overflow warning
+        per_axis * per_axis * per_axis, MAX_ORIENTATIONS, "orientations of the grid", "the step"
+    )
     n = int(per_axis)
     angles = lo + step * np.arange(n)
     a, b, c = np.meshgrid(angles, angles, angles, indexing="ij")

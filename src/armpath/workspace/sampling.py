@@ -223,9 +223,9 @@ class GridSpec:
             raise InvalidInputError(f"voxel size must be a positive length, got {voxel}")
         reach = reach_bound(arm) + voxel
         centre = z_axis_chain(arm)[0, :3, 3]
-        edge = np.ceil(2.0 * reach / voxel)  # a float: may be beyond any integer
+        edge = float(np.ceil(2.0 * reach / voxel))  # may be beyond any integer, or inf
         check_size(
-            edge**3,
+            edge * edge * edge,  # Python floats: inf rather than an overflow warning
             MAX_VOXELS,
             f"voxels of a {voxel:g} grid over the reach ({reach:.0f}; use a voxel of at least "
             f"{2.0 * reach / MAX_VOXELS ** (1 / 3):.3g})",

@@ -1,0 +1,348 @@
+"""Bounds on work and memory of the non-planning commands (issue 17, item 4): workspace,
+blindzones, design-sweep, trajectory and rcm.
+
+Every input that sets the size of the work is refused before any work with one ``error:`` line
+on stderr that names the option to change, exit status 1, nothing on stdout and no output
+folder (nor a staging folder left beside it). The sizes refused here would need gigabytes or
+hours; they are refused from the arithmetic alone, so these runs take about a second each.
+``--time-limit`` ends long runs with the time-limit message and writes nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armpath.budget import MAX_COMMANDS, MAX_PERIODS, MAX_WAYPOINTS
+
+ARMPATH = [sys.executable, "-m", "armpath"]
+
+
+def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*ARMPATH, *args], capture_output=True, text=True, timeout=600, cwd=cwd)
+
+
+def _error_line(proc: subprocess.CompletedProcess[str]) -> str:
+    """The one ``error:`` line of a refused run (progress lines, ``armpath: [..]``, may come
+    before it on stderr; nothing else may)."""
+    lines = proc.stderr.strip().splitlines()
+    errors = [ln for ln in lines if ln.startswith("error:")]
+    assert len(errors) == 1, proc.stderr
+    assert all(ln.startswith(("error:", "armpath: [")) for ln in lines), proc.stderr
+    return errors[0]
+
+
+def _refused(tmp_path: Path, args: list[str], *needles: str) -> str:
+    """Run with ``--out``; exit 1, one error line containing every needle, no stdout, no
+    output or staging folder."""
+    out = tmp_path / "out"
+    before = set(tmp_path.iterdir())
+    proc = _run([*args, "--out", str(out)], tmp_path)
+    assert proc.returncode == 1, (proc.returncode, proc.stdout, proc.stderr)
+    line = _error_line(proc)
+    for needle in needles:
+        assert needle in line, line
+    assert proc.stdout == ""
+    assert not out.exists()
+    assert set(tmp_path.iterdir()) == before  # no .armpath-* staging folder left
+    assert "Traceback" not in proc.stderr
+    return line
+
+
+# --- trajectory -----------------------------------------------------------------------------
+
+
+def _waypoints(tmp_path: Path, text: str | bytes, name: str = "wp.csv") -> str:
+    path = tmp_path / name
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text, encoding="utf-8")
+    return name
+
+
+def test_trajectory_far_waypoints_are_refused_by_their_periods(tmp_path):
+    """1e7 deg at the default 30 deg/s and 60 deg/s^2 lasts 1e7/30 + 30/60 s: 33 million
+    periods of 0.01 s (the 6.4 GB of the report), more than MAX_PERIODS."""
+    wp = _waypoints(tmp_path, "0,0,0,0,0,0\n1e7,0,0,0,0,0\n")
+    periods = math.ceil((1e7 / 30.0 + 30.0 / 60.0) / 0.01)
+    assert periods > MAX_PERIODS
+    line = _refused(tmp_path, ["trajectory", "--waypoints", wp], "controller periods", "--period")
+    assert f"{periods:.3g}" in line
+    wp = _waypoints(tmp_path, "0,0,0,0,0,0\n1e9,0,0,0,0,0\n", "far.csv")
+    _refused(tmp_path, ["trajectory", "--waypoints", wp], "controller periods", "--period")
+
+
+def test_trajectory_tiny_period_is_refused(tmp_path):
+    wp = _waypoints(tmp_path, "t,q1,q2\n0,0,0\n1.5,10,20\n")
+    line = _refused(
+        tmp_path,
+        ["trajectory", "--waypoints", wp, "--period", "1e-9"],
+        "controller periods",
+        "--period",
+    )
+    assert "1.5e+09" in line  # 1.5 s / 1e-9 s
+
+
+def test_trajectory_span_beyond_the_command_limit_is_refused(tmp_path):
+    """With a long period the periods are few, but a joint moving 1e9 deg needs 1e10 ticks /
+    20 = 5e8 commands, more than MAX_COMMANDS."""
+    wp = _waypoints(tmp_path, "t,q1\n0,0\n1,1e9\n")
+    line = _refused(
+        tmp_path, ["trajectory", "--waypoints", wp, "--period", "10"], "commands", "--waypoints"
+    )
+    assert "5e+08" in line
+
+
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [
+        ("--max-velocity", "0"),
+        ("--max-velocity", "-1"),
+        ("--max-velocity", "nan"),
+        ("--max-velocity", "1e300"),
+        ("--max-acceleration", "0"),
+        ("--max-acceleration", "inf"),
+        ("--max-acceleration", "-5"),
+        ("--max-jerk", "0"),
+        ("--max-jerk", "nan"),
+        ("--max-jerk", "1e20"),
+        ("--period", "0"),
+        ("--period", "nan"),
+        ("--kind", "crackle"),
+        ("--solver", "cvx"),
+    ],
+)
+def test_trajectory_bad_option_values(tmp_path, option, value):
+    wp = _waypoints(tmp_path, "0,0\n10,20\n")
+    _refused(tmp_path, ["trajectory", "--waypoints", wp, "--bounded", option, value], option)
+
+
+def test_trajectory_tiny_velocity_limit_names_the_limits(tmp_path):
+    """1e-300 deg/s spaces the waypoints 1e301 s apart: refused by the periods, naming the
+    options that set the duration."""
+    wp = _waypoints(tmp_path, "0,0\n10,20\n")
+    _refused(
+        tmp_path,
+        ["trajectory", "--waypoints", wp, "--max-velocity", "1e-300"],
+        "controller periods",
+        "--max-velocity",
+    )
+
+
+@pytest.mark.parametrize(
+    ("content", "needle"),
+    [
+        (b"\xff\xfe,1\n1,2\n", "not UTF-8"),
+        (b"0,0\n\xe9\n", "line 2 is not UTF-8"),
+        (b"", "is empty"),
+        (b"\n  \n", "is empty"),
+        (b"q1,q2\n", "no waypoint rows"),
+        (b"1,2\n", "at least 2 waypoint rows"),
+        (b"q1,q2\n1,abc\n2,3\n", "line 2, column 2: 'abc' is not a number"),
+        (b"1,2,3\n4,5\n", "line 2 has 2 values, the first row has 3"),
+        (b"q1,q2,q3\n4,5\n6,7\n", "line 2 has 2 values, the header has 3"),
+        (b"1,2\nnan,3\n", "line 2, column 1: 'nan' is not a finite number"),
+        (b"1,2\n3,inf\n", "'inf' is not a finite number"),
+        (b"t,q1\n0,1\n0,2\n", "must increase strictly"),
+        (b"t\n0\n1\n", "no joint column"),
+        (b"1," * 40_000 + b"\n", "longer than 65,536 bytes"),
+        (b",".join([b"1"] * 70) + b"\n", "columns of line 1"),
+    ],
+)
+def test_trajectory_malformed_waypoint_files(tmp_path, content, needle):
+    wp = _waypoints(tmp_path, content)
+    line = _refused(tmp_path, ["trajectory", "--waypoints", wp], "--waypoints", needle)
+    assert wp in line
+
+
+def test_trajectory_too_many_waypoints_and_missing_file(tmp_path):
+    rows = "".join(f"{0.01 * k:.2f},0\n" for k in range(MAX_WAYPOINTS + 1))
+    wp = _waypoints(tmp_path, rows)
+    _refused(tmp_path, ["trajectory", "--waypoints", wp], "--waypoints", "more than 10,000")
+    _refused(tmp_path, ["trajectory", "--waypoints", "nowhere.csv"], "--waypoints", "nowhere")
+
+
+def test_trajectory_byte_order_mark_and_time_column(tmp_path):
+    """A UTF-8 file with a byte-order mark (as spreadsheets save it) keeps its 't' column as
+    the times: 1000 ticks in one 5 s period are ceil(1000 / 20) = 50 commands of 20 ticks."""
+    wp = _waypoints(tmp_path, b"\xef\xbb\xbft,q1,q2\n0,0,0\n1,100,-37.3\n")
+    out = tmp_path / "tr"
+    proc = _run(["trajectory", "--waypoints", wp, "--period", "5", "--out", str(out)], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    rows = np.loadtxt(out / "commands.csv", delimiter=",", skiprows=1, dtype=np.int64)
+    assert rows.shape == (math.ceil(1000 / 20), 3)
+    assert rows[:, 1].tolist() == [20] * 50  # joint 1: 100 deg = 1000 ticks
+    assert rows[:, 2].sum() == -373 and np.abs(rows[:, 2]).max() <= 20
+    samples = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
+    assert samples[:, 0].tolist() == [0.0, 1.0]  # one period, clipped to the 1 s trajectory
+    assert "periods split (> 20 ticks: 2 deg)" in proc.stdout
+
+
+def test_trajectory_time_limit_ends_the_bounded_search(tmp_path):
+    rng = np.random.default_rng(1)
+    rows = "\n".join(",".join(f"{v:.3f}" for v in row) for row in rng.uniform(-90, 90, (600, 6)))
+    wp = _waypoints(tmp_path, rows + "\n")
+    _refused(
+        tmp_path,
+        ["trajectory", "--waypoints", wp, "--bounded", "--time-limit", "1"],
+        "time limit of 1 s ran out",
+        "--time-limit",
+    )
+
+
+# --- rcm ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (["--points", "100000"], ("points on the circle", "--points", "9,999")),
+        (["--points", "2"], ("--points must be >= 3",)),
+        (["--duration", "1e9"], ("controller periods", "--duration")),
+        (["--period", "1e-9"], ("controller periods", "--period")),
+        (["--duration", "0"], ("--duration",)),
+        (["--duration", "nan"], ("--duration",)),
+        (["--duration", "inf"], ("--duration",)),
+        (["--duration", "1e-300"], ("--duration",)),
+        (["--period", "-1"], ("--period",)),
+        (["--cone", "0"], ("--cone",)),
+        (["--cone", "nan"], ("--cone",)),
+        (["--axis", "0,0,0"], ("--axis",)),
+        (["--centre", "1,2"], ("--centre",)),
+        (["--kind", "pop"], ("--kind",)),
+        (["--time-limit", "-1"], ("--time-limit",)),
+    ],
+)
+def test_rcm_refusals(tmp_path, args, needles):
+    _refused(tmp_path, ["rcm", *args], *needles)
+
+
+def test_rcm_counts_commands_and_names_the_command_limit(tmp_path):
+    """One turn in 8 s at 0.01 s periods: 800 periods, and no period needs more than the
+    command limit (20 ticks, 2 deg or 2 mm), so 800 commands; the table says so."""
+    proc = _run(["rcm", "--points", "12"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "periods split (> 20 ticks: 2 deg, 2 mm)" in proc.stdout
+    assert "2 ticks)" not in proc.stdout
+    commands = next(ln for ln in proc.stdout.splitlines() if ln.strip().startswith("commands"))
+    assert commands.split()[1] == str(round(8.0 / 0.01))
+
+
+# --- workspace ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (["--voxel", "0.001"], ("voxels", "--voxel", "50,000,000")),
+        (["--voxel", "1e-300"], ("voxels", "--voxel")),
+        (["--voxel", "nan"], ("--voxel",)),
+        (["--voxel", "-2"], ("--voxel",)),
+        (["--samples", "1000000000"], ("joint samples", "--samples", "200,000,000")),
+        (["--samples", "0"], ("--samples",)),
+        (["--chunk", "100000000"], ("--chunk", "4,000,000")),
+        (["--chunk", "0"], ("--chunk",)),
+        (["--seed", "-1"], ("--seed",)),
+        (["--method", "sobol"], ("--method",)),
+        (["--time-limit", "0"], ("--time-limit",)),
+        (["--time-limit", "nan"], ("--time-limit",)),
+    ],
+)
+def test_workspace_refusals(tmp_path, args, needles):
+    _refused(tmp_path, ["workspace", *args], *needles)
+
+
+def test_workspace_time_limit(tmp_path):
+    _refused(
+        tmp_path,
+        ["workspace", "--samples", "200000000", "--time-limit", "1"],
+        "time limit of 1 s ran out while sampling the workspace",
+        "--time-limit",
+    )
+
+
+# --- blindzones -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (["--pixel", "0.001"], ("pixels", "--pixel", "50,000,000")),
+        (["--pixel", "0"], ("--pixel",)),
+        (["--pixel", "inf"], ("--pixel",)),
+        (["--samples", "100000000"], ("joint samples", "--samples", "200,000,000")),
+        (["--samples", "0"], ("--samples",)),
+        (["--bands", "100000"], ("circles", "--bands", "1,000")),
+        (["--bands", "-1"], ("--bands",)),
+        (["--seed", "-3"], ("--seed",)),
+    ],
+)
+def test_blindzones_refusals(tmp_path, args, needles):
+    _refused(tmp_path, ["blindzones", *args], *needles)
+
+
+def test_blindzones_time_limit(tmp_path):
+    _refused(
+        tmp_path,
+        ["blindzones", "--time-limit", "1"],
+        "time limit of 1 s ran out",
+        "--time-limit",
+    )
+
+
+# --- design-sweep ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (["--jobs", "0"], ("--jobs", "-1 (every core)")),
+        (["--jobs", "-2"], ("--jobs",)),
+        (["--jobs", "1000"], ("parallel jobs", "--jobs", "256")),
+        (["--samples", "10000000"], ("joint samples of the sweep", "--samples", "4.1e+08")),
+        (["--samples", "0"], ("--samples",)),
+        (["--pixel", "0.01"], ("pixels", "--pixel")),
+        (["--pixel", "nan"], ("--pixel",)),
+        (["--total", "nan"], ("--total",)),
+        (["--total", "1e300"], ("pixels", "--total")),
+        (["--top", "0"], ("--top",)),
+        (["--seed", "-1"], ("--seed",)),
+    ],
+)
+def test_design_sweep_refusals(tmp_path, args, needles):
+    _refused(tmp_path, ["design-sweep", *args], *needles)
+
+
+def test_design_sweep_time_limit_stops_the_workers(tmp_path):
+    """Two worker processes on 4 million samples a design would run for minutes; the limit
+    ends the sweep (the parent stops waiting, the workers stop at their own deadline)."""
+    _refused(
+        tmp_path,
+        ["design-sweep", "--samples", "4000000", "--jobs", "2", "--time-limit", "2"],
+        "time limit of 2 s ran out while evaluating designs",
+        "--time-limit",
+    )
+
+
+def test_design_sweep_every_core_stays_valid(tmp_path):
+    """--jobs -1 (the default) passes the checks: a refusal further on (the pixel count) is
+    the one reported."""
+    line = _refused(tmp_path, ["design-sweep", "--jobs", "-1", "--pixel", "0.01"], "--pixel")
+    assert "--jobs" not in line
+
+
+def test_refusals_come_before_the_output_folder_is_touched(tmp_path):
+    """An existing output folder keeps its files when the run is refused."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("x")
+    proc = _run(["workspace", "--voxel", "0.001", "--out", str(out)], tmp_path)
+    assert proc.returncode == 1
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+    assert MAX_COMMANDS == 1_000_000  # the limit the messages above quote
