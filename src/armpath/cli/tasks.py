@@ -50,7 +50,13 @@ from armpath.export import (
     write_sequence_files,
 )
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.motion import MotionOptions, MotionPlan, Objective, plan_motion
+from armpath.planning.motion import (
+    MAX_SEARCHES,
+    MotionOptions,
+    MotionPlan,
+    Objective,
+    plan_motion,
+)
 from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
 from armpath.planning.tour import TourResult, VisitOrder
 from armpath.planning.trace import TraceOptions, TraceResult
@@ -313,6 +319,7 @@ def plan(
         int,
         typer.Option(
             min=1,
+            max=MAX_SEARCHES,
             help="Successful searches (seeds) to try when the direct motion is blocked; "
             "the best is kept.",
         ),

@@ -57,6 +57,10 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+#: Most searches (or failed attempts) of one :func:`plan_motion` call.
+MAX_SEARCHES = 100
+
+
 class Objective(StrEnum):
     """What a plan minimises after reaching its goal."""
 
@@ -129,8 +133,19 @@ class MotionOptions:
         object.__setattr__(self, "objective", _objective(self.objective))
         if not (np.isfinite(self.buffer_mm) and self.buffer_mm >= 0):
             raise InvalidInputError(f"buffer must be >= 0 mm, got {self.buffer_mm}")
-        if not (np.isfinite(self.sample_spacing_mm) and self.sample_spacing_mm > 0):
-            raise InvalidInputError(f"sample spacing must be > 0 mm, got {self.sample_spacing_mm}")
+        if not (np.isfinite(self.sample_spacing_mm) and 0.01 <= self.sample_spacing_mm <= 100):
+            raise InvalidInputError(
+                f"sample spacing must be in [0.01, 100] mm, got {self.sample_spacing_mm}"
+            )
+        if not (1 <= self.searches <= MAX_SEARCHES and 1 <= self.attempts <= MAX_SEARCHES):
+            raise InvalidInputError(
+                f"searches and attempts must be in [1, {MAX_SEARCHES}], got {self.searches} and "
+                f"{self.attempts}"
+            )
+        if not 0 <= self.shortcut_rounds <= 100_000:
+            raise InvalidInputError(
+                f"shortcut rounds must be in [0, 100000], got {self.shortcut_rounds}"
+            )
         if self.energy_weights is not None and any(
             not (np.isfinite(w) and w >= 0) for w in self.energy_weights
         ):

@@ -68,6 +68,9 @@ SURFACE_TOLERANCE_MM = 1e-6
 GOAL_COUNT = 12
 GOAL_BODY_BUFFER_MM = 1.5
 GOAL_SPREAD_DEG = 4.0
+#: Smallest and largest fingertip tolerance a reach accepts (mm).
+MIN_TOLERANCE_MM = 0.001
+MAX_TOLERANCE_MM = 100.0
 
 
 @dataclass(frozen=True)
@@ -105,10 +108,18 @@ class ReachOptions:
     plan_around: bool = True
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.tolerance_mm) and self.tolerance_mm > 0):
-            raise InvalidInputError(f"tolerance must be > 0 mm, got {self.tolerance_mm}")
-        if self.extra_commands < 0:
-            raise InvalidInputError("extra_commands must be >= 0")
+        if not (
+            np.isfinite(self.tolerance_mm)
+            and MIN_TOLERANCE_MM <= self.tolerance_mm <= MAX_TOLERANCE_MM
+        ):
+            raise InvalidInputError(
+                f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm "
+                f"(the 0.1 deg lattice seldom comes closer than a few um), got {self.tolerance_mm}"
+            )
+        if not 0 <= self.extra_commands <= 20:
+            raise InvalidInputError(f"extra_commands must be in [0, 20], got {self.extra_commands}")
+        if not (1 <= self.max_motion_checks <= 10_000 and 0 <= self.polish_candidates <= 10_000):
+            raise InvalidInputError("max_motion_checks and polish_candidates must be in [1, 1e4]")
         if not (0.05 <= self.sphere_step_deg <= 5.0):
             raise InvalidInputError("sphere_step_deg must be in [0.05, 5] deg")
 

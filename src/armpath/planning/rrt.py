@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
+from armpath.errors import InvalidInputError
 
 FloatArray = NDArray[np.float64]
 
@@ -33,6 +34,14 @@ class RrtOptions:
     step: float = np.radians(20.0)
     max_samples: int = 5000
     goal_bias: float = 0.05
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.step) and 1e-3 <= self.step <= 2 * np.pi):
+            raise InvalidInputError(f"RRT step must be in [0.001, 2 pi] rad, got {self.step}")
+        if not 1 <= self.max_samples <= 1_000_000:
+            raise InvalidInputError(f"RRT samples must be in [1, 1000000], got {self.max_samples}")
+        if not 0.0 <= self.goal_bias <= 1.0:
+            raise InvalidInputError(f"RRT goal bias must be in [0, 1], got {self.goal_bias}")
 
 
 @dataclass(frozen=True)
