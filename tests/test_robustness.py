@@ -408,3 +408,13 @@ def test_wall_convention_of_a_scene_without_workpiece_is_not_none():
     assert scene.describe()["definition"]["obstacles"][1]["wall_thickness"] == "normal"
     horizontal = scene.with_wall_thickness("horizontal")
     assert horizontal.describe()["definition"]["obstacles"][1]["wall_thickness"] == "horizontal"
+
+
+def test_an_animation_written_beside_a_result_keeps_the_result(tmp_path):
+    out = tmp_path / "res"
+    r = run("plan", "--to", "10", "-80", "10", "0", "-80", "0", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    before = sorted(p.name for p in out.iterdir())
+    r = run("animate", str(out / "plan.json"), "--out", str(out / "plan.gif"), "--frames", "4")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.iterdir()) == sorted([*before, "plan.gif"])

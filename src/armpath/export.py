@@ -443,8 +443,9 @@ class OutputFolder:
     destination fails *before* any computation; on error nothing is left behind.
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, prune: bool = True) -> None:
         self.path = Path(path).expanduser()
+        self.prune = prune
         if self.path.exists() and not self.path.is_dir():
             raise OutputError(f"output folder {self.path} exists and is not a folder")
         anchor = self.path
@@ -474,19 +475,22 @@ class OutputFolder:
     def commit(self) -> list[Path]:
         """Move every staged file into the destination folder; returns their final paths.
 
-        Files an earlier armpath run wrote into the same folder (listed in its
-        :data:`MANIFEST`) that this run did not write again are removed, so the folder never
-        mixes two runs' results; files armpath did not write are left alone.
+        With ``prune`` (a command's whole output folder), files an earlier armpath run wrote
+        into the same folder (listed in its :data:`MANIFEST`) that this run did not write again
+        are removed, so the folder never mixes two runs' results; files armpath did not write
+        are left alone. Without it (one file written beside others: an animation, an HTML
+        page) nothing else is touched.
         """
         try:
             self.path.mkdir(parents=True, exist_ok=True)
             names = sorted(p.name for p in self._staging.iterdir())
-            earlier = self._earlier_files()
+            earlier = self._earlier_files() if self.prune else set()
             for name in names:
                 os.replace(self._staging / name, self.path / name)
             for name in sorted(earlier - set(names)):
                 (self.path / name).unlink(missing_ok=True)
-            (self.path / MANIFEST).write_text("\n".join(names) + "\n", encoding="utf-8")
+            if self.prune:
+                (self.path / MANIFEST).write_text("\n".join(names) + "\n", encoding="utf-8")
             self.written = [self.path / n for n in names]
         except OSError as exc:
             raise OutputError(
@@ -509,9 +513,10 @@ class OutputFolder:
 
 
 @contextlib.contextmanager
-def output_folder(path: str | Path) -> Iterator[OutputFolder]:
-    """Context manager: stage files, commit on success, discard on any exception."""
-    folder = OutputFolder(path)
+def output_folder(path: str | Path, prune: bool = True) -> Iterator[OutputFolder]:
+    """Context manager: stage files, commit on success, discard on any exception (``prune``:
+    see :meth:`OutputFolder.commit`)."""
+    folder = OutputFolder(path, prune)
     try:
         yield folder
     except OSError as exc:  # a full disk or an unwritable file while writing the results

@@ -16,6 +16,7 @@ from armpath.cli.common import (
     app,
     err_console,
     out_console,
+    progress,
 )
 from armpath.errors import InvalidInputError
 from armpath.export import (
@@ -75,7 +76,7 @@ def view(
                 page = replay_html(loaded, fps=fps, notes=notes)
             for note in notes:
                 err_console.print(f"warning: {note}", markup=False, soft_wrap=True)
-            with output_folder(export_html.parent) as folder:
+            with output_folder(export_html.parent, prune=False) as folder:
                 folder.write_text(export_html.name, page)
             out_console.print(f"wrote {export_html}", markup=False)
             return
@@ -121,7 +122,7 @@ def animate(
             raise InvalidInputError("--fps must be >= 1 and --frames >= 2")
         loaded = load_result(result, scene_file)
         target = out if out is not None else result.with_suffix(".gif")
-        with output_folder(target.parent) as folder, err_console.status("animating ..."):
+        with output_folder(target.parent, prune=False) as folder, progress("animating ..."):
             n = write_animation(
                 folder.file(target.name), result_animation(loaded), fps=fps, max_frames=frames
             )
