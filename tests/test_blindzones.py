@@ -11,6 +11,7 @@ from scipy import ndimage
 from scipy.optimize import minimize
 
 import independent
+from armpath.errors import InvalidInputError
 from armpath.model import seed_arm
 from armpath.scenes import seed_scene
 from armpath.workspace.blindzones import arm_plane_map, meridian_map, surface_blindness
@@ -117,3 +118,73 @@ def test_cli_blindzones_writes_maps(tmp_path):
     )
     assert bad.returncode == 1 and bad.stderr.strip().startswith("error: pixel size")
     assert not (tmp_path / "x").exists()
+
+
+# --- bounds on the work (issue 17, item 4) ----------------------------------------------------
+
+
+def test_map_size_is_known_before_sampling():
+    """A map spans the reach BC + CD + DE from the shoulder with a pixel of margin on every
+    side: ceil((2 reach + 2 pixel) / pixel) pixels along each axis, computed here from the seed
+    geometry; map_shape gives it without sampling and the sampled map has it."""
+    from armpath.model.seed_arm import seed_geometry_of
+    from armpath.workspace.blindzones import map_shape
+
+    arm = seed_arm()
+    g = seed_geometry_of(arm)
+    reach = g.bc_mm + g.cd_mm + g.de_mm
+    for pixel in (7.0, 20.0):
+        side = int(np.ceil((2 * reach + 2 * pixel) / pixel))
+        assert map_shape(arm, pixel) == (side, side)
+        assert arm_plane_map(arm, pixel, 1000).reach.shape == (side, side)
+    with pytest.raises(InvalidInputError, match=r"pixels of a 0\.001 mm map.*change --pixel"):
+        map_shape(arm, 0.001, "--pixel")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"pixel": 0.05}, "pixels of a 0.05 mm map"),
+        ({"samples": 200_000_001}, "joint samples of a map"),
+        ({"chunk": 0}, "chunk must be >= 1"),  # it used to loop forever
+        ({"chunk": 4_000_001}, "samples a chunk"),
+        ({"seed": -1}, "random seed"),
+    ],
+)
+def test_map_sizes_are_refused_before_any_work(kwargs, message):
+    args = {"pixel": 5.0, "samples": 1000, **kwargs}
+    with pytest.raises(InvalidInputError, match=message):
+        arm_plane_map(seed_arm(), args.pop("pixel"), args.pop("samples"), **args)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"bands": 1001}, "circles a face"),
+        ({"bands": 0}, "bands must be >= 1"),
+        ({"resolution_mm": 1e-20}, "resolution must be at least"),  # bisection below float ulp
+        ({"resolution_mm": float("nan")}, "resolution"),
+        ({"scan_step_mm": 1e-5, "resolution_mm": 1e-6}, "scan points of a circle"),
+        ({"faces": ("top",)}, "face must be one of"),
+    ],
+)
+def test_face_survey_sizes_are_refused_before_any_scan(kwargs, message):
+    scene = seed_scene()
+    args = {"bands": 2, **kwargs}
+    with pytest.raises(InvalidInputError, match=message):
+        surface_blindness(seed_arm(), scene.world, scene.workpieces[0], args.pop("bands"), **args)
+
+
+def test_time_limit_ends_the_maps():
+    import time
+
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
+
+    with time_limit(0.01), pytest.raises(TimeLimitError, match="sampling the meridian map"):
+        time.sleep(0.02)
+        meridian_map(seed_arm(), 5.0, 1_000_000)
+    scene = seed_scene()
+    with time_limit(0.01), pytest.raises(TimeLimitError, match="scanning the outer face"):
+        time.sleep(0.02)
+        surface_blindness(seed_arm(), scene.world, scene.workpieces[0], 3)

@@ -83,3 +83,83 @@ def test_cli_design_sweep(tmp_path):
     )
     assert bad.returncode == 1 and "no candidate fits" in bad.stderr
     assert not (tmp_path / "x").exists()
+
+
+# --- bounds on the work (issue 17, item 4) ----------------------------------------------------
+
+
+def test_job_counts():
+    from armpath.errors import InvalidInputError
+    from armpath.workspace.design import check_jobs
+
+    assert [check_jobs(n) for n in (-1, 1, 2, 256)] == [-1, 1, 2, 256]
+    for bad, message in ((0, "-1 .every core."), (-2, "-1 .every core."), (257, "256")):
+        with pytest.raises(InvalidInputError, match=message):
+            check_jobs(bad, "--jobs")
+    with pytest.raises(InvalidInputError, match="n_jobs must be -1"):
+        sweep(design_grid()[:1], samples=100, n_jobs=0)  # joblib's own error was a traceback
+
+
+def test_sweep_sizes_are_refused_before_any_work():
+    """101 x 100 x 1 = 10,100 grid points is more than MAX_DESIGNS (refused before building
+    them); a sweep whose samples or maps are too large is refused before any worker starts."""
+    from armpath.errors import InvalidInputError
+
+    many = [100.0 + k for k in range(101)], [45.0 + k / 10 for k in range(100)]
+    with pytest.raises(InvalidInputError, match=r"candidate designs.*1\.01e\+04.*10,000"):
+        design_grid(715.0, ab_mm=many[0], de_mm=many[1], theta3_deg=(138.0,))
+    with pytest.raises(InvalidInputError, match="total length"):
+        design_grid(float("nan"))
+    candidates = design_grid()  # 40
+    with pytest.raises(InvalidInputError, match=r"joint samples of the sweep.*2e\+08"):
+        sweep(candidates, samples=5_000_001, n_jobs=1)  # 40 x 5,000,001 > 200,000,000
+    with pytest.raises(InvalidInputError, match=r"pixels of a 0\.01 mm map"):
+        sweep(candidates, pixel_mm=0.01, samples=100, n_jobs=1)
+    with pytest.raises(InvalidInputError, match="random seed"):
+        sweep(candidates, samples=100, seed=-1, n_jobs=1)
+
+
+def test_sweep_in_batches_under_a_time_limit_gives_the_same_numbers():
+    """Under a generous time limit the designs go out one batch per round of workers, each
+    worker under the deadline; the numbers are those of the sweep without a limit."""
+    from armpath.budget import time_limit
+
+    candidates = design_grid(715.0, ab_mm=(100.0, 180.0, 250.0), de_mm=(65.0,), theta3_deg=(165.0,))
+    free = sweep(candidates, pixel_mm=20.0, samples=20_000, seed=2, n_jobs=2)
+    with time_limit(600.0):
+        limited = sweep(candidates, pixel_mm=20.0, samples=20_000, seed=2, n_jobs=2)
+    assert [r.row() for r in limited] == [r.row() for r in free]
+    assert [r.geometry.ab_mm for r in limited] == [100.0, 180.0, 250.0]
+
+
+def test_time_limit_ends_a_local_sweep():
+    """4 million samples a design on 2 processes would take minutes; the parent stops waiting
+    at the limit (the workers' start-up included) and raises its own time-limit error."""
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
+
+    with (
+        time_limit(1.5),
+        pytest.raises(TimeLimitError, match=r"time limit of 1\.5 s ran out while evaluating"),
+    ):
+        sweep(design_grid()[:4], pixel_mm=10.0, samples=4_000_000, n_jobs=2)
+
+
+def test_time_limit_ends_a_dask_sweep():
+    distributed = pytest.importorskip("distributed")
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
+
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+        ) as cluster,
+        time_limit(1.5),
+        pytest.raises(TimeLimitError, match=r"time limit of 1\.5 s ran out"),
+    ):
+        sweep(
+            design_grid()[:4],
+            pixel_mm=10.0,
+            samples=4_000_000,
+            scheduler=cluster.scheduler_address,
+        )

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 from numpy.polynomial import polynomial as npoly
@@ -558,3 +560,193 @@ def test_cli_rcm_writes_the_rotation_and_its_commands(tmp_path):
         text=True,
     )
     assert bad.returncode == 1 and "--centre" in bad.stderr and not (tmp_path / "x").exists()
+
+
+# --- bounds on the work (issue 17, item 4) ----------------------------------------------------
+
+
+def test_quantize_at_the_command_limit_and_one_command_past():
+    """One period carrying 20,000,000 ticks (2,000,000 deg) is split into exactly
+    ceil(20,000,000 / 20) = MAX_COMMANDS commands of 20 ticks; 21 ticks more need one command
+    too many and are refused before any command is built."""
+    import math
+
+    from armpath.budget import MAX_COMMANDS
+    from armpath.trajectory import quantize
+
+    span = 20_000_000  # ticks of 0.1 deg
+    traj = minimum_snap(np.radians([[0.0], [span / 10.0]]), [0.0, 1.0])
+    q = quantize(traj, 10.0)
+    assert q.sequence.n_commands == math.ceil(span / 20) == MAX_COMMANDS
+    assert q.split_periods == 1 and np.all(q.sequence.commands == 20)
+    assert q.state_index.tolist() == [0, MAX_COMMANDS]
+    over = minimum_snap(np.radians([[0.0], [(span + 21) / 10.0]]), [0.0, 1.0])
+    with pytest.raises(
+        InvalidInputError, match=r"commands.*20,000,021 ticks.*the limit is 1,000,000.*--period"
+    ):
+        quantize(over, 10.0, option="--period")
+
+
+def test_quantize_refuses_periods_before_sampling():
+    """A 2 s trajectory in periods of 1e-9 s would be 2e9 samples (16 GB a joint): refused from
+    the arithmetic, naming the option."""
+    from armpath.trajectory import quantize
+
+    traj = minimum_snap([[0.0], [1.0]], [0.0, 2.0])
+    with pytest.raises(InvalidInputError, match=r"controller periods.*2e\+09.*change --period"):
+        quantize(traj, 1e-9, option="--period")
+    with pytest.raises(InvalidInputError, match="controller periods"):
+        quantize(traj, 1e-300)  # 2e300 periods: the ratio itself is beyond any integer
+    one = quantize(traj, 1e300)  # a period longer than the trajectory: one period, to its end
+    assert one.sample_times.tolist() == [0.0, 2.0] and one.n_periods == 1
+    assert one.sequence.final_ticks.tolist() == [round(np.degrees(1.0) * 10)]
+
+
+def test_quantize_refuses_joint_values_beyond_exact_ticks():
+    from armpath.trajectory import quantize
+
+    traj = minimum_snap([[1e15], [1e15 + 1e-3]], [0.0, 1.0])  # rad: ~5.7e20 ticks
+    with pytest.raises(InvalidInputError, match="ticks to be quantized"):
+        quantize(traj, 0.5)
+
+
+def test_commands_of_all_periods_at_once_match_split_move():
+    """The vectorised split of every period equals commands.split_move period by period."""
+    from armpath.commands import commands_needed, split_move
+    from armpath.trajectory.quantize import _split_periods
+
+    rng = np.random.default_rng(5)
+    delta = rng.integers(-700, 700, (300, 6))
+    delta[::7] = rng.integers(-20, 21, (len(delta[::7]), 6))  # some periods need one command
+    m = np.array([max(commands_needed(d), 1) for d in delta])
+    expected = np.vstack([split_move(d, k) for d, k in zip(delta, m, strict=True)])
+    got = _split_periods(delta, m)
+    assert np.array_equal(got, expected)
+    assert np.abs(got).max() <= 20 and got.shape[0] == m.sum()
+
+
+def test_commanded_motion_in_parts_joins_up_to_the_whole(monkeypatch):
+    qz = importlib.import_module("armpath.trajectory.quantize")  # the function shadows it
+    from armpath.model import seed_arm
+    from armpath.trajectory import lattice_motion, quantize, tip_deviation
+
+    traj = _seed_trajectory(speed_deg_s=60.0)
+    q = quantize(traj, 0.02)
+    t_all, q_all = lattice_motion(q, 8)
+    n = q.n_periods
+    parts = [lattice_motion(q, 8, a, min(a + 37, n)) for a in range(0, n, 37)]
+    assert np.array_equal(np.concatenate([p[0] for p in parts]), t_all)
+    assert np.array_equal(np.vstack([p[1] for p in parts]), q_all)
+    assert t_all.size == 8 * n + 1
+    whole = tip_deviation(seed_arm(), traj, q)
+    monkeypatch.setattr(qz, "MOTION_CHUNK", 5)
+    assert tip_deviation(seed_arm(), traj, q) == whole
+    with pytest.raises(InvalidInputError, match="substeps"):
+        lattice_motion(q, 0)
+
+
+def test_shortest_bounded_search_has_a_step_budget(monkeypatch):
+    """The finest tolerance still ends within 1 + 1 + MAX_HALVINGS + MAX_BISECTIONS QP solves;
+    rtol of 0 (which used to bisect forever once hi and lo were neighbouring floats) or NaN is
+    refused."""
+    import armpath.trajectory.retime as rt
+
+    W, t, limits = _retiming_case()
+    calls = []
+    real = rt.minimum_snap
+
+    def counting(*args, **kwargs):
+        calls.append(kwargs.get("limits") is not None)
+        return real(*args, **kwargs)
+
+    coarse = shortest_bounded(W, t, limits, rtol=1e-3)
+    monkeypatch.setattr(rt, "minimum_snap", counting)
+    best = shortest_bounded(W, t, limits, rtol=rt.MIN_RTOL)
+    assert sum(calls) <= 1 + rt.MAX_HALVINGS + rt.MAX_BISECTIONS
+    # the finer search ends within the coarse one's bracket
+    assert coarse.duration * (1 - 1.1e-3) <= best.duration <= coarse.duration
+    for rtol in (0.0, float("nan"), 1e-12, 1.5):
+        with pytest.raises(InvalidInputError, match="rtol"):
+            shortest_bounded(W, t, limits, rtol=rtol)
+
+
+def test_motionless_and_barely_moving_waypoints():
+    """Waypoints that do not move meet any limit at any duration: the free optimum comes back
+    (the scale factor used to be 0 and the error spoke of missing limits); waypoints that move
+    1e-200 rad would need segments of 1e-100 s, beyond what the solve can take: named."""
+    limits = MotionLimits(velocity=1.0, acceleration=1.0)
+    still = shortest_bounded([[0.5], [0.5], [0.5]], [0.0, 1.0, 3.0], limits)
+    assert still.duration == 3.0 and np.all(still.evaluate(np.linspace(0, 3, 7)) == 0.5)
+    assert scaled(still, limits).duration == 3.0
+    with pytest.raises(InvalidInputError, match="move so little"):
+        shortest_bounded([[0.0], [1e-200]], [0.0, 1.0], limits)
+
+
+@pytest.mark.parametrize(
+    ("limits", "message"),
+    [
+        (MotionLimits(velocity=float("nan")), "velocity limits must be > 0 and finite"),
+        (MotionLimits(velocity=1.0, acceleration=float("inf")), "acceleration limits"),
+        (MotionLimits(velocity=1.0, jerk=-1.0), "jerk limits"),
+    ],
+)
+def test_bad_limits_are_refused(limits, message):
+    with pytest.raises(InvalidInputError, match=message):
+        minimum_snap([[0.0], [1.0]], [0.0, 1.0], limits=limits)
+
+
+def test_trajectory_sizes_and_durations_are_refused_before_the_solve():
+    from armpath.budget import MAX_JOINTS, MAX_WAYPOINTS
+
+    with pytest.raises(InvalidInputError, match="waypoints: this would need 1e\\+04"):
+        minimum_snap(np.zeros((MAX_WAYPOINTS + 1, 1)), np.arange(MAX_WAYPOINTS + 1.0))
+    with pytest.raises(InvalidInputError, match="joints"):
+        minimum_snap(np.zeros((2, MAX_JOINTS + 1)), [0.0, 1.0])
+    with pytest.raises(InvalidInputError, match="segment durations"):
+        minimum_snap([[0.0], [1.0]], [0.0, 1e-300])  # T^-7 overflows
+    with pytest.raises(InvalidInputError, match="segment durations"):
+        minimum_snap([[0.0], [1.0]], [0.0, 1e60])  # T^7 overflows
+    with pytest.raises(InvalidInputError, match="finite"):
+        allocate_times([[0.0], [1.0]], float("nan"), 1.0)
+    with pytest.raises(InvalidInputError, match="samples_per_segment"):
+        minimum_snap(
+            [[0.0], [1.0]], [0.0, 1.0], limits=MotionLimits(velocity=9.0), samples_per_segment=10**6
+        )
+
+
+def test_time_limit_ends_the_retiming_searches():
+    import time
+
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
+
+    W, t, limits = _retiming_case()
+    for run in (
+        lambda: shortest_bounded(W, t, limits),
+        lambda: compare_retimings(W, t, limits, methods=("ruckig",)),
+        lambda: minimum_snap(W, t, limits=limits),
+    ):
+        with (
+            time_limit(0.01),
+            pytest.raises(TimeLimitError, match=r"time limit of 0\.01 s ran out"),
+        ):
+            time.sleep(0.02)
+            run()
+
+
+def test_fixed_point_rotation_bounds_and_a_huge_axis():
+    """The number of points is bounded; an axis of 1e308 (whose norm overflows) gives the same
+    circle as the same direction written small."""
+    from armpath.budget import MAX_WAYPOINTS
+    from armpath.model.catalog import welder003
+    from armpath.trajectory.rcm import fixed_point_rotation
+
+    arm = welder003()
+    with pytest.raises(InvalidInputError, match="waypoints of the circle"):
+        fixed_point_rotation(arm, (900, 0, 0), n_points=MAX_WAYPOINTS)
+    with pytest.raises(InvalidInputError, match="duration"):
+        fixed_point_rotation(arm, (900, 0, 0), duration_s=float("inf"))
+    small = fixed_point_rotation(arm, (900, 0, 0), circle_axis=(1.0, 1.0, 0.0), n_points=8)
+    huge = fixed_point_rotation(arm, (900, 0, 0), circle_axis=(1e308, 1e308, 0.0), n_points=8)
+    assert np.allclose(huge.wrist_points, small.wrist_points, atol=1e-9)
+    assert huge.max_tip_deviation == pytest.approx(small.max_tip_deviation, rel=1e-9)

@@ -18,7 +18,7 @@ from armpath.model.serial_arm import JointKind
 from armpath.scenes import seed_scene
 from armpath.workspace import GridSpec, joint_ranges, sample_workspace
 from armpath.workspace.dexterous import dexterity, orientation_grid
-from armpath.workspace.sampling import joint_samples
+from armpath.workspace.sampling import joint_samples, reach_bound
 from independent_dh import dh_pose
 
 ARMPATH = [sys.executable, "-m", "armpath"]
@@ -225,3 +225,89 @@ def test_seed003_torus_dexterous_workspace():
     assert not sample.dexterous[dist > 130.0].any()
     exact = 2.0 * np.pi**2 * 500.0 * 100.0**2
     assert abs(sample.volume - exact) < 3.0 * sample.standard_error + 0.1 * exact
+
+
+# --- bounds on the work (issue 17, item 4) ----------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"samples": 200_000_001, "voxel": 10.0}, "joint samples: this would need"),
+        ({"samples": 10, "voxel": 10.0, "chunk": 4_000_001}, "samples a chunk"),
+        ({"samples": 10, "voxel": 10.0, "chunk": 0}, "chunk must be >= 1"),
+        ({"samples": 10, "voxel": 10.0, "seed": -1}, "random seed"),
+        ({"samples": 10.5, "voxel": 10.0}, "whole number"),
+        ({"samples": 10, "voxel": 1e-300}, "voxels.*an unbounded number"),
+    ],
+)
+def test_sizes_are_refused_before_any_work(kwargs, message):
+    with pytest.raises(InvalidInputError, match=message):
+        sample_workspace(BUILTIN_MODELS["seed"](), **kwargs)
+
+
+def test_voxel_grid_at_its_limit():
+    """The seed arm reaches at most AB + BC + CD + DE = 715 mm from joint 1's origin; the grid
+    is a cube of ceil(2 (715 + v) / v) voxels a side, at most MAX_GRID_CELLS (368^3 fits,
+    369^3 does not): v = 3.91 mm gives 368, v = 3.90 mm gives 369."""
+    from armpath.budget import MAX_GRID_CELLS
+
+    arm = BUILTIN_MODELS["seed"]()
+    assert reach_bound(arm) == pytest.approx(715.0)
+    assert 368**3 <= MAX_GRID_CELLS < 369**3
+    for voxel, edge in ((3.91, 368), (20.0, 74)):
+        assert int(np.ceil(2 * (715.0 + voxel) / voxel)) == edge
+        assert GridSpec.for_arm(arm, voxel).shape == (edge, edge, edge)
+    with pytest.raises(InvalidInputError, match=r"5\.02e\+07.*change --voxel"):
+        GridSpec.for_arm(arm, 3.90, "--voxel")
+
+
+def test_obstacle_checks_in_batches_keep_the_same_samples(monkeypatch):
+    """The clearance rule applied a batch at a time (bounded memory) keeps exactly the samples
+    it keeps all at once, counted independently here."""
+    import armpath.workspace.sampling as sampling
+
+    arm = BUILTIN_MODELS["seed"]()
+    world: CollisionWorld = seed_scene().world
+    whole = sample_workspace(arm, 3_000, 20.0, seed=4, world=world)
+    monkeypatch.setattr(sampling, "OBSTACLE_BATCH", 7)
+    parts = sample_workspace(arm, 3_000, 20.0, seed=4, world=world)
+    q = joint_samples(joint_ranges(arm), 3_000, np.random.default_rng(4), "uniform")
+    assert parts.kept == whole.kept == int(np.sum(world.slack(arm, q) >= 0.0)) < 3_000
+    assert np.array_equal(parts.occupied, whole.occupied)
+
+
+def test_time_limit_ends_the_sampling():
+    import time
+
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
+
+    with time_limit(0.01), pytest.raises(TimeLimitError, match="sampling the workspace"):
+        time.sleep(0.02)
+        sample_workspace(BUILTIN_MODELS["seed"](), 1_000_000, 20.0)
+
+
+def test_orientation_and_dexterity_bounds(monkeypatch):
+    """101^3 orientations (step 2 pi / 100) are more than MAX_ORIENTATIONS; dexterity solved in
+    batches of 100 poses gives the same counts as in one batch; too many points or poses are
+    refused before any IK."""
+    import armpath.workspace.dexterous as dex
+    from armpath.workspace.dexterous import dexterous_workspace
+
+    with pytest.raises(InvalidInputError, match=r"orientations of the grid.*1\.03e\+06"):
+        orientation_grid(2 * np.pi / 100)
+    with pytest.raises(InvalidInputError, match="finite step"):
+        orientation_grid(float("nan"))
+    arm = BUILTIN_MODELS["welder003"]()
+    rotations = orientation_grid(0.25 * np.pi)
+    assert rotations.shape == (9**3, 3, 3)
+    whole = dexterity(arm, [700.0, 0.0, 150.0], rotations)
+    monkeypatch.setattr(dex, "POSE_BATCH", 100)
+    parts = dexterity(arm, [700.0, 0.0, 150.0], rotations)
+    assert np.array_equal(parts.solutions, whole.solutions) and parts.n_reached == 9**3
+    box = ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+    with pytest.raises(InvalidInputError, match="poses"):
+        dexterous_workspace(arm, 1_000_000, rotations, *box)  # 7.3e8 poses
+    with pytest.raises(InvalidInputError, match="points held at once"):
+        dexterous_workspace(arm, 5_000_000, rotations[:1], *box)

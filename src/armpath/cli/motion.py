@@ -111,7 +111,9 @@ def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
                     )
                 rows.append([_number(c, number, k + 1, name) for k, c in enumerate(cells)])
     except OSError as exc:
-        raise InvalidInputError(f"cannot read {name}: {exc.strerror or exc}") from None
+        raise InvalidInputError(
+            f"cannot read waypoints file {path} (--waypoints): {exc.strerror or exc}"
+        ) from None
     if not rows:
         raise InvalidInputError(f"{name} has no waypoint rows" if header else f"{name} is empty")
     if len(rows) < 2:
@@ -215,10 +217,15 @@ def _check_net_motion(waypoints_deg: np.ndarray, option: str) -> None:
     check_size(
         float(np.ceil((net - 1.0) / MAX_INCREMENT_TICKS)),
         MAX_COMMANDS,
-        f"commands (a joint moves {net:.4g} ticks from the first waypoint to the last, at most "
-        f"{MAX_INCREMENT_TICKS} a command)",
+        f"commands (a joint moves {_amount(net)} ticks from the first waypoint to the last, "
+        f"at most {MAX_INCREMENT_TICKS} a command)",
         option,
     )
+
+
+def _amount(x: float) -> str:
+    """A count for a message: every digit up to 1e15 (so 20,000,021 is not shown as 2e+07)."""
+    return f"{x:,.0f}" if abs(x) < 1e15 else f"{x:.3g}"
 
 
 def _write_csv(

@@ -58,9 +58,9 @@ def _check_seed(seed: int) -> None:
         raise InvalidInputError(f"--seed must be >= 0, got {seed}")
 
 
-def _check_length(value: float, option: str) -> None:
+def _check_length(value: float, what: str, option: str) -> None:
     if not (np.isfinite(value) and value > 0):
-        raise InvalidInputError(f"{option} must be a positive length in mm, got {value}")
+        raise InvalidInputError(f"{what} ({option}) must be a positive length in mm, got {value}")
 
 
 def _percent_steps(say: Callable[[str], None], what: str) -> Callable[[int, int], None]:
@@ -112,7 +112,7 @@ def workspace(
         if method not in METHODS:
             raise InvalidInputError(f"--method must be one of {METHODS}, got {method!r}")
         _check_seed(seed)
-        _check_length(voxel, "--voxel")
+        _check_length(voxel, "voxel size", "--voxel")
         arm = resolve_model(model)
         GridSpec.for_arm(arm, voxel, "--voxel")
         world = load_scene(scene_file).world if obstacles else None
@@ -228,7 +228,7 @@ def _check_blind_zone_sizes(
     )
     check_count(bands, "--bands", MAX_BANDS, "circles a workpiece face", least=0)
     _check_seed(seed)
-    _check_length(pixel, "--pixel")
+    _check_length(pixel, "pixel size", "--pixel")
     map_shape(arm, pixel, "--pixel")
 
 
@@ -412,8 +412,8 @@ def design_sweep(
         if top < 1:
             raise InvalidInputError(f"--top must be >= 1, got {top}")
         _check_seed(seed)
-        _check_length(total, "--total")
-        _check_length(pixel, "--pixel")
+        _check_length(total, "total length", "--total")
+        _check_length(pixel, "pixel size", "--pixel")
         candidates = design_grid(total)
         check_sweep_size(
             candidates, pixel, samples, seed, extra=1, options=("--pixel or --total", "--samples")

@@ -111,7 +111,7 @@ def quantize(
     check_size(
         float(np.ceil((net - 1.0) / MAX_INCREMENT_TICKS)),
         MAX_COMMANDS,
-        f"commands (a joint moves {net:.4g} ticks from start to end, at most "
+        f"commands (a joint moves {_amount(net)} ticks from start to end, at most "
         f"{MAX_INCREMENT_TICKS} a command)",
         option,
     )
@@ -134,7 +134,7 @@ def quantize(
     check_size(
         total,
         MAX_COMMANDS,
-        f"commands ({n:,} periods, {int(np.count_nonzero(m > 1)):,} of them split)",
+        f"commands ({total:,} for {n:,} periods, {int(np.count_nonzero(m > 1)):,} of them split)",
         option,
     )
     check_time("converting the trajectory to commands")
@@ -147,6 +147,11 @@ def quantize(
         float(np.max(np.abs(states - x))),
         int(np.count_nonzero(m > 1)),
     )
+
+
+def _amount(x: float) -> str:
+    """A count for a message: every digit up to 1e15 (so 20,000,021 is not shown as 2e+07)."""
+    return f"{x:,.0f}" if abs(x) < 1e15 else f"{x:.3g}"
 
 
 def _check_state_range(x: FloatArray) -> None:
