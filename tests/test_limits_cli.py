@@ -346,3 +346,13 @@ def test_refusals_come_before_the_output_folder_is_touched(tmp_path):
     assert proc.returncode == 1
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
     assert MAX_COMMANDS == 1_000_000  # the limit the messages above quote
+
+
+def test_help_texts_quote_the_limits_in_force(tmp_path):
+    """The limits --help quotes are the budget's (the docstrings state two of them in words)."""
+    text = " ".join(_run(["trajectory", "--help"], tmp_path).stdout.split())
+    assert f"At most {MAX_PERIODS:,} controller periods" in text
+    assert f"and {MAX_COMMANDS:,} commands" in text
+    assert f"{MAX_WAYPOINTS:,} rows of 64 joints" in text
+    text = " ".join(_run(["rcm", "--help"], tmp_path).stdout.split())
+    assert f"At most {MAX_PERIODS:,} controller periods" in text and "1,000,000 commands" in text

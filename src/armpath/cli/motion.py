@@ -281,7 +281,8 @@ def trajectory(
         typer.Option(
             "--waypoints",
             help="CSV of joint waypoints in deg, one row each; a first column 't' (s) gives "
-            "their times, otherwise they are spaced by the velocity/acceleration limits.",
+            "their times, otherwise they are spaced by the velocity/acceleration limits. At "
+            f"most {MAX_WAYPOINTS:,} rows of {MAX_JOINTS} joints.",
         ),
     ],
     kind: Annotated[
@@ -290,17 +291,23 @@ def trajectory(
     max_velocity: Annotated[
         float,
         typer.Option(
-            help="Joint speed limit, deg/s (time allocation; with --bounded or --retime a limit)."
+            help="Joint speed limit, deg/s (time allocation; with --bounded or --retime a "
+            f"limit); in (0, {MAX_VELOCITY_DEG_S:g}]."
         ),
     ] = 30.0,
     max_acceleration: Annotated[
-        float, typer.Option(help="Joint acceleration limit, deg/s^2 (as --max-velocity).")
+        float,
+        typer.Option(
+            help="Joint acceleration limit, deg/s^2 (as --max-velocity); in "
+            f"(0, {MAX_ACCELERATION_DEG_S2:g}]."
+        ),
     ] = 60.0,
     max_jerk: Annotated[
         float | None,
         typer.Option(
             help="Joint jerk limit, deg/s^3, for --bounded and --retime (default: "
-            "none; --retime then uses 10x the acceleration limit per s)."
+            "none; --retime then uses 10x the acceleration limit per s); in "
+            f"(0, {MAX_JERK_DEG_S3:g}]."
         ),
     ] = None,
     bounded: Annotated[
@@ -337,8 +344,8 @@ def trajectory(
 ) -> None:
     """Minimum-snap (or minimum-jerk) joint trajectory through waypoints, rest to rest, and its
     commands on the 0.1 deg / 2 deg lattice (error feedback: within half a tick at every
-    period). At most 10,000 waypoints of 64 joints, 5,000,000 periods and 1,000,000 commands;
-    limits up to 1e6 deg/s, 1e9 deg/s^2 and 1e12 deg/s^3."""
+    period). At most 5,000,000 controller periods (duration / --period) and 1,000,000
+    commands."""
     from armpath.trajectory import (
         ORDERS,
         QP_SOLVERS,
@@ -508,7 +515,9 @@ def rcm(
         float,
         typer.Option(help="Angle of the circle from the axis, deg (90: a great circle)."),
     ] = 90.0,
-    points: Annotated[int, typer.Option(help="Waypoints on the circle.")] = 24,
+    points: Annotated[
+        int, typer.Option(help=f"Waypoints on the circle (3 to {MAX_WAYPOINTS - 1:,}).")
+    ] = 24,
     duration: Annotated[float, typer.Option(help="Time for one turn, s.")] = 8.0,
     kind: Annotated[str, typer.Option(help="snap or jerk.")] = "snap",
     period: PeriodOption = 0.01,
@@ -528,7 +537,7 @@ def rcm(
     """Fixed-point rotation (seed 003): the tool tip stays on CENTRE while the tool turns once
     round a circle of directions (Rodrigues rotations, closed-form IK on the nearest branch,
     minimum-snap joints); prints how far the tip leaves the point, on the smooth trajectory and
-    under the quantized commands. At most 9,999 points, 5,000,000 periods (duration / period)
+    under the quantized commands. At most 5,000,000 controller periods (--duration / --period)
     and 1,000,000 commands."""
     from armpath.trajectory import ORDERS, joint_ticks, lattice_motion, quantize
     from armpath.trajectory.minsnap import segment_durations_ok

@@ -23,6 +23,8 @@ from rich.table import Table
 from armpath.budget import (
     MAX_BANDS,
     MAX_CHUNK,
+    MAX_GRID_CELLS,
+    MAX_JOBS,
     MAX_SAMPLES,
     check_size,
 )
@@ -76,14 +78,23 @@ def _percent_steps(say: Callable[[str], None], what: str) -> Callable[[int, int]
 def workspace(
     model: ModelOption = "seed",
     samples: Annotated[
-        int, typer.Option(help="Joint vectors to sample (streamed in chunks of --chunk).")
+        int,
+        typer.Option(
+            help="Joint vectors to sample (streamed in chunks of --chunk; at most "
+            f"{MAX_SAMPLES:,})."
+        ),
     ] = 4_000_000,
-    voxel: Annotated[float, typer.Option(help="Voxel edge, mm.")] = 20.0,
+    voxel: Annotated[
+        float,
+        typer.Option(help=f"Voxel edge, mm (at most {MAX_GRID_CELLS:,} voxels over the reach)."),
+    ] = 20.0,
     method: Annotated[
         str, typer.Option(help="uniform, or stratified (a Latin hypercube per chunk).")
     ] = "uniform",
     seed: Annotated[int, typer.Option(help="Random seed (same seed, same workspace).")] = 0,
-    chunk: Annotated[int, typer.Option(help="Samples per chunk (bounds the memory).")] = 1_000_000,
+    chunk: Annotated[
+        int, typer.Option(help=f"Samples per chunk (bounds the memory; at most {MAX_CHUNK:,}).")
+    ] = 1_000_000,
     obstacles: Annotated[
         bool,
         typer.Option(
@@ -102,8 +113,7 @@ def workspace(
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Reachable workspace of the tool point by sampling joint space into voxels: volume,
-    bounding box and sections. At most 200,000,000 samples, 4,000,000 a chunk and 50,000,000
-    voxels."""
+    bounding box and sections."""
     from armpath.workspace import sample_workspace
 
     with _cli_errors(time_limit):
@@ -304,12 +314,23 @@ def _write_blind_zones(folder: OutputFolder, bz: _BlindZones) -> None:
 
 @app.command()
 def blindzones(
-    pixel: Annotated[float, typer.Option(help="Pixel edge of the plane maps, mm.")] = 5.0,
+    pixel: Annotated[
+        float,
+        typer.Option(help=f"Pixel edge of the plane maps, mm (at most {MAX_GRID_CELLS:,} pixels)."),
+    ] = 5.0,
     samples: Annotated[
-        int, typer.Option(help="Joint samples of each plane map (the 3-D meridian map: twice).")
+        int,
+        typer.Option(
+            help="Joint samples of the arm-plane map (the 3-D meridian map: twice; at most "
+            f"{MAX_SAMPLES:,} in all)."
+        ),
     ] = 2_000_000,
     bands: Annotated[
-        int, typer.Option(help="Horizontal circles per workpiece face (0: skip the faces).")
+        int,
+        typer.Option(
+            help="Horizontal circles per workpiece face (0: skip the faces; at most "
+            f"{MAX_BANDS:,})."
+        ),
     ] = 9,
     seed: Annotated[int, typer.Option(help="Random seed of the sampling.")] = 0,
     wall: WallOption = None,
@@ -326,8 +347,7 @@ def blindzones(
 ) -> None:
     """Blind zones of the seed arm: the central blind zone in the arm plane and in 3-D (areas
     mm^2, volume mm^3), and the parts of the workpiece's outer and inner faces the fingertip
-    cannot reach without a collision (areas mm^2, fractions). At most 50,000,000 pixels a map,
-    200,000,000 samples in all (3 x --samples) and 1000 circles a face."""
+    cannot reach without a collision (areas mm^2, fractions)."""
     with _cli_errors(time_limit):
         scene = _scene(None, wall)
         arm = _arm(link_radius)
@@ -378,10 +398,23 @@ def design_sweep(
     total: Annotated[
         float, typer.Option(help="Total link length AB + BC + CD + DE of every candidate, mm.")
     ] = 715.0,
-    samples: Annotated[int, typer.Option(help="Joint samples per candidate.")] = 1_000_000,
-    pixel: Annotated[float, typer.Option(help="Pixel edge of the meridian maps, mm.")] = 10.0,
+    samples: Annotated[
+        int,
+        typer.Option(
+            help=f"Joint samples per candidate (at most {MAX_SAMPLES:,} over the sweep and the "
+            "seed arm)."
+        ),
+    ] = 1_000_000,
+    pixel: Annotated[
+        float,
+        typer.Option(
+            help=f"Pixel edge of the meridian maps, mm (at most {MAX_GRID_CELLS:,} pixels)."
+        ),
+    ] = 10.0,
     seed: Annotated[int, typer.Option(help="Random seed (every candidate uses it).")] = 0,
-    jobs: Annotated[int, typer.Option(help="Local worker processes (-1: every core).")] = -1,
+    jobs: Annotated[
+        int, typer.Option(help=f"Local worker processes (-1: every core; at most {MAX_JOBS}).")
+    ] = -1,
     scheduler: Annotated[
         str | None,
         typer.Option(help="Address of a Dask scheduler (e.g. tcp://host:8786) to run on."),
@@ -395,8 +428,7 @@ def design_sweep(
     """Design study of the seed arm: link lengths (AB, BC = CD, DE at a fixed total) and the
     range of joint 3 against the reach volume above the table (m^3) and the central blind zone
     (litres). Objective: the largest reach volume; ties (within 0.5 %) go to the smaller blind
-    zone. At most 200,000,000 samples over the sweep (--samples x 41 designs), 50,000,000 pixels
-    a map and 256 jobs; under --time-limit the designs go out one per worker at a time."""
+    zone. Under --time-limit the designs go out one per worker at a time."""
     from armpath.workspace.design import (
         check_jobs,
         check_sweep_size,
