@@ -17,7 +17,7 @@
 Sizes are checked before any work (:mod:`armpath.budget`): a map has at most
 ``MAX_GRID_CELLS`` pixels and ``MAX_SAMPLES`` samples (``MAX_CHUNK`` held at once), a face at
 most ``MAX_BANDS`` circles of at most ``MAX_CURVE_POINTS`` scan points. The time limit in force
-is checked after every chunk of samples and before every circle.
+is checked before every chunk of samples and every circle.
 """
 
 from __future__ import annotations

@@ -3,8 +3,12 @@
 Joint vectors are drawn inside the joint limits (uniform, or stratified: a Latin hypercube per
 chunk), seeded, in chunks of bounded size; a compiled kernel runs forward kinematics of the tool
 point and marks the voxel it falls in. Memory is the grid (one byte a voxel) plus one chunk, so
-10^8-10^9 samples run in bounded memory; a callback reports progress after each chunk. With a
+10^8 samples run in bounded memory; a callback reports progress after each chunk. With a
 collision world, samples that break its clearance rule are dropped before they are marked.
+
+Sizes are checked before any work (:mod:`armpath.budget`): at most ``MAX_SAMPLES`` samples,
+``MAX_CHUNK`` a chunk and ``MAX_GRID_CELLS`` voxels; the time limit in force is checked before
+every chunk (and every batch of a chunk checked against the obstacles).
 """
 
 from __future__ import annotations
@@ -297,8 +301,9 @@ def sample_workspace(
     collision). ``progress(done, total)`` is called after each chunk.
 
     Refused before any work: more than ``MAX_SAMPLES`` samples, a chunk of more than
-    ``MAX_CHUNK``, a grid of more than ``MAX_VOXELS`` voxels. The time limit in force
-    (:func:`armpath.budget.check_time`) is checked after every chunk.
+    ``MAX_CHUNK``, a grid of more than ``MAX_VOXELS`` voxels. An arm of more than six joints
+    gets chunks of at most ``6 * MAX_CHUNK / joints`` samples (the same memory). The time limit
+    in force (:func:`armpath.budget.check_time`) is checked before every chunk.
     """
     samples = check_count(samples, "samples", MAX_SAMPLES, "joint samples")
     chunk = check_count(chunk, "chunk", MAX_CHUNK, "samples a chunk")
@@ -306,6 +311,8 @@ def sample_workspace(
         raise InvalidInputError(f"sampling method must be one of {METHODS}, got {method!r}")
     rng = random_generator(seed)
     ranges = joint_ranges(arm)
+    # a chunk holds at most MAX_CHUNK samples of six joints' worth of values
+    chunk = min(chunk, max(1, 6 * MAX_CHUNK // max(arm.n_joints, 1)))
     spec = GridSpec.for_arm(arm, voxel)
     occupied = np.zeros(spec.shape, dtype=np.uint8)
     C = np.ascontiguousarray(z_axis_chain(arm))
