@@ -117,7 +117,12 @@ def check_size(count: float, limit: float, what: str, option: str) -> None:
 
     ``count`` may be a float (an estimate that could overflow an integer)."""
     if not math.isfinite(count) or count > limit:
-        shown = f"{count:.3g}" if math.isfinite(count) else "an unbounded number of"
+        if not math.isfinite(count):
+            shown = "an unbounded number of"
+        elif count < 1e15 and float(count).is_integer():
+            shown = f"{count:,.0f}"  # every digit of a whole count: 1,000,001
+        else:
+            shown = f"{count:.3g}"
         raise InvalidInputError(
             f"{what}: this would need {shown} (the limit is {limit:,.0f}); change {option}"
         )

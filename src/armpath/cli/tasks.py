@@ -31,7 +31,6 @@ from armpath.cli.common import (
     _numbers,
     _scene,
     app,
-    err_console,
     out_console,
     progress,
 )
@@ -639,8 +638,8 @@ def run(
                 tour = spotweld_task(scene, arm, on_progress=say)
             tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
             _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
-            with err_console.status("blind zones ...") as status:
-                blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, status, scan_step_mm=16.0)
+            with progress("blind zones ...") as say:
+                blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, say, scan_step_mm=16.0)
             _write_blind_zones(folder, blind)
             tasks = [
                 (titles["reach"], reach_doc),
