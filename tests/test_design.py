@@ -106,12 +106,12 @@ def test_sweep_sizes_are_refused_before_any_work():
     from armpath.errors import InvalidInputError
 
     many = [100.0 + k for k in range(101)], [45.0 + k / 10 for k in range(100)]
-    with pytest.raises(InvalidInputError, match=r"candidate designs.*1\.01e\+04.*10,000"):
+    with pytest.raises(InvalidInputError, match=r"candidate designs.*10,100.*10,000"):
         design_grid(715.0, ab_mm=many[0], de_mm=many[1], theta3_deg=(138.0,))
     with pytest.raises(InvalidInputError, match="total length"):
         design_grid(float("nan"))
     candidates = design_grid()  # 40
-    with pytest.raises(InvalidInputError, match=r"joint samples of the sweep.*2e\+08"):
+    with pytest.raises(InvalidInputError, match=r"joint samples of the sweep.*200,000,040"):
         sweep(candidates, samples=5_000_001, n_jobs=1)  # 40 x 5,000,001 > 200,000,000
     with pytest.raises(InvalidInputError, match=r"pixels of a 0\.01 mm map"):
         sweep(candidates, pixel_mm=0.01, samples=100, n_jobs=1)
