@@ -268,3 +268,29 @@ def test_broad_phase_verdict_equals_the_exact_clearances():
         dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
         assert np.all(o.signed_distance(center + (radius + 1e-6) * dirs) > 0)
     assert ball_center.shape == (3,)
+
+
+def test_a_segment_through_the_wall_is_never_reported_as_touching():
+    """Regression (stress suite): a segment that enters the hollow workpiece's wall and leaves it
+    again (both ends outside the solid) was given the value 0 of its crossings, which the tool
+    tip's rule (>= 0) accepted. Its value must be negative and at least as deep as the
+    independent distance (shapely in the profile plane) sampled along it."""
+    wp = seed_scene().world.obstacles[1]
+    rng = np.random.default_rng(7)
+    ref = independent.Workpiece("normal")
+    # radial segments at random heights and angles from outside the cone into the cavity
+    z = rng.uniform(15.0, 170.0, 200)
+    phi = rng.uniform(0.0, 2 * np.pi, 200)
+    r_out = 168.0 - 0.4 * z
+    u = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], -1)
+    centre = np.stack([np.full_like(z, 210.0), np.zeros_like(z), z], -1)
+    a = centre + (r_out + 5.0)[:, None] * u
+    b = centre + (r_out - 25.0)[:, None] * u
+    assert np.all(ref.distance(a) > 0) and np.all(ref.distance(b) > 0)
+    value, _ = wp.segment_distance_bounds(a, b)
+    t = np.linspace(0.0, 1.0, 3001)
+    dense = ref.distance((a[:, None] + t[None, :, None] * (b - a)[:, None]).reshape(-1, 3))
+    deepest = dense.reshape(len(z), -1).min(axis=1)
+    assert np.all(deepest < -3.0)  # through an 8 mm wall
+    assert np.all(value <= deepest + 1e-6)
+    assert np.all(value >= -8.616 / 2 - 1e-6)  # no deeper than half the wall

@@ -22,7 +22,10 @@ of the derivative (recursively down to a closed-form quadratic) and bisecting; s
 of the polynomials are candidates too, so near-double roots that rounding turns complex are not
 lost. The exact 2-D signed distance is evaluated at every candidate and the smallest kept. When the
 segment stays outside the solid this is the exact minimum (to rounding); when it enters the solid
-the value is negative and attained by the segment (a zero crossing or a stationary point inside).
+the value is negative and attained by the segment: every stretch between candidates that lies
+inside is searched for its deepest point (the deepest point can lie where two features are
+equally near, which no candidate marks), so a segment that passes through a wall is never
+reported as merely touching it.
 
 Convex solids (boxes) use a golden-section search of their convex signed distance along the
 segment, to :data:`GOLDEN_ITERATIONS` steps (parameter interval below 1e-14 of the segment).
@@ -38,6 +41,8 @@ from numba import njit
 #: Golden-section steps for convex solids: 0.618^72 < 1e-14 of the segment length.
 GOLDEN_ITERATIONS = 72
 _BISECTIONS = 60
+#: Golden-section steps searching a stretch of a segment inside a solid for its deepest point.
+_INSIDE_GOLDEN = 40
 #: Extra points along a segment whose distance bounds the minimum from above (feature pruning).
 _PRUNE_SAMPLES = 2
 #: Below this distance (length unit) a segment counts as touching the surface
@@ -312,64 +317,74 @@ def _segment_revolution(
         s = _polygon_sdf(math.sqrt(max(qt, 0.0)), z0 + t * zd, verts, boundary)
         best_abs = min(best_abs, abs(s))
     nv = verts.shape[0]
-    for i in range(nv):
-        j = i + 1 if i + 1 < nv else 0
-        ar, az = verts[i, 0], verts[i, 1]
-        br, bz = verts[j, 0], verts[j, 1]
-        er, ez = br - ar, bz - az
-        if boundary[i]:
-            # lower bound: distance between the segment's box and the edge's box
-            dr = max(rmin - max(ar, br), 0.0, min(ar, br) - rmax)
-            dz = max(zmin - max(az, bz), 0.0, min(az, bz) - zmax)
-            ln = math.sqrt(er * er + ez * ez)
-            if dr * dr + dz * dz < best_abs * best_abs and ln > 0.0:
-                nr, nz = ez / ln, -er / ln
+    n_base = n
+    # features farther than the best distance so far are skipped; a segment that touches or
+    # enters the solid is swept again with every feature, so that every crossing is a
+    # candidate and the stretches inside the solid lie between candidates
+    for sweep in range(2):
+        if sweep == 1:
+            if best_abs > _TOUCH and sdf_start > 0.0:
+                break
+            n = n_base
+        for i in range(nv):
+            reach = best_abs if sweep == 0 else np.inf
+            j = i + 1 if i + 1 < nv else 0
+            ar, az = verts[i, 0], verts[i, 1]
+            br, bz = verts[j, 0], verts[j, 1]
+            er, ez = br - ar, bz - az
+            if boundary[i]:
+                # lower bound: distance between the segment's box and the edge's box
+                dr = max(rmin - max(ar, br), 0.0, min(ar, br) - rmax)
+                dz = max(zmin - max(az, bz), 0.0, min(az, bz) - zmax)
+                ln = math.sqrt(er * er + ez * ez)
+                if dr * dr + dz * dz < reach * reach and ln > 0.0:
+                    nr, nz = ez / ln, -er / ln
+                    n_before = n
+                    # zeros of f: nr^2 q - L^2 with L = nz (z - az) - nr ar
+                    l0 = nz * (z0 - az) - nr * ar
+                    l1 = nz * zd
+                    n = _quadratic_unit_roots(
+                        nr * nr * q0 - l0 * l0,
+                        nr * nr * q1 - 2.0 * l0 * l1,
+                        nr * nr * q2 - l1 * l1,
+                        cands,
+                        n,
+                    )
+                    # stationary points of f: nr^2 (q1 + 2 q2 t)^2 - 4 nz^2 zd^2 q
+                    kk = 4.0 * nz * nz * zd * zd
+                    n = _quadratic_unit_roots(
+                        nr * nr * q1 * q1 - kk * q0,
+                        4.0 * nr * nr * q1 * q2 - kk * q1,
+                        4.0 * nr * nr * q2 * q2 - kk * q2,
+                        cands,
+                        n,
+                    )
+                    for c in range(n_before, n):
+                        dist = _feature_distance(q0, q1, q2, z0, zd, cands[c], ar, az, er, ez, True)
+                        best_abs = min(best_abs, dist)
+            # vertex circle (R, Z) = (ar, az): (u0 + u1 t)^2 q - R^2 (q1 + 2 q2 t)^2
+            if _box_point_2d(rmin, rmax, zmin, zmax, ar, az) < reach:
                 n_before = n
-                # zeros of f: nr^2 q - L^2 with L = nz (z - az) - nr ar
-                l0 = nz * (z0 - az) - nr * ar
-                l1 = nz * zd
-                n = _quadratic_unit_roots(
-                    nr * nr * q0 - l0 * l0,
-                    nr * nr * q1 - 2.0 * l0 * l1,
-                    nr * nr * q2 - l1 * l1,
-                    cands,
-                    n,
-                )
-                # stationary points of f: nr^2 (q1 + 2 q2 t)^2 - 4 nz^2 zd^2 q
-                kk = 4.0 * nz * nz * zd * zd
-                n = _quadratic_unit_roots(
-                    nr * nr * q1 * q1 - kk * q0,
-                    4.0 * nr * nr * q1 * q2 - kk * q1,
-                    4.0 * nr * nr * q2 * q2 - kk * q2,
-                    cands,
-                    n,
-                )
+                u0 = q1 + 2.0 * (z0 - az) * zd
+                u1 = 2.0 * q2 + 2.0 * zd * zd
+                r2 = ar * ar
+                if ar == 0.0:  # a point on the axis: u = 0 (q = 0 is already a candidate)
+                    if u1 != 0.0 and 0.0 <= -u0 / u1 <= 1.0:
+                        cands[n] = -u0 / u1
+                        n += 1
+                else:
+                    n = _quartic_unit_roots(
+                        u0 * u0 * q0 - r2 * q1 * q1,
+                        2.0 * u0 * u1 * q0 + u0 * u0 * q1 - 4.0 * r2 * q1 * q2,
+                        u1 * u1 * q0 + 2.0 * u0 * u1 * q1 + u0 * u0 * q2 - 4.0 * r2 * q2 * q2,
+                        u1 * u1 * q1 + 2.0 * u0 * u1 * q2,
+                        u1 * u1 * q2,
+                        cands,
+                        n,
+                    )
                 for c in range(n_before, n):
-                    dist = _feature_distance(q0, q1, q2, z0, zd, cands[c], ar, az, er, ez, True)
+                    dist = _feature_distance(q0, q1, q2, z0, zd, cands[c], ar, az, er, ez, False)
                     best_abs = min(best_abs, dist)
-        # vertex circle (R, Z) = (ar, az): (u0 + u1 t)^2 q - R^2 (q1 + 2 q2 t)^2
-        if _box_point_2d(rmin, rmax, zmin, zmax, ar, az) < best_abs:
-            n_before = n
-            u0 = q1 + 2.0 * (z0 - az) * zd
-            u1 = 2.0 * q2 + 2.0 * zd * zd
-            r2 = ar * ar
-            if ar == 0.0:  # a point on the axis: u = 0 (q = 0 is already a candidate)
-                if u1 != 0.0 and 0.0 <= -u0 / u1 <= 1.0:
-                    cands[n] = -u0 / u1
-                    n += 1
-            else:
-                n = _quartic_unit_roots(
-                    u0 * u0 * q0 - r2 * q1 * q1,
-                    2.0 * u0 * u1 * q0 + u0 * u0 * q1 - 4.0 * r2 * q1 * q2,
-                    u1 * u1 * q0 + 2.0 * u0 * u1 * q1 + u0 * u0 * q2 - 4.0 * r2 * q2 * q2,
-                    u1 * u1 * q1 + 2.0 * u0 * u1 * q2,
-                    u1 * u1 * q2,
-                    cands,
-                    n,
-                )
-            for c in range(n_before, n):
-                dist = _feature_distance(q0, q1, q2, z0, zd, cands[c], ar, az, er, ez, False)
-                best_abs = min(best_abs, dist)
     if best_abs > _TOUCH and sdf_start > 0.0:
         return best_abs  # the segment never reaches the surface and starts outside
     best = np.inf
@@ -379,6 +394,37 @@ def _segment_revolution(
         s = _polygon_sdf(math.sqrt(max(qt, 0.0)), z0 + t * zd, verts, boundary)
         if s < best:
             best = s
+    # Inside the solid the depth is the distance to the *nearest* feature, whose largest value
+    # can lie where two features are equally near, which no candidate marks; so every stretch
+    # between consecutive candidates that lies inside is searched (golden section of the
+    # signed distance) for a deeper point. The value stays one the segment attains.
+    ts = np.sort(cands[:n])
+    for i in range(n - 1):
+        lo, hi = ts[i], ts[i + 1]
+        if hi - lo <= 1e-12:
+            continue
+        mid = 0.5 * (lo + hi)
+        qt = q0 + mid * (q1 + mid * q2)
+        if _polygon_sdf(math.sqrt(max(qt, 0.0)), z0 + mid * zd, verts, boundary) >= 0.0:
+            continue
+        x1 = hi - _GOLDEN * (hi - lo)
+        x2 = lo + _GOLDEN * (hi - lo)
+        qa = q0 + x1 * (q1 + x1 * q2)
+        f1 = _polygon_sdf(math.sqrt(max(qa, 0.0)), z0 + x1 * zd, verts, boundary)
+        qb = q0 + x2 * (q1 + x2 * q2)
+        f2 = _polygon_sdf(math.sqrt(max(qb, 0.0)), z0 + x2 * zd, verts, boundary)
+        for _ in range(_INSIDE_GOLDEN):
+            if f1 < f2:
+                hi, x2, f2 = x2, x1, f1
+                x1 = hi - _GOLDEN * (hi - lo)
+                qa = q0 + x1 * (q1 + x1 * q2)
+                f1 = _polygon_sdf(math.sqrt(max(qa, 0.0)), z0 + x1 * zd, verts, boundary)
+            else:
+                lo, x1, f1 = x1, x2, f2
+                x2 = lo + _GOLDEN * (hi - lo)
+                qb = q0 + x2 * (q1 + x2 * q2)
+                f2 = _polygon_sdf(math.sqrt(max(qb, 0.0)), z0 + x2 * zd, verts, boundary)
+        best = min(best, f1, f2)
     return best
 
 
