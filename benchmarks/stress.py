@@ -83,16 +83,20 @@ WEIGHTS = {
     "trace": 0.10,
     "spotweld": 0.10,
 }
+#: Default budget of a case (s), ``--time-limit-per-case``.
+DEFAULT_BUDGET_S = 20.0
 #: Budget of a kind as a multiple of ``--time-limit-per-case``.
 BUDGET_FACTOR = {"trace": 1.5, "spotweld": 2.0}
 #: A case still running after this multiple of its budget is killed and counted a failure.
 HANG_FACTOR = 2.0
 #: Extra seconds allowed to a command-line case (interpreter start, imports, compiled caches).
-CLI_STARTUP_S = 20.0
+CLI_STARTUP_S = 10.0
 #: A replay running longer than this (s) is killed (a problem of the replay, reported as such).
 REPLAY_LIMIT_S = 600.0
 
 HOME_DEG = (0.0, -90.0, 0.0, 0.0, -90.0, 0.0)
+#: What a scene-file case asks of the command line: reach this point from home.
+CLI_SCENE_TARGET = [300.0, 0.0, 200.0]
 SEED_LIMITS = {1: 125.0, 2: 138.0, 4: 133.5}
 ARM_REACH = 255.0 + 255.0 + 65.0  # from B
 
@@ -689,10 +693,6 @@ class Case:
     curve: ir.DenseCurve | None = None
     targets: np.ndarray | None = None
 
-    def reproducer(self, kinds: str) -> str:
-        extra = f" --kinds {kinds}" if kinds else ""
-        return f"python benchmarks/stress.py --seed {self.seed}{extra} --case {self.index}"
-
 
 def _choose_kind(rng: np.random.Generator, kinds: list[str]) -> str:
     w = np.array([WEIGHTS[k] for k in kinds])
@@ -761,20 +761,8 @@ def _start(case: Case, rng: np.random.Generator) -> list[float]:
 
 def _target(case: Case, rng: np.random.Generator, start: list[float]) -> list[float]:
     """A fingertip target and what is known about it (case.facts['target_kind'], ...)."""
-    kinds = [
-        "fk",
-        "fk",
-        "fk",
-        "fk_limit",
-        "far",
-        "inside",
-        "surface",
-        "axis",
-        "blind",
-        "stretch",
-        "near_start",
-        "huge",
-    ]
+    kinds = ["fk"] * 4 + ["fk_limit"] + ["near_start"] * 2
+    kinds += ["far", "inside", "surface", "axis", "blind", "stretch", "huge"]
     t = str(rng.choice(kinds))
     case.facts["target_kind"] = t
     B = np.array([0.0, 0.0, 140.0])
@@ -852,16 +840,95 @@ def _tolerance(case: Case, rng: np.random.Generator, default: float = 0.05) -> f
     return _f(rng.choice([1e-3, 0.01, 0.2, 1.0, 5.0]))
 
 
+def _scene_text(name: str, spec: dict[str, Any]) -> str:
+    if name.endswith(".toml"):
+        return toml_text(spec)
+    import yaml
+
+    return yaml.safe_dump(_plain(spec), sort_keys=False)
+
+
+def _add_blocker(case: Case, rng: np.random.Generator, work: Path, q_from: Any, q_to: Any) -> None:
+    """Sometimes put a small or thin solid where link CD or DE passes half-way between two
+    states (a thin disk, a small ball, a plate, a ring around the link, a small cone), often
+    with a zero margin: the direct motion is then blocked or grazes it."""
+    if case.expect_error or case.scene is None or q_to is None or rng.random() < 0.7:
+        return
+    p = case.params
+    mid = (np.asarray(q_from, float) + np.asarray(q_to, float)) / 2
+    P = ir.SeedArm.points(mid)
+    j = int(rng.choice([2, 3]))
+    u = (P[j + 1] - P[j]) / np.linalg.norm(P[j + 1] - P[j])
+    at = P[j] + (P[j + 1] - P[j]) * rng.uniform(0.2, 0.8)
+    kind = str(rng.choice(["disk", "ball", "plate", "ring", "cone"]))
+    axis = u if rng.random() < 0.5 else _unit(rng)
+    if kind == "disk":
+        h = rng.uniform(0.3, 3.0)
+        o = {
+            "type": "cylinder",
+            "base_center": _vec(at - axis * h / 2),
+            "axis": _vec(axis),
+            "radius": _f(rng.uniform(3.0, 30.0)),
+            "height": _f(h),
+        }
+    elif kind == "ball":
+        o = {"type": "sphere", "center": _vec(at), "radius": _f(rng.uniform(1.0, 20.0))}
+    elif kind == "plate":
+        o = {
+            "type": "box",
+            "center": _vec(at),
+            "size": _vec([rng.uniform(10, 80), rng.uniform(10, 80), rng.uniform(0.2, 2.0)]),
+            "rotation_deg": _rotvec_deg(rng),
+        }
+    elif kind == "ring":
+        h = rng.uniform(2.0, 20.0)
+        r = rng.uniform(4.0, 20.0) + p["link_radius"]
+        o = {
+            "type": "hollow_frustum",
+            "base_center": _vec(at - u * h / 2),
+            "axis": _vec(u),
+            "height": _f(h),
+            "r_bottom": _f(r),
+            "r_top": _f(r),
+            "wall": _f(rng.uniform(0.5, 2.0)),
+            "open_top": True,
+            "closed_bottom": False,
+        }
+    else:
+        h = rng.uniform(2.0, 30.0)
+        o = {
+            "type": "cone_frustum",
+            "base_center": _vec(at - axis * h / 2),
+            "axis": _vec(axis),
+            "r_bottom": _f(rng.uniform(1.0, 15.0)),
+            "r_top": 0.0,
+            "height": _f(h),
+        }
+    spec = json.loads(json.dumps(p["scene_spec"]))
+    spec["obstacles"].append({"name": "blocker", **o})
+    if rng.random() < 0.4:
+        spec["clearance"] = {**spec.get("clearance", {}), "margin_mm": 0.0}
+    scene, arm = truth_scene(spec, work, p["link_radius"], p["wall"] or None)
+    if not (is_clear(scene, arm, q_from) and is_clear(scene, arm, q_to)):
+        return
+    p["scene_spec"] = spec
+    case.files[p["scene_file"]] = _scene_text(p["scene_file"], spec)
+    case.scene, case.arm = scene, arm
+    case.facts["blocker"] = kind
+
+
 def gen_reach(case: Case, rng: np.random.Generator, work: Path) -> None:
     _scene_for_motion(case, rng, work)
     p = case.params
     p["start_deg"] = _start(case, rng)
     p["target"] = _target(case, rng, p["start_deg"])
     p["tolerance"] = _tolerance(case, rng)
+    _add_blocker(case, rng, work, p["start_deg"], case.facts.get("target_from"))
     case.summary = (
         f"reach {p['target']} from {p['start_deg']} ({case.facts['target_kind']} target), "
         f"{len(p['scene_spec']['obstacles'])} obstacles, tol {p['tolerance']}, "
         f"radius {p['link_radius']}"
+        + (f", a {case.facts['blocker']} in the way" if "blocker" in case.facts else "")
     )
 
 
@@ -876,14 +943,18 @@ def gen_plan(case: Case, rng: np.random.Generator, work: Path) -> None:
     if rng.random() < 0.5:
         p["tolerance"] = 0.05  # not used with --to
         p["to"] = _goal(case, rng, p["start_deg"])
+        _add_blocker(case, rng, work, p["start_deg"], p["to"])
         case.summary = f"plan --to {p['to']} from {p['start_deg']}"
     else:
         p["tolerance"] = _tolerance(case, rng)
         p["to_xyz"] = _target(case, rng, p["start_deg"])
+        _add_blocker(case, rng, work, p["start_deg"], case.facts.get("target_from"))
         case.summary = (
             f"plan --to-xyz {p['to_xyz']} ({case.facts['target_kind']}) from {p['start_deg']}"
         )
     case.summary += f", {len(p['scene_spec']['obstacles'])} obstacles, objective {p['objective']}"
+    if "blocker" in case.facts:
+        case.summary += f", a {case.facts['blocker']} in the way"
 
 
 def _goal(case: Case, rng: np.random.Generator, start: list[float]) -> list[float]:
@@ -1107,7 +1178,12 @@ def gen_trace(case: Case, rng: np.random.Generator, work: Path) -> None:
             "plane_normal": normal,
         }
         if not case.expect_error:
-            truth = ir.frustum_section_curve(hf["base_center"], hf["axis"], h, rb, rt, pp, normal)
+            try:
+                truth = ir.frustum_section_curve(
+                    hf["base_center"], hf["axis"], h, rb, rt, pp, normal
+                )
+            except ValueError:
+                case.expect_error = "a plane that leaves the part's face"
     spec["tasks"] = {"trace": {"curve": curve}}
     case.files.update(files)
     p["scene_spec"] = spec
@@ -1797,8 +1873,11 @@ RUNNERS: dict[str, Callable[[Case, Path], Any]] = {
 def check_result(case: Case, result: Any, work: Path) -> dict[str, Any]:
     if case.expect_error:
         raise RejectedError(f"accepted invalid input ({case.expect_error})")
-    if case.kind == "scene":
+    if case.kind == "scene" and not isinstance(result, dict):
         return check_scene(case, result, work)
+    if case.kind == "scene":  # through the command line: a reach in the scene
+        case.scene, case.arm = truth_scene(case.params["scene_spec"], work)
+        case.params.update(start_deg=list(HOME_DEG), target=CLI_SCENE_TARGET, tolerance=0.05)
     doc = _strict_json(result)
     if case.kind == "fk":
         return check_fk_doc(case, doc)
@@ -1901,7 +1980,7 @@ def cli_args(case: Case, work: Path, out_dir: Path | None) -> list[str]:
         else:
             args += ["--pose", " ".join(_num(v) for row in p["pose"] for v in row)]
     elif k in ("reach", "scene"):
-        target = p.get("target", [300.0, 0.0, 200.0])
+        target = p.get("target", CLI_SCENE_TARGET)
         args = ["reach", *map(_num, target), "--scene", str(work / p["scene_file"])]
         if k == "reach":
             args += [
@@ -1980,6 +2059,7 @@ def run_cli(case: Case, work: Path) -> dict[str, Any]:
     out_dir = work / "out" / "sub" if use_out else None
     args = cli_args(case, work, out_dir)
     env = {**os.environ, "COLUMNS": "120", "NO_COLOR": "1", "NUMBA_NUM_THREADS": "1"}
+    started = time.monotonic()
     try:
         proc = subprocess.run(
             [*_armpath_cmd(), *args],
@@ -1993,6 +2073,12 @@ def run_cli(case: Case, work: Path) -> dict[str, Any]:
         raise HangError(
             f"the command line ran past {HANG_FACTOR} x its budget: armpath {shlex.join(args)}"
         ) from None
+    took = time.monotonic() - started
+    if took > HANG_FACTOR * case.budget + CLI_STARTUP_S:
+        raise HangError(
+            f"the command line took {took:.1f} s, past {HANG_FACTOR:g} x its budget of "
+            f"{case.budget:g} s (+{CLI_STARTUP_S:g} s to start): armpath {shlex.join(args)}"
+        )
     err_lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
     if "Traceback" in proc.stderr:
         raise RejectedError(
@@ -2305,6 +2391,16 @@ def _git_commit() -> str:
         return "?"
 
 
+def reproducer(args: argparse.Namespace, index: int) -> str:
+    """The command that reruns case ``index`` of this run on its own."""
+    line = f"python benchmarks/stress.py --seed {args.seed}"
+    if args.kinds != ",".join(WEIGHTS):
+        line += f" --kinds {args.kinds}"
+    if args.time_limit_per_case != DEFAULT_BUDGET_S:
+        line += f" --time-limit-per-case {args.time_limit_per_case:g}"
+    return line + f" --case {index}"
+
+
 def report(
     records: list[dict[str, Any]], args: argparse.Namespace, command: str, wall_s: float
 ) -> str:
@@ -2353,13 +2449,8 @@ def report(
     ]
     fails = [r for r in records if r["outcome"] == "failure"]
     lines += ["", f"## Failures: {len(fails)}", ""]
-    kinds_arg = args.kinds if args.kinds != ",".join(WEIGHTS) else ""
     for r in sorted(fails, key=lambda r: r["index"]):
-        repro = (
-            f"python benchmarks/stress.py --seed {args.seed}"
-            + (f" --kinds {kinds_arg}" if kinds_arg else "")
-            + f" --case {r['index']}"
-        )
+        repro = reproducer(args, r["index"])
         msg = " ".join(str(r.get("message", "")).split())
         lines += [
             f"- case {r['index']} ({r['kind']}{', cli' if r.get('cli') else ''}; "
@@ -2419,7 +2510,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--time-limit-per-case",
         type=float,
-        default=20.0,
+        default=DEFAULT_BUDGET_S,
         help="budget of a case, s (traces 1.5 x, spot welds 2 x; default 20)",
     )
     ap.add_argument(
@@ -2454,7 +2545,8 @@ def main(argv: list[str] | None = None) -> int:
         if rec["outcome"] == "failure":
             print(
                 f"\nFAIL case {rec['index']} ({rec['kind']}): {rec.get('category')}: "
-                f"{' '.join(str(rec.get('message', '')).split())[:300]}",
+                f"{' '.join(str(rec.get('message', '')).split())[:300]}\n  "
+                + reproducer(args, rec["index"]),
                 flush=True,
             )
         else:
