@@ -661,7 +661,9 @@ def clear_config(
 
 
 def is_clear(scene: ir.Scene, arm: ir.SeedArm, q: Any) -> bool:
-    return bool(ir.config_slack(arm, scene, np.asarray(q, float)[None], 0.25)[0] > 1e-3)
+    """Whether the state provably keeps the clearance rule: links sampled every 0.25 mm, so the
+    sampled slack exceeds the true one by at most 0.125 mm."""
+    return bool(ir.config_slack(arm, scene, np.asarray(q, float)[None], 0.25)[0] > 0.126)
 
 
 def tip_of(q: Any) -> np.ndarray:
@@ -1606,7 +1608,31 @@ def _replay_motion(case: Case, doc: dict[str, Any]) -> dict[str, Any]:
         raise RejectedError("; ".join(rep.problems[:4]))
     facts = {k: v for k, v in rep.facts.items() if isinstance(v, int | float | str)}
     facts["commands"] = doc.get("n_commands")
+    _check_lower_bound(doc, truth)
     return facts
+
+
+#: Largest claimed lower bound checked exhaustively (the check of ``b - 1`` commands takes about
+#: 1 s for b = 2 and 10 s for b = 3).
+LOWER_BOUND_CHECKED = 3
+
+
+def _check_lower_bound(doc: dict[str, Any], truth: ir.Truth) -> None:
+    """A reach's lower bound ``b`` (over every configuration, obstacles ignored) is wrong if
+    some lattice state within ``b - 1`` commands of the start puts the fingertip within the
+    tolerance: ``independent.lattice_has_state_within`` enumerates them (small ``b`` only)."""
+    import independent
+
+    b = doc.get("lower_bound_commands")
+    if doc.get("task") != "reach" or not isinstance(b, int) or not 2 <= b <= LOWER_BOUND_CHECKED:
+        return
+    if independent.lattice_has_state_within(
+        truth.target, truth.start_deg, b - 1, float(truth.tolerance or doc["tolerance_mm"])
+    ):
+        raise RejectedError(
+            f"claims a lower bound of {b} commands, but a lattice state within {b - 1} "
+            "commands puts the fingertip within the tolerance (exhaustive independent search)"
+        )
 
 
 def _library_scene(case: Case, work: Path) -> Any:

@@ -390,6 +390,17 @@ def test_rejects_a_trace_off_its_curve_and_welds_off_their_points(seed_run):
     _rejects(doc, what="missed by")
 
 
+def test_an_overclaimed_lower_bound_is_rejected(stress):
+    """The exhaustive lattice search behind the suite's check of a reach's lower bound."""
+    home = np.array(HOME)
+    doc = {"task": "reach", "lower_bound_commands": 2, "tolerance_mm": 0.05}
+    one = ir.SeedArm.points(home + np.array([0.0, 1.5, 0.0, 0.0, 0.0, 0.0]))[4]  # 1 command
+    with pytest.raises(stress.RejectedError, match="lower bound of 2"):
+        stress._check_lower_bound(doc, ir.Truth(start_deg=HOME, target=one, tolerance=0.05))
+    two = ir.SeedArm.points(home + np.array([3.0, 0.0, 0.0, 0.0, 0.0, 0.0]))[4]  # needs 2
+    stress._check_lower_bound(doc, ir.Truth(start_deg=HOME, target=two, tolerance=0.05))
+
+
 # --- the stress suite itself ------------------------------------------------------------------
 
 #: The fixed sample: cheap kinematics cases (seed 17), planning cases of seed 1 that take a few
