@@ -455,6 +455,11 @@ def scene_from_dict(
     return scene
 
 
+def _one_line(exc: Exception) -> str:
+    """A parser's message on one line (YAML's point at the error over several)."""
+    return " ".join(str(exc).split())
+
+
 def load_scene(path: str | Path | None = None) -> Scene:
     """Load a scene file (``.toml``, or ``.yaml``/``.yml``); ``None`` loads the seed scene."""
     base_dir = None
@@ -482,14 +487,14 @@ def load_scene(path: str | Path | None = None) -> Scene:
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
-            raise SceneError(f"scene {source}: not valid TOML: {exc}") from None
+            raise SceneError(f"scene {source}: not valid TOML: {_one_line(exc)}") from None
     else:
         import yaml
 
         try:
             data = yaml.safe_load(text)
         except yaml.YAMLError as exc:
-            raise SceneError(f"scene {source}: not valid YAML: {exc}") from None
+            raise SceneError(f"scene {source}: not valid YAML: {_one_line(exc)}") from None
     return scene_from_dict(data, source, base_dir)  # type: ignore[arg-type]
 
 
