@@ -1,10 +1,14 @@
-"""The quantized command lattice (SPEC section 2).
+"""Command sequences on an arm's command lattice (SPEC section 2).
 
-A command moves every joint at once by an integer number of *ticks* of 0.1 degree, each in
-``[-20, 20]`` (at most 2 degrees). Joint states reached by commands are integer tick vectors, so a
-sequence replays exactly. During one command all joints move linearly in time and finish together
-(synchronous linear interpolation); :meth:`CommandSequence.sample_motion` samples that continuous
-motion for checks.
+A command moves every joint at once by a whole number of its ticks (the seed controller: ticks
+of 0.1 degree, each in ``[-20, 20]``, at most 2 degrees; any arm: its own
+:class:`~armpath.model.lattice.Lattice`). Joint states reached by commands are integer tick
+vectors, so a sequence replays exactly. During one command all joints move linearly in time and
+finish together (synchronous linear interpolation); :meth:`CommandSequence.sample_motion`
+samples that continuous motion for checks.
+
+The module-level helpers (``ticks_to_rad``, ``deg_to_ticks``, ``commands_needed``, ...) are the
+seed controller's lattice, kept for the seed arm's code and its tests.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import CommandError, InvalidInputError
+from armpath.model.lattice import DEFAULT_MAX_TICKS, DEFAULT_REVOLUTE_TICK_RAD, Lattice
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -22,9 +27,9 @@ FloatArray = NDArray[np.float64]
 #: Size of one tick in degrees.
 TICK_DEG = 0.1
 #: Size of one tick in radians.
-TICK_RAD = np.pi / 1800.0
+TICK_RAD = DEFAULT_REVOLUTE_TICK_RAD
 #: Largest increment of one joint in one command, in ticks (2.0 degrees).
-MAX_INCREMENT_TICKS = 20
+MAX_INCREMENT_TICKS = DEFAULT_MAX_TICKS
 
 
 def ticks_to_rad(ticks: ArrayLike) -> FloatArray:
@@ -80,35 +85,46 @@ def split_move(delta_ticks: ArrayLike, n_commands: int) -> IntArray:
 
 @dataclass(frozen=True, eq=False)
 class CommandSequence:
-    """A start state and a sequence of commands, all as integer ticks.
+    """A start state and a sequence of commands, all as integer ticks of ``lattice``.
 
     Parameters
     ----------
     start_ticks:
-        Joint state before the first command, ``(n_joints,)`` integer ticks of 0.1 degree.
+        Joint state before the first command, ``(n_joints,)`` integer ticks.
     commands:
-        ``(n_commands, n_joints)`` integer increments, each in ``[-20, 20]``.
+        ``(n_commands, n_joints)`` integer increments, each within its joint's
+        ``lattice.max_ticks``.
+    lattice:
+        The arm's command lattice (``arm.lattice``); ``None``: the seed controller's (0.1 deg,
+        20 ticks per joint).
     """
 
     start_ticks: IntArray
     commands: IntArray
+    lattice: Lattice | None = None
 
     def __post_init__(self) -> None:
         start = _as_int_array(self.start_ticks, "start state")
         if start.ndim != 1:
             raise CommandError(f"start state must be a vector of ticks, got shape {start.shape}")
         cmds = _as_int_array(self.commands, "commands").reshape(-1, start.size)
-        bad = np.abs(cmds) > MAX_INCREMENT_TICKS
-        if np.any(bad):
-            k, i = np.argwhere(bad)[0]
+        lattice = self.lattice if self.lattice is not None else Lattice.uniform(start.size)
+        if lattice.n_joints != start.size:
             raise CommandError(
-                f"command {k + 1}, joint {i + 1}: increment {cmds[k, i]} ticks is outside "
-                f"[-{MAX_INCREMENT_TICKS}, {MAX_INCREMENT_TICKS}] (at most 2.0 deg)"
+                f"the lattice has {lattice.n_joints} joints, the start state {start.size}"
             )
+        lattice.check_commands(cmds)
         start.setflags(write=False)
         cmds.setflags(write=False)
         object.__setattr__(self, "start_ticks", start)
         object.__setattr__(self, "commands", cmds)
+        object.__setattr__(self, "lattice", lattice)
+
+    @property
+    def grid(self) -> Lattice:
+        """The command lattice (never ``None`` after construction)."""
+        assert self.lattice is not None
+        return self.lattice
 
     @property
     def n_commands(self) -> int:
@@ -138,18 +154,43 @@ class CommandSequence:
         s = np.arange(substeps, dtype=np.float64) / substeps
         inner = states[:-1, None, :] + s[None, :, None] * self.commands[:, None, :]
         path = np.vstack([inner.reshape(-1, self.n_joints), states[-1:]])
-        return ticks_to_rad(path)
+        return self.grid.to_joint(path)
+
+    def states_joint(self) -> FloatArray:
+        """Joint values (rad or length unit) of :meth:`states`."""
+        return self.grid.to_joint(self.states())
+
+    def then(self, other: CommandSequence) -> CommandSequence:
+        """This sequence followed by ``other`` (which must start where this one ends)."""
+        if not np.array_equal(other.start_ticks, self.final_ticks):
+            raise CommandError("the second sequence does not start where the first ends")
+        return CommandSequence(
+            self.start_ticks, np.vstack([self.commands, other.commands]), self.lattice
+        )
 
     @classmethod
     def straight(
-        cls, start_ticks: ArrayLike, goal_ticks: ArrayLike, n_commands: int | None = None
+        cls,
+        start_ticks: ArrayLike,
+        goal_ticks: ArrayLike,
+        n_commands: int | None = None,
+        lattice: Lattice | None = None,
     ) -> CommandSequence:
         """The move from ``start`` to ``goal`` split evenly into the fewest (or given) commands."""
         start = _as_int_array(start_ticks, "start state")
         goal = _as_int_array(goal_ticks, "goal state")
+        grid = lattice if lattice is not None else Lattice.uniform(start.size)
         delta = goal - start
-        n = commands_needed(delta) if n_commands is None else n_commands
-        return cls(start, split_move(delta, n))
+        n = grid.commands_needed(delta) if n_commands is None else n_commands
+        return cls(start, grid.split(delta, n), grid)
+
+    @classmethod
+    def from_states(cls, states: ArrayLike, lattice: Lattice | None = None) -> CommandSequence:
+        """The sequence through lattice ``states`` ``(K + 1, n)`` (row 0 the start)."""
+        arr = _as_int_array(states, "states")
+        if arr.ndim != 2 or arr.shape[0] == 0:
+            raise CommandError(f"states must be (K + 1, n) ticks, got shape {arr.shape}")
+        return cls(arr[0], np.diff(arr, axis=0), lattice)
 
 
 def _as_int_array(value: ArrayLike, what: str) -> IntArray:

@@ -18,10 +18,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath import __version__
-from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
+from armpath.commands import CommandSequence
 from armpath.errors import OutputError
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serialize import arm_to_dict
 from armpath.planning.motion import MotionPlan, PlanMetrics
 from armpath.planning.motion_check import MotionClearance
 from armpath.planning.reach import ReachResult
@@ -31,11 +32,19 @@ from armpath.scenes import Scene
 
 FloatArray = NDArray[np.float64]
 
-UNITS = {
-    "length": "mm",
-    "angle": "deg",
-    "commands": "ticks of 0.1 deg per joint, each in [-20, 20]",
-}
+
+def units_dict(arm: SerialArm) -> dict[str, Any]:
+    """The units of a result: lengths mm, angles deg, each joint's display unit, and what a
+    command's numbers are (the arm's lattice)."""
+    grid = arm.lattice
+    if grid.is_default:
+        commands = "ticks of 0.1 deg per joint, each in [-20, 20]"
+    else:
+        commands = (
+            "integer ticks per joint, each within its joint's max_ticks_per_command; the tick "
+            "of each joint is model.lattice.tick (deg or mm)"
+        )
+    return {"length": "mm", "angle": "deg", "joints": list(grid.units), "commands": commands}
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -43,7 +52,9 @@ def _finite_or_none(x: float) -> float | None:
 
 
 def model_dict(arm: SerialArm) -> dict[str, Any]:
-    """The model's name, numbers and joint limits (deg; null = unlimited)."""
+    """The model's name, numbers, joint limits (deg; null = unlimited), command lattice, and
+    its whole definition (:func:`~armpath.model.serialize.arm_to_dict`: a result replays with
+    the same arm anywhere)."""
     limits: list[list[float] | None] = []
     for j in arm.joints:
         if not j.is_limited:
@@ -57,6 +68,8 @@ def model_dict(arm: SerialArm) -> dict[str, Any]:
         "parameters": dict(arm.parameters),
         "joint_limits_deg": limits,
         "length_unit": arm.length_unit,
+        "lattice": arm.lattice.describe(),
+        "definition": arm_to_dict(arm),
     }
 
 
@@ -90,7 +103,7 @@ def _document_head(task: str, arm: SerialArm, scene: Scene) -> dict[str, Any]:
         "model": model_dict(arm),
         "scene": scene.describe(),
         "wall_thickness": wall.value if wall else None,
-        "units": UNITS,
+        "units": units_dict(arm),
     }
 
 
@@ -100,9 +113,9 @@ def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict
     lb = result.lower_bound
     return {
         **_document_head("reach", arm, scene),
-        "initial_deg": ticks_to_deg(seq.start_ticks).tolist(),
+        "initial_deg": seq.grid.display(seq.start_ticks).tolist(),
         "commands": seq.commands.tolist(),
-        "final_deg": ticks_to_deg(seq.final_ticks).tolist(),
+        "final_deg": seq.grid.display(seq.final_ticks).tolist(),
         "target": result.target_mm.tolist(),
         "tip": result.tip_mm.tolist(),
         "error_mm": result.error_mm,
@@ -139,9 +152,9 @@ def metrics_dict(m: PlanMetrics) -> dict[str, Any]:
 
 def _sequence_fields(seq: CommandSequence) -> dict[str, Any]:
     return {
-        "initial_deg": ticks_to_deg(seq.start_ticks).tolist(),
+        "initial_deg": seq.grid.display(seq.start_ticks).tolist(),
         "commands": seq.commands.tolist(),
-        "final_deg": ticks_to_deg(seq.final_ticks).tolist(),
+        "final_deg": seq.grid.display(seq.final_ticks).tolist(),
         "n_commands": seq.n_commands,
     }
 
@@ -151,7 +164,7 @@ def tour_result_dict(
 ) -> dict[str, Any]:
     """The JSON document of a spot-weld tour (the reach schema plus targets and visits)."""
     seq = result.sequence
-    tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+    tip = tool_position(arm, seq.states_joint()[-1])
     return {
         **_document_head("spotweld", arm, scene),
         "z_from": "inner surface of the workpiece, under the wall_thickness convention",
@@ -213,7 +226,7 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
     reach = result.reachability
     L = curve.length
     s_dense = np.linspace(0.0, L, 2001)
-    tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+    tip = tool_position(arm, seq.states_joint()[-1])
 
     def point(s: float) -> list[float]:
         return [float(x) for x in curve.at_arc_length(s)]
@@ -302,7 +315,7 @@ def plan_result_dict(
 ) -> dict[str, Any]:
     """The JSON document of a general motion plan (``armpath plan``)."""
     seq = plan.sequence
-    tip = tool_position(arm, ticks_to_rad(seq.final_ticks))
+    tip = tool_position(arm, seq.states_joint()[-1])
     doc: dict[str, Any] = {
         **_document_head("plan", arm, scene),
         **_sequence_fields(seq),
@@ -342,12 +355,12 @@ def command_table(arm: SerialArm, seq: CommandSequence) -> tuple[list[str], list
     header = (
         ["step"]
         + [f"d{i + 1}_ticks" for i in range(n)]
-        + [f"theta{i + 1}_deg" for i in range(n)]
+        + [f"theta{i + 1}_{u}" for i, u in enumerate(seq.grid.units)]
         + ["tip_x_mm", "tip_y_mm", "tip_z_mm"]
     )
     states = seq.states()[1:]
-    tips = tool_position(arm, ticks_to_rad(states)) if len(states) else np.zeros((0, 3))
-    degs = ticks_to_deg(states)
+    tips = tool_position(arm, seq.grid.to_joint(states)) if len(states) else np.zeros((0, 3))
+    degs = seq.grid.display(states)
     rows = [
         [
             k + 1,

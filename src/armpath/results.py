@@ -11,11 +11,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from armpath.commands import CommandSequence, deg_to_ticks, ticks_to_rad
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
 from armpath.model.seed_arm import seed_arm, seed_geometry_from
 from armpath.model.serial_arm import SerialArm
+from armpath.model.serialize import arm_from_dict
 from armpath.scenes import Scene, load_scene, scene_from_dict
 
 FloatArray = NDArray[np.float64]
@@ -40,7 +41,7 @@ class PlannedResult:
     @property
     def states_rad(self) -> FloatArray:
         """Joint angles after each command, ``(n_commands + 1, 6)`` rad."""
-        return ticks_to_rad(self.sequence.states())
+        return self.sequence.states_joint()
 
     @property
     def tip_path_mm(self) -> FloatArray:
@@ -53,6 +54,9 @@ class PlannedResult:
 
 
 def _arm(model: dict[str, Any]) -> SerialArm:
+    definition = model.get("definition")
+    if isinstance(definition, dict):
+        return arm_from_dict(definition, "the result's model")
     if model.get("name") != "seed":
         raise InvalidInputError(
             f"result documents of model {model.get('name')!r} cannot be replayed; only the seed "
@@ -106,13 +110,13 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Pl
         raise InvalidInputError(
             f"result file {p}: expected an armpath result with task one of {RESULT_TASKS}"
         )
+    arm = _arm(doc.get("model", {}))
     try:
-        start = deg_to_ticks(doc["initial_deg"], what=f"result file {p}: initial_deg")
-        commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, 6)
+        start = arm.lattice.from_display(doc["initial_deg"], f"result file {p}: initial_deg")
+        commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, arm.n_joints)
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None
-    arm = _arm(doc.get("model", {}))
-    sequence = CommandSequence(start, commands)
+    sequence = CommandSequence(start, commands, arm.lattice)
     if "targets" in doc:
         targets = np.asarray(doc["targets"], dtype=float).reshape(-1, 3)
     elif doc.get("target") is not None:

@@ -539,7 +539,7 @@ def rcm(
     minimum-snap joints); prints how far the tip leaves the point, on the smooth trajectory and
     under the quantized commands. At most 5,000,000 controller periods (--duration / --period)
     and 1,000,000 commands."""
-    from armpath.trajectory import ORDERS, joint_ticks, lattice_motion, quantize
+    from armpath.trajectory import ORDERS, lattice_motion, quantize
     from armpath.trajectory.minsnap import segment_durations_ok
     from armpath.trajectory.quantize import MOTION_CHUNK
     from armpath.trajectory.rcm import fixed_point_rotation
@@ -577,7 +577,7 @@ def rcm(
                 )
                 traj = plan.trajectory
                 say("converting to commands ...")
-                quantized = quantize(traj, period, joint_ticks(arm), option=options)
+                quantized = quantize(traj, period, arm.lattice, option=options)
                 t = quantized.sample_times
                 say("measuring the tip deviation ...")
                 smooth_tip = np.vstack(

@@ -16,15 +16,32 @@ Angles are radians, lengths are in the model's ``length_unit``; nothing is conve
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError, JointLimitError
+from armpath.model.lattice import (
+    DEFAULT_MAX_TICKS,
+    DEFAULT_PRISMATIC_TICK_MM,
+    DEFAULT_REVOLUTE_TICK_RAD,
+    Lattice,
+)
 
 FloatArray = NDArray[np.float64]
+
+
+def _check_rigid(T: FloatArray, what: str) -> None:
+    if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0]) or not np.allclose(
+        T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-9
+    ):
+        raise InvalidInputError(f"{what} is not a rigid transform")
+    if np.linalg.det(T[:3, :3]) < 0:
+        raise InvalidInputError(f"{what} is a reflection, not a rotation")
 
 
 def _frozen(a: ArrayLike, shape: tuple[int, ...], what: str) -> FloatArray:
@@ -61,6 +78,11 @@ class Joint:
     limits:
         ``(lower, upper)`` in rad or length unit; ``-inf``/``inf`` for an unlimited joint
         (a revolute joint may then turn past 360 degrees).
+    tick:
+        The controller's tick of this joint (rad, or length unit if prismatic); ``None``: the
+        default, 0.1 deg or 0.1 mm (:mod:`armpath.model.lattice`).
+    max_ticks:
+        The most ticks one command may move this joint (default 20).
     """
 
     name: str
@@ -68,6 +90,8 @@ class Joint:
     axis: FloatArray
     kind: JointKind = JointKind.REVOLUTE
     limits: tuple[float, float] = (-np.inf, np.inf)
+    tick: float | None = None
+    max_ticks: int = DEFAULT_MAX_TICKS
 
     def __post_init__(self) -> None:
         T = _frozen(self.T_parent_joint, (4, 4), f"joint {self.name!r} T_parent_joint")
@@ -88,14 +112,25 @@ class Joint:
         object.__setattr__(self, "axis", _frozen(axis / norm, (3,), "axis"))
         object.__setattr__(self, "kind", JointKind(self.kind))
         object.__setattr__(self, "limits", (lo, hi))
+        if self.tick is not None and not (np.isfinite(self.tick) and self.tick > 0):
+            raise InvalidInputError(f"joint {self.name!r}: tick must be > 0, got {self.tick}")
+        if int(self.max_ticks) != self.max_ticks or self.max_ticks < 1:
+            raise InvalidInputError(
+                f"joint {self.name!r}: max ticks per command must be a whole number >= 1, got "
+                f"{self.max_ticks}"
+            )
+        object.__setattr__(self, "max_ticks", int(self.max_ticks))
 
     def same_as(self, other: Joint, atol: float = 1e-12) -> bool:
-        """Whether ``other`` has the same placement, axis, kind and limits (names ignored)."""
+        """Whether ``other`` has the same placement, axis, kind, limits and lattice (names
+        ignored)."""
         return (
             self.kind is other.kind
             and np.allclose(self.T_parent_joint, other.T_parent_joint, atol=atol)
             and np.allclose(self.axis, other.axis, atol=atol)
             and np.allclose(self.limits, other.limits, atol=atol)
+            and self.tick == other.tick
+            and self.max_ticks == other.max_ticks
         )
 
     @property
@@ -198,6 +233,130 @@ class SerialArm:
     @property
     def n_joints(self) -> int:
         return len(self.joints)
+
+    @cached_property
+    def lattice(self) -> Lattice:
+        """The controller's command lattice: each joint's tick (its own, or 0.1 deg / 0.1 mm)
+        and the most ticks a command may move it."""
+        mm = 1e-3 if self.length_unit == "m" else 1.0
+        ticks = [
+            j.tick
+            if j.tick is not None
+            else (
+                DEFAULT_PRISMATIC_TICK_MM * mm
+                if j.kind is JointKind.PRISMATIC
+                else DEFAULT_REVOLUTE_TICK_RAD
+            )
+            for j in self.joints
+        ]
+        return Lattice(
+            np.array(ticks),
+            np.array([j.max_ticks for j in self.joints]),
+            np.array([j.kind is JointKind.PRISMATIC for j in self.joints]),
+            self.length_unit,
+        )
+
+    def placed(self, T_world_cell_base: ArrayLike) -> SerialArm:
+        """The arm standing at ``T_world_cell_base`` in a cell (its own base transform applied
+        after it): where a scene puts the arm."""
+        T = _frozen(T_world_cell_base, (4, 4), "base placement")
+        _check_rigid(T, "base placement")
+        return replace(self, T_world_base=T @ self.T_world_base)
+
+    def with_tool(self, T_flange_tool: ArrayLike, radius: float | None = None) -> SerialArm:
+        """The arm carrying another tool: ``T_flange_tool`` from the last joint's frame to the
+        tool centre point. Landmarks in the tool frame are replaced by one at the new tool point
+        (``TCP``), and links that ended at them end there (the tool's own capsule; ``radius``
+        replaces their radius when given)."""
+        T = _frozen(T_flange_tool, (4, 4), "tool")
+        _check_rigid(T, "tool")
+        n = self.n_joints
+        tool_frame = n + 1
+        old = [i for i, lm in enumerate(self.landmarks) if lm.frame == tool_frame]
+        keep = [i for i, lm in enumerate(self.landmarks) if lm.frame != tool_frame]
+        landmarks = [self.landmarks[i] for i in keep] + [Landmark("TCP", tool_frame)]
+        index = {old_i: new_i for new_i, old_i in enumerate(keep)}
+        tcp = len(landmarks) - 1
+        links = []
+        for link in self.links:
+            start = tcp if link.start in old else index[link.start]
+            end = tcp if link.end in old else index[link.end]
+            if start == end:
+                continue
+            touches_tool = link.start in old or link.end in old
+            r = radius if (touches_tool and radius is not None) else link.radius
+            links.append(replace(link, start=start, end=end, radius=r))
+        if not any(tcp in (lk.start, lk.end) for lk in links) and keep:
+            # the tool point was not on any link: join it to the last point of the arm
+            last = max(range(len(keep)), key=lambda i: landmarks[i].frame)
+            links.append(Link("tool", last, tcp, 0.0 if radius is None else radius))
+        return replace(self, T_flange_tool=T, landmarks=tuple(landmarks), links=tuple(links))
+
+    def link_bodies(self) -> list[int]:
+        """For each link, the body it belongs to: 0 for the fixed base (unchecked links), else
+        the last joint of the chain before it. A landmark at the origin of frame k comes after
+        joint k - 1 (joint k turns about that point), one offset in frame k after joint k."""
+
+        def after(lm: Landmark) -> int:
+            moved = lm.frame if any(lm.offset) else lm.frame - 1
+            return min(max(moved, 0), self.n_joints)
+
+        return [
+            max(after(self.landmarks[lk.start]), after(self.landmarks[lk.end])) if lk.checked else 0
+            for lk in self.links
+        ]
+
+    def with_link_radii(self, radii: float | Sequence[float] | Mapping[str, float]) -> SerialArm:
+        """The same arm with other capsule radii (length unit): one number for every link,
+        ``n + 1`` numbers (the fixed base, then the body each joint moves: see
+        :meth:`link_bodies`), or a mapping from link names to radii."""
+        n = self.n_joints
+        if isinstance(radii, Mapping):
+            unknown = set(radii) - {lk.name for lk in self.links}
+            if unknown:
+                names = ", ".join(lk.name for lk in self.links)
+                raise InvalidInputError(
+                    f"link radii name unknown links {sorted(unknown)} (links: {names})"
+                )
+            values = [float(radii.get(lk.name, lk.radius)) for lk in self.links]
+        else:
+            arr = np.asarray(radii, dtype=np.float64)
+            if arr.ndim == 0:
+                values = [float(arr)] * len(self.links)
+            elif arr.shape == (n + 1,):
+                values = [float(arr[b]) for b in self.link_bodies()]
+            else:
+                raise InvalidInputError(
+                    f"link radii must be one number or {n + 1} (the fixed base, then the body "
+                    f"each of the {n} joints moves), got {arr.size}"
+                )
+        if not all(np.isfinite(v) and v >= 0 for v in values):
+            raise InvalidInputError(f"link radii must be finite and >= 0, got {values}")
+        links = tuple(replace(lk, radius=v) for lk, v in zip(self.links, values, strict=True))
+        return replace(self, links=links)
+
+    def with_home(self, home: ArrayLike) -> SerialArm:
+        """The same arm with another home pose (rad / length unit), checked against the
+        limits."""
+        return replace(self, home=_frozen(home, (self.n_joints,), "home"))
+
+    def with_lattice(
+        self, tick: ArrayLike | None = None, max_ticks: ArrayLike | None = None
+    ) -> SerialArm:
+        """The same arm with other ticks (per joint, rad or length unit; ``None`` keeps them)
+        and command limits (ticks per command)."""
+        n = self.n_joints
+        t = self.lattice.tick if tick is None else np.broadcast_to(np.asarray(tick, float), (n,))
+        m = (
+            self.lattice.max_ticks
+            if max_ticks is None
+            else np.broadcast_to(np.asarray(max_ticks), (n,))
+        )
+        Lattice(t, m, self.lattice.prismatic, self.length_unit)  # validates
+        joints = tuple(
+            replace(j, tick=float(t[i]), max_ticks=int(m[i])) for i, j in enumerate(self.joints)
+        )
+        return replace(self, joints=joints)
 
     @property
     def lower(self) -> FloatArray:

@@ -33,14 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_time
-from armpath.commands import (
-    MAX_INCREMENT_TICKS,
-    TICK_RAD,
-    CommandSequence,
-    commands_needed,
-    ticks_to_deg,
-    ticks_to_rad,
-)
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import (
@@ -49,6 +42,7 @@ from armpath.kinematics import (
     position_jacobian,
     tool_position,
 )
+from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.rrt import EdgeChecker, RrtOptions, rrt_connect, shortcut
@@ -176,8 +170,9 @@ class MotionPlan:
 def plan_metrics(
     arm: SerialArm, sequence: CommandSequence, weights: ArrayLike | None = None
 ) -> PlanMetrics:
-    """Commands, fingertip path length (mm, continuous motion) and weighted joint travel."""
-    travel = np.abs(sequence.commands).sum(axis=0) * ticks_to_deg(1)
+    """Commands, fingertip path length (mm, continuous motion) and weighted joint travel (deg
+    for revolute joints, mm for prismatic ones)."""
+    travel = np.round(np.abs(sequence.commands).sum(axis=0) * sequence.grid.tick_display, 10)
     w = np.ones(arm.n_joints) if weights is None else np.asarray(weights, dtype=np.float64)
     if w.shape != (arm.n_joints,):
         raise InvalidInputError(f"energy weights need {arm.n_joints} values, got {w.size}")
@@ -266,20 +261,24 @@ def edge_checker(
     return check
 
 
-def path_to_sequence(path_ticks: FloatArray, start: IntArray, goal: IntArray) -> CommandSequence:
+def path_to_sequence(
+    path_ticks: FloatArray, start: IntArray, goal: IntArray, lattice: Lattice
+) -> CommandSequence:
     """Follow a joint-space path (ticks, float) at full speed on the lattice.
 
-    States are taken at equal largest-change steps of at most 20 ticks along the path and rounded
-    to ticks; the first is ``start`` and the last ``goal`` exactly.
+    States are taken at equal steps along the path in the command metric (the largest
+    ``|change_i| / max_ticks_i``) of at most one command, and rounded to ticks; the first is
+    ``start`` and the last ``goal`` exactly. A float step strictly below ``max_ticks_i`` ticks
+    rounds to at most ``max_ticks_i``, so at most one count past the fewest is tried.
     """
     p = np.asarray(path_ticks, dtype=np.float64).copy()
     p[0], p[-1] = start, goal
-    seg = np.max(np.abs(np.diff(p, axis=0)), axis=1)
+    m = lattice.max_ticks.astype(np.float64)
+    seg = np.max(np.abs(np.diff(p, axis=0)) / m, axis=1)
     arc = np.r_[0.0, np.cumsum(seg)]
     total = float(arc[-1])
-    fewest = max(int(np.ceil(total / MAX_INCREMENT_TICKS - 1e-9)), 1)
-    # steps of at most 19 ticks round to at most 20, so n never passes ceil(total / 19)
-    for n in range(fewest, max(int(np.ceil(total / (MAX_INCREMENT_TICKS - 1))), fewest) + 1):
+    fewest = max(int(np.ceil(total - 1e-9)), 1)
+    for n in range(fewest, max(int(np.floor(total)) + 1, fewest) + 1):
         s = np.linspace(0.0, total, n + 1)
         states = np.empty((n + 1, p.shape[1]))
         for j in range(p.shape[1]):
@@ -287,9 +286,9 @@ def path_to_sequence(path_ticks: FloatArray, start: IntArray, goal: IntArray) ->
         ticks = np.round(states).astype(np.int64)
         ticks[0], ticks[-1] = start, goal
         cmds = np.diff(ticks, axis=0)
-        if np.all(np.abs(cmds) <= MAX_INCREMENT_TICKS):
-            return CommandSequence(start, cmds)
-    raise AssertionError("unreachable: steps of 19 ticks always round to legal commands")
+        if np.all(lattice.legal(cmds)):
+            return CommandSequence(start, cmds, lattice)
+    raise AssertionError("unreachable: steps below max_ticks always round to legal commands")
 
 
 def merge_commands(
@@ -300,32 +299,32 @@ def merge_commands(
     Greedy from the start: from each state, the farthest later state that a straight motion
     reaches in fewer commands and that passes ``edges_clear`` is jumped to.
     """
+    grid = sequence.grid
     states = sequence.states()
     out = [states[0]]
     i = 0
     checks = 0
     while i < len(states) - 1:
         later = np.arange(len(states) - 1, i + 1, -1)
-        need = np.array([commands_needed(states[j] - states[i]) for j in later])
+        need = grid.commands_needed_many(states[later] - states[i])
         saving = later[need < later - i]
         jump = i + 1
         if saving.size and checks < max_checks:
             take = saving[: max(1, min(saving.size, 24))]
             checks += take.size
             ok = edges_clear(
-                ticks_to_rad(np.broadcast_to(states[i], (take.size, states.shape[1]))),
-                ticks_to_rad(states[take]),
+                grid.to_joint(np.broadcast_to(states[i], (take.size, states.shape[1]))),
+                grid.to_joint(states[take]),
             )
             if np.any(ok):
                 jump = int(take[int(np.argmax(ok))])
         if jump > i + 1:
-            straight = CommandSequence.straight(states[i], states[jump]).states()
+            straight = CommandSequence.straight(states[i], states[jump], lattice=grid).states()
             out.extend(straight[1:])
         else:
             out.append(states[i + 1])
         i = jump
-    arr = np.array(out)
-    return CommandSequence(arr[0], np.diff(arr, axis=0))
+    return CommandSequence.from_states(np.array(out), grid)
 
 
 def plan_motion(
@@ -350,14 +349,16 @@ def plan_motion(
             f"start must have {n} joint values and goals shape (G, {n}); "
             f"got {start.shape} and {goals.shape}"
         )
-    start = CommandSequence(start, np.zeros((0, n), np.int64)).start_ticks
-    goals = np.array([CommandSequence(g, np.zeros((0, n), np.int64)).start_ticks for g in goals])
-    arm.check_limits(ticks_to_rad(start), what="start state")
+    grid = arm.lattice
+    none = np.zeros((0, n), np.int64)
+    start = CommandSequence(start, none, grid).start_ticks
+    goals = np.array([CommandSequence(g, none, grid).start_ticks for g in goals])
+    arm.check_limits(grid.to_joint(start), what="start state")
     for g in goals:
-        arm.check_limits(ticks_to_rad(g), what="goal state")
-    check_state_clear(arm, world, ticks_to_rad(start))
+        arm.check_limits(grid.to_joint(g), what="goal state")
+    check_state_clear(arm, world, grid.to_joint(start))
     if goals.shape[0] == 1:
-        check_state_clear(arm, world, ticks_to_rad(goals[0]), what="goal state")
+        check_state_clear(arm, world, grid.to_joint(goals[0]), what="goal state")
     weights = None if opts.energy_weights is None else np.asarray(opts.energy_weights)
     say = on_progress or (lambda _msg: None)
 
@@ -369,11 +370,11 @@ def plan_motion(
             return (m.energy_deg, m.commands)
         return (m.commands, m.tip_path_mm)
 
-    direct_counts = np.array([commands_needed(g - start) for g in goals])
+    direct_counts = grid.commands_needed_many(goals - start)
     # 1. direct motions, fewest commands first
     best: MotionPlan | None = None
     for gi in np.argsort(direct_counts, kind="stable")[:8]:
-        seq = CommandSequence.straight(start, goals[gi])
+        seq = CommandSequence.straight(start, goals[gi], lattice=grid)
         mc = motion_clearance(arm, world, seq)
         if mc.certified_ok:
             plan = MotionPlan(
@@ -396,8 +397,8 @@ def plan_motion(
     active = active_joints(arm)
     lo = np.array([j.limits[0] for j in arm.joints])
     hi = np.array([j.limits[1] for j in arm.joints])
-    s_rad = ticks_to_rad(start)
-    g_rad = ticks_to_rad(goals)
+    s_rad = grid.to_joint(start)
+    g_rad = grid.to_joint(goals)
     span_lo = np.minimum(s_rad, g_rad.min(axis=0)) - np.pi
     span_hi = np.maximum(s_rad, g_rad.max(axis=0)) + np.pi
     lower = np.where(np.isfinite(lo), np.maximum(lo, span_lo), span_lo)
@@ -410,22 +411,27 @@ def plan_motion(
     lead = _retreat(arm, world, start, active, opts.approach_mm)
     if lead.n_commands:
         start = lead.final_ticks
-        s_rad = ticks_to_rad(start)
+        s_rad = grid.to_joint(start)
     # inactive joints move straight from start to goal; plan with them at the start value
     goals_search = np.where(active, pre, s_rad)
+    # the search works in joint coordinates scaled by each joint's largest step in one command
+    # (relative to the largest), where the largest-change distance counts commands; for the
+    # seed controller (2 deg on every joint) the scale is exactly 1
+    scale = grid.max_step / grid.max_step.max()
 
     def cost_fn(w: FloatArray | None) -> Callable[[FloatArray], float]:
+        """The objective of a path in scaled coordinates."""
         if opts.objective is Objective.PATH:
 
             def tip_len(path: FloatArray) -> float:
-                dense = _densify_path(path, np.radians(1.0))
+                dense = _densify_path(path * scale, np.radians(1.0))
                 tip = tool_position(arm, dense)
                 return float(np.linalg.norm(np.diff(tip, axis=0), axis=-1).sum())
 
             return tip_len
         if opts.objective is Objective.ENERGY:
             ww = np.ones(n) if w is None else w
-            return lambda path: float((np.abs(np.diff(path, axis=0)) @ ww).sum())
+            return lambda path: float((np.abs(np.diff(path * scale, axis=0)) @ ww).sum())
         return lambda path: float(np.abs(np.diff(path, axis=0)).max(axis=1).sum())
 
     failures: list[str] = []
@@ -437,24 +443,39 @@ def plan_motion(
         check_time("planning a collision-free motion")
         rng = np.random.default_rng([opts.seed, attempt])
         check = edge_checker(arm, world, buffer, spacing)
+
+        def check_scaled(
+            a: FloatArray, b: FloatArray, check: EdgeChecker = check
+        ) -> NDArray[np.bool_]:
+            return check(a * scale, b * scale)
+
         say(f"searching (search {attempt + 1}, buffer {buffer:g} mm)")
-        res = rrt_connect(s_rad, goals_search, lower, upper, check, rng, opts.rrt)
+        res = rrt_connect(
+            s_rad / scale,
+            goals_search / scale,
+            lower / scale,
+            upper / scale,
+            check_scaled,
+            rng,
+            opts.rrt,
+        )
         if not res.success:
             failures.append(f"search {attempt + 1}: {res.reason}")
             continue
         gi = res.goal_index
         path = res.path.copy()
-        path[-1] = np.where(active, pre[gi], g_rad[gi])  # inactive joints: goal value at the end
-        path = shortcut(path, check, rng, cost_fn(weights), opts.shortcut_rounds)
+        # inactive joints: goal value at the end
+        path[-1] = np.where(active, pre[gi], g_rad[gi]) / scale
+        path = shortcut(path, check_scaled, rng, cost_fn(weights), opts.shortcut_rounds)
+        path_ticks = grid.to_ticks_float(path * scale)
         if np.array_equal(pre[gi], g_rad[gi]):
-            seq = merge_commands(path_to_sequence(path / TICK_RAD, start, goals[gi]), check)
+            seq = merge_commands(path_to_sequence(path_ticks, start, goals[gi], grid), check)
         else:  # the final approach from the pre-goal is its own straight motion
-            pre_ticks = np.round(path[-1] / TICK_RAD).astype(np.int64)
-            main = merge_commands(path_to_sequence(path / TICK_RAD, start, pre_ticks), check)
-            last = CommandSequence.straight(pre_ticks, goals[gi])
-            seq = CommandSequence(start, np.vstack([main.commands, last.commands]))
+            pre_ticks = np.round(path_ticks[-1]).astype(np.int64)
+            main = merge_commands(path_to_sequence(path_ticks, start, pre_ticks, grid), check)
+            seq = main.then(CommandSequence.straight(pre_ticks, goals[gi], lattice=grid))
         if lead.n_commands:
-            seq = CommandSequence(lead.start_ticks, np.vstack([lead.commands, seq.commands]))
+            seq = lead.then(seq)
         mc = motion_clearance(arm, world, seq)
         if mc.certified_ok:
             found.append(
@@ -493,15 +514,16 @@ def _retreat(
     """Commands that back the tool tip straight away from the surface it touches at ``start``
     (:func:`retracted_pre_goal` on the lattice), or none when it touches nothing or the retreat
     is not certified clear. A search from a touching start could not prove its first edge."""
-    none = CommandSequence(start, np.zeros((0, start.size), dtype=np.int64))
-    q = ticks_to_rad(start)
+    grid = arm.lattice
+    none = CommandSequence(start, np.zeros((0, start.size), dtype=np.int64), grid)
+    q = grid.to_joint(start)
     back = retracted_pre_goal(arm, world, q, active, distance_mm)
     if np.array_equal(back, q):
         return none
-    back_ticks = np.round(back / TICK_RAD).astype(np.int64)
-    if not arm.within_limits(ticks_to_rad(back_ticks)):
+    back_ticks = grid.nearest_ticks(back)
+    if not arm.within_limits(grid.to_joint(back_ticks)):
         return none
-    seq = CommandSequence.straight(start, back_ticks)
+    seq = CommandSequence.straight(start, back_ticks, lattice=grid)
     return seq if motion_clearance(arm, world, seq).certified_ok else none
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.commands import CommandSequence, ticks_to_rad
+from armpath.commands import CommandSequence
 from armpath.errors import CollisionError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import displacement_bounds
@@ -87,14 +87,15 @@ def motion_clearance(
     n = sequence.n_commands
     # every point moves at most rate[k] per unit of u during command k; a link-link distance
     # can change by twice that
-    rate = np.abs(sequence.commands).astype(np.float64) @ R * ticks_to_rad(1.0)
+    grid = sequence.grid
+    rate = (np.abs(sequence.commands).astype(np.float64) * grid.tick) @ R
     speed = np.where(is_self, 2.0, 1.0)
 
     def config(u: FloatArray) -> FloatArray:
         if n == 0:
-            return ticks_to_rad(np.broadcast_to(states[0], (u.size, states.shape[1])))
+            return grid.to_joint(np.broadcast_to(states[0], (u.size, states.shape[1])))
         k = np.clip(np.floor(u).astype(np.int64), 0, n - 1)
-        return ticks_to_rad(states[k] + (u - k)[:, None] * sequence.commands[k])
+        return grid.to_joint(states[k] + (u - k)[:, None] * sequence.commands[k])
 
     def evaluate(u: FloatArray) -> tuple[FloatArray, FloatArray]:
         values, lowers = world.pair_clearances(arm, config(u))

@@ -21,10 +21,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_time
-from armpath.commands import MAX_INCREMENT_TICKS, CommandSequence, ticks_to_rad
+from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
+from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import (
     MotionOptions,
@@ -91,27 +92,30 @@ MAX_TOUR_TARGETS = 500
 LISTED_ORDERS = 24
 
 
-def _direct_commands(a: IntArray, b: IntArray) -> FloatArray:
+def _direct_commands(a: IntArray, b: IntArray, lattice: Lattice) -> FloatArray:
     """Fewest direct-motion commands from each state of ``a`` ``(A, n)`` to each of ``b``
     ``(B, n)``: ``(A, B)``."""
-    span = np.max(np.abs(b[None, :, :] - a[:, None, :]), axis=-1)
-    return np.asarray(np.ceil(span / MAX_INCREMENT_TICKS), dtype=np.float64)
+    return lattice.commands_needed_many(b[None, :, :] - a[:, None, :]).astype(np.float64)
 
 
 def _order_bounds(
-    start: IntArray, goals: list[IntArray], orders: list[tuple[int, ...]], back: bool
+    start: IntArray,
+    goals: list[IntArray],
+    orders: list[tuple[int, ...]],
+    back: bool,
+    lattice: Lattice,
 ) -> dict[tuple[int, ...], int]:
     """For every order, the fewest direct-motion commands through one goal state per target
     (a shortest path through the layers of goal states; obstacles ignored, so a lower bound for
     these goal states). The step costs between targets are computed once."""
-    first = [_direct_commands(start[None, :], g)[0] for g in goals]
+    first = [_direct_commands(start[None, :], g, lattice)[0] for g in goals]
     between = {
-        (i, j): _direct_commands(goals[i], goals[j])
+        (i, j): _direct_commands(goals[i], goals[j], lattice)
         for i in range(len(goals))
         for j in range(len(goals))
         if i != j
     }
-    home = [_direct_commands(g, start[None, :])[:, 0] for g in goals]
+    home = [_direct_commands(g, start[None, :], lattice)[:, 0] for g in goals]
     out: dict[tuple[int, ...], int] = {}
     for k, order in enumerate(orders):
         if k % 1024 == 0:
@@ -183,7 +187,7 @@ def plan_tour(
         else list(itertools.permutations(range(len(pts))))
     )
     say(f"ranking {len(orders):,} visiting order(s) by their lower bounds")
-    bounds = _order_bounds(start, goals, orders, return_to_start)
+    bounds = _order_bounds(start, goals, orders, return_to_start, arm.lattice)
     ranking = sorted(orders, key=lambda o: (bounds[o], o))
     ranked = ranking[:orders_to_plan]
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
@@ -229,12 +233,12 @@ def plan_tour(
         raise PlanningError("no order could be planned: " + "; ".join(failures))
     _, legs, chosen = best
     commands = np.vstack([leg.sequence.commands for leg in legs])
-    sequence = CommandSequence(start, commands)
+    sequence = CommandSequence(start, commands, arm.lattice)
     visits = []
     k = 0
     for t, leg in zip(chosen, legs, strict=False):
         k += leg.sequence.n_commands
-        tip = tool_position(arm, ticks_to_rad(leg.sequence.final_ticks))
+        tip = tool_position(arm, arm.lattice.to_joint(leg.sequence.final_ticks))
         visits.append(
             Visit(t, tuple(float(v) for v in pts[t]), k, float(np.linalg.norm(tip - pts[t])))  # type: ignore[arg-type]
         )

@@ -6,9 +6,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import numpy as np
-
-from armpath.commands import deg_to_ticks
 from armpath.errors import SceneError
 from armpath.model.seed_arm import seed_arm
 from armpath.model.serial_arm import SerialArm
@@ -33,7 +30,7 @@ def reach_task(
     if scene.reach_target_mm is None:
         raise SceneError(f"scene {scene.source} defines no [tasks.reach] target_mm")
     model = arm or seed_arm()
-    start = deg_to_ticks(np.degrees(model.home), what="initial pose")
+    start = model.lattice.to_ticks(model.home, "initial pose")
     return plan_reach(model, scene.world, start, scene.reach_target_mm, options)
 
 
@@ -48,7 +45,7 @@ def spotweld_task(
 ) -> TourResult:
     """Task 3: from the arm's initial pose through every spot weld of the scene, best order."""
     model = arm or seed_arm()
-    start = deg_to_ticks(np.degrees(model.home), what="initial pose")
+    start = model.lattice.to_ticks(model.home, "initial pose")
     return plan_tour(
         model,
         scene.world,
@@ -70,5 +67,5 @@ def trace_task(
 ) -> TraceResult:
     """Task 2: from the arm's initial pose, trace every reachable part of the scene's curve."""
     model = arm or seed_arm()
-    start = deg_to_ticks(np.degrees(model.home), what="initial pose")
+    start = model.lattice.to_ticks(model.home, "initial pose")
     return plan_trace(model, scene.world, start, scene.trace_curve(), options, on_progress)

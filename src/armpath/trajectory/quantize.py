@@ -27,10 +27,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import MAX_COMMANDS, MAX_PERIODS, check_size, check_time
-from armpath.commands import MAX_INCREMENT_TICKS, TICK_RAD, CommandSequence
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.lattice import DEFAULT_MAX_TICKS, DEFAULT_REVOLUTE_TICK_RAD, Lattice
+from armpath.model.serial_arm import SerialArm
 from armpath.trajectory.minsnap import PiecewisePolynomial
 
 FloatArray = NDArray[np.float64]
@@ -70,21 +71,20 @@ class QuantizedTrajectory:
 
 
 def joint_ticks(arm: SerialArm) -> FloatArray:
-    """Each joint's tick: 0.1 deg in rad if revolute, 0.1 model unit if prismatic."""
-    return np.array(
-        [0.1 if j.kind is JointKind.PRISMATIC else TICK_RAD for j in arm.joints], dtype=np.float64
-    )
+    """Each joint's tick (rad if revolute, model unit if prismatic): the arm's lattice."""
+    return np.asarray(arm.lattice.tick, dtype=np.float64)
 
 
 def quantize(
     traj: PiecewisePolynomial,
     period_s: float,
-    tick: ArrayLike | None = None,
+    tick: ArrayLike | Lattice | None = None,
     *,
     option: str = "the period",
 ) -> QuantizedTrajectory:
-    """Commands that follow ``traj`` at the controller period. ``tick`` (per joint, in the
-    trajectory's unit) defaults to 0.1 deg in rad for every joint; see ``joint_ticks``.
+    """Commands that follow ``traj`` at the controller period on a command lattice: an arm's
+    ``arm.lattice``, or ``tick`` per joint (in the trajectory's unit) with the seed
+    controller's 20 ticks a command; ``None``: 0.1 deg and 20 ticks on every joint.
 
     Refused (naming ``option``, what to change) before the samples are built: more than
     ``MAX_PERIODS`` periods, more than ``MAX_COMMANDS`` commands at one a period or for the
@@ -94,11 +94,19 @@ def quantize(
     if not (np.isfinite(period_s) and period_s > 0):
         raise InvalidInputError(f"the controller period must be > 0 s, got {period_s}")
     J = traj.coefficients.shape[2]
-    ticks = np.broadcast_to(
-        np.asarray(TICK_RAD if tick is None else tick, dtype=np.float64), (J,)
-    ).copy()
-    if not np.all(np.isfinite(ticks) & (ticks > 0)):
-        raise InvalidInputError("ticks must be finite and > 0")
+    if isinstance(tick, Lattice):
+        grid = tick
+        if grid.n_joints != J:
+            raise InvalidInputError(f"the lattice has {grid.n_joints} joints, the trajectory {J}")
+    else:
+        ticks_in = np.broadcast_to(
+            np.asarray(DEFAULT_REVOLUTE_TICK_RAD if tick is None else tick, dtype=np.float64), (J,)
+        ).copy()
+        if not np.all(np.isfinite(ticks_in) & (ticks_in > 0)):
+            raise InvalidInputError("ticks must be finite and > 0")
+        grid = Lattice(ticks_in, np.full(J, DEFAULT_MAX_TICKS), np.zeros(J, bool))
+    ticks = np.array(grid.tick)
+    most = grid.max_ticks
     duration = traj.duration
     ratio = duration / period_s  # a float: may be beyond any integer (or inf)
     periods = max(1.0, float(np.ceil(ratio - 1e-9))) if math.isfinite(ratio) else math.inf
@@ -107,12 +115,14 @@ def quantize(
     check_size(periods, MAX_COMMANDS, f"commands (at least one a period: {how})", option)
     ends = traj.evaluate(traj.times[[0, -1]]) / ticks
     _check_state_range(ends)
-    net = float(np.max(np.abs(ends[1] - ends[0])))
+    spans = np.abs(ends[1] - ends[0])
+    j_far = int(np.argmax(spans / most))
+    net = float(spans[j_far])
     check_size(
-        float(np.ceil((net - 1.0) / MAX_INCREMENT_TICKS)),
+        float(np.ceil((net - 1.0) / most[j_far])),
         MAX_COMMANDS,
         f"commands (a joint moves {_amount(net)} ticks from start to end, at most "
-        f"{MAX_INCREMENT_TICKS} a command)",
+        f"{most[j_far]} a command)",
         option,
     )
     n = int(periods)
@@ -129,7 +139,7 @@ def quantize(
     states = np.rint(x).astype(np.int64)
     delta = np.diff(states, axis=0)
     # fewest legal commands for each period (at least one: one command per period)
-    m = np.maximum(-(-np.abs(delta).max(axis=1, initial=0) // MAX_INCREMENT_TICKS), 1)
+    m = np.maximum(grid.commands_needed_many(delta) if delta.size else np.zeros(0, np.int64), 1)
     total = int(m.sum())
     check_size(
         total,
@@ -139,7 +149,7 @@ def quantize(
     )
     check_time("converting the trajectory to commands")
     return QuantizedTrajectory(
-        CommandSequence(states[0], _split_periods(delta, m)),
+        CommandSequence(states[0], _split_periods(delta, m), grid),
         float(period_s),
         ticks,
         t,

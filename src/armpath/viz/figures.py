@@ -15,7 +15,7 @@ from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike
 
-from armpath.commands import CommandSequence, ticks_to_deg, ticks_to_rad
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.geometry.primitives import (
     Box,
@@ -156,7 +156,7 @@ def plot_motion_3d(
     ax = fig.add_subplot(projection="3d")
     assert isinstance(ax, Axes3D)
     motion = landmark_positions(arm, seq.sample_motion(8))
-    states = landmark_positions(arm, ticks_to_rad(seq.states()))
+    states = landmark_positions(arm, seq.states_joint())
     pts = [motion.reshape(-1, 3), np.zeros((1, 3))]
     pts += draw_obstacles(ax, scene)
     step = max(1, len(states) // 12)
@@ -262,7 +262,7 @@ def plot_joint_angles(
         ``(k, label)`` pairs, e.g. the command after which each weld is reached: a dotted
         vertical line at x = k through every panel, labelled above the top panel.
     """
-    degs = ticks_to_deg(seq.states())
+    degs = seq.grid.display(seq.states())
     n_joints = degs.shape[1]
     steps = np.arange(degs.shape[0])
     checked = _check_marks(marks, seq.n_commands)
@@ -283,7 +283,7 @@ def plot_joint_angles(
             ax.set_ylim(mid - 0.5 * _MIN_SPAN_DEG, mid + 0.5 * _MIN_SPAN_DEG)
         for k, _ in checked:
             ax.axvline(k, color="0.3", linestyle=":", linewidth=1.2, gid="mark")
-        ax.set_ylabel(f"θ{i + 1} [deg]")
+        ax.set_ylabel(f"θ{i + 1} [{seq.grid.units[i]}]")
         ax.yaxis.set_major_locator(MaxNLocator(4))
         ax.grid(alpha=0.3)
     _label_marks(axes[0], checked, x_span)
@@ -423,7 +423,7 @@ def plot_trace_3d(
     assert isinstance(ax, Axes3D)
     eye = _eye_direction(*_TRACE_VIEW)
     tip = tool_position(arm, sequence.sample_motion(_SUBSTEPS))  # state k is row k * _SUBSTEPS
-    states = landmark_positions(arm, ticks_to_rad(sequence.states()))
+    states = landmark_positions(arm, sequence.states_joint())
     first = spans[0][0] if spans else 0
     pts = [tip, curve, states[[first, -1]].reshape(-1, 3)]
     pts += draw_obstacles(ax, scene)

@@ -1,0 +1,251 @@
+"""The controller's command lattice of an arm: per joint, one tick and the most ticks a command.
+
+A command moves every joint at once by a whole number of its *ticks*, at most ``max_ticks`` of
+them; joint states reached by commands are integer tick vectors, so a sequence replays exactly.
+The seed controller's lattice (SPEC section 2) is 0.1 deg per tick and 20 ticks (2 deg) per
+command on every joint; a stepper-driven arm may have, say, 0.0225 deg per step and its own
+limit per joint, and a prismatic joint's tick is a length (0.1 mm by default).
+
+Ticks are in the joint's own unit inside armpath: rad for a revolute joint, the model's length
+unit for a prismatic one. Degrees and mm appear only at the edges (:meth:`Lattice.tick_display`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armpath.errors import CommandError, InvalidInputError
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: The seed controller's tick of a revolute joint: 0.1 deg, in rad.
+DEFAULT_REVOLUTE_TICK_RAD = np.pi / 1800.0
+#: The default tick of a prismatic joint: 0.1 mm.
+DEFAULT_PRISMATIC_TICK_MM = 0.1
+#: The seed controller's largest command: 20 ticks (2 deg) per joint.
+DEFAULT_MAX_TICKS = 20
+#: Finest and coarsest tick accepted: 1e-6 deg (or mm) to 10 deg (or 100 mm).
+MIN_TICK_DEG, MAX_TICK_DEG = 1e-6, 10.0
+MIN_TICK_MM, MAX_TICK_MM = 1e-6, 100.0
+#: Most ticks one command may move a joint.
+MAX_TICKS_PER_COMMAND = 1_000_000
+#: How close (in ticks) a joint value must be to a tick to count as on the lattice.
+ON_LATTICE_TICKS = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class Lattice:
+    """Per joint: the tick (rad, or model length unit if prismatic) and the most ticks one
+    command may move it (``max_ticks``); ``prismatic`` marks the joints whose tick is a
+    length, ``length_unit`` is the model's (``"mm"`` or ``"m"``)."""
+
+    tick: FloatArray
+    max_ticks: IntArray
+    prismatic: BoolArray
+    length_unit: str = "mm"
+
+    def __post_init__(self) -> None:
+        tick = np.array(self.tick, dtype=np.float64).reshape(-1)
+        n = tick.size
+        max_ticks = np.broadcast_to(np.asarray(self.max_ticks), (n,))
+        prismatic = np.broadcast_to(np.asarray(self.prismatic, dtype=bool), (n,)).copy()
+        if n == 0:
+            raise InvalidInputError("a command lattice needs at least one joint")
+        if not np.all(np.isfinite(tick) & (tick > 0)):
+            raise InvalidInputError(f"ticks must be finite and > 0, got {tick.tolist()}")
+        if max_ticks.dtype.kind not in "iu" and not np.all(max_ticks == np.round(max_ticks)):
+            raise InvalidInputError(f"max ticks must be whole numbers, got {max_ticks.tolist()}")
+        max_ticks = max_ticks.astype(np.int64)
+        if not np.all((max_ticks >= 1) & (max_ticks <= MAX_TICKS_PER_COMMAND)):
+            raise InvalidInputError(
+                f"max ticks per command must be in [1, {MAX_TICKS_PER_COMMAND:,}], got "
+                f"{max_ticks.tolist()}"
+            )
+        scale = 1000.0 if self.length_unit == "m" else 1.0
+        shown = np.where(prismatic, tick * scale, np.degrees(tick))
+        lo = np.where(prismatic, MIN_TICK_MM, MIN_TICK_DEG)
+        hi = np.where(prismatic, MAX_TICK_MM, MAX_TICK_DEG)
+        if np.any((shown < lo * (1 - 1e-9)) | (shown > hi * (1 + 1e-9))):
+            raise InvalidInputError(
+                f"ticks must be {MIN_TICK_DEG:g} to {MAX_TICK_DEG:g} deg (revolute) or "
+                f"{MIN_TICK_MM:g} to {MAX_TICK_MM:g} mm (prismatic), got {shown.tolist()}"
+            )
+        for arr in (tick, max_ticks, prismatic):
+            arr.setflags(write=False)
+        object.__setattr__(self, "tick", tick)
+        object.__setattr__(self, "max_ticks", max_ticks)
+        object.__setattr__(self, "prismatic", prismatic)
+
+    # -- construction ------------------------------------------------------------------------
+    @classmethod
+    def uniform(
+        cls,
+        n_joints: int,
+        tick: float = DEFAULT_REVOLUTE_TICK_RAD,
+        max_ticks: int = DEFAULT_MAX_TICKS,
+    ) -> Lattice:
+        """``n_joints`` revolute joints with the same tick (rad) and limit: by default the seed
+        controller's 0.1 deg and 20 ticks."""
+        return cls(np.full(n_joints, tick), np.full(n_joints, max_ticks), np.zeros(n_joints, bool))
+
+    # -- sizes -------------------------------------------------------------------------------
+    @property
+    def n_joints(self) -> int:
+        return int(self.tick.size)
+
+    @property
+    def max_step(self) -> FloatArray:
+        """The largest change of each joint in one command (rad or length unit)."""
+        return np.asarray(self.tick * self.max_ticks, dtype=np.float64)
+
+    @property
+    def is_default(self) -> bool:
+        """Whether this is the seed controller's lattice (0.1 deg, 20 ticks on every joint)."""
+        return bool(
+            not self.prismatic.any()
+            and np.allclose(self.tick, DEFAULT_REVOLUTE_TICK_RAD, rtol=1e-12, atol=0.0)
+            and np.all(self.max_ticks == DEFAULT_MAX_TICKS)
+        )
+
+    def same_as(self, other: Lattice) -> bool:
+        return bool(
+            self.n_joints == other.n_joints
+            and np.array_equal(self.tick, other.tick)
+            and np.array_equal(self.max_ticks, other.max_ticks)
+            and np.array_equal(self.prismatic, other.prismatic)
+        )
+
+    # -- conversions -------------------------------------------------------------------------
+    def to_joint(self, ticks: ArrayLike) -> FloatArray:
+        """Joint values (rad or length unit) of tick states ``(..., n)`` (floats allowed: a
+        point of a command's motion)."""
+        return np.asarray(np.asarray(ticks, dtype=np.float64) * self.tick, dtype=np.float64)
+
+    def to_ticks_float(self, q: ArrayLike) -> FloatArray:
+        """Joint values in ticks, not rounded."""
+        return np.asarray(np.asarray(q, dtype=np.float64) / self.tick, dtype=np.float64)
+
+    def nearest_ticks(self, q: ArrayLike) -> IntArray:
+        """The nearest lattice state of joint values ``(..., n)``."""
+        return np.round(self.to_ticks_float(q)).astype(np.int64)
+
+    def to_ticks(self, q: ArrayLike, what: str = "joint state") -> IntArray:
+        """Tick state of joint values that lie on the lattice (within 1e-6 tick); raises
+        :class:`InvalidInputError` naming the first joint that does not."""
+        t = self.to_ticks_float(q)
+        if not np.all(np.isfinite(t)):
+            raise InvalidInputError(f"{what} must be finite numbers")
+        r = np.round(t)
+        off = np.abs(t - r) > ON_LATTICE_TICKS
+        if np.any(off):
+            i = int(np.argwhere(off)[0][-1])
+            raise InvalidInputError(
+                f"{what}: joint {i + 1} is not a whole number of its ticks of "
+                f"{self.tick_text(i)} (the command lattice)"
+            )
+        return r.astype(np.int64)
+
+    def display(self, ticks: ArrayLike) -> FloatArray:
+        """Tick states in display units: deg for revolute joints, mm for prismatic ones (exact
+        decimal rounding at 1e-10)."""
+        q = self.to_joint(ticks)
+        scale = 1000.0 if self.length_unit == "m" else 1.0
+        return np.asarray(
+            np.round(np.where(self.prismatic, q * scale, np.degrees(q)), 10), dtype=np.float64
+        )
+
+    def from_display(self, values: ArrayLike, what: str = "joint state") -> IntArray:
+        """Tick state of joint values in display units (deg / mm) that lie on the lattice."""
+        v = np.asarray(values, dtype=np.float64)
+        if v.shape[-1:] != (self.n_joints,):
+            raise InvalidInputError(
+                f"{what} needs {self.n_joints} joint values, got {v.shape[-1] if v.ndim else 1}"
+            )
+        scale = 1000.0 if self.length_unit == "m" else 1.0
+        return self.to_ticks(np.where(self.prismatic, v / scale, np.radians(v)), what)
+
+    @property
+    def tick_display(self) -> FloatArray:
+        """Each joint's tick in display units (deg or mm)."""
+        scale = 1000.0 if self.length_unit == "m" else 1.0
+        return np.asarray(np.where(self.prismatic, self.tick * scale, np.degrees(self.tick)))
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Display unit of each joint: ``"deg"`` or ``"mm"``."""
+        return tuple("mm" if p else "deg" for p in self.prismatic)
+
+    def tick_text(self, i: int) -> str:
+        return f"{self.tick_display[i]:.10g} {self.units[i]}"
+
+    def describe(self) -> dict[str, object]:
+        """The lattice for result files: tick per joint in deg or mm, the most ticks a
+        command, the units."""
+        return {
+            "tick": [float(f"{v:.12g}") for v in self.tick_display],
+            "tick_unit": list(self.units),
+            "max_ticks_per_command": [int(v) for v in self.max_ticks],
+        }
+
+    # -- commands ----------------------------------------------------------------------------
+    def commands_needed(self, delta_ticks: ArrayLike) -> int:
+        """Fewest commands that move the joints by ``delta_ticks`` (the last axis): the
+        largest ``ceil(|d_i| / max_ticks_i)``."""
+        d = np.abs(np.asarray(delta_ticks, dtype=np.int64))
+        if d.size == 0:
+            return 0
+        return int(np.max(-(-d // self.max_ticks)))
+
+    def commands_needed_many(self, delta_ticks: ArrayLike) -> IntArray:
+        """:meth:`commands_needed` of each row ``(..., n)``."""
+        d = np.abs(np.asarray(delta_ticks, dtype=np.int64))
+        return np.asarray(np.max(-(-d // self.max_ticks), axis=-1), dtype=np.int64)
+
+    def commands_for_change(self, change: ArrayLike) -> FloatArray:
+        """Continuous lower bound of the commands a joint change ``(..., n)`` (rad or length
+        unit) needs: the largest ``|change_i| / max_step_i`` (not rounded)."""
+        c = np.abs(np.asarray(change, dtype=np.float64))
+        return np.asarray(np.max(c / self.max_step, axis=-1), dtype=np.float64)
+
+    def legal(self, commands: ArrayLike) -> BoolArray:
+        """Per command ``(..., n)``, whether every increment is within its joint's limit."""
+        c = np.abs(np.asarray(commands, dtype=np.int64))
+        return np.asarray(np.all(c <= self.max_ticks, axis=-1))
+
+    def check_commands(self, commands: IntArray) -> None:
+        """Raise :class:`CommandError` naming the first increment beyond its joint's limit."""
+        bad = np.abs(commands) > self.max_ticks
+        if np.any(bad):
+            k, i = np.argwhere(bad)[0]
+            raise CommandError(
+                f"command {k + 1}, joint {i + 1}: increment {commands[k, i]} ticks is outside "
+                f"[-{self.max_ticks[i]}, {self.max_ticks[i]}] (at most "
+                f"{self.max_ticks[i] * self.tick_display[i]:.10g} {self.units[i]})"
+            )
+
+    def split(self, delta_ticks: ArrayLike, n_commands: int) -> IntArray:
+        """Split a joint move into ``n_commands`` legal commands that track the straight line:
+        command ``k`` moves joint ``i`` by ``floor((k+1) d_i / n) - floor(k d_i / n)``, so every
+        joint advances as evenly as the lattice allows and all finish together."""
+        d = np.asarray(delta_ticks, dtype=np.int64)
+        need = self.commands_needed(d)
+        if n_commands < need:
+            raise CommandError(f"a move of {d.tolist()} ticks needs at least {need} commands")
+        if n_commands == 0:
+            return np.zeros((0, d.size), dtype=np.int64)
+        k = np.arange(n_commands + 1, dtype=np.int64)[:, None]
+        cumulative = np.floor_divide(k * d[None, :], n_commands)
+        return np.asarray(np.diff(cumulative, axis=0), dtype=np.int64)
+
+
+__all__ = [
+    "DEFAULT_MAX_TICKS",
+    "DEFAULT_PRISMATIC_TICK_MM",
+    "DEFAULT_REVOLUTE_TICK_RAD",
+    "Lattice",
+]

@@ -1,0 +1,94 @@
+"""The arm that works in a scene: its ``[arm]`` table applied to a built-in model or robot file.
+
+``[arm]`` gives the model (built-in name or robot file, relative to the scene file), where the
+arm stands in the cell (``base``), the tool centre point (``tool``, a transform from the
+flange), the home pose, link radii and the command lattice. Without ``[arm]`` the seed arm works
+in the scene. A model chosen on the command line (``--model``) replaces the scene's model and
+keeps only where the scene puts it (``base``): the rest of ``[arm]`` belongs to its own model.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.errors import InvalidInputError, SceneError
+from armpath.model.catalog import resolve_model
+from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.scenes.build import rotation_matrix
+from armpath.scenes.scene import Scene
+from armpath.scenes.schema import ArmSpec, PlacementSpec
+
+
+def placement_matrix(spec: PlacementSpec, length_unit: str = "mm") -> NDArray[np.float64]:
+    """The 4x4 transform of a placement (its position converted from mm to ``length_unit``)."""
+    T = np.eye(4)
+    T[:3, :3] = rotation_matrix(spec.rotation_deg)
+    T[:3, 3] = np.asarray(spec.position_mm) * (1e-3 if length_unit == "m" else 1.0)
+    return T
+
+
+def _model(name: str, base_dir: str | None) -> SerialArm:
+    path = Path(name)
+    if base_dir is not None and not path.is_absolute() and (Path(base_dir) / path).is_file():
+        return resolve_model(str(Path(base_dir) / path))
+    return resolve_model(name)
+
+
+def _per_joint(value: float | int | list[float] | list[int], n: int, what: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise InvalidInputError(f"{what} needs one number or {n} (one per joint), got {arr.size}")
+    return arr
+
+
+def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
+    """The arm an ``[arm]`` table describes."""
+    arm = _model(spec.model, base_dir)
+    n = arm.n_joints
+    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+    mm = 1e-3 if arm.length_unit == "m" else 1.0
+    if spec.tick is not None or spec.max_ticks is not None:
+        tick = None
+        if spec.tick is not None:
+            shown = _per_joint(spec.tick, n, "arm.tick")
+            tick = np.where(prismatic, shown * mm, np.radians(shown))
+        most = None if spec.max_ticks is None else _per_joint(spec.max_ticks, n, "arm.max_ticks")
+        if most is not None and not np.all(most == np.round(most)):
+            raise InvalidInputError(f"arm.max_ticks must be whole numbers, got {most.tolist()}")
+        arm = arm.with_lattice(tick, None if most is None else most.astype(np.int64))
+    if spec.link_radii_mm is not None:
+        radii = np.asarray(spec.link_radii_mm, dtype=np.float64) * mm
+        arm = arm.with_link_radii(float(radii) if radii.ndim == 0 else radii.tolist())
+    if spec.tool is not None:
+        radius = None if spec.tool.radius_mm is None else spec.tool.radius_mm * mm
+        arm = arm.with_tool(placement_matrix(spec.tool, arm.length_unit), radius)
+    if spec.base is not None:
+        arm = arm.placed(placement_matrix(spec.base, arm.length_unit))
+    if spec.home_deg is not None:
+        home = _per_joint(spec.home_deg, n, "arm.home_deg")
+        arm = arm.with_home(np.where(prismatic, home * mm, np.radians(home)))
+    return arm
+
+
+def scene_arm(scene: Scene, model: str | None = None) -> SerialArm:
+    """The arm that works in ``scene``: its ``[arm]``, or the seed arm if it has none; ``model``
+    (a built-in name or robot file) replaces the scene's model and keeps only its ``base``."""
+    spec = scene.arm_spec
+    try:
+        if model is None:
+            return arm_from_spec(spec or ArmSpec(), scene.base_dir)
+        return arm_from_spec(
+            ArmSpec(model=model, base=spec.base if spec is not None else None), None
+        )
+    except SceneError:
+        raise
+    except InvalidInputError as exc:
+        raise SceneError(f"scene {scene.source}: arm: {exc}") from None
+
+
+__all__ = ["arm_from_spec", "placement_matrix", "scene_arm"]

@@ -1,0 +1,119 @@
+"""Loading scene files (TOML or YAML) and the built-in seed scene."""
+
+from __future__ import annotations
+
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+from pydantic import ValidationError
+
+from armpath.errors import InvalidInputError, SceneError
+from armpath.geometry import CollisionWorld
+from armpath.scenes.build import build_obstacle
+from armpath.scenes.scene import Scene
+from armpath.scenes.schema import SceneFile
+
+
+def scene_from_dict(
+    data: dict[str, object], source: str = "<dict>", base_dir: Path | None = None
+) -> Scene:
+    """Validate a parsed scene file and build the scene (relative mesh paths from
+    ``base_dir``)."""
+    if not isinstance(data, dict):
+        raise SceneError(f"scene {source}: the top level must be a table of keys")
+    try:
+        spec = SceneFile.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first["loc"])
+        msg = str(first["msg"]).removeprefix("Value error, ")
+        raise SceneError(f"scene {source}: {where}: {msg}") from None
+    try:
+        obstacles = tuple(build_obstacle(o, base_dir) for o in spec.obstacles)
+        world = CollisionWorld(
+            obstacles,
+            spec.clearance.margin_mm,
+            spec.clearance.tool_tip_exempt_mm,
+            spec.clearance.self_margin_mm,
+        )
+    except InvalidInputError as exc:
+        raise SceneError(f"scene {source}: {exc}") from None
+    reach = spec.tasks.reach.target_mm if spec.tasks.reach else None
+    definition = spec.model_dump(mode="json")
+    for o_spec, o in zip(definition["obstacles"], obstacles, strict=True):
+        if o_spec["type"] == "mesh":
+            o_spec["file"] = str(Path(getattr(o, "source", None) or o_spec["file"]).resolve())
+    if spec.arm is not None and base_dir is not None:
+        robot = Path(spec.arm.model)
+        if not robot.is_absolute() and (base_dir / robot).is_file():
+            definition["arm"]["model"] = str((base_dir / robot).resolve())
+    scene = Scene(
+        spec.name,
+        spec.description,
+        world,
+        reach,
+        source,
+        spec.tasks.spotweld,
+        spec.tasks.trace,
+        definition,
+        spec.arm,
+        None if base_dir is None else str(base_dir),
+    )
+    if spec.arm is not None:
+        from armpath.scenes.arm import scene_arm
+
+        scene_arm(scene)  # validates the arm: model, base, tool, home within the limits
+    if scene.spotweld is not None:
+        scene.spotweld_targets_mm()  # validates the workpiece name and the points
+    if scene.trace is not None:
+        scene.trace_curve()  # validates the curve against the obstacles
+    return scene
+
+
+def _one_line(exc: Exception) -> str:
+    """A parser's message on one line (YAML's point at the error over several)."""
+    return " ".join(str(exc).split())
+
+
+def load_scene(path: str | Path | None = None) -> Scene:
+    """Load a scene file (``.toml``, or ``.yaml``/``.yml``); ``None`` loads the seed scene."""
+    base_dir = None
+    suffix = ".toml"
+    if path is None:
+        text = resources.files("armpath.scenes").joinpath("seed.toml").read_text("utf-8")
+        source = "built-in seed.toml"
+    else:
+        p = Path(path)
+        suffix = p.suffix.lower()
+        if suffix not in (".toml", ".yaml", ".yml"):
+            raise SceneError(f"scene file {p} must end in .toml, .yaml or .yml")
+        try:
+            text = p.read_text("utf-8")
+        except OSError as exc:
+            raise SceneError(f"cannot read scene file {p}: {exc.strerror}") from None
+        except UnicodeDecodeError as exc:
+            raise SceneError(
+                f"scene file {p} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+            ) from None
+        source = str(p)
+        base_dir = p.parent
+    data: object
+    if suffix == ".toml":
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise SceneError(f"scene {source}: not valid TOML: {_one_line(exc)}") from None
+    else:
+        import yaml
+
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise SceneError(f"scene {source}: not valid YAML: {_one_line(exc)}") from None
+    return scene_from_dict(data, source, base_dir)  # type: ignore[arg-type]
+
+
+def seed_scene() -> Scene:
+    """The built-in seed scene of SPEC section 3."""
+    return load_scene(None)

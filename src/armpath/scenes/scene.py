@@ -1,0 +1,136 @@
+"""A validated scene: the collision world, the arm that works in it (if the file names one) and
+its tasks."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.errors import InvalidInputError, SceneError
+from armpath.geometry import CollisionWorld, HollowFrustum, SolidOfRevolution, WallThickness
+from armpath.geometry.curves import Curve, ParametricCurve, Polyline, plane_section
+from armpath.scenes.build import rebuild_frustum
+from armpath.scenes.schema import (
+    ArmSpec,
+    ParametricCurveSpec,
+    PlaneSectionCurveSpec,
+    SpotweldTaskSpec,
+    TraceTaskSpec,
+)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: the collision world and the task data."""
+
+    name: str
+    description: str
+    world: CollisionWorld
+    reach_target_mm: tuple[float, float, float] | None
+    source: str
+    spotweld: SpotweldTaskSpec | None = None
+    trace: TraceTaskSpec | None = None
+    #: The validated scene file as plain JSON types (mesh paths made absolute): results carry
+    #: it, so a result replays in its scene from any folder (:func:`scene_from_dict`).
+    definition: dict[str, Any] = field(default_factory=dict)
+    #: The scene's ``[arm]`` (None: the file names no arm).
+    arm_spec: ArmSpec | None = None
+    #: The folder the scene file is in (robot and mesh files are relative to it).
+    base_dir: str | None = None
+
+    def spotweld_targets_mm(self) -> NDArray[np.float64]:
+        """Task 3's points ``(N, 3)`` mm: each xy projection lifted onto the inner wall of the
+        named workpiece (its height from the inner surface under the scene's wall convention).
+        """
+        if self.spotweld is None:
+            raise SceneError(f"scene {self.source} defines no [tasks.spotweld]")
+        spec = self.spotweld
+        found = [o for o in self.world.obstacles if o.name == spec.workpiece]
+        if not found:
+            names = ", ".join(repr(o.name) for o in self.world.obstacles) or "none"
+            raise SceneError(
+                f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is not an "
+                f"obstacle of the scene (obstacles: {names})"
+            )
+        if not isinstance(found[0], HollowFrustum):
+            raise SceneError(
+                f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is not a "
+                "hollow_frustum obstacle"
+            )
+        w = found[0]
+        return np.array([w.inner_wall_point(x, y) for x, y in spec.points_xy_mm])
+
+    def trace_curve(self) -> Curve:
+        """Task 2's curve, built against the scene's obstacles (mm)."""
+        if self.trace is None:
+            raise SceneError(f"scene {self.source} defines no [tasks.trace]")
+        spec = self.trace.curve
+        try:
+            if isinstance(spec, PlaneSectionCurveSpec):
+                found = [o for o in self.world.obstacles if o.name == spec.solid]
+                if not found:
+                    names = ", ".join(repr(o.name) for o in self.world.obstacles) or "none"
+                    raise SceneError(
+                        f"scene {self.source}: tasks.trace.curve.solid {spec.solid!r} is not an "
+                        f"obstacle of the scene (obstacles: {names})"
+                    )
+                if not isinstance(found[0], SolidOfRevolution):
+                    raise SceneError(
+                        f"scene {self.source}: tasks.trace.curve.solid {spec.solid!r} is not a "
+                        "hollow_frustum, cylinder or cone_frustum"
+                    )
+                return plane_section(
+                    spec.name, found[0], spec.plane_point, spec.plane_normal, spec.face
+                )
+            if isinstance(spec, ParametricCurveSpec):
+                return ParametricCurve(spec.name, spec.x, spec.y, spec.z, spec.t[0], spec.t[1])
+            return Polyline(spec.name, np.array(spec.points_mm), spec.closed)
+        except SceneError:
+            raise
+        except InvalidInputError as exc:
+            raise SceneError(f"scene {self.source}: tasks.trace.curve: {exc}") from None
+
+    @property
+    def workpieces(self) -> tuple[HollowFrustum, ...]:
+        return tuple(o for o in self.world.obstacles if isinstance(o, HollowFrustum))
+
+    @property
+    def wall_thickness(self) -> WallThickness | None:
+        """The wall-thickness convention of the scene's workpiece(s), if any."""
+        conventions = {w.wall_thickness for w in self.workpieces}
+        return conventions.pop() if len(conventions) == 1 else None
+
+    def with_wall_thickness(self, convention: WallThickness | str) -> Scene:
+        """The same scene with every hollow frustum's wall measured by ``convention``."""
+        try:
+            conv = WallThickness(convention)
+        except ValueError:
+            valid = ", ".join(w.value for w in WallThickness)
+            raise InvalidInputError(
+                f"wall thickness must be one of {valid}, got {convention!r}"
+            ) from None
+        obstacles = tuple(
+            rebuild_frustum(o, conv) if isinstance(o, HollowFrustum) else o
+            for o in self.world.obstacles
+        )
+        definition = copy.deepcopy(self.definition)
+        for spec in definition.get("obstacles", []):
+            if spec.get("type") == "hollow_frustum":
+                spec["wall_thickness"] = conv.value
+        return replace(self, world=replace(self.world, obstacles=obstacles), definition=definition)
+
+    def describe(self) -> dict[str, object]:
+        """The scene for result files: name, source, wall convention, the obstacles and the
+        clearance rule, and ``definition`` (what :func:`scene_from_dict` rebuilds it from)."""
+        wall = self.wall_thickness
+        return {
+            "name": self.name,
+            "source": self.source,
+            "wall_thickness": wall.value if wall else None,
+            **self.world.describe(),
+            "definition": self.definition,
+        }

@@ -1,0 +1,242 @@
+"""The schema of scene files (TOML or YAML), validated with pydantic: obstacles, the clearance
+rule, the arm that works in the cell and its tasks. Lengths mm, angles deg; every number finite
+and within :data:`~armpath.budget.MAX_COORDINATE_MM`."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from armpath.budget import MAX_COORDINATE_MM
+from armpath.geometry import WallThickness
+
+Vec3 = tuple[float, float, float]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def _check_number(x: float) -> None:
+    if not np.isfinite(x):
+        raise ValueError("must be a finite number")
+    if abs(x) > MAX_COORDINATE_MM:
+        raise ValueError(
+            f"{x:g} is beyond the largest coordinate or size a scene may use "
+            f"({MAX_COORDINATE_MM:g} mm)"
+        )
+
+
+class _FiniteVec(_Strict):
+    @field_validator("*", mode="after")
+    @classmethod
+    def _finite(cls, v: object) -> object:
+        values = v if isinstance(v, tuple | list) else (v,)
+        for x in values:
+            for y in x if isinstance(x, tuple | list) else (x,):
+                if isinstance(y, float | int) and not isinstance(y, bool):
+                    _check_number(float(y))
+        return v
+
+
+class HalfSpaceSpec(_FiniteVec):
+    type: Literal["half_space"]
+    name: str
+    point: Vec3
+    normal: Vec3
+
+
+class HollowFrustumSpec(_FiniteVec):
+    type: Literal["hollow_frustum"]
+    name: str
+    base_center: Vec3
+    height: float = Field(gt=0)
+    r_bottom: float = Field(gt=0)
+    r_top: float = Field(gt=0)
+    wall: float = Field(gt=0)
+    wall_thickness: WallThickness = WallThickness.NORMAL
+    open_top: bool = True
+    closed_bottom: bool = True
+    axis: Vec3 = (0.0, 0.0, 1.0)
+
+
+class SphereSpec(_FiniteVec):
+    type: Literal["sphere"]
+    name: str
+    center: Vec3
+    radius: float = Field(gt=0)
+
+
+class CapsuleSpec(_FiniteVec):
+    type: Literal["capsule"]
+    name: str
+    start: Vec3
+    end: Vec3
+    radius: float = Field(gt=0)
+
+
+class BoxSpec(_FiniteVec):
+    type: Literal["box"]
+    name: str
+    center: Vec3
+    size: Vec3 = Field(description="edge lengths along the box axes")
+    rotation_deg: Vec3 = Field(
+        default=(0.0, 0.0, 0.0), description="rotation vector of the box axes, degrees"
+    )
+
+    @field_validator("size", mode="after")
+    @classmethod
+    def _positive(cls, v: Vec3) -> Vec3:
+        if any(x <= 0 for x in v):
+            raise ValueError("box size must be positive")
+        return v
+
+
+class CylinderSpec(_FiniteVec):
+    type: Literal["cylinder"]
+    name: str
+    base_center: Vec3
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    radius: float = Field(gt=0)
+    height: float = Field(gt=0)
+
+
+class ConeFrustumSpec(_FiniteVec):
+    type: Literal["cone_frustum"]
+    name: str
+    base_center: Vec3
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    r_bottom: float = Field(ge=0)
+    r_top: float = Field(ge=0)
+    height: float = Field(gt=0)
+
+
+class MeshSpec(_FiniteVec):
+    type: Literal["mesh"]
+    name: str
+    file: str = Field(description="STL/OBJ path, relative to the scene file")
+    scale: float = Field(default=1.0, gt=0)
+    translation: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+
+
+ObstacleSpec = Annotated[
+    HalfSpaceSpec
+    | HollowFrustumSpec
+    | SphereSpec
+    | CapsuleSpec
+    | BoxSpec
+    | CylinderSpec
+    | ConeFrustumSpec
+    | MeshSpec,
+    Field(discriminator="type"),
+]
+
+
+class ClearanceSpec(_FiniteVec):
+    margin_mm: float = Field(default=1.0, ge=0)
+    tool_tip_exempt_mm: float = Field(default=5.0, ge=0)
+    self_margin_mm: float = Field(default=1.0, ge=0)
+
+
+class ReachTaskSpec(_FiniteVec):
+    target_mm: Vec3
+
+
+class SpotweldTaskSpec(_FiniteVec):
+    """Points on the inner wall of a hollow obstacle, given by their projections on xy."""
+
+    workpiece: str = Field(description="name of the hollow_frustum obstacle")
+    points_xy_mm: list[tuple[float, float]] = Field(min_length=1)
+    surface: Literal["inner"] = "inner"
+
+
+class PlaneSectionCurveSpec(_FiniteVec):
+    """Where a plane cuts a side face of a solid of revolution obstacle (hollow_frustum,
+    cylinder, cone_frustum): its outer face (the seed crack) or a hollow solid's inner face."""
+
+    type: Literal["plane_section"]
+    name: str = "curve"
+    solid: str = Field(description="name of the hollow_frustum, cylinder or cone_frustum")
+    face: Literal["outer", "inner"] = "outer"
+    plane_point: Vec3
+    plane_normal: Vec3
+
+
+class ParametricCurveSpec(_FiniteVec):
+    """``x(t), y(t), z(t)`` (mm) as expressions in ``t`` (numbers, + - * / ^ **, sin, cos, ...)."""
+
+    type: Literal["parametric"]
+    name: str = "curve"
+    x: str
+    y: str
+    z: str
+    t: tuple[float, float] = (0.0, 1.0)
+
+
+class PolylineCurveSpec(_FiniteVec):
+    type: Literal["polyline"]
+    name: str = "curve"
+    points_mm: list[Vec3] = Field(min_length=2)
+    closed: bool = False
+
+
+CurveSpec = Annotated[
+    PlaneSectionCurveSpec | ParametricCurveSpec | PolylineCurveSpec, Field(discriminator="type")
+]
+
+
+class TraceTaskSpec(_Strict):
+    """Task 2: the curve the fingertip follows."""
+
+    curve: CurveSpec
+
+
+class TasksSpec(_Strict):
+    reach: ReachTaskSpec | None = None
+    trace: TraceTaskSpec | None = None
+    spotweld: SpotweldTaskSpec | None = None
+
+
+class PlacementSpec(_FiniteVec):
+    """A rigid transform: a position (mm) and a rotation vector (deg; its direction is the
+    axis, its length the angle)."""
+
+    position_mm: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+
+
+class ToolSpec(PlacementSpec):
+    """The tool centre point as a transform from the flange (the last joint's frame), and the
+    radius of the tool's capsule (default: the last link's)."""
+
+    radius_mm: float | None = Field(default=None, ge=0)
+
+
+class ArmSpec(_FiniteVec):
+    """The arm that works in the cell: a built-in model or a robot file (relative to the scene
+    file), where it stands (``base``), its tool, its home pose (deg, or mm for prismatic
+    joints), link radii (mm: one number, or the fixed base then one per joint) and command
+    lattice (``tick``: deg or mm per joint, one number or one per joint; ``max_ticks``: the
+    most ticks a command, one number or one per joint)."""
+
+    model: str = "seed"
+    base: PlacementSpec | None = None
+    tool: ToolSpec | None = None
+    home_deg: list[float] | None = None
+    link_radii_mm: float | list[float] | None = None
+    tick: float | list[float] | None = None
+    max_ticks: int | list[int] | None = None
+
+
+class SceneFile(_Strict):
+    """Schema of a scene file (TOML or YAML)."""
+
+    name: str
+    description: str = ""
+    clearance: ClearanceSpec = ClearanceSpec()
+    obstacles: list[ObstacleSpec] = []
+    arm: ArmSpec | None = None
+    tasks: TasksSpec = TasksSpec()

@@ -1,0 +1,176 @@
+"""The arm's own command lattice (issue 18, item 2) and the arm document results carry.
+
+Counts are checked against the definition written out by hand (the largest
+``ceil(|d_i| / max_ticks_i)``), replays in integer ticks, and forward kinematics of a model
+rebuilt from its document against the original.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import independent_dh as idh
+from armpath.commands import CommandSequence
+from armpath.errors import CommandError, InvalidInputError
+from armpath.geometry import CollisionWorld, Sphere
+from armpath.kinematics import landmark_positions, tool_pose
+from armpath.model.catalog import resolve_model
+from armpath.model.dh import DHRow, dh_arm
+from armpath.model.lattice import Lattice
+from armpath.model.seed_arm import seed_arm
+from armpath.model.serialize import arm_from_dict, arm_to_dict
+from armpath.planning.motion import path_to_sequence, plan_motion
+from armpath.planning.motion_check import motion_clearance
+
+STEPPER_TICK_DEG = 0.0225  # a 1.8 deg stepper with 1/8 microsteps and a 10:1 gearbox
+
+
+def stepper_seed():
+    """The seed arm driven by steppers: 0.0225 deg a step, joints 1-3 at most 60 steps (1.35
+    deg) a command, joints 4-6 at most 120 (2.7 deg)."""
+    return seed_arm().with_lattice(
+        tick=np.radians(STEPPER_TICK_DEG), max_ticks=[60, 60, 60, 120, 120, 120]
+    )
+
+
+def test_the_seed_lattice_is_the_seed_controllers():
+    g = seed_arm().lattice
+    assert g.is_default and g.n_joints == 6
+    np.testing.assert_allclose(np.degrees(g.tick), 0.1, rtol=1e-15)
+    assert g.max_ticks.tolist() == [20] * 6
+    np.testing.assert_allclose(np.degrees(g.max_step), 2.0, rtol=1e-15)
+    assert g.display([900, -900, 1, 0, 0, 0]).tolist() == [90.0, -90.0, 0.1, 0.0, 0.0, 0.0]
+
+
+def test_commands_needed_and_split_on_an_uneven_lattice():
+    g = stepper_seed().lattice
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        d = rng.integers(-2000, 2001, 6)
+        need = max(int(np.ceil(abs(int(d[i])) / [60, 60, 60, 120, 120, 120][i])) for i in range(6))
+        assert g.commands_needed(d) == need
+        for n in (need, need + 3):
+            cmds = g.split(d, n)
+            assert cmds.shape == (n, 6) and np.all(cmds.sum(axis=0) == d)
+            assert np.all(np.abs(cmds) <= [60, 60, 60, 120, 120, 120])
+    with pytest.raises(CommandError, match="needs at least"):
+        g.split([61, 0, 0, 0, 0, 0], 1)
+
+
+def test_a_sequence_is_checked_against_each_joints_limit():
+    g = stepper_seed().lattice
+    ok = CommandSequence(np.zeros(6, int), [[60, -60, 0, 120, -120, 0]], g)
+    assert ok.final_ticks.tolist() == [60, -60, 0, 120, -120, 0]
+    np.testing.assert_allclose(ok.grid.display(ok.final_ticks), [1.35, -1.35, 0, 2.7, -2.7, 0])
+    with pytest.raises(CommandError, match=r"joint 1: increment 61 ticks is outside \[-60, 60\]"):
+        CommandSequence(np.zeros(6, int), [[61, 0, 0, 0, 0, 0]], g)
+    # the seed controller's sequence refuses what the stepper's allows
+    with pytest.raises(CommandError, match="at most 2 deg"):
+        CommandSequence(np.zeros(6, int), [[0, 0, 0, 120, 0, 0]])
+
+
+def test_display_units_and_lattice_membership():
+    welder = resolve_model("welder003")  # joint 3 prismatic, mm
+    g = welder.lattice
+    assert g.units == ("deg", "deg", "mm", "deg", "deg", "deg")
+    ticks = g.from_display([10.0, -20.5, 123.4, 0, 0, 0], "--from")
+    assert ticks.tolist() == [100, -205, 1234, 0, 0, 0]
+    with pytest.raises(InvalidInputError, match="joint 3 is not a whole number of its ticks"):
+        g.from_display([10.0, -20.5, 123.45, 0, 0, 0], "--from")
+    metres = Lattice([1e-4, np.radians(0.1)], [20, 20], [True, False], "m")
+    np.testing.assert_allclose(metres.tick_display, [0.1, 0.1])
+    with pytest.raises(InvalidInputError, match="ticks must be"):
+        Lattice([np.radians(20.0)], [1], [False])  # 20 deg a tick: beyond 10 deg
+    with pytest.raises(InvalidInputError, match="max ticks per command"):
+        Lattice([np.radians(0.1)], [0], [False])
+
+
+def test_path_to_sequence_follows_any_lattice_with_legal_commands():
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        most = rng.integers(1, 200, 4)
+        g = Lattice(np.radians(rng.uniform(0.01, 0.5, 4)), most, np.zeros(4, bool))
+        path = np.cumsum(rng.normal(0, 300, (6, 4)), axis=0)
+        start, goal = np.round(path[0]).astype(int), np.round(path[-1]).astype(int)
+        seq = path_to_sequence(path, start, goal, g)
+        assert np.all(np.abs(seq.commands) <= most)
+        assert seq.start_ticks.tolist() == start.tolist()
+        assert seq.final_ticks.tolist() == goal.tolist()
+        # at most one command more than the path's length in the command metric
+        metric = np.abs(np.diff(path, axis=0)) / most
+        assert seq.n_commands <= int(np.ceil(metric.max(axis=1).sum() - 1e-9)) + 1
+
+
+def test_plan_around_a_ball_on_a_stepper_lattice_replays():
+    arm = stepper_seed()
+    g = arm.lattice
+    # a ball on the circle the forearm sweeps when joint 1 turns from 0 to 90 deg
+    ball = np.array([-390.0 * np.sin(np.pi / 4), 390.0 * np.cos(np.pi / 4), 140.0])
+    world = CollisionWorld((Sphere("ball", ball, 60.0),))
+    start = g.from_display([0, -90, 0, 0, -90, 0], "start")
+    goal = g.from_display([90, -90, 0, 0, -90, 0], "goal")
+    plan = plan_motion(arm, world, start, goal[None])
+    seq = plan.sequence
+    assert seq.grid.same_as(g)
+    states = seq.states()
+    assert states[0].tolist() == start.tolist() and states[-1].tolist() == goal.tolist()
+    assert np.all(np.abs(np.diff(states, axis=0)) <= g.max_ticks)
+    # fewest possible: the largest ceil(|change| / max ticks) over the joints, by hand
+    change = np.abs(goal - start)
+    assert seq.n_commands >= max(int(np.ceil(change[i] / g.max_ticks[i])) for i in range(6))
+    assert plan.method != "direct" and motion_clearance(arm, world, seq).certified_ok
+    # the middle of every command, replayed with the textbook product: clear of the ball
+    mid = g.to_joint(states[:-1] + 0.5 * np.diff(states, axis=0))
+    pts = landmark_positions(arm, mid)
+    for a, b in ((1, 2), (2, 3), (3, 4)):
+        s = np.linspace(0, 1, 60)
+        p = pts[:, a, None] + s[None, :, None] * (pts[:, b] - pts[:, a])[:, None]
+        assert np.linalg.norm(p - ball, axis=-1).min() >= 61.0 - 1e-6
+
+
+@pytest.mark.parametrize("name", ["seed", "welder003", "painter004", "puma560", "ur5"])
+def test_an_arm_document_rebuilds_the_same_arm(name):
+    arm = resolve_model(name)
+    doc = json.loads(json.dumps(arm_to_dict(arm)))  # plain JSON types
+    back = arm_from_dict(doc)
+    q = np.random.default_rng(5).uniform(-2, 2, (40, arm.n_joints))
+    np.testing.assert_array_equal(tool_pose(back, q), tool_pose(arm, q))
+    np.testing.assert_array_equal(landmark_positions(back, q), landmark_positions(arm, q))
+    assert back.lattice.same_as(arm.lattice)
+    assert [(lk.start, lk.end, lk.radius, lk.checked) for lk in back.links] == [
+        (lk.start, lk.end, lk.radius, lk.checked) for lk in arm.links
+    ]
+    np.testing.assert_array_equal(back.home, arm.home)
+
+
+def test_an_arm_document_of_a_dh_table_matches_the_textbook_product():
+    rows = [
+        DHRow(a=0.0, alpha=np.pi / 2, d=89.2),
+        DHRow(a=-425.0, alpha=0.0, d=0.0),
+        DHRow(a=-392.0, alpha=0.0, d=0.0),
+        DHRow(a=0.0, alpha=np.pi / 2, d=109.3),
+        DHRow(a=0.0, alpha=-np.pi / 2, d=94.75),
+        DHRow(a=0.0, alpha=0.0, d=82.5),
+    ]
+    arm = dh_arm(rows, name="ur-like").with_lattice(max_ticks=[10, 20, 30, 40, 50, 60])
+    back = arm_from_dict(json.loads(json.dumps(arm_to_dict(arm))))
+    q = np.random.default_rng(9).uniform(-3, 3, 6)
+    a = [r.a for r in rows]
+    alpha = [r.alpha for r in rows]
+    d = [r.d for r in rows]
+    np.testing.assert_allclose(tool_pose(back, q), idh.dh_pose(a, alpha, d, q), atol=1e-9)
+    assert back.lattice.max_ticks.tolist() == [10, 20, 30, 40, 50, 60]
+
+
+def test_bad_arm_documents_are_one_clear_error():
+    doc = arm_to_dict(seed_arm())
+    with pytest.raises(InvalidInputError, match="document version"):
+        arm_from_dict({**doc, "version": 99})
+    broken = {**doc, "joints": doc["joints"][:1]}
+    with pytest.raises(InvalidInputError):
+        arm_from_dict(broken)
+    with pytest.raises(InvalidInputError, match="incomplete or malformed"):
+        arm_from_dict({**doc, "joints": [{"name": "j"}]})
