@@ -12,6 +12,7 @@ Every length is mm and every angle rad. Sources:
   reproduces the paper's pose and its table 1 (``docs/seed004.md``).
 * ``puma560``: Corke's standard D-H PUMA 560 (lengths in mm) with its joint limits.
 * ``ur5``: Universal Robots UR5, the maker's standard D-H parameters, joints +-360 deg.
+* ``iiwa14``: KUKA LBR iiwa 14 R820, a 7-axis arm (standard D-H, the maker's joint limits).
 
 Collision links are each model's physical skeleton (:mod:`armpath.model.skeleton`) with the
 capsule radii below (mm; the fixed base first, then the link each joint moves; zero-length
@@ -45,6 +46,8 @@ PUMA560_LINK_RADII_MM = (100.0, 0.0, 80.0, 55.0, 0.0, 0.0, 0.0)
 #: The PUMA 560's trunk: its D-H base frame is at the shoulder, 26.45 in above the mounting
 #: surface (the height Corke's Python Robotics Toolbox gives).
 PUMA560_PEDESTAL_MM = 26.45 * 25.4
+#: iiwa14: the base, then the seven links (shoulder, upper arm, elbow, forearm, wrist, flange).
+IIWA14_LINK_RADII_MM = (80.0, 70.0, 70.0, 65.0, 65.0, 55.0, 50.0, 40.0)
 #: ur5: the base column, the upper arm, the forearm (with wrist 1's 109 mm housing), wrists 2, 3.
 UR5_LINK_RADII_MM = (75.0, 0.0, 60.0, 50.0, 45.0, 45.0, 0.0)
 
@@ -131,12 +134,32 @@ def ur5() -> SerialArm:
     return dh_arm(rows, "standard", name="ur5", link_radii_mm=UR5_LINK_RADII_MM)
 
 
+def iiwa14() -> SerialArm:
+    """KUKA LBR iiwa 14 R820, a 7-axis arm: standard D-H (mm) with the maker's joint limits
+    (a redundant arm: every tool pose has a one-dimensional family of solutions)."""
+    rows = _rows(
+        a=[0.0] * 7,
+        alpha_deg=[-90.0, 90.0, 90.0, -90.0, -90.0, 90.0, 0.0],
+        d=[360.0, 0.0, 420.0, 0.0, 400.0, 0.0, 126.0],
+        limits_deg=[(-170, 170), (-120, 120), (-170, 170), (-120, 120), (-170, 170), (-120, 120),
+                    (-175, 175)],
+    )  # fmt: skip
+    return dh_arm(
+        rows,
+        "standard",
+        name="iiwa14",
+        home=np.radians([0.0, 30.0, 0.0, -60.0, 0.0, 30.0, 0.0]),
+        link_radii_mm=IIWA14_LINK_RADII_MM,
+    )
+
+
 BUILTIN_MODELS: dict[str, Callable[[], SerialArm]] = {
     "seed": seed_arm,
     "welder003": welder003,
     "painter004": painter004,
     "puma560": puma560,
     "ur5": ur5,
+    "iiwa14": iiwa14,
 }
 
 

@@ -159,6 +159,10 @@ def seed_geometry_of(arm: SerialArm) -> SeedArmGeometry:
     rebuilt = seed_arm(geometry)
     if not all(a.same_as(b) for a, b in zip(rebuilt.joints, arm.joints, strict=True)) or not (
         np.allclose(rebuilt.T_flange_tool, arm.T_flange_tool)
+        and np.allclose(arm.T_world_base, np.eye(4))
     ):
-        raise InvalidInputError(f"model {arm.name!r} does not match the seed-arm geometry")
+        raise InvalidInputError(
+            f"model {arm.name!r} does not match the seed-arm geometry (joints, tool at E, base "
+            "at the origin)"
+        )
     return geometry

@@ -129,9 +129,16 @@ class Joint:
             and np.allclose(self.T_parent_joint, other.T_parent_joint, atol=atol)
             and np.allclose(self.axis, other.axis, atol=atol)
             and np.allclose(self.limits, other.limits, atol=atol)
-            and self.tick == other.tick
+            and self._tick_or_default() == other._tick_or_default()
             and self.max_ticks == other.max_ticks
         )
+
+    def _tick_or_default(self) -> float:
+        if self.tick is not None:
+            return float(self.tick)
+        if self.kind is JointKind.PRISMATIC:
+            return DEFAULT_PRISMATIC_TICK_MM
+        return DEFAULT_REVOLUTE_TICK_RAD
 
     @property
     def is_limited(self) -> bool:

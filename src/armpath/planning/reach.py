@@ -50,7 +50,8 @@ from armpath.ik.seed_position import (
     fingertip,
     solve_with_fixed_pair,
 )
-from armpath.kinematics import position_jacobian, tool_position
+from armpath.ik.target import Orientation, ToolTarget
+from armpath.kinematics import position_jacobian, tool_pose, tool_position
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
@@ -138,6 +139,9 @@ class LowerBound:
     exact_max_joint_change_deg: float
     configuration_deg: tuple[float, ...]
     method: str
+    #: Whether the bound is a proof (the seed arm's closed-form family searched on a grid
+    #: and refined) or the best a multi-start search over the family found (any other arm).
+    proven: bool = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,6 +159,10 @@ class ReachResult:
     motion_checks: int
     fewer_commands_rejected: tuple[str, ...] = ()
     method: str = "direct"
+    #: The orientation rule of the tool at the target, if any, and the tool's angle to it at
+    #: the goal (rad; the rule's direction or rotation).
+    orientation: Orientation | None = None
+    angle_rad: float | None = None
 
     @property
     def n_commands(self) -> int:
@@ -162,7 +170,12 @@ class ReachResult:
 
     @property
     def is_provably_fewest(self) -> bool:
-        """Whether the plan meets the lower bound, i.e. no plan has fewer commands."""
+        """Whether the plan meets a proven lower bound, i.e. no plan has fewer commands."""
+        return self.lower_bound.proven and self.n_commands == self.lower_bound.commands
+
+    @property
+    def meets_bound(self) -> bool:
+        """Whether the plan has as few commands as the bound the search found."""
         return self.n_commands == self.lower_bound.commands
 
 
@@ -557,8 +570,15 @@ def plan_reach(
     target_mm: ArrayLike,
     options: ReachOptions | None = None,
     seed: int = 0,
+    orientation: Orientation | None = None,
 ) -> ReachResult:
     """Plan the fewest commands that bring the fingertip to ``target_mm``, then the least error.
+
+    The seed arm (at the origin, fingertip tool, seed lattice, no orientation rule) takes the
+    closed form of its solution family, whose bound is a proof; every other arm, tool, lattice
+    or orientation rule (``orientation``: an :class:`~armpath.ik.target.AxisCone` or
+    :class:`~armpath.ik.target.PoseOrientation`) takes the generic search
+    (:mod:`armpath.planning.reach_generic`).
 
     Parameters
     ----------
@@ -587,6 +607,8 @@ def plan_reach(
         and planning around the obstacles failed (or ``plan_around`` is off).
     """
     opts = options or ReachOptions()
+    if orientation is not None or not _seed_fast_path(arm):
+        return _plan_reach_generic(arm, world, start_ticks, target_mm, opts, seed, orientation)
     p = _validated_problem(arm, world, start_ticks, target_mm)
     fam = _reachable_family(p, opts.sphere_step_deg, opts.tolerance_mm, seed)
     bound = _lower_bound(p, fam, opts.tolerance_mm)
@@ -658,6 +680,74 @@ def plan_reach(
     raise PlanningError(
         "no clear direct motion reaches the target within "
         f"{bound.commands + opts.extra_commands} commands ({'; '.join(failures)})"
+    )
+
+
+def _seed_fast_path(arm: SerialArm) -> bool:
+    """Whether the seed arm's closed-form family serves ``arm``: the seed geometry at the
+    origin with the fingertip as its tool, on the seed controller's lattice."""
+    try:
+        seed_geometry_of(arm)
+    except InvalidInputError:
+        return False
+    return arm.lattice.is_default
+
+
+def _plan_reach_generic(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: ArrayLike,
+    target_mm: ArrayLike,
+    opts: ReachOptions,
+    seed: int,
+    orientation: Orientation | None,
+) -> ReachResult:
+    """:func:`plan_reach` for any arm (:mod:`armpath.planning.reach_generic`)."""
+    from armpath.planning.reach_generic import reach_any_arm
+
+    target = ToolTarget(np.asarray(target_mm, dtype=np.float64), orientation)
+    start = np.asarray(start_ticks)
+    out = reach_any_arm(
+        arm,
+        world,
+        start,
+        target,
+        opts.tolerance_mm,
+        extra_commands=opts.extra_commands,
+        max_motion_checks=min(opts.max_motion_checks, 40),
+        plan_around=opts.plan_around,
+        seed=seed,
+    )
+    grid = arm.lattice
+    seq = out.sequence
+    T = tool_pose(arm, grid.to_joint(seq.final_ticks))
+    tip = T[:3, 3]
+    b = out.bound
+    span = np.abs(grid.to_ticks_float(b.configuration) - seq.start_ticks) * grid.tick_display
+    lb = LowerBound(
+        commands=b.commands,
+        max_joint_change_deg=float(span.max(initial=0.0)),
+        exact_max_joint_change_deg=float(span.max(initial=0.0)),
+        configuration_deg=tuple(
+            float(v) for v in grid.display(grid.to_ticks_float(b.configuration))
+        ),
+        method=b.method,
+        proven=False,
+    )
+    return ReachResult(
+        sequence=seq,
+        target_mm=target.position,
+        tip_mm=tip,
+        error_mm=float(np.linalg.norm(tip - target.position)),
+        tolerance_mm=opts.tolerance_mm,
+        lower_bound=lb,
+        clearance=out.clearance,  # type: ignore[arg-type]
+        lattice_states_examined=out.examined,
+        motion_checks=out.checks,
+        fewer_commands_rejected=out.rejected,
+        method=out.method,
+        orientation=orientation,
+        angle_rad=None if orientation is None else float(target.angles(T[:3, :3])),
     )
 
 

@@ -1,0 +1,247 @@
+"""The solution family of a tool target: configurations that put the tool centre on a point
+(under an orientation rule), for any arm.
+
+A position target leaves the arm free in its other degrees of freedom: a 6-joint arm has a
+three-dimensional family of solutions (every tool orientation), a 7-joint arm four. Tasks need
+the whole family, not one solution: the fewest commands from a start state are a minimum over
+it. :class:`GenericFamily` samples it for any arm:
+
+* arms with an all-solutions IK (six joints: spherical wrist, three parallel axes, or the
+  general 6R elimination) take tool rotations spread over what the orientation rule allows and
+  keep every solution of every rotation;
+* other arms (5 or 7 joints, ...) run Levenberg-Marquardt from many starts inside the limits, on
+  the position with the orientation rule as a penalty, for full poses drawn from the rule when
+  there is one.
+
+Every sample is checked by forward kinematics (position within :data:`EXACT_FRACTION` of the
+arm's size, the orientation rule kept) and lies within the joint limits (revolute angles shifted
+by whole turns into the limits, nearest a reference state). :meth:`GenericFamily.refine` pulls
+configurations back onto the target by damped Newton steps.
+
+The seed arm has a closed form for its whole family (:mod:`armpath.ik.seed_position`); its
+planners use that directly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.errors import InvalidInputError
+from armpath.ik.solve import complete_solver
+from armpath.ik.target import ToolTarget
+from armpath.kinematics import forward_frames, jacobian_from_frames, tool_pose
+from armpath.model.serial_arm import JointKind, SerialArm
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: A sample's position error must be below this fraction of the arm's size (1e-9 of a 1 m arm:
+#: a nanometre in mm).
+EXACT_FRACTION = 1e-9
+#: Largest number of family samples kept (memory of the planners' searches).
+MAX_SAMPLES = 200_000
+
+
+def arm_size(arm: SerialArm) -> float:
+    """A length of the arm's order (model unit): the sum of its fixed offsets, at least 1."""
+    offsets = [float(np.linalg.norm(j.T_parent_joint[:3, 3])) for j in arm.joints]
+    offsets.append(float(np.linalg.norm(arm.T_flange_tool[:3, 3])))
+    return max(float(sum(offsets)), 1.0)
+
+
+def shift_into_limits(arm: SerialArm, q: FloatArray, near: FloatArray | None = None) -> FloatArray:
+    """Revolute joints of ``q`` ``(M, n)`` turned by whole turns: into the joint limits where
+    a turn allows, and among those (or for unlimited joints) nearest ``near``. Rows that stay
+    outside the limits are returned as they are (check with ``arm.within_limits``)."""
+    out = np.array(q, dtype=np.float64, copy=True)
+    for i, joint in enumerate(arm.joints):
+        if joint.kind is not JointKind.REVOLUTE:
+            continue
+        lo, hi = joint.limits
+        ref = 0.0 if near is None else float(near[i])
+        v = out[:, i]
+        best = ref + (v - ref + np.pi) % (2 * np.pi) - np.pi  # the turn nearest the reference
+        if np.isfinite(lo) or np.isfinite(hi):
+            inside = (best >= lo - 1e-9) & (best <= hi + 1e-9)
+            for k in (-1, 1, -2, 2):  # the next turns, nearest first
+                alt = best + 2 * np.pi * k
+                ok = ~inside & (alt >= lo - 1e-9) & (alt <= hi + 1e-9)
+                best = np.where(ok, alt, best)
+                inside |= ok
+        out[:, i] = best
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class GenericFamily:
+    """Samples of the solution family of ``target`` for ``arm`` (any arm)."""
+
+    arm: SerialArm
+    target: ToolTarget
+
+    @property
+    def size(self) -> float:
+        return arm_size(self.arm)
+
+    def residuals(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Position error (length unit) and orientation-rule excess (rad) of each row."""
+        T = tool_pose(self.arm, q)
+        pos = np.linalg.norm(T[..., :3, 3] - self.target.position, axis=-1)
+        return np.asarray(pos), np.asarray(self.target.angle_errors(T[..., :3, :3]))
+
+    def exact(self, q: FloatArray) -> BoolArray:
+        """Rows that reach the target (to :data:`EXACT_FRACTION` of the arm's size) and keep the
+        orientation rule (to 1e-9 rad) and the joint limits."""
+        pos, ang = self.residuals(q)
+        return np.asarray(
+            (pos <= EXACT_FRACTION * self.size) & (ang <= 1e-9) & self.arm.within_limits(q)
+        )
+
+    def samples(
+        self,
+        near: FloatArray | None = None,
+        rotations: int = 2000,
+        starts: int = 600,
+        rng: np.random.Generator | None = None,
+    ) -> FloatArray:
+        """Configurations ``(M, n)`` of the family, spread over it, within the limits and turned
+        nearest ``near`` (rad / length unit). Empty when the target is out of reach (or the
+        sampling found none)."""
+        gen = rng or np.random.default_rng(0)
+        solver = complete_solver(self.arm) if self.arm.n_joints == 6 else None
+        if solver is not None:
+            q = self._from_rotations(solver, rotations, gen)
+        else:
+            q = self._from_starts(starts, gen)
+        if q.shape[0] == 0:
+            return q
+        q = shift_into_limits(self.arm, q, near)
+        keep = self.exact(q)
+        q = q[keep]
+        if q.shape[0] > MAX_SAMPLES:
+            q = q[gen.choice(q.shape[0], MAX_SAMPLES, replace=False)]
+        return q
+
+    def _from_rotations(self, solver: object, count: int, gen: np.random.Generator) -> FloatArray:
+        Rs = self.target.rotations(count, gen)
+        T = np.broadcast_to(np.eye(4), (Rs.shape[0], 4, 4)).copy()
+        T[:, :3, :3] = Rs
+        T[:, :3, 3] = self.target.position
+        out = []
+        for k in range(0, T.shape[0], 2048):
+            check_time("sampling the solution family")
+            batch = solver.solve_batch(T[k : k + 2048])  # type: ignore[attr-defined]
+            q = batch.solutions.reshape(-1, self.arm.n_joints)
+            out.append(q[np.all(np.isfinite(q), axis=1)])
+        q = np.concatenate(out) if out else np.zeros((0, self.arm.n_joints))
+        return self.refine(q, iterations=2) if q.shape[0] else q
+
+    def _from_starts(self, count: int, gen: np.random.Generator) -> FloatArray:
+        arm = self.arm
+        lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+        hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+        lo = np.where(prismatic & ~np.isfinite(arm.lower), -self.size, lo)
+        hi = np.where(prismatic & ~np.isfinite(arm.upper), self.size, hi)
+        q = gen.uniform(lo, hi, (count, arm.n_joints))
+        if self.target.orientation is not None and arm.n_joints >= 6:
+            # full poses drawn from the rule: each start aims at one rotation
+            Rs = self.target.rotations(count, gen)[:count]
+            q = self.refine(q[: Rs.shape[0]], iterations=60, rotations=Rs)
+        return self.refine(q, iterations=60)
+
+    def refine(
+        self,
+        q: FloatArray,
+        iterations: int = 30,
+        rotations: FloatArray | None = None,
+        lower: FloatArray | None = None,
+        upper: FloatArray | None = None,
+    ) -> FloatArray:
+        """Damped Newton (Levenberg-Marquardt) steps that bring each row onto the target: the
+        position, the orientation rule (a penalty that acts only outside it) or, with
+        ``rotations`` ``(M, 3, 3)``, each row's own full tool rotation. Steps stay within the
+        limits and, if given, the box ``lower`` .. ``upper`` (per row or for all)."""
+        arm = self.arm
+        lo = arm.lower if lower is None else np.maximum(arm.lower, lower)
+        hi = arm.upper if upper is None else np.minimum(arm.upper, upper)
+        q = np.array(q, dtype=np.float64, copy=True)
+        if q.shape[0] == 0:
+            return q
+        n = arm.n_joints
+        size = self.size
+        lam = np.full(q.shape[0], 1e-3)
+
+        def errors(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+            frames = forward_frames(arm, x)
+            J = jacobian_from_frames(arm, frames)
+            tool = frames[:, -1]
+            e_pos = (self.target.position - tool[:, :3, 3]) / size
+            Jp = J[:, :3] / size
+            parts, jacs = [e_pos], [Jp]
+            if rotations is not None:
+                e_rot = 0.5 * np.sum(
+                    np.cross(tool[:, :3, :3], rotations, axisa=1, axisb=1, axisc=1), axis=2
+                )
+                parts.append(e_rot)
+                jacs.append(J[:, 3:])
+            elif self.target.orientation is not None:
+                e_ang, J_ang = _rule_error(self.target, tool[:, :3, :3], J[:, 3:])
+                parts.append(e_ang[:, None])
+                jacs.append(J_ang[:, None, :])
+            return np.concatenate(parts, axis=1), np.concatenate(jacs, axis=1)
+
+        err, J = errors(q)
+        cost = np.sum(err**2, axis=1)
+        for _ in range(iterations):
+            JtJ = np.swapaxes(J, 1, 2) @ J
+            g = np.einsum("sji,sj->si", J, err)
+            dq = np.linalg.solve(JtJ + lam[:, None, None] * np.eye(n), g[..., None])[..., 0]
+            q_new = np.clip(q + dq, lo, hi)
+            err_new, J_new = errors(q_new)
+            cost_new = np.sum(err_new**2, axis=1)
+            better = cost_new < cost
+            q[better] = q_new[better]
+            err[better] = err_new[better]
+            J[better] = J_new[better]
+            cost[better] = cost_new[better]
+            lam = np.where(better, np.maximum(lam / 5.0, 1e-12), np.minimum(lam * 5.0, 1e8))
+            if np.all(cost < (EXACT_FRACTION * 1e-2) ** 2):
+                break
+        return q
+
+
+def _rule_error(target: ToolTarget, R: FloatArray, Jw: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The orientation rule's excess (rad, 0 inside) and its gradient along the joints (from
+    the angular-velocity Jacobian ``Jw`` ``(M, 3, n)``): an axis cone only (a pose rule is met
+    through full rotations)."""
+    from armpath.ik.target import AxisCone
+
+    o = target.orientation
+    if not isinstance(o, AxisCone):
+        return np.zeros(R.shape[0]), np.zeros((R.shape[0], Jw.shape[2]))
+    a = R @ o.axis_tool  # world approach axis (M, 3)
+    cos = np.clip(a @ o.direction, -1.0, 1.0)
+    angle = np.arccos(cos)
+    excess = np.maximum(angle - o.tolerance_rad, 0.0)
+    # d angle = -(d cos) / sin, d a = w x a, d cos = (w x a) . d = w . (a x d)
+    s = np.maximum(np.sin(angle), 1e-9)
+    axd = np.cross(a, o.direction)
+    grad = -np.einsum("mk,mkn->mn", axd, Jw) / s[:, None]
+    # the residual to drive to zero is -excess (a step dq reduces the angle by grad @ dq)
+    active = excess > 0
+    return np.where(active, -excess, 0.0), np.where(active[:, None], grad, 0.0)
+
+
+def family_of(arm: SerialArm, target: ToolTarget) -> GenericFamily:
+    """The sampler of ``target``'s family for ``arm`` (checks the target's position is finite)."""
+    if target.position.shape != (3,):
+        raise InvalidInputError("a target needs a 3-D point")
+    return GenericFamily(arm, target)
+
+
+__all__ = ["EXACT_FRACTION", "GenericFamily", "arm_size", "family_of", "shift_into_limits"]

@@ -1,0 +1,520 @@
+"""Fewest-command reach for any arm: the bound over the whole solution family, the lattice
+search from it, the continuous clearance proof.
+
+N commands change joint ``i`` by at most ``N * step_i`` (``step_i`` = its tick times its most
+ticks a command), so a plan of N commands exists only if some configuration within the
+tolerance of the target (and its orientation rule) has ``max_i |q_i - s_i| / step_i <= N``.
+
+1. **Bound.** The solution family (:class:`~armpath.ik.family.GenericFamily`: every
+   orientation's all-solutions IK, or Levenberg-Marquardt from many starts) is sampled, and the
+   best samples by that command metric are refined by SLSQP (minimise ``t`` subject to the tip
+   within the tolerance, the orientation rule, ``|q_i - s_i| <= t step_i`` and the limits); the
+   smallest ``t`` found gives ``N >= ceil(t)``. It is a multi-start optimum over the family, so
+   it is reported as the bound the search found, with its method.
+2. **Lattice.** For ``N`` from the bound up, family members within ``N`` commands are searched
+   on the lattice: around each, the integer offsets of a box (wider for joints that move the
+   tool less) whose linearised tool error is within the tolerance are kept and checked exactly
+   (forward kinematics, the rule, the limits, ``N`` commands).
+3. **Motion.** The candidates nearest the target are tried as straight moves of ``N`` commands,
+   their continuous clearance certified (:func:`~armpath.planning.motion_check.motion_clearance`);
+   if every direct motion is blocked, the collision-free planner plans around the obstacles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import minimize
+
+from armpath.budget import check_time
+from armpath.commands import CommandSequence
+from armpath.errors import CollisionError, InvalidInputError, PlanningError, UnreachableError
+from armpath.geometry.world import CollisionWorld
+from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
+from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
+from armpath.kinematics import forward_frames, jacobian_from_frames, tool_pose
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.motion import MotionOptions, plan_motion
+from armpath.planning.motion_check import check_state_clear, motion_clearance
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Largest number of integer offsets searched around one family member.
+BOX_BUDGET = 60_000
+#: Family members searched on the lattice for one command count.
+MEMBERS_PER_COUNT = 48
+#: A target this close (model unit) inside a surface counts as on it.
+SURFACE_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class GenericBound:
+    """The command bound found over the family: ``commands = ceil(change)`` where ``change`` is
+    the smallest largest ``|q_i - s_i| / step_i`` within the tolerance, at ``configuration``."""
+
+    commands: int
+    change_commands: float
+    configuration: FloatArray
+    samples: int
+    method: str
+
+
+def _validated(
+    arm: SerialArm, world: CollisionWorld, start_ticks: IntArray, target: ToolTarget
+) -> IntArray:
+    grid = arm.lattice
+    start = np.asarray(start_ticks)
+    if start.shape != (arm.n_joints,):
+        raise InvalidInputError(f"start state needs {arm.n_joints} joint values, got {start.size}")
+    start = CommandSequence(start, np.zeros((0, arm.n_joints), np.int64), grid).start_ticks
+    arm.check_limits(grid.to_joint(start), what="start state")
+    for obstacle in world.obstacles:
+        depth = -float(obstacle.signed_distance(target.position))
+        if depth > SURFACE_TOLERANCE:
+            raise CollisionError(
+                f"target ({', '.join(f'{v:g}' for v in target.position)}) {arm.length_unit} lies "
+                f"{depth:.3f} {arm.length_unit} inside {obstacle.name}: the tool may touch a "
+                "surface but not enter it"
+            )
+    check_state_clear(arm, world, grid.to_joint(start))
+    return start
+
+
+def command_metric(arm: SerialArm, q: FloatArray, start: FloatArray) -> FloatArray:
+    """The continuous commands a straight move from ``start`` to each row of ``q`` needs."""
+    return arm.lattice.commands_for_change(q - start)
+
+
+def _pose_residuals(
+    arm: SerialArm, target: ToolTarget, q: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    T = tool_pose(arm, q)
+    return (
+        np.asarray(np.linalg.norm(T[..., :3, 3] - target.position, axis=-1)),
+        np.asarray(target.angles(T[..., :3, :3])),
+    )
+
+
+def nearest_reachable(
+    arm: SerialArm, target: ToolTarget, rng: np.random.Generator
+) -> tuple[float, FloatArray]:
+    """The smallest distance from the target to the tool point over the joint limits (the
+    orientation rule ignored), and the tool point there."""
+    fam = GenericFamily(arm, ToolTarget(target.position))
+    q = fam._from_starts(400, rng)  # Levenberg-Marquardt toward the point from 400 starts
+    tip = tool_pose(arm, q)[:, :3, 3]
+    d = np.linalg.norm(tip - target.position, axis=1)
+    k = int(np.argmin(d))
+    return float(d[k]), tip[k]
+
+
+def _refine_bound(
+    arm: SerialArm,
+    target: ToolTarget,
+    start: FloatArray,
+    x0: FloatArray,
+    tol: float,
+) -> tuple[float, FloatArray] | None:
+    """``min t`` subject to the tool within ``tol`` of the target, the orientation rule, every
+    joint within ``t`` commands of ``start`` and the limits (SLSQP from ``x0``)."""
+    step = arm.lattice.max_step
+    n = arm.n_joints
+    size = arm_size(arm)
+    lo, hi = arm.lower, arm.upper
+    bounds = [(None if not np.isfinite(a) else float(a), None if not np.isfinite(b) else float(b))
+              for a, b in zip(lo, hi, strict=True)] + [(0.0, None)]  # fmt: skip
+    o = target.orientation
+
+    def frames(z: FloatArray) -> FloatArray:
+        return np.asarray(forward_frames(arm, z[:n][None])[0], dtype=np.float64)
+
+    def pos_con(z: FloatArray) -> float:
+        e = frames(z)[-1, :3, 3] - target.position
+        return float((tol**2 - e @ e) / size**2)
+
+    def pos_jac(z: FloatArray) -> FloatArray:
+        F = frames(z)
+        e = F[-1, :3, 3] - target.position
+        J = jacobian_from_frames(arm, F[None])[0][:3]
+        return np.asarray(np.r_[-2.0 * e @ J / size**2, 0.0], dtype=np.float64)
+
+    cons: list[dict[str, object]] = [{"type": "ineq", "fun": pos_con, "jac": pos_jac}]
+    if isinstance(o, AxisCone):
+
+        def axis_con(z: FloatArray) -> float:
+            a = frames(z)[-1, :3, :3] @ o.axis_tool
+            return float(a @ o.direction - np.cos(o.tolerance_rad))
+
+        def axis_jac(z: FloatArray) -> FloatArray:
+            F = frames(z)
+            a = F[-1, :3, :3] @ o.axis_tool
+            Jw = jacobian_from_frames(arm, F[None])[0][3:]
+            return np.asarray(np.r_[np.cross(a, o.direction) @ Jw, 0.0], dtype=np.float64)
+
+        cons.append({"type": "ineq", "fun": axis_con, "jac": axis_jac})
+    elif isinstance(o, PoseOrientation):
+
+        def pose_con(z: FloatArray) -> float:
+            R = frames(z)[-1, :3, :3]
+            return float((np.trace(R.T @ o.R_world_tool) - 1.0) / 2.0 - np.cos(o.tolerance_rad))
+
+        cons.append({"type": "ineq", "fun": pose_con})
+    eye = np.eye(n)
+    # t * step_i - (q_i - s_i) >= 0 and t * step_i + (q_i - s_i) >= 0
+    A = np.vstack([np.c_[-eye, step], np.c_[eye, step]])
+    b = np.r_[start, -start]
+    cons.append({"type": "ineq", "fun": lambda z: A @ z + b, "jac": lambda z: A})
+    z0 = np.r_[x0, float(np.max(np.abs(x0 - start) / step))]
+    res = minimize(
+        lambda z: float(z[-1]),
+        z0,
+        jac=lambda z: np.r_[np.zeros(n), 1.0],
+        method="SLSQP",
+        bounds=bounds,
+        constraints=cons,
+        options={"maxiter": 200, "ftol": 1e-12},
+    )
+    q = np.asarray(res.x[:n])
+    pos, ang = _pose_residuals(arm, target, q[None])
+    if not np.all(np.isfinite(q)) or pos[0] > tol * (1 + 1e-6) or not arm.within_limits(q):
+        return None
+    if o is not None and ang[0] > o.tolerance_rad + 1e-7:
+        return None
+    return float(np.max(np.abs(q - start) / step)), q
+
+
+def _diverse(q: FloatArray, metric: FloatArray, count: int, spread: FloatArray) -> FloatArray:
+    """Up to ``count`` rows of ``q``, smallest ``metric`` first, each at least ``spread``
+    (per joint, largest ratio >= 1) from those already taken."""
+    picks: list[FloatArray] = []
+    for i in np.argsort(metric, kind="stable"):
+        if not np.isfinite(metric[i]):
+            break
+        if all(np.max(np.abs(q[i] - c) / spread) >= 1.0 for c in picks):
+            picks.append(q[i])
+            if len(picks) >= count:
+                break
+    return np.array(picks).reshape(-1, q.shape[1])
+
+
+def _members_in_box(
+    fam: GenericFamily,
+    q_best: FloatArray,
+    start: FloatArray,
+    n: int,
+    rng: np.random.Generator,
+    count: int = 200,
+) -> FloatArray:
+    """Family members within ``n`` commands of ``start``: ``q_best`` moved at random inside the
+    n-command box and pulled back onto the target by Newton steps that stay in the box."""
+    step = fam.arm.lattice.max_step
+    lower, upper = start - n * step, start + n * step
+    half = np.minimum(q_best - lower, upper - q_best)
+    q0 = q_best + rng.uniform(-1.0, 1.0, (count, q_best.size)) * np.maximum(half, 0.0) * 0.9
+    q = fam.refine(q0, iterations=40, lower=lower, upper=upper)
+    return q[fam.exact(q)]
+
+
+def generic_bound(
+    arm: SerialArm,
+    target: ToolTarget,
+    start_ticks: IntArray,
+    tolerance: float,
+    samples: FloatArray,
+    starts: int = 24,
+) -> GenericBound:
+    """The command bound over the sampled family, refined by SLSQP from the ``starts`` best
+    diverse samples."""
+    start = arm.lattice.to_joint(start_ticks)
+    metric = command_metric(arm, samples, start)
+    k = int(np.argmin(metric))
+    best, best_q = float(metric[k]), samples[k]
+    spread = arm.lattice.max_step * 2.0
+    for x0 in _diverse(samples, metric, starts, spread):
+        check_time("refining the bound on the commands")
+        out = _refine_bound(arm, target, start, x0, tolerance)
+        if out is not None and out[0] < best:
+            best, best_q = out
+    rule = (
+        "" if target.orientation is None else f" and {target.orientation.describe()['type']} rule"
+    )
+    return GenericBound(
+        commands=max(int(np.ceil(best - 1e-9)), 0),
+        change_commands=best,
+        configuration=best_q,
+        samples=int(samples.shape[0]),
+        method=(
+            f"min over {samples.shape[0]} sampled configurations reaching the target{rule} "
+            f"(every tool orientation's all-solutions IK, or Levenberg-Marquardt from many "
+            f"starts) of the largest joint change in commands, the best {starts} refined by "
+            "SLSQP within the tolerance; commands >= ceil(change)"
+        ),
+    )
+
+
+def _box(arm: SerialArm, q: FloatArray, tol: float) -> tuple[IntArray, FloatArray]:
+    """Integer offsets around ``q``'s nearest lattice state (a box, wider for joints that move
+    the tool less, at most :data:`BOX_BUDGET` of them) and the tool's linearised move (model
+    unit) for each offset from ``q`` itself."""
+    grid = arm.lattice
+    F = forward_frames(arm, q[None])[0]
+    J = jacobian_from_frames(arm, F[None])[0][:3] * grid.tick  # length unit per tick
+    lever = np.linalg.norm(J, axis=0)
+    active = lever > 1e-9 * tol
+    radius = np.zeros(arm.n_joints, dtype=np.int64)
+    if np.any(active):
+        # joints that move the tool less get more ticks: the radius is ``scale * tol / lever``
+        # (1 to 12 ticks), with the largest scale whose box holds the budget (bisection)
+        inv = np.divide(tol, lever, out=np.zeros_like(lever), where=active)
+
+        def box(scale: float) -> IntArray:
+            return np.where(active, np.clip(np.round(scale * inv), 1, 12), 0).astype(np.int64)
+
+        lo_s, hi_s = 0.0, 1e4
+        for _ in range(40):
+            mid = 0.5 * (lo_s + hi_s)
+            if float(np.prod(2 * box(mid) + 1)) <= BOX_BUDGET:
+                lo_s = mid
+            else:
+                hi_s = mid
+        radius = box(lo_s)
+        if float(np.prod(2 * radius + 1)) > BOX_BUDGET:  # even radius 1 everywhere is too many
+            radius = np.where(active, 1, 0).astype(np.int64)
+    axes = [np.arange(-k, k + 1) for k in radius]
+    offsets = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, arm.n_joints)
+    return offsets, J
+
+
+def lattice_candidates(
+    arm: SerialArm,
+    target: ToolTarget,
+    q: FloatArray,
+    tol: float,
+) -> tuple[IntArray, FloatArray]:
+    """Lattice states near family member ``q`` whose tool is within ``tol`` of the target (and
+    keeps its orientation rule) and that lie within the limits: ``(K, n)`` ticks and their exact
+    position errors (model unit)."""
+    grid = arm.lattice
+    offsets, J = _box(arm, q, tol)
+    exact = grid.to_ticks_float(q)
+    base = np.round(exact).astype(np.int64)
+    lin = (offsets + (base - exact)) @ J.T  # the tool's linearised move from q
+    near = np.einsum("ij,ij->i", lin, lin) <= (1.5 * tol + 1e-3 * tol) ** 2
+    cand = base + offsets[near]
+    if cand.shape[0] == 0:
+        return cand, np.zeros(0)
+    q_c = grid.to_joint(cand)
+    pos, ang = _pose_residuals(arm, target, q_c)
+    ok = (pos <= tol) & arm.within_limits(q_c)
+    if target.orientation is not None:
+        ok &= ang <= target.orientation.tolerance_rad
+    return cand[ok], pos[ok]
+
+
+@dataclass(frozen=True)
+class GenericReach:
+    """What the generic search produced (the planner wraps it into a reach result)."""
+
+    sequence: CommandSequence
+    clearance: object
+    bound: GenericBound
+    examined: int
+    checks: int
+    rejected: tuple[str, ...]
+    method: str
+
+
+def reach_any_arm(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: IntArray,
+    target: ToolTarget,
+    tolerance: float,
+    extra_commands: int = 3,
+    max_motion_checks: int = 40,
+    plan_around: bool = True,
+    seed: int = 0,
+) -> GenericReach:
+    """The fewest commands from ``start_ticks`` to the target (then the smallest error), for any
+    arm (see the module docstring). Raises :class:`UnreachableError` naming the nearest
+    reachable point when no configuration within the limits reaches the target."""
+    grid = arm.lattice
+    start = _validated(arm, world, start_ticks, target)
+    s_q = grid.to_joint(start)
+    rng = np.random.default_rng(seed)
+    fam = GenericFamily(arm, target)
+    samples = fam.samples(near=s_q, rng=rng)
+    unit = arm.length_unit
+    where = ", ".join(f"{v:g}" for v in target.position)
+    if samples.shape[0] == 0:
+        dist, tip = nearest_reachable(arm, target, rng)
+        if dist > tolerance:
+            raise UnreachableError(
+                f"target ({where}) {unit} is out of reach within the joint limits: the nearest "
+                f"reachable point ({', '.join(f'{round(v, 2) + 0.0:.2f}' for v in tip)}) {unit} "
+                f"is {dist:.3f} {unit} away"
+            )
+        if target.orientation is not None:
+            raise UnreachableError(
+                f"target ({where}) {unit} is within reach but no configuration found puts the "
+                f"tool there with its {target.orientation.describe()['type']} rule kept"
+            )
+        raise UnreachableError(
+            f"target ({where}) {unit}: no configuration within the limits found reaching it "
+            f"(the nearest point found is {dist:.4f} {unit} away)"
+        )
+    bound = generic_bound(arm, target, start, tolerance, samples)
+    metric = command_metric(arm, samples, s_q)
+    pool = np.vstack([bound.configuration[None], samples])
+    pool_metric = np.r_[bound.change_commands, metric]
+    spread = grid.max_step * 0.5
+    examined, checks = 0, 0
+    failures: list[str] = []
+    for n in range(bound.commands, bound.commands + extra_commands + 1):
+        check_time(f"searching the lattice for {n} commands")
+        within = pool_metric <= n + 1e-9
+        members = _diverse(pool[within], pool_metric[within], MEMBERS_PER_COUNT, spread)
+        if members.shape[0] < MEMBERS_PER_COUNT // 2:
+            # few samples fit in n commands (n is tight): draw more members of the family
+            # inside the n-command box around the bound's configuration
+            extra = _members_in_box(fam, bound.configuration, s_q, n, rng)
+            if extra.shape[0]:
+                em = command_metric(arm, extra, s_q)
+                pool = np.vstack([pool, extra])
+                pool_metric = np.r_[pool_metric, em]
+                within = pool_metric <= n + 1e-9
+                members = _diverse(pool[within], pool_metric[within], MEMBERS_PER_COUNT, spread)
+        found: list[IntArray] = []
+        errors: list[float] = []
+        for q in members:
+            cand, err = lattice_candidates(arm, target, q, tolerance)
+            examined += cand.shape[0]
+            if cand.shape[0] == 0:
+                continue
+            fits = grid.commands_needed_many(cand - start) <= n
+            found.extend(cand[fits])
+            errors.extend(err[fits])
+        if not found:
+            failures.append(
+                f"{n} commands: no lattice state within {tolerance:g} {unit} of the target found "
+                f"near {members.shape[0]} family members within {n} commands"
+            )
+            continue
+        cands = np.array(found)
+        errs = np.array(errors)
+        cands, first = np.unique(cands, axis=0, return_index=True)
+        errs = errs[first]
+        order = np.argsort(errs, kind="stable")
+        clear = world.slack(arm, grid.to_joint(cands[order[: 4 * max_motion_checks]])) >= 0
+        tried = order[: 4 * max_motion_checks][clear][:max_motion_checks]
+        if tried.size == 0:
+            failures.append(f"{n} commands: every goal state within tolerance is in collision")
+            continue
+        blocked = ""
+        for i in tried:
+            check_time(f"checking the direct motions of {n} commands")
+            seq = CommandSequence.straight(start, cands[i], lattice=grid)
+            checks += 1
+            mc = motion_clearance(arm, world, seq)
+            if mc.certified_ok:
+                return GenericReach(seq, mc, bound, examined, checks, tuple(failures), "direct")
+            blocked = blocked or (
+                f"{mc.limiting_pair} is {mc.limiting_slack:+.2f} {unit} off its required "
+                f"clearance during command {mc.limiting_command}"
+            )
+        failures.append(f"{n} commands: every direct motion is blocked (e.g. {blocked})")
+    if not plan_around:
+        raise PlanningError(
+            f"no clear direct motion reaches the target within "
+            f"{bound.commands + extra_commands} commands ({'; '.join(failures)})"
+        )
+    goals = generic_goal_states(arm, world, start, target, tolerance, samples=samples, rng=rng)
+    plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed))
+    return GenericReach(
+        plan.sequence,
+        plan.clearance,
+        bound,
+        examined,
+        checks,
+        (*failures, "planned around the obstacles instead"),
+        plan.method,
+    )
+
+
+def generic_goal_states(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: IntArray,
+    target: ToolTarget,
+    tolerance: float,
+    count: int = 12,
+    body_buffer: float = 1.5,
+    spread_deg: float = 4.0,
+    samples: FloatArray | None = None,
+    rng: np.random.Generator | None = None,
+) -> IntArray:
+    """Lattice states within ``tolerance`` of the target whose links keep the margin plus
+    ``body_buffer`` (the tool tip only must not enter), at most ``count``, spread over the
+    family (members at least ``spread_deg`` apart), nearest the start in commands first."""
+    grid = arm.lattice
+    start = np.asarray(start_ticks, dtype=np.int64)
+    s_q = grid.to_joint(start)
+    gen = rng or np.random.default_rng(0)
+    if samples is None:
+        samples = GenericFamily(arm, target).samples(near=s_q, rng=gen)
+    where = ", ".join(f"{v:g}" for v in target.position)
+    if samples.shape[0] == 0:
+        raise UnreachableError(f"target ({where}) {arm.length_unit} is out of reach")
+    samples = shift_into_limits(arm, samples, s_q)
+    pairs = world.pairs(arm)
+    is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
+    required = world.required(arm)
+    values, _ = world.pair_clearances(arm, samples)
+    body_ok = np.all(np.where(is_tip, values >= 0, values - required >= body_buffer), axis=-1)
+    if not np.any(body_ok):
+        raise PlanningError(
+            f"no configuration reaching ({where}) {arm.length_unit} keeps the links "
+            f"{world.margin:g} {arm.length_unit} clear of the obstacles"
+        )
+    samples = samples[body_ok]
+    metric = command_metric(arm, samples, s_q)
+    members = _diverse(samples, metric, 4 * count, np.full(arm.n_joints, np.radians(spread_deg)))
+    states: list[IntArray] = []
+    for q in members:
+        check_time("finding goal states")
+        cand, err = lattice_candidates(arm, target, q, tolerance)
+        if cand.shape[0] == 0:
+            continue
+        vals, _ = world.pair_clearances(arm, grid.to_joint(cand))
+        ok = np.all(np.where(is_tip, vals >= 0, vals - required >= body_buffer), axis=-1)
+        if not np.any(ok):
+            continue
+        k = int(np.flatnonzero(ok)[np.argmin(err[ok])])
+        if any(np.array_equal(cand[k], s) for s in states):
+            continue
+        states.append(cand[k])
+        if len(states) >= count:
+            break
+    if not states:
+        raise PlanningError(
+            f"no lattice state within {tolerance:g} {arm.length_unit} of ({where}) "
+            f"{arm.length_unit} satisfies the clearance rule"
+        )
+    out = np.array(states, dtype=np.int64)
+    order = np.argsort(grid.commands_needed_many(out - start), kind="stable")
+    return out[order]
+
+
+__all__ = [
+    "GenericBound",
+    "GenericReach",
+    "command_metric",
+    "generic_bound",
+    "generic_goal_states",
+    "lattice_candidates",
+    "nearest_reachable",
+    "reach_any_arm",
+]
