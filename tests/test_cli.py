@@ -202,8 +202,8 @@ def test_choices_are_listed_and_a_wrong_one_is_a_usage_error(tmp_path):
     assert list(tmp_path.iterdir()) == []
     h = run("reach", "--help")
     assert "<normal|horizontal>" in h.stdout and "<bool>" not in h.stdout
-    assert "NUM NUM NUM NUM NUM NUM" in h.stdout  # --from takes six separate numbers
-    assert "float,float" not in h.stdout
+    assert "--from" in h.stdout and "θ1 … θn" in h.stdout  # one number per joint
+    assert "X Y Z" in h.stdout and "float,float" not in h.stdout
 
 
 def test_plan_and_spotweld_errors():

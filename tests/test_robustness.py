@@ -346,9 +346,8 @@ def test_a_full_disk_while_writing_is_one_line_and_leaves_nothing(tmp_path, monk
 
     monkeypatch.setattr(armpath.export, "write_xlsx", full)
     monkeypatch.chdir(tmp_path)
-    result = CliRunner().invoke(
-        app, ["plan", "--to", "10", "-80", "10", "0", "-80", "0", "--out", "o"]
-    )
+    # in-process the joint values are one word (the console entry joins them: see cli.main)
+    result = CliRunner().invoke(app, ["plan", "--to", "10 -80 10 0 -80 0", "--out", "o"])
     assert result.exit_code == 1
     lines = error_lines(result.stderr)
     assert lines == [

@@ -593,7 +593,9 @@ def test_quantize_refuses_periods_before_sampling():
     from armpath.trajectory import quantize
 
     traj = minimum_snap([[0.0], [1.0]], [0.0, 2.0])
-    with pytest.raises(InvalidInputError, match=r"controller periods.*2,000,000,000.*change --period"):
+    with pytest.raises(
+        InvalidInputError, match=r"controller periods.*2,000,000,000.*change --period"
+    ):
         quantize(traj, 1e-9, option="--period")
     with pytest.raises(InvalidInputError, match="controller periods"):
         quantize(traj, 1e-300)  # 2e300 periods: the ratio itself is beyond any integer

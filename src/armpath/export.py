@@ -123,6 +123,13 @@ def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict
         "n_commands": result.n_commands,
         "lower_bound_commands": lb.commands,
         "provably_fewest": result.is_provably_fewest,
+        "meets_bound": result.meets_bound,
+        "tool_orientation": None
+        if result.orientation is None
+        else {
+            **result.orientation.describe(),
+            "angle_deg": None if result.angle_rad is None else float(np.degrees(result.angle_rad)),
+        },
         "fewer_commands_rejected": list(result.fewer_commands_rejected),
         "method": result.method,
         "lower_bound": {
@@ -131,6 +138,7 @@ def reach_result_dict(result: ReachResult, arm: SerialArm, scene: Scene) -> dict
             "exact_max_joint_change_deg": lb.exact_max_joint_change_deg,
             "configuration_deg": list(lb.configuration_deg),
             "method": lb.method,
+            "proven": lb.proven,
         },
         "min_clearance_mm": _finite_or_none(result.clearance.min_clearance),
         "clearance": clearance_dict(result.clearance),

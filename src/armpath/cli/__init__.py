@@ -68,13 +68,46 @@ def cli_command() -> Any:
     return _tidy_help(typer.main.get_command(app))
 
 
+#: Options that take one value per joint of the chosen arm (how many depends on the arm): on
+#: the command line their numbers follow the option as separate words, which are joined into
+#: the option's one value before parsing.
+JOINT_LIST_OPTIONS = ("--from", "--to")
+
+
+def join_number_lists(args: list[str], options: tuple[str, ...] = JOINT_LIST_OPTIONS) -> list[str]:
+    """``--from 0 -90 0 0 -90 0`` becomes ``--from "0 -90 0 0 -90 0"``: the numbers that
+    follow one of ``options`` (up to the next word that is not a number) become its value."""
+
+    def is_number(word: str) -> bool:
+        try:
+            float(word)
+        except ValueError:
+            return False
+        return True
+
+    out: list[str] = []
+    i = 0
+    while i < len(args):
+        word = args[i]
+        out.append(word)
+        i += 1
+        if word in options:
+            numbers = []
+            while i < len(args) and (is_number(args[i]) or "," in args[i]):
+                numbers.append(args[i])
+                i += 1
+            if numbers:
+                out.append(" ".join(numbers))
+    return out
+
+
 def main() -> None:
     """Console entry point."""
     try:
-        cli_command()()
+        cli_command()(args=join_number_lists(sys.argv[1:]))
     except ArmpathError as exc:  # pragma: no cover - commands already convert these
         err_console.print(f"error: {exc}", markup=False)
         sys.exit(1)
 
 
-__all__ = ["app", "cli_command", "main"]
+__all__ = ["app", "cli_command", "join_number_lists", "main"]

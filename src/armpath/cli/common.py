@@ -12,6 +12,7 @@ from typing import Annotated, Any, NoReturn
 
 import numpy as np
 import typer
+from numpy.typing import NDArray
 from rich.console import Console
 from rich.markup import escape
 
@@ -23,7 +24,8 @@ from armpath.geometry import WallThickness
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.motion import Objective
-from armpath.scenes import Scene, load_scene
+from armpath.scenes import Scene, load_scene, scene_from_dict
+from armpath.scenes.arm import scene_arm
 
 app = typer.Typer(
     add_completion=False,
@@ -37,6 +39,8 @@ app = typer.Typer(
 out_console = Console(highlight=False)
 err_console = Console(stderr=True, highlight=False)
 
+IntArray = NDArray[np.int64]
+
 LOOSE = {"ignore_unknown_options": True}  # lets negative numbers through as arguments
 
 WallOption = Annotated[
@@ -48,7 +52,12 @@ WallOption = Annotated[
     ),
 ]
 LinkRadiusOption = Annotated[
-    float, typer.Option(help="Radius of the links' capsules, mm (the seeds use 0).")
+    float | None,
+    typer.Option(
+        help="Radius of every link's capsule, mm. Default: the model's own (the seed arm: 0, "
+        "as in the seeds).",
+        show_default=False,
+    ),
 ]
 SceneOption = Annotated[
     Path | None,
@@ -190,6 +199,47 @@ def _arm(link_radius_mm: float) -> SerialArm:
     if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
         raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
     return seed_arm(SeedArmGeometry(link_radius_mm=link_radius_mm))
+
+
+#: The scene of an arm that stands alone (no scene file, a model other than the seed arm):
+#: no obstacles, its links kept apart from each other.
+ALONE = {"name": "none (the arm alone)", "description": "no obstacles: self-collision only"}
+
+
+def task_setup(
+    model: str | None,
+    scene_file: Path | None,
+    wall: WallThickness | str | None,
+    link_radius_mm: float | None,
+) -> tuple[SerialArm, Scene]:
+    """The arm and the scene of a task command, decided once: the scene file (or the seed
+    scene for the seed arm, or no obstacles for another arm standing alone), its ``[arm]`` or
+    ``--model`` (which replaces the scene's model), and ``--link-radius`` (mm, every link)."""
+    if scene_file is not None:
+        scene = load_scene(scene_file)
+    elif model in (None, "seed"):
+        scene = load_scene(None)
+    else:
+        scene = scene_from_dict(dict(ALONE), "none (the arm alone)")
+    if wall:
+        scene = scene.with_wall_thickness(wall)
+    arm = scene_arm(scene, model)
+    if link_radius_mm is not None:
+        if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
+            raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
+        scale = 1e-3 if arm.length_unit == "m" else 1.0
+        arm = arm.with_link_radii(link_radius_mm * scale)
+    return arm, scene
+
+
+def joint_state(arm: SerialArm, values: str | None, option: str) -> IntArray:
+    """A lattice state of ``arm`` from an option's joint values (deg, or mm for prismatic
+    joints, separated by spaces or commas); ``None``: the arm's home pose."""
+    if values is None:
+        return arm.lattice.to_ticks(arm.home, "the arm's home pose")
+    words = values.replace(",", " ").split()
+    numbers = _numbers(words, arm.n_joints, f"{option} ({arm.n_joints} joint values of {arm.name})")
+    return arm.lattice.from_display(np.array(numbers), f"{option}")
 
 
 def _fmt(v: Any, digits: int = 4) -> str:

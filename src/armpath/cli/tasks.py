@@ -31,10 +31,11 @@ from armpath.cli.common import (
     _numbers,
     _scene,
     app,
+    joint_state,
     out_console,
     progress,
+    task_setup,
 )
-from armpath.commands import deg_to_ticks, ticks_to_deg
 from armpath.errors import InvalidInputError
 from armpath.export import (
     OutputFolder,
@@ -48,6 +49,7 @@ from armpath.export import (
     write_reach_files,
     write_sequence_files,
 )
+from armpath.ik.target import AxisCone, Orientation, PoseOrientation
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import (
     MAX_SEARCHES,
@@ -99,36 +101,56 @@ def _clearance_text(c: dict[str, Any], proven: bool = False) -> str:
 
 def _scene_text(name: str, wall: str | None) -> str:
     """The scene's name and, when it has a hollow workpiece, how its wall is measured."""
-    return f"{name}; workpiece wall measured {wall}" if wall else f"{name} (no hollow workpiece)"
+    return f"{name}; workpiece wall measured {wall}" if wall else name
 
 
 def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     seq = result.sequence
+    grid = seq.grid
     lb = result.lower_bound
-    c = result.clearance
-    table = Table(title="reach", show_header=False)
+    table = Table(title=f"reach ({arm.name})", show_header=False)
     table.add_column("quantity", style="bold")
     table.add_column("value")
+    units = _units_text(grid.units)
     table.add_row("target", f"{_fmt(result.target_mm, 3)} mm")
-    table.add_row("start", f"{_fmt(ticks_to_deg(seq.start_ticks), 1)} deg")
-    proof = "provably fewest" if result.is_provably_fewest else "not proven fewest"
-    table.add_row("commands", f"{result.n_commands}  (lower bound {lb.commands}: {proof})")
+    if result.orientation is not None and result.angle_rad is not None:
+        o = result.orientation.describe()
+        table.add_row(
+            "tool orientation",
+            f"{np.degrees(result.angle_rad):.3f} deg from the {str(o['type']).replace('_', ' ')} "
+            f"(tolerance {o['tolerance_deg']:g} deg)",
+        )
+    table.add_row("start", f"{_fmt(grid.display(seq.start_ticks), 1)} {units}")
+    if result.is_provably_fewest:
+        claim = f"lower bound {lb.commands}: provably fewest"
+    elif result.meets_bound:
+        claim = f"bound {lb.commands} found over the solution family: fewest found"
+    else:
+        claim = f"lower bound {lb.commands}" + ("" if lb.proven else ", found over the family")
+    table.add_row("commands", f"{result.n_commands}  ({claim})")
     if result.method != "direct":
         table.add_row("method", f"{result.method} (every direct motion is blocked)")
     table.add_row(
-        "fingertip error", f"{result.error_mm:.4f} mm  (tolerance {result.tolerance_mm} mm)"
+        "tool point error", f"{result.error_mm:.4f} mm  (tolerance {result.tolerance_mm} mm)"
     )
-    table.add_row("final joints", f"{_fmt(ticks_to_deg(seq.final_ticks), 1)} deg")
-    table.add_row("fingertip", f"{_fmt(result.tip_mm, 4)} mm")
+    table.add_row("final joints", f"{_fmt(grid.display(seq.final_ticks), 1)} {units}")
+    table.add_row("tool point", f"{_fmt(result.tip_mm, 4)} mm")
+    span = np.abs(seq.final_ticks - seq.start_ticks) * grid.tick_display
     table.add_row(
         "largest joint change",
-        f"{np.abs(seq.final_ticks - seq.start_ticks).max() / 10:.1f} deg "
-        f"(least possible {lb.max_joint_change_deg:.3f} deg)",
+        f"{span.max(initial=0.0):.1f} {units} (least possible {lb.max_joint_change_deg:.3f})"
+        if grid.is_default
+        else f"{span.max(initial=0.0):.2f} {units}",
     )
-    table.add_row("min clearance", _clearance_text(clearance_dict(c), proven=True))
+    table.add_row("min clearance", _clearance_text(clearance_dict(result.clearance), proven=True))
     wall = scene.wall_thickness
     table.add_row("scene", _scene_text(scene.name, wall.value if wall else None))
     return table
+
+
+def _units_text(units: tuple[str, ...]) -> str:
+    """``deg`` for an arm of revolute joints, else the unit of each joint (``deg, deg, mm``)."""
+    return "deg" if set(units) == {"deg"} else "(" + ", ".join(units) + ")"
 
 
 def _write_reach(
@@ -154,51 +176,124 @@ def _write_reach(
         _animate_into(folder, stem, arm, scene, result.sequence, title, result.target_mm)
 
 
+FromOption = Annotated[
+    str | None,
+    typer.Option(
+        "--from",
+        metavar="θ1 … θn",
+        help="Start joint values, one per joint: deg (mm for prismatic joints), on the arm's "
+        "lattice. Default: the arm's home pose (the seed arm: 0 -90 0 0 -90 0).",
+        show_default=False,
+    ),
+]
+ToolAxisOption = Annotated[
+    tuple[float, float, float] | None,
+    typer.Option(
+        "--tool-axis",
+        metavar="X Y Z",
+        help="Keep the tool's approach axis within --axis-tolerance of this world direction at "
+        "the target.",
+        show_default=False,
+    ),
+]
+AxisToleranceOption = Annotated[
+    float, typer.Option("--axis-tolerance", help="Largest angle of the tool axis, deg.")
+]
+PoseOption = Annotated[
+    tuple[float, float, float] | None,
+    typer.Option(
+        "--pose",
+        metavar="RX RY RZ",
+        help="Reach a whole pose: the tool frame's rotation as a rotation vector, deg, kept "
+        "within --angle-tolerance.",
+        show_default=False,
+    ),
+]
+AngleToleranceOption = Annotated[
+    float, typer.Option("--angle-tolerance", help="Largest rotation angle from --pose, deg.")
+]
+TaskModelOption = Annotated[
+    str | None,
+    typer.Option(
+        "--model",
+        help="The arm: a built-in model (seed, welder003, painter004, puma560, ur5, iiwa14) or "
+        "a robot file (.json D-H, .urdf). Default: the scene's [arm], else the seed arm.",
+        show_default=False,
+    ),
+]
+
+
+def orientation_rule(
+    tool_axis: tuple[float, float, float] | None,
+    axis_tolerance_deg: float,
+    pose_deg: tuple[float, float, float] | None,
+    angle_tolerance_deg: float,
+) -> Orientation | None:
+    """The orientation rule of ``--tool-axis``/``--axis-tolerance`` or ``--pose``/
+    ``--angle-tolerance`` (at most one of them)."""
+    if tool_axis is not None and pose_deg is not None:
+        raise InvalidInputError("give --tool-axis or --pose, not both")
+    for what, v in (
+        ("--axis-tolerance", axis_tolerance_deg),
+        ("--angle-tolerance", angle_tolerance_deg),
+    ):
+        if not (np.isfinite(v) and 0.0 <= v <= 180.0):
+            raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
+    if tool_axis is not None:
+        axis = np.array(_numbers([str(v) for v in tool_axis], 3, "--tool-axis X Y Z"))
+        return AxisCone(axis, np.radians(axis_tolerance_deg))
+    if pose_deg is not None:
+        from scipy.spatial.transform import Rotation
+
+        rv = np.radians(_numbers([str(v) for v in pose_deg], 3, "--pose RX RY RZ (deg)"))
+        return PoseOrientation(
+            Rotation.from_rotvec(rv).as_matrix(), np.radians(angle_tolerance_deg)
+        )
+    return None  # fmt: skip
+
+
 @app.command(context_settings=LOOSE)
 def reach(
     target: Annotated[
         list[str],
         typer.Argument(help="X Y Z of the target in mm", show_default=False, metavar="X Y Z"),
     ],
-    start: Annotated[
-        tuple[float, float, float, float, float, float] | None,
-        typer.Option(
-            "--from",
-            help="Start joint angles θ1 … θ6 in deg (multiples of 0.1). "
-            "Default: the arm's initial pose (0 -90 0 0 -90 0).",
-        ),
-    ] = None,
+    start: FromOption = None,
+    model: TaskModelOption = None,
+    tool_axis: ToolAxisOption = None,
+    axis_tolerance: AxisToleranceOption = 15.0,
+    pose: PoseOption = None,
+    angle_tolerance: AngleToleranceOption = 5.0,
     json_out: JsonOption = False,
     out: Annotated[
         Path | None,
         typer.Option("--out", help="Write reach.json, reach.csv, reach.xlsx and PNG figures here."),
     ] = None,
-    tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
+    tolerance: Annotated[float, typer.Option(help="Largest tool point error accepted, mm.")] = 0.05,
     wall: WallOption = None,
     scene_file: SceneOption = None,
-    link_radius: LinkRadiusOption = 0.0,
+    link_radius: LinkRadiusOption = None,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
-    """Reach a point with the fingertip in the fewest commands, then the smallest error.
+    """Reach a point with the tool in the fewest commands, then the smallest error.
 
-    When every direct motion is blocked, the motion is planned around the obstacles instead
-    (the summary's method says so).
+    The seed arm takes its closed-form solution family (the bound is a proof); any other arm,
+    tool or orientation rule takes the search over its whole solution family. When every
+    direct motion is blocked, the motion is planned around the obstacles instead (the
+    summary's method says so).
     """
     with _cli_errors(time_limit):
-        arm = _arm(link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
-        theta = list(start) if start is not None else list(np.degrees(arm.home))
-        start_ticks = deg_to_ticks(
-            _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
-        )
+        start_ticks = joint_state(arm, start, "--from")
+        rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance)
         options = ReachOptions(tolerance_mm=tolerance)
         _animate_needs_out(animate, out)
-        scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             with progress("planning the reach ..."):
-                result = plan_reach(arm, scene.world, start_ticks, xyz, options)
+                result = plan_reach(arm, scene.world, start_ticks, xyz, options, orientation=rule)
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene, animate)
         written = folder.written if folder is not None else []
@@ -220,12 +315,12 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     )
     if "error_mm" in doc:
         table.add_row(
-            "fingertip error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
+            "tool point error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
         )
     table.add_row("method", str(doc["method"]))
     table.add_row(
         "objectives",
-        f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
+        f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
         f"joint travel {m['energy_deg']:.1f} deg (objective: {doc['objective']})",
     )
     table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} deg")
@@ -244,10 +339,13 @@ def _plan_to_point(
     json_out: bool,
     stem: str,
     animate: bool = False,
+    orientation: Orientation | None = None,
 ) -> None:
     with progress("planning ...") as say:
         say("goal states at the target")
-        goals, _ = goal_states(arm, scene.world, start_ticks, xyz, tolerance)
+        goals, _ = goal_states(
+            arm, scene.world, start_ticks, xyz, tolerance, orientation=orientation
+        )
         plan = plan_motion(arm, scene.world, start_ticks, goals, options, on_progress=say)
     doc = plan_result_dict(plan, arm, scene, options.objective.value, xyz, tolerance)
     _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz, animate)
@@ -282,29 +380,37 @@ def _emit_plan(
 @app.command(context_settings=LOOSE)
 def plan(
     scene_file: SceneOption = None,
-    start: Annotated[
-        tuple[float, float, float, float, float, float] | None,
-        typer.Option(
-            "--from",
-            help="Start joint angles θ1 … θ6 in deg (multiples of 0.1). Default: the arm's "
-            "initial pose.",
-        ),
-    ] = None,
+    model: TaskModelOption = None,
+    start: FromOption = None,
     to: Annotated[
-        tuple[float, float, float, float, float, float] | None,
-        typer.Option("--to", help="Goal joint angles θ1 … θ6 in deg (multiples of 0.1)."),
+        str | None,
+        typer.Option(
+            "--to",
+            metavar="θ1 … θn",
+            help="Goal joint values, one per joint: deg (mm for prismatic joints), on the "
+            "arm's lattice.",
+            show_default=False,
+        ),
     ] = None,
     to_xyz: Annotated[
         tuple[float, float, float] | None,
-        typer.Option("--to-xyz", help="Goal point X Y Z of the fingertip, mm."),
+        typer.Option("--to-xyz", metavar="X Y Z", help="Goal point of the tool, mm."),
     ] = None,
+    tool_axis: ToolAxisOption = None,
+    axis_tolerance: AxisToleranceOption = 15.0,
+    pose: PoseOption = None,
+    angle_tolerance: AngleToleranceOption = 5.0,
     objective: ObjectiveOption = Objective.COMMANDS,
     weights: Annotated[
-        tuple[float, float, float, float, float, float] | None,
-        typer.Option(help="Energy weights of joints 1 … 6 (default all 1)."),
+        str | None,
+        typer.Option(
+            metavar="W1,…,Wn",
+            help="Energy weights, one per joint, separated by commas (default all 1).",
+            show_default=False,
+        ),
     ] = None,
     tolerance: Annotated[
-        float, typer.Option(help="Largest fingertip error accepted with --to-xyz, mm.")
+        float, typer.Option(help="Largest tool point error accepted with --to-xyz, mm.")
     ] = 0.05,
     json_out: JsonOption = False,
     out: Annotated[
@@ -312,7 +418,7 @@ def plan(
         typer.Option("--out", help="Write plan.json, plan.csv, plan.xlsx and PNG figures here."),
     ] = None,
     wall: WallOption = None,
-    link_radius: LinkRadiusOption = 0.0,
+    link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     searches: Annotated[
         int,
@@ -326,7 +432,7 @@ def plan(
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
-    """Plan a collision-free command sequence to a joint goal or a fingertip point.
+    """Plan a collision-free command sequence to a joint goal or a tool point.
 
     Obstacles and the clearance rule come from the scene file. The direct motion is used when
     it is clear; otherwise RRT-Connect with shortcuts finds a path, which is put on the command
@@ -334,20 +440,22 @@ def plan(
     """
     with _cli_errors(time_limit):
         if (to is None) == (to_xyz is None):
-            raise InvalidInputError("give exactly one goal: --to θ1 … θ6 or --to-xyz X Y Z")
+            raise InvalidInputError("give exactly one goal: --to θ1 … θn or --to-xyz X Y Z")
         _animate_needs_out(animate, out)
-        arm = _arm(link_radius)
-        theta = list(start) if start is not None else list(np.degrees(arm.home))
-        start_ticks = deg_to_ticks(
-            _numbers([str(t) for t in theta], 6, "--from θ1 … θ6 (deg)"), what="--from angles"
-        )
+        arm, scene = task_setup(model, scene_file, wall, link_radius)
+        start_ticks = joint_state(arm, start, "--from")
+        rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance)
+        if rule is not None and to_xyz is None:
+            raise InvalidInputError("--tool-axis and --pose go with --to-xyz")
+        energy = None
+        if weights is not None:
+            energy = tuple(_numbers(weights.replace(",", " ").split(), arm.n_joints, "--weights"))
         options = MotionOptions(
             objective=objective,
-            energy_weights=tuple(weights) if weights else None,
+            energy_weights=energy,
             seed=seed,
             searches=searches,
         )
-        scene = _scene(scene_file, wall)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             if to_xyz is not None:
@@ -363,12 +471,10 @@ def plan(
                     json_out,
                     "plan",
                     animate,
+                    rule,
                 )
             else:
-                assert to is not None
-                goal = deg_to_ticks(
-                    _numbers([str(t) for t in to], 6, "--to θ1 … θ6 (deg)"), what="--to angles"
-                )
+                goal = joint_state(arm, to, "--to")
                 with progress("planning ...") as say:
                     result = plan_motion(
                         arm, scene.world, start_ticks, goal[None, :], options, on_progress=say
@@ -402,7 +508,7 @@ def _tour_summary(doc: dict[str, Any]) -> Table:
     m = doc["metrics"]
     table.add_row(
         "objectives",
-        f"{m['commands']} commands, fingertip path {m['tip_path_mm']:.1f} mm, "
+        f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
         f"joint travel {m['energy_deg']:.1f} deg",
     )
     table.add_row("scene", _scene_text(doc["scene"]["name"], doc["wall_thickness"]))
@@ -450,19 +556,20 @@ def spotweld(
         Path | None,
         typer.Option("--out", help="Write spotweld.json, .csv, .xlsx and PNG figures here."),
     ] = None,
-    tolerance: Annotated[float, typer.Option(help="Largest fingertip error accepted, mm.")] = 0.05,
+    tolerance: Annotated[float, typer.Option(help="Largest tool point error accepted, mm.")] = 0.05,
     objective: ObjectiveOption = Objective.COMMANDS,
     wall: WallOption = None,
     scene_file: SceneOption = None,
-    link_radius: LinkRadiusOption = 0.0,
+    model: TaskModelOption = None,
+    link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
-    """Task 3: reach the spot welds on the workpiece's inner wall through the open top."""
+    """Task 3: reach the scene's spot welds (the seed scene: on the workpiece's inner wall,
+    through the open top), in the best order; any arm (--model or the scene's [arm])."""
     with _cli_errors(time_limit):
-        arm = _arm(link_radius)
-        scene = _scene(scene_file, wall)
+        arm, scene = task_setup(model, scene_file, wall, link_radius)
         options = MotionOptions(objective=objective, seed=seed)
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
@@ -570,7 +677,7 @@ def _write_trace(
 def trace(
     tolerance: Annotated[
         float,
-        typer.Option(help="Largest distance of the continuous fingertip path from the curve, mm."),
+        typer.Option(help="Largest distance of the continuous tool path from the curve, mm."),
     ] = 0.1,
     json_out: JsonOption = False,
     out: Annotated[
@@ -579,16 +686,16 @@ def trace(
     ] = None,
     wall: WallOption = None,
     scene_file: SceneOption = None,
-    link_radius: LinkRadiusOption = 0.0,
+    model: TaskModelOption = None,
+    link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
-    """Task 2: go once around the scene's curve (the crack) with the fingertip, every reachable
+    """Task 2: go once around the scene's curve (the crack) with the tool, every reachable
     part, fewest passes and commands; report the unreachable arcs and why."""
     with _cli_errors(time_limit):
-        arm = _arm(link_radius)
-        scene = _scene(scene_file, wall)
+        arm, scene = task_setup(model, scene_file, wall, link_radius)
         options = TraceOptions(tolerance_mm=tolerance, motion=MotionOptions(seed=seed))
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
@@ -623,7 +730,7 @@ def run(
 
     with _cli_errors(time_limit):
         scene = _scene(None, wall)
-        arm = _arm(link_radius)
+        arm = _arm(0.0 if link_radius is None else link_radius)
         titles = dict(SEED_TASKS)
         with output_folder(out) as folder:
             with progress(f"{titles['reach']} ..."):

@@ -334,7 +334,7 @@ def blindzones(
     ] = 9,
     seed: Annotated[int, typer.Option(help="Random seed of the sampling.")] = 0,
     wall: WallOption = None,
-    link_radius: LinkRadiusOption = 0.0,
+    link_radius: LinkRadiusOption = None,
     out: Annotated[
         Path | None,
         typer.Option(
@@ -350,7 +350,7 @@ def blindzones(
     cannot reach without a collision (areas mm^2, fractions)."""
     with _cli_errors(time_limit):
         scene = _scene(None, wall)
-        arm = _arm(link_radius)
+        arm = _arm(0.0 if link_radius is None else link_radius)
         _check_blind_zone_sizes(arm, pixel, samples, bands, seed)
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:

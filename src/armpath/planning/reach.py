@@ -761,6 +761,7 @@ def goal_states(
     body_buffer_mm: float = GOAL_BODY_BUFFER_MM,
     spread_deg: float = GOAL_SPREAD_DEG,
     sphere_step_deg: float = 1.0,
+    orientation: Orientation | None = None,
 ) -> tuple[IntArray, FloatArray]:
     """Lattice states that put the fingertip within ``tolerance_mm`` of the target, clear of
     obstacles, nearest first.
@@ -777,6 +778,16 @@ def goal_states(
     by largest joint change from the start. Raises :class:`PlanningError` when no clear state
     exists.
     """
+    if orientation is not None or not _seed_fast_path(arm):
+        from armpath.planning.reach_generic import generic_goal_states, validated_start
+
+        target = ToolTarget(np.asarray(target_mm, dtype=np.float64), orientation)
+        start = validated_start(arm, world, np.asarray(start_ticks), target)
+        states = generic_goal_states(
+            arm, world, start, target, tolerance_mm, count, body_buffer_mm, spread_deg
+        )
+        T = tool_pose(arm, arm.lattice.to_joint(states))
+        return states, np.linalg.norm(T[:, :3, 3] - target.position, axis=-1)
     p = _validated_problem(arm, world, start_ticks, target_mm)
     fam = _reachable_family(p, sphere_step_deg, tolerance_mm, 0)
     return _goal_states(p, fam, tolerance_mm, count, body_buffer_mm, spread_deg)

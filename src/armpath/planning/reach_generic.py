@@ -62,7 +62,7 @@ class GenericBound:
     method: str
 
 
-def _validated(
+def validated_start(
     arm: SerialArm, world: CollisionWorld, start_ticks: IntArray, target: ToolTarget
 ) -> IntArray:
     grid = arm.lattice
@@ -342,7 +342,7 @@ def reach_any_arm(
     arm (see the module docstring). Raises :class:`UnreachableError` naming the nearest
     reachable point when no configuration within the limits reaches the target."""
     grid = arm.lattice
-    start = _validated(arm, world, start_ticks, target)
+    start = validated_start(arm, world, start_ticks, target)
     s_q = grid.to_joint(start)
     rng = np.random.default_rng(seed)
     fam = GenericFamily(arm, target)
