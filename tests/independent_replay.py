@@ -263,14 +263,16 @@ class DHRobot:
     def within_limits(self, q: np.ndarray, slack: float = 1e-9) -> bool:
         return bool(np.all((q >= self.lower - slack) & (q <= self.upper + slack)))
 
-    def position_jacobian(self, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
-        """Pose Jacobian by central differences: position (mm) and rotation entries, per joint."""
+    def pose_jacobian(self, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
+        """Jacobian of (position in m, rotation-matrix entries) by central differences, per
+        joint (rad, or m for a prismatic joint): unitless, for judging conditioning."""
         cols = []
         for i in range(self.n):
             e = np.zeros(self.n)
             e[i] = h
             Tp, Tm = self.pose(q + e), self.pose(q - e)
-            cols.append(np.r_[(Tp[:3, 3] - Tm[:3, 3]) / 1000.0, (Tp[:3, :3] - Tm[:3, :3]).ravel()])
+            col = np.r_[(Tp[:3, 3] - Tm[:3, 3]) / 1000.0, (Tp[:3, :3] - Tm[:3, :3]).ravel()]
+            cols.append(col * (1000.0 if self.prismatic[i] else 1.0))
         return np.array(cols).T / (2 * h)
 
 
@@ -369,9 +371,7 @@ def check_ik(
     }
     if generating_q is not None and len(generating_q):
         found = any(_angle_close(s, generating_q, robot.prismatic, 1e-4) for s in sols)
-        sv = np.linalg.svd(
-            robot.position_jacobian(np.asarray(generating_q, float)), compute_uv=False
-        )
+        sv = np.linalg.svd(robot.pose_jacobian(np.asarray(generating_q, float)), compute_uv=False)
         facts["found_generating"] = found
         facts["generating_sigma_min"] = float(sv[-1]) if sv.size else 0.0
     return problems, facts

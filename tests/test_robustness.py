@@ -21,7 +21,7 @@ from armpath.commands import deg_to_ticks
 from armpath.errors import InvalidInputError, SceneError, TimeLimitError, UnreachableError
 from armpath.model.seed_arm import seed_arm
 from armpath.planning.tour import MAX_AUTO_ORDER_TARGETS, plan_tour
-from armpath.planning.trace import TraceOptions, _Tracer, plan_trace
+from armpath.planning.trace import TraceOptions, Tracer, plan_trace
 from armpath.results import load_result
 from armpath.scenes import load_scene, scene_from_dict, seed_scene
 from cli_checks import error_lines
@@ -61,7 +61,7 @@ def test_tracer_stops_at_the_goal_instead_of_stepping_across_it():
     """The defect: the stop rule took |goal - s| <= 0.05 mm while a command could overshoot the
     goal by up to the tolerance, so the tracer went back and forth across the goal for ever. A
     stub step that always jumps 0.08 mm across the goal must end the pass after one command."""
-    tracer = _Tracer.__new__(_Tracer)
+    tracer = Tracer.__new__(Tracer)
     tracer.tol = 0.1
     tracer.arc = type("Arc", (), {"start_mm": 0.0, "end_mm": 10.0})()
     calls = []
@@ -76,7 +76,7 @@ def test_tracer_stops_at_the_goal_instead_of_stepping_across_it():
 
 
 def test_tracer_refuses_a_step_that_makes_no_progress():
-    tracer = _Tracer.__new__(_Tracer)
+    tracer = Tracer.__new__(Tracer)
     tracer.tol = 0.1
     tracer.arc = type("Arc", (), {"start_mm": 0.0, "end_mm": 10.0})()
     tracer.step = lambda qk, sk, goal: (qk, sk + 0.01)  # breaks the step rule

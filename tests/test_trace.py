@@ -20,8 +20,7 @@ from armpath.commands import deg_to_ticks
 from armpath.errors import SceneError
 from armpath.geometry.curves import ParametricCurve, Polyline
 from armpath.model.seed_arm import seed_arm
-from armpath.planning.curve_reach import curve_reachability
-from armpath.planning.trace import TraceOptions, plan_trace
+from armpath.planning.trace import TraceOptions, curve_reachability, plan_trace
 from armpath.scenes import scene_from_dict
 
 TABLE_ONLY = {

@@ -1,10 +1,15 @@
 """Planning on the command lattice: reach a point, plan around obstacles, tour points, trace a
 curve, check continuous motions."""
 
-from armpath.planning.curve_reach import CurveReachability, curve_reachability
 from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.reach import LowerBound, ReachOptions, ReachResult, plan_reach
-from armpath.planning.trace import TraceOptions, TraceResult, plan_trace
+from armpath.planning.trace import (
+    CurveReachability,
+    TraceOptions,
+    TraceResult,
+    curve_reachability,
+    plan_trace,
+)
 
 __all__ = [
     "CurveReachability",

@@ -45,7 +45,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.seed_arm import seed_geometry_of
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.curve_reach import curve_reachability
+from armpath.planning.trace import curve_reachability
 from armpath.workspace.sampling import check_count, joint_ranges, random_generator
 
 FloatArray = NDArray[np.float64]

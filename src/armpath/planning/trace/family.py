@@ -1,0 +1,525 @@
+"""The solution family of the tool point on a curve: the configurations that put it on the
+curve at arc length ``s``, for one arm and scene.
+
+A point of the curve is *reachable* when some configuration puts the tool point exactly on it
+with every joint within its limits and the clearance rule kept (links keep the margin from every
+obstacle and each other; the tool tip may touch but not penetrate). For a curve that lies on an
+obstacle's surface (the *surface*, e.g. the weld seam on the workpiece) the tool must come from
+outside: only tool directions (the tool frame's approach axis, from the flange to the tool
+point) with ``direction . n <= 0`` (``n`` the outward normal) are searched, and a rule for the
+tool axis (within a cone about the surface normal, or a fixed direction) narrows them further.
+
+The family is searched over tool directions: :class:`SeedCurveFamily` by the seed arm's closed
+form (the wrist point on a sphere around the point, four geometric branches), polished by
+Nelder-Mead; :class:`GenericCurveFamily` for any other arm by the all-solutions IK of each tool
+direction with turns about it (six joints) or Levenberg-Marquardt from warm starts (other arms).
+
+A family member's *score* is its smallest slack: a pair's clearance less what it needs (mm) or a
+joint's distance to its limit (deg, counted 1:1 with mm -- only the sign decides).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import minimize
+
+from armpath.errors import InvalidInputError
+from armpath.geometry.curves import Curve
+from armpath.geometry.primitives import Obstacle, orthonormal_frame
+from armpath.geometry.world import CollisionWorld
+from armpath.ik.family import GenericFamily, shift_into_limits
+from armpath.ik.seed_position import family_from_wrist
+from armpath.ik.solve import complete_solver
+from armpath.ik.target import ToolTarget
+from armpath.kinematics import landmark_positions, tool_pose
+from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
+from armpath.model.serial_arm import SerialArm
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: A tool point this close to the surface (or inside by at most this much) touches it (mm).
+TOUCH_MM = 1e-6
+#: Tool directions this far past tangent to the surface are still searched (cosine).
+_PAST_TANGENT = 0.02
+#: Branches of :func:`family_from_wrist` that differ geometrically (wrist flip dropped).
+_BRANCHES = (0, 2, 4, 6)
+
+
+def fibonacci_directions(count: int) -> FloatArray:
+    """``count`` nearly uniform unit vectors ``(count, 3)`` (Fibonacci sphere)."""
+    i = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * i / count
+    phi = np.pi * (1.0 + np.sqrt(5.0)) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The best configuration the family search found for one curve point.
+
+    ``score`` is the smallest slack there (>= 0: reachable); ``q`` joints (rad) or NaN when the
+    point has no real solution; ``limiting`` names the constraints at the smallest slack (see
+    :meth:`CurveFamily.limiting`).
+    """
+
+    s_mm: float
+    score: float
+    q: FloatArray
+    limiting: tuple[str, ...]
+
+    @property
+    def reachable(self) -> bool:
+        return bool(self.score >= 0.0)
+
+    @property
+    def out_of_reach(self) -> bool:
+        """No configuration at all puts the tool point there."""
+        return not bool(np.all(np.isfinite(self.q)))
+
+
+@dataclass(frozen=True)
+class AxisRule:
+    """Where the tool's approach axis may point while it is on the curve: within
+    ``tolerance_rad`` of the surface's inward normal (``normal=True``: a torch kept near the
+    normal), or of a fixed world ``direction``."""
+
+    tolerance_rad: float
+    normal: bool = True
+    direction: FloatArray | None = None
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "normal" if self.normal else "direction",
+            "direction": None if self.direction is None else np.asarray(self.direction).tolist(),
+            "tolerance_deg": float(np.degrees(self.tolerance_rad)),
+        }
+
+
+@dataclass
+class CurveFamily:
+    """The solution family of the tool point on a curve (the machinery every arm shares).
+
+    ``surface`` is the obstacle the curve lies on (found automatically: the one whose surface is
+    within 1e-6 mm of every sampled curve point), or None for a curve in free space. ``rule``
+    narrows the tool directions (:class:`AxisRule`).
+    """
+
+    arm: SerialArm
+    world: CollisionWorld
+    curve: Curve
+    rule: AxisRule | None = None
+    surface: Obstacle | None = field(init=False)
+
+    def __post_init__(self) -> None:
+        pts = self.curve.sample(257)
+        self.surface = None
+        for o in self.world.obstacles:
+            if np.max(np.abs(o.signed_distance(pts))) <= 1e-6:
+                self.surface = o
+        if self.rule is not None and self.rule.normal and self.surface is None:
+            raise InvalidInputError(
+                f"the tool axis can follow the surface normal only on a curve that lies on an "
+                f"obstacle's surface; {self.curve.name!r} lies on none"
+            )
+        pairs = self.world.pairs(self.arm)
+        self._required = self.world.required(self.arm)
+        touching = np.array(
+            [p.is_tip and self.surface is not None and p.other == self.surface.name for p in pairs]
+        )
+        self._touch_cols = touching
+        self._labels = [p.label for p in pairs]
+        self._others = [p.other for p in pairs]
+        self._is_self = np.array([p.is_self for p in pairs], dtype=bool)
+        #: joints without limits (turning by whole turns gives the same links)
+        self.unlimited = ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
+        self._lo = np.where(np.isfinite(self.arm.lower), self.arm.lower, -np.inf)
+        self._hi = np.where(np.isfinite(self.arm.upper), self.arm.upper, np.inf)
+
+    # -- what differs between arms ------------------------------------------------------------
+    @cached_property
+    def tip_joints(self) -> BoolArray:
+        """Joints that move the tool point (the others turn the tool about it)."""
+        from armpath.planning.motion import active_joints
+
+        q = np.random.default_rng(0).uniform(-np.pi, np.pi, (8, self.arm.n_joints))
+        q = np.clip(q, self.arm.lower, self.arm.upper)
+        base = tool_pose(self.arm, q)[:, :3, 3]
+        moves = np.zeros(self.arm.n_joints, dtype=bool)
+        for i in range(self.arm.n_joints):
+            dq = np.zeros(self.arm.n_joints)
+            dq[i] = 0.3
+            moves[i] = np.abs(tool_pose(self.arm, q + dq)[:, :3, 3] - base).max() > 1e-9
+        return moves & active_joints(self.arm)
+
+    def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
+        """Family members ``(M, n)`` with the tool point at ``E`` and the tool pointing along
+        ``dirs`` (every solution; members without a real solution dropped)."""
+        raise NotImplementedError
+
+    def same_links(self, q: FloatArray, half_turn: float) -> FloatArray:
+        """Configurations ``(..., n)`` and the others with the same links, stacked
+        ``(R, ..., n)`` (``half_turn``: 180 for degrees, pi for radians). Whole turns of
+        unlimited joints are handled by the caller."""
+        return np.asarray(q)[None]
+
+    def flipped(self, q_deg: FloatArray) -> FloatArray | None:
+        """The configurations (deg) with the same links that a pass may choose instead (the
+        seed arm's wrist flip), or None."""
+        return None
+
+    def _polish(
+        self,
+        s: float,
+        q: FloatArray,
+        sc: FloatArray,
+        limits: bool,
+        obstacles: tuple[str, ...] | None,
+        best_q: FloatArray,
+        best_sc: float,
+    ) -> tuple[FloatArray, float]:
+        return best_q, best_sc
+
+    # -- geometry of the curve -------------------------------------------------------------
+    def frame(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Point, unit tangent and outward normal (zero without a surface) at arc length ``s``
+        (mm; brought onto the curve by :meth:`Curve.wrap`)."""
+        h = 1e-3
+        c, before, after = self.curve.at_arc_length(np.array([s, s - h, s + h]))
+        t = after - before
+        t = t / np.linalg.norm(t)
+        if self.surface is None:
+            return c, t, np.zeros(3)
+        n = self.surface.outward_normal(c)
+        n = n - (n @ t) * t
+        return c, t, n / np.linalg.norm(n)
+
+    @cached_property
+    def coarse_dirs(self) -> FloatArray:
+        """Tool directions of the scan (2000, about 4.5 deg apart)."""
+        return fibonacci_directions(2000)
+
+    @cached_property
+    def fine_dirs(self) -> FloatArray:
+        """Tool directions of the refined search (8000, about 2.3 deg apart)."""
+        return fibonacci_directions(8000)
+
+    def allowed_dirs(self, s: float, dirs: FloatArray) -> FloatArray:
+        """The directions of ``dirs`` the tool may point along at ``s``: into the surface (or
+        along it) when the curve lies on one, and within the axis rule."""
+        _, _, n = self.frame(s)
+        if self.surface is not None:
+            dirs = dirs[dirs @ n <= _PAST_TANGENT]
+        if self.rule is not None:
+            axis = -n if self.rule.normal else np.asarray(self.rule.direction, dtype=np.float64)
+            dirs = dirs[dirs @ axis >= np.cos(self.rule.tolerance_rad)]
+            if dirs.shape[0] == 0:
+                dirs = axis[None]
+        return dirs
+
+    # -- the family at one point -------------------------------------------------------------
+    def configs(self, s: float, dirs: FloatArray) -> FloatArray:
+        """Family members ``(M, n)`` rad with the tool point on the curve at ``s`` and the tool
+        along the allowed ones of ``dirs``."""
+        c, _, _ = self.frame(s)
+        return self.configs_at(c, self.allowed_dirs(s, dirs))
+
+    def slacks(self, q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Per configuration: joint slacks ``(M, n)`` deg, pair slacks ``(M, K)`` mm (the tool
+        tip against the surface excluded: NaN) and whether the tool tip stays out of the surface.
+        """
+        with np.errstate(invalid="ignore"):
+            joint = np.degrees(np.minimum(self._hi - q, q - self._lo))
+        values, _ = self.world.pair_clearances(self.arm, q)
+        pair = values - self._required
+        tip_ok = np.all(pair[:, self._touch_cols] >= -TOUCH_MM, axis=-1)
+        pair[:, self._touch_cols] = np.nan
+        return joint, pair, tip_ok
+
+    def score(
+        self, q: FloatArray, limits: bool = True, obstacles: tuple[str, ...] | None = None
+    ) -> FloatArray:
+        """Smallest slack per configuration (-inf when the tool tip enters the surface).
+
+        ``limits=False`` ignores joint limits; ``obstacles`` keeps only the pairs against those
+        obstacles (None: every pair, link pairs included; ``()``: no pair).
+        """
+        joint, pair, tip_ok = self.slacks(q)
+        parts = []
+        if limits:
+            parts.append(np.min(joint, axis=-1))
+        keep = self._columns(obstacles)
+        if np.any(keep):
+            parts.append(np.nanmin(np.where(keep, pair, np.nan), axis=-1, initial=np.inf))
+        out = np.minimum.reduce(parts) if parts else np.full(q.shape[0], np.inf)
+        return np.where(tip_ok, out, -np.inf)
+
+    def _columns(self, obstacles: tuple[str, ...] | None) -> NDArray[np.bool_]:
+        cols = ~self._touch_cols
+        if obstacles is None:
+            return cols
+        chosen = np.array([o in obstacles for o in self._others], dtype=bool)
+        return np.asarray(cols & chosen & ~self._is_self, dtype=bool)
+
+    def limiting(
+        self,
+        q: FloatArray,
+        limits: bool = True,
+        obstacles: tuple[str, ...] | None = None,
+        within: float = 0.01,
+    ) -> tuple[str, ...]:
+        """Constraints within ``within`` of the smallest slack at one configuration ``(n,)``
+        (among those :meth:`score` counts with the same ``limits`` and ``obstacles``)."""
+        joint, pair, _ = self.slacks(q[None])
+        joint = joint[0] if limits else np.full(joint.shape[1], np.inf)
+        pair = np.where(self._columns(obstacles), pair[0], np.nan)
+        lowest = min(float(np.min(joint)), float(np.nanmin(pair, initial=np.inf)))
+        out = []
+        for j in np.flatnonzero(joint <= lowest + within):
+            which = "upper" if self._hi[j] - q[j] < q[j] - self._lo[j] else "lower"
+            limit = self._hi[j] if which == "upper" else self._lo[j]
+            out.append(f"joint {j + 1} at its {which} limit {np.degrees(limit):g} deg")
+        for k in np.flatnonzero(np.nan_to_num(pair, nan=np.inf) <= lowest + within):
+            need = self._required[k]
+            out.append(f"{self._labels[k]} clearance {pair[k] + need:.3f} mm (needs {need:g})")
+        return tuple(out)
+
+    def best(
+        self,
+        s: float,
+        fine: bool = False,
+        limits: bool = True,
+        obstacles: tuple[str, ...] | None = None,
+    ) -> Verdict:
+        """The family member with the largest score at ``s``: grid, then (``fine``) a finer grid
+        polished where the arm has a way to (the seed arm: Nelder-Mead over the tool
+        direction)."""
+        dirs = self.fine_dirs if fine else self.coarse_dirs
+        q = self.configs(s, dirs)
+        if q.shape[0] == 0:
+            return Verdict(s, -np.inf, np.full(self.arm.n_joints, np.nan), ("out of reach",))
+        sc = self.score(q, limits, obstacles)
+        k = int(np.argmax(sc))
+        best_q, best_sc = q[k], float(sc[k])
+        if fine:
+            best_q, best_sc = self._polish(s, q, sc, limits, obstacles, best_q, best_sc)
+        lim = self.limiting(best_q, limits, obstacles) if best_sc > -np.inf else ()
+        return Verdict(s, best_sc, best_q, lim)
+
+
+@dataclass
+class SeedCurveFamily(CurveFamily):
+    """The seed arm's family in closed form: the wrist point D on the sphere of radius DE
+    around the point, four geometric branches (arm side x elbow; the wrist flip gives the same
+    links and the same limit slack); joint 6 turns the tool only."""
+
+    geometry: SeedArmGeometry = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.geometry = seed_geometry_of(self.arm)
+        super().__post_init__()
+
+    @cached_property
+    def tip_joints(self) -> BoolArray:
+        return np.array([True, True, True, True, True, False])
+
+    def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
+        wrist = E - self.geometry.de_mm * dirs
+        sol = family_from_wrist(self.geometry, E, wrist)[:, _BRANCHES, :]
+        q = np.concatenate([sol, np.zeros((*sol.shape[:-1], 1))], axis=-1).reshape(-1, 6)
+        return q[np.all(np.isfinite(q), axis=-1)]
+
+    def same_links(self, q: FloatArray, half_turn: float) -> FloatArray:
+        """Itself, its wrist flip (joint 4 + half a turn, joint 5 negated), its arm-side flip
+        (joint 1 + half a turn, joints 2 and 3 negated, joint 4 - half a turn) and both."""
+        q = np.asarray(q, dtype=np.float64)
+        wrist = q.copy()
+        wrist[..., 3] += half_turn
+        wrist[..., 4] *= -1.0
+        side = q.copy()
+        side[..., 0] += half_turn
+        side[..., 1:3] *= -1.0
+        side[..., 3] -= half_turn
+        both = side.copy()
+        both[..., 3] += half_turn
+        both[..., 4] *= -1.0
+        return np.stack([q, wrist, side, both])
+
+    def flipped(self, q_deg: FloatArray) -> FloatArray | None:
+        """The wrist flips (joint 4 in ``[-180, 180)``) of tip-joint configurations (deg)."""
+        q = np.asarray(q_deg, dtype=np.float64)
+        full = np.concatenate([q, np.zeros((*q.shape[:-1], 6 - q.shape[-1]))], axis=-1)
+        other = self.same_links(full, 180.0)[1][..., : q.shape[-1]]
+        other[..., 3] = (other[..., 3] + 180.0) % 360.0 - 180.0
+        return np.asarray(other)
+
+    def _polish(
+        self,
+        s: float,
+        q: FloatArray,
+        sc: FloatArray,
+        limits: bool,
+        obstacles: tuple[str, ...] | None,
+        best_q: FloatArray,
+        best_sc: float,
+    ) -> tuple[FloatArray, float]:
+        c, _, n = self.frame(s)
+        axis = -n if self.surface is not None else np.array([0.0, 0.0, 1.0])
+        e1, e2 = orthonormal_frame(axis)
+        # the direction E - D of each candidate, as polar angles about ``axis``
+        pts_d = self._wrist_dirs(q, c)
+
+        def member(x: FloatArray, branch: int) -> FloatArray:
+            """The family member of ``branch`` whose tool direction has polar angles ``x``."""
+            u = np.cos(x[0]) * axis + np.sin(x[0]) * (np.cos(x[1]) * e1 + np.sin(x[1]) * e2)
+            sol = family_from_wrist(self.geometry, c, (c - self.geometry.de_mm * u)[None])
+            return np.asarray(np.r_[sol[0, _BRANCHES[branch]], 0.0], dtype=np.float64)
+
+        for k in np.argsort(-sc)[:3]:
+            if not np.isfinite(sc[k]):
+                break
+            d = pts_d[k]
+            x0 = np.array([np.arccos(np.clip(d @ axis, -1, 1)), np.arctan2(d @ e2, d @ e1)])
+            branch = self._branch_of(q[k], c, d)
+
+            def objective(x: FloatArray, branch: int = branch) -> float:
+                cand = member(x, branch)
+                if not np.all(np.isfinite(cand)):
+                    return 1e6
+                return -float(self.score(cand[None], limits, obstacles)[0])
+
+            res = minimize(
+                objective,
+                x0,
+                method="Nelder-Mead",
+                options={"xatol": 1e-4, "fatol": 1e-5, "maxfev": 250},
+            )
+            if -res.fun > best_sc:
+                best_q, best_sc = member(res.x, branch), float(-res.fun)
+        return best_q, best_sc
+
+    def _wrist_dirs(self, q: FloatArray, E: FloatArray) -> FloatArray:
+        D = landmark_positions(self.arm, q)[:, -2, :]
+        u = E - D
+        return np.asarray(u / np.linalg.norm(u, axis=-1, keepdims=True), dtype=np.float64)
+
+    def _branch_of(self, q: FloatArray, E: FloatArray, d: FloatArray) -> int:
+        sols = family_from_wrist(self.geometry, E, (E - self.geometry.de_mm * d)[None])[
+            0, _BRANCHES
+        ]
+        err = np.nan_to_num(np.abs(sols - q[:5]).max(axis=-1), nan=np.inf)
+        return int(np.argmin(err))
+
+
+@dataclass
+class GenericCurveFamily(CurveFamily):
+    """Any other arm's family: for each tool direction, the tool frames with that approach axis
+    and a few turns about it, each solved by the all-solutions IK (six joints) or by
+    Levenberg-Marquardt from the last solutions found (warm starts) and random ones."""
+
+    rolls: int = 6
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self._solver = complete_solver(self.arm) if self.arm.n_joints == 6 else None
+        self._warm = np.zeros((0, self.arm.n_joints))
+
+    @cached_property
+    def coarse_dirs(self) -> FloatArray:
+        """Tool directions of the scan (600, about 8 deg apart; with the turns about each)."""
+        return fibonacci_directions(600)
+
+    @cached_property
+    def fine_dirs(self) -> FloatArray:
+        """Tool directions of the refined search (2400, about 4 deg apart)."""
+        return fibonacci_directions(2400)
+
+    @cached_property
+    def _turns(self) -> int:
+        # the turn about the tool axis moves no link when the tool point is on the last axis
+        return 1 if not self.tip_joints[-1] else self.rolls
+
+    def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
+        if dirs.shape[0] == 0:
+            return np.zeros((0, self.arm.n_joints))
+        Rs = _frames_along(dirs, self._turns)
+        if self._solver is not None:
+            T = np.broadcast_to(np.eye(4), (Rs.shape[0], 4, 4)).copy()
+            T[:, :3, :3] = Rs
+            T[:, :3, 3] = E
+            q = self._solver.solve_batch(T).solutions.reshape(-1, self.arm.n_joints)
+            q = q[np.all(np.isfinite(q), axis=1)]
+        else:
+            q = self._numerical(E, Rs)
+        if q.shape[0] == 0:
+            return q
+        q = shift_into_limits(self.arm, q)
+        fam = GenericFamily(self.arm, ToolTarget(E))
+        ok = fam.exact(q)
+        return np.asarray(q[ok], dtype=np.float64)
+
+    def _numerical(self, E: FloatArray, Rs: FloatArray) -> FloatArray:
+        arm = self.arm
+        fam = GenericFamily(arm, ToolTarget(E))
+        rng = np.random.default_rng(len(self._warm))
+        lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+        hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+        starts = rng.uniform(lo, hi, (Rs.shape[0], arm.n_joints))
+        if self._warm.shape[0]:
+            pick = np.asarray(rng.integers(0, self._warm.shape[0], Rs.shape[0]))
+            use = rng.uniform(size=Rs.shape[0]) < 0.75
+            starts[use] = self._warm[pick[use]]
+        q = fam.refine(starts, iterations=40, rotations=Rs)
+        # the tool axis exactly (the turn about it is free): keep what reaches the point
+        axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, 2], Rs[:, :, 2])
+        q = q[axis_ok > np.cos(np.radians(1.0))]
+        good = q[fam.exact(q)]
+        if good.shape[0]:
+            self._warm = good[: 4 * Rs.shape[0]]
+        return np.asarray(good, dtype=np.float64)
+
+
+def _frames_along(dirs: FloatArray, turns: int) -> FloatArray:
+    """Tool rotations ``(D * turns, 3, 3)`` whose z axis is each direction, ``turns`` turns
+    about it each."""
+    out = []
+    for d in np.asarray(dirs, dtype=np.float64):
+        e1, e2 = orthonormal_frame(d)
+        for k in range(turns):
+            a = 2 * np.pi * k / turns
+            x = np.cos(a) * e1 + np.sin(a) * e2
+            out.append(np.stack([x, np.cross(d, x), d], axis=1))
+    return np.array(out).reshape(-1, 3, 3)
+
+
+def curve_family(
+    arm: SerialArm, world: CollisionWorld, curve: Curve, rule: AxisRule | None = None
+) -> CurveFamily:
+    """The family of ``curve`` for ``arm``: the seed closed form for the seed arm (at the
+    origin, its fingertip as the tool, its lattice, no axis rule), the generic search for every
+    other arm."""
+    if rule is None and arm.lattice.is_default:
+        try:
+            seed_geometry_of(arm)
+        except InvalidInputError:
+            pass  # not the plain seed arm
+        else:
+            return SeedCurveFamily(arm, world, curve)
+    return GenericCurveFamily(arm, world, curve, rule)
+
+
+__all__ = [
+    "TOUCH_MM",
+    "AxisRule",
+    "CurveFamily",
+    "GenericCurveFamily",
+    "SeedCurveFamily",
+    "Verdict",
+    "curve_family",
+    "fibonacci_directions",
+]

@@ -1,0 +1,332 @@
+"""Tracing a curve with the tool point: command sequences whose continuous tool path stays on it.
+
+1. **Reachability** (:mod:`~armpath.planning.trace.reachability`) splits the curve into
+   reachable arcs, searching the solution family of every arm
+   (:mod:`~armpath.planning.trace.family`).
+2. **Reference path** (:mod:`~armpath.planning.trace.reference`): dynamic programming through
+   the family, as few passes as possible.
+3. **Commands** (:mod:`~armpath.planning.trace.tracer`): the lattice command that carries the
+   tool point farthest along the curve, checked exactly.
+4. **Passes and transits.** The arm moves from the start to each pass, and between passes
+   (lifting off the surface), with the collision-free planner
+   (:func:`~armpath.planning.motion.plan_motion`).
+5. **Certification.** The whole sequence's clearance is certified along the continuous motion
+   (:func:`~armpath.planning.motion_check.motion_clearance`); the tool's deviation from the curve
+   during every pass is bounded by branch and bound
+   (:mod:`~armpath.planning.trace.certificate`), so the reported largest deviation is the true
+   maximum of the continuous path to within ``2 um``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.commands import CommandSequence
+from armpath.errors import InvalidInputError, PlanningError
+from armpath.geometry.curves import Curve
+from armpath.geometry.world import CollisionWorld
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.motion import (
+    MotionOptions,
+    MotionPlan,
+    PlanMetrics,
+    active_joints,
+    plan_metrics,
+    plan_motion,
+    search_clearance_extra,
+)
+from armpath.planning.motion_check import MotionClearance, motion_clearance
+from armpath.planning.trace.certificate import certified_deviation
+from armpath.planning.trace.family import AxisRule
+from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
+from armpath.planning.trace.reference import reference_pieces
+from armpath.planning.trace.tracer import _BODY_BUFFER_MM, Tracer
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class TraceOptions:
+    """How to trace.
+
+    ``tolerance_mm``: the largest distance of the continuous tool path from the curve during a
+    pass. ``layer_step_mm``: spacing of the reference path's layers. ``scan_step_mm``: spacing of
+    the reachability scan (see :func:`~armpath.planning.trace.curve_reachability`).
+    ``motion``: options of the transits onto the curve and between passes. ``axis_rule``:
+    where the tool's approach axis may point on the curve (:class:`AxisRule`: near the surface
+    normal, or a fixed direction); None: any direction from outside the surface.
+    """
+
+    tolerance_mm: float = 0.1
+    layer_step_mm: float = 5.0
+    scan_step_mm: float = 4.0
+    motion: MotionOptions = field(default_factory=MotionOptions)
+    axis_rule: AxisRule | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.tolerance_mm) and 0.005 <= self.tolerance_mm <= 10.0):
+            raise InvalidInputError(
+                f"tracing tolerance must be between 0.005 and 10 mm, got {self.tolerance_mm}"
+            )
+        if not self.layer_step_mm > 0:
+            raise InvalidInputError("layer step must be > 0 mm")
+
+
+@dataclass(frozen=True)
+class TracePass:
+    """One continuous pass: the tip follows the curve from state ``first`` to state ``last``
+    (state 0 is the start, state k the state after command k), covering arc lengths
+    ``start_mm``..``end_mm``."""
+
+    first: int
+    last: int
+    start_mm: float
+    end_mm: float
+    max_deviation_mm: float
+    max_deviation_bound_mm: float
+
+    @property
+    def covered_mm(self) -> float:
+        return self.end_mm - self.start_mm
+
+
+@dataclass(frozen=True)
+class Transit:
+    """A move off the curve (to the first pass, or lifting off between passes)."""
+
+    first: int
+    last: int
+    method: str
+
+
+@dataclass(frozen=True, eq=False)
+class TraceResult:
+    """A traced curve: the command sequence, its passes and what they cover."""
+
+    sequence: CommandSequence
+    curve: Curve
+    reachability: CurveReachability
+    passes: tuple[TracePass, ...]
+    transits: tuple[Transit, ...]
+    tolerance_mm: float
+    clearance: MotionClearance
+    metrics: PlanMetrics
+    deviation_s_mm: FloatArray
+    deviation_mm: FloatArray
+
+    @property
+    def n_commands(self) -> int:
+        return self.sequence.n_commands
+
+    @property
+    def covered_mm(self) -> float:
+        """Length of the curve covered by the passes (mm; overlaps counted once)."""
+        return min(float(sum(p.covered_mm for p in self.passes)), self.curve.length)
+
+    @property
+    def max_deviation_mm(self) -> float:
+        return max((p.max_deviation_mm for p in self.passes), default=0.0)
+
+    @property
+    def max_deviation_bound_mm(self) -> float:
+        return max((p.max_deviation_bound_mm for p in self.passes), default=0.0)
+
+
+def plan_trace(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: IntArray,
+    curve: Curve,
+    options: TraceOptions | None = None,
+    on_progress: Callable[[str], None] | None = None,
+) -> TraceResult:
+    """Trace every reachable part of ``curve`` from ``start_ticks``, fewest passes first."""
+    opts = options or TraceOptions()
+    say = on_progress or (lambda _m: None)
+    reach = curve_reachability(
+        arm, world, curve, scan_step_mm=opts.scan_step_mm, on_progress=say, rule=opts.axis_rule
+    )
+    if not reach.reachable:
+        raise PlanningError(
+            f"no part of curve {curve.name!r} is reachable: "
+            + "; ".join(a.reason for a in reach.unreachable)
+        )
+    fam = reach.family
+    start = np.asarray(start_ticks, dtype=np.int64)
+    states: list[IntArray] = [start]
+    passes: list[TracePass] = []
+    transits: list[Transit] = []
+    prof_s: list[FloatArray] = []
+    prof_d: list[FloatArray] = []
+    arcs = list(reach.reachable)
+    overlap = 0.0
+    if curve.closed and len(arcs) == 1 and arcs[0].length_mm >= curve.length - 1e-9:
+        # all around: run on a little past the start so the covered ends meet
+        arcs = [CurveArc(arcs[0].start_mm, arcs[0].start_mm + curve.length)]
+        overlap = 2.0 * opts.tolerance_mm
+    queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
+    queue[-1] = (queue[-1][0], overlap)
+    while queue:
+        check_time("tracing the curve")
+        arc, run_on = queue.pop(0)
+        pieces = reference_pieces(fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1]))
+        for k, piece in enumerate(pieces):
+            last_piece = k == len(pieces) - 1
+            say(
+                f"tracing pass {len(passes) + 1}: {piece.arc.start_mm:.1f}.."
+                f"{piece.arc.end_mm:.1f} mm of the curve"
+            )
+            tracer = Tracer(fam, piece, opts.tolerance_mm)
+            tracer.align(arm.lattice.to_joint(states[-1]))
+            here = len(states) - 1
+            if passes:  # lift off first, to where the transit's search has room
+                states.extend(list(_lift_off(arm, world, states[-1], opts).states()[1:]))
+            motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
+            states.extend(list(motion.sequence.states()[1:]))
+            transits.append(Transit(here, len(states) - 1, motion.method))
+            first = len(states) - 1
+            pass_states = [q_entry]
+            if s_entry > piece.arc.start_mm + 0.05:  # back to the start of the piece first
+                pass_states, s_entry = tracer.run(q_entry, s_entry, piece.arc.start_mm)
+            goal = piece.arc.end_mm + (run_on if last_piece else 0.0)
+            ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
+            pass_states += ahead[1:]
+            states.extend(pass_states[1:])
+            dev, dev_bound, ps, pd = certified_deviation(
+                arm, curve, np.array(pass_states), piece.arc.start_mm
+            )
+            prof_s.append(ps)
+            prof_d.append(pd)
+            passes.append(
+                TracePass(first, len(states) - 1, float(ps.min()), float(ps.max()), dev, dev_bound)
+            )
+            if s_reached < piece.arc.end_mm - 0.5:
+                # stuck: the rest of the arc gets new passes. The rest starts at least 1 mm past
+                # this piece's start (skipping 2 mm if this pass made no progress), so every
+                # arc put back is shorter by 1 mm or more and the loop ends.
+                resume = (
+                    s_reached
+                    if s_reached > piece.arc.start_mm + 1.0
+                    else max(s_reached, piece.arc.start_mm) + 2.0
+                )
+                if resume < arc.end_mm - 0.5:
+                    queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
+                break
+    all_states = np.array(states)
+    sequence = CommandSequence.from_states(all_states, arm.lattice)
+    say("certifying the clearance of the whole motion")
+    clearance = motion_clearance(arm, world, sequence, max_evaluations=400_000)
+    return TraceResult(
+        sequence,
+        curve,
+        reach,
+        tuple(passes),
+        tuple(transits),
+        opts.tolerance_mm,
+        clearance,
+        plan_metrics(arm, sequence),
+        np.concatenate(prof_s) if prof_s else np.zeros(0),
+        np.concatenate(prof_d) if prof_d else np.zeros(0),
+    )
+
+
+def _lift_off(
+    arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, opts: TraceOptions
+) -> CommandSequence:
+    """Commands that take the arm from the end of a pass (tool on the surface, links possibly in
+    a tight spot) to a state with the room the motion planner's search needs.
+
+    Greedy escape: from each state, random full-size commands (seeded) are scored by their end
+    state's smallest slack against the search's clearance needs, and the best one whose continuous
+    motion is certified clear is taken; at most 12 commands.
+    """
+    need = world.required(arm) + search_clearance_extra(
+        arm, world, opts.motion.buffer_mm, opts.motion.sample_spacing_mm
+    )
+    active = active_joints(arm)
+    grid = arm.lattice
+    rng = np.random.default_rng([opts.motion.seed, 7])
+    states = [np.asarray(q_ticks, dtype=np.int64)]
+
+    def slack(q: IntArray) -> FloatArray:
+        values, _ = world.pair_clearances(arm, arm.lattice.to_joint(q))
+        return np.asarray((values - need).min(axis=-1), dtype=np.float64)
+
+    for _ in range(12):
+        check_time("lifting off the curve")
+        here = states[-1]
+        if float(slack(here[None])[0]) >= 0.0:
+            break
+        # random commands of every size up to each joint's largest (in twentieths of it)
+        size = rng.uniform(1.0, 20.0, (4000, 1)) / 20.0 * grid.max_ticks
+        steps = np.round(rng.uniform(-1.0, 1.0, (4000, here.size)) * size).astype(np.int64)
+        cand = here + steps * active
+        cand = cand[arm.within_limits(arm.lattice.to_joint(cand))]
+        if cand.shape[0] == 0:
+            break
+        sc = slack(cand)
+        for k in np.argsort(-sc)[:16]:
+            seq = CommandSequence.straight(here, cand[k], lattice=grid)
+            if motion_clearance(arm, world, seq).certified_ok:
+                states.append(cand[k])
+                break
+        else:
+            break
+    return CommandSequence.from_states(np.array(states, dtype=np.int64), grid)
+
+
+def _enter(
+    tracer: Tracer,
+    reach: CurveReachability,
+    q_from: IntArray,
+    opts: TraceOptions,
+    say: Callable[[str], None],
+) -> tuple[MotionPlan, IntArray, float]:
+    """Move from ``q_from`` onto the curve near the start of the tracer's arc.
+
+    The start of an arc is usually a tight spot (that is why the arc ends there): it is entered
+    only by a straight motion. Otherwise the entry is one of the first scan points along the arc
+    whose best configuration keeps the transit search's buffer plus half its sample spacing plus
+    0.5 mm of slack; the pass then runs back to the start of the arc before tracing forward.
+    """
+    arc = tracer.arc
+    L = reach.curve.length
+    scan_s = reach.scan_s_mm
+    if reach.curve.closed:
+        scan_s = np.concatenate([scan_s, scan_s + L, scan_s + 2 * L])
+        scores = np.tile(reach.scan_score, 3)
+    else:
+        scores = reach.scan_score
+    inside = (scan_s >= arc.start_mm) & (scan_s <= arc.end_mm)
+    need = opts.motion.buffer_mm + opts.motion.sample_spacing_mm / 2 + 0.5
+    roomy = scan_s[inside & (scores >= need)]
+    candidates = [arc.start_mm, *roomy[:3].tolist()]
+    failures = []
+    for i, s_try in enumerate(candidates):
+        try:
+            q, s = tracer.start_state(s_try, need if i else _BODY_BUFFER_MM)
+        except PlanningError as exc:
+            failures.append(f"{s_try:.1f} mm: {exc}")
+            continue
+        say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm")
+        if i == 0:  # the tight start of the arc: only a straight motion can end there
+            seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
+            mc = motion_clearance(tracer.arm, tracer.world, seq)
+            if mc.certified_ok:
+                m = plan_metrics(tracer.arm, seq)
+                return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
+            failures.append(f"{s:.1f} mm: the straight motion there is blocked")
+            continue
+        # one search per entry point but the last: another entry often works where one fails
+        motion_opts = opts.motion if i == len(candidates) - 1 else replace(opts.motion, attempts=1)
+        try:
+            return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], motion_opts), q, s
+        except PlanningError as exc:
+            failures.append(f"{s:.1f} mm: {exc}")
+    raise PlanningError("could not move onto the curve: " + "; ".join(failures))

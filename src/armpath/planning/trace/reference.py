@@ -1,0 +1,183 @@
+"""The reference path of a trace: dynamic programming through the solution family along an arc.
+
+The tool point has a family of solutions at every curve point. A reference path through the
+family is chosen by dynamic programming over layers of the family every few mm: nodes keep a
+clearance and joint-limit slack, transitions cost the largest joint change of the joints that
+move the tool point (what commands cost) less a small reward for slack; where the family cannot
+be followed continuously the path pays for a lift-off, which splits the arc into *pieces*
+(passes), as few as possible. Configurations with the same links (the seed arm's wrist flip) are
+chosen per piece to suit the state the arm comes from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.errors import PlanningError
+from armpath.planning.trace.family import CurveFamily
+from armpath.planning.trace.reachability import CurveArc
+
+FloatArray = NDArray[np.float64]
+
+#: Largest joint change between reference layers 5 mm apart that still counts as following the
+#: solution family continuously (deg).
+_MAX_LAYER_STEP_DEG = 12.0
+#: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
+_LIFT_OFF_DEG = 120.0
+#: Most family members kept on one layer (evenly over the tool directions).
+MAX_LAYER_NODES = 1500
+
+
+def _joint_change(q_deg: FloatArray, here_deg: FloatArray, wrap: NDArray[np.bool_]) -> FloatArray:
+    """Largest joint change (deg) from ``here_deg`` to each row of ``q_deg`` (unlimited joints
+    by the shorter way round)."""
+    d = q_deg - here_deg
+    d = np.where(wrap, (d + 180.0) % 360.0 - 180.0, d)
+    return np.asarray(np.abs(d).max(axis=-1), dtype=np.float64)
+
+
+@numba.njit(cache=True)
+def _dp_layer(
+    prev_q: FloatArray,
+    prev_cost: FloatArray,
+    q: FloatArray,
+    bonus: FloatArray,
+    wrap: NDArray[np.bool_],
+    max_step: float,
+    lift_cost: float,
+) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover - compiled
+    """One DP layer: for each node of ``q`` (deg) the best predecessor in ``prev_q``, either
+    traced (largest joint change <= ``max_step``, costing that change) or after a lift-off
+    (costing ``lift_cost`` plus half the change: a new pass)."""
+    n, m, j = prev_q.shape[0], q.shape[0], q.shape[1]
+    cost = np.full(m, np.inf)
+    arg = np.full(m, -1, dtype=np.int64)
+    lifted = np.zeros(m, dtype=np.bool_)
+    for b in range(m):
+        for a in range(n):
+            if not np.isfinite(prev_cost[a]):
+                continue
+            worst = 0.0
+            for k in range(j):
+                d = q[b, k] - prev_q[a, k]
+                if wrap[k]:
+                    d = (d + 180.0) % 360.0 - 180.0
+                d = abs(d)
+                if d > worst:
+                    worst = d
+            if worst <= max_step:
+                c = prev_cost[a] + worst - bonus[b]
+                if c < cost[b]:
+                    cost[b] = c
+                    arg[b] = a
+                    lifted[b] = False
+            c = prev_cost[a] + lift_cost + 0.5 * worst - bonus[b]
+            if c < cost[b]:
+                cost[b] = c
+                arg[b] = a
+                lifted[b] = True
+    return cost, arg, lifted
+
+
+@dataclass(frozen=True)
+class Piece:
+    """A piece of a reachable arc traced in one pass, with its reference path (layers, rad)."""
+
+    arc: CurveArc
+    layers: FloatArray
+    ref: FloatArray
+
+
+def reference_pieces(
+    fam: CurveFamily, arc: CurveArc, step: float, q_from: FloatArray
+) -> list[Piece]:
+    """Reference paths through the solution family along ``arc``, as few pieces (passes) as
+    possible.
+
+    Dynamic programming over layers of the family every ``step`` mm: nodes keep a slack, a traced
+    transition costs the largest joint change (at most :data:`_MAX_LAYER_STEP_DEG`: the family
+    must be followed continuously), a lift-off costs :data:`_LIFT_OFF_DEG` more (a new pass). The
+    first layer's cost is the largest joint change from ``q_from``. The wrist flip (joint 4 + 180
+    deg, joint 5 negated) moves no link, so it is chosen per piece afterwards.
+    """
+    a, b = arc.start_mm, arc.end_mm
+    tip = fam.tip_joints
+    inset = min(1.0, 0.1 * (b - a))
+    n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
+    nodes: list[tuple[float, FloatArray, FloatArray]] = []
+    # the same tool directions on every layer; a curve in free space (every direction allowed,
+    # not half of them) takes every third, which keeps the DP's work alike
+    dirs = fam.coarse_dirs if fam.surface is not None else fam.coarse_dirs[::3]
+    for s in np.linspace(a + inset, b - inset, n + 1):
+        check_time("choosing the reference path along the curve")
+        q = fam.configs(float(s), dirs)
+        if q.shape[0] == 0:
+            continue
+        sc = fam.score(q)
+        best = float(np.max(sc))
+        if best < 0:
+            continue
+        keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
+        if keep.size > MAX_LAYER_NODES:  # evenly over the tool directions
+            keep = keep[np.linspace(0, keep.size - 1, MAX_LAYER_NODES).astype(np.int64)]
+        nodes.append((float(s), np.degrees(q[keep][:, tip]), sc[keep]))
+    if not nodes:
+        raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
+    wrap = fam.unlimited[tip]
+    here = np.degrees(q_from[tip])
+    first = [nodes[0][1]]
+    flip0 = fam.flipped(nodes[0][1])
+    if flip0 is not None:
+        first.append(flip0)
+    cost = np.min([_joint_change(q, here, wrap) for q in first], axis=0)
+    back = []
+    for k in range(1, len(nodes)):
+        gap = nodes[k][0] - nodes[k - 1][0]
+        bonus = 0.3 * np.minimum(nodes[k][2], 3.0)
+        max_step = _MAX_LAYER_STEP_DEG * max(gap / 5.0, 1.0)
+        cost, arg, lifted = _dp_layer(
+            nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max_step, _LIFT_OFF_DEG
+        )
+        back.append((arg, lifted))
+    j = int(np.argmin(cost))
+    path, lifts = [j], []
+    for k in range(len(back) - 1, -1, -1):
+        arg, lifted = back[k]
+        if lifted[j]:
+            lifts.append(k + 1)  # a new pass starts at layer k + 1
+        j = int(arg[j])
+        path.append(j)
+    path.reverse()
+    ref = np.array([nodes[k][1][path[k]] for k in range(len(nodes))])
+    s_nodes = np.array([x[0] for x in nodes])
+    cuts = [0, *sorted(lifts), len(nodes)]
+    pieces = []
+    prev = here
+    for i in range(len(cuts) - 1):
+        lo, hi = cuts[i], cuts[i + 1]
+        part = ref[lo:hi]
+        flipped = fam.flipped(part)
+        if (
+            flipped is not None
+            and _joint_change(flipped[:1], prev, wrap)[0] < _joint_change(part[:1], prev, wrap)[0]
+        ):
+            part = flipped
+        prev = part[-1]
+        rad = np.radians(part)
+        rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
+        # the joints that do not move the tool point are left to the tracer (it keeps them)
+        full = np.zeros((rad.shape[0], fam.arm.n_joints))
+        full[:, tip] = rad
+        start = a if i == 0 else float(s_nodes[lo - 1])
+        end = b if i == len(cuts) - 2 else float(s_nodes[hi - 1])
+        layers = s_nodes[lo:hi]
+        if layers.size == 1:  # a one-layer piece: a constant reference
+            layers = np.array([layers[0], layers[0] + 1e-9])
+            full = np.vstack([full, full])
+        pieces.append(Piece(CurveArc(start, end), layers, full))
+    return pieces

@@ -1,0 +1,312 @@
+"""The tracer: greedy lattice commands that carry the tool point along one piece of a curve.
+
+From the current lattice state, the tracer looks for the command that carries the tool point
+farthest along the curve: for each candidate advance it follows the reference path (pulled
+gently toward it), projects onto the curve point (offset outward by half the tolerance when the
+curve lies on a surface, so the tip neither leaves the band nor enters the surface), and
+searches the lattice around it. Candidates are pre-filtered by their linearized offset in the
+curve's normal plane, then checked exactly: end point within the band, the continuous motion
+sampled within the band and outside the surface, the clearance rule with a small buffer. Every
+accepted command advances the tool point by at least :data:`MIN_ADVANCE_MM` toward a fixed end,
+so every pass ends.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.errors import PlanningError
+from armpath.kinematics import position_jacobian, tool_position
+from armpath.planning.trace.family import CurveFamily
+from armpath.planning.trace.reference import Piece
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Lattice offsets searched around a projected configuration, per joint that moves the tool
+#: point (ticks): +-4 for up to five such joints (the seed arm), fewer for more joints.
+_BOX = {5: 4, 6: 3, 7: 2}
+#: Instants per command at which a candidate's continuous motion is checked while searching.
+_PATH_SAMPLES = 16
+#: Extra clearance the links keep while tracing, so the certification of the continuous motion
+#: (bound from sampling) succeeds (mm).
+_BODY_BUFFER_MM = 0.02
+#: Least advance of the tip along the curve that one tracing command must make (mm): the
+#: progress measure that makes every pass end.
+MIN_ADVANCE_MM = 0.05
+_MIN_ADVANCE_MM = MIN_ADVANCE_MM
+#: Candidate advances along the curve per command (mm), tried largest first.
+_ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
+
+
+def _offsets(joints: int) -> IntArray:
+    """Every integer offset of a box of ``joints`` joints (see :data:`_BOX`)."""
+    radius = _BOX.get(joints, 4 if joints < 5 else 1)
+    box = np.arange(-radius, radius + 1)
+    return np.stack(np.meshgrid(*[box] * joints, indexing="ij"), -1).reshape(-1, joints)
+
+
+class Tracer:
+    """Greedy lattice tracing of one arc along a reference path through the family."""
+
+    def __init__(self, fam: CurveFamily, piece: Piece, tolerance: float) -> None:
+        self.fam = fam
+        self.arm = fam.arm
+        self.world = fam.world
+        self.arc = piece.arc
+        self.tol = tolerance
+        self.offset = tolerance / 2 if fam.surface is not None else 0.0
+        self.wrap = fam.unlimited
+        self.grid = fam.arm.lattice
+        self.tip = fam.tip_joints
+        pairs = self.world.pairs(self.arm)
+        self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
+        self.layers, self.ref = piece.layers, piece.ref
+        self.offsets = _offsets(int(self.tip.sum()))
+        self.offsets_f = self.offsets.astype(np.float64)
+
+    def q_ref(self, s: float | FloatArray) -> FloatArray:
+        s_arr = np.asarray(s, dtype=np.float64)
+        return np.stack(
+            [np.interp(s_arr, self.layers, self.ref[:, j]) for j in range(self.ref.shape[1])],
+            axis=-1,
+        )
+
+    def align(self, q_start: FloatArray) -> None:
+        """Shift unlimited joints of the reference by whole turns to start near ``q_start``."""
+        first = self.q_ref(self.layers[0])
+        turns = np.round((q_start - first) / (2 * np.pi)) * self.wrap
+        self.ref = self.ref + turns * 2 * np.pi
+
+    def matched(self, q: FloatArray, like: FloatArray) -> FloatArray:
+        """The representation of each configuration's links (``q`` ``(6,)`` or ``(M, 6)``)
+        nearest ``like`` among :meth:`CurveFamily.same_links`, unlimited joints turned by whole
+        turns;
+        representations outside the joint limits are not used."""
+        q2 = np.atleast_2d(q)
+        reps = self.fam.same_links(q2, np.pi)  # (R, M, n)
+        reps = reps + np.round((like - reps) / (2 * np.pi)) * 2 * np.pi * self.wrap
+        gap = np.abs(reps - like).max(axis=-1)
+        gap = np.where(self.arm.within_limits(reps), gap, np.inf)
+        gap[0] = np.where(np.isfinite(gap).any(axis=0), gap[0], 0.0)  # keep q if none fits
+        pick = np.argmin(gap, axis=0)
+        out = reps[pick, np.arange(q2.shape[0])]
+        return np.asarray(out if q.ndim == 2 else out[0], dtype=np.float64)
+
+    # -- curve geometry -------------------------------------------------------------------------
+    def target(self, s: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Target tip point at ``s`` and two unit vectors spanning the curve's normal plane."""
+        c, t, n = self.fam.frame(s)
+        if not np.any(n):
+            helper = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            n = helper - (helper @ t) * t
+            n /= np.linalg.norm(n)
+        return c + self.offset * n if self.fam.surface is not None else c, n, np.cross(t, n)
+
+    def unwrap_s(self, s: FloatArray, near: float) -> FloatArray:
+        if not self.fam.curve.closed:
+            return s
+        L = self.fam.curve.length
+        return np.asarray(s + L * np.round((near - s) / L))
+
+    def tip_checks(self, P: FloatArray, near: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Distance to the curve, arc length of the closest point (unwrapped near ``near``) and
+        signed distance to the surface (inf without one) of tip points ``(..., 3)``."""
+        d, s = self.fam.curve.closest(P)
+        if self.fam.surface is not None:
+            sd = self.fam.surface.signed_distance(P)
+        else:
+            sd = np.full(d.shape, np.inf)
+        return d, self.unwrap_s(s, near), sd
+
+    def in_band(self, d: FloatArray, sd: FloatArray, off_surface: float) -> NDArray[np.bool_]:
+        """Tip points within 0.9 of the tolerance from the curve and, on a surface, at least
+        ``off_surface`` times the tolerance outside it (``d``, ``sd`` from :meth:`tip_checks`)."""
+        return np.asarray((d <= 0.9 * self.tol) & (sd >= off_surface * self.tol), dtype=bool)
+
+    # -- lattice ---------------------------------------------------------------------------
+    def project(self, q: FloatArray, E: FloatArray) -> FloatArray:
+        """Nearest family member to ``q`` (minimum-norm Newton steps) with the tip at ``E``."""
+        q = q.copy()
+        for _ in range(5):
+            e = E - tool_position(self.arm, q)
+            if np.linalg.norm(e) < 1e-9:
+                break
+            J = position_jacobian(self.arm, q)[:, self.tip]
+            q[self.tip] += np.linalg.pinv(J) @ e
+        return q
+
+    def lattice_near(
+        self, base: FloatArray, n: FloatArray, b: FloatArray, fixed: IntArray
+    ) -> IntArray:
+        """Lattice states around ``base`` (rad) whose tip, linearized, is within half the
+        tolerance of the base's tip in the normal plane."""
+        tick = self.grid.tick[self.tip]
+        J = position_jacobian(self.arm, base)[:, self.tip]
+        A_t = (np.stack([n, b]) @ J).T * tick[:, None]  # mm per tick
+        exact = base[self.tip] / tick
+        rounded = np.round(exact).astype(np.int64)
+        lin = self.offsets_f @ A_t + (rounded - exact) @ A_t
+        keep = np.einsum("ij,ij->i", lin, lin) <= (self.tol / 2) ** 2
+        cand = rounded + self.offsets[keep]
+        out = np.broadcast_to(np.asarray(fixed, dtype=np.int64), (cand.shape[0], self.tip.size))
+        out = out.copy()
+        out[:, self.tip] = cand
+        return out
+
+    def valid_ends(
+        self, qk: IntArray, sk: float, cand: IntArray, goal: float
+    ) -> tuple[IntArray, FloatArray]:
+        """Candidates whose command from ``qk`` keeps the tip in the band and the arm clear while
+        it moves toward arc length ``goal``; returned with the arc length their end state
+        reaches."""
+        sign = 1.0 if goal >= sk else -1.0
+        if cand.shape[0] == 0:
+            return cand, np.zeros(0)
+        cand = cand[self.grid.legal(cand - qk)]
+        cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
+        if cand.shape[0] == 0:
+            return cand, np.zeros(0)
+        d, s, sd = self.tip_checks(tool_position(self.arm, self.grid.to_joint(cand)), sk)
+        ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > _MIN_ADVANCE_MM)
+        ok &= sign * (s - goal) <= self.tol
+        cand, s = cand[ok], s[ok]
+        if cand.shape[0] == 0:
+            return cand, s
+        t = np.linspace(0.0, 1.0, _PATH_SAMPLES + 1)[1:-1]
+        Q = qk[None, None, :] + t[None, :, None] * (cand - qk)[:, None, :]
+        d2, _, sd2 = self.tip_checks(tool_position(self.arm, self.grid.to_joint(Q)), sk)
+        ok = np.all(self.in_band(d2, sd2, 0.05), axis=1)
+        cand, s, Q = cand[ok], s[ok], Q[ok]
+        if cand.shape[0] == 0:
+            return cand, s
+        checked = np.concatenate([Q[:, 1::2], cand[:, None, :]], axis=1)
+        clear = self.world.satisfied(self.arm, self.grid.to_joint(checked), self.extra).all(axis=1)
+        return cand[clear], s[clear]
+
+    def step(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """The command from ``qk`` that carries the tip farthest along the curve toward arc
+        length ``goal``."""
+        qk_rad = self.grid.to_joint(qk)
+        sign = 1.0 if goal >= sk else -1.0
+        last = None
+        for adv in _ADVANCES_MM:
+            s1 = sk + sign * min(adv, abs(goal - sk))
+            if abs(s1 - sk) <= _MIN_ADVANCE_MM or s1 == last:
+                continue
+            last = s1
+            drift = self.q_ref(s1) - self.q_ref(sk)
+            pull = np.clip(0.3 * (self.q_ref(sk) - qk_rad), -np.radians(0.5), np.radians(0.5))
+            cand, s = self._commands_toward(qk, sk, s1, goal, [drift + pull, drift])
+            if cand.shape[0]:
+                gap = np.abs(self.grid.to_joint(cand) - self.q_ref(s))[:, self.tip]
+                ref_gap = np.degrees(gap).max(axis=1)
+                k = int(np.argmax(sign * s - 0.05 * ref_gap))
+                return cand[k], float(s[k])
+        if abs(goal - sk) <= 15.0:
+            return self._toward_best(qk, sk, goal)
+        return None
+
+    def _commands_toward(
+        self, qk: IntArray, sk: float, s1: float, goal: float, moves: list[FloatArray]
+    ) -> tuple[IntArray, FloatArray]:
+        """Valid next states (see :meth:`valid_ends`) near the tip target at ``s1``: each joint
+        move (rad) from ``qk`` is projected onto the target and the lattice searched around it
+        (moves that end up more than 2.3 deg from ``qk`` are dropped)."""
+        qk_rad = self.grid.to_joint(qk)
+        E, n, b = self.target(s1)
+        found = []
+        for move in moves:
+            base = self.project(qk_rad + move, E)
+            if np.degrees(np.abs(base - qk_rad)).max() <= 2.3:
+                found.append(self.lattice_near(base, n, b, qk))
+        if not found:
+            return np.zeros((0, qk.size), dtype=np.int64), np.zeros(0)
+        return self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+
+    def _toward_best(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """Near the end of an arc (a tight spot): small advances, the joints turned toward the
+        family member with the most slack there rather than along the reference."""
+        qk_rad = self.grid.to_joint(qk)
+        sign = 1.0 if goal >= sk else -1.0
+        for adv in (3.0, 1.5, 0.8, 0.4, 0.2, 0.1):
+            s1 = sk + sign * min(adv, abs(goal - sk))
+            v = self.fam.best(s1, fine=True)
+            if not v.reachable:
+                continue
+            turn = self.matched(v.q, qk_rad) - qk_rad
+            moves = [np.clip(turn, -np.radians(t), np.radians(t)) for t in (1.9, 1.0, 0.5, 0.25)]
+            cand, s = self._commands_toward(qk, sk, s1, goal, moves)
+            if cand.shape[0]:
+                # the most slack first (a tight spot), then the farthest
+                score = self.fam.score(self.grid.to_joint(cand))
+                k = int(np.lexsort((-sign * s, -np.round(score, 2)))[0])
+                return cand[k], float(s[k])
+        return None
+
+    def start_state(
+        self, s_from: float, body_buffer_mm: float = _BODY_BUFFER_MM
+    ) -> tuple[IntArray, float]:
+        """A lattice state with the tip in the band as close after ``s_from`` as found, whose
+        links keep ``body_buffer_mm`` beyond the clearance rule."""
+        extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
+        for gap in (0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 6.4):
+            s0 = s_from + gap
+            E, n, b = self.target(s0)
+            ref = self.q_ref(s0)
+            bases = [ref]
+            q = self.fam.configs(s0, self.fam.fine_dirs)
+            if q.shape[0]:
+                q = self.matched(q, ref)
+                turn = np.degrees(np.abs(q - ref)[:, self.tip].max(axis=1))
+                score = np.where(turn <= 30.0, self.fam.score(q), -np.inf)
+                roomy = score >= body_buffer_mm
+                pick = (
+                    np.argmin(np.where(roomy, turn, np.inf)) if np.any(roomy) else np.argmax(score)
+                )
+                if np.isfinite(score[pick]):
+                    bases.insert(0, q[pick])
+            for base in bases:
+                proj = self.project(base, E)
+                cand = self.lattice_near(proj, n, b, self.grid.nearest_ticks(proj))
+                cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
+                if cand.shape[0] == 0:
+                    continue
+                d, s, sd = self.tip_checks(tool_position(self.arm, self.grid.to_joint(cand)), s0)
+                ok = self.in_band(d, sd, 0.1) & (s >= self.arc.start_mm - self.tol)
+                ok &= self.world.satisfied(self.arm, self.grid.to_joint(cand), extra)
+                if np.any(ok):
+                    k = int(np.argmin(np.where(ok, s, np.inf)))
+                    return cand[k], float(s[k])
+        raise PlanningError(
+            f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
+            f"{s_from:.1f} mm"
+        )
+
+    def run(self, q_start: IntArray, s_start: float, goal: float) -> tuple[list[IntArray], float]:
+        """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes).
+
+        Terminates by design: the direction is fixed at the start, every accepted command
+        advances the tip by more than :data:`_MIN_ADVANCE_MM` in that direction (see
+        :meth:`valid_ends`), and the pass ends once the tip is within that distance of the goal
+        or past it. So the distance left decreases strictly and the number of commands is at
+        most ``(|goal - s_start| + tolerance) / _MIN_ADVANCE_MM``.
+        """
+        direction = 1.0 if goal >= s_start else -1.0
+        states, sk, qk = [q_start], s_start, q_start
+        budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
+        for _ in range(budget):
+            if direction * (goal - sk) <= _MIN_ADVANCE_MM:
+                break
+            check_time(f"tracing {self.arc.start_mm:.1f}..{self.arc.end_mm:.1f} mm of the curve")
+            nxt = self.step(qk, sk, goal)
+            if nxt is None:
+                break
+            q_next, s_next = nxt
+            if direction * (s_next - sk) <= _MIN_ADVANCE_MM:  # cannot happen: valid_ends
+                raise AssertionError("tracer made no progress: step rule broken")
+            qk, sk = q_next, s_next
+            states.append(qk)
+        return states, sk
