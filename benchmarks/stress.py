@@ -45,6 +45,7 @@ import argparse
 import collections
 import contextlib
 import datetime as dt
+import faulthandler
 import json
 import math
 import multiprocessing as mp
@@ -53,6 +54,7 @@ import os
 import platform
 import shlex
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -1342,9 +1344,12 @@ def random_robot(rng: np.random.Generator) -> tuple[dict[str, Any], str, str]:
     conv = str(rng.choice(["standard", "modified"]))
     rows = []
     for _ in range(n):
-        a = 0.0 if rng.random() < 0.35 else _f(rng.uniform(-500, 500))
-        d = 0.0 if rng.random() < 0.35 else _f(rng.uniform(-500, 500))
-        al = float(rng.choice([0.0, 90.0, -90.0, 180.0, _f(rng.uniform(-180, 180))]))
+        # mostly general geometry; some zero offsets and parallel axes (degenerate arms whose
+        # solutions form families) stay in the mix
+        a = 0.0 if rng.random() < 0.2 else _f(rng.uniform(-500, 500))
+        d = 0.0 if rng.random() < 0.2 else _f(rng.uniform(-500, 500))
+        u = rng.random()
+        al = _f(rng.uniform(-180, 180)) if u < 0.6 else float(rng.choice([90.0, -90.0, 0.0]))
         row: dict[str, Any] = {"a": a, "alpha": al, "d": d}
         if rng.random() < 0.3:
             row["offset"] = _f(rng.uniform(-90, 90))
@@ -1773,6 +1778,12 @@ def run_ik(case: Case, work: Path) -> dict[str, Any]:
     return doc
 
 
+def _complete_method(method: str) -> bool:
+    """Whether an IK method claims every solution (closed forms, the elimination), not a
+    numerical search (Levenberg-Marquardt from seeds, also as a fallback)."""
+    return not any(k in method for k in ("levenberg", "numerical"))
+
+
 def check_fk_doc(case: Case, doc: dict[str, Any]) -> dict[str, Any]:
     p = case.params
     if p["model"] == "seed":
@@ -1798,7 +1809,7 @@ def check_ik_doc(case: Case, doc: dict[str, Any]) -> dict[str, Any]:
         problems, facts = ir.check_ik(robot, np.array(p["xyz"]), doc, None, position_only=True)
     else:
         problems, facts = ir.check_ik(robot, np.array(p["pose"]), doc, gen)
-        complete = "numerical" not in doc["method"]
+        complete = _complete_method(doc["method"])
         if gen is not None and complete and not facts.get("found_generating", True):
             sigma = facts.get("generating_sigma_min", 0.0)
             case.facts["missed_generating"] = sigma
@@ -1949,9 +1960,9 @@ def check_error(case: Case, exc: BaseException) -> None:
             raise RejectedError(f"JointLimitError for states inside the limits: {msg}")
     if case.kind == "ik" and "generating_q" in p and "pose" in p and p["model"] != "seed":
         method = case.facts.get("ik_doc", {}).get("method", "")
-        if "numerical" not in method:
+        if _complete_method(method):
             robot = ir.DHRobot.from_file(p["table"])
-            J = robot.position_jacobian(np.array(p["generating_q"]))
+            J = robot.pose_jacobian(np.array(p["generating_q"]))
             sigma = float(np.linalg.svd(J, compute_uv=False)[-1])
             if sigma > 1e-2:
                 raise RejectedError(
@@ -2251,6 +2262,9 @@ def _worker(conn: mpc.Connection, seed: int, kinds: list[str], budget: float, sh
 
     with contextlib.suppress(ValueError, OSError):
         resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
+    # on SIGUSR1 (sent by the watchdog before it kills a hung case) write where it is stuck
+    stacks = _stack_file(os.getpid()).open("w")
+    faulthandler.register(signal.SIGUSR1, file=stacks, all_threads=False)
     import warnings
 
     warnings.filterwarnings("ignore")
@@ -2283,6 +2297,22 @@ def _worker(conn: mpc.Connection, seed: int, kinds: list[str], budget: float, sh
             conn.send(("done", index, rec))
         finally:
             shutil.rmtree(work, ignore_errors=True)
+
+
+def _stack_file(pid: int) -> Path:
+    return Path(tempfile.gettempdir()) / f"armpath-stress-stack-{pid}.txt"
+
+
+def where_stuck(dump: str) -> str:
+    """The innermost armpath frames of a faulthandler dump, as ``; in f (file:line) < ...``."""
+    frames = []
+    for line in dump.splitlines():
+        line = line.strip()
+        if line.startswith("File ") and "/armpath/" in line:
+            path, _, rest = line.partition(", line ")
+            lineno, _, func = rest.partition(" in ")
+            frames.append(f"{func} ({path.split('/armpath/')[-1].rstrip(chr(34))}:{lineno})")
+    return ("; stuck in " + " < ".join(frames[:4])) if frames else ""
 
 
 @dataclass
@@ -2324,7 +2354,16 @@ def run_pool(
         with contextlib.suppress(Exception):
             slot.proc.kill()
             slot.proc.join(5)
+        _stack_file(slot.proc.pid).unlink(missing_ok=True)
         start(slot)
+
+    def stuck_at(slot: _Slot) -> str:
+        """Where the worker's Python code is (its innermost armpath frames)."""
+        with contextlib.suppress(Exception):
+            os.kill(slot.proc.pid, signal.SIGUSR1)
+            time.sleep(1.0)
+            return where_stuck(_stack_file(slot.proc.pid).read_text())
+        return ""
 
     for s in slots:
         start(s)
@@ -2389,7 +2428,7 @@ def run_pool(
                         "category": what,
                         "elapsed": now - s.since,
                         "message": f"still {s.phase} after {now - s.since:.0f} s (budget "
-                        f"{s.budget:g} s); killed",
+                        f"{s.budget:g} s); killed" + stuck_at(s),
                     }
                 )
                 kill(s)
@@ -2509,7 +2548,9 @@ def _show_case(args: argparse.Namespace, kinds: list[str]) -> int:
         with contextlib.suppress(Exception):
             print("  command line: armpath " + shlex.join(cli_args(case, work, None)))
         t0 = time.monotonic()
+        faulthandler.dump_traceback_later(HANG_FACTOR * case.budget + 1.0, exit=False)
         rec = run_case(case, work)
+        faulthandler.cancel_dump_traceback_later()
         print(f"  -> {rec['outcome']} ({rec.get('category', '')}) in {time.monotonic() - t0:.1f} s")
         if rec.get("message"):
             print("  " + rec["message"])

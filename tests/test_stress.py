@@ -442,11 +442,6 @@ def test_fixed_sample_kinematics_and_planning(stress):
     assert outcomes == {"result", "error"}  # both replayed results and clear errors
 
 
-@pytest.mark.xfail(
-    reason="known bug (found by the stress suite): a malformed YAML scene raises a SceneError "
-    "whose message spans several lines (case 21)",
-    strict=False,
-)
 def test_fixed_sample_scene_files(stress):
     seed, kinds, indices = SCENES
     _no_failures(_run(stress, seed, indices, kinds))
