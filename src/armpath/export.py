@@ -51,6 +51,10 @@ def _finite_or_none(x: float) -> float | None:
     return float(x) if np.isfinite(x) else None
 
 
+def _deg_or_none(x: float | None) -> float | None:
+    return None if x is None else float(np.degrees(x))
+
+
 def model_dict(arm: SerialArm) -> dict[str, Any]:
     """The model's name, numbers, joint limits (deg; null = unlimited), command lattice, and
     its whole definition (:func:`~armpath.model.serialize.arm_to_dict`: a result replays with
@@ -272,6 +276,10 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
             for t in result.transits
         ],
         "covered": [{"start_mm": p.start_mm, "end_mm": p.end_mm} for p in result.passes],
+        "not_traced": [
+            {"start_mm": a.start_mm, "end_mm": a.end_mm, "reason": why}
+            for a, why in result.not_traced
+        ],
         "reachable": [
             {"start_mm": a.start_mm, "end_mm": a.end_mm, "length_mm": a.length_mm}
             for a in reach.reachable
@@ -296,6 +304,23 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
         ),
         "max_deviation_mm": result.max_deviation_mm,
         "max_deviation_bound_mm": result.max_deviation_bound_mm,
+        "tool_axis": None
+        if result.axis_rule is None
+        else {
+            **result.axis_rule.describe(),
+            "max_angle_deg": _deg_or_none(result.max_axis_angle_rad),
+            "max_angle_bound_deg": _deg_or_none(result.max_axis_angle_bound_rad),
+            "method": (
+                "angle of the tool's approach axis from the rule's axis over the continuous "
+                "motion of every pass: "
+                + (
+                    "largest instant of samples every 1/32 command, refined (the surface normal "
+                    "turns with the tool point: no proven bound)"
+                    if result.axis_rule.normal
+                    else "branch and bound with the tool frame's largest turning rate (proven)"
+                )
+            ),
+        },
         "deviation_method": (
             "distance from the fingertip to the curve over the continuous motion of every pass: "
             "branch and bound with the fingertip's largest speed (proven bound)"

@@ -68,10 +68,9 @@ def cli_command() -> Any:
     return _tidy_help(typer.main.get_command(app))
 
 
-#: Options that take one value per joint of the chosen arm (how many depends on the arm): on
-#: the command line their numbers follow the option as separate words, which are joined into
-#: the option's one value before parsing.
-JOINT_LIST_OPTIONS = ("--from", "--to")
+#: Options whose numbers follow them as separate words (one value per joint of the chosen arm,
+#: or a direction): the words are joined into the option's one value before parsing.
+JOINT_LIST_OPTIONS = ("--from", "--to", "--tool-axis")
 
 
 def join_number_lists(args: list[str], options: tuple[str, ...] = JOINT_LIST_OPTIONS) -> list[str]:

@@ -60,7 +60,7 @@ from armpath.planning.motion import (
 )
 from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
 from armpath.planning.tour import TourResult, VisitOrder
-from armpath.planning.trace import TraceOptions, TraceResult
+from armpath.planning.trace import AxisRule, TraceOptions, TraceResult
 from armpath.report import passes_text, summary_html, summary_markdown
 from armpath.scenes import Scene
 from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
@@ -187,7 +187,7 @@ FromOption = Annotated[
     ),
 ]
 ToolAxisOption = Annotated[
-    tuple[float, float, float] | None,
+    str | None,
     typer.Option(
         "--tool-axis",
         metavar="X Y Z",
@@ -196,6 +196,24 @@ ToolAxisOption = Annotated[
         show_default=False,
     ),
 ]
+TraceToolAxisOption = Annotated[
+    str | None,
+    typer.Option(
+        "--tool-axis",
+        metavar="normal|X Y Z",
+        help="Keep the tool's approach axis within --axis-tolerance of the surface's inward "
+        "normal at each point ('normal': a torch kept near the normal), or of a fixed world "
+        "direction, along the whole continuous motion of every pass. Default: any direction "
+        "from outside the surface.",
+        show_default=False,
+    ),
+]
+
+
+def _direction(text: str, option: str) -> np.ndarray:
+    return np.array(_numbers(text.replace(",", " ").split(), 3, f"{option} X Y Z"))
+
+
 AxisToleranceOption = Annotated[
     float, typer.Option("--axis-tolerance", help="Largest angle of the tool axis, deg.")
 ]
@@ -224,7 +242,7 @@ TaskModelOption = Annotated[
 
 
 def orientation_rule(
-    tool_axis: tuple[float, float, float] | None,
+    tool_axis: str | None,
     axis_tolerance_deg: float,
     pose_deg: tuple[float, float, float] | None,
     angle_tolerance_deg: float,
@@ -240,8 +258,12 @@ def orientation_rule(
         if not (np.isfinite(v) and 0.0 <= v <= 180.0):
             raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
     if tool_axis is not None:
-        axis = np.array(_numbers([str(v) for v in tool_axis], 3, "--tool-axis X Y Z"))
-        return AxisCone(axis, np.radians(axis_tolerance_deg))
+        if tool_axis.strip() == "normal":
+            raise InvalidInputError(
+                "--tool-axis normal follows a surface along a curve (trace); give a direction "
+                "X Y Z here"
+            )
+        return AxisCone(_direction(tool_axis, "--tool-axis"), np.radians(axis_tolerance_deg))
     if pose_deg is not None:
         from scipy.spatial.transform import Rotation
 
@@ -614,6 +636,11 @@ def _trace_summary(doc: dict[str, Any]) -> Table:
         f"{cov['covered_mm']:.2f} mm of {cov['reachable_mm']:.2f} mm reachable "
         f"({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
     )
+    for u in doc.get("not_traced", []):
+        table.add_row(
+            "not traced",
+            f"arc {u['start_mm']:.2f} .. {u['end_mm']:.2f} mm (reachable): {u['reason']}",
+        )
     for u in doc["unreachable"]:
         table.add_row(
             "unreachable",
@@ -624,8 +651,21 @@ def _trace_summary(doc: dict[str, Any]) -> Table:
     table.add_row(
         "largest deviation",
         f"{doc['max_deviation_mm']:.4f} mm (proven <= {doc['max_deviation_bound_mm']:.4f}; "
-        f"tolerance {doc['tolerance_mm']} mm; continuous tip path)",
+        f"tolerance {doc['tolerance_mm']} mm; continuous tool path)",
     )
+    axis = doc.get("tool_axis")
+    if axis is not None and axis["max_angle_deg"] is not None:
+        against = "the surface normal" if axis["type"] == "normal" else "its direction"
+        bound = (
+            f"proven <= {axis['max_angle_bound_deg']:.3f} deg"
+            if axis["max_angle_bound_deg"] is not None
+            else "refined sampling"
+        )
+        table.add_row(
+            "tool axis",
+            f"at most {axis['max_angle_deg']:.3f} deg from {against} ({bound}; tolerance "
+            f"{axis['tolerance_deg']:g} deg; continuous motion of every pass)",
+        )
     table.add_row("min clearance", _clearance_text(doc["clearance"]))
     table.add_row("scene", _scene_text(doc["scene"]["name"], doc["wall_thickness"]))
     return table
@@ -687,16 +727,33 @@ def trace(
     wall: WallOption = None,
     scene_file: SceneOption = None,
     model: TaskModelOption = None,
+    tool_axis: TraceToolAxisOption = None,
+    axis_tolerance: AxisToleranceOption = 15.0,
     link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Task 2: go once around the scene's curve (the crack) with the tool, every reachable
-    part, fewest passes and commands; report the unreachable arcs and why."""
+    part, fewest passes and commands; report the unreachable arcs and why. Any arm (--model or
+    the scene's [arm]); --tool-axis keeps the torch near the surface normal or a direction."""
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius)
-        options = TraceOptions(tolerance_mm=tolerance, motion=MotionOptions(seed=seed))
+        rule = None
+        if tool_axis is not None:
+            if not (np.isfinite(axis_tolerance) and 0.0 < axis_tolerance <= 180.0):
+                raise InvalidInputError(
+                    f"--axis-tolerance must be in (0, 180] deg, got {axis_tolerance}"
+                )
+            tol_rad = float(np.radians(axis_tolerance))
+            if tool_axis.strip() == "normal":
+                rule = AxisRule(tol_rad)
+            else:
+                d = _direction(tool_axis, "--tool-axis")
+                rule = AxisRule(tol_rad, normal=False, direction=d / np.linalg.norm(d))
+        options = TraceOptions(
+            tolerance_mm=tolerance, motion=MotionOptions(seed=seed), axis_rule=rule
+        )
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:

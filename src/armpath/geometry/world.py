@@ -201,14 +201,16 @@ class CollisionWorld:
 
     def parts(self, arm: SerialArm) -> tuple[Part, ...]:
         """The capsules checked against obstacles: every checked link of non-zero length, the
-        last one split into body and tip."""
+        last one split into body and tip. The tip is the bare segment (radius 0): the tool
+        point itself may touch a surface; the body keeps its radius (so a tool of radius ``r``
+        can meet a surface head-on only when ``r + margin <= tip_exempt``)."""
         checked = self._checked_links(arm)
         out: list[Part] = []
         for k, link in enumerate(checked):
             last = k == len(checked) - 1
             out.append(Part(link.name, link.name, link.radius, False))
             if last and self.tip_exempt > 0:
-                out.append(Part(f"{link.name} tip", link.name, link.radius, True))
+                out.append(Part(f"{link.name} tip", link.name, 0.0, True))
         return tuple(out)
 
     def self_pairs(self, arm: SerialArm) -> tuple[tuple[int, int], ...]:

@@ -4,6 +4,8 @@ instants of a command, and distance to the curve is 1-Lipschitz)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -60,3 +62,50 @@ def certified_deviation(
     k = np.minimum(np.floor(u[:-1]).astype(np.int64), n - 1)
     bound = float(np.max(0.5 * (d[:-1] + d[1:] + rate[k] * np.diff(u))))
     return float(d.max()), max(bound, float(d.max())), profile_s, profile_d
+
+
+def certified_axis_angle(
+    arm: SerialArm,
+    angle_of: Callable[[FloatArray], FloatArray],
+    states: IntArray,
+    fixed_direction: bool,
+    precision: float = 1e-4,
+) -> tuple[float, float | None]:
+    """Largest angle (rad) of the tool axis from its rule over the continuous motion through
+    lattice ``states``, and a proven upper bound of it when the rule's axis is a fixed
+    direction (the tool frame turns at most ``sum_i |dq_i|`` over its revolute joints between
+    two instants, and the angle to a fixed direction is 1-Lipschitz in the turn); for a rule
+    that follows the surface normal the normal's own turning is not bounded, so the largest
+    angle is found by sampling every 1/32 of a command and bisecting around the worst
+    instants (bound None)."""
+    states = np.asarray(states, dtype=np.int64)
+    grid = arm.lattice
+    if states.shape[0] < 2:
+        a = angle_of(grid.to_joint(states))
+        return float(a.max()), float(a.max()) if fixed_direction else None
+    steps = np.diff(states, axis=0).astype(np.float64)
+    turning = np.where(grid.prismatic, 0.0, np.abs(steps) * grid.tick).sum(axis=1)  # rad per u
+    n = steps.shape[0]
+
+    def angle(u: FloatArray) -> FloatArray:
+        k = np.clip(np.floor(u).astype(np.int64), 0, n - 1)
+        return angle_of(grid.to_joint(states[k] + (u - k)[:, None] * steps[k]))
+
+    u = np.linspace(0.0, n, 32 * n + 1)
+    a = angle(u)
+    for _ in range(40):
+        k = np.minimum(np.floor(u[:-1]).astype(np.int64), n - 1)
+        h = np.diff(u)
+        bound = 0.5 * (a[:-1] + a[1:] + turning[k] * h)
+        need = bound > float(a.max()) + precision
+        if not np.any(need):
+            break
+        mid = 0.5 * (u[:-1][need] + u[1:][need])
+        order = np.argsort(np.concatenate([u, mid]), kind="stable")
+        u = np.concatenate([u, mid])[order]
+        a = np.concatenate([a, angle(mid)])[order]
+    if not fixed_direction:
+        return float(a.max()), None
+    k = np.minimum(np.floor(u[:-1]).astype(np.int64), n - 1)
+    bound_max = float(np.max(0.5 * (a[:-1] + a[1:] + turning[k] * np.diff(u))))
+    return float(a.max()), max(bound_max, float(a.max()))

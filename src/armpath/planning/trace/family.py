@@ -222,6 +222,30 @@ class CurveFamily:
                 dirs = axis[None]
         return dirs
 
+    def axis_angles(self, q: FloatArray) -> FloatArray:
+        """The angle (rad) between the tool's approach axis and the rule's axis (the surface's
+        inward normal at the tool point, or the rule's direction) for configurations
+        ``(..., n)``; zero without a rule."""
+        q = np.asarray(q, dtype=np.float64)
+        if self.rule is None:
+            return np.zeros(q.shape[:-1])
+        T = tool_pose(self.arm, q)
+        a = T[..., :3, 2]
+        if self.rule.normal:
+            assert self.surface is not None
+            axis = -self.surface.outward_normal(T[..., :3, 3])
+        else:
+            axis = np.broadcast_to(np.asarray(self.rule.direction, dtype=np.float64), a.shape)
+        cos = np.einsum("...i,...i->...", a, axis)
+        return np.asarray(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+    def axis_ok(self, q: FloatArray, margin: float = 0.0) -> BoolArray:
+        """Whether each configuration keeps the tool axis within the rule (less ``margin``
+        rad); everything passes without a rule."""
+        if self.rule is None:
+            return np.ones(np.asarray(q).shape[:-1], dtype=bool)
+        return np.asarray(self.axis_angles(q) <= self.rule.tolerance_rad - margin)
+
     # -- the family at one point -------------------------------------------------------------
     def configs(self, s: float, dirs: FloatArray) -> FloatArray:
         """Family members ``(M, n)`` rad with the tool point on the curve at ``s`` and the tool
@@ -427,7 +451,8 @@ class GenericCurveFamily(CurveFamily):
     def __post_init__(self) -> None:
         super().__post_init__()
         self._solver = complete_solver(self.arm) if self.arm.n_joints == 6 else None
-        self._warm = np.zeros((0, self.arm.n_joints))
+        #: the last solution found for each tool frame (numerical family): warm starts
+        self._last: dict[tuple[float, ...], FloatArray] = {}
 
     @cached_property
     def coarse_dirs(self) -> FloatArray:
@@ -464,24 +489,28 @@ class GenericCurveFamily(CurveFamily):
         return np.asarray(q[ok], dtype=np.float64)
 
     def _numerical(self, E: FloatArray, Rs: FloatArray) -> FloatArray:
+        """Levenberg-Marquardt for each tool frame of ``Rs``: continued from the solution found
+        for the same frame at the last point (so that neighbouring points of a curve get
+        neighbouring configurations, which the reference path can follow), otherwise from a
+        fixed random start of that frame."""
         arm = self.arm
         fam = GenericFamily(arm, ToolTarget(E))
-        rng = np.random.default_rng(len(self._warm))
+        keys = [(*np.round(R[:, 2], 6).tolist(), round(float(R[0, 0]), 6)) for R in Rs]
         lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
         hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+        rng = np.random.default_rng(0)
         starts = rng.uniform(lo, hi, (Rs.shape[0], arm.n_joints))
-        if self._warm.shape[0]:
-            pick = np.asarray(rng.integers(0, self._warm.shape[0], Rs.shape[0]))
-            use = rng.uniform(size=Rs.shape[0]) < 0.75
-            starts[use] = self._warm[pick[use]]
+        for i, key in enumerate(keys):
+            last = self._last.get(key)
+            if last is not None:
+                starts[i] = last
         q = fam.refine(starts, iterations=40, rotations=Rs)
         # the tool axis exactly (the turn about it is free): keep what reaches the point
         axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, 2], Rs[:, :, 2])
-        q = q[axis_ok > np.cos(np.radians(1.0))]
-        good = q[fam.exact(q)]
-        if good.shape[0]:
-            self._warm = good[: 4 * Rs.shape[0]]
-        return np.asarray(good, dtype=np.float64)
+        good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
+        for i in np.flatnonzero(good):
+            self._last[keys[i]] = q[i]
+        return np.asarray(q[good], dtype=np.float64)
 
 
 def _frames_along(dirs: FloatArray, turns: int) -> FloatArray:

@@ -41,7 +41,7 @@ from armpath.planning.motion import (
     search_clearance_extra,
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
-from armpath.planning.trace.certificate import certified_deviation
+from armpath.planning.trace.certificate import certified_axis_angle, certified_deviation
 from armpath.planning.trace.family import AxisRule
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
 from armpath.planning.trace.reference import reference_pieces
@@ -90,6 +90,11 @@ class TracePass:
     end_mm: float
     max_deviation_mm: float
     max_deviation_bound_mm: float
+    #: With a tool-axis rule: the largest angle (rad) of the tool axis from the rule's axis
+    #: over the continuous motion of the pass, and its proven bound (a fixed direction; None
+    #: for the surface normal, whose largest angle is found by refined sampling).
+    max_axis_angle_rad: float | None = None
+    max_axis_angle_bound_rad: float | None = None
 
     @property
     def covered_mm(self) -> float:
@@ -119,6 +124,9 @@ class TraceResult:
     metrics: PlanMetrics
     deviation_s_mm: FloatArray
     deviation_mm: FloatArray
+    axis_rule: AxisRule | None = None
+    #: Reachable pieces no pass could be moved onto (with why): reachable but not traced.
+    not_traced: tuple[tuple[CurveArc, str], ...] = ()
 
     @property
     def n_commands(self) -> int:
@@ -132,6 +140,19 @@ class TraceResult:
     @property
     def max_deviation_mm(self) -> float:
         return max((p.max_deviation_mm for p in self.passes), default=0.0)
+
+    @property
+    def max_axis_angle_rad(self) -> float | None:
+        """The largest angle of the tool axis from its rule over every pass (None: no rule)."""
+        angles = [p.max_axis_angle_rad for p in self.passes if p.max_axis_angle_rad is not None]
+        return max(angles) if angles else None
+
+    @property
+    def max_axis_angle_bound_rad(self) -> float | None:
+        bounds = [p.max_axis_angle_bound_rad for p in self.passes]
+        if not bounds or any(b is None for b in bounds):
+            return None
+        return max(b for b in bounds if b is not None)
 
     @property
     def max_deviation_bound_mm(self) -> float:
@@ -162,6 +183,7 @@ def plan_trace(
     states: list[IntArray] = [start]
     passes: list[TracePass] = []
     transits: list[Transit] = []
+    not_traced: list[tuple[CurveArc, str]] = []
     prof_s: list[FloatArray] = []
     prof_d: list[FloatArray] = []
     arcs = list(reach.reachable)
@@ -187,7 +209,12 @@ def plan_trace(
             here = len(states) - 1
             if passes:  # lift off first, to where the transit's search has room
                 states.extend(list(_lift_off(arm, world, states[-1], opts).states()[1:]))
-            motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
+            try:
+                motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
+            except PlanningError as exc:
+                # this piece is reachable but cannot be entered from here: report it, go on
+                not_traced.append((piece.arc, str(exc)))
+                continue
             states.extend(list(motion.sequence.states()[1:]))
             transits.append(Transit(here, len(states) - 1, motion.method))
             first = len(states) - 1
@@ -203,8 +230,22 @@ def plan_trace(
             )
             prof_s.append(ps)
             prof_d.append(pd)
+            angle, angle_bound = None, None
+            if opts.axis_rule is not None:
+                angle, angle_bound = certified_axis_angle(
+                    arm, fam.axis_angles, np.array(pass_states), not opts.axis_rule.normal
+                )
             passes.append(
-                TracePass(first, len(states) - 1, float(ps.min()), float(ps.max()), dev, dev_bound)
+                TracePass(
+                    first,
+                    len(states) - 1,
+                    float(ps.min()),
+                    float(ps.max()),
+                    dev,
+                    dev_bound,
+                    angle,
+                    angle_bound,
+                )
             )
             if s_reached < piece.arc.end_mm - 0.5:
                 # stuck: the rest of the arc gets new passes. The rest starts at least 1 mm past
@@ -218,6 +259,11 @@ def plan_trace(
                 if resume < arc.end_mm - 0.5:
                     queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
                 break
+    if not passes:
+        raise PlanningError(
+            f"no reachable part of curve {curve.name!r} could be traced: "
+            + "; ".join(f"{a.start_mm:.1f}..{a.end_mm:.1f} mm: {why}" for a, why in not_traced)
+        )
     all_states = np.array(states)
     sequence = CommandSequence.from_states(all_states, arm.lattice)
     say("certifying the clearance of the whole motion")
@@ -233,6 +279,8 @@ def plan_trace(
         plan_metrics(arm, sequence),
         np.concatenate(prof_s) if prof_s else np.zeros(0),
         np.concatenate(prof_d) if prof_d else np.zeros(0),
+        opts.axis_rule,
+        tuple(not_traced),
     )
 
 
@@ -329,4 +377,23 @@ def _enter(
             return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], motion_opts), q, s
         except PlanningError as exc:
             failures.append(f"{s:.1f} mm: {exc}")
+    # no room for a searched transit anywhere: straight motions onto the first scan points of
+    # the arc where the links keep the tracer's small buffer
+    tight = scan_s[inside & (scores >= _BODY_BUFFER_MM)][:8]
+    for s_try in tight.tolist():
+        check_time("moving onto the curve")
+        try:
+            q, s = tracer.start_state(s_try, _BODY_BUFFER_MM)
+        except PlanningError:
+            continue
+        seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
+        mc = motion_clearance(tracer.arm, tracer.world, seq)
+        if mc.certified_ok:
+            say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm (straight)")
+            m = plan_metrics(tracer.arm, seq)
+            return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
+    if tight.size:
+        failures.append(
+            f"straight motions onto {tight.size} more points of the arc are blocked too"
+        )
     raise PlanningError("could not move onto the curve: " + "; ".join(failures))

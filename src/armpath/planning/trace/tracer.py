@@ -33,6 +33,9 @@ _PATH_SAMPLES = 16
 #: Extra clearance the links keep while tracing, so the certification of the continuous motion
 #: (bound from sampling) succeeds (mm).
 _BODY_BUFFER_MM = 0.02
+#: The tool axis keeps this far inside its rule's cone at the checked instants, so that the
+#: certified worst angle of the continuous motion stays within the rule (rad: 0.2 deg).
+_AXIS_MARGIN_RAD = float(np.radians(0.2))
 #: Least advance of the tip along the curve that one tracing command must make (mm): the
 #: progress measure that makes every pass end.
 MIN_ADVANCE_MM = 0.05
@@ -169,16 +172,19 @@ class Tracer:
         cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
         if cand.shape[0] == 0:
             return cand, np.zeros(0)
-        d, s, sd = self.tip_checks(tool_position(self.arm, self.grid.to_joint(cand)), sk)
+        q_cand = self.grid.to_joint(cand)
+        d, s, sd = self.tip_checks(tool_position(self.arm, q_cand), sk)
         ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > _MIN_ADVANCE_MM)
+        ok &= self.fam.axis_ok(q_cand, _AXIS_MARGIN_RAD)
         ok &= sign * (s - goal) <= self.tol
         cand, s = cand[ok], s[ok]
         if cand.shape[0] == 0:
             return cand, s
         t = np.linspace(0.0, 1.0, _PATH_SAMPLES + 1)[1:-1]
         Q = qk[None, None, :] + t[None, :, None] * (cand - qk)[:, None, :]
-        d2, _, sd2 = self.tip_checks(tool_position(self.arm, self.grid.to_joint(Q)), sk)
-        ok = np.all(self.in_band(d2, sd2, 0.05), axis=1)
+        Q_rad = self.grid.to_joint(Q)
+        d2, _, sd2 = self.tip_checks(tool_position(self.arm, Q_rad), sk)
+        ok = np.all(self.in_band(d2, sd2, 0.05) & self.fam.axis_ok(Q_rad, _AXIS_MARGIN_RAD), axis=1)
         cand, s, Q = cand[ok], s[ok], Q[ok]
         if cand.shape[0] == 0:
             return cand, s
@@ -274,8 +280,10 @@ class Tracer:
                 cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
                 if cand.shape[0] == 0:
                     continue
-                d, s, sd = self.tip_checks(tool_position(self.arm, self.grid.to_joint(cand)), s0)
+                q_cand = self.grid.to_joint(cand)
+                d, s, sd = self.tip_checks(tool_position(self.arm, q_cand), s0)
                 ok = self.in_band(d, sd, 0.1) & (s >= self.arc.start_mm - self.tol)
+                ok &= self.fam.axis_ok(q_cand, _AXIS_MARGIN_RAD)
                 ok &= self.world.satisfied(self.arm, self.grid.to_joint(cand), extra)
                 if np.any(ok):
                     k = int(np.argmin(np.where(ok, s, np.inf)))
