@@ -508,8 +508,8 @@ class GenericCurveFamily(CurveFamily):
         # the tool axis exactly (the turn about it is free): keep what reaches the point
         axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, 2], Rs[:, :, 2])
         good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
-        for i in np.flatnonzero(good):
-            self._last[keys[i]] = q[i]
+        for k in np.flatnonzero(good).tolist():
+            self._last[keys[k]] = q[k]
         return np.asarray(q[good], dtype=np.float64)
 
 
