@@ -296,22 +296,93 @@ def lattice_candidates(
 ) -> tuple[IntArray, FloatArray]:
     """Lattice states near family member ``q`` whose tool is within ``tol`` of the target (and
     keeps its orientation rule) and that lie within the limits: ``(K, n)`` ticks and their exact
-    position errors (model unit)."""
+    position errors (model unit).
+
+    Two searches: (1) a box of integer offsets around ``q``'s nearest lattice state whose
+    linearised tool error is within the tolerance; (2) the joints that move the tool least
+    (up to three, *fine*) are solved, the others (*coarse*) run over a box of lattice values:
+    for each coarse choice whose linearised error the fine joints can take up, the fine joints
+    are solved exactly (Newton steps on the forward kinematics) and rounded both ways. The
+    second finds lattice states where the coarse joints alone put the tool millimetres apart
+    (large arms: a tick of the base joint moves the tool 2 mm on a 1 m reach)."""
     grid = arm.lattice
     offsets, J = _box(arm, q, tol)
     exact = grid.to_ticks_float(q)
     base = np.round(exact).astype(np.int64)
     lin = (offsets + (base - exact)) @ J.T  # the tool's linearised move from q
     near = np.einsum("ij,ij->i", lin, lin) <= (1.5 * tol + 1e-3 * tol) ** 2
-    cand = base + offsets[near]
-    if cand.shape[0] == 0:
-        return cand, np.zeros(0)
-    q_c = grid.to_joint(cand)
-    pos, ang = _pose_residuals(arm, target, q_c)
-    ok = (pos <= tol) & arm.within_limits(q_c)
-    if target.orientation is not None:
-        ok &= ang <= target.orientation.tolerance_rad
-    return cand[ok], pos[ok]
+
+    def checked(cand: IntArray) -> tuple[IntArray, FloatArray]:
+        if cand.shape[0] == 0:
+            return cand, np.zeros(0)
+        q_c = grid.to_joint(cand)
+        pos, ang = _pose_residuals(arm, target, q_c)
+        ok = (pos <= tol) & arm.within_limits(q_c)
+        if target.orientation is not None:
+            ok &= ang <= target.orientation.tolerance_rad
+        return cand[ok], pos[ok]
+
+    found, err = checked(base + offsets[near])
+    if found.shape[0] >= 4:
+        return found, err
+    more, more_err = checked(np.unique(_solved_fine(arm, target, q, tol, J), axis=0))
+    keep = ~np.any(np.all(more[:, None, :] == found[None, :, :], axis=-1), axis=1)
+    return np.vstack([found, more[keep]]), np.r_[err, more_err[keep]]
+
+
+#: Coarse lattice choices tried around one family member by the fine-joint solve.
+COARSE_BUDGET = 20_000
+
+
+def _solved_fine(
+    arm: SerialArm, target: ToolTarget, q: FloatArray, tol: float, J: FloatArray
+) -> IntArray:
+    """Lattice states from the fine-joint solve of :func:`lattice_candidates` (unchecked)."""
+    grid = arm.lattice
+    n = arm.n_joints
+    lever = np.linalg.norm(J, axis=0)
+    active = np.flatnonzero(lever > 1e-9 * tol)
+    if active.size < 2:
+        return np.zeros((0, n), dtype=np.int64)
+    by_lever = active[np.argsort(lever[active])]
+    fine = by_lever[: min(3, active.size - 1)]
+    coarse = np.setdiff1d(active, fine)
+    if coarse.size == 0 or np.linalg.matrix_rank(J[:, fine], tol=1e-9 * lever.max()) < 2:
+        return np.zeros((0, n), dtype=np.int64)
+    # the coarse box: equal radii within the budget
+    radius = max(int(np.floor((COARSE_BUDGET ** (1.0 / coarse.size) - 1) / 2)), 1)
+    axes = [np.arange(-radius, radius + 1)] * coarse.size
+    d_c = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, coarse.size)
+    exact = grid.to_ticks_float(q)
+    base = np.round(exact).astype(np.int64)
+    r = base - exact
+    # what the fine joints must take up, and how much of it they can (least squares)
+    y = -(d_c + r[coarse]) @ J[:, coarse].T - J[:, fine] @ r[fine]
+    pinv = np.linalg.pinv(J[:, fine])
+    x = y @ pinv.T
+    miss = np.linalg.norm(x @ J[:, fine].T - y, axis=1)
+    # a loose linear prefilter (the exact solve below absorbs the curvature)
+    keep = np.flatnonzero(miss <= max(10.0 * tol, 0.2 * float(lever[coarse].min())))
+    if keep.size == 0:
+        return np.zeros((0, n), dtype=np.int64)
+    keep = keep[np.argsort(miss[keep])[:400]]
+    ticks = np.broadcast_to(base.astype(np.float64), (keep.size, n)).copy()
+    ticks[:, coarse] += d_c[keep]
+    ticks[:, fine] += x[keep]
+    qs = grid.to_joint(ticks)
+    for _ in range(4):  # exact Newton on the fine joints
+        frames = forward_frames(arm, qs)
+        e = target.position - frames[:, -1, :3, 3]
+        Jf = jacobian_from_frames(arm, frames)[:, :3][:, :, fine]
+        step = np.einsum("mij,mj->mi", np.linalg.pinv(Jf), e)
+        qs[:, fine] += step
+    t_fine = grid.to_ticks_float(qs)[:, fine]
+    corners = np.array([[(c >> b) & 1 for b in range(fine.size)] for c in range(2**fine.size)])
+    out = np.repeat(
+        np.round(grid.to_ticks_float(qs)).astype(np.int64)[:, None], corners.shape[0], 1
+    )
+    out[:, :, fine] = np.floor(t_fine).astype(np.int64)[:, None, :] + corners[None]
+    return out.reshape(-1, n)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,227 @@
+"""Issue 18: reach, plan and trace for arms other than the seed arm, checked independently.
+
+The D-H tables below are written out from the makers' published values (not read from armpath);
+the textbook D-H product (tests/independent_dh.py) replays every plan; the least number of
+commands is bounded by a multi-start SLSQP of the largest joint change written here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+import independent_dh as idh
+from armpath.geometry import CollisionWorld
+from armpath.ik.target import AxisCone
+from armpath.model.catalog import resolve_model
+from armpath.planning.reach import ReachOptions, plan_reach
+from armpath.planning.trace import TraceOptions, plan_trace
+from armpath.scenes import scene_from_dict
+
+D = np.pi / 180
+# (a mm, alpha rad, d mm, joint offset rad), standard D-H
+TABLES = {
+    "ur5": (
+        [0, -425.0, -392.25, 0, 0, 0],
+        [90 * D, 0, 0, 90 * D, -90 * D, 0],
+        [89.159, 0, 0, 109.15, 94.65, 82.3],
+    ),
+    "puma560": (
+        [0, 431.8, 20.32, 0, 0, 0],
+        [90 * D, 0, -90 * D, 90 * D, -90 * D, 0],
+        [0, 0, 150.05, 431.8, 0, 0],
+    ),
+    "iiwa14": (
+        [0.0] * 7,
+        [-90 * D, 90 * D, 90 * D, -90 * D, -90 * D, 90 * D, 0],
+        [360.0, 0, 420.0, 0, 400.0, 0, 126.0],
+    ),
+}
+#: seed 004's painting robot: (a, d) lengths, twists, offsets (docs/seed004.md)
+PAINTER = (
+    [400.0, 800.0, 130.0, 0, 0, 0],
+    [-90 * D, 0, -90 * D, -50 * D, 50 * D, 0],
+    [842.0, 0, 0, 774.0, 98.0, 63.0],
+    [0, -90 * D, 0, -90 * D, 0, 180 * D],
+)
+STEP = 2.0 * D  # 20 ticks of 0.1 deg a command, every joint of every built-in model
+#: Tools (mm along the flange's z) given to arms whose flange point is the wrist centre: with
+#: only joints 1-3 moving that point, the 0.1 deg lattice reaches points about 1 mm apart.
+TOOL_MM = {"puma560": 120.0}
+
+
+def pose(name: str, q: np.ndarray) -> np.ndarray:
+    """The tool frame from the textbook D-H product (and the test's tool)."""
+    if name == "painter004":
+        a, alpha, d, off = PAINTER
+        T = idh.dh_pose(a, alpha, d, q, offset=off)
+    else:
+        a, alpha, d = TABLES[name]
+        T = idh.dh_pose(a, alpha, d, q)
+    tool = np.eye(4)
+    tool[2, 3] = TOOL_MM.get(name, 0.0)
+    return T @ tool
+
+
+def tip(name: str, q: np.ndarray) -> np.ndarray:
+    return pose(name, q)[:3, 3]
+
+
+def tip_and_jacobian(name: str, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tool point and its Jacobian from the textbook D-H frames: column i is
+    ``z_{i-1} x (p - o_{i-1})``."""
+    if name == "painter004":
+        a, alpha, d, off = PAINTER
+    else:
+        a, alpha, d = TABLES[name]
+        off = [0.0] * len(a)
+    T = np.eye(4)
+    zs, os_ = [], []
+    for i in range(len(a)):
+        zs.append(T[:3, 2].copy())
+        os_.append(T[:3, 3].copy())
+        T = T @ idh.dh_pose([a[i]], [alpha[i]], [d[i]], [q[i]], offset=[off[i]])
+    p = T[:3, 3] + TOOL_MM.get(name, 0.0) * T[:3, 2]
+    J = np.stack([np.cross(z, p - o) for z, o in zip(zs, os_, strict=True)], axis=1)
+    return p, J
+
+
+def independent_bound(name, start, target, tol, lo, hi, starts=10, seed=0):
+    """Least largest joint change (in commands of 2 deg) over configurations within ``tol`` of
+    the target: SLSQP from many random starts on the textbook D-H product."""
+    rng = np.random.default_rng(seed)
+    n = start.size
+    lo_b = np.where(np.isfinite(lo), lo, start - 4 * np.pi)
+    hi_b = np.where(np.isfinite(hi), hi, start + 4 * np.pi)
+    best = np.inf
+
+    def err2(z):
+        p, J = tip_and_jacobian(name, z[:n])
+        e = p - target
+        return float(e @ e), np.r_[2 * e @ J, np.zeros(z.size - n)]
+
+    eye = np.eye(n)
+    A = np.vstack([np.c_[-eye, np.full(n, STEP)], np.c_[eye, np.full(n, STEP)]])
+    b = np.r_[start, -start]
+    cons = [
+        {"type": "ineq", "fun": lambda z: tol**2 - err2(z)[0], "jac": lambda z: -err2(z)[1]},
+        {"type": "ineq", "fun": lambda z: A @ z + b, "jac": lambda z: A},
+    ]
+    for k in range(starts):
+        # half the starts near the start state (the basins of the least change), half anywhere
+        spread = np.radians(45.0) if k % 2 == 0 else np.pi
+        q0 = rng.uniform(np.maximum(lo_b, start - spread), np.minimum(hi_b, start + spread))
+
+        # a start on the target with a small largest change: a smooth p-norm of the change
+        # plus a stiff penalty on the tool's distance, then the tool exactly onto the target
+        def smooth(q):
+            x = (q - start) / STEP
+            m = float(np.max(np.abs(x))) + 1e-12
+            s16 = np.sum((x / m) ** 16)
+            pn = m * s16 ** (1 / 16)
+            g = (x / m) ** 15 * s16 ** (1 / 16 - 1) / STEP
+            e2, de2 = err2(np.r_[q, 0.0])
+            return pn + 1e-2 * e2, g + 1e-2 * de2[:n]
+
+        bnds = list(zip(lo_b, hi_b, strict=True))
+        r = minimize(smooth, q0, jac=True, method="L-BFGS-B", bounds=bnds)
+        r = minimize(err2, r.x, jac=True, method="L-BFGS-B", bounds=bnds)
+        if err2(r.x)[0] > tol**2:
+            continue
+        z0 = np.r_[r.x, np.max(np.abs(r.x - start)) / STEP]
+        res = minimize(
+            lambda z: z[n],
+            z0,
+            jac=lambda z: np.r_[np.zeros(n), 1.0],
+            method="SLSQP",
+            constraints=cons,
+            bounds=[*zip(lo_b, hi_b, strict=True), (0, None)],
+            options={"maxiter": 300, "ftol": 1e-12},
+        )
+        z = res.x if res.success else z0
+        if err2(z)[0] <= tol**2 * 1.0001:
+            best = min(best, float(np.max(np.abs(z[:n] - start)) / STEP))
+    return best
+
+
+CASES = [
+    ("ur5", [0, -90, 90, -90, -90, 0], [300.0, 200.0, 300.0]),
+    ("puma560", [0, 45, -90, 0, 30, 0], [400.0, 200.0, 100.0]),
+    ("painter004", [0, 0, 0, 0, 0, 0], [1100.0, 300.0, 1000.0]),
+    ("iiwa14", [0, 30, 0, -60, 0, 30, 0], [500.0, 200.0, 400.0]),
+]
+
+
+@pytest.mark.parametrize(("name", "start_deg", "target"), CASES)
+@pytest.mark.parametrize("cone", [False, True])
+def test_reach_of_any_arm_within_one_command_of_the_independent_bound(
+    name, start_deg, target, cone
+):
+    arm = resolve_model(name)
+    if name in TOOL_MM:
+        tool = np.eye(4)
+        tool[2, 3] = TOOL_MM[name]
+        arm = arm.with_tool(tool)
+    world = CollisionWorld(())  # the arm alone
+    grid = arm.lattice
+    start = grid.from_display(start_deg, "start")
+    rule = AxisCone(np.array([0.0, 0.0, -1.0]), np.radians(20.0)) if cone else None
+    r = plan_reach(arm, world, start, target, ReachOptions(), orientation=rule)
+    states = r.sequence.states()
+    assert np.all(np.abs(np.diff(states, axis=0)) <= 20)
+    q_end = grid.to_joint(states[-1])
+    assert np.all((q_end >= arm.lower - 1e-9) & (q_end <= arm.upper + 1e-9))
+    err = float(np.linalg.norm(tip(name, q_end) - target))
+    assert err <= 0.05
+    assert err == pytest.approx(r.error_mm, abs=1e-6)
+    if cone:
+        T = pose(name, q_end)
+        angle = np.degrees(np.arccos(np.clip(T[:3, 2] @ [0, 0, -1], -1, 1)))
+        assert angle <= 20.0 + 1e-6
+    else:
+        bound = independent_bound(
+            name, grid.to_joint(start), np.array(target), 0.05, arm.lower, arm.upper
+        )
+        assert np.isfinite(bound)
+        assert r.n_commands <= int(np.ceil(bound - 1e-9)) + 1
+        # the bound the planner reports is never above what the independent search attains
+        assert r.lower_bound.commands <= int(np.ceil(bound - 1e-9))
+
+
+def test_a_free_circle_traced_by_ur5_replays_on_the_textbook_product():
+    centre, radius = np.array([400.0, 100.0, 150.0]), 60.0
+    scene = scene_from_dict(
+        {
+            "name": "table",
+            "arm": {"model": "ur5", "home_deg": [0, -90, 90, -90, -90, 0]},
+            "obstacles": [
+                {"type": "half_space", "name": "table", "point": [0, 0, -50],
+                 "normal": [0, 0, 1]}
+            ],
+            "tasks": {"trace": {"curve": {
+                "type": "parametric", "name": "circle",
+                "x": f"{centre[0]} + {radius}*cos(t)", "y": f"{centre[1]} + {radius}*sin(t)",
+                "z": f"{centre[2]}", "t": [0, 2 * np.pi]}}},
+        }
+    )  # fmt: skip
+    from armpath.scenes.arm import scene_arm
+
+    arm = scene_arm(scene)
+    start = arm.lattice.to_ticks(arm.home)
+    r = plan_trace(arm, scene.world, start, scene.trace_curve(), TraceOptions())
+    assert r.clearance.certified_ok and len(r.passes) >= 1
+    states = r.sequence.states()
+    assert np.all(np.abs(np.diff(states, axis=0)) <= 20)
+    t = np.linspace(0, 1, 41)
+    swept = []
+    for p in r.passes:
+        a, b = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (a[:, None] + t[None, :, None] * (b - a)[:, None]).reshape(-1, 6) * (np.pi / 1800)
+        P = np.array([tip("ur5", x) for x in q])
+        rho = np.hypot(P[:, 0] - centre[0], P[:, 1] - centre[1])
+        dev = np.hypot(rho - radius, P[:, 2] - centre[2])
+        assert dev.max() <= 0.1
+        swept.append(np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0])))
+    # once around: the passes together sweep the whole circle
+    assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3
