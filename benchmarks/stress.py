@@ -2050,7 +2050,7 @@ def cli_args(case: Case, work: Path, out_dir: Path | None) -> list[str]:
             ["--to", *map(_num, p["to"])] if "to" in p else ["--to-xyz", *map(_num, p["to_xyz"])]
         )
         if p.get("weights"):
-            args += ["--weights", *map(_num, p["weights"])]
+            args += ["--weights", ",".join(map(_num, p["weights"]))]
         if p.get("wall"):
             args += ["--wall", p["wall"]]
     elif k == "trace":
@@ -2135,6 +2135,9 @@ def run_cli(case: Case, work: Path) -> dict[str, Any]:
         if case.kind in ("fk", "ik"):
             doc = _cli_kinematics_doc(case, doc)
         return check_result(case, doc, work)
+    if proc.returncode == 2 and case.expect_error and "Usage:" in proc.stderr:
+        # the option parser refused an invalid value (e.g. a --wall choice): a usage error
+        raise CliError(" ".join(proc.stderr.split())[:300])
     if proc.returncode != 1:
         raise RejectedError(f"exit {proc.returncode}: {proc.stderr.strip()[:300]}")
     errors = [ln for ln in err_lines if ln.startswith("error:")]

@@ -1064,13 +1064,6 @@ def replay_result(
         return rep
     if arm is None:
         arm = SeedArm(link_radius=claimed.link_radius)
-    if not np.allclose(claimed.limits_deg, arm.limits_deg, rtol=0, atol=1e-9) or not math.isclose(
-        claimed.link_radius, arm.link_radius, abs_tol=1e-12
-    ):
-        P.append(
-            f"the result's arm (limits {claimed.limits_deg}, link radius {claimed.link_radius}) "
-            f"is not the one asked for ({arm.limits_deg}, {arm.link_radius})"
-        )
     states = replay_states(doc, arm, P)
     rep.states_ticks = states
     if truth.start_deg is not None and not np.array_equal(
@@ -1079,6 +1072,20 @@ def replay_result(
         P.append(f"starts at {(states[0] / 10).tolist()}, asked {list(truth.start_deg)}")
     if P:
         return rep  # the motion itself is not legal: nothing more to judge
+    # the result must describe the arm asked for (the motion is judged with that arm anyway)
+    radii = [
+        float(link["radius"])
+        for link in doc["model"].get("definition", {}).get("links", [])
+        if "radius" in link
+    ]
+    if not np.allclose(claimed.limits_deg, arm.limits_deg, rtol=0, atol=1e-9):
+        P.append(f"the result's joint limits {claimed.limits_deg} are not {arm.limits_deg}")
+    for what, r in [("model.parameters.link_radius_mm", claimed.link_radius)] + [
+        ("a link radius of model.definition", r) for r in radii
+    ]:
+        if not math.isclose(r, arm.link_radius, abs_tol=1e-9):
+            P.append(f"{what} is {r:g} mm, the arm asked for has {arm.link_radius:g} mm")
+            break
     # clearance along the continuous motion
     rep.clearance = motion_clearance(arm, scene, states, time_step_mm, link_step_mm)
     eps = scene.allowance
