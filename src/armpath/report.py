@@ -20,6 +20,11 @@ FILES = {
 }
 
 
+def _mm(value: float | None) -> str:
+    """A length in mm to 3 decimals, or a dash when there was nothing to measure."""
+    return "-" if value is None else f"{value:.3f}"
+
+
 def passes_text(n: int) -> str:
     """'1 pass', '2 passes'."""
     return f"{n} pass" + ("" if n == 1 else "es")
@@ -27,7 +32,7 @@ def passes_text(n: int) -> str:
 
 def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], list[str]]:
     lines = [
-        "| task | commands | lower bound | fingertip error [mm] | min clearance [mm] | wall |",
+        "| task | commands | lower bound | tool point error [mm] | min clearance [mm] | wall |",
         "|---|---:|---:|---:|---:|---|",
     ]
     notes = []
@@ -36,17 +41,17 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
             body = doc["clearance"]["min_body_clearance_mm"]
             lines.append(
                 f"| {title} | {doc['n_commands']} | - | {doc['max_deviation_mm']:.4f} (largest "
-                f"deviation of the continuous path) | {doc['min_clearance_mm']:.3f} (tool tip) / "
-                f"{body:.3f} (links) | {doc['wall_thickness']} |"
+                f"deviation of the continuous path) | {_mm(doc['min_clearance_mm'])} (tool tip) / "
+                f"{_mm(body)} (links) | {doc['wall_thickness'] or '-'} |"
             )
             continue
         bound, error = str(doc["lower_bound_commands"]), f"{doc['error_mm']:.4f}"
-        clearance = f"{doc['min_clearance_mm']:.3f}"
+        clearance = _mm(doc["min_clearance_mm"])
         if doc["task"] == "spotweld":
             bound += "*"
             error += " (largest)"
             body = doc["clearance"]["min_body_clearance_mm"]
-            clearance = f"{clearance} (tool tip) / {body:.3f} (links)"
+            clearance = f"{clearance} (tool tip) / {_mm(body)} (links)"
             order = " → ".join(str(i) for i in doc["order"])
             notes.append(
                 f"\\* Task 3, order {order}: the bound counts direct motions between the chosen "
@@ -54,7 +59,7 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
             )
         lines.append(
             f"| {title} | {doc['n_commands']} | {bound} | {error} | {clearance} | "
-            f"{doc['wall_thickness']} |"
+            f"{doc['wall_thickness'] or '-'} |"
         )
     return lines, notes
 
@@ -68,18 +73,26 @@ def summary_markdown(
     tasks: Sequence[tuple[str, dict[str, Any]]],
     blind_zone_lines: Sequence[str] = (),
     files: Sequence[str] = (),
+    heading: str = "seed tasks",
 ) -> str:
     """The report: ``tasks`` are (title, result document) for reach, trace and spot welds;
     ``blind_zone_lines`` the blind-zone summary; ``files`` the names written beside it (figures
-    are shown when present)."""
+    are shown when present); ``heading`` what was run (the seed tasks, or an arm in a scene)."""
     available = set(files)
     glance, notes = _glance(tasks)
     wall = next((doc["wall_thickness"] for _, doc in tasks), None)
+    first = tasks[0][1] if tasks else {}
+    model = first.get("model", {}).get("name", "seed")
+    scene = first.get("scene", {}).get("name", "seed")
+    lattice = first.get("units", {}).get(
+        "commands", "ticks of 0.1 deg (at most 20 per joint and command)"
+    )
     out = [
-        f"# armpath {__version__}: seed tasks",
+        f"# armpath {__version__}: {heading}",
         "",
-        f"Seed arm and scene, workpiece wall measured {wall}. Lengths in mm, angles in deg, "
-        "commands in ticks of 0.1 deg (at most 20 per joint and command).",
+        f"Arm {model} in scene {scene}"
+        + (f", workpiece wall measured {wall}" if wall else "")
+        + f". Lengths in mm, angles in deg, commands in {lattice}.",
         "",
         *glance,
         "",
@@ -88,16 +101,19 @@ def summary_markdown(
     for title, doc in tasks:
         out += ["", f"## {title}", ""]
         c = doc["clearance"]
-        clearance = (
-            f"closest approach {c['min_clearance_mm']:.3f} mm ({c['closest_part']} to "
-            f"{c['closest_obstacle']}) over the whole continuous motion"
-        )
+        if c["min_clearance_mm"] is None:
+            clearance = "no obstacles to keep clear of"
+        else:
+            clearance = (
+                f"closest approach {c['min_clearance_mm']:.3f} mm ({c['closest_part']} to "
+                f"{c['closest_obstacle']}) over the whole continuous motion"
+            )
         if doc["task"] == "reach":
             fewest = "provably the fewest" if doc.get("provably_fewest") else "not proven fewest"
             out.append(
                 f"- {doc['n_commands']} commands ({fewest}; lower bound "
                 f"{doc['lower_bound_commands']}) to ({', '.join(f'{v:g}' for v in doc['target'])})"
-                f" mm, fingertip error {doc['error_mm']:.4f} mm; {clearance}."
+                f" mm, tool point error {doc['error_mm']:.4f} mm; {clearance}."
             )
             figs = ["reach_motion.png", "reach_joints.png", "reach.gif"]
         elif doc["task"] == "trace":

@@ -25,11 +25,9 @@ from armpath.cli.common import (
     WallOption,
     _animate_into,
     _animate_needs_out,
-    _arm,
     _cli_errors,
     _fmt,
     _numbers,
-    _scene,
     app,
     joint_state,
     out_console,
@@ -773,82 +771,138 @@ def trace(
 @app.command()
 def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
+    scene_file: SceneOption = None,
+    model: TaskModelOption = None,
     wall: WallOption = None,
-    link_radius: LinkRadiusOption = 0.0,
+    link_radius: LinkRadiusOption = None,
     html: Annotated[
         bool, typer.Option("--html", help="Also write the report as summary.html.")
     ] = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
-    """Run the seed scene's three tasks: 1, reach the tool box; 2, trace the crack; 3, spot welds
-    inside the workpiece; then summarise the seed arm's blind zones. Writes each task's result
-    (JSON, CSV, XLSX), figures and animations (GIF), and a one-page report summary.md."""
+    """Run a scene's tasks for its arm (default: the seed scene's three tasks: 1, reach the
+    tool box; 2, trace the crack; 3, spot welds inside the workpiece; then the seed arm's blind
+    zones). Writes each task's result (JSON, CSV, XLSX), figures and animations (GIF), and a
+    one-page report summary.md."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
 
     with _cli_errors(time_limit):
-        scene = _scene(None, wall)
-        arm = _arm(0.0 if link_radius is None else link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius)
         titles = dict(SEED_TASKS)
+        has = {
+            "reach": scene.reach_target_mm is not None,
+            "trace": scene.trace is not None,
+            "spotweld": scene.spotweld is not None,
+        }
+        if not any(has.values()):
+            raise InvalidInputError(
+                f"scene {scene.source} defines no task: give it [tasks.reach], [tasks.trace] "
+                "or [tasks.spotweld]"
+            )
+        seed_job = scene_file is None and model in (None, "seed")
+        if not seed_job:
+            titles = {
+                "reach": f"Task 1: reach ({', '.join(f'{v:g}' for v in scene.reach_target_mm)}) mm"
+                if scene.reach_target_mm is not None
+                else "Task 1: reach",
+                "trace": f"Task 2: trace the {scene.trace.curve.name}"
+                if scene.trace is not None
+                else "Task 2: trace",
+                "spotweld": "Task 3: spot welds",
+            }
+        reach_doc = trace_doc = tour_doc = None
+        blind = None
         with output_folder(out) as folder:
-            with progress(f"{titles['reach']} ..."):
-                result = reach_task(scene, arm)
-            _write_reach(folder, "reach", result, arm, scene, animate=True)
-            reach_doc = reach_result_dict(result, arm, scene)
-            with progress(f"{titles['trace']} ...") as say:
-                traced = trace_task(scene, arm, on_progress=say)
-            trace_doc = trace_result_dict(traced, arm, scene)
-            _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
-            with progress(f"{titles['spotweld']} ...") as say:
-                tour = spotweld_task(scene, arm, on_progress=say)
-            tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
-            _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
-            with progress("blind zones ...") as say:
-                blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, say, scan_step_mm=16.0)
-            _write_blind_zones(folder, blind)
+            if has["reach"]:
+                with progress(f"{titles['reach']} ..."):
+                    result = reach_task(scene, arm)
+                _write_reach(folder, "reach", result, arm, scene, animate=True)
+                reach_doc = reach_result_dict(result, arm, scene)
+            if has["trace"]:
+                with progress(f"{titles['trace']} ...") as say:
+                    traced = trace_task(scene, arm, on_progress=say)
+                trace_doc = trace_result_dict(traced, arm, scene)
+                _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
+            if has["spotweld"]:
+                with progress(f"{titles['spotweld']} ...") as say:
+                    tour = spotweld_task(scene, arm, on_progress=say)
+                tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
+                _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
+            if seed_job:  # the blind zones are the seed arm's and its workpiece's
+                with progress("blind zones ...") as say:
+                    blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, say, scan_step_mm=16.0)
+                _write_blind_zones(folder, blind)
             tasks = [
-                (titles["reach"], reach_doc),
-                (titles["trace"], trace_doc),
-                (titles["spotweld"], tour_doc),
+                (titles[key], doc)
+                for key, doc in (("reach", reach_doc), ("trace", trace_doc), ("spotweld", tour_doc))
+                if doc is not None
             ]
-            report = summary_markdown(tasks, blind.summary(), [*folder.staged(), "summary.md"])
+            heading = "seed tasks" if seed_job else f"{arm.name} in scene {scene.name}"
+            report = summary_markdown(
+                tasks,
+                blind.summary() if blind is not None else (),
+                [*folder.staged(), "summary.md"],
+                heading=heading,
+            )
             folder.write_text("summary.md", report)
             if html:
                 folder.write_text("summary.html", summary_html(report))
-        written = folder.written
-        table = Table(
-            title=f"armpath {__version__}: seed tasks, scene {scene.name}, "
-            f"wall thickness {reach_doc['wall_thickness']}"
-        )
-        for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
-            table.add_column(escape(col), justify="left" if col == "task" else "right")
+        _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading)
+
+
+def _print_run(
+    folder: OutputFolder,
+    scene: Scene,
+    arm: SerialArm,
+    reach_doc: dict[str, Any] | None,
+    trace_doc: dict[str, Any] | None,
+    tour_doc: dict[str, Any] | None,
+    blind: Any,
+    heading: str,
+) -> None:
+    """The run's table of results on stdout and the files it wrote."""
+    written = folder.written
+    wall = scene.wall_thickness
+    table = Table(
+        title=f"armpath {__version__}: {heading}, scene {scene.name}"
+        + (f", wall thickness {wall.value}" if wall else "")
+    )
+    for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
+        table.add_column(escape(col), justify="left" if col == "task" else "right")
+    if reach_doc is not None:
         table.add_row(
             f"1 reach {_fmt(reach_doc['target'], 0)} mm",
             str(reach_doc["n_commands"]),
             str(reach_doc["lower_bound_commands"]),
             f"{reach_doc['error_mm']:.4f}",
-            f"{reach_doc['min_clearance_mm']:.3f}",
+            _mm(reach_doc["min_clearance_mm"]),
         )
-        cov = trace_doc["coverage"]
+    if trace_doc is not None:
         table.add_row(
-            f"2 trace the crack, {passes_text(len(trace_doc['passes']))}",
+            f"2 trace the {trace_doc['curve']['definition'].get('name', 'curve')}, "
+            f"{passes_text(len(trace_doc['passes']))}",
             str(trace_doc["n_commands"]),
             "-",
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
-            f"{trace_doc['min_clearance_mm']:.3f} (tip); "
-            f"{trace_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
+            f"{_mm(trace_doc['min_clearance_mm'])} (tip); "
+            f"{_mm(trace_doc['clearance']['min_body_clearance_mm'])} (links)",
         )
+    if tour_doc is not None:
         table.add_row(
             f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
             str(tour_doc["n_commands"]),
             f"{tour_doc['lower_bound_commands']}*",
             f"{tour_doc['error_mm']:.4f} (largest)",
-            f"{tour_doc['min_clearance_mm']:.3f} (tip); "
-            f"{tour_doc['clearance']['min_body_clearance_mm']:.3f} (links)",
+            f"{_mm(tour_doc['min_clearance_mm'])} (tip); "
+            f"{_mm(tour_doc['clearance']['min_body_clearance_mm'])} (links)",
         )
-        out_console.print(table)
+    out_console.print(table)
+    if trace_doc is not None:
+        cov = trace_doc["coverage"]
         out_console.print(
-            f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm reachable "
-            f"covered; error column = largest deviation of the continuous fingertip path; "
+            f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm "
+            "reachable covered; error column = largest deviation of the continuous tool "
+            "path; "
             + "; ".join(
                 f"unreachable {u['start_mm']:.2f}..{u['end_mm']:.2f} mm ({u['reason']})"
                 for u in trace_doc["unreachable"]
@@ -856,12 +910,14 @@ def run(
             markup=False,
             soft_wrap=True,
         )
+    if tour_doc is not None:
         out_console.print(
             "* Task 3's bound: direct motions between the chosen goal states, obstacles ignored.",
             markup=False,
         )
+    if blind is not None:
         for line in blind.summary():
             out_console.print(f"Blind zones: {line}", markup=False, soft_wrap=True)
-        out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
-        for path in written:
-            out_console.print(f"  {path.name}", markup=False)
+    out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
+    for path in written:
+        out_console.print(f"  {path.name}", markup=False)
