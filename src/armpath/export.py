@@ -171,6 +171,16 @@ def _sequence_fields(seq: CommandSequence) -> dict[str, Any]:
     }
 
 
+def _welds_from(scene: Scene) -> str:
+    """Where the weld points come from (the scene's [tasks.spotweld])."""
+    spec = scene.spotweld
+    if spec is None or spec.points_mm is not None:
+        return "the 3-D points given"
+    if spec.surface == "outer":
+        return f"outer face of {spec.workpiece}, above each xy point"
+    return f"inner surface of {spec.workpiece}, under the wall_thickness convention"
+
+
 def tour_result_dict(
     result: TourResult, arm: SerialArm, scene: Scene, objective: str
 ) -> dict[str, Any]:
@@ -179,7 +189,7 @@ def tour_result_dict(
     tip = tool_position(arm, seq.states_joint()[-1])
     return {
         **_document_head("spotweld", arm, scene),
-        "z_from": "inner surface of the workpiece, under the wall_thickness convention",
+        "z_from": _welds_from(scene),
         **_sequence_fields(seq),
         "targets": [list(v.target_mm) for v in sorted(result.visits, key=lambda v: v.target_index)],
         "order": [v.target_index + 1 for v in result.visits],

@@ -206,10 +206,38 @@ TraceToolAxisOption = Annotated[
         show_default=False,
     ),
 ]
+WeldToolAxisOption = Annotated[
+    str | None,
+    typer.Option(
+        "--tool-axis",
+        metavar="normal|X Y Z",
+        help="At each weld, keep the tool's approach axis within --axis-tolerance of the "
+        "surface's inward normal there ('normal') or of a fixed world direction.",
+        show_default=False,
+    ),
+]
 
 
 def _direction(text: str, option: str) -> np.ndarray:
     return np.array(_numbers(text.replace(",", " ").split(), 3, f"{option} X Y Z"))
+
+
+def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | None:
+    """The tool-axis rule of ``--tool-axis normal|X Y Z --axis-tolerance DEG`` on a surface."""
+    if tool_axis is None:
+        return None
+    if not (np.isfinite(axis_tolerance_deg) and 0.0 < axis_tolerance_deg <= 180.0):
+        raise InvalidInputError(
+            f"--axis-tolerance must be in (0, 180] deg, got {axis_tolerance_deg}"
+        )
+    tol_rad = float(np.radians(axis_tolerance_deg))
+    if tool_axis.strip() == "normal":
+        return AxisRule(tol_rad)
+    d = _direction(tool_axis, "--tool-axis")
+    norm = float(np.linalg.norm(d))
+    if norm < 1e-12:
+        raise InvalidInputError("--tool-axis must be a non-zero direction")
+    return AxisRule(tol_rad, normal=False, direction=d / norm)
 
 
 AxisToleranceOption = Annotated[
@@ -581,6 +609,8 @@ def spotweld(
     wall: WallOption = None,
     scene_file: SceneOption = None,
     model: TaskModelOption = None,
+    tool_axis: WeldToolAxisOption = None,
+    axis_tolerance: AxisToleranceOption = 15.0,
     link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     animate: AnimateOption = False,
@@ -596,7 +626,14 @@ def spotweld(
         with staged as folder:
             with progress("planning the spot welds ...") as say:
                 result = spotweld_task(
-                    scene, arm, order, return_home, tolerance, options, on_progress=say
+                    scene,
+                    arm,
+                    order,
+                    return_home,
+                    tolerance,
+                    options,
+                    on_progress=say,
+                    tool_axis=axis_rule(tool_axis, axis_tolerance),
                 )
             doc = tour_result_dict(result, arm, scene, objective.value)
             if folder is not None:
@@ -737,18 +774,7 @@ def trace(
     the scene's [arm]); --tool-axis keeps the torch near the surface normal or a direction."""
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius)
-        rule = None
-        if tool_axis is not None:
-            if not (np.isfinite(axis_tolerance) and 0.0 < axis_tolerance <= 180.0):
-                raise InvalidInputError(
-                    f"--axis-tolerance must be in (0, 180] deg, got {axis_tolerance}"
-                )
-            tol_rad = float(np.radians(axis_tolerance))
-            if tool_axis.strip() == "normal":
-                rule = AxisRule(tol_rad)
-            else:
-                d = _direction(tool_axis, "--tool-axis")
-                rule = AxisRule(tol_rad, normal=False, direction=d / np.linalg.norm(d))
+        rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
             tolerance_mm=tolerance, motion=MotionOptions(seed=seed), axis_rule=rule
         )

@@ -565,6 +565,23 @@ class HollowFrustum(SolidOfRevolution):
             )
         return (float(x), float(y), float(self.origin[2] + z))
 
+    def outer_wall_point(self, x: float, y: float) -> tuple[float, float, float]:
+        """The point of the outer side face whose projection along the (vertical) axis is
+        ``(x, y)``: its height from inverting the outer radius. Raises
+        :class:`InvalidInputError` when no point of the outer face projects there."""
+        if not np.allclose(self.axis, [0.0, 0.0, 1.0]):
+            raise InvalidInputError(f"{self.name!r}: outer wall points need a vertical axis")
+        r = float(np.hypot(x - self.origin[0], y - self.origin[1]))
+        slope = (self.r_top - self.r_bottom) / self.height
+        z = (r - self.r_bottom) / slope if slope else float("nan")
+        if not (np.isfinite(z) and 0.0 <= z <= self.height):
+            lo, hi = sorted((self.r_bottom, self.r_top))
+            raise InvalidInputError(
+                f"({x:g}, {y:g}) is {r:.3f} mm from the axis of {self.name!r}; its outer face "
+                f"spans radii {lo:.3f} to {hi:.3f} mm"
+            )
+        return (float(x), float(y), float(self.origin[2] + z))
+
     @property
     def horizontal_wall(self) -> float:
         """Wall thickness measured horizontally (equals ``wall`` for the horizontal convention)."""

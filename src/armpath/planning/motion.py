@@ -408,6 +408,9 @@ def plan_motion(
     # goals whose tool tip touches a surface are approached from a retracted pre-goal; a start
     # whose tool tip touches one (the end of a weld) first backs away from it the same way
     pre = np.array([retracted_pre_goal(arm, world, g, active, opts.approach_mm) for g in g_rad])
+    # after a farther back-off (below): the lattice states from the pre-goal to each goal
+    chains: list[list[IntArray] | None] = [None] * len(g_rad)
+    original_start = start
     lead = _retreat(arm, world, start, active, opts.approach_mm)
     if lead.n_commands:
         start = lead.final_ticks
@@ -437,6 +440,7 @@ def plan_motion(
     failures: list[str] = []
     found: list[MotionPlan] = []
     buffer, spacing = opts.buffer_mm, opts.sample_spacing_mm
+    approach = opts.approach_mm
     for attempt in range(opts.attempts + opts.searches - 1):
         if len(found) >= opts.searches:
             break
@@ -461,6 +465,30 @@ def plan_motion(
         )
         if not res.success:
             failures.append(f"search {attempt + 1}: {res.reason}")
+            touching = any(not np.array_equal(p_, g_) for p_, g_ in zip(pre, g_rad, strict=True))
+            if (touching or lead.n_commands) and approach < MAX_APPROACH_MM:
+                # the goals (or the start) sit in a narrow spot, a tool just off the surface it
+                # works on: back off farther for the next search; the motions from there are
+                # straight and certified like every other.
+                approach = min(approach * 5.0, MAX_APPROACH_MM)
+            if touching:
+                backed = [_approach_chain(arm, world, g, active, approach, grid) for g in g_rad]
+                pre = np.array([g if not chain else grid.to_joint(chain[0]) for g, chain in zip(
+                    g_rad, backed, strict=True)])  # fmt: skip
+                chains = [chain or None for chain in backed]
+                failures[-1] += f" (the goals boxed in: backing off {approach:g} mm)"
+            if lead.n_commands:
+                # a start just off its surface (the end of a weld): back it off farther too
+                chain = _approach_chain(
+                    arm, world, grid.to_joint(original_start), active, approach, grid
+                )
+                if chain:
+                    lead = _straight_through(np.array([original_start, *chain[::-1]]), grid)
+                    start = lead.final_ticks
+                    s_rad = grid.to_joint(start)
+                    lower = np.where(active, lower, s_rad)
+                    upper = np.where(active, upper, s_rad)
+            goals_search = np.where(active, pre, s_rad)
             continue
         gi = res.goal_index
         path = res.path.copy()
@@ -468,7 +496,13 @@ def plan_motion(
         path[-1] = np.where(active, pre[gi], g_rad[gi]) / scale
         path = shortcut(path, check_scaled, rng, cost_fn(weights), opts.shortcut_rounds)
         path_ticks = grid.to_ticks_float(path * scale)
-        if np.array_equal(pre[gi], g_rad[gi]):
+        chain = chains[gi]
+        if chain is not None:  # from the far pre-goal down the certified approach
+            main = merge_commands(path_to_sequence(path_ticks, start, chain[0], grid), check)
+            seq = main
+            for a_, b_ in itertools.pairwise([*chain, goals[gi]]):
+                seq = seq.then(CommandSequence.straight(a_, b_, lattice=grid))
+        elif np.array_equal(pre[gi], g_rad[gi]):
             seq = merge_commands(path_to_sequence(path_ticks, start, goals[gi], grid), check)
         else:  # the final approach from the pre-goal is its own straight motion
             pre_ticks = np.round(path_ticks[-1]).astype(np.int64)
@@ -502,6 +536,48 @@ def plan_motion(
     if found:
         return min(found, key=lambda plan: score(plan.sequence))
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
+
+
+#: The farthest a goal is backed off its surface for the search (mm).
+MAX_APPROACH_MM = 75.0
+
+
+def _approach_chain(
+    arm: SerialArm,
+    world: CollisionWorld,
+    q: FloatArray,
+    active: NDArray[np.bool_],
+    distance_mm: float,
+    grid: Lattice,
+) -> list[IntArray]:
+    """Lattice states backing the tool off its surface from goal ``q`` along the surface
+    normal: at ``distance_mm``, then a fifth of it, and so on down to 3 mm, farthest first,
+    with every straight motion between them (and the last one to the goal) certified clear.
+    Empty when the goal touches nothing or a motion is not clear."""
+    goal = grid.nearest_ticks(q)
+    steps: list[IntArray] = []
+    d = distance_mm
+    while True:
+        back = retracted_pre_goal(arm, world, q, active, d)
+        if np.array_equal(back, q):
+            return []
+        steps.append(grid.nearest_ticks(back))
+        if d <= 3.0:
+            break
+        d = max(d / 5.0, 3.0)
+    for a, b in itertools.pairwise([*steps, goal]):
+        seq = CommandSequence.straight(a, b, lattice=grid)
+        if not motion_clearance(arm, world, seq).certified_ok:
+            return []
+    return steps
+
+
+def _straight_through(states: IntArray, grid: Lattice) -> CommandSequence:
+    """Straight moves through lattice ``states`` (each split into legal commands)."""
+    seq = CommandSequence(states[0], np.zeros((0, states.shape[1]), dtype=np.int64), grid)
+    for a, b in itertools.pairwise(states):
+        seq = seq.then(CommandSequence.straight(a, b, lattice=grid))
+    return seq
 
 
 def _retreat(
@@ -553,9 +629,12 @@ def retracted_pre_goal(
         return q
     goal = tip + (distance_mm - d[k]) * normal
     out = q.copy()
-    for _ in range(2):
+    for k in range(8):  # Newton; a few mm converge in two steps, a larger retreat in more
+        miss = goal - tool_position(arm, out)
+        if k >= 2 and float(np.linalg.norm(miss)) < 1e-9:
+            break
         J = position_jacobian(arm, out)[:, active]
-        step, *_ = np.linalg.lstsq(J, goal - tool_position(arm, out), rcond=None)
+        step, *_ = np.linalg.lstsq(J, miss, rcond=None)
         out[active] += step
     lo = np.array([j.limits[0] for j in arm.joints])
     hi = np.array([j.limits[1] for j in arm.joints])

@@ -543,8 +543,19 @@ def generic_goal_states(
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
     required = world.required(arm)
+    # the tool's own link against the surface its point touches meets it head-on from a
+    # retracted pre-goal (see plan_motion): it needs the margin only, not the search's buffer
+    touched = {
+        o.name for o in world.obstacles if abs(float(o.signed_distance(target.position))) <= 1e-6
+    }
+    tool_link = pairs[int(np.flatnonzero(is_tip)[0])].part.removesuffix(" tip") if any(
+        is_tip
+    ) else None  # fmt: skip
+    buffer = np.array(
+        [0.0 if (c.part == tool_link and c.other in touched) else body_buffer for c in pairs]
+    )
     values, _ = world.pair_clearances(arm, samples)
-    body_ok = np.all(np.where(is_tip, values >= 0, values - required >= body_buffer), axis=-1)
+    body_ok = np.all(np.where(is_tip, values >= 0, values - required >= buffer), axis=-1)
     if not np.any(body_ok):
         raise PlanningError(
             f"no configuration reaching ({where}) {arm.length_unit} keeps the links "
@@ -560,7 +571,7 @@ def generic_goal_states(
         if cand.shape[0] == 0:
             continue
         vals, _ = world.pair_clearances(arm, grid.to_joint(cand))
-        ok = np.all(np.where(is_tip, vals >= 0, vals - required >= body_buffer), axis=-1)
+        ok = np.all(np.where(is_tip, vals >= 0, vals - required >= buffer), axis=-1)
         if not np.any(ok):
             continue
         k = int(np.flatnonzero(ok)[np.argmin(err[ok])])

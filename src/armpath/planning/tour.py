@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -24,6 +24,7 @@ from armpath.budget import check_time
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
+from armpath.ik.target import Orientation
 from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
@@ -141,6 +142,7 @@ def plan_tour(
     orders_to_plan: int = 2,
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
+    orientations: Sequence[Orientation | None] | None = None,
 ) -> TourResult:
     """Plan a clear tour from ``start_ticks`` through every target (mm), optionally back.
 
@@ -148,7 +150,8 @@ def plan_tour(
     planned; at most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
     at most :data:`MAX_TOUR_TARGETS`). Raises :class:`PlanningError` when a target cannot be
     reached clear of the obstacles. ``orders_not_planned`` of the result says, for each ranked
-    order that has no planned command count, why.
+    order that has no planned command count, why. ``orientations``: a tool orientation rule per
+    target (None: the tool point only).
     """
     try:
         order = VisitOrder(order)
@@ -158,6 +161,10 @@ def plan_tour(
     pts = np.asarray(targets_mm, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] == 0 or not np.all(np.isfinite(pts)):
         raise InvalidInputError(f"targets must be a list of finite (x, y, z) mm, got {pts.shape}")
+    if orientations is not None and len(orientations) != pts.shape[0]:
+        raise InvalidInputError(
+            f"one orientation rule per target: got {len(orientations)} for {pts.shape[0]}"
+        )
     if order == "auto" and pts.shape[0] > MAX_AUTO_ORDER_TARGETS:
         raise InvalidInputError(
             f"{pts.shape[0]} targets have {math.factorial(pts.shape[0]):,} visiting orders; "
@@ -177,7 +184,10 @@ def plan_tour(
     for i, p in enumerate(pts):
         say(f"goal states for target {i + 1} ({', '.join(f'{v:.2f}' for v in p)}) mm")
         try:
-            g, _ = goal_states(arm, world, start, p, tolerance_mm, goals_per_target)
+            rule = None if orientations is None else orientations[i]
+            g, _ = goal_states(
+                arm, world, start, p, tolerance_mm, goals_per_target, orientation=rule
+            )
         except ArmpathError as exc:
             raise type(exc)(f"target {i + 1}: {exc}") from None
         goals.append(g)
@@ -207,7 +217,18 @@ def plan_tour(
         state = start
         try:
             for t in o:
-                leg = plan_motion(arm, world, state, goals[t], opts)
+                try:
+                    leg = plan_motion(arm, world, state, goals[t], opts)
+                except PlanningError:
+                    # the goal states nearest the start may lie on other branches than where
+                    # the arm is now: take the target's goal states nearest here and try again
+                    say(f"planning order {name}: goal states of target {t + 1} from here")
+                    rule = None if orientations is None else orientations[t]
+                    near, _ = goal_states(
+                        arm, world, state, pts[t], tolerance_mm, goals_per_target,
+                        orientation=rule,
+                    )  # fmt: skip
+                    leg = plan_motion(arm, world, state, near, opts)
                 legs.append(leg)
                 state = leg.sequence.final_ticks
             if return_to_start:

@@ -43,12 +43,15 @@ class Scene:
     base_dir: str | None = None
 
     def spotweld_targets_mm(self) -> NDArray[np.float64]:
-        """Task 3's points ``(N, 3)`` mm: each xy projection lifted onto the inner wall of the
-        named workpiece (its height from the inner surface under the scene's wall convention).
+        """Task 3's points ``(N, 3)`` mm: the 3-D points given, or each xy projection lifted
+        onto the inner (under the scene's wall convention) or outer face of the named workpiece.
         """
         if self.spotweld is None:
             raise SceneError(f"scene {self.source} defines no [tasks.spotweld]")
         spec = self.spotweld
+        if spec.points_mm is not None:
+            return np.array(spec.points_mm, dtype=np.float64)
+        assert spec.points_xy_mm is not None
         found = [o for o in self.world.obstacles if o.name == spec.workpiece]
         if not found:
             names = ", ".join(repr(o.name) for o in self.world.obstacles) or "none"
@@ -62,7 +65,11 @@ class Scene:
                 "hollow_frustum obstacle"
             )
         w = found[0]
-        return np.array([w.inner_wall_point(x, y) for x, y in spec.points_xy_mm])
+        lift = w.outer_wall_point if spec.surface == "outer" else w.inner_wall_point
+        try:
+            return np.array([lift(x, y) for x, y in spec.points_xy_mm])
+        except InvalidInputError as exc:
+            raise SceneError(f"scene {self.source}: tasks.spotweld: {exc}") from None
 
     def trace_curve(self) -> Curve:
         """Task 2's curve, built against the scene's obstacles (mm)."""

@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from armpath.budget import MAX_COORDINATE_MM
 from armpath.geometry import WallThickness
@@ -146,11 +146,24 @@ class ReachTaskSpec(_FiniteVec):
 
 
 class SpotweldTaskSpec(_FiniteVec):
-    """Points on the inner wall of a hollow obstacle, given by their projections on xy."""
+    """The welds: points ``points_mm`` (3-D), or projections ``points_xy_mm`` lifted onto the
+    inner (default) or outer face of a hollow_frustum obstacle (``workpiece``)."""
 
-    workpiece: str = Field(description="name of the hollow_frustum obstacle")
-    points_xy_mm: list[tuple[float, float]] = Field(min_length=1)
-    surface: Literal["inner"] = "inner"
+    workpiece: str | None = Field(default=None, description="name of the hollow_frustum")
+    points_xy_mm: list[tuple[float, float]] | None = None
+    points_mm: list[Vec3] | None = None
+    surface: Literal["inner", "outer"] = "inner"
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> SpotweldTaskSpec:
+        if (self.points_xy_mm is None) == (self.points_mm is None):
+            raise ValueError("give either points_mm (3-D points) or points_xy_mm with workpiece")
+        if self.points_xy_mm is not None and self.workpiece is None:
+            raise ValueError("points_xy_mm are lifted onto a workpiece: name it (workpiece)")
+        points = self.points_mm if self.points_mm is not None else self.points_xy_mm
+        if not points:
+            raise ValueError("give at least one weld point")
+        return self
 
 
 class PlaneSectionCurveSpec(_FiniteVec):

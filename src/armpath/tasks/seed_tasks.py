@@ -6,13 +6,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
+
 from armpath.errors import SceneError
+from armpath.ik.target import AxisCone, Orientation
 from armpath.model.seed_arm import seed_arm
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions
 from armpath.planning.reach import ReachOptions, ReachResult, plan_reach
 from armpath.planning.tour import TourResult, plan_tour
-from armpath.planning.trace import TraceOptions, TraceResult, plan_trace
+from armpath.planning.trace import AxisRule, TraceOptions, TraceResult, plan_trace
 from armpath.scenes import Scene
 
 #: The seed tasks implemented so far, in SPEC order: (key, title).
@@ -42,20 +45,40 @@ def spotweld_task(
     tolerance_mm: float = 0.05,
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
+    tool_axis: AxisRule | None = None,
 ) -> TourResult:
-    """Task 3: from the arm's initial pose through every spot weld of the scene, best order."""
+    """Task 3: from the arm's initial pose through every spot weld of the scene, best order.
+    ``tool_axis``: the torch within a cone about the surface's inward normal at each weld (a
+    rule with ``normal``) or about a fixed direction."""
     model = arm or seed_arm()
     start = model.lattice.to_ticks(model.home, "initial pose")
+    targets = scene.spotweld_targets_mm()
+    rules: list[Orientation | None] | None = None
+    if tool_axis is not None:
+        rules = []
+        for p in targets:
+            if tool_axis.normal:
+                if not scene.world.obstacles:
+                    raise SceneError(
+                        "a tool axis along the surface normal needs the welds on a surface; "
+                        f"scene {scene.source} has no obstacles"
+                    )
+                surface = min(scene.world.obstacles, key=lambda o: abs(float(o.signed_distance(p))))
+                direction = -surface.outward_normal(p)
+            else:
+                direction = np.asarray(tool_axis.direction, dtype=np.float64)
+            rules.append(AxisCone(direction, tool_axis.tolerance_rad))
     return plan_tour(
         model,
         scene.world,
         start,
-        scene.spotweld_targets_mm(),
+        targets,
         order=order,
         return_to_start=return_to_start,
         tolerance_mm=tolerance_mm,
         options=options,
         on_progress=on_progress,
+        orientations=rules,
     )
 
 
