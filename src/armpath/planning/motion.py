@@ -496,11 +496,13 @@ def plan_motion(
         path[-1] = np.where(active, pre[gi], g_rad[gi]) / scale
         path = shortcut(path, check_scaled, rng, cost_fn(weights), opts.shortcut_rounds)
         path_ticks = grid.to_ticks_float(path * scale)
-        chain = chains[gi]
-        if chain is not None:  # from the far pre-goal down the certified approach
-            main = merge_commands(path_to_sequence(path_ticks, start, chain[0], grid), check)
+        approach_states = chains[gi]
+        if approach_states is not None:  # from the far pre-goal down the certified approach
+            main = merge_commands(
+                path_to_sequence(path_ticks, start, approach_states[0], grid), check
+            )
             seq = main
-            for a_, b_ in itertools.pairwise([*chain, goals[gi]]):
+            for a_, b_ in itertools.pairwise([*approach_states, goals[gi]]):
                 seq = seq.then(CommandSequence.straight(a_, b_, lattice=grid))
         elif np.array_equal(pre[gi], g_rad[gi]):
             seq = merge_commands(path_to_sequence(path_ticks, start, goals[gi], grid), check)
