@@ -18,8 +18,11 @@ What it checks
   sum of those link lengths). At every instant each link is sampled every ``link_step_mm`` (at
   most 1 mm) and the signed distance of every sample to every obstacle is computed by the
   formulas below; the link's capsule radius and the required clearance are subtracted.
-  The last ``tool_tip_exempt_mm`` of the last link only need a clearance >= 0; non-adjacent
-  links keep ``self_margin_mm`` (a sample of one link against the other link's segment).
+  The last ``tool_tip_exempt_mm`` of the last link is the tool tip: a bare segment (no radius,
+  README: "a bare segment that may touch the surface it works on") that must not penetrate
+  (clearance >= 0); the rest of that link keeps its radius plus the margin. Non-adjacent links
+  keep ``self_margin_mm`` beyond both radii (a sample of one link against the other link's
+  segment).
 
   *The allowance.* Every sample is a real point of the continuous motion, so a sample below the
   required clearance is a real violation: the result is rejected when the sampled minimum is
@@ -765,7 +768,8 @@ def _pairs(arm: SeedArm, scene: Scene) -> list[_Pair]:
             if last and scene.tip_exempt > 0:
                 cut = scene.tip_exempt
                 out.append(_Pair(f"{names[k]} body - {o.name}", k, cut, False, scene.margin, r, o))
-                out.append(_Pair(f"{names[k]} tip - {o.name}", k, cut, True, 0.0, r, o))
+                # the tool tip is a bare segment: no radius, it may touch but not enter
+                out.append(_Pair(f"{names[k]} tip - {o.name}", k, cut, True, 0.0, 0.0, o))
             else:
                 out.append(_Pair(f"{names[k]} - {o.name}", k, 0.0, False, scene.margin, r, o))
     for i, j in arm.self_pairs:
