@@ -149,11 +149,15 @@ def test_cli_view_export_and_animate(seed_run, tmp_path):
     from PIL import Image
 
     assert Image.open(gif).n_frames == 12
-    bad = _cli("view", "--export-html", str(tmp_path / "x.html"))
-    assert bad.returncode == 1 and "needs --result" in bad.stderr
+    # without a result: the arm alone at its home pose (issue 18: any arm, standing alone)
+    alone = _cli("view", "--model", "ur5", "--export-html", str(tmp_path / "ur5.html"))
+    assert alone.returncode == 0, alone.stderr
+    assert (tmp_path / "ur5.html").read_text().lstrip().lower().startswith("<!doctype html")
+    bad = _cli("view", "--export-html", str(tmp_path / "x.txt"))
+    assert bad.returncode == 1 and "must end in .html" in bad.stderr
     bad = _cli("animate", str(tmp_path / "missing.json"))
     assert bad.returncode == 1 and bad.stderr.startswith("error: cannot read result file")
-    assert not (tmp_path / "x.html").exists()
+    assert not (tmp_path / "x.txt").exists()
 
 
 # --- empty and far-away scenes, bad addresses -----------------------------------------------

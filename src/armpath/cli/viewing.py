@@ -6,29 +6,49 @@ import time
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 
 from armpath.cli.common import (
-    ModelOption,
     SceneOption,
     _cli_errors,
-    _scene,
     app,
     err_console,
     out_console,
     progress,
+    task_setup,
 )
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.export import (
     output_folder,
 )
-from armpath.model.catalog import resolve_model
-from armpath.model.seed_arm import seed_arm
+from armpath.model.serial_arm import SerialArm
+from armpath.results import PlannedResult
+from armpath.scenes import Scene
+
+
+def _standing(arm: SerialArm, scene: Scene) -> PlannedResult:
+    """A result of no commands: the arm standing at its home pose in its scene."""
+    start = arm.lattice.to_ticks(arm.home, "the arm's home pose")
+    sequence = CommandSequence(start, np.zeros((0, arm.n_joints), dtype=np.int64), arm.lattice)
+    doc = {"task": "plan", "model": {"name": arm.name}, "scene": {"name": scene.name}}
+    return PlannedResult(
+        Path(f"{arm.name}.json"), "plan", doc, arm, scene, sequence, np.zeros((0, 3)), None
+    )
 
 
 @app.command()
 def view(
-    model: ModelOption = "seed",
+    model: Annotated[
+        str | None,
+        typer.Option(
+            "--model",
+            help="The arm: a built-in model or a robot file. Default: the scene's [arm], else "
+            "the seed arm.",
+            show_default=False,
+        ),
+    ] = None,
     scene_file: SceneOption = None,
     result: Annotated[
         Path | None,
@@ -44,8 +64,8 @@ def view(
         Path | None,
         typer.Option(
             "--export-html",
-            help="Write a self-contained HTML replay of --result to this file and exit "
-            "(opens offline in any browser).",
+            help="Write a self-contained HTML replay of --result (or, without it, the arm in "
+            "its scene) to this file and exit (opens offline in any browser).",
         ),
     ] = None,
     fps: Annotated[float, typer.Option(help="Commands per second in the HTML replay.")] = 15.0,
@@ -65,8 +85,9 @@ def view(
             check_address(host, port)
         loaded = load_result(result, scene_file) if result is not None else None
         if export_html is not None:
-            if loaded is None:
-                raise InvalidInputError("--export-html needs --result FILE")
+            if loaded is None:  # the arm alone (or in its scene), at its home pose
+                arm, scene = task_setup(model, scene_file, None, None)
+                loaded = _standing(arm, scene)
             if export_html.suffix.lower() not in (".html", ".htm"):
                 raise InvalidInputError(f"--export-html must end in .html, got {export_html.name}")
             from armpath.viewer.app import replay_html
@@ -85,8 +106,7 @@ def view(
         if loaded is not None:
             arm, scene = loaded.arm, loaded.scene
         else:
-            arm = seed_arm() if model == "seed" else resolve_model(model)
-            scene = _scene(scene_file, None)
+            arm, scene = task_setup(model, scene_file, None, None)
         viewer = ArmViewer(arm, scene, host=host, port=port, result=loaded)
         for note in viewer.notes:
             err_console.print(f"warning: {note}", markup=False, soft_wrap=True)

@@ -1,6 +1,7 @@
 """The interactive viewer: a viser server showing the arm in its scene.
 
-The page has one slider per joint (0.1 deg steps, within the joint's limits), a live readout of
+The page has one slider per joint (steps of one tick of the arm's lattice, 0.1 deg for the
+seed arm, within the joint's limits), a live readout of
 the fingertip position and the clearance (the violating parts turn red), a target-point input
 that runs the reach planner from the current pose, and a replay of any result (play, pause,
 step, timeline) with the fingertip's path and the result's curve and targets drawn.
@@ -64,7 +65,7 @@ HEADLESS_CHROMIUM_ARGS = (
 
 @dataclass
 class ViewerState:
-    """What the page shows: the joint state (ticks of 0.1 deg, or 0.1 mm for prismatic joints)
+    """What the page shows: the joint state (ticks of the arm's lattice)
     and its readouts (fingertip mm, smallest clearance mm and its pair, colliding parts)."""
 
     ticks: NDArray[np.int64]
@@ -120,6 +121,8 @@ class ArmViewer:
         self.server.initial_camera.look_at = (0.0, 0.0, 0.3 * size)
         self.server.initial_camera.position = (1.1 * size, -1.3 * size, 0.9 * size)
         self._tick = joint_ticks(arm)  # rad per tick (revolute) or mm per tick (prismatic)
+        # one tick of each joint on the sliders, deg or mm (0.1 exactly, not 0.09999999999999999)
+        self._steps = np.array([float(f"{t:.10g}") for t in arm.lattice.tick_display])
         home = np.rint(arm.home / self._tick).astype(np.int64)
         ticks = home if start_ticks is None else np.asarray(start_ticks, dtype=np.int64)
         self.state = ViewerState(ticks=ticks)
@@ -224,22 +227,27 @@ class ArmViewer:
     def _build_gui(self) -> None:
         gui = self.server.gui
         gui.configure_theme(control_width="large")
-        units = ["mm" if j.kind is JointKind.PRISMATIC else "deg" for j in self.arm.joints]
-        with gui.add_folder(f"Joints ({', '.join(sorted(set(units)))}; 0.1 steps)"):
+        grid = self.arm.lattice
+        units = list(grid.units)
+        steps = self._steps
+        shown = ", ".join(sorted({f"{t:.10g} {u}" for t, u in zip(steps, units, strict=True)}))
+        with gui.add_folder(f"Joints (steps of one tick: {shown})"):
             self.sliders = []
             for i, joint in enumerate(self.arm.joints):
                 prismatic = joint.kind is JointKind.PRISMATIC
                 if joint.is_limited:
-                    lo, hi = joint.limits if prismatic else np.degrees(joint.limits)
+                    lo_t = np.ceil(joint.limits[0] / grid.tick[i] - 1e-9)
+                    hi_t = np.floor(joint.limits[1] / grid.tick[i] + 1e-9)
                 else:
-                    lo, hi = (-1000.0, 1000.0) if prismatic else (-180.0, 180.0)
-                lo, hi = np.ceil(lo * 10) / 10, np.floor(hi * 10) / 10
+                    span = 1000.0 if prismatic else 180.0
+                    lo_t, hi_t = np.ceil(-span / steps[i]), np.floor(span / steps[i])
+                lo, hi = round(float(lo_t * steps[i]), 10), round(float(hi_t * steps[i]), 10)
                 slider = gui.add_slider(
                     f"{'d' if prismatic else 'θ'}{i + 1} [{units[i]}]",
-                    min=float(lo),
-                    max=float(hi),
-                    step=0.1,
-                    initial_value=float(np.clip(self.state.ticks[i] / 10, lo, hi)),
+                    min=lo,
+                    max=hi,
+                    step=float(steps[i]),
+                    initial_value=round(float(np.clip(self.state.ticks[i] * steps[i], lo, hi)), 10),
                 )
                 slider.on_update(lambda _event: self._on_slider())
                 self.sliders.append(slider)
@@ -260,7 +268,7 @@ class ArmViewer:
     # --- state -----------------------------------------------------------------------------
 
     def set_ticks(self, ticks: NDArray[np.int64]) -> ViewerState:
-        """Show the arm at ``ticks`` (0.1 deg, or 0.1 mm, per tick); updates the sliders and
+        """Show the arm at ``ticks`` (of the arm's lattice); updates the sliders and
         readouts."""
         with self._lock:
             ticks = np.asarray(ticks, dtype=np.int64)
@@ -297,8 +305,8 @@ class ArmViewer:
                 self._tip.position = tuple(tip * MM)
                 self._updating = True
                 try:
-                    for slider, t in zip(self.sliders, ticks, strict=True):
-                        value = round(float(t) / 10, 1)
+                    for slider, t, step in zip(self.sliders, ticks, self._steps, strict=True):
+                        value = round(float(t) * float(step), 10)
                         if slider.value != value:
                             slider.value = value  # type: ignore[misc]
                 finally:
@@ -324,7 +332,11 @@ class ArmViewer:
     def _on_slider(self) -> None:
         if self._updating:
             return
-        ticks = np.array([round(s.value * 10) for s in self.sliders], dtype=np.int64)
+        steps = self._steps
+        ticks = np.array(
+            [round(s.value / step) for s, step in zip(self.sliders, steps, strict=True)],
+            dtype=np.int64,
+        )
         self.set_ticks(ticks)
 
     # --- reach -----------------------------------------------------------------------------
