@@ -206,11 +206,23 @@ def _arm(link_radius_mm: float) -> SerialArm:
 ALONE = {"name": "none (the arm alone)", "description": "no obstacles: self-collision only"}
 
 
+TipLinkOption = Annotated[
+    str | None,
+    typer.Option(
+        "--tip-link",
+        help="The URDF link that carries the tool (default: the deepest leaf link; outputs name "
+        "the link chosen).",
+        show_default=False,
+    ),
+]
+
+
 def task_setup(
     model: str | None,
     scene_file: Path | None,
     wall: WallThickness | str | None,
     link_radius_mm: float | None,
+    tip_link: str | None = None,
 ) -> tuple[SerialArm, Scene]:
     """The arm and the scene of a task command, decided once: the scene file (or the seed
     scene for the seed arm, or no obstacles for another arm standing alone), its ``[arm]`` or
@@ -223,7 +235,7 @@ def task_setup(
         scene = scene_from_dict(dict(ALONE), "none (the arm alone)")
     if wall:
         scene = scene.with_wall_thickness(wall)
-    arm = scene_arm(scene, model)
+    arm = scene_arm(scene, model, tip_link)
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
             raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")

@@ -16,6 +16,7 @@ from armpath.cli.common import (
     LOOSE,
     JsonOption,
     ModelOption,
+    TipLinkOption,
     _cli_errors,
     _fmt,
     _from_display,
@@ -45,6 +46,7 @@ def fk(
         ),
     ],
     model: ModelOption = "seed",
+    tip_link: TipLinkOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print JSON on stdout.")] = False,
 ) -> None:
     """Forward kinematics: the arm's joint points and the tool pose (mm, deg).
@@ -53,7 +55,7 @@ def fk(
     origins and the tool frame (4x4 pose, row-major).
     """
     with _cli_errors():
-        arm = resolve_model(model)
+        arm = resolve_model(model, tip_link)
         units = _joint_units(arm)
         what = f"joint values q1 … q{arm.n_joints} ({', '.join(units)})"
         q = _from_display(arm, _numbers(angles, arm.n_joints, what))
@@ -113,6 +115,7 @@ def _pose_argument(text: str) -> np.ndarray:
 @app.command(context_settings=LOOSE)
 def ik(
     model: ModelOption = "seed",
+    tip_link: TipLinkOption = None,
     pose: Annotated[
         str | None,
         typer.Option(help="Target tool pose: 16 numbers, row-major 4x4, lengths mm."),
@@ -151,7 +154,7 @@ def ik(
             )
         if not 1 <= seeds <= MAX_IK_SEEDS:
             raise InvalidInputError(f"--seeds must be in [1, {MAX_IK_SEEDS}], got {seeds}")
-        arm = resolve_model(model)
+        arm = resolve_model(model, tip_link)
         if pose is not None:
             target = _pose_argument(pose)
             result = solve_ik(arm, target, method=method, seeds=seeds)

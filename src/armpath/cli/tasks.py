@@ -22,6 +22,7 @@ from armpath.cli.common import (
     SceneOption,
     SeedOption,
     TimeLimitOption,
+    TipLinkOption,
     WallOption,
     _animate_into,
     _animate_needs_out,
@@ -308,6 +309,7 @@ def reach(
     ],
     start: FromOption = None,
     model: TaskModelOption = None,
+    tip_link: TipLinkOption = None,
     tool_axis: ToolAxisOption = None,
     axis_tolerance: AxisToleranceOption = 15.0,
     pose: PoseOption = None,
@@ -332,7 +334,7 @@ def reach(
     summary's method says so).
     """
     with _cli_errors(time_limit):
-        arm, scene = task_setup(model, scene_file, wall, link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
         start_ticks = joint_state(arm, start, "--from")
         rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance)
@@ -429,6 +431,7 @@ def _emit_plan(
 def plan(
     scene_file: SceneOption = None,
     model: TaskModelOption = None,
+    tip_link: TipLinkOption = None,
     start: FromOption = None,
     to: Annotated[
         str | None,
@@ -490,7 +493,7 @@ def plan(
         if (to is None) == (to_xyz is None):
             raise InvalidInputError("give exactly one goal: --to θ1 … θn or --to-xyz X Y Z")
         _animate_needs_out(animate, out)
-        arm, scene = task_setup(model, scene_file, wall, link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         start_ticks = joint_state(arm, start, "--from")
         rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance)
         if rule is not None and to_xyz is None:
@@ -609,6 +612,7 @@ def spotweld(
     wall: WallOption = None,
     scene_file: SceneOption = None,
     model: TaskModelOption = None,
+    tip_link: TipLinkOption = None,
     tool_axis: WeldToolAxisOption = None,
     axis_tolerance: AxisToleranceOption = 15.0,
     link_radius: LinkRadiusOption = None,
@@ -619,7 +623,7 @@ def spotweld(
     """Task 3: reach the scene's spot welds (the seed scene: on the workpiece's inner wall,
     through the open top), in the best order; any arm (--model or the scene's [arm])."""
     with _cli_errors(time_limit):
-        arm, scene = task_setup(model, scene_file, wall, link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         options = MotionOptions(objective=objective, seed=seed)
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
@@ -762,6 +766,7 @@ def trace(
     wall: WallOption = None,
     scene_file: SceneOption = None,
     model: TaskModelOption = None,
+    tip_link: TipLinkOption = None,
     tool_axis: TraceToolAxisOption = None,
     axis_tolerance: AxisToleranceOption = 15.0,
     link_radius: LinkRadiusOption = None,
@@ -773,7 +778,7 @@ def trace(
     part, fewest passes and commands; report the unreachable arcs and why. Any arm (--model or
     the scene's [arm]); --tool-axis keeps the torch near the surface normal or a direction."""
     with _cli_errors(time_limit):
-        arm, scene = task_setup(model, scene_file, wall, link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
             tolerance_mm=tolerance, motion=MotionOptions(seed=seed), axis_rule=rule
@@ -799,6 +804,7 @@ def run(
     out: Annotated[Path, typer.Option("--out", help="Output folder.")] = Path("armpath-out"),
     scene_file: SceneOption = None,
     model: TaskModelOption = None,
+    tip_link: TipLinkOption = None,
     wall: WallOption = None,
     link_radius: LinkRadiusOption = None,
     html: Annotated[
@@ -813,7 +819,7 @@ def run(
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
 
     with _cli_errors(time_limit):
-        arm, scene = task_setup(model, scene_file, wall, link_radius)
+        arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         titles = dict(SEED_TASKS)
         has = {
             "reach": scene.reach_target_mm is not None,

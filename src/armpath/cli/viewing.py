@@ -11,6 +11,7 @@ import typer
 
 from armpath.cli.common import (
     SceneOption,
+    TipLinkOption,
     _cli_errors,
     app,
     err_console,
@@ -49,6 +50,7 @@ def view(
             show_default=False,
         ),
     ] = None,
+    tip_link: TipLinkOption = None,
     scene_file: SceneOption = None,
     result: Annotated[
         Path | None,
@@ -86,7 +88,7 @@ def view(
         loaded = load_result(result, scene_file) if result is not None else None
         if export_html is not None:
             if loaded is None:  # the arm alone (or in its scene), at its home pose
-                arm, scene = task_setup(model, scene_file, None, None)
+                arm, scene = task_setup(model, scene_file, None, None, tip_link)
                 loaded = _standing(arm, scene)
             if export_html.suffix.lower() not in (".html", ".htm"):
                 raise InvalidInputError(f"--export-html must end in .html, got {export_html.name}")
@@ -106,7 +108,7 @@ def view(
         if loaded is not None:
             arm, scene = loaded.arm, loaded.scene
         else:
-            arm, scene = task_setup(model, scene_file, None, None)
+            arm, scene = task_setup(model, scene_file, None, None, tip_link)
         viewer = ArmViewer(arm, scene, host=host, port=port, result=loaded)
         for note in viewer.notes:
             err_console.print(f"warning: {note}", markup=False, soft_wrap=True)

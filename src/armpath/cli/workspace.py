@@ -33,6 +33,7 @@ from armpath.cli.common import (
     ModelOption,
     SceneOption,
     TimeLimitOption,
+    TipLinkOption,
     WallOption,
     _arm,
     _cli_errors,
@@ -77,6 +78,7 @@ def _percent_steps(say: Callable[[str], None], what: str) -> Callable[[int, int]
 @app.command()
 def workspace(
     model: ModelOption = "seed",
+    tip_link: TipLinkOption = None,
     samples: Annotated[
         int,
         typer.Option(
@@ -123,7 +125,7 @@ def workspace(
             raise InvalidInputError(f"--method must be one of {METHODS}, got {method!r}")
         _check_seed(seed)
         _check_length(voxel, "voxel size", "--voxel")
-        arm = resolve_model(model)
+        arm = resolve_model(model, tip_link)
         GridSpec.for_arm(arm, voxel, "--voxel")
         world = load_scene(scene_file).world if obstacles else None
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()

@@ -163,12 +163,15 @@ BUILTIN_MODELS: dict[str, Callable[[], SerialArm]] = {
 }
 
 
-def resolve_model(spec: str) -> SerialArm:
-    """A built-in model by name, or a robot file (``.json`` D-H table or ``.urdf``) by path."""
+def resolve_model(spec: str, tip_link: str | None = None) -> SerialArm:
+    """A built-in model by name, or a robot file (``.json`` D-H table or ``.urdf``, up to
+    ``tip_link``) by path."""
     if spec in BUILTIN_MODELS:
+        if tip_link is not None:
+            raise InvalidInputError(f"--tip-link names a link of a URDF; {spec!r} is built in")
         return BUILTIN_MODELS[spec]()
     if Path(spec).suffix.lower() in (".json", ".urdf") or Path(spec).exists():
-        return load_robot_file(spec)
+        return load_robot_file(spec, tip_link)
     raise InvalidInputError(
         f"unknown model {spec!r}: use one of {sorted(BUILTIN_MODELS)} or a .json / .urdf file"
     )

@@ -282,8 +282,9 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
     )
 
 
-def load_robot_file(path: str | Path) -> SerialArm:
-    """Load a robot from a JSON D-H file (``.json``) or a URDF (``.urdf``); lengths become mm."""
+def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
+    """Load a robot from a JSON D-H file (``.json``) or a URDF (``.urdf``, up to ``tip_link``,
+    default its deepest leaf link); lengths become mm."""
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"robot file {str(p)!r} does not exist")
@@ -291,7 +292,9 @@ def load_robot_file(path: str | Path) -> SerialArm:
     if suffix == ".urdf":
         from armpath.model.urdf import arm_from_urdf
 
-        return arm_from_urdf(p)
+        return arm_from_urdf(p, tip_link)
+    if tip_link is not None:
+        raise InvalidInputError(f"--tip-link names a link of a URDF; {p.name!r} is not one")
     if suffix != ".json":
         raise InvalidInputError(f"robot file {p.name!r}: expected a .json D-H file or a .urdf")
     try:

@@ -29,6 +29,9 @@ def arm_from_urdf(
 ) -> SerialArm:
     """Load the serial chain of a URDF (root link to ``tip_link``, default the deepest leaf).
 
+    The arm is named after the robot and the tip link, ``"ur5 [tool0]"``, so every output says
+    which link is the tool.
+
     ``link_radii_mm``: the links' capsule radius, one for every link or ``n + 1`` (the fixed
     base, then the link each moving joint moves).
     """
@@ -102,8 +105,9 @@ def arm_from_urdf(
     landmarks, links = physical_links(joints, carry, names, radii)
     lo_all = np.array([j.limits[0] for j in joints])
     hi_all = np.array([j.limits[1] for j in joints])
+    robot = urdf.robot.name or p.stem
     return SerialArm(
-        name=urdf.robot.name or p.stem,
+        name=f"{robot} [{tip_link}]",
         joints=tuple(joints),
         T_flange_tool=carry,
         landmarks=landmarks,

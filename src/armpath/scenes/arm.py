@@ -30,11 +30,11 @@ def placement_matrix(spec: PlacementSpec, length_unit: str = "mm") -> NDArray[np
     return T
 
 
-def _model(name: str, base_dir: str | None) -> SerialArm:
+def _model(name: str, base_dir: str | None, tip_link: str | None = None) -> SerialArm:
     path = Path(name)
     if base_dir is not None and not path.is_absolute() and (Path(base_dir) / path).is_file():
-        return resolve_model(str(Path(base_dir) / path))
-    return resolve_model(name)
+        return resolve_model(str(Path(base_dir) / path), tip_link)
+    return resolve_model(name, tip_link)
 
 
 def _per_joint(value: float | int | list[float] | list[int], n: int, what: str) -> np.ndarray:
@@ -48,7 +48,7 @@ def _per_joint(value: float | int | list[float] | list[int], n: int, what: str) 
 
 def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
     """The arm an ``[arm]`` table describes."""
-    arm = _model(spec.model, base_dir)
+    arm = _model(spec.model, base_dir, spec.tip_link)
     n = arm.n_joints
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
     mm = 1e-3 if arm.length_unit == "m" else 1.0
@@ -75,15 +75,20 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
     return arm
 
 
-def scene_arm(scene: Scene, model: str | None = None) -> SerialArm:
+def scene_arm(scene: Scene, model: str | None = None, tip_link: str | None = None) -> SerialArm:
     """The arm that works in ``scene``: its ``[arm]``, or the seed arm if it has none; ``model``
-    (a built-in name or robot file) replaces the scene's model and keeps only its ``base``."""
+    (a built-in name or robot file) replaces the scene's model and keeps only its ``base``;
+    ``tip_link`` chooses a URDF's tool link."""
     spec = scene.arm_spec
     try:
         if model is None:
-            return arm_from_spec(spec or ArmSpec(), scene.base_dir)
+            base = spec or ArmSpec()
+            if tip_link is not None:
+                base = base.model_copy(update={"tip_link": tip_link})
+            return arm_from_spec(base, scene.base_dir)
         return arm_from_spec(
-            ArmSpec(model=model, base=spec.base if spec is not None else None), None
+            ArmSpec(model=model, base=spec.base if spec is not None else None, tip_link=tip_link),
+            None,
         )
     except SceneError:
         raise

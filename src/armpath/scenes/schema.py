@@ -230,12 +230,13 @@ class ToolSpec(PlacementSpec):
 
 class ArmSpec(_FiniteVec):
     """The arm that works in the cell: a built-in model or a robot file (relative to the scene
-    file), where it stands (``base``), its tool, its home pose (deg, or mm for prismatic
-    joints), link radii (mm: one number, or the fixed base then one per joint) and command
-    lattice (``tick``: deg or mm per joint, one number or one per joint; ``max_ticks``: the
-    most ticks a command, one number or one per joint)."""
+    file; ``tip_link``: a URDF's tool link), where it stands (``base``), its tool, its home
+    pose (deg, or mm for prismatic joints), link radii (mm: one number, or the fixed base then
+    one per joint) and command lattice (``tick``: deg or mm per joint, one number or one per
+    joint; ``max_ticks``: the most ticks a command, one number or one per joint)."""
 
     model: str = "seed"
+    tip_link: str | None = None
     base: PlacementSpec | None = None
     tool: ToolSpec | None = None
     home_deg: list[float] | None = None
