@@ -225,3 +225,28 @@ def test_a_free_circle_traced_by_ur5_replays_on_the_textbook_product():
         swept.append(np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0])))
     # once around: the passes together sweep the whole circle
     assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3
+
+
+def test_the_tool_approach_axis_belongs_to_the_tool():
+    """ur_description's ee_link points along its x axis: with that approach axis the cone
+    holds the tool's x axis (checked on the textbook D-H product), not its z axis."""
+    scene = scene_from_dict(
+        {
+            "name": "x tool",
+            "arm": {
+                "model": "ur5",
+                "home_deg": [0, -90, 90, -90, -90, 0],
+                "tool": {"approach_axis": [1, 0, 0]},
+            },
+        }
+    )
+    from armpath.scenes.arm import scene_arm
+
+    arm = scene_arm(scene)
+    assert arm.approach_axis == (1.0, 0.0, 0.0)
+    rule = AxisCone(np.array([0.0, 0.0, -1.0]), np.radians(5.0), np.array(arm.approach_axis))
+    target = [300.0, 200.0, 300.0]
+    r = plan_reach(arm, scene.world, arm.lattice.to_ticks(arm.home), target, orientation=rule)
+    T = pose("ur5", arm.lattice.to_joint(r.sequence.final_ticks))
+    assert np.linalg.norm(T[:3, 3] - target) <= 0.05
+    assert np.degrees(np.arccos(np.clip(T[:3, 0] @ [0, 0, -1], -1, 1))) <= 5.0 + 1e-6

@@ -273,9 +273,10 @@ def orientation_rule(
     axis_tolerance_deg: float,
     pose_deg: tuple[float, float, float] | None,
     angle_tolerance_deg: float,
+    approach: tuple[float, float, float] = (0.0, 0.0, 1.0),
 ) -> Orientation | None:
-    """The orientation rule of ``--tool-axis``/``--axis-tolerance`` or ``--pose``/
-    ``--angle-tolerance`` (at most one of them)."""
+    """The orientation rule of ``--tool-axis``/``--axis-tolerance`` (for the tool's
+    ``approach`` axis) or ``--pose``/``--angle-tolerance`` (at most one of them)."""
     if tool_axis is not None and pose_deg is not None:
         raise InvalidInputError("give --tool-axis or --pose, not both")
     for what, v in (
@@ -290,7 +291,11 @@ def orientation_rule(
                 "--tool-axis normal follows a surface along a curve (trace); give a direction "
                 "X Y Z here"
             )
-        return AxisCone(_direction(tool_axis, "--tool-axis"), np.radians(axis_tolerance_deg))
+        return AxisCone(
+            _direction(tool_axis, "--tool-axis"),
+            np.radians(axis_tolerance_deg),
+            np.asarray(approach),
+        )
     if pose_deg is not None:
         from scipy.spatial.transform import Rotation
 
@@ -337,7 +342,7 @@ def reach(
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
         start_ticks = joint_state(arm, start, "--from")
-        rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance)
+        rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance, arm.approach_axis)
         options = ReachOptions(tolerance_mm=tolerance)
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
@@ -495,7 +500,7 @@ def plan(
         _animate_needs_out(animate, out)
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         start_ticks = joint_state(arm, start, "--from")
-        rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance)
+        rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance, arm.approach_axis)
         if rule is not None and to_xyz is None:
             raise InvalidInputError("--tool-axis and --pose go with --to-xyz")
         energy = None

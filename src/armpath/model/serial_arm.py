@@ -217,6 +217,9 @@ class SerialArm:
     length_unit: str = "mm"
     T_world_base: FloatArray = field(default_factory=lambda: np.eye(4))
     parameters: tuple[tuple[str, float], ...] = ()
+    #: The tool's approach axis in the tool frame (where a torch or gripper points): z unless
+    #: the tool frame says otherwise (ur_description's ``ee_link`` points along x).
+    approach_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def __post_init__(self) -> None:
         n = len(self.joints)
@@ -233,6 +236,10 @@ class SerialArm:
                 raise InvalidInputError(f"link {link.name!r}: landmark index out of range")
             if not (np.isfinite(link.radius) and link.radius >= 0):
                 raise InvalidInputError(f"link {link.name!r}: radius must be >= 0")
+        a = np.asarray(self.approach_axis, dtype=np.float64)
+        if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) < 1e-12:
+            raise InvalidInputError("the tool's approach axis must be a non-zero 3-vector")
+        object.__setattr__(self, "approach_axis", tuple(float(v) for v in a / np.linalg.norm(a)))
         if self.length_unit not in ("mm", "m"):
             raise InvalidInputError(f"length_unit must be 'mm' or 'm', got {self.length_unit!r}")
         self.check_limits(self.home, what="home pose")
@@ -270,11 +277,17 @@ class SerialArm:
         _check_rigid(T, "base placement")
         return replace(self, T_world_base=T @ self.T_world_base)
 
-    def with_tool(self, T_flange_tool: ArrayLike, radius: float | None = None) -> SerialArm:
+    def with_tool(
+        self,
+        T_flange_tool: ArrayLike,
+        radius: float | None = None,
+        approach_axis: ArrayLike | None = None,
+    ) -> SerialArm:
         """The arm carrying another tool: ``T_flange_tool`` from the last joint's frame to the
         tool centre point. Landmarks in the tool frame are replaced by one at the new tool point
         (``TCP``), and links that ended at them end there (the tool's own capsule; ``radius``
-        replaces their radius when given)."""
+        replaces their radius when given). ``approach_axis`` (tool frame) is where the tool
+        points (kept when not given)."""
         T = _frozen(T_flange_tool, (4, 4), "tool")
         _check_rigid(T, "tool")
         n = self.n_joints
@@ -297,7 +310,14 @@ class SerialArm:
             # the tool point was not on any link: join it to the last point of the arm
             last = max(range(len(keep)), key=lambda i: landmarks[i].frame)
             links.append(Link("tool", last, tcp, 0.0 if radius is None else radius))
-        return replace(self, T_flange_tool=T, landmarks=tuple(landmarks), links=tuple(links))
+        axis = self.approach_axis if approach_axis is None else tuple(np.asarray(approach_axis))
+        return replace(
+            self,
+            T_flange_tool=T,
+            landmarks=tuple(landmarks),
+            links=tuple(links),
+            approach_axis=axis,
+        )
 
     def link_bodies(self) -> list[int]:
         """For each link, the body it belongs to: 0 for the fixed base (unchecked links), else

@@ -59,6 +59,7 @@ def arm_to_dict(arm: SerialArm) -> dict[str, Any]:
         ],
         "home": np.asarray(arm.home).tolist(),
         "parameters": [[k, float(v)] for k, v in arm.parameters],
+        "approach_axis": list(arm.approach_axis),
     }
 
 
@@ -110,6 +111,7 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             length_unit=str(doc["length_unit"]),
             T_world_base=np.array(doc["T_world_base"], dtype=np.float64),
             parameters=tuple((str(k), float(v)) for k, v in doc.get("parameters", [])),
+            approach_axis=tuple(doc.get("approach_axis", (0.0, 0.0, 1.0))),
         )
     except (KeyError, TypeError, ValueError, IndexError) as exc:
         raise InvalidInputError(f"{what}: incomplete or malformed arm ({exc!r})") from None

@@ -66,7 +66,9 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
         arm = arm.with_link_radii(float(radii) if radii.ndim == 0 else radii.tolist())
     if spec.tool is not None:
         radius = None if spec.tool.radius_mm is None else spec.tool.radius_mm * mm
-        arm = arm.with_tool(placement_matrix(spec.tool, arm.length_unit), radius)
+        arm = arm.with_tool(
+            placement_matrix(spec.tool, arm.length_unit), radius, spec.tool.approach_axis
+        )
     if spec.base is not None:
         arm = arm.placed(placement_matrix(spec.base, arm.length_unit))
     if spec.home_deg is not None:

@@ -222,10 +222,12 @@ class PlacementSpec(_FiniteVec):
 
 
 class ToolSpec(PlacementSpec):
-    """The tool centre point as a transform from the flange (the last joint's frame), and the
-    radius of the tool's capsule (default: the last link's)."""
+    """The tool centre point as a transform from the flange (the last joint's frame), the
+    radius of the tool's capsule (default: the last link's) and its approach axis in the tool
+    frame (where it points; default z)."""
 
     radius_mm: float | None = Field(default=None, ge=0)
+    approach_axis: Vec3 = (0.0, 0.0, 1.0)
 
 
 class ArmSpec(_FiniteVec):

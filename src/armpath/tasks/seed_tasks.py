@@ -67,7 +67,9 @@ def spotweld_task(
                 direction = -surface.outward_normal(p)
             else:
                 direction = np.asarray(tool_axis.direction, dtype=np.float64)
-            rules.append(AxisCone(direction, tool_axis.tolerance_rad))
+            rules.append(
+                AxisCone(direction, tool_axis.tolerance_rad, np.asarray(model.approach_axis))
+            )
     return plan_tour(
         model,
         scene.world,

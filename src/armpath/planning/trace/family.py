@@ -230,7 +230,7 @@ class CurveFamily:
         if self.rule is None:
             return np.zeros(q.shape[:-1])
         T = tool_pose(self.arm, q)
-        a = T[..., :3, 2]
+        a = T[..., :3, :3] @ np.asarray(self.arm.approach_axis)
         if self.rule.normal:
             assert self.surface is not None
             axis = -self.surface.outward_normal(T[..., :3, 3])
@@ -472,7 +472,7 @@ class GenericCurveFamily(CurveFamily):
     def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
         if dirs.shape[0] == 0:
             return np.zeros((0, self.arm.n_joints))
-        Rs = _frames_along(dirs, self._turns)
+        Rs = _frames_along(dirs, self._turns, np.asarray(self.arm.approach_axis))
         if self._solver is not None:
             T = np.broadcast_to(np.eye(4), (Rs.shape[0], 4, 4)).copy()
             T[:, :3, :3] = Rs
@@ -506,16 +506,20 @@ class GenericCurveFamily(CurveFamily):
                 starts[i] = last
         q = fam.refine(starts, iterations=40, rotations=Rs)
         # the tool axis exactly (the turn about it is free): keep what reaches the point
-        axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, 2], Rs[:, :, 2])
+        a = np.asarray(arm.approach_axis)
+        axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, Rs @ a)
         good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
         for k in np.flatnonzero(good).tolist():
             self._last[keys[k]] = q[k]
         return np.asarray(q[good], dtype=np.float64)
 
 
-def _frames_along(dirs: FloatArray, turns: int) -> FloatArray:
-    """Tool rotations ``(D * turns, 3, 3)`` whose z axis is each direction, ``turns`` turns
-    about it each."""
+def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = None) -> FloatArray:
+    """Tool rotations ``(D * turns, 3, 3)`` that turn the tool's ``approach`` axis (tool
+    frame, default z) onto each direction, ``turns`` turns about it each."""
+    if approach is not None and not np.allclose(approach, [0.0, 0.0, 1.0]):
+        to_z = _frames_along(np.asarray(approach)[None], 1)[0].T  # takes the axis onto z
+        return np.asarray(_frames_along(dirs, turns) @ to_z)
     out = []
     for d in np.asarray(dirs, dtype=np.float64):
         e1, e2 = orthonormal_frame(d)
