@@ -369,6 +369,78 @@ def test_numerical_solver_redundant_arm_and_position_only():
     assert far.count == 0 and "closest reached" in far.reason
 
 
+#: KUKA's published D-H table of the LBR iiwa 14 R820 (a, alpha, d in mm), written out here.
+_IIWA_DH = ([0.0] * 7, np.radians([-90, 90, 90, -90, -90, 90, 0]), [360, 0, 420, 0, 400, 0, 126])
+
+
+def _commands_between(arm, q, r):
+    d = np.asarray(q) - np.asarray(r)
+    d = (d + np.pi) % (2 * np.pi) - np.pi  # all revolute here
+    return float(np.max(np.abs(d) / (arm.lattice.tick * arm.lattice.max_ticks)))
+
+
+def test_numerical_tolerances_are_physical_and_the_search_retries():
+    """iiwa14 poses made by its own forward kinematics are found within 1e-6 mm and 1e-8 rad
+    (checked on the textbook D-H product), the answer says the solutions are a 1-dimensional
+    family, and a search whose first starts all fail draws more before giving up."""
+    iiwa = BUILTIN_MODELS["iiwa14"]()
+    rng = np.random.default_rng(14)
+    lo, hi = iiwa.lower, iiwa.upper
+    fails_once = 0
+    for _ in range(4):
+        q = rng.uniform(0.8 * lo, 0.8 * hi)
+        target = dh_pose(*_IIWA_DH, q)
+        result = solve_ik(iiwa, target)
+        assert result.count >= 1 and result.family_dimension == 1
+        for s in result.solutions:
+            pos, rot = pose_residual(dh_pose(*_IIWA_DH, s), target)
+            assert pos < 1e-6 and rot < 1e-8
+        # one start alone often fails; the retrying search then finds a solution
+        for rng_seed in range(6):
+            single = solve_numerical(iiwa, target, seeds=1, rng_seed=rng_seed, retry=False)
+            if single.count == 0:
+                fails_once += 1
+                again = solve_numerical(iiwa, target, seeds=1, rng_seed=rng_seed)
+                assert again.count >= 1
+    assert fails_once >= 1
+    far = np.eye(4)
+    far[:3, 3] = [2000.0, 0.0, 400.0]
+    none = solve_ik(iiwa, far)
+    assert none.count == 0 and "3072 starts" in none.reason and "1e-06 mm" in none.reason
+
+
+def test_near_picks_the_family_member_nearest_a_state():
+    """A state one degree off a pose's generating solution: the first solution of ``near`` is
+    a member of the family within one command of it (the generating one is 0.05 commands
+    away), and the list is ordered by commands from that state."""
+    iiwa = BUILTIN_MODELS["iiwa14"]()
+    rng = np.random.default_rng(3)
+    q = rng.uniform(0.7 * iiwa.lower, 0.7 * iiwa.upper)
+    target = tool_pose(iiwa, q)
+    near = q + np.radians(1.0)
+    result = solve_ik(iiwa, target, near=near)
+    assert result.family_dimension == 1 and result.count >= 2
+    first = result.solutions[0]
+    pos, rot = pose_residual(tool_pose(iiwa, first), target)
+    assert pos < 1e-6 and rot < 1e-8
+    dist = [_commands_between(iiwa, s, near) for s in result.solutions]
+    assert dist[0] <= _commands_between(iiwa, q, near) + 1e-9
+    assert dist == sorted(dist)
+    ur5 = BUILTIN_MODELS["ur5"]()
+    pos_only = solve_ik(ur5, np.array([300.0, 200.0, 300.0]), position_only=True, near=ur5.home)
+    assert pos_only.family_dimension == 3
+    assert np.allclose(tool_pose(ur5, pos_only.solutions)[:, :3, 3], [300, 200, 300], atol=1e-6)
+    pose = " ".join(f"{v:.12g}" for v in target.reshape(-1))
+    near_deg = " ".join(f"{v:.6f}" for v in np.degrees(near))
+    out = _armpath("ik", "--model", "iiwa14", "--pose", pose, "--near", near_deg, "--json")
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout)
+    assert doc["family_dimension"] == 1
+    assert _commands_between(iiwa, np.radians(doc["solutions"][0]), near) <= dist[0] + 1e-6
+    table = _armpath("ik", "--model", "iiwa14", "--pose", pose)
+    assert "sample(s) of a 1-dimensional family of solutions" in table.stdout
+
+
 def _armpath(*args):
     return subprocess.run(
         [sys.executable, "-m", "armpath", *args], capture_output=True, text=True, timeout=600

@@ -70,7 +70,7 @@ def cli_command() -> Any:
 
 #: Options whose numbers follow them as separate words (one value per joint of the chosen arm,
 #: or a direction): the words are joined into the option's one value before parsing.
-JOINT_LIST_OPTIONS = ("--from", "--to", "--tool-axis")
+JOINT_LIST_OPTIONS = ("--from", "--to", "--tool-axis", "--near")
 
 
 def join_number_lists(args: list[str], options: tuple[str, ...] = JOINT_LIST_OPTIONS) -> list[str]:

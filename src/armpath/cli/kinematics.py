@@ -132,13 +132,23 @@ def ik(
         ),
     ] = "auto",
     seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver.")] = 48,
+    near: Annotated[
+        str | None,
+        typer.Option(
+            help="A joint state (deg, mm for prismatic joints; one value per joint): the "
+            "numerical search starts there and solutions are listed nearest to it first."
+        ),
+    ] = None,
     json_out: JsonOption = False,
 ) -> None:
     """Inverse kinematics: every solution for a tool pose (or position), deg / mm.
 
     Complete methods return every real solution: closed form for arms with a spherical wrist
     or three parallel axes (UR type), Raghavan-Roth elimination for any other 6R arm. Each
-    solution carries its forward-kinematics residual. Exit status 1 if there is no solution.
+    solution carries its forward-kinematics residual. An arm with more joints than the target
+    constrains (7 axes and a pose, or any --xyz goal of a 6-axis arm) has a continuous family
+    of solutions: the output says so and lists samples of it (--near picks the part of the
+    family nearest a state). Exit status 1 if there is no solution.
     """
     with _cli_errors():
         if (pose is None) == (xyz is None):
@@ -155,13 +165,19 @@ def ik(
         if not 1 <= seeds <= MAX_IK_SEEDS:
             raise InvalidInputError(f"--seeds must be in [1, {MAX_IK_SEEDS}], got {seeds}")
         arm = resolve_model(model, tip_link)
+        near_q = None
+        if near is not None:
+            words = near.replace(",", " ").split()
+            near_q = _from_display(
+                arm, _numbers(words, arm.n_joints, f"--near ({arm.n_joints} joint values)")
+            )
         if pose is not None:
             target = _pose_argument(pose)
-            result = solve_ik(arm, target, method=method, seeds=seeds)
+            result = solve_ik(arm, target, method=method, seeds=seeds, near=near_q)
         else:
             assert xyz is not None
             target = np.array(_numbers([str(v) for v in xyz], 3, "--xyz"))
-            result = solve_ik(arm, target, position_only=True, seeds=seeds)
+            result = solve_ik(arm, target, position_only=True, seeds=seeds, near=near_q)
         units = _joint_units(arm)
         sols = _to_display(arm, result.solutions)
         inside: Any = result.within_limits if result.within_limits is not None else []
@@ -174,6 +190,7 @@ def ik(
                 else {"position": [float(c) for c in target]}
             ),
             "count": result.count,
+            "family_dimension": result.family_dimension,
             "solutions": [[float(v) for v in s] for s in sols],
             "residuals": [
                 {"position_mm": float(p), "rotation_deg": float(np.degrees(r))}
@@ -189,9 +206,16 @@ def ik(
             typer.echo(json.dumps(doc))
         else:
             unit_note = ", ".join(f"q{i + 1} {u}" for i, u in enumerate(units) if u != "deg")
+            if result.family_dimension:
+                found = (
+                    f"{result.count} sample(s) of a {result.family_dimension}-dimensional family "
+                    "of solutions" + (", nearest --near first" if near_q is not None else "")
+                )
+            else:
+                found = f"{result.count} solution(s)"
             table = Table(
                 title=escape(
-                    f"{arm.name}: {result.count} solution(s), {result.method}; angles deg"
+                    f"{arm.name}: {found}, {result.method}; angles deg"
                     + (f", {unit_note}" if unit_note else "")
                 ),
                 box=box.SIMPLE_HEAD,

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.budget import check_time
 from armpath.errors import InvalidInputError
 from armpath.ik.result import IKResult
 from armpath.kinematics import forward_frames, jacobian_from_frames
@@ -41,6 +42,15 @@ def _errors_and_jacobians(
 #: Most random starts of one numerical solve (each runs up to ``max_iterations`` LM steps).
 MAX_SEEDS = 100_000
 
+#: A converged solution puts the tool within this distance of the target (mm) ...
+POSITION_TOLERANCE_MM = 1e-6
+#: ... and its frame within this angle of the target's (rad).
+ROTATION_TOLERANCE_RAD = 1e-8
+#: When no start converges, the search draws this many times more fresh starts, up to
+#: ``MAX_RETRY_SEEDS`` in all (arms whose reachable poses few random starts lead to).
+RETRY_GROWTH = 4
+MAX_RETRY_SEEDS = 3072
+
 
 def solve_numerical(
     arm: SerialArm,
@@ -51,21 +61,32 @@ def solve_numerical(
     rng_seed: int = 0,
     initial: FloatArray | None = None,
     max_iterations: int = 200,
-    tol: float = 1e-10,
+    position_tolerance_mm: float = POSITION_TOLERANCE_MM,
+    rotation_tolerance_rad: float = ROTATION_TOLERANCE_RAD,
+    retry: bool = True,
 ) -> IKResult:
     """Solutions of one target found by LM from ``seeds`` random starts (plus ``initial``).
 
     ``T_target`` is a 4x4 pose, or a 3-vector position when ``position_only``. Seeds are drawn
     uniformly inside the joint limits (``[-pi, pi]`` or ``[-1000, 1000]`` model units where
-    unlimited) with ``rng_seed``. A seed has converged when its position error is below
-    ``tol`` times the arm's size and its rotation error below ``tol`` rad. Steps are projected
-    onto the joint limits.
+    unlimited) with ``rng_seed``. A start has converged when the tool is within
+    ``position_tolerance_mm`` of the target (in mm whatever the model's length unit) and, for a
+    pose, its frame within ``rotation_tolerance_rad``. Steps are projected onto the joint
+    limits. When no start converges and ``retry`` is set, the search draws ``RETRY_GROWTH``
+    times more fresh starts, again and again, until one converges or ``MAX_RETRY_SEEDS``
+    starts have been tried; only then does it answer that no solution was found.
     """
     n = arm.n_joints
     if not 1 <= seeds <= MAX_SEEDS:
         raise InvalidInputError(
             f"seeds of the numerical IK must be in [1, {MAX_SEEDS}], got {seeds}"
         )
+    for name, value in (
+        ("position_tolerance_mm", position_tolerance_mm),
+        ("rotation_tolerance_rad", rotation_tolerance_rad),
+    ):
+        if not (np.isfinite(value) and value > 0.0):
+            raise InvalidInputError(f"{name} must be a positive number, got {value}")
     if position_only:
         p = np.asarray(T_target, dtype=np.float64).reshape(-1)
         if p.shape != (3,) or not np.isfinite(p).all():
@@ -81,17 +102,78 @@ def solve_numerical(
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
     lo = np.where(prismatic & ~np.isfinite(arm.lower), -1000.0, lo)
     hi = np.where(prismatic & ~np.isfinite(arm.upper), 1000.0, hi)
+    position_tol = position_tolerance_mm * (1e-3 if arm.length_unit == "m" else 1.0)
+    size = 1.0 + float(np.max(np.abs(forward_frames(arm, arm.home)[:, :3, 3])))
     rng = np.random.default_rng(rng_seed)
     starts = rng.uniform(lo, hi, size=(seeds, n))
     if initial is not None:
         starts = np.vstack([np.asarray(initial, dtype=np.float64).reshape(1, n), starts])
-    size = 1.0 + float(np.max(np.abs(forward_frames(arm, arm.home)[:, :3, 3])))
+    tried = 0
+    while True:
+        tried += starts.shape[0]
+        q, pos_err, rot_err = _descend(
+            arm,
+            starts,
+            T,
+            position_only,
+            size,
+            max_iterations,
+            position_tol,
+            rotation_tolerance_rad,
+        )
+        ok = (pos_err <= position_tol) & (rot_err <= rotation_tolerance_rad)
+        more = min(starts.shape[0] * RETRY_GROWTH, MAX_RETRY_SEEDS - tried)
+        if np.any(ok) or not retry or more <= 0:
+            break
+        check_time()
+        starts = rng.uniform(lo, hi, size=(more, n))
+    method = "levenberg-marquardt" + (" (position only)" if position_only else "")
+    if not np.any(ok):
+        best = int(np.argmin(pos_err / position_tol + rot_err / rotation_tolerance_rad))
+        return IKResult.empty(
+            n,
+            method,
+            f"no start converged ({tried} starts): the closest reached "
+            f"{pos_err[best]:.4g} {arm.length_unit} and {np.degrees(rot_err[best]):.4g} deg "
+            f"from the target (tolerances {position_tolerance_mm:g} mm, "
+            f"{rotation_tolerance_rad:g} rad)",
+        )
+    sols: list[FloatArray] = []
+    res_p: list[float] = []
+    res_r: list[float] = []
+    for k in np.flatnonzero(ok):
+        cand = q[k].copy()
+        if any(np.all(np.abs(_angle_diff(cand - s, prismatic)) < 1e-6) for s in sols):
+            continue
+        sols.append(cand)
+        res_p.append(float(pos_err[k]))
+        res_r.append(float(rot_err[k]))
+    order = np.lexsort(np.array(sols).T[::-1])
+    S = np.array(sols)[order]
+    false = np.zeros(len(sols), dtype=bool)
+    return IKResult(S, np.array(res_p)[order], np.array(res_r)[order], false, false.copy(), method)
+
+
+def _descend(
+    arm: SerialArm,
+    starts: FloatArray,
+    T: FloatArray,
+    position_only: bool,
+    size: float,
+    max_iterations: int,
+    position_tol: float,
+    rotation_tol: float,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """LM from every start at once; the final joints, position and rotation errors."""
+    n = arm.n_joints
     q = starts.copy()
     lam = np.full(q.shape[0], 1e-2)
     err, J = _errors_and_jacobians(arm, q, T, position_only)
     w = np.ones(err.shape[1])
     w[:3] = 1.0 / size  # position in units of the arm size, rotation in rad
     cost = np.sum((err * w) ** 2, axis=1)
+    # Stop once every start is well inside both tolerances (or stuck).
+    done_cost = min(position_tol / size, rotation_tol) ** 2 * 1e-4
     for _ in range(max_iterations):
         Jw = J * w[None, :, None]
         ew = err * w
@@ -108,35 +190,11 @@ def solve_numerical(
         J[better] = J_new[better]
         cost[better] = cost_new[better]
         lam = np.where(better, np.maximum(lam / 3.0, 1e-12), np.minimum(lam * 4.0, 1e8))
-        if np.all(cost < (tol * 1e-2) ** 2):
+        if np.all(cost < done_cost):
             break
     pos_err = np.linalg.norm(err[:, :3], axis=1)
     rot_err = np.zeros(q.shape[0]) if position_only else np.linalg.norm(err[:, 3:], axis=1)
-    ok = (pos_err <= tol * size) & (rot_err <= tol)
-    method = "levenberg-marquardt" + (" (position only)" if position_only else "")
-    if not np.any(ok):
-        best = int(np.argmin(pos_err + size * rot_err))
-        return IKResult.empty(
-            n,
-            method,
-            f"no seed converged ({q.shape[0]} seeds): the closest reached "
-            f"{pos_err[best]:.4g} {arm.length_unit} and {np.degrees(rot_err[best]):.4g} deg "
-            "from the target",
-        )
-    sols: list[FloatArray] = []
-    res_p: list[float] = []
-    res_r: list[float] = []
-    for k in np.flatnonzero(ok):
-        cand = q[k].copy()
-        if any(np.all(np.abs(_angle_diff(cand - s, prismatic)) < 1e-6) for s in sols):
-            continue
-        sols.append(cand)
-        res_p.append(float(pos_err[k]))
-        res_r.append(float(rot_err[k]))
-    order = np.lexsort(np.array(sols).T[::-1])
-    S = np.array(sols)[order]
-    false = np.zeros(len(sols), dtype=bool)
-    return IKResult(S, np.array(res_p)[order], np.array(res_r)[order], false, false.copy(), method)
+    return q, pos_err, rot_err
 
 
 def _angle_diff(d: FloatArray, prismatic: NDArray[np.bool_]) -> FloatArray:

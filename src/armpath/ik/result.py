@@ -25,7 +25,10 @@ class IKResult:
     rank deficient. ``within_limits`` says, per solution, whether it lies inside the joint limits
     (revolute angles are then shifted by whole turns into the limits). ``reason`` is empty when
     solutions were found and otherwise says why none was; ``method`` names the solver (and the
-    elimination split used, if any).
+    elimination split used, if any). ``family_dimension`` is 0 when the solutions are isolated;
+    when the arm has more joints than the goal constrains (a 7-axis arm and a pose, a 6-axis
+    arm and a position) the solutions form a continuous family of that dimension and
+    ``solutions`` are samples of it.
     """
 
     solutions: FloatArray
@@ -36,6 +39,7 @@ class IKResult:
     method: str
     reason: str = ""
     within_limits: BoolArray | None = None
+    family_dimension: int = 0
 
     @property
     def count(self) -> int:

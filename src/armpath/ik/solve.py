@@ -108,25 +108,156 @@ def solve_ik(
     position_only: bool = False,
     seeds: int = 48,
     rng_seed: int = 0,
+    near: FloatArray | None = None,
 ) -> IKResult:
     """Every solution of one target: a 4x4 pose, or a 3-vector with ``position_only``.
 
     Complete methods return every real solution; the numerical method those its seeds find.
     Solutions are shifted into the joint limits where a whole turn allows and flagged by
-    ``within_limits``.
+    ``within_limits``. When the arm has more joints than the goal constrains, the solutions
+    are samples of a continuous family (``family_dimension`` > 0). ``near`` (joint values,
+    rad / model length unit) starts the numerical search there first and orders the
+    solutions nearest to it first (in commands of the arm's lattice); a continuous family
+    gets its member nearest ``near`` as well.
     """
+    n = arm.n_joints
+    initial = None
+    if near is not None:
+        initial = np.asarray(near, dtype=np.float64).reshape(-1)
+        if initial.shape != (n,) or not np.isfinite(initial).all():
+            raise InvalidInputError(f"near needs {n} finite joint values of {arm.name}")
+    family = max(0, n - (3 if position_only else 6))
     if position_only:
-        return into_limits(
-            arm, solve_numerical(arm, target, position_only=True, seeds=seeds, rng_seed=rng_seed)
+        result = solve_numerical(
+            arm, target, position_only=True, seeds=seeds, rng_seed=rng_seed, initial=initial
         )
-    solver = complete_solver(arm, method)
-    if solver is None:
-        return into_limits(arm, solve_numerical(arm, target, seeds=seeds, rng_seed=rng_seed))
-    result = solver.solve(np.asarray(target, dtype=np.float64))
-    if result.count == 0 and "degenerate" in result.reason:
-        fallback = solve_numerical(arm, target, seeds=seeds, rng_seed=rng_seed)
-        result = replace(
-            fallback,
-            method=f"{fallback.method} (after {result.method}: {result.reason})",
-        )
-    return into_limits(arm, result)
+    else:
+        solver = complete_solver(arm, method)
+        if solver is None:
+            result = solve_numerical(arm, target, seeds=seeds, rng_seed=rng_seed, initial=initial)
+        else:
+            result = solver.solve(np.asarray(target, dtype=np.float64))
+            if result.count == 0 and "degenerate" in result.reason:
+                fallback = solve_numerical(
+                    arm, target, seeds=seeds, rng_seed=rng_seed, initial=initial
+                )
+                result = replace(
+                    fallback,
+                    method=f"{fallback.method} (after {result.method}: {result.reason})",
+                )
+    result = into_limits(arm, replace(result, family_dimension=family))
+    if initial is not None and family and result.count:
+        result = _with_nearest_member(arm, result, target, position_only, initial)
+    if initial is not None and result.count > 1:
+        result = nearest_first(arm, result, initial)
+    return result
+
+
+def _with_nearest_member(
+    arm: SerialArm, result: IKResult, target: FloatArray, position_only: bool, q0: FloatArray
+) -> IKResult:
+    """``result`` plus the member of its continuous family nearest ``q0`` in commands: SLSQP
+    minimises the largest joint change (in units of one command's most ticks) on the family
+    (the goal as equality constraints, from the nearest sample found), then
+    Levenberg-Marquardt polishes it to the tolerances."""
+    from scipy.optimize import minimize
+
+    from armpath.kinematics import forward_frames
+
+    n = arm.n_joints
+    step = arm.lattice.tick * arm.lattice.max_ticks
+    T = np.asarray(target, dtype=np.float64)
+    start = nearest_first(arm, result, q0).solutions[0]
+    size = 1.0 + float(np.max(np.abs(forward_frames(arm, arm.home)[:, :3, 3])))
+
+    def goal_error(x: FloatArray) -> FloatArray:
+        tool = forward_frames(arm, x[:n])[-1]
+        if position_only:
+            return np.asarray((tool[:3, 3] - T.reshape(-1)[:3]) / size, dtype=np.float64)
+        rot = 0.5 * np.sum(np.cross(tool[:3, :3], T[:3, :3], axisa=0, axisb=0), axis=0)
+        return np.concatenate([(tool[:3, 3] - T[:3, 3]) / size, rot])
+
+    # the start shifted by whole turns next to q0, so the change is measured the short way
+    shifted = start.copy()
+    for i, joint in enumerate(arm.joints):
+        if joint.kind is JointKind.REVOLUTE:
+            shifted[i] = q0[i] + (start[i] - q0[i] + np.pi) % (2.0 * np.pi) - np.pi
+    lo = np.minimum(arm.lower, shifted)
+    hi = np.maximum(arm.upper, shifted)
+    commands0 = float(np.max(np.abs(shifted - q0) / step))
+    eye = np.hstack([np.eye(n) / step[:, None], np.zeros((n, 1))])
+    ones = np.zeros((n, n + 1))
+    ones[:, n] = 1.0
+    res = minimize(
+        lambda x: float(x[n]),
+        np.append(shifted, commands0),
+        jac=lambda x: np.eye(n + 1)[n],
+        constraints=[
+            {"type": "eq", "fun": goal_error},
+            {
+                "type": "ineq",
+                "fun": lambda x: x[n] - (x[:n] - q0) / step,
+                "jac": lambda x: ones - eye,
+            },
+            {
+                "type": "ineq",
+                "fun": lambda x: x[n] + (x[:n] - q0) / step,
+                "jac": lambda x: ones + eye,
+            },
+        ],
+        bounds=[*zip(lo, hi, strict=True), (0.0, None)],
+        method="SLSQP",
+        options={"maxiter": 300, "ftol": 1e-10},
+    )
+    res.x = res.x[:n]
+    polished = solve_numerical(
+        arm,
+        T if not position_only else T.reshape(-1)[:3],
+        position_only=position_only,
+        seeds=1,
+        initial=np.clip(res.x, arm.lower, arm.upper),
+        retry=False,
+    )
+    if polished.count == 0:
+        return result
+    merged = into_limits(
+        arm,
+        replace(
+            result,
+            solutions=np.vstack([polished.solutions[:1], result.solutions]),
+            position_residual=np.concatenate(
+                [polished.position_residual[:1], result.position_residual]
+            ),
+            rotation_residual_rad=np.concatenate(
+                [polished.rotation_residual_rad[:1], result.rotation_residual_rad]
+            ),
+            near_double=np.concatenate([[False], result.near_double]),
+            near_singular=np.concatenate([[False], result.near_singular]),
+        ),
+    )
+    return merged
+
+
+def nearest_first(arm: SerialArm, result: IKResult, q: FloatArray) -> IKResult:
+    """``result`` with its solutions ordered by the commands they need from ``q`` (the largest
+    joint change in units of the joint's most ticks per command, revolute joints the shorter
+    way round), nearest first."""
+    d = result.solutions - np.asarray(q, dtype=np.float64)[None, :]
+    for i, joint in enumerate(arm.joints):
+        if joint.kind is JointKind.REVOLUTE:
+            d[:, i] = (d[:, i] + np.pi) % (2.0 * np.pi) - np.pi
+    step = arm.lattice.tick * arm.lattice.max_ticks
+    order = np.argsort(np.max(np.abs(d) / step, axis=1), kind="stable")
+
+    def pick(a: np.ndarray | None) -> np.ndarray | None:
+        return None if a is None else a[order]
+
+    return replace(
+        result,
+        solutions=result.solutions[order],
+        position_residual=result.position_residual[order],
+        rotation_residual_rad=result.rotation_residual_rad[order],
+        near_double=result.near_double[order],
+        near_singular=result.near_singular[order],
+        within_limits=pick(result.within_limits),
+    )
