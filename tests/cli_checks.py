@@ -8,11 +8,3 @@ def error_lines(stderr: str) -> list[str]:
     when stderr is not a terminal: what is left of a failed command must be one ``error:``
     line."""
     return [line for line in stderr.strip().splitlines() if not line.startswith("armpath: [")]
-
-
-def usage_text(stderr: str) -> str:
-    """The parser's usage error as plain text: the box drawn around it removed, whitespace
-    collapsed (the message wraps at the terminal width)."""
-    for ch in "│╭╮╰╯─":
-        stderr = stderr.replace(ch, " ")
-    return " ".join(stderr.split())

@@ -2,9 +2,10 @@
 
 Angles on the command line are degrees, lengths mm; command increments are ticks of 0.1 deg.
 Every error armpath detects is printed as one line ``error: ...`` on stderr with exit status 1;
-usage errors exit with status 2. Each module registers its commands on the shared app: kinematics
-(fk, ik), tasks (reach, plan, spotweld, trace, run), workspace (workspace, blindzones,
-design-sweep), motion (trajectory, rcm) and viewing (view, animate).
+usage errors (unknown option, missing or malformed value) are one ``error:`` line too, exit
+status 2. Each module registers its commands on the shared app: kinematics (fk, ik), tasks
+(reach, plan, spotweld, trace, run), workspace (workspace, blindzones, design-sweep), motion
+(trajectory, rcm) and viewing (view, animate).
 """
 
 from __future__ import annotations
@@ -101,12 +102,25 @@ def join_number_lists(args: list[str], options: tuple[str, ...] = JOINT_LIST_OPT
 
 
 def main() -> None:
-    """Console entry point."""
+    """Console entry point: a usage error (unknown option, missing or malformed value) is one
+    ``error:`` line naming the command's --help, exit status 2."""
     try:
-        cli_command()(args=join_number_lists(sys.argv[1:]))
+        rc = cli_command()(args=join_number_lists(sys.argv[1:]), standalone_mode=False)
+    except typer.Abort:
+        err_console.print("error: interrupted", markup=False)
+        sys.exit(130)
+    except typer.TyperException as exc:  # the parser's errors (typer's click)
+        message = " ".join(str(getattr(exc, "format_message", exc.__str__)()).split())
+        message = message.replace(": Value error, ", ": ")  # the enum converter's prefix
+        ctx = getattr(exc, "ctx", None)
+        where = f" (see: {ctx.command_path} --help)" if ctx is not None else ""
+        err_console.print(f"error: {message}{where}", markup=False, soft_wrap=True)
+        sys.exit(int(getattr(exc, "exit_code", 2)))
     except ArmpathError as exc:  # pragma: no cover - commands already convert these
         err_console.print(f"error: {exc}", markup=False)
         sys.exit(1)
+    if isinstance(rc, int) and rc:
+        sys.exit(rc)
 
 
 __all__ = ["app", "cli_command", "join_number_lists", "main"]
