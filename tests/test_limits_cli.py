@@ -356,3 +356,19 @@ def test_help_texts_quote_the_limits_in_force(tmp_path):
     assert f"{MAX_WAYPOINTS:,} rows of 64 joints" in text
     text = " ".join(_run(["rcm", "--help"], tmp_path).stdout.split())
     assert f"At most {MAX_PERIODS:,} controller periods" in text and "1,000,000 commands" in text
+
+
+def test_trajectory_waypoints_separated_by_spaces(tmp_path):
+    """A file of values separated by spaces and tabs (as a newcomer writes it) reads like its
+    CSV twin: the same commands, line for line."""
+    commands = []
+    for name, text in (
+        ("spaces", "t q1 q2\n0 0 0\n1\t100  -37.3\n"),
+        ("csv", "t,q1,q2\n0,0,0\n1,100,-37.3\n"),
+    ):
+        wp = _waypoints(tmp_path, text, f"{name}.txt")
+        out = tmp_path / name
+        proc = _run(["trajectory", "--waypoints", wp, "--period", "5", "--out", str(out)], tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        commands.append((out / "commands.csv").read_text())
+    assert commands[0] == commands[1] and commands[0].count("\n") == 51

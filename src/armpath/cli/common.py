@@ -32,8 +32,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     no_args_is_help=True,
     help=(
-        "Motion design for serial arms driven by quantized joint commands "
-        "(0.1 deg ticks, at most 2 deg per joint per command). Angles in deg, lengths in mm."
+        "Motion design for serial arms driven by quantized joint commands (each joint moves a "
+        "whole number of ticks per command: for the seed arm 0.1 deg, at most 2 deg; any arm "
+        "brings its own lattice). Angles in deg, lengths in mm."
     ),
 )
 out_console = Console(highlight=False)

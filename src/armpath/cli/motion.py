@@ -22,6 +22,7 @@ import numpy as np
 import typer
 from numpy.typing import NDArray
 from rich import box
+from rich.markup import escape
 from rich.table import Table
 
 from armpath.budget import (
@@ -70,8 +71,9 @@ ANIMATION_STATES = 2_048
 
 
 def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
-    """Waypoints (deg) and optional times (s) from a CSV: one row per waypoint, joint angles in
-    deg; a first column named ``t`` or ``time_s`` gives the times (strictly increasing).
+    """Waypoints (deg) and optional times (s) from a CSV (or values separated by spaces): one
+    row per waypoint, joint angles in deg; a first column named ``t`` or ``time_s`` gives the
+    times (strictly increasing).
 
     The file is read a line at a time and refused at the first line past a limit: at most
     ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of at most ``MAX_LINE_BYTES``
@@ -87,7 +89,8 @@ def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
                 line = _decoded(raw, number, name).strip()
                 if not line:
                     continue
-                cells = [c.strip() for c in line.split(",")]
+                # commas separate the values; a line without commas may use spaces or tabs
+                cells = [c.strip() for c in line.split(",")] if "," in line else line.split()
                 check_size(
                     len(cells),
                     MAX_JOINTS + 1,
@@ -280,9 +283,9 @@ def trajectory(
         Path,
         typer.Option(
             "--waypoints",
-            help="CSV of joint waypoints in deg, one row each; a first column 't' (s) gives "
-            "their times, otherwise they are spaced by the velocity/acceleration limits. At "
-            f"most {MAX_WAYPOINTS:,} rows of {MAX_JOINTS} joints.",
+            help="Joint waypoints in deg, one row each (CSV, or values separated by spaces); "
+            "a first column 't' (s) gives their times, otherwise they are spaced by the "
+            "velocity/acceleration limits. At most {MAX_WAYPOINTS:,} rows of {MAX_JOINTS} joints.",
         ),
     ],
     kind: Annotated[
@@ -473,7 +476,7 @@ def _retiming_table(retimed: list[Any], limits: Any) -> Table:
         "limits",
         "compute [ms]",
     ):
-        table.add_column(name, justify="right")
+        table.add_column(escape(name), justify="right")
     for r in retimed:
         peaks = np.degrees([r.peak_velocity.max(), r.peak_acceleration.max(), r.peak_jerk.max()])
         table.add_row(

@@ -262,7 +262,7 @@ TaskModelOption = Annotated[
     typer.Option(
         "--model",
         help="The arm: a built-in model (seed, welder003, painter004, puma560, ur5, iiwa14) or "
-        "a robot file (.json D-H, .urdf). Default: the scene's [arm], else the seed arm.",
+        "a robot file (.json D-H, .urdf). Default: the scene's \\[arm], else the seed arm.",
         show_default=False,
     ),
 ]
@@ -626,7 +626,7 @@ def spotweld(
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Task 3: reach the scene's spot welds (the seed scene: on the workpiece's inner wall,
-    through the open top), in the best order; any arm (--model or the scene's [arm])."""
+    through the open top), in the best order; any arm (--model or the scene's \\[arm])."""
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         options = MotionOptions(objective=objective, seed=seed)
@@ -781,7 +781,7 @@ def trace(
 ) -> None:
     """Task 2: go once around the scene's curve (the crack) with the tool, every reachable
     part, fewest passes and commands; report the unreachable arcs and why. Any arm (--model or
-    the scene's [arm]); --tool-axis keeps the torch near the surface normal or a direction."""
+    the scene's \\[arm]); --tool-axis keeps the torch near the surface normal or a direction."""
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         rule = axis_rule(tool_axis, axis_tolerance)

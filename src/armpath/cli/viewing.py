@@ -45,7 +45,7 @@ def view(
         str | None,
         typer.Option(
             "--model",
-            help="The arm: a built-in model or a robot file. Default: the scene's [arm], else "
+            help="The arm: a built-in model or a robot file. Default: the scene's \\[arm], else "
             "the seed arm.",
             show_default=False,
         ),
