@@ -1,0 +1,202 @@
+"""Issue 18: robot files nobody here wrote, from a public robot-description package.
+
+The URDF files come from the ``example-robot-data`` package (ur_description's UR5, Franka's
+Panda, Unitree's Z1) as its users get them; their forward kinematics is Pinocchio's, the
+library that package is made for. armpath reads each file itself, and everything it plans is
+replayed on Pinocchio's forward kinematics of the same file.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from armpath.ik import solve_ik
+from armpath.kinematics import tool_pose
+from armpath.model.catalog import resolve_model
+
+UR5 = "ur_description/urdf/ur5_robot.urdf"
+PANDA = "panda_description/urdf/panda.urdf"
+Z1 = "z1_description/urdf/z1.urdf"
+
+
+def robot_file(tail: str) -> str:
+    """The installed file of example-robot-data whose path ends with ``tail``."""
+    files = importlib.metadata.files("example-robot-data") or []
+    (path,) = [f.locate() for f in files if str(f).endswith("robots/" + tail)]
+    return str(path)
+
+
+class PinocchioArm:
+    """Pinocchio's model of one URDF file, its joints in armpath's order (others at zero)."""
+
+    def __init__(self, path: str, tip: str, joint_names: list[str]) -> None:
+        self.model = pin.buildModelFromUrdf(path)
+        self.data = self.model.createData()
+        self.frame = self.model.getFrameId(tip)
+        assert self.frame < len(self.model.frames), tip
+        self.index = [self.model.joints[self.model.getJointId(n)].idx_q for n in joint_names]
+
+    def pose_mm(self, q: np.ndarray) -> np.ndarray:
+        full = pin.neutral(self.model)
+        full[self.index] = q
+        pin.framesForwardKinematics(self.model, self.data, full)
+        M = self.data.oMf[self.frame]
+        T = np.eye(4)
+        T[:3, :3] = M.rotation
+        T[:3, 3] = 1000.0 * M.translation  # the file is in m
+        return T
+
+
+def _armpath(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "armpath", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=900,
+    )
+
+
+@pytest.mark.parametrize(
+    ("tail", "tip", "n_joints"),
+    [(UR5, "tool0", 6), (UR5, "ee_link", 6), (PANDA, "panda_hand", 7), (Z1, "link06", 6)],
+)
+def test_forward_kinematics_agrees_with_pinocchio(tail, tip, n_joints):
+    path = robot_file(tail)
+    arm = resolve_model(path, tip)
+    assert arm.n_joints == n_joints and tip in arm.name
+    ref = PinocchioArm(path, tip, [j.name for j in arm.joints])
+    rng = np.random.default_rng(18)
+    lo, hi = np.maximum(arm.lower, -np.pi), np.minimum(arm.upper, np.pi)
+    for q in rng.uniform(lo, hi, size=(50, n_joints)):
+        T, P = tool_pose(arm, q), ref.pose_mm(q)
+        assert np.abs(T[:3, 3] - P[:3, 3]).max() < 1e-9  # mm
+        assert np.abs(T[:3, :3] - P[:3, :3]).max() < 1e-12
+
+
+def test_z1_inverse_kinematics_checked_by_pinocchio():
+    """Every solution of poses of the Z1 arm puts Pinocchio's tool frame on the pose, and the
+    state that made each pose is among them."""
+    path = robot_file(Z1)
+    arm = resolve_model(path, "link06")
+    ref = PinocchioArm(path, "link06", [j.name for j in arm.joints])
+    rng = np.random.default_rng(1)
+    for q in rng.uniform(0.8 * arm.lower, 0.8 * arm.upper, size=(5, 6)):
+        target = ref.pose_mm(q)
+        result = solve_ik(arm, target)
+        assert result.count >= 1, result.reason
+        for s in result.solutions:
+            P = ref.pose_mm(s)
+            assert np.linalg.norm(P[:3, 3] - target[:3, 3]) < 1e-6
+            assert np.abs(P[:3, :3] - target[:3, :3]).max() < 1e-8
+        d = (result.solutions - q + np.pi) % (2 * np.pi) - np.pi
+        assert np.abs(d).max(axis=1).min() < 1e-6
+
+
+def _replayed_states(doc: dict) -> np.ndarray:
+    """Joint states (rad) of a result's command list, summed from its initial state."""
+    tick = np.radians(0.1)
+    start = np.radians(np.asarray(doc["initial_deg"], dtype=float))
+    steps = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, start.size)
+    assert np.abs(steps).max() <= 20  # every command within the lattice's 2 deg
+    return start + tick * np.vstack([np.zeros((1, start.size), np.int64), np.cumsum(steps, 0)])
+
+
+def test_reach_with_the_ur5_file_replayed_on_pinocchio(tmp_path):
+    path = robot_file(UR5)
+    target = np.array([400.0, 150.0, 300.0])
+    out = tmp_path / "reach"
+    args = ["reach", *map(str, target), "--model", path, "--tip-link", "tool0", "--out", str(out)]
+    proc = _armpath(*args, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "reach.json").read_text())
+    assert doc["model"]["name"] == "ur5 [tool0]"
+    states = _replayed_states(doc)
+    assert len(states) - 1 == doc["n_commands"] <= doc["lower_bound_commands"] + 1
+    ref = PinocchioArm(path, "tool0", [f"{n}_joint" for n in _UR5_JOINTS])
+    assert np.linalg.norm(ref.pose_mm(states[-1])[:3, 3] - target) <= 0.05
+    np.testing.assert_allclose(np.degrees(states[-1]), doc["final_deg"], atol=1e-9)
+
+
+_UR5_JOINTS = ("shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3")
+
+
+def test_reach_with_a_tool_axis_cone_for_the_panda_file(tmp_path):
+    """The 7-axis Panda from its URDF reaches a point with its hand's approach axis within
+    10 deg of straight down, checked on Pinocchio's frame of the hand."""
+    path = robot_file(PANDA)
+    target = np.array([450.0, -100.0, 250.0])
+    out = tmp_path / "reach"
+    proc = _armpath(
+        "reach", *map(str, target), "--model", path, "--tip-link", "panda_hand",
+        "--from", "0", "-45", "0", "-135", "0", "90", "45",
+        "--tool-axis", "0", "0", "-1", "--axis-tolerance", "10", "--out", str(out),
+        cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "reach.json").read_text())
+    states = _replayed_states(doc)
+    ref = PinocchioArm(path, "panda_hand", [f"panda_joint{k}" for k in range(1, 8)])
+    T = ref.pose_mm(states[-1])
+    assert np.linalg.norm(T[:3, 3] - target) <= 0.05
+    assert np.degrees(np.arccos(np.clip(-T[2, 2], -1.0, 1.0))) <= 10.0 + 1e-6
+
+
+def test_trace_with_the_ur5_file_replayed_on_pinocchio(tmp_path):
+    """A 60 mm circle above a table, the arm from the UR5 file standing on a base transform:
+    every commanded motion, sampled finely, stays within 0.1 mm of the circle on Pinocchio's
+    forward kinematics (shifted by the base), and the passes go once around."""
+    path = robot_file(UR5)
+    centre, radius, base = np.array([400.0, 100.0, 250.0]), 60.0, np.array([0.0, 0.0, 100.0])
+    scene = tmp_path / "cell.toml"
+    scene.write_text(
+        f"""name = "ur5 file on a pedestal"
+
+[arm]
+model = "{path}"
+tip_link = "tool0"
+base = {{ position_mm = [0, 0, {base[2]}], rotation_deg = [0, 0, 0] }}
+home_deg = [0, -90, 90, -90, -90, 0]
+
+[[obstacles]]
+type = "half_space"
+name = "table"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+
+[tasks.trace.curve]
+type = "parametric"
+name = "circle"
+x = "{centre[0]} + {radius}*cos(t)"
+y = "{centre[1]} + {radius}*sin(t)"
+z = "{centre[2]}"
+t = [0, 6.283185307179586]
+""",
+        encoding="utf-8",
+    )
+    out = tmp_path / "trace"
+    proc = _armpath("trace", "--scene", str(scene), "--out", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "trace.json").read_text())
+    states = _replayed_states(doc)
+    ref = PinocchioArm(path, "tool0", [f"{n}_joint" for n in _UR5_JOINTS])
+    t = np.linspace(0.0, 1.0, 21)
+    swept = 0.0
+    assert doc["passes"]
+    for first, last in doc["passes"]:  # state indices
+        a, b = states[first:last], states[first + 1 : last + 1]
+        q = (a[:, None] + t[None, :, None] * (b - a)[:, None]).reshape(-1, 6)
+        P = np.array([ref.pose_mm(x)[:3, 3] for x in q]) + base
+        rho = np.hypot(P[:, 0] - centre[0], P[:, 1] - centre[1])
+        assert np.hypot(rho - radius, P[:, 2] - centre[2]).max() <= 0.1
+        assert P[:, 2].min() > 0.0  # above the table
+        swept += np.ptp(np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0])))
+    assert swept >= 2 * np.pi - 1e-3
