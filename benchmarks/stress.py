@@ -2274,6 +2274,8 @@ def _worker(conn: mpc.Connection, seed: int, kinds: list[str], budget: float, sh
     while True:
         index = conn.recv()
         if index is None:
+            stacks.close()
+            _stack_file(os.getpid()).unlink(missing_ok=True)
             return
         work = Path(tempfile.mkdtemp(prefix=f"stress-{seed}-{index}-"))
         try:
