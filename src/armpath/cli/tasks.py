@@ -401,7 +401,9 @@ def _plan_to_point(
         goals, _ = goal_states(
             arm, scene.world, start_ticks, xyz, tolerance, orientation=orientation
         )
-        plan = plan_motion(arm, scene.world, start_ticks, goals, options, on_progress=say)
+        plan = plan_motion(
+            arm, scene.world, start_ticks, goals, options, on_progress=say, turn_copies=True
+        )
     doc = plan_result_dict(plan, arm, scene, options.objective.value, xyz, tolerance)
     _emit_plan(plan, doc, arm, scene, folder, json_out, stem, xyz, animate)
 

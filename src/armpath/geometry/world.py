@@ -213,6 +213,25 @@ class CollisionWorld:
                 out.append(Part(f"{link.name} tip", link.name, 0.0, True))
         return tuple(out)
 
+    def touch_blocker(self, arm: SerialArm) -> str | None:
+        """Why ``arm``'s tool cannot touch a surface at all, or None when it can: its body
+        (the last link's capsule) must keep the margin, so unless the bare tip is longer than
+        the body's radius plus the margin, the body meets the surface before the tip does."""
+        parts = self.parts(arm)
+        if not parts:
+            return None
+        body = [p for p in parts if not p.is_tip][-1]
+        need = body.radius + self.margin
+        if self.tip_exempt > need:
+            return None
+        unit = arm.length_unit
+        return (
+            f"the tool cannot touch a surface: its body ({body.name}, radius {body.radius:g} "
+            f"{unit}) keeps the {self.margin:g} {unit} margin and only its last "
+            f"{self.tip_exempt:g} {unit} are bare (the scene's clearance.tool_tip_exempt_mm); "
+            f"make that longer than {need:g} {unit} (radius plus margin) or the tool thinner"
+        )
+
     def self_pairs(self, arm: SerialArm) -> tuple[tuple[int, int], ...]:
         """Indices into ``arm.links`` of link pairs checked for self-collision.
 

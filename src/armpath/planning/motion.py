@@ -334,8 +334,12 @@ def plan_motion(
     goal_ticks: ArrayLike,
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
+    turn_copies: bool = False,
 ) -> MotionPlan:
     """Plan a clear command sequence from ``start_ticks`` to one of ``goal_ticks`` ``(G, n)``.
+
+    ``turn_copies``: the goals stand for a tool target rather than exact joint values, so their
+    whole-turn copies (:func:`with_turn_copies`) are goals too.
 
     Raises :class:`PlanningError` when neither a direct motion nor the search finds a motion
     that keeps the clearance rule (the message says what was tried).
@@ -359,6 +363,8 @@ def plan_motion(
     check_state_clear(arm, world, grid.to_joint(start))
     if goals.shape[0] == 1:
         check_state_clear(arm, world, grid.to_joint(goals[0]), what="goal state")
+    if turn_copies:
+        goals = with_turn_copies(arm, goals, start)
     weights = None if opts.energy_weights is None else np.asarray(opts.energy_weights)
     say = on_progress or (lambda _msg: None)
 
@@ -538,6 +544,44 @@ def plan_motion(
     if found:
         return min(found, key=lambda plan: score(plan.sequence))
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
+
+
+#: Most goal states one motion search takes: the given ones and their whole-turn copies.
+MAX_SEARCH_GOALS = 64
+
+
+def with_turn_copies(arm: SerialArm, goals: IntArray, start: IntArray) -> IntArray:
+    """``goals`` followed by their whole-turn copies: each goal with one revolute joint, whose
+    (finite) limits span more than a turn, a whole turn up or down (inside the limits, on the
+    lattice).
+    A copy has the same links but is reached the other way round: an elbow at 222.8 deg is
+    also at -137.2 deg, and only one of them may be reachable without folding the arm through
+    itself. Copies nearest ``start`` in commands first, up to :data:`MAX_SEARCH_GOALS` goals."""
+    grid = arm.lattice
+    turn = 2.0 * np.pi / grid.tick
+    wide = np.isfinite(arm.lower) & np.isfinite(arm.upper) & (arm.upper - arm.lower > 2 * np.pi)
+    exact = (~grid.prismatic) & wide & (np.abs(turn - np.round(turn)) < 1e-6)
+    if not np.any(exact) or goals.shape[0] >= MAX_SEARCH_GOALS:
+        return goals
+    turn_ticks = np.round(np.where(exact, turn, 0.0)).astype(np.int64)
+    seen = {g.tobytes() for g in goals}
+    copies: list[IntArray] = []
+    for g in goals:
+        for i in np.flatnonzero(exact):
+            for sign in (1, -1):
+                c = g.copy()
+                c[i] += sign * turn_ticks[i]
+                q_i = float(grid.to_joint(c)[i])
+                if q_i < arm.lower[i] - 1e-12 or q_i > arm.upper[i] + 1e-12:
+                    continue
+                if c.tobytes() not in seen:
+                    seen.add(c.tobytes())
+                    copies.append(c)
+    if not copies:
+        return goals
+    extra = np.array(copies)
+    extra = extra[np.argsort(grid.commands_needed_many(extra - start), kind="stable")]
+    return np.vstack([goals, extra[: MAX_SEARCH_GOALS - goals.shape[0]]])
 
 
 #: The farthest a goal is backed off its surface for the search (mm).

@@ -674,7 +674,9 @@ def plan_reach(
         goals, _ = _goal_states(
             p, fam, opts.tolerance_mm, GOAL_COUNT, GOAL_BODY_BUFFER_MM, GOAL_SPREAD_DEG
         )
-        plan = plan_motion(arm, world, p.start_ticks, goals, MotionOptions(seed=seed))
+        plan = plan_motion(
+            arm, world, p.start_ticks, goals, MotionOptions(seed=seed), turn_copies=True
+        )
         rejected = (*failures, "planned around the obstacles instead")
         return result(plan.sequence, plan.clearance, rejected, plan.method)
     raise PlanningError(

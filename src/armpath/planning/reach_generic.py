@@ -79,6 +79,13 @@ def validated_start(
                 f"{depth:.3f} {arm.length_unit} inside {obstacle.name}: the tool may touch a "
                 "surface but not enter it"
             )
+        if abs(depth) <= SURFACE_TOLERANCE:
+            blocker = world.touch_blocker(arm)
+            if blocker is not None:
+                raise InvalidInputError(
+                    f"target ({', '.join(f'{v:g}' for v in target.position)}) "
+                    f"{arm.length_unit} lies on {obstacle.name}, but {blocker}"
+                )
     check_state_clear(arm, world, grid.to_joint(start))
     return start
 
@@ -503,7 +510,7 @@ def reach_any_arm(
             f"{bound.commands + extra_commands} commands ({'; '.join(failures)})"
         )
     goals = generic_goal_states(arm, world, start, target, tolerance, samples=samples, rng=rng)
-    plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed))
+    plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed), turn_copies=True)
     return GenericReach(
         plan.sequence,
         plan.clearance,

@@ -218,7 +218,7 @@ def plan_tour(
         try:
             for t in o:
                 try:
-                    leg = plan_motion(arm, world, state, goals[t], opts)
+                    leg = plan_motion(arm, world, state, goals[t], opts, turn_copies=True)
                 except PlanningError:
                     # the goal states nearest the start may lie on other branches than where
                     # the arm is now: take the target's goal states nearest here and try again
@@ -228,7 +228,7 @@ def plan_tour(
                         arm, world, state, pts[t], tolerance_mm, goals_per_target,
                         orientation=rule,
                     )  # fmt: skip
-                    leg = plan_motion(arm, world, state, near, opts)
+                    leg = plan_motion(arm, world, state, near, opts, turn_copies=True)
                 legs.append(leg)
                 state = leg.sequence.final_ticks
             if return_to_start:

@@ -30,6 +30,7 @@ from armpath.viz.figures import (
     draw_table,
     label_axes_3d,
     set_equal_axes,
+    tip_label,
 )
 
 FloatArray = NDArray[np.float64]
@@ -188,7 +189,7 @@ def animation_frames(
         axis.set_major_locator(MaxNLocator(4))  # fewer labels: each is redrawn every frame
     ax.view_init(elev=22, azim=-60)
     (arm_line,) = ax.plot([], [], [], "-o", color="tab:blue", lw=2.5, ms=5, label="arm")
-    (trail,) = ax.plot([], [], [], color="tab:red", lw=1.8, label="fingertip path")
+    (trail,) = ax.plot([], [], [], color="tab:red", lw=1.8, label=f"{tip_label(anim.arm)} path")
 
     # layout, measured from the top: title, legend, 3-D view, caption
     title = fig.suptitle(anim.title, fontsize=TITLE_PT, y=0.985, va="top")

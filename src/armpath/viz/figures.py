@@ -86,6 +86,12 @@ def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
     return np.asarray(corners)
 
 
+def tip_label(arm: SerialArm) -> str:
+    """What the figures call the point the arm works with: the seed arm's fingertip (SPEC),
+    any other arm's tool point."""
+    return "fingertip" if arm.name == "seed" else "tool point"
+
+
 def draw_table(ax: Axes3D, scene: Scene) -> None:
     """The table (plane z = 0) across the current x and y limits, if the scene has one; call
     after framing the axes."""
@@ -164,7 +170,7 @@ def plot_motion_3d(
         ax.plot(*states[k].T, color="0.6", alpha=0.35, linewidth=1)
     ax.plot(*states[0].T, "-o", color="0.35", linewidth=2.5, markersize=4, label="start")
     ax.plot(*states[-1].T, "-o", color="tab:blue", linewidth=2.5, markersize=4, label="end")
-    ax.plot(*motion[:, -1].T, color="tab:red", linewidth=1.5, label="fingertip path")
+    ax.plot(*motion[:, -1].T, color="tab:red", linewidth=1.5, label=f"{tip_label(arm)} path")
     if target is not None:
         t = np.asarray(target, dtype=float).reshape(-1, 3)
         label = "target" if len(t) == 1 else "targets (numbered)"
@@ -481,7 +487,7 @@ def plot_trace_3d(
             color=_PASS_COLOURS[k % len(_PASS_COLOURS)],
             linewidth=3.0,
             alpha=0.9,
-            label=f"fingertip, pass {k + 1}: states {i}–{j}",
+            label=f"{tip_label(arm)}, pass {k + 1}: states {i}–{j}",
         )
     # the curve over the passes: a thin dark centre line in each coloured band
     _plot_depth_cued(

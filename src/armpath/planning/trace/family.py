@@ -122,6 +122,12 @@ class CurveFamily:
         for o in self.world.obstacles:
             if np.max(np.abs(o.signed_distance(pts))) <= 1e-6:
                 self.surface = o
+        if self.surface is not None:
+            blocker = self.world.touch_blocker(self.arm)
+            if blocker is not None:
+                raise InvalidInputError(
+                    f"curve {self.curve.name!r} lies on {self.surface.name}, but {blocker}"
+                )
         if self.rule is not None and self.rule.normal and self.surface is None:
             raise InvalidInputError(
                 f"the tool axis can follow the surface normal only on a curve that lies on an "

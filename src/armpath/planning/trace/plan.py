@@ -259,6 +259,7 @@ def plan_trace(
                 if resume < arc.end_mm - 0.5:
                     queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
                 break
+    not_traced += _gaps_between_passes(arcs, passes, not_traced)
     if not passes:
         raise PlanningError(
             f"no reachable part of curve {curve.name!r} could be traced: "
@@ -282,6 +283,54 @@ def plan_trace(
         opts.axis_rule,
         tuple(not_traced),
     )
+
+
+#: A stretch of a reachable arc between two passes longer than this (mm) is reported as not
+#: traced.
+GAP_REPORTED_MM = 0.5
+
+
+def _gaps_between_passes(
+    arcs: list[CurveArc],
+    passes: list[TracePass],
+    already: list[tuple[CurveArc, str]],
+) -> list[tuple[CurveArc, str]]:
+    """The stretches of the reachable ``arcs`` that no pass covers and that are not reported
+    yet (``already``): where a pass found no command continuing it within the tolerance and
+    the next pass began farther on."""
+    out: list[tuple[CurveArc, str]] = []
+    for arc in arcs:
+        spans = sorted(
+            (p.start_mm, p.end_mm)
+            for p in passes
+            if p.end_mm > arc.start_mm - 1e-9 and p.start_mm < arc.end_mm + 1e-9
+        )
+        spans += sorted(
+            (a.start_mm, a.end_mm)
+            for a, _ in already
+            if a.end_mm > arc.start_mm and a.start_mm < arc.end_mm
+        )
+        spans.sort()
+        reached = arc.start_mm
+        for a, b in spans:
+            if a - reached > GAP_REPORTED_MM:
+                out.append(
+                    (
+                        CurveArc(reached, a),
+                        "the tracer found no lattice command continuing the pass within the "
+                        "tolerance here; the next pass starts past it",
+                    )
+                )
+            reached = max(reached, b)
+        if arc.end_mm - reached > GAP_REPORTED_MM and spans:
+            out.append(
+                (
+                    CurveArc(reached, arc.end_mm),
+                    "the tracer found no lattice command continuing the last pass within "
+                    "the tolerance to the end of the reachable arc",
+                )
+            )
+    return out
 
 
 def _lift_off(
