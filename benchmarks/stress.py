@@ -2135,9 +2135,15 @@ def run_cli(case: Case, work: Path) -> dict[str, Any]:
         if case.kind in ("fk", "ik"):
             doc = _cli_kinematics_doc(case, doc)
         return check_result(case, doc, work)
-    if proc.returncode == 2 and case.expect_error and "Usage:" in proc.stderr:
-        # the option parser refused an invalid value (e.g. a --wall choice): a usage error
-        raise CliError(" ".join(proc.stderr.split())[:300])
+    if proc.returncode == 2 and case.expect_error:
+        # the option parser refused an invalid value (e.g. a --wall choice): a usage error,
+        # one 'error:' line like every other error
+        usage = [ln for ln in err_lines if not ln.startswith("armpath:")]
+        if len(usage) != 1 or not usage[0].startswith("error:"):
+            raise RejectedError(
+                f"exit 2 but stderr is not one 'error:' line: {proc.stderr[:400]!r}"
+            )
+        raise CliError(usage[0][len("error:") :].strip())
     if proc.returncode != 1:
         raise RejectedError(f"exit {proc.returncode}: {proc.stderr.strip()[:300]}")
     errors = [ln for ln in err_lines if ln.startswith("error:")]

@@ -194,6 +194,19 @@ def test_seed_arm_links_and_pairs_are_unchanged():
     assert [p.name for p in world.parts(arm)] == ["BC", "CD", "DE", "DE tip"]
 
 
+def test_overridden_link_radii_are_what_the_model_says():
+    """--link-radius on the seed arm: its parameters say the radius its links have (stress
+    suite: a result claimed link_radius_mm 0 for links of radius 3), and no single radius when
+    the links differ."""
+    arm = BUILTIN_MODELS["seed"]()
+    thick = arm.with_link_radii(3.0)
+    assert dict(thick.parameters)["link_radius_mm"] == 3.0
+    assert [lk.radius for lk in thick.links] == [3.0] * len(arm.links)
+    mixed = arm.with_link_radii([1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+    assert "link_radius_mm" not in dict(mixed.parameters)
+    assert dict(mixed.parameters)["BC_mm"] == 255.0
+
+
 # ------------------------------------------------------------------------------------------
 # The pairs
 # ------------------------------------------------------------------------------------------

@@ -167,7 +167,7 @@ def test_urdf_chain_matches_dh(tmp_path):
     path = tmp_path / "bot.urdf"
     path.write_text(_urdf_from_dh(a, alpha, d))
     arm = load_robot_file(path)
-    assert arm.n_joints == 6 and arm.name == "dhbot"
+    assert arm.n_joints == 6 and arm.name == "dhbot [l7]"  # the tip link is named
     assert np.isinf(arm.upper[5]) and arm.upper[0] == pytest.approx(3.0)
     for q in rng.uniform(-2.5, 2.5, (10, 6)):
         assert np.allclose(tool_pose(arm, q), dh_pose(a, alpha, d, q), atol=1e-9)

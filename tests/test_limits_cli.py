@@ -372,3 +372,15 @@ def test_trajectory_waypoints_separated_by_spaces(tmp_path):
         assert proc.returncode == 0, proc.stderr
         commands.append((out / "commands.csv").read_text())
     assert commands[0] == commands[1] and commands[0].count("\n") == 51
+
+
+@pytest.mark.parametrize("tolerance", ["0", "-1", "1e9", "nan"])
+def test_plan_tolerance_is_checked_before_any_work(tmp_path, tolerance):
+    """plan --tolerance outside the range reach accepts is refused with the range (stress
+    suite: it used to be taken as given)."""
+    _refused(
+        tmp_path,
+        ["plan", "--to-xyz", "300", "0", "200", "--tolerance", tolerance],
+        "--tolerance must be between",
+        "mm, got",
+    )

@@ -558,3 +558,21 @@ def test_load_mesh_rejects_bad_files(tmp_path):
         load_mesh(box, "m", scale=0.0)
     with pytest.raises(InvalidInputError, match="transform"):
         load_mesh(box, "m", transform=np.zeros((4, 4)))
+
+
+def test_mesh_distances_stop_at_the_time_limit():
+    """A long batch of segments against a mesh honours the time limit in force (stress suite:
+    a plan in a scene of meshes ran to twice its --time-limit)."""
+    import time
+
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
+
+    obs = OBSTACLES["ball"]
+    rng = np.random.default_rng(7)
+    a, b = _random_segments(rng, 600, 25.0, 8.0)
+    with time_limit(0.001), pytest.raises(TimeLimitError, match="distances to a mesh"):
+        time.sleep(0.01)
+        obs.segment_distance_bounds(a, b)
+    value, _ = obs.segment_distance_bounds(a, b)  # no limit: the whole batch
+    assert value.shape == (600,)

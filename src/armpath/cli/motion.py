@@ -285,7 +285,7 @@ def trajectory(
             "--waypoints",
             help="Joint waypoints in deg, one row each (CSV, or values separated by spaces); "
             "a first column 't' (s) gives their times, otherwise they are spaced by the "
-            "velocity/acceleration limits. At most {MAX_WAYPOINTS:,} rows of {MAX_JOINTS} joints.",
+            f"velocity/acceleration limits. At most {MAX_WAYPOINTS:,} rows of {MAX_JOINTS} joints.",
         ),
     ],
     kind: Annotated[

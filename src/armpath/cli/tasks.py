@@ -57,7 +57,14 @@ from armpath.planning.motion import (
     Objective,
     plan_motion,
 )
-from armpath.planning.reach import ReachOptions, ReachResult, goal_states, plan_reach
+from armpath.planning.reach import (
+    MAX_TOLERANCE_MM,
+    MIN_TOLERANCE_MM,
+    ReachOptions,
+    ReachResult,
+    goal_states,
+    plan_reach,
+)
 from armpath.planning.tour import TourResult, VisitOrder
 from armpath.planning.trace import AxisRule, TraceOptions, TraceResult
 from armpath.report import passes_text, summary_html, summary_markdown
@@ -499,6 +506,11 @@ def plan(
     with _cli_errors(time_limit):
         if (to is None) == (to_xyz is None):
             raise InvalidInputError("give exactly one goal: --to θ1 … θn or --to-xyz X Y Z")
+        if not (np.isfinite(tolerance) and MIN_TOLERANCE_MM <= tolerance <= MAX_TOLERANCE_MM):
+            raise InvalidInputError(
+                f"--tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm, "
+                f"got {tolerance}"
+            )
         _animate_needs_out(animate, out)
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         start_ticks = joint_state(arm, start, "--from")

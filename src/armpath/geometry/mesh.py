@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import check_time
 from armpath.errors import InvalidInputError
 
 try:
@@ -335,6 +336,8 @@ class MeshObstacle(Obstacle):
         identity = coal.Transform3s()
         out = np.empty(a.shape[0])
         for k in range(a.shape[0]):
+            if k % 256 == 255:
+                check_time("measuring distances to a mesh")
             capsule.halfLength = float(half[k])
             result = coal.DistanceResult()
             out[k] = coal.distance(

@@ -360,7 +360,14 @@ class SerialArm:
         if not all(np.isfinite(v) and v >= 0 for v in values):
             raise InvalidInputError(f"link radii must be finite and >= 0, got {values}")
         links = tuple(replace(lk, radius=v) for lk, v in zip(self.links, values, strict=True))
-        return replace(self, links=links)
+        # a model described by parameters (the seed arm's link_radius_mm) says the new radius
+        # when it is one for every link, and no longer claims one otherwise
+        parameters = tuple(
+            (k, values[0]) if k == "link_radius_mm" else (k, v)
+            for k, v in self.parameters
+            if k != "link_radius_mm" or len(set(values)) == 1
+        )
+        return replace(self, links=links, parameters=parameters)
 
     def with_home(self, home: ArrayLike) -> SerialArm:
         """The same arm with another home pose (rad / length unit), checked against the

@@ -477,8 +477,9 @@ def _lattice_candidates(
     for pair in FIXED_PAIRS:
         grid = _pair_grid(p, fam, pair, n)
         solved = [j for j in range(TIP_JOINTS) if j not in pair]
-        for k in range(0, grid.shape[0], 100_000):
-            chunk = grid[k : k + 100_000]
+        for k in range(0, grid.shape[0], 25_000):
+            check_time("searching the lattice near the target")
+            chunk = grid[k : k + 25_000]
             sol = solve_with_fixed_pair(
                 p.geometry, p.target, pair, chunk[:, 0] * TICK_RAD, chunk[:, 1] * TICK_RAD
             )
@@ -501,6 +502,7 @@ def _lattice_candidates(
     # polish: exhaustive +-1 tick neighbourhoods of the best states until nothing improves
     steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
     for _ in range(6):
+        check_time("polishing lattice states near the target")
         best_before = float(errs.min()) if errs.size else np.inf
         top = cands[np.argsort(errs)[:polish]]
         near = np.unique((top[:, None, :] + steps[None, :, :]).reshape(-1, TIP_JOINTS), axis=0)

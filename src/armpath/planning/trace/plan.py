@@ -225,6 +225,11 @@ def plan_trace(
             ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
             pass_states += ahead[1:]
             states.extend(pass_states[1:])
+            if len(pass_states) == 1:  # entered but no command along the curve: not a pass
+                resume = max(s_reached, piece.arc.start_mm) + 2.0
+                if resume < arc.end_mm - 0.5:
+                    queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
+                break
             dev, dev_bound, ps, pd = certified_deviation(
                 arm, curve, np.array(pass_states), piece.arc.start_mm
             )
