@@ -117,6 +117,13 @@ class SeedArm:
     #: landmark indices of the links: AB (fixed column, not checked), BC, CD, DE
     links: tuple[tuple[int, int], ...] = ((0, 1), (1, 2), (2, 3), (3, 4))
     checked: tuple[bool, ...] = (False, True, True, True)
+    link_names: tuple[str, ...] = ("AB", "BC", "CD", "DE")
+    #: landmark index of the fingertip
+    tip_index: int = 4
+
+    @property
+    def radii(self) -> tuple[float, ...]:
+        return (self.link_radius,) * len(self.links)
 
     @staticmethod
     def points(theta_deg: np.ndarray) -> np.ndarray:
@@ -131,9 +138,7 @@ class SeedArm:
 
     @property
     def tick_limits(self) -> tuple[np.ndarray, np.ndarray]:
-        lo = np.array([lo for lo, _ in self.limits_deg]) * TICKS_PER_DEG
-        hi = np.array([hi for _, hi in self.limits_deg]) * TICKS_PER_DEG
-        return np.ceil(lo - 1e-9), np.floor(hi + 1e-9)
+        return _tick_limits(self.limits_deg)
 
     @property
     def self_pairs(self) -> list[tuple[int, int]]:
@@ -163,6 +168,38 @@ class SeedArm:
         for lim in model.get("joint_limits_deg", [None] * 6):
             limits.append((-math.inf, math.inf) if lim is None else (float(lim[0]), float(lim[1])))
         return cls(tuple(limits), float(params.get("link_radius_mm", 0.0)))
+
+
+def _tick_limits(limits_deg: Sequence[tuple[float, float]]) -> tuple[np.ndarray, np.ndarray]:
+    lo = np.array([lo for lo, _ in limits_deg]) * TICKS_PER_DEG
+    hi = np.array([hi for _, hi in limits_deg]) * TICKS_PER_DEG
+    return np.ceil(lo - 1e-9), np.floor(hi + 1e-9)
+
+
+@dataclass(frozen=True)
+class CapsuleArm:
+    """Any arm on the 0.1 deg / 20 tick lattice, described by the caller: ``landmarks(deg)``
+    gives points ``(..., K, 3)`` (mm) from joint angles in degrees (the caller's own forward
+    kinematics), ``links`` are capsules between landmarks with their radii, ``self_pairs`` the
+    link pairs checked against each other, ``reach_per_joint`` (mm) bounds every landmark's
+    (and link point's) distance from each joint's axis, ``tip_index`` is the tool point."""
+
+    landmarks: Callable[[np.ndarray], np.ndarray]
+    links: tuple[tuple[int, int], ...]
+    radii: tuple[float, ...]
+    checked: tuple[bool, ...]
+    link_names: tuple[str, ...]
+    self_pairs: tuple[tuple[int, int], ...]
+    reach_per_joint: np.ndarray
+    limits_deg: tuple[tuple[float, float], ...]
+    tip_index: int
+
+    def points(self, theta_deg: np.ndarray) -> np.ndarray:
+        return self.landmarks(np.asarray(theta_deg, dtype=float))
+
+    @property
+    def tick_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        return _tick_limits(self.limits_deg)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -729,7 +766,7 @@ class _Pair:
     obstacle: Obstacle | None = None
     other: int | None = None  # the other link of a self pair
 
-    def values(self, arm: SeedArm, P: np.ndarray, step: float) -> np.ndarray:
+    def values(self, arm: SeedArm | CapsuleArm, P: np.ndarray, step: float) -> np.ndarray:
         """``clearance - required`` at samples every ``step`` mm along the part: ``(C, S)``."""
         i0, i1 = arm.links[self.link]
         a, b = P[:, i0], P[:, i1]
@@ -757,9 +794,8 @@ class _Pair:
         return d.reshape(len(P), n) - self.radii - self.required
 
 
-def _pairs(arm: SeedArm, scene: Scene) -> list[_Pair]:
-    names = ["AB", "BC", "CD", "DE"]
-    r = arm.link_radius
+def _pairs(arm: SeedArm | CapsuleArm, scene: Scene) -> list[_Pair]:
+    names, r = arm.link_names, arm.radii
     checked = [k for k in range(len(arm.links)) if arm.checked[k]]
     out = []
     for k in checked:
@@ -767,14 +803,18 @@ def _pairs(arm: SeedArm, scene: Scene) -> list[_Pair]:
         for o in scene.obstacles:
             if last and scene.tip_exempt > 0:
                 cut = scene.tip_exempt
-                out.append(_Pair(f"{names[k]} body - {o.name}", k, cut, False, scene.margin, r, o))
+                out.append(
+                    _Pair(f"{names[k]} body - {o.name}", k, cut, False, scene.margin, r[k], o)
+                )
                 # the tool tip is a bare segment: no radius, it may touch but not enter
                 out.append(_Pair(f"{names[k]} tip - {o.name}", k, cut, True, 0.0, 0.0, o))
             else:
-                out.append(_Pair(f"{names[k]} - {o.name}", k, 0.0, False, scene.margin, r, o))
+                out.append(_Pair(f"{names[k]} - {o.name}", k, 0.0, False, scene.margin, r[k], o))
     for i, j in arm.self_pairs:
         out.append(
-            _Pair(f"{names[i]} - {names[j]}", i, 0.0, False, scene.self_margin, 2 * r, None, j)
+            _Pair(
+                f"{names[i]} - {names[j]}", i, 0.0, False, scene.self_margin, r[i] + r[j], None, j
+            )
         )
     return out
 
@@ -801,7 +841,7 @@ class PairResult:
 
 
 def motion_clearance(
-    arm: SeedArm,
+    arm: SeedArm | CapsuleArm,
     scene: Scene,
     states_ticks: np.ndarray,
     time_step_mm: float = TIME_STEP_MM,
@@ -884,7 +924,7 @@ def _frac_of(owner: np.ndarray, k: int, n_sub: np.ndarray) -> float:
 
 
 def _refine(
-    arm: SeedArm,
+    arm: SeedArm | CapsuleArm,
     pair: _Pair,
     states_deg: np.ndarray,
     cmds: np.ndarray,
@@ -1002,7 +1042,9 @@ class Replay:
         return not self.problems
 
 
-def replay_states(doc: Mapping[str, Any], arm: SeedArm, problems: list[str]) -> np.ndarray:
+def replay_states(
+    doc: Mapping[str, Any], arm: SeedArm | CapsuleArm, problems: list[str]
+) -> np.ndarray:
     """Exact integer replay of ``initial_deg`` and ``commands``: states ``(N + 1, 6)``."""
     raw = np.asarray(doc.get("commands", []), dtype=object)
     flat = [v for row in doc.get("commands", []) for v in row]
@@ -1048,25 +1090,29 @@ def replay_result(
     time_step_mm: float = TIME_STEP_MM,
     link_step_mm: float = LINK_STEP_MM,
     tip_step_mm: float = TIP_STEP_MM,
-    arm: SeedArm | None = None,
+    arm: SeedArm | CapsuleArm | None = None,
 ) -> Replay:
     """Replay a result document (reach, plan, spotweld, trace) independently.
 
     ``scene``: the scene as the caller wrote it (default: the result's own description);
     ``truth``: what was asked for; ``arm``: the arm asked for (default: the SPEC's seed arm
-    with the result's link radius; the result's joint limits must be the SPEC's). Returns the
-    problems found (empty: accepted) and facts.
+    with the result's link radius; the result's joint limits must be the SPEC's; any other arm
+    is a :class:`CapsuleArm` with the caller's own kinematics). Returns the problems found
+    (empty: accepted) and facts.
     """
     truth = truth or Truth()
     rep = Replay()
     P = rep.problems
+    claimed: SeedArm | None = None
     try:
-        claimed = SeedArm.from_model(doc["model"])
+        if not isinstance(arm, CapsuleArm):
+            claimed = SeedArm.from_model(doc["model"])
         scene = scene or Scene.from_result(doc)
     except (KeyError, ValueError) as exc:
         P.append(f"cannot replay: {exc}")
         return rep
     if arm is None:
+        assert claimed is not None
         arm = SeedArm(link_radius=claimed.link_radius)
     states = replay_states(doc, arm, P)
     rep.states_ticks = states
@@ -1076,20 +1122,8 @@ def replay_result(
         P.append(f"starts at {(states[0] / 10).tolist()}, asked {list(truth.start_deg)}")
     if P:
         return rep  # the motion itself is not legal: nothing more to judge
-    # the result must describe the arm asked for (the motion is judged with that arm anyway)
-    radii = [
-        float(link["radius"])
-        for link in doc["model"].get("definition", {}).get("links", [])
-        if "radius" in link
-    ]
-    if not np.allclose(claimed.limits_deg, arm.limits_deg, rtol=0, atol=1e-9):
-        P.append(f"the result's joint limits {claimed.limits_deg} are not {arm.limits_deg}")
-    for what, r in [("model.parameters.link_radius_mm", claimed.link_radius)] + [
-        ("a link radius of model.definition", r) for r in radii
-    ]:
-        if not math.isclose(r, arm.link_radius, abs_tol=1e-9):
-            P.append(f"{what} is {r:g} mm, the arm asked for has {arm.link_radius:g} mm")
-            break
+    if claimed is not None and isinstance(arm, SeedArm):
+        _check_claimed_seed_arm(doc, claimed, arm, P)
     # clearance along the continuous motion
     rep.clearance = motion_clearance(arm, scene, states, time_step_mm, link_step_mm)
     eps = scene.allowance
@@ -1118,7 +1152,7 @@ def replay_result(
                 f"reported clearance lower bound {reported:.6g} mm exceeds a sampled clearance "
                 f"{sampled:.6g} mm"
             )
-    tips = SeedArm.points(states / TICKS_PER_DEG)[:, 4]
+    tips = arm.points(states / TICKS_PER_DEG)[:, arm.tip_index]
     tol = truth.tolerance if truth.tolerance is not None else doc.get("tolerance_mm")
     task = doc.get("task")
     if "tip" in doc and not np.allclose(doc["tip"], tips[-1], atol=1e-6):
@@ -1153,6 +1187,25 @@ def replay_result(
     if task == "trace":
         _check_trace(doc, truth, arm, states, tol, tip_step_mm, P, rep.facts)
     return rep
+
+
+def _check_claimed_seed_arm(
+    doc: Mapping[str, Any], claimed: SeedArm, arm: SeedArm, P: list[str]
+) -> None:
+    """The result must describe the arm asked for (the motion is judged with that arm anyway)."""
+    radii = [
+        float(link["radius"])
+        for link in doc["model"].get("definition", {}).get("links", [])
+        if "radius" in link
+    ]
+    if not np.allclose(claimed.limits_deg, arm.limits_deg, rtol=0, atol=1e-9):
+        P.append(f"the result's joint limits {claimed.limits_deg} are not {arm.limits_deg}")
+    for what, r in [("model.parameters.link_radius_mm", claimed.link_radius)] + [
+        ("a link radius of model.definition", r) for r in radii
+    ]:
+        if not math.isclose(r, arm.link_radius, abs_tol=1e-9):
+            P.append(f"{what} is {r:g} mm, the arm asked for has {arm.link_radius:g} mm")
+            break
 
 
 def _check_spotweld(
@@ -1209,7 +1262,7 @@ def _check_spotweld(
 def _check_trace(
     doc: Mapping[str, Any],
     truth: Truth,
-    arm: SeedArm,
+    arm: SeedArm | CapsuleArm,
     states: np.ndarray,
     tol: float | None,
     tip_step_mm: float,
@@ -1239,7 +1292,7 @@ def _check_trace(
         move = np.abs(np.radians(cmds[i:j])) @ R
         n_sub = np.maximum(1, np.ceil(move / tip_step_mm)).astype(int)
         q, owner = _instants(deg[i:j], cmds[i:j], n_sub)
-        E = SeedArm.points(q)[:, 4]
+        E = arm.points(q)[:, arm.tip_index]
         d = curve.distance(E)
         k = int(np.argmax(d))
         dev = float(d[k])
@@ -1249,7 +1302,10 @@ def _check_trace(
         step = 1.0 / n_sub[owner[k]]
         fr = np.linspace(max(0.0, f - step), min(1.0, f + step), 2 * REFINE_FACTOR + 1)
         dev = max(
-            dev, float(curve.distance(SeedArm.points(deg[c] + fr[:, None] * cmds[c])[:, 4]).max())
+            dev,
+            float(
+                curve.distance(arm.points(deg[c] + fr[:, None] * cmds[c])[:, arm.tip_index]).max()
+            ),
         )
         devs.append(dev)
         if dev > tol + allowance:
@@ -1369,7 +1425,7 @@ def sampled_curve(
 
 
 def config_slack(
-    arm: SeedArm, scene: Scene, theta_deg: np.ndarray, link_step_mm: float = 1.0
+    arm: SeedArm | CapsuleArm, scene: Scene, theta_deg: np.ndarray, link_step_mm: float = 1.0
 ) -> np.ndarray:
     """Smallest sampled ``clearance - required`` over every pair, per configuration ``(K,)``
     (links sampled every ``link_step_mm``; inf without pairs)."""

@@ -11,6 +11,8 @@ status 2. Each module registers its commands on the shared app: kinematics (fk, 
 from __future__ import annotations
 
 import importlib
+import inspect
+import re
 import sys
 from typing import Annotated, Any
 
@@ -34,14 +36,33 @@ def _root(
         raise typer.Exit(0)
 
 
+def _reflow(text: str) -> str:
+    """A docstring's paragraphs as single lines (typer keeps its line breaks, which then
+    wrap twice in a narrow terminal); a line starting a bullet (``*``, ``-``) stays a line."""
+    paragraphs = re.split(r"\n\s*\n", inspect.cleandoc(text))
+    out = []
+    for para in paragraphs:
+        lines: list[str] = []
+        for line in para.splitlines():
+            if lines and not line.lstrip().startswith(("* ", "- ")):
+                lines[-1] += " " + line.strip()
+            else:
+                lines.append(line.strip())
+        out.append("\n".join(lines))
+    return "\n\n".join(out)
+
+
 def _tidy_help(command: Any) -> Any:
-    """Help conventions for every command, in one place: an on/off flag (``--help`` included)
-    shows no value type (typer would print ``<bool>``); an option that takes several separate
-    numbers shows one ``NUM`` per number rather than a comma-joined type list, unless it names
-    them itself; an argument with a metavar (``X Y Z``) shows no type column."""
+    """Help conventions for every command, in one place: paragraphs reflowed; an on/off flag
+    (``--help`` included) shows no value type (typer would print ``<bool>``); an option that
+    takes several separate numbers shows one ``NUM`` per number rather than a comma-joined type
+    list, unless it names them itself; an argument with a metavar (``X Y Z``) shows no type
+    column."""
     commands = getattr(command, "commands", {})
     for sub in commands.values():
         _tidy_help(sub)
+    if command.help:
+        command.help = _reflow(command.help)
     for param in command.params:
         if param.param_type_name == "argument" and param.metavar:
             # the metavar (X Y Z) already names the values; no type column

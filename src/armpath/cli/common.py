@@ -21,6 +21,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.export import OutputFolder, csv_text
 from armpath.geometry import WallThickness
+from armpath.model.catalog import BUILTIN_MODELS
 from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.motion import Objective
@@ -259,12 +260,14 @@ def _fmt(v: Any, digits: int = 4) -> str:
     return "(" + ", ".join(f"{x:.{digits}f}" for x in np.asarray(v, dtype=float)) + ")"
 
 
+#: The built-in models as --help lists them.
+BUILTIN_NAMES = ", ".join(BUILTIN_MODELS)
+
 ModelOption = Annotated[
     str,
     typer.Option(
         "--model",
-        help="Built-in model (seed, welder003, painter004, puma560, ur5) or a robot file "
-        "(.json D-H table or .urdf).",
+        help=f"Built-in model ({BUILTIN_NAMES}) or a robot file (.json D-H table or .urdf).",
     ),
 ]
 

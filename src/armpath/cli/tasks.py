@@ -14,6 +14,7 @@ from rich.table import Table
 
 from armpath import __version__
 from armpath.cli.common import (
+    BUILTIN_NAMES,
     LOOSE,
     AnimateOption,
     JsonOption,
@@ -268,8 +269,8 @@ TaskModelOption = Annotated[
     str | None,
     typer.Option(
         "--model",
-        help="The arm: a built-in model (seed, welder003, painter004, puma560, ur5, iiwa14) or "
-        "a robot file (.json D-H, .urdf). Default: the scene's \\[arm], else the seed arm.",
+        help=f"The arm: a built-in model ({BUILTIN_NAMES}) or a robot file (.json D-H, .urdf). "
+        "Default: the scene's \\[arm], else the seed arm.",
         show_default=False,
     ),
 ]

@@ -1,0 +1,235 @@
+"""Issue 18: a UR5 in a welding cell (``examples/ur5_cell.toml``), every task replayed.
+
+The cell: a UR5 standing on a pedestal (base transform), a 120 mm torch (tool transform, radius
+3 mm, its last 10 mm bare), a table, a clamp and a hollow conical workpiece. Through the command
+line it plans to a point low beside the workpiece, traces the plane section of the workpiece's
+outer face, traces a circle in free space and visits four spot welds lifted onto the outer face.
+
+Everything is judged without armpath: the UR5's forward kinematics is the textbook product of
+Universal Robots' published D-H table with the base and tool read from the scene file here; the
+links are capsules around the D-H legs with the UR5's radii; the obstacles, the clearance along
+the continuous motion and the deviation from the curve are ``tests/independent_replay.py``'s;
+the seam is the plane-section curve in closed form and the welds are lifted onto the cone here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import independent_replay as ir
+
+ROOT = Path(__file__).resolve().parents[1]
+CELL = ROOT / "examples" / "ur5_cell.toml"
+SPEC = tomllib.loads(CELL.read_text(encoding="utf-8"))
+
+# Universal Robots' published D-H parameters of the UR5 (standard convention, mm and rad)
+UR5_A = np.array([0.0, -425.0, -392.25, 0.0, 0.0, 0.0])
+UR5_D = np.array([89.159, 0.0, 0.0, 109.15, 94.65, 82.3])
+UR5_ALPHA = np.array([math.pi / 2, 0.0, 0.0, math.pi / 2, -math.pi / 2, 0.0])
+
+# Landmarks: 0 the base, 1..6 the D-H frame origins O1..O6 (O6 the flange), 7 the tool point.
+# Links are capsules around the D-H legs: the base column (fixed, not checked), the upper arm
+# O1-O2, the forearm O2-O3, the wrist legs O3-O4 (d4), O4-O5 (d5), O5-O6 (d6), and the torch.
+LINKS = ((0, 1), (1, 2), (2, 3), (3, 4), (4, 5), (5, 6), (6, 7))
+NAMES = ("column", "upper arm", "forearm", "wrist 1", "wrist 2", "wrist 3", "torch")
+UR5_RADII = (75.0, 60.0, 50.0, 50.0, 45.0, 45.0)
+# Links at least two apart, except two whose distance no motion can change enough to matter:
+# wrist 1 and wrist 3 hang on wrist 2, 94.65 mm long, less than their radii plus the 1 mm self
+# margin (50 + 45 + 1); wrist 2 lies on joint 5's axis and the torch on joint 6's axis, at a
+# fixed offset from it, so their distance never changes.
+SELF_PAIRS = tuple(
+    (i, j) for i in range(7) for j in range(i + 2, 7) if (i, j) not in {(3, 5), (4, 6)}
+)
+
+
+def _placement(spec: dict) -> np.ndarray:
+    """A ``{position_mm, rotation_deg}`` placement of the scene file (rotations are zero here)."""
+    assert spec.get("rotation_deg", [0, 0, 0]) == [0, 0, 0]
+    T = np.eye(4)
+    T[:3, 3] = spec["position_mm"]
+    return T
+
+
+BASE = _placement(SPEC["arm"]["base"])
+TOOL = _placement(SPEC["arm"]["tool"])
+TOOL_RADIUS = float(SPEC["arm"]["tool"]["radius_mm"])
+
+
+def _dh(theta: np.ndarray, i: int) -> np.ndarray:
+    """Rz(theta) Tz(d) Tx(a) Rx(alpha) for a batch of angles: ``(N, 4, 4)``."""
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = math.cos(UR5_ALPHA[i]), math.sin(UR5_ALPHA[i])
+    A = np.zeros((len(theta), 4, 4))
+    A[:, 0, 0], A[:, 0, 1], A[:, 0, 2], A[:, 0, 3] = ct, -st * ca, st * sa, UR5_A[i] * ct
+    A[:, 1, 0], A[:, 1, 1], A[:, 1, 2], A[:, 1, 3] = st, ct * ca, -ct * sa, UR5_A[i] * st
+    A[:, 2, 1], A[:, 2, 2], A[:, 2, 3] = sa, ca, UR5_D[i]
+    A[:, 3, 3] = 1.0
+    return A
+
+
+def ur5_landmarks(theta_deg: np.ndarray) -> np.ndarray:
+    """Base, O1..O6 and the tool point ``(..., 8, 3)`` (mm) for joint angles in degrees."""
+    q = np.radians(np.asarray(theta_deg, dtype=float))
+    shape = q.shape[:-1]
+    q = q.reshape(-1, 6)
+    T = np.broadcast_to(BASE, (len(q), 4, 4)).copy()
+    out = [T[:, :3, 3].copy()]
+    for i in range(6):
+        T = T @ _dh(q[:, i], i)
+        out.append(T[:, :3, 3].copy())
+    out.append((T @ TOOL)[:, :3, 3])
+    return np.stack(out, axis=1).reshape(*shape, 8, 3)
+
+
+def _ur5_arm() -> ir.CapsuleArm:
+    leg = np.abs(UR5_A) + np.abs(UR5_D)
+    tool_length = float(np.linalg.norm(TOOL[:3, 3]))
+    # every point beyond joint i lies within the legs after it (and the torch) of its axis
+    reach = np.array([leg[i:].sum() + tool_length for i in range(6)])
+    return ir.CapsuleArm(
+        landmarks=ur5_landmarks,
+        links=LINKS,
+        radii=(*UR5_RADII, TOOL_RADIUS),
+        checked=(False, True, True, True, True, True, True),
+        link_names=NAMES,
+        self_pairs=SELF_PAIRS,
+        reach_per_joint=reach,
+        limits_deg=((-360.0, 360.0),) * 6,
+        tip_index=7,
+    )
+
+
+ARM = _ur5_arm()
+SCENE = ir.Scene.from_spec(SPEC, CELL.parent)
+HOME_DEG = SPEC["arm"]["home_deg"]
+
+
+def _armpath(args: list[str], cwd: Path) -> dict:
+    proc = subprocess.run(
+        [sys.executable, "-m", "armpath", *args, "--json"],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+def _accepted(doc: dict, truth: ir.Truth) -> ir.Replay:
+    rep = ir.replay_result(doc, SCENE, truth, arm=ARM)
+    assert rep.ok, rep.problems
+    # links at least the margin clear of every obstacle (the torch's bare end may touch)
+    body = [c for c in rep.clearance if not c.is_self and " tip - " not in c.label]
+    assert min(c.sampled_min + c.required for c in body) >= SCENE.margin - 1e-6
+    return rep
+
+
+def test_the_independent_model_is_the_cells_arm():
+    """The replay's UR5 is armpath's (at random states, to 1e-9 mm), so the checks below are
+    about the motions, not about two readings of the arm."""
+    from armpath.kinematics import landmark_positions
+    from armpath.scenes.arm import scene_arm
+    from armpath.scenes.load import load_scene
+
+    arm = scene_arm(load_scene(CELL))
+    q = np.random.default_rng(18).uniform(-180, 180, (40, 6))
+    ours = ur5_landmarks(q)
+    theirs = landmark_positions(arm, np.radians(q))
+    names = [lm.name for lm in arm.landmarks]
+    for k, name in enumerate(["base", "J1", "J3", "J4'", "J4", "J5", "J6", "TCP"]):
+        np.testing.assert_allclose(ours[:, k], theirs[:, names.index(name)], atol=1e-9)
+
+
+def test_plan_to_a_point_low_beside_the_workpiece(tmp_path):
+    """From home to 360, 0, 160 mm (above the table, beside the workpiece's wall): the elbow
+    must go round by its whole-turn copy; the result replays within 0.05 mm and clear."""
+    target = [360.0, 0.0, 160.0]
+    doc = _armpath(
+        ["plan", "--scene", str(CELL), "--to-xyz", *map(str, target)],
+        tmp_path,
+    )
+    rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, target=target, tolerance=0.05))
+    assert rep.facts["error_mm"] <= 0.05
+    assert doc["n_commands"] >= doc["lower_bound_commands"]
+
+
+def test_seam_around_the_workpiece(tmp_path):
+    """The scene's seam (a tilted plane cutting the cone's outer face): every pass within
+    0.1 mm of the closed-form section, links >= 1 mm clear, and the passes with the arcs
+    reported as not traced cover the whole seam."""
+    doc = _armpath(["trace", "--scene", str(CELL)], tmp_path)
+    wp = next(o for o in SPEC["obstacles"] if o["name"] == "workpiece")
+    curve_spec = SPEC["tasks"]["trace"]["curve"]
+    seam = ir.frustum_section_curve(
+        wp["base_center"],
+        [0.0, 0.0, 1.0],
+        wp["height"],
+        wp["r_bottom"],
+        wp["r_top"],
+        curve_spec["plane_point"],
+        curve_spec["plane_normal"],
+    )
+    rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, curve=seam, tolerance=0.1))
+    assert rep.facts["max_deviation_mm"] <= 0.1
+    assert rep.facts["curve_hausdorff_mm"] <= 0.01
+    length = float(doc["curve"]["length_mm"])
+    traced = sum(abs(p["end_mm"] - p["start_mm"]) for p in doc["pass_details"])
+    skipped = sum(a["end_mm"] - a["start_mm"] for a in doc["not_traced"])
+    assert traced >= 0.8 * length  # most of the seam is welded
+    assert traced + skipped == pytest.approx(length, abs=1.0)
+
+
+def test_circle_in_free_space(tmp_path):
+    """A 40 mm circle above the table beside the workpiece, as a parametric curve: traced
+    whole, within 0.1 mm, clear."""
+    c, r = (330.0, -200.0, 150.0), 40.0
+    scene = tmp_path / "circle.toml"
+    text = CELL.read_text(encoding="utf-8").split("[tasks.reach]")[0]
+    scene.write_text(
+        text
+        + "[tasks.trace.curve]\n"
+        + 'type = "parametric"\nname = "circle"\n'
+        + f'x = "{c[0]} + {r} * cos(t)"\ny = "{c[1]} + {r} * sin(t)"\nz = "{c[2]}"\n'
+        + f"t = [0, {2 * math.pi!r}]\n",
+        encoding="utf-8",
+    )
+    doc = _armpath(["trace", "--scene", str(scene)], tmp_path)
+    phi = np.linspace(0.0, 2 * math.pi, 100_001)[:-1]
+    circle = ir.DenseCurve(
+        np.c_[c[0] + r * np.cos(phi), c[1] + r * np.sin(phi), np.full_like(phi, c[2])],
+        closed=True,
+        allowance=r * (1 - math.cos(math.pi / 100_000)),
+    )
+    rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, curve=circle, tolerance=0.1))
+    assert rep.facts["max_deviation_mm"] <= 0.1
+    assert doc["not_traced"] == []
+    traced = sum(abs(p["end_mm"] - p["start_mm"]) for p in doc["pass_details"])
+    assert traced == pytest.approx(2 * math.pi * r, abs=0.5)
+
+
+def test_spot_welds_on_the_outer_face(tmp_path):
+    """The four welds, given as xy and lifted onto the cone's outer face (here: the outer
+    radius falls linearly from r_bottom to r_top over the height), each visited within
+    0.05 mm, clear along the whole tour."""
+    doc = _armpath(["spotweld", "--scene", str(CELL)], tmp_path)
+    wp = next(o for o in SPEC["obstacles"] if o["name"] == "workpiece")
+    cx, cy, z0 = wp["base_center"]
+    targets = []
+    for x, y in SPEC["tasks"]["spotweld"]["points_xy_mm"]:
+        rho = math.hypot(x - cx, y - cy)
+        z = z0 + (wp["r_bottom"] - rho) * wp["height"] / (wp["r_bottom"] - wp["r_top"])
+        targets.append([x, y, z])
+    rep = _accepted(
+        doc, ir.Truth(start_deg=HOME_DEG, targets=np.array(targets), tolerance=0.05)
+    )
+    assert rep.facts["error_mm"] <= 0.05
+    assert len(doc["visits"]) == 4
