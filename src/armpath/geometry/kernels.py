@@ -606,40 +606,54 @@ def segment_segment_distance(
     """
     out = np.empty(a0.shape[0])
     for k in range(a0.shape[0]):
-        d1 = a1[k] - a0[k]
-        d2 = b1[k] - b0[k]
-        r = a0[k] - b0[k]
-        aa = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
-        ee = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
-        bb = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
-        cc = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2]
-        ff = d2[0] * r[0] + d2[1] * r[1] + d2[2] * r[2]
+        # scalars only: no temporary arrays in the loop
+        u0, u1, u2 = a1[k, 0] - a0[k, 0], a1[k, 1] - a0[k, 1], a1[k, 2] - a0[k, 2]
+        v0, v1, v2 = b1[k, 0] - b0[k, 0], b1[k, 1] - b0[k, 1], b1[k, 2] - b0[k, 2]
+        r0, r1, r2 = a0[k, 0] - b0[k, 0], a0[k, 1] - b0[k, 1], a0[k, 2] - b0[k, 2]
+        aa = u0 * u0 + u1 * u1 + u2 * u2
+        ee = v0 * v0 + v1 * v1 + v2 * v2
+        bb = u0 * v0 + u1 * v1 + u2 * v2
+        cc = u0 * r0 + u1 * r1 + u2 * r2
+        ff = v0 * r0 + v1 * r1 + v2 * r2
         best = np.inf
         den = aa * ee - bb * bb
         if den > 1e-12 * aa * ee and den > 0.0:
             s = (bb * ff - cc * ee) / den
             t = (aa * ff - bb * cc) / den
             if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
-                best = _pair_dist2(r, d1, d2, s, t)
+                best = _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s, t)
         # edges of the unit square: s = 0, s = 1 (optimise t); t = 0, t = 1 (optimise s)
         for s_fix in (0.0, 1.0):
             t = (ff + s_fix * bb) / ee if ee > 0.0 else 0.0
             t = min(max(t, 0.0), 1.0)
-            best = min(best, _pair_dist2(r, d1, d2, s_fix, t))
+            best = min(best, _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s_fix, t))
         for t_fix in (0.0, 1.0):
             s = (t_fix * bb - cc) / aa if aa > 0.0 else 0.0
             s = min(max(s, 0.0), 1.0)
-            best = min(best, _pair_dist2(r, d1, d2, s, t_fix))
+            best = min(best, _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s, t_fix))
         out[k] = math.sqrt(best)
     return out
 
 
-@njit(cache=True)
-def _pair_dist2(r: np.ndarray, d1: np.ndarray, d2: np.ndarray, s: float, t: float) -> float:
-    v0 = r[0] + s * d1[0] - t * d2[0]
-    v1 = r[1] + s * d1[1] - t * d2[1]
-    v2 = r[2] + s * d1[2] - t * d2[2]
-    return float(v0 * v0 + v1 * v1 + v2 * v2)
+@njit(cache=True, inline="always")
+def _pair_dist2(
+    r0: float,
+    r1: float,
+    r2: float,
+    u0: float,
+    u1: float,
+    u2: float,
+    v0: float,
+    v1: float,
+    v2: float,
+    s: float,
+    t: float,
+) -> float:
+    """``|r + s u - t v|^2``."""
+    w0 = r0 + s * u0 - t * v0
+    w1 = r1 + s * u1 - t * v1
+    w2 = r2 + s * u2 - t * v2
+    return w0 * w0 + w1 * w1 + w2 * w2
 
 
 @njit(cache=True)

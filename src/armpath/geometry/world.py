@@ -30,7 +30,7 @@ The seed arm has no zero-length link and its pairs are AB-CD, AB-DE and BC-DE.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -42,6 +42,7 @@ from armpath.kinematics import landmark_positions
 from armpath.model.serial_arm import JointKind, Link, SerialArm
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
 
 
 @dataclass(frozen=True)
@@ -155,6 +156,25 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class _ArmBinding:
+    """What a :class:`CollisionWorld` computes once per arm: its parts and pairs, what each
+    pair requires, and the landmark indices of the parts' and self pairs' segments."""
+
+    parts: tuple[Part, ...]
+    pairs: tuple[ClearancePair, ...]
+    required: FloatArray
+    part_radius: FloatArray
+    link_start: IntArray
+    link_end: IntArray
+    tip_split: bool
+    self_a0: IntArray
+    self_a1: IntArray
+    self_b0: IntArray
+    self_b1: IntArray
+    self_radii: FloatArray
+
+
 @dataclass(frozen=True)
 class CollisionWorld:
     """Obstacles plus the clearance rule.
@@ -176,6 +196,10 @@ class CollisionWorld:
     margin: float = 1.0
     tip_exempt: float = 5.0
     self_margin: float = 1.0
+    #: what the world computed once for each arm it met (:meth:`_bound`)
+    _bindings: dict[int, tuple[SerialArm, _ArmBinding]] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         for what, v in (
@@ -199,11 +223,52 @@ class CollisionWorld:
         degenerate = link_analysis(arm).degenerate
         return [lk for lk, z in zip(arm.links, degenerate, strict=True) if lk.checked and not z]
 
+    def _bound(self, arm: SerialArm) -> _ArmBinding:
+        """Parts, pairs, requirements and index arrays for ``arm``: computed on the first call
+        with that arm, then reused (the planners ask thousands of times)."""
+        entry = self._bindings.get(id(arm))
+        if entry is not None and entry[0] is arm:
+            return entry[1]
+        parts = self._parts(arm)
+        checked = self._checked_links(arm)
+        sp = self.self_pairs(arm)
+        pairs = [
+            ClearancePair(p.name, o.name, 0.0 if p.is_tip else self.margin, p.is_tip, False)
+            for p in parts
+            for o in self.obstacles
+        ]
+        pairs += [
+            ClearancePair(arm.links[i].name, arm.links[j].name, self.self_margin, False, True)
+            for i, j in sp
+        ]
+        links = arm.links
+        binding = _ArmBinding(
+            parts=parts,
+            pairs=tuple(pairs),
+            required=np.array([p.required for p in pairs], dtype=np.float64),
+            part_radius=np.array([p.radius for p in parts], dtype=np.float64),
+            link_start=np.array([lk.start for lk in checked], dtype=np.intp),
+            link_end=np.array([lk.end for lk in checked], dtype=np.intp),
+            tip_split=bool(checked) and self.tip_exempt > 0,
+            self_a0=np.array([links[i].start for i, _ in sp], dtype=np.intp),
+            self_a1=np.array([links[i].end for i, _ in sp], dtype=np.intp),
+            self_b0=np.array([links[j].start for _, j in sp], dtype=np.intp),
+            self_b1=np.array([links[j].end for _, j in sp], dtype=np.intp),
+            self_radii=np.array(
+                [links[i].radius + links[j].radius for i, j in sp], dtype=np.float64
+            ),
+        )
+        self._bindings[id(arm)] = (arm, binding)
+        return binding
+
     def parts(self, arm: SerialArm) -> tuple[Part, ...]:
         """The capsules checked against obstacles: every checked link of non-zero length, the
         last one split into body and tip. The tip is the bare segment (radius 0): the tool
         point itself may touch a surface; the body keeps its radius (so a tool of radius ``r``
         can meet a surface head-on only when ``r + margin <= tip_exempt``)."""
+        return self._bound(arm).parts
+
+    def _parts(self, arm: SerialArm) -> tuple[Part, ...]:
         checked = self._checked_links(arm)
         out: list[Part] = []
         for k, link in enumerate(checked):
@@ -262,40 +327,31 @@ class CollisionWorld:
 
     def pairs(self, arm: SerialArm) -> tuple[ClearancePair, ...]:
         """Every constrained clearance: each part against each obstacle, then link pairs."""
-        out = [
-            ClearancePair(p.name, o.name, 0.0 if p.is_tip else self.margin, p.is_tip, False)
-            for p in self.parts(arm)
-            for o in self.obstacles
-        ]
-        out += [
-            ClearancePair(arm.links[i].name, arm.links[j].name, self.self_margin, False, True)
-            for i, j in self.self_pairs(arm)
-        ]
-        return tuple(out)
+        return self._bound(arm).pairs
 
     def part_segments(self, arm: SerialArm, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """End points of every part, each ``(..., P, 3)``, in the order of :meth:`parts`."""
         return self._segments(arm, landmark_positions(arm, q))
 
     def _segments(self, arm: SerialArm, pts: FloatArray) -> tuple[FloatArray, FloatArray]:
-        checked = self._checked_links(arm)
-        starts, ends = [], []
-        for k, link in enumerate(checked):
-            a, b = pts[..., link.start, :], pts[..., link.end, :]
-            starts.append(a)
-            ends.append(b)
-            if k == len(checked) - 1 and self.tip_exempt > 0:
-                length = np.linalg.norm(b - a, axis=-1, keepdims=True)
-                frac = np.clip(self.tip_exempt / np.where(length > 0, length, 1.0), 0.0, 1.0)
-                cut = b - frac * (b - a)
-                ends[-1] = cut
-                starts.append(cut)
-                ends.append(b)
-        return np.stack(starts, axis=-2), np.stack(ends, axis=-2)
+        bound = self._bound(arm)
+        starts = pts[..., bound.link_start, :]
+        ends = pts[..., bound.link_end, :]
+        if not bound.tip_split:
+            return starts, ends
+        # the last link: its body up to the cut, then the bare tip from the cut
+        a, b = starts[..., -1, :], ends[..., -1, :]
+        length = np.linalg.norm(b - a, axis=-1, keepdims=True)
+        frac = np.clip(self.tip_exempt / np.where(length > 0, length, 1.0), 0.0, 1.0)
+        cut = (b - frac * (b - a))[..., None, :]
+        return (
+            np.concatenate([starts, cut], axis=-2),
+            np.concatenate([ends[..., :-1, :], cut, ends[..., -1:, :]], axis=-2),
+        )
 
     def required(self, arm: SerialArm) -> FloatArray:
         """Clearance each pair must keep, ``(K,)`` in the order of :meth:`pairs`."""
-        return np.array([p.required for p in self.pairs(arm)])
+        return self._bound(arm).required.copy()
 
     def pair_clearances(self, arm: SerialArm, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Clearance of every pair ``(..., K)`` and a proven lower bound of it.
@@ -306,7 +362,7 @@ class CollisionWorld:
         pts = landmark_positions(arm, q)
         batch = pts.shape[:-2]
         p0, p1 = self._segments(arm, pts)
-        radii = np.array([p.radius for p in self.parts(arm)])
+        radii = self._bound(arm).part_radius
         values, lowers = [], []
         for o in self.obstacles:
             v, lo = o.segment_distance_bounds(p0, p1)
@@ -335,16 +391,16 @@ class CollisionWorld:
         """
         pts = landmark_positions(arm, q)
         batch = pts.shape[:-2]
-        pairs = self.pairs(arm)
-        need = self.required(arm) + np.broadcast_to(
-            np.asarray(extra, dtype=np.float64), (len(pairs),)
+        bound = self._bound(arm)
+        need = bound.required + np.broadcast_to(
+            np.asarray(extra, dtype=np.float64), bound.required.shape
         )
         p0, p1 = self._segments(arm, pts)
         n_parts = p0.shape[-2]
         a = np.ascontiguousarray(p0.reshape(-1, 3))
         b = np.ascontiguousarray(p1.reshape(-1, 3))
         ok = np.ones(a.shape[0] // max(n_parts, 1), dtype=bool)
-        radii = np.tile(np.array([p.radius for p in self.parts(arm)]), ok.size)
+        radii = np.tile(bound.part_radius, ok.size)
         owner = np.repeat(np.arange(ok.size), n_parts)
         part_of = np.tile(np.arange(n_parts), ok.size)
         for k, o in enumerate(self.obstacles):
@@ -365,7 +421,7 @@ class CollisionWorld:
                 d, _ = o.segment_distance_bounds(a[todo], b[todo])
                 bad = d < col_need[todo]
                 ok[owner[todo[bad]]] = False
-        n_self = len(self.self_pairs(arm))
+        n_self = len(bound.self_radii)
         if n_self and np.any(ok):
             live = np.flatnonzero(ok)
             d = self._self_clearances(arm, pts.reshape(-1, *pts.shape[-2:])[live])
@@ -374,24 +430,21 @@ class CollisionWorld:
 
     def _self_clearances(self, arm: SerialArm, pts: FloatArray) -> FloatArray:
         """Distances between the self-collision link pairs less their radii, ``(..., S)``."""
-        sp = self.self_pairs(arm)
-        links = arm.links
+        bound = self._bound(arm)
         flat = pts.reshape(-1, *pts.shape[-2:])
 
-        def ends(which: str, first: bool) -> FloatArray:
-            lm = np.array([getattr(links[i if first else j], which) for i, j in sp])
-            return np.ascontiguousarray(flat[:, lm, :].reshape(-1, 3))
+        def ends(landmarks: IntArray) -> FloatArray:
+            return np.ascontiguousarray(flat[:, landmarks, :].reshape(-1, 3))
 
         d = segment_segment_distance(
-            ends("start", True), ends("end", True), ends("start", False), ends("end", False)
-        ).reshape(*pts.shape[:-2], len(sp))
-        rsum = np.array([links[i].radius + links[j].radius for i, j in sp])
-        return np.asarray(d - rsum)
+            ends(bound.self_a0), ends(bound.self_a1), ends(bound.self_b0), ends(bound.self_b1)
+        ).reshape(*pts.shape[:-2], len(bound.self_radii))
+        return np.asarray(d - bound.self_radii)
 
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""
         values, _ = self.pair_clearances(arm, q)
-        n_parts, n_obs = len(self.parts(arm)), len(self.obstacles)
+        n_parts, n_obs = len(self._bound(arm).parts), len(self.obstacles)
         return values[..., : n_parts * n_obs].reshape(*values.shape[:-1], n_parts, n_obs)
 
     def slack(self, arm: SerialArm, q: ArrayLike) -> FloatArray:

@@ -220,6 +220,12 @@ def search_clearance_extra(
     )
 
 
+#: Sample strides of :func:`edge_checker`'s coarse-to-fine passes along each segment.
+EDGE_STRIDES = (16, 1)
+#: Most configurations :func:`edge_checker` evaluates in one call of the world.
+EDGE_CHUNK = 50_000
+
+
 def edge_checker(
     arm: SerialArm, world: CollisionWorld, buffer_mm: float, spacing_mm: float
 ) -> EdgeChecker:
@@ -243,19 +249,30 @@ def edge_checker(
         owner = np.repeat(np.arange(a2.shape[0]), counts)
         start = np.cumsum(counts) - counts
         frac = (np.arange(owner.size) - start[owner]) / (counts[owner] - 1)
-        q = a2[owner] + frac[:, None] * (b2 - a2)[owner]
         ok = np.ones(a2.shape[0], dtype=bool)
         if not pairs:
             return ok
-        # evaluate in chunks, skipping segments already known to be blocked
-        chunk = 50_000
-        for s in range(0, q.shape[0], chunk):
-            sl = slice(s, s + chunk)
-            live = ok[owner[sl]]
-            if not np.any(live):
-                continue
-            bad = ~world.satisfied(arm, q[sl][live], extra)
-            ok[np.unique(owner[sl][live][bad])] = False
+        # coarse to fine: every EDGE_STRIDES[0]-th sample of each segment (and its end) first,
+        # then the samples between, only for segments not yet blocked. Most segments a search
+        # tries are blocked, and a blocked stretch is usually caught by the coarse samples;
+        # a segment that passes has had every sample checked, as before.
+        local = np.arange(owner.size) - start[owner]
+        last = local == counts[owner] - 1
+        level = np.full(owner.size, len(EDGE_STRIDES) - 1)
+        for k in range(len(EDGE_STRIDES) - 1, -1, -1):
+            level[(local % EDGE_STRIDES[k] == 0) | last] = k
+        for k in range(len(EDGE_STRIDES)):
+            rows = np.flatnonzero((level == k) & ok[owner])
+            for s in range(0, rows.size, EDGE_CHUNK):
+                sel = rows[s : s + EDGE_CHUNK]
+                sel = sel[ok[owner[sel]]]
+                if sel.size == 0:
+                    continue
+                q = a2[owner[sel]] + frac[sel, None] * (b2 - a2)[owner[sel]]
+                bad = ~world.satisfied(arm, q, extra)
+                ok[owner[sel[bad]]] = False
+            if not np.any(ok):
+                break
         return ok
 
     return check

@@ -14,6 +14,7 @@ so every pass ends.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
@@ -49,6 +50,22 @@ def _offsets(joints: int) -> IntArray:
     radius = _BOX.get(joints, 4 if joints < 5 else 1)
     box = np.arange(-radius, radius + 1)
     return np.stack(np.meshgrid(*[box] * joints, indexing="ij"), -1).reshape(-1, joints)
+
+
+@njit(cache=True)
+def _within_disc(
+    offsets: FloatArray, A: FloatArray, shift: FloatArray, radius2: float
+) -> NDArray[np.bool_]:
+    """Rows ``o`` of ``offsets`` with ``|o A + shift|^2 <= radius2`` (``A`` is ``(k, 2)``):
+    one pass, no temporaries (the box has 117,649 offsets for six joints)."""
+    out = np.empty(offsets.shape[0], dtype=np.bool_)
+    for i in range(offsets.shape[0]):
+        x, y = shift[0], shift[1]
+        for j in range(offsets.shape[1]):
+            x += offsets[i, j] * A[j, 0]
+            y += offsets[i, j] * A[j, 1]
+        out[i] = x * x + y * y <= radius2
+    return out
 
 
 class Tracer:
@@ -151,8 +168,7 @@ class Tracer:
         A_t = (np.stack([n, b]) @ J).T * tick[:, None]  # mm per tick
         exact = base[self.tip] / tick
         rounded = np.round(exact).astype(np.int64)
-        lin = self.offsets_f @ A_t + (rounded - exact) @ A_t
-        keep = np.einsum("ij,ij->i", lin, lin) <= (self.tol / 2) ** 2
+        keep = _within_disc(self.offsets_f, A_t, (rounded - exact) @ A_t, (self.tol / 2) ** 2)
         cand = rounded + self.offsets[keep]
         out = np.broadcast_to(np.asarray(fixed, dtype=np.int64), (cand.shape[0], self.tip.size))
         out = out.copy()
