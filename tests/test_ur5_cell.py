@@ -228,8 +228,6 @@ def test_spot_welds_on_the_outer_face(tmp_path):
         rho = math.hypot(x - cx, y - cy)
         z = z0 + (wp["r_bottom"] - rho) * wp["height"] / (wp["r_bottom"] - wp["r_top"])
         targets.append([x, y, z])
-    rep = _accepted(
-        doc, ir.Truth(start_deg=HOME_DEG, targets=np.array(targets), tolerance=0.05)
-    )
+    rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, targets=np.array(targets), tolerance=0.05))
     assert rep.facts["error_mm"] <= 0.05
     assert len(doc["visits"]) == 4
