@@ -207,3 +207,46 @@ def test_a_clamp_on_the_crack_forces_a_second_pass_with_a_planned_lift_off():
     covered = sorted((p.start_mm, p.end_mm) for p in r.passes)
     assert covered[0][0] <= 0.05 and covered[-1][1] >= piece.length - 0.05
     assert covered[1][0] <= covered[0][1]
+
+
+def test_a_polyline_folding_back_is_followed_into_its_apex():
+    """A polyline that turns back on itself at a 12 deg apex (stress suite, seed 0 case 810):
+    a path may stay within the tolerance of both sides while it turns 1 mm short of the apex,
+    leaving the apex farther than the tolerance from the tool path. Every point of the curve
+    must be within the tolerance of the traced motion (the independent fingertip, 50 instants
+    per command)."""
+    scene = scene_from_dict(TABLE_ONLY)
+    V = np.array(
+        [
+            [283.787732, -67.172544, 240.944748],
+            [291.064896, -58.9614, 242.958027],
+            [282.314621, -52.59312, 238.065932],
+            [299.657496, -67.832587, 251.783095],
+            [289.495222, -53.740055, 261.468408],
+        ]
+    )
+    a, b = V[1] - V[2], V[3] - V[2]
+    apex_deg = np.degrees(np.arccos(a @ b / np.linalg.norm(a) / np.linalg.norm(b)))
+    assert apex_deg < 15.0
+    res = plan_trace(
+        seed_arm(),
+        scene.world,
+        deg_to_ticks([0, -90, 0, 0, -90, 0]),
+        Polyline("poly", V),
+        TraceOptions(tolerance_mm=0.1),
+    )
+    assert not res.not_traced and res.covered_mm >= res.curve.length - 1e-3
+    states = res.sequence.states()
+    t = np.linspace(0.0, 1.0, 51)
+    tips = []
+    for p in res.passes:
+        cmds = np.diff(states, axis=0)[p.first : p.last]
+        q = states[p.first : p.last, None, :] + t[None, :, None] * cmds[:, None, :]
+        tips.append(independent.points(q.reshape(-1, 6) / 10.0)[:, -1, :])
+    tips = np.concatenate(tips)
+    # the curve, densely, and its distance to the sampled tool path
+    u = np.linspace(0.0, 1.0, 2001)[:, None]
+    curve = np.concatenate([V[i] + u * (V[i + 1] - V[i]) for i in range(len(V) - 1)])
+    gap = np.min(np.linalg.norm(curve[:, None, :] - tips[None, :, :], axis=-1), axis=1)
+    step = np.linalg.norm(np.diff(tips, axis=0), axis=1).max()
+    assert gap.max() <= 0.1 + step, (gap.max(), step)

@@ -189,24 +189,51 @@ class Tracer:
         if cand.shape[0] == 0:
             return cand, np.zeros(0)
         q_cand = self.grid.to_joint(cand)
-        d, s, sd = self.tip_checks(tool_position(self.arm, q_cand), sk)
+        E_end = tool_position(self.arm, q_cand)
+        d, s, sd = self.tip_checks(E_end, sk)
         ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > _MIN_ADVANCE_MM)
         ok &= self.fam.axis_ok(q_cand, _AXIS_MARGIN_RAD)
         ok &= sign * (s - goal) <= self.tol
-        cand, s = cand[ok], s[ok]
+        cand, s, E_end = cand[ok], s[ok], E_end[ok]
         if cand.shape[0] == 0:
             return cand, s
         t = np.linspace(0.0, 1.0, _PATH_SAMPLES + 1)[1:-1]
         Q = qk[None, None, :] + t[None, :, None] * (cand - qk)[:, None, :]
         Q_rad = self.grid.to_joint(Q)
-        d2, _, sd2 = self.tip_checks(tool_position(self.arm, Q_rad), sk)
+        E = tool_position(self.arm, Q_rad)
+        d2, s2, sd2 = self.tip_checks(E, sk)
         ok = np.all(self.in_band(d2, sd2, 0.05) & self.fam.axis_ok(Q_rad, _AXIS_MARGIN_RAD), axis=1)
+        ok &= self._follows(qk, sk, E, s2, E_end, s)
         cand, s, Q = cand[ok], s[ok], Q[ok]
         if cand.shape[0] == 0:
             return cand, s
         checked = np.concatenate([Q[:, 1::2], cand[:, None, :]], axis=1)
         clear = self.world.satisfied(self.arm, self.grid.to_joint(checked), self.extra).all(axis=1)
         return cand[clear], s[clear]
+
+    def _follows(
+        self,
+        qk: IntArray,
+        sk: float,
+        E: FloatArray,
+        s: FloatArray,
+        E_end: FloatArray,
+        s_end: FloatArray,
+    ) -> NDArray[np.bool_]:
+        """Per candidate, whether its tip follows the curve rather than jumping across it: the
+        arc length of the closest curve point may change between consecutive samples of the
+        motion (``E``, ``s`` ``(M, S)``, then the end) by no more than the tip moves plus twice
+        the tolerance. Near a sharp corner (a polyline folding back on itself) the closest point
+        jumps from one side to the other while the tip stays short of the apex; such a motion
+        would leave the apex farther than the tolerance from the tool path."""
+        E0 = np.broadcast_to(tool_position(self.arm, self.grid.to_joint(qk)), (E.shape[0], 1, 3))
+        path = np.concatenate([E0, E, E_end[:, None, :]], axis=1)
+        arc = np.concatenate([np.full((s.shape[0], 1), sk), s, s_end[:, None]], axis=1)
+        moved = np.linalg.norm(np.diff(path, axis=1), axis=-1)
+        return np.asarray(
+            np.all(np.abs(np.diff(arc, axis=1)) <= 1.02 * moved + 2.0 * self.tol, axis=1),
+            dtype=bool,
+        )
 
     def step(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """The command from ``qk`` that carries the tip farthest along the curve toward arc
