@@ -1,35 +1,78 @@
 import fcntl
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+#: Longest wait for ``armpath run`` (s).
+SEED_RUN_TIMEOUT_S = 1800.0
+
+# What the background process runs: ``armpath run`` in the current folder, then its exit status
+# into ``rc`` (written last, so its presence means the run is over).
+_RUN_AND_RECORD = """
+import subprocess, sys
+with open("stdout.txt.part", "w") as out, open("stderr.txt", "w") as err:
+    rc = subprocess.run([sys.executable, "-m", "armpath", "run"], stdout=out, stderr=err).returncode
+import os
+os.replace("stdout.txt.part", "stdout.txt")
+with open("rc.part", "w") as f:
+    f.write(str(rc))
+os.replace("rc.part", "rc")
+"""
+
+
+def _shared_folder(config: pytest.Config) -> Path:
+    """The session's base temporary folder, the same for every xdist worker."""
+    base = config._tmp_path_factory.getbasetemp()  # the tmp_path_factory fixture's object
+    return base.parent if base.name.startswith("popen-gw") else base
+
+
+def _start_seed_run(config: pytest.Config) -> Path:
+    """Start ``armpath run`` in the background, once per session (the first process to get
+    here starts it; the others find it started)."""
+    cwd = _shared_folder(config) / "seed_run"
+    with open(_shared_folder(config) / "seed_run.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not cwd.exists():
+            cwd.mkdir()
+            subprocess.Popen(
+                [sys.executable, "-c", _RUN_AND_RECORD],
+                cwd=cwd,
+                stdin=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+    return cwd
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(session, config, items):
+    """Files that read ``armpath run``'s output go last, and the run starts in the background
+    as soon as the tests are collected: with one file per worker (``--dist loadfile``) no worker
+    then sits idle waiting for it while other files could run."""
+    files = {item.path for item in items if "seed_run" in getattr(item, "fixturenames", ())}
+    if not files:
+        return
+    items.sort(key=lambda item: item.path in files)  # stable: the order within stays
+    _start_seed_run(config)
+
 
 @pytest.fixture(scope="session")
-def seed_run(tmp_path_factory):
+def seed_run(pytestconfig):
     """``armpath run`` once per test session, as a user runs it: (output folder, stdout).
 
-    With parallel workers (pytest-xdist) the first worker that needs it runs it in a folder all
-    workers share; the others wait on a file lock and read the same output.
+    It runs in the background from the start of the session in a folder all workers share;
+    a test that needs it waits for it to end.
     """
-    worker_tmp = tmp_path_factory.getbasetemp()
-    shared = worker_tmp.parent if worker_tmp.name.startswith("popen-gw") else worker_tmp
-    cwd = shared / "seed_run"
-    stdout_file = cwd / "stdout.txt"
-    with open(shared / "seed_run.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not stdout_file.exists():
-            cwd.mkdir(exist_ok=True)
-            proc = subprocess.run(
-                [sys.executable, "-m", "armpath", "run"],
-                capture_output=True,
-                text=True,
-                cwd=cwd,
-                timeout=900,
-            )
-            assert proc.returncode == 0, proc.stderr
-            stdout_file.write_text(proc.stdout)
-    return cwd / "armpath-out", stdout_file.read_text()
+    cwd = _start_seed_run(pytestconfig)
+    rc_file = cwd / "rc"
+    deadline = time.monotonic() + SEED_RUN_TIMEOUT_S
+    while not rc_file.exists():
+        assert time.monotonic() < deadline, "armpath run did not finish in time"
+        time.sleep(0.5)
+    rc = int(rc_file.read_text())
+    assert rc == 0, (cwd / "stderr.txt").read_text()
+    return cwd / "armpath-out", (cwd / "stdout.txt").read_text()

@@ -240,7 +240,7 @@ def test_self_pair_distances_agree_with_brute_force_sampling(arms, name):
     q = _within_limits(arm, 60, seed=4)
     values, lowers = SELF_ONLY.pair_clearances(arm, q)
     pts = _points_by_frames(arm, q)
-    t = np.linspace(0.0, 1.0, 301)[:, None]
+    t = np.linspace(0.0, 1.0, 151)[:, None]
     for k, (i, j) in enumerate(pairs):
         a, b = arm.links[i], arm.links[j]
         for c in range(len(q)):

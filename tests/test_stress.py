@@ -407,7 +407,7 @@ def test_an_overclaimed_lower_bound_is_rejected(stress):
 #: seconds (results and clear errors of every planning kind), two of them through the command
 #: line, and scene files (seed 17).
 KINEMATICS = (17, ["fk", "ik"], list(range(30)))
-PLANNING = (1, [7, 8, 9, 10, 12, 14, 20, 21, 23, 30, 35, 36, 37, 58, 71, 78])
+PLANNING = (1, [8, 9, 10, 12, 14, 20, 21, 23, 36, 37, 71, 78])
 PLANNING_CLI = (1, [31, 40])
 SCENES = (17, ["scene"], list(range(24)))
 
