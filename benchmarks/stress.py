@@ -703,6 +703,11 @@ def _choose_kind(rng: np.random.Generator, kinds: list[str]) -> str:
     return str(kinds[int(rng.choice(len(kinds), p=w / w.sum()))])
 
 
+def _kind_of(seed: int, index: int, kinds: list[str]) -> str:
+    """The kind of case ``index`` of run ``seed`` (the first draw of :func:`make_case`)."""
+    return _choose_kind(np.random.default_rng([seed, index]), kinds)
+
+
 def make_case(
     seed: int, index: int, kinds: list[str], base_budget: float, cli_share: float, work: Path
 ) -> Case:
@@ -2598,6 +2603,12 @@ def main(argv: list[str] | None = None) -> int:
         help="share of cases run through the command line (default 0.06)",
     )
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
+    ap.add_argument(
+        "--only",
+        choices=list(WEIGHTS),
+        help="run only the cases of the range that are of this kind (the same cases as in the "
+        "whole run: e.g. the traces of a 2,000-case run after a change to the tracer)",
+    )
     ap.add_argument("--case", type=int, action="append", help="rerun this case verbosely")
     ap.add_argument("--keep", action="store_true", help="with --case: keep the case's files")
     ap.add_argument("--out", type=Path, default=RESULTS / "stress.md", help="report file")
@@ -2631,6 +2642,8 @@ def main(argv: list[str] | None = None) -> int:
             print(mark, end="\n" if done % 50 == 0 else "", flush=True)
 
     indices = list(range(args.first, args.first + args.cases))
+    if args.only:
+        indices = [i for i in indices if _kind_of(args.seed, i, kinds) == args.only]
     run_pool(
         args.seed, indices, kinds, args.time_limit_per_case, args.cli_share, args.jobs, on_record
     )
