@@ -19,15 +19,18 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from armpath.budget import MAX_COORDINATE_MM
 from armpath.errors import InvalidInputError
 from armpath.geometry.expressions import Expression, parse_expression
 from armpath.geometry.primitives import SolidOfRevolution
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 FloatArray = NDArray[np.float64]
 
@@ -75,6 +78,8 @@ class Curve(ABC):
 
     @cached_property
     def _tree(self) -> cKDTree:
+        from scipy.spatial import cKDTree  # imported when first needed (start-up time)
+
         return cKDTree(self._table[1])
 
     @property

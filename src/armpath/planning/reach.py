@@ -27,7 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize
 
 from armpath.angles import nearest_equivalent, wrap_to_pi
 from armpath.budget import check_time
@@ -313,6 +312,8 @@ def _nearest_reachable(p: _Problem, rng: np.random.Generator) -> tuple[float, Fl
             J = position_jacobian(p.arm, p.full(q))[:, :TIP_JOINTS]
             return float(e @ e), 2.0 * e @ J
 
+        from scipy.optimize import minimize  # imported when first needed
+
         res = minimize(f, x0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True)))
         d = float(np.sqrt(max(res.fun, 0.0)))
         if d < best_d:
@@ -359,6 +360,8 @@ def _minimax(p: _Problem, x0: FloatArray, tol: float | None) -> tuple[float, Flo
                 "jac": lambda z: (-2.0 * tip_err(z) @ tip_jac(z))[None, :],
             }
         )
+    from scipy.optimize import minimize  # imported when first needed
+
     res = minimize(
         lambda z: z[-1],
         z0,

@@ -26,7 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import minimize
 
 from armpath.budget import check_time
 from armpath.commands import CommandSequence
@@ -175,6 +174,8 @@ def _refine_bound(
     b = np.r_[start, -start]
     cons.append({"type": "ineq", "fun": lambda z: A @ z + b, "jac": lambda z: A})
     z0 = np.r_[x0, float(np.max(np.abs(x0 - start) / step))]
+    from scipy.optimize import minimize  # imported when first needed
+
     res = minimize(
         lambda z: float(z[-1]),
         z0,

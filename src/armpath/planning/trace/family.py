@@ -25,7 +25,6 @@ from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import minimize
 
 from armpath.errors import InvalidInputError
 from armpath.geometry.curves import Curve
@@ -422,6 +421,8 @@ class SeedCurveFamily(CurveFamily):
                 if not np.all(np.isfinite(cand)):
                     return 1e6
                 return -float(self.score(cand[None], limits, obstacles)[0])
+
+            from scipy.optimize import minimize  # imported when first needed
 
             res = minimize(
                 objective,
