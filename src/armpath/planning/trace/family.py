@@ -528,28 +528,11 @@ def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = No
         to_z = _frames_along(np.asarray(approach)[None], 1)[0].T  # takes the axis onto z
         return np.asarray(_frames_along(dirs, turns) @ to_z)
     d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
-    # orthonormal_frame of every direction at once: e1 = d x h normalised (h = x, or y when d
-    # is close to x), e2 = d x e1
-    helper = np.where((np.abs(d[:, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
-    e1 = _cross(d, helper)
-    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
-    e2 = _cross(d, e1)
+    e1, e2 = orthonormal_frame(d)
     a = 2 * np.pi * np.arange(turns) / turns
     x = np.cos(a)[None, :, None] * e1[:, None, :] + np.sin(a)[None, :, None] * e2[:, None, :]
     dd = np.broadcast_to(d[:, None, :], x.shape)
-    return np.stack([x, _cross(dd, x), dd], axis=-1).reshape(-1, 3, 3)
-
-
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``a x b`` over the last axis (np.cross costs microseconds of overhead per call)."""
-    return np.stack(
-        [
-            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
-        ],
-        axis=-1,
-    )
+    return np.stack([x, np.cross(dd, x), dd], axis=-1).reshape(-1, 3, 3)
 
 
 def curve_family(
