@@ -11,7 +11,7 @@ SRC = ROOT / "src" / "armpath"
 
 # each module may import only from its own layer and the layers below (DESIGN.md)
 LAYERS = [
-    {"errors", "budget", "angles", "model", "kinematics"},
+    {"errors", "budget", "jit", "lazy", "angles", "model", "kinematics"},
     {"geometry"},
     {"ik"},
     {"commands"},

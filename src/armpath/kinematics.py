@@ -8,10 +8,11 @@ configuration is the batch of one.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from armpath import jit
 from armpath.errors import InvalidInputError
+from armpath.jit import njit
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -69,9 +70,23 @@ def landmark_positions(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """
     qa = _as_joint_array(arm, q)
     flat = np.ascontiguousarray(qa.reshape(-1, arm.n_joints))
+    if len(flat) <= NUMPY_LANDMARK_BATCH and not jit.numba_loaded():
+        # a few poses in a process that has run no kernel yet (``armpath fk``): numpy is
+        # quicker than loading numba
+        frames = forward_frames(arm, flat)
+        index = [lm.frame for lm in arm.landmarks]
+        offsets = np.array([lm.offset for lm in arm.landmarks], dtype=np.float64).reshape(-1, 3)
+        picked = frames[:, index]
+        pts = picked[..., :3, 3] + np.einsum("clij,lj->cli", picked[..., :3, :3], offsets)
+        return np.asarray(pts.reshape(*qa.shape[:-1], len(arm.landmarks), 3))
     chain = _compiled_chain(arm)
     out = _landmarks_kernel(flat, *chain)
     return np.asarray(out.reshape(*qa.shape[:-1], len(arm.landmarks), 3))
+
+
+#: Batches up to this many poses take the numpy path of :func:`landmark_positions` while numba
+#: is not loaded yet.
+NUMPY_LANDMARK_BATCH = 8
 
 
 def _compiled_chain(

@@ -36,7 +36,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from armpath.jit import njit
 
 #: Golden-section steps for convex solids: 0.618^72 < 1e-14 of the segment length.
 GOLDEN_ITERATIONS = 72

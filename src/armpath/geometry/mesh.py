@@ -25,11 +25,11 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_time
 from armpath.errors import InvalidInputError
+from armpath.jit import njit, prange
 
 try:
     import coal  # type: ignore[import-untyped]

@@ -32,7 +32,6 @@ reversed (twelve splits) until one is regular; the result says which one served.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
@@ -46,6 +45,7 @@ from armpath.ik.kernels import (
     trig_roots,
 )
 from armpath.ik.result import chain_length_scale
+from armpath.jit import njit, prange
 from armpath.kinematics import _affine_mul, z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 

@@ -7,10 +7,10 @@ Jacobian of a z-axis chain, and the Newton polish every candidate solution gets.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.jit import njit
 from armpath.kinematics import _affine_mul
 
 FloatArray = NDArray[np.float64]

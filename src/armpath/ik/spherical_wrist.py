@@ -23,7 +23,6 @@ returned, flagged near-singular.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
@@ -36,6 +35,7 @@ from armpath.ik.kernels import (
     trig_roots,
 )
 from armpath.ik.result import chain_length_scale
+from armpath.jit import njit, prange
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 

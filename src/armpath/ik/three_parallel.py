@@ -23,13 +23,13 @@ families: one member is returned, flagged near-singular.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.ik.compiled import CompiledSolver, KernelOutput, padded_outputs
 from armpath.ik.kernels import keep_solution, newton_polish, sort_solutions
 from armpath.ik.result import chain_length_scale
+from armpath.jit import njit, prange
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 

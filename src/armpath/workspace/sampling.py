@@ -17,12 +17,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
 from numpy.typing import NDArray
 
 from armpath.budget import MAX_CHUNK, MAX_GRID_CELLS, MAX_SAMPLES, check_size, check_time
 from armpath.errors import InvalidInputError
 from armpath.geometry.world import CollisionWorld
+from armpath.jit import njit, prange
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
+from armpath.jit import njit
 from armpath.planning.trace.family import CurveFamily
 from armpath.planning.trace.reachability import CurveArc
 
@@ -41,7 +41,7 @@ def _joint_change(q_deg: FloatArray, here_deg: FloatArray, wrap: NDArray[np.bool
     return np.asarray(np.abs(d).max(axis=-1), dtype=np.float64)
 
 
-@numba.njit(cache=True)
+@njit(cache=True)
 def _dp_layer(
     prev_q: FloatArray,
     prev_cost: FloatArray,

@@ -14,11 +14,11 @@ so every pass ends.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
+from armpath.jit import njit
 from armpath.kinematics import position_jacobian, tool_position
 from armpath.planning.trace.family import CurveFamily
 from armpath.planning.trace.reference import Piece

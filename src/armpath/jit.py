@@ -1,0 +1,104 @@
+"""Compiled kernels without paying for numba at start-up.
+
+armpath's hot loops are numba kernels, but importing numba costs about a third of a second,
+which every command (``--help`` and ``fk`` included) paid whether or not it ran a kernel.
+:func:`njit` here takes the same options as :func:`numba.njit` and defers numba until the first
+kernel is called: then numba is imported once, every kernel defined so far becomes a real numba
+dispatcher (compiled on first use, cached on disk as before), and the names bound to them in
+armpath's modules are rebound to the dispatchers, so a kernel compiling a call to another sees
+a numba function and calls from Python cost nothing extra. :data:`prange` is ``range`` until
+then and :func:`numba.prange` after, so a parallel loop compiles as one.
+
+Kernels defined after numba is loaded are plain numba dispatchers.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+from collections.abc import Callable
+from typing import Any, TypeVar, overload
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+#: ``range`` until numba is loaded, then ``numba.prange``; a kernel's module imports it as
+#: ``from armpath.jit import prange`` and is rebound before any of its kernels compiles.
+prange: Any = range
+
+_pending: list[_DeferredKernel] = []
+_numba: Any = None
+_loading = threading.Lock()
+
+
+class _DeferredKernel:
+    """A kernel whose numba dispatcher is made when a kernel is first called."""
+
+    def __init__(self, func: Callable[..., Any], options: dict[str, Any]) -> None:
+        self.py_func = func
+        self.options = options
+        self.dispatcher: Any = None
+        self.__name__ = func.__name__
+        self.__qualname__ = func.__qualname__
+        self.__module__ = func.__module__
+        self.__doc__ = func.__doc__
+        self.__wrapped__ = func
+
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            load_numba()
+        return self.dispatcher(*args)
+
+    def __repr__(self) -> str:
+        return f"<kernel {self.__module__}.{self.__qualname__} (numba not loaded yet)>"
+
+
+def load_numba() -> Any:
+    """Import numba (once), make every deferred kernel a numba dispatcher and rebind the names
+    armpath's modules hold for them (and their ``prange``). Returns the numba module."""
+    global _numba, prange
+    with _loading:
+        if _numba is not None:
+            return _numba
+        import numba
+
+        for kernel in _pending:
+            kernel.dispatcher = numba.njit(**kernel.options)(kernel.py_func)
+        prange = numba.prange
+        for name, module in list(sys.modules.items()):
+            if module is None or not (name == "armpath" or name.startswith("armpath.")):
+                continue
+            namespace = module.__dict__
+            for key, value in list(namespace.items()):
+                if isinstance(value, _DeferredKernel):
+                    namespace[key] = value.dispatcher
+                elif key == "prange" and value is range:
+                    namespace[key] = numba.prange
+        _pending.clear()
+        _numba = numba
+    return numba
+
+
+def numba_loaded() -> bool:
+    """Whether numba has been loaded (a kernel has run) in this process."""
+    return _numba is not None
+
+
+@overload
+def njit(func: F, /) -> F: ...
+@overload
+def njit(**options: Any) -> Callable[[F], F]: ...
+def njit(func: Any = None, /, **options: Any) -> Any:
+    """:func:`numba.njit` (same options, e.g. ``cache=True``, ``parallel=True``), deferred
+    until a kernel is first called (see the module's description)."""
+
+    def wrap(f: Callable[..., Any]) -> Any:
+        if _numba is not None:
+            return _numba.njit(**options)(f)
+        kernel = _DeferredKernel(f, dict(options))
+        _pending.append(kernel)
+        return kernel
+
+    return wrap(func) if func is not None else wrap
+
+
+__all__ = ["load_numba", "njit", "numba_loaded", "prange"]
