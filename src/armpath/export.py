@@ -12,7 +12,7 @@ import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,12 +23,14 @@ from armpath.errors import OutputError
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.model.serialize import arm_to_dict
-from armpath.planning.motion import MotionPlan, PlanMetrics
-from armpath.planning.motion_check import MotionClearance
-from armpath.planning.reach import ReachResult
-from armpath.planning.tour import TourResult
-from armpath.planning.trace import TraceResult
-from armpath.scenes import Scene
+
+if TYPE_CHECKING:  # the result types, for annotations only: writing a result needs no planner
+    from armpath.planning.motion import MotionPlan, PlanMetrics
+    from armpath.planning.motion_check import MotionClearance
+    from armpath.planning.reach import ReachResult
+    from armpath.planning.tour import TourResult
+    from armpath.planning.trace import TraceResult
+    from armpath.scenes import Scene
 
 FloatArray = NDArray[np.float64]
 

@@ -1,14 +1,42 @@
 """Planning on the command lattice: reach a point, plan around obstacles, tour points, trace a
 curve, check continuous motions."""
 
-from armpath.planning.motion_check import MotionClearance, motion_clearance
-from armpath.planning.reach import LowerBound, ReachOptions, ReachResult, plan_reach
-from armpath.planning.trace import (
-    CurveReachability,
-    TraceOptions,
-    TraceResult,
-    curve_reachability,
-    plan_trace,
+from typing import TYPE_CHECKING
+
+from armpath.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from armpath.planning.motion_check import MotionClearance, motion_clearance
+    from armpath.planning.reach import LowerBound, ReachOptions, ReachResult, plan_reach
+    from armpath.planning.trace import (
+        CurveReachability,
+        TraceOptions,
+        TraceResult,
+        curve_reachability,
+        plan_trace,
+    )
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "motion_check": (
+            "MotionClearance",
+            "motion_clearance",
+        ),
+        "reach": (
+            "LowerBound",
+            "ReachOptions",
+            "ReachResult",
+            "plan_reach",
+        ),
+        "trace": (
+            "CurveReachability",
+            "TraceOptions",
+            "TraceResult",
+            "curve_reachability",
+            "plan_trace",
+        ),
+    },
 )
 
 __all__ = [

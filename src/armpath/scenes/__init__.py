@@ -7,8 +7,26 @@ problem is reported as a :class:`~armpath.errors.SceneError` naming the field; t
 built by :mod:`armpath.scenes.build`, the arm by :mod:`armpath.scenes.arm`.
 """
 
-from armpath.scenes.load import load_scene, scene_from_dict, seed_scene
-from armpath.scenes.scene import Scene
-from armpath.scenes.schema import SceneFile
+from typing import TYPE_CHECKING
+
+from armpath.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from armpath.scenes.load import load_scene, scene_from_dict, seed_scene
+    from armpath.scenes.scene import Scene
+    from armpath.scenes.schema import SceneFile
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "load": (
+            "load_scene",
+            "scene_from_dict",
+            "seed_scene",
+        ),
+        "scene": ("Scene",),
+        "schema": ("SceneFile",),
+    },
+)
 
 __all__ = ["Scene", "SceneFile", "load_scene", "scene_from_dict", "seed_scene"]

@@ -1,0 +1,95 @@
+"""Deferred numba kernels (armpath.jit): commands that run no kernel never import numba, and
+kernels compiled after the deferral give the same numbers as the plain Python functions."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+
+from armpath.geometry import kernels
+from armpath.model.catalog import resolve_model
+
+
+def _modules_after(code: str) -> set[str]:
+    proc = subprocess.run(
+        [sys.executable, "-c", f"{code}\nimport sys\nprint(' '.join(sorted(sys.modules)))"],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return set(proc.stdout.split())
+
+
+def test_the_cli_and_forward_kinematics_do_not_load_numba_or_scipy() -> None:
+    loaded = _modules_after(
+        "import armpath.cli\n"
+        "from armpath.kinematics import landmark_positions, tool_pose\n"
+        "from armpath.model.catalog import resolve_model\n"
+        "arm = resolve_model('puma560', None)\n"
+        "landmark_positions(arm, [0.1] * 6); tool_pose(arm, [0.1] * 6)"
+    )
+    assert "armpath.cli" in loaded
+    assert not any(m == "numba" or m.startswith("numba.") for m in loaded)
+    assert not any(m == "scipy" or m.startswith("scipy.") for m in loaded)
+
+
+def test_running_a_kernel_loads_numba_and_rebinds_every_kernel() -> None:
+    loaded = _modules_after(
+        "import numpy as np\n"
+        "from armpath.geometry import kernels\n"
+        "import armpath.ik.general6r as g\n"
+        "kernels.segments_to_point(np.zeros((1, 3)), np.ones((1, 3)), np.zeros((1, 3)))\n"
+        "import numba\n"
+        "assert isinstance(g._solve_parallel, numba.core.registry.CPUDispatcher)\n"
+        "assert g.prange is numba.prange\n"
+        "assert g._solve_parallel.targetoptions['parallel']"
+    )
+    assert "numba" in loaded
+
+
+def test_a_kernel_agrees_with_its_python_function() -> None:
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(size=(50, 3)) * 100, rng.normal(size=(50, 3)) * 100
+    p = np.repeat(rng.normal(size=(1, 3)) * 100, 50, axis=0)
+    fast = kernels.segments_to_point(a, b, p)
+    plain = kernels.segments_to_point.py_func(a, b, p)
+    assert np.allclose(fast, plain, rtol=0, atol=1e-9)
+    # the brute force: the closest of 20,001 points along each segment
+    t = np.linspace(0.0, 1.0, 20001)[:, None, None]
+    brute = np.linalg.norm(a + t * (b - a) - p, axis=-1).min(axis=0)
+    assert np.all(fast <= brute + 1e-9) and np.allclose(fast, brute, atol=0.05)
+
+
+def test_the_numpy_landmarks_of_a_few_poses_equal_the_compiled_ones() -> None:
+    """A fresh process (numba not loaded) takes the numpy path for up to 8 poses; this one
+    runs the compiled kernel; both equal each frame's landmark offset carried by the frame."""
+    import json
+
+    from armpath import jit
+    from armpath.kinematics import forward_frames, landmark_positions
+
+    rng = np.random.default_rng(5)
+    for name in ("seed", "puma560", "ur5"):
+        arm = resolve_model(name, None)
+        q = rng.uniform(-2.0, 2.0, size=(3, arm.n_joints))
+        code = (
+            "import json, sys\n"
+            "from armpath.kinematics import landmark_positions\n"
+            "from armpath.model.catalog import resolve_model\n"
+            f"pts = landmark_positions(resolve_model({name!r}, None), {q.tolist()!r})\n"
+            "assert 'numba' not in sys.modules\n"
+            "print(json.dumps(pts.tolist()))"
+        )
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        numpy_path = np.array(json.loads(out.stdout))
+        jit.load_numba()
+        compiled = landmark_positions(arm, q)
+        frames = forward_frames(arm, q)
+        for k, lm in enumerate(arm.landmarks):
+            rot, origin = frames[:, lm.frame, :3, :3], frames[:, lm.frame, :3, 3]
+            expected = rot @ np.asarray(lm.offset, dtype=float) + origin
+            assert np.allclose(compiled[:, k], expected, rtol=0, atol=1e-9)
+            assert np.allclose(numpy_path[:, k], expected, rtol=0, atol=1e-9)
