@@ -138,6 +138,7 @@ def test_weld_marks_sit_at_the_commands_after_which_the_welds_are_reached(tmp_pa
 def test_spotweld_writes_its_welds_into_the_joint_figure(tmp_path, monkeypatch):
     """``armpath spotweld`` passes each visit's command and weld number to the joint figure."""
     import armpath.cli.tasks as tasks
+    import armpath.export as export
     import armpath.viz.figures as figures
 
     seen = {}
@@ -147,7 +148,7 @@ def test_spotweld_writes_its_welds_into_the_joint_figure(tmp_path, monkeypatch):
 
     monkeypatch.setattr(figures, "plot_joint_angles", fake_joint_angles)
     monkeypatch.setattr(figures, "plot_motion_3d", lambda *a, **k: None)
-    monkeypatch.setattr(tasks, "write_sequence_files", lambda *a, **k: None)
+    monkeypatch.setattr(export, "write_sequence_files", lambda *a, **k: None)
     visit = SimpleNamespace
     result = SimpleNamespace(
         sequence=_ramp(5, [1, 0, 0, 0, 0, 0]),

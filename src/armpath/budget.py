@@ -33,6 +33,8 @@ MAX_PERIODS = 5_000_000
 MAX_COMMANDS = 1_000_000
 #: Largest number of candidate designs of a design sweep.
 MAX_DESIGNS = 10_000
+#: Most searches (or failed attempts) of one motion plan (``plan_motion``).
+MAX_SEARCHES = 100
 #: Largest number of parallel jobs.
 MAX_JOBS = 256
 #: Largest coordinate or size a scene or curve may use (mm): 1000 km. Beyond it squared

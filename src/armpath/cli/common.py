@@ -8,7 +8,7 @@ import math
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import numpy as np
 import typer
@@ -17,16 +17,16 @@ from rich.console import Console
 from rich.markup import escape
 
 from armpath.budget import check_time_limit_value, time_limit
-from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError
-from armpath.export import OutputFolder, csv_text
 from armpath.geometry import WallThickness
 from armpath.model.catalog import BUILTIN_MODELS
-from armpath.model.seed_arm import SeedArmGeometry, seed_arm
-from armpath.model.serial_arm import JointKind, SerialArm
-from armpath.planning.motion import Objective
-from armpath.scenes import Scene, load_scene, scene_from_dict
-from armpath.scenes.arm import scene_arm
+from armpath.planning.choices import Objective
+
+if TYPE_CHECKING:
+    from armpath.commands import CommandSequence
+    from armpath.export import OutputFolder
+    from armpath.model.serial_arm import SerialArm
+    from armpath.scenes import Scene
 
 app = typer.Typer(
     add_completion=False,
@@ -193,11 +193,15 @@ def _numbers(values: list[str], count: int, what: str) -> list[float]:
 
 
 def _scene(scene_file: Path | None, wall: WallThickness | str | None) -> Scene:
+    from armpath.scenes import load_scene
+
     scene = load_scene(scene_file)
     return scene.with_wall_thickness(wall) if wall else scene
 
 
 def _arm(link_radius_mm: float) -> SerialArm:
+    from armpath.model.seed_arm import SeedArmGeometry, seed_arm
+
     if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
         raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
     return seed_arm(SeedArmGeometry(link_radius_mm=link_radius_mm))
@@ -229,6 +233,9 @@ def task_setup(
     """The arm and the scene of a task command, decided once: the scene file (or the seed
     scene for the seed arm, or no obstacles for another arm standing alone), its ``[arm]`` or
     ``--model`` (which replaces the scene's model), and ``--link-radius`` (mm, every link)."""
+    from armpath.scenes import load_scene, scene_from_dict
+    from armpath.scenes.arm import scene_arm
+
     if scene_file is not None:
         scene = load_scene(scene_file)
     elif model in (None, "seed"):
@@ -276,11 +283,15 @@ PeriodOption = Annotated[float, typer.Option(help="Controller period, s (one com
 
 
 def _joint_units(arm: SerialArm) -> list[str]:
+    from armpath.model.serial_arm import JointKind
+
     return ["mm" if j.kind is JointKind.PRISMATIC else "deg" for j in arm.joints]
 
 
 def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
     """Joint values for output: deg for revolute joints, mm for prismatic ones."""
+    from armpath.model.serial_arm import JointKind
+
     out = np.array(q, dtype=float, copy=True)
     for i, j in enumerate(arm.joints):
         if j.kind is JointKind.REVOLUTE:
@@ -289,6 +300,8 @@ def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
 
 
 def _from_display(arm: SerialArm, values: list[float]) -> np.ndarray:
+    from armpath.model.serial_arm import JointKind
+
     q = np.array(values, dtype=float)
     for i, j in enumerate(arm.joints):
         if j.kind is JointKind.REVOLUTE:
@@ -308,4 +321,6 @@ def _commands_csv(sequence: Any) -> str:
 
 def _csv_rows(header: list[str], rows: np.ndarray, fmt: str = "{:.6f}") -> str:
     """CSV text of a numeric table, every value written with ``fmt``."""
+    from armpath.export import csv_text
+
     return csv_text(header, [[fmt.format(v) for v in row] for row in rows])

@@ -28,11 +28,6 @@ from armpath.cli.common import (
     out_console,
 )
 from armpath.errors import ArmpathError, InvalidInputError
-from armpath.ik import solve_ik
-from armpath.ik.numerical import MAX_SEEDS as MAX_IK_SEEDS
-from armpath.ik.solve import METHODS as IK_METHODS
-from armpath.kinematics import landmark_positions, tool_pose
-from armpath.model.catalog import resolve_model
 
 
 @app.command(context_settings=LOOSE)
@@ -54,6 +49,9 @@ def fk(
     For the seed arm the points are A–E and the fingertip; for other models the joint frame
     origins and the tool frame (4x4 pose, row-major).
     """
+    from armpath.kinematics import landmark_positions, tool_pose
+    from armpath.model.catalog import resolve_model
+
     with _cli_errors():
         arm = resolve_model(model, tip_link)
         units = _joint_units(arm)
@@ -150,6 +148,11 @@ def ik(
     of solutions: the output says so and lists samples of it (--near picks the part of the
     family nearest a state). Exit status 1 if there is no solution.
     """
+    from armpath.ik import solve_ik
+    from armpath.ik.numerical import MAX_SEEDS as MAX_IK_SEEDS
+    from armpath.ik.solve import METHODS as IK_METHODS
+    from armpath.model.catalog import resolve_model
+
     with _cli_errors():
         if (pose is None) == (xyz is None):
             raise InvalidInputError("give exactly one target: --pose '16 numbers' or --xyz X Y Z")

@@ -16,7 +16,7 @@ import contextlib
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
 import typer
@@ -47,12 +47,10 @@ from armpath.cli.common import (
     out_console,
     progress,
 )
-from armpath.commands import MAX_INCREMENT_TICKS, TICK_DEG
 from armpath.errors import InvalidInputError
-from armpath.export import OutputFolder, output_folder
-from armpath.kinematics import tool_position
-from armpath.model.catalog import resolve_model
-from armpath.workspace.sampling import check_count
+
+if TYPE_CHECKING:
+    from armpath.export import OutputFolder
 
 #: Largest joint speed limit accepted (deg/s).
 MAX_VELOCITY_DEG_S = 1e6
@@ -216,6 +214,8 @@ def _check_periods(duration_s: float, period_s: float, options: str) -> None:
 def _check_net_motion(waypoints_deg: np.ndarray, option: str) -> None:
     """Refuse waypoints whose first and last rows are more commands apart than
     ``MAX_COMMANDS`` (20 ticks of 0.1 deg a command)."""
+    from armpath.commands import MAX_INCREMENT_TICKS, TICK_DEG
+
     net = float(np.max(np.abs(waypoints_deg[-1] - waypoints_deg[0]))) / TICK_DEG
     check_size(
         float(np.ceil((net - 1.0) / MAX_INCREMENT_TICKS)),
@@ -349,6 +349,7 @@ def trajectory(
     commands on the 0.1 deg / 2 deg lattice (error feedback: within half a tick at every
     period). At most 5,000,000 controller periods (duration / --period) and 1,000,000
     commands."""
+    from armpath.export import output_folder
     from armpath.trajectory import (
         ORDERS,
         QP_SOLVERS,
@@ -542,10 +543,14 @@ def rcm(
     minimum-snap joints); prints how far the tip leaves the point, on the smooth trajectory and
     under the quantized commands. At most 5,000,000 controller periods (--duration / --period)
     and 1,000,000 commands."""
+    from armpath.export import output_folder
+    from armpath.kinematics import tool_position
+    from armpath.model.catalog import resolve_model
     from armpath.trajectory import ORDERS, lattice_motion, quantize
     from armpath.trajectory.minsnap import segment_durations_ok
     from armpath.trajectory.quantize import MOTION_CHUNK
     from armpath.trajectory.rcm import fixed_point_rotation
+    from armpath.workspace.sampling import check_count
 
     with _cli_errors(time_limit):
         _check_choice(kind, ORDERS, "--kind")

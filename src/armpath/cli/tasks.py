@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import contextlib
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
 import typer
@@ -13,6 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from armpath import __version__
+from armpath.budget import MAX_SEARCHES
 from armpath.cli.common import (
     BUILTIN_NAMES,
     LOOSE,
@@ -37,40 +38,17 @@ from armpath.cli.common import (
     task_setup,
 )
 from armpath.errors import InvalidInputError
-from armpath.export import (
-    OutputFolder,
-    clearance_dict,
-    json_text,
-    output_folder,
-    plan_result_dict,
-    reach_result_dict,
-    tour_result_dict,
-    trace_result_dict,
-    write_reach_files,
-    write_sequence_files,
-)
-from armpath.ik.target import AxisCone, Orientation, PoseOrientation
-from armpath.model.serial_arm import SerialArm
-from armpath.planning.motion import (
-    MAX_SEARCHES,
-    MotionOptions,
-    MotionPlan,
-    Objective,
-    plan_motion,
-)
-from armpath.planning.reach import (
-    MAX_TOLERANCE_MM,
-    MIN_TOLERANCE_MM,
-    ReachOptions,
-    ReachResult,
-    goal_states,
-    plan_reach,
-)
-from armpath.planning.tour import TourResult, VisitOrder
-from armpath.planning.trace import AxisRule, TraceOptions, TraceResult
-from armpath.report import passes_text, summary_html, summary_markdown
-from armpath.scenes import Scene
-from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
+from armpath.planning.choices import Objective, VisitOrder
+
+if TYPE_CHECKING:
+    from armpath.export import OutputFolder
+    from armpath.ik.target import Orientation
+    from armpath.model.serial_arm import SerialArm
+    from armpath.planning.motion import MotionOptions, MotionPlan
+    from armpath.planning.reach import ReachResult
+    from armpath.planning.tour import TourResult
+    from armpath.planning.trace import AxisRule, TraceResult
+    from armpath.scenes import Scene
 
 
 def _mm(value: float | None, digits: int = 3) -> str:
@@ -112,6 +90,8 @@ def _scene_text(name: str, wall: str | None) -> str:
 
 
 def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
+    from armpath.export import clearance_dict
+
     seq = result.sequence
     grid = seq.grid
     lb = result.lower_bound
@@ -168,6 +148,7 @@ def _write_reach(
     scene: Scene,
     animate: bool = False,
 ) -> None:
+    from armpath.export import write_reach_files
     from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
     write_reach_files(folder, stem, result, arm, scene)
@@ -233,6 +214,8 @@ def _direction(text: str, option: str) -> np.ndarray:
 
 def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | None:
     """The tool-axis rule of ``--tool-axis normal|X Y Z --axis-tolerance DEG`` on a surface."""
+    from armpath.planning.trace import AxisRule
+
     if tool_axis is None:
         return None
     if not (np.isfinite(axis_tolerance_deg) and 0.0 < axis_tolerance_deg <= 180.0):
@@ -285,6 +268,8 @@ def orientation_rule(
 ) -> Orientation | None:
     """The orientation rule of ``--tool-axis``/``--axis-tolerance`` (for the tool's
     ``approach`` axis) or ``--pose``/``--angle-tolerance`` (at most one of them)."""
+    from armpath.ik.target import AxisCone, PoseOrientation
+
     if tool_axis is not None and pose_deg is not None:
         raise InvalidInputError("give --tool-axis or --pose, not both")
     for what, v in (
@@ -346,6 +331,9 @@ def reach(
     direct motion is blocked, the motion is planned around the obstacles instead (the
     summary's method says so).
     """
+    from armpath.export import json_text, output_folder, reach_result_dict
+    from armpath.planning.reach import ReachOptions, plan_reach
+
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         xyz = _numbers(target, 3, "target X Y Z (mm)")
@@ -404,6 +392,10 @@ def _plan_to_point(
     animate: bool = False,
     orientation: Orientation | None = None,
 ) -> None:
+    from armpath.export import plan_result_dict
+    from armpath.planning.motion import plan_motion
+    from armpath.planning.reach import goal_states
+
     with progress("planning ...") as say:
         say("goal states at the target")
         goals, _ = goal_states(
@@ -427,6 +419,8 @@ def _emit_plan(
     target: np.ndarray | None,
     animate: bool = False,
 ) -> None:
+    from armpath.export import json_text, write_sequence_files
+
     if folder is not None:
         from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
@@ -504,6 +498,10 @@ def plan(
     it is clear; otherwise RRT-Connect with shortcuts finds a path, which is put on the command
     lattice and certified along its whole continuous motion.
     """
+    from armpath.export import output_folder, plan_result_dict
+    from armpath.planning.motion import MotionOptions, plan_motion
+    from armpath.planning.reach import MAX_TOLERANCE_MM, MIN_TOLERANCE_MM
+
     with _cli_errors(time_limit):
         if (to is None) == (to_xyz is None):
             raise InvalidInputError("give exactly one goal: --to θ1 … θn or --to-xyz X Y Z")
@@ -594,6 +592,7 @@ def _write_tour(
     scene: Scene,
     animate: bool = False,
 ) -> None:
+    from armpath.export import write_sequence_files
     from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
     write_sequence_files(folder, "spotweld", doc, arm, result.sequence)
@@ -642,6 +641,10 @@ def spotweld(
 ) -> None:
     """Task 3: reach the scene's spot welds (the seed scene: on the workpiece's inner wall,
     through the open top), in the best order; any arm (--model or the scene's \\[arm])."""
+    from armpath.export import json_text, output_folder, tour_result_dict
+    from armpath.planning.motion import MotionOptions
+    from armpath.tasks import spotweld_task
+
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         options = MotionOptions(objective=objective, seed=seed)
@@ -738,6 +741,8 @@ def _write_trace(
     scene: Scene,
     animate: bool = False,
 ) -> None:
+    from armpath.export import write_sequence_files
+    from armpath.report import passes_text
     from armpath.viz.figures import plot_trace_3d, plot_trace_deviation
 
     write_sequence_files(folder, "trace", doc, arm, result.sequence)
@@ -797,6 +802,11 @@ def trace(
     """Task 2: go once around the scene's curve (the crack) with the tool, every reachable
     part, fewest passes and commands; report the unreachable arcs and why. Any arm (--model or
     the scene's \\[arm]); --tool-axis keeps the torch near the surface normal or a direction."""
+    from armpath.export import json_text, output_folder, trace_result_dict
+    from armpath.planning.motion import MotionOptions
+    from armpath.planning.trace import TraceOptions
+    from armpath.tasks import trace_task
+
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         rule = axis_rule(tool_axis, axis_tolerance)
@@ -837,6 +847,9 @@ def run(
     zones). Writes each task's result (JSON, CSV, XLSX), figures and animations (GIF), and a
     one-page report summary.md."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
+    from armpath.export import output_folder, reach_result_dict, tour_result_dict, trace_result_dict
+    from armpath.report import summary_html, summary_markdown
+    from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
 
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
@@ -913,6 +926,8 @@ def _print_run(
     heading: str,
 ) -> None:
     """The run's table of results on stdout and the files it wrote."""
+    from armpath.report import passes_text
+
     written = folder.written
     wall = scene.wall_thickness
     table = Table(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 import typer
@@ -19,18 +19,19 @@ from armpath.cli.common import (
     progress,
     task_setup,
 )
-from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
-from armpath.export import (
-    output_folder,
-)
-from armpath.model.serial_arm import SerialArm
-from armpath.results import PlannedResult
-from armpath.scenes import Scene
+
+if TYPE_CHECKING:
+    from armpath.model.serial_arm import SerialArm
+    from armpath.results import PlannedResult
+    from armpath.scenes import Scene
 
 
 def _standing(arm: SerialArm, scene: Scene) -> PlannedResult:
     """A result of no commands: the arm standing at its home pose in its scene."""
+    from armpath.commands import CommandSequence
+    from armpath.results import PlannedResult
+
     start = arm.lattice.to_ticks(arm.home, "the arm's home pose")
     sequence = CommandSequence(start, np.zeros((0, arm.n_joints), dtype=np.int64), arm.lattice)
     doc = {"task": "plan", "model": {"name": arm.name}, "scene": {"name": scene.name}}
@@ -76,6 +77,7 @@ def view(
     steps within the limits), live fingertip position and clearance (collisions in red), a
     target point to plan a reach to, and the replay of a result (play, pause, step,
     timeline)."""
+    from armpath.export import output_folder
     from armpath.results import load_result
 
     with _cli_errors():
@@ -136,6 +138,7 @@ def animate(
 ) -> None:
     """Animate a result: the arm through its commands in the scene, the fingertip's path, the
     targets and the curve (GIF with Pillow, MP4 with ffmpeg)."""
+    from armpath.export import output_folder
     from armpath.results import load_result
     from armpath.viz.animation import result_animation, write_animation
 

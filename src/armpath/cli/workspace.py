@@ -13,7 +13,7 @@ import dataclasses
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
 import typer
@@ -43,17 +43,12 @@ from armpath.cli.common import (
     progress,
 )
 from armpath.errors import InvalidInputError
-from armpath.export import (
-    OutputFolder,
-    output_folder,
-)
-from armpath.geometry.primitives import SolidOfRevolution
-from armpath.kinematics import z_axis_chain
-from armpath.model.catalog import resolve_model
-from armpath.model.seed_arm import SeedArmGeometry
-from armpath.model.serial_arm import SerialArm
-from armpath.scenes import Scene, load_scene
-from armpath.workspace.sampling import METHODS, GridSpec, check_count
+
+if TYPE_CHECKING:
+    from armpath.export import OutputFolder
+    from armpath.geometry.primitives import SolidOfRevolution
+    from armpath.model.serial_arm import SerialArm
+    from armpath.scenes import Scene
 
 
 def _check_seed(seed: int) -> None:
@@ -116,7 +111,12 @@ def workspace(
 ) -> None:
     """Reachable workspace of the tool point by sampling joint space into voxels: volume,
     bounding box and sections."""
+    from armpath.export import output_folder
+    from armpath.kinematics import z_axis_chain
+    from armpath.model.catalog import resolve_model
+    from armpath.scenes import load_scene
     from armpath.workspace import sample_workspace
+    from armpath.workspace.sampling import METHODS, GridSpec, check_count
 
     with _cli_errors(time_limit):
         check_count(samples, "--samples", MAX_SAMPLES, "joint samples")
@@ -230,6 +230,7 @@ def _check_blind_zone_sizes(
 ) -> None:
     """Refuse, naming the option, what :func:`_blind_zones` could not do within the budget."""
     from armpath.workspace.blindzones import map_shape
+    from armpath.workspace.sampling import check_count
 
     check_count(samples, "--samples", MAX_SAMPLES)
     check_size(
@@ -350,6 +351,8 @@ def blindzones(
     """Blind zones of the seed arm: the central blind zone in the arm plane and in 3-D (areas
     mm^2, volume mm^3), and the parts of the workpiece's outer and inner faces the fingertip
     cannot reach without a collision (areas mm^2, fractions)."""
+    from armpath.export import output_folder
+
     with _cli_errors(time_limit):
         scene = _scene(None, wall)
         arm = _arm(0.0 if link_radius is None else link_radius)
@@ -431,6 +434,8 @@ def design_sweep(
     range of joint 3 against the reach volume above the table (m^3) and the central blind zone
     (litres). Objective: the largest reach volume; ties (within 0.5 %) go to the smaller blind
     zone. Under --time-limit the designs go out one per worker at a time."""
+    from armpath.export import output_folder
+    from armpath.model.seed_arm import SeedArmGeometry
     from armpath.workspace.design import (
         check_jobs,
         check_sweep_size,
@@ -439,6 +444,7 @@ def design_sweep(
         ranked,
         sweep,
     )
+    from armpath.workspace.sampling import check_count
 
     with _cli_errors(time_limit):
         check_jobs(jobs, "--jobs")

@@ -27,12 +27,11 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import check_time
+from armpath.budget import MAX_SEARCHES, check_time
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
@@ -44,23 +43,12 @@ from armpath.kinematics import (
 )
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.choices import Objective
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.rrt import EdgeChecker, RrtOptions, rrt_connect, shortcut
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-#: Most searches (or failed attempts) of one :func:`plan_motion` call.
-MAX_SEARCHES = 100
-
-
-class Objective(StrEnum):
-    """What a plan minimises after reaching its goal."""
-
-    COMMANDS = "commands"  # number of commands (time)
-    PATH = "path"  # fingertip path length (mm)
-    ENERGY = "energy"  # weighted joint travel (deg)
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,6 @@ import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,6 +27,7 @@ from armpath.ik.target import Orientation
 from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.choices import VisitOrder
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
@@ -76,13 +76,6 @@ class TourResult:
     @property
     def max_error_mm(self) -> float:
         return max(v.error_mm for v in self.visits)
-
-
-class VisitOrder(StrEnum):
-    """How a tour orders its targets."""
-
-    AUTO = "auto"  # every order ranked by its lower bound, the best planned
-    GIVEN = "given"  # as listed
 
 
 #: Most targets whose visiting orders are all ranked (``order="auto"``): 8! = 40,320 orders.
