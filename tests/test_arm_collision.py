@@ -397,3 +397,37 @@ def test_link_radii_in_a_robot_file():
         robot_from_dict({"links": [_row()], "link_radii_mm": -1})
     with pytest.raises(InvalidInputError, match="must be a number"):
         robot_from_dict({"links": [_row()], "link_radii_mm": "thick"})
+
+
+@pytest.mark.parametrize("scene_file", ["seed", "ur5_cell"])
+def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file):
+    """The pruned minimum (broad-phase bounds, exact distances only where they can matter)
+    equals the plain minimum over :meth:`pair_clearances` for random configurations, random
+    pair masks and ceilings: pruning never changes a value."""
+    from pathlib import Path
+
+    from armpath.scenes import load_scene
+    from armpath.scenes.arm import scene_arm
+
+    root = Path(__file__).resolve().parents[1]
+    path = root / "examples" / "ur5_cell.toml" if scene_file == "ur5_cell" else None
+    scene = load_scene(path)
+    arm, world = scene_arm(scene), scene.world
+    rng = np.random.default_rng(7)
+    q = _within_limits(arm, 400, seed=3)
+    # some configurations near the home pose too, where most pairs are far apart
+    q = np.vstack([q, arm.home + rng.normal(0.0, 0.2, (200, arm.n_joints))])
+    values, _ = world.pair_clearances(arm, q)
+    slack = values - world.required(arm)
+    n_pairs = slack.shape[1]
+    assert n_pairs > 10
+    checked = 0
+    for trial in range(12):
+        mask = rng.random(n_pairs) < (1.0 if trial == 0 else 0.5)
+        ceiling = np.inf if trial < 3 else rng.normal(20.0, 30.0, q.shape[0])
+        (got,) = world.smallest_slacks(arm, q, [(mask, ceiling)])
+        want = np.minimum(ceiling, np.min(slack[:, mask], axis=1, initial=np.inf))
+        np.testing.assert_array_equal(got, want)
+        checked += int(mask.sum())
+    assert checked > 6 * n_pairs
+    np.testing.assert_array_equal(world.slack(arm, q), np.min(slack, axis=1))

@@ -30,6 +30,7 @@ The seed arm has no zero-length link and its pairs are AB-CD, AB-DE and BC-DE.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -378,6 +379,83 @@ class CollisionWorld:
             return np.zeros((*batch, 0)), np.zeros((*batch, 0))
         return np.concatenate(cols_v, axis=-1), np.concatenate(cols_l, axis=-1)
 
+    def smallest_slacks(
+        self,
+        arm: SerialArm,
+        q: ArrayLike,
+        groups: Sequence[tuple[NDArray[np.bool_], FloatArray | float]],
+    ) -> list[FloatArray]:
+        """For each ``(columns, ceiling)`` of ``groups``: per configuration of ``q (M, n)``,
+        ``min(ceiling, smallest clearance - required over the pairs in columns)``, where
+        ``columns`` is a mask over :meth:`pairs` and ``ceiling`` a scalar or ``(M,)``.
+
+        Equal to the same minimum of :meth:`pair_clearances` (the same kernels on the same
+        segments), but a pair is measured exactly only where its broad-phase lower bound (the
+        part's distance to the obstacle's enclosing ball) is below the smallest slack known so
+        far: first each configuration's pair of lowest bound, then the pairs still below.
+        The minimum a caller takes with its own slacks (joint limits) is the natural ceiling.
+        """
+        pts = landmark_positions(arm, np.asarray(q, dtype=np.float64))
+        if pts.ndim != 3:
+            raise InvalidInputError(f"configurations must have shape (M, n), got {pts.shape[:-1]}")
+        bound = self._bound(arm)
+        p0, p1 = self._segments(arm, pts)
+        m_count, n_parts = p0.shape[0], p0.shape[1]
+        n_obs = len(self.obstacles)
+        n_obs_cols = n_parts * n_obs
+        a = np.ascontiguousarray(p0.reshape(-1, 3))
+        b = np.ascontiguousarray(p1.reshape(-1, 3))
+        # broad-phase lower bound of every obstacle pair's slack, (M, P * O) in pairs' order
+        by_obstacle = np.full((m_count, n_parts, n_obs), -np.inf)
+        for o, obstacle in enumerate(self.obstacles):
+            ball = obstacle.enclosing_ball()
+            if ball is not None:
+                c = np.ascontiguousarray(np.broadcast_to(ball[0], a.shape))
+                by_obstacle[:, :, o] = (segments_to_point(a, b, c) - ball[1]).reshape(
+                    m_count, n_parts
+                )
+        lower = by_obstacle.reshape(m_count, n_obs_cols)
+        # (less a rounding allowance, so a bound never passes the exact value it bounds)
+        lower -= np.repeat(bound.part_radius, n_obs) + bound.required[:n_obs_cols] + 1e-9
+        self_slack = None
+
+        def measure(result: FloatArray, m_idx: IntArray, k: IntArray) -> None:
+            """Lower ``result`` by the exact slacks of configurations ``m_idx``, pairs ``k``."""
+            part, obs = np.divmod(k, n_obs)
+            slack = np.empty(m_idx.size)
+            for o in np.unique(obs):
+                sel = np.flatnonzero(obs == o)
+                seg = m_idx[sel] * n_parts + part[sel]
+                v, _ = self.obstacles[o].segment_distance_bounds(a[seg], b[seg])
+                slack[sel] = v - bound.part_radius[part[sel]] - bound.required[k[sel]]
+            np.minimum.at(result, m_idx, slack)
+
+        out = []
+        for columns, ceiling in groups:
+            result = np.array(np.broadcast_to(ceiling, (m_count,)), dtype=np.float64)
+            cols = np.asarray(columns, dtype=bool)
+            if np.any(cols[n_obs_cols:]):
+                if self_slack is None:
+                    self_slack = self._self_clearances(arm, pts) - bound.required[n_obs_cols:]
+                result = np.minimum(
+                    result, self_slack[:, cols[n_obs_cols:]].min(axis=-1, initial=np.inf)
+                )
+            obstacle_cols = np.flatnonzero(cols[:n_obs_cols])
+            if obstacle_cols.size:
+                lb = lower[:, obstacle_cols]
+
+                # each configuration's pair of lowest bound first: it sets the bar the other
+                # pairs' bounds must pass to be measured
+                first = np.argmin(lb, axis=1)
+                rows = np.flatnonzero(lb[np.arange(m_count), first] < result)
+                measure(result, rows, obstacle_cols[first[rows]])
+                below = lb < result[:, None]
+                below[rows, first[rows]] = False
+                m_idx, c_idx = np.nonzero(below)
+                measure(result, m_idx, obstacle_cols[c_idx])
+            out.append(result)
+        return out
+
     def satisfied(
         self, arm: SerialArm, q: ArrayLike, extra: ArrayLike | float = 0.0
     ) -> NDArray[np.bool_]:
@@ -450,12 +528,14 @@ class CollisionWorld:
     def slack(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Per configuration, the smallest ``clearance - required`` over all pairs.
 
-        Non-negative exactly when the configuration satisfies the clearance rule.
+        Non-negative exactly when the configuration satisfies the clearance rule. Measured
+        with the broad phase of :meth:`smallest_slacks` (the same values).
         """
-        values, _ = self.pair_clearances(arm, q)
-        if values.shape[-1] == 0:
-            return np.full(values.shape[:-1], np.inf)
-        return np.asarray((values - self.required(arm)).min(axis=-1), dtype=np.float64)
+        q = np.asarray(q, dtype=np.float64)
+        flat = q.reshape(-1, q.shape[-1])
+        every = np.ones(len(self._bound(arm).pairs), dtype=bool)
+        (lowest,) = self.smallest_slacks(arm, flat, [(every, np.inf)])
+        return lowest.reshape(q.shape[:-1])
 
     def describe(self) -> dict[str, object]:
         return {

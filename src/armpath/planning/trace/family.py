@@ -278,15 +278,25 @@ class CurveFamily:
         ``limits=False`` ignores joint limits; ``obstacles`` keeps only the pairs against those
         obstacles (None: every pair, link pairs included; ``()``: no pair).
         """
-        joint, pair, tip_ok = self.slacks(q)
-        parts = []
+        q = np.asarray(q, dtype=np.float64)
         if limits:
-            parts.append(np.min(joint, axis=-1))
+            with np.errstate(invalid="ignore"):
+                floor = np.asarray(
+                    np.degrees(np.min(np.minimum(self._hi - q, q - self._lo), axis=-1))
+                )
+        else:
+            floor = np.full(q.shape[0], np.inf)
         keep = self._columns(obstacles)
-        if np.any(keep):
-            parts.append(np.nanmin(np.where(keep, pair, np.nan), axis=-1, initial=np.inf))
-        out = np.minimum.reduce(parts) if parts else np.full(q.shape[0], np.inf)
-        return np.where(tip_ok, out, -np.inf)
+        groups: list[tuple[BoolArray, FloatArray | float]] = [(keep, floor)] if np.any(keep) else []
+        if np.any(self._touch_cols):  # the tool tip only must not enter the surface
+            groups.append((self._touch_cols, -TOUCH_MM))
+        if not groups:
+            return floor
+        found = self.world.smallest_slacks(self.arm, q, groups)
+        out = found[0] if np.any(keep) else floor
+        if np.any(self._touch_cols):
+            return np.where(found[-1] >= -TOUCH_MM, out, -np.inf)
+        return out
 
     def _columns(self, obstacles: tuple[str, ...] | None) -> NDArray[np.bool_]:
         cols = ~self._touch_cols
