@@ -174,3 +174,27 @@ def test_bad_arm_documents_are_one_clear_error():
         arm_from_dict(broken)
     with pytest.raises(InvalidInputError, match="incomplete or malformed"):
         arm_from_dict({**doc, "joints": [{"name": "j"}]})
+
+
+@pytest.mark.parametrize(
+    ("rows", "cols", "low", "high"),
+    [
+        (5000, 5, -3, 3),  # many repeats: neighbourhoods of lattice states
+        (2000, 6, -3600, 3600),  # whole tick ranges: packed into one key
+        (3000, 5, -(2**40), 2**40),  # too wide to pack: sorted column by column
+        (40, 1, 0, 0),  # one column, all equal
+        (1, 3, 7, 7),
+    ],
+)
+def test_unique_states_equals_numpy_unique_rows(rows, cols, low, high):
+    """Same rows, order, first indices and inverse as ``np.unique(..., axis=0)``."""
+    from armpath.model.lattice import unique_states
+
+    a = np.random.default_rng(rows + cols).integers(low, high + 1, (rows, cols))
+    want = np.unique(a, axis=0, return_index=True, return_inverse=True)
+    got = unique_states(a, return_index=True, return_inverse=True)
+    for w, g in zip(want, got, strict=True):
+        np.testing.assert_array_equal(g, w.reshape(g.shape))
+    np.testing.assert_array_equal(unique_states(a), want[0])
+    np.testing.assert_array_equal(unique_states(a, return_inverse=True)[1], want[2].reshape(-1))
+    assert np.array_equal(want[0][want[2].reshape(-1)], a)

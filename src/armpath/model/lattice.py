@@ -13,6 +13,7 @@ unit for a prismatic one. Degrees and mm appear only at the edges (:meth:`Lattic
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -249,3 +250,55 @@ __all__ = [
     "DEFAULT_REVOLUTE_TICK_RAD",
     "Lattice",
 ]
+
+
+def unique_states(
+    states: ArrayLike, return_index: bool = False, return_inverse: bool = False
+) -> Any:
+    """``np.unique(states, axis=0, ...)`` for integer rows (lattice states, grid cells), with
+    the same rows, order (lexicographic), first-occurrence indices and inverse.
+
+    Each row is packed into one int64 key (column 0 most significant, each column offset by
+    its minimum) and sorted once: a 1-D stable sort instead of numpy's sort of row views,
+    tens of times faster on large batches. Rows whose columns together need more than 62 bits
+    are sorted lexicographically column by column instead.
+    """
+    a = np.asarray(states)
+    if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer) or a.shape[0] == 0:
+        rows, index, inverse = np.unique(a, axis=0, return_index=True, return_inverse=True)
+        picked = [rows] + [index] * return_index + [inverse.reshape(-1)] * return_inverse
+        return picked[0] if len(picked) == 1 else tuple(picked)
+    a = a.astype(np.int64, copy=False)
+    low = a.min(axis=0)
+    spans = a.max(axis=0) - low
+    bits = [int(s).bit_length() for s in spans]
+    if sum(bits) > 62:
+        # too wide to pack: a stable lexicographic sort of the columns (column 0 first)
+        order = np.lexsort(a.T[::-1])
+        ordered = a[order]
+        first = np.concatenate(([True], np.any(ordered[1:] != ordered[:-1], axis=1)))
+    else:
+        key = np.zeros(a.shape[0], dtype=np.int64)
+        for j in range(a.shape[1]):
+            key = (key << bits[j]) | (a[:, j] - low[j])
+        if not (return_index or return_inverse):
+            # the rows decoded from the sorted keys: no argsort needed
+            keys = np.sort(key)
+            keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))]
+            rows = np.empty((keys.size, a.shape[1]), dtype=np.int64)
+            for j in reversed(range(a.shape[1])):
+                rows[:, j] = (keys & ((1 << bits[j]) - 1)) + low[j]
+                keys = keys >> bits[j]
+            return rows
+        order = np.argsort(key, kind="stable")
+        packed = key[order]
+        first = np.concatenate(([True], packed[1:] != packed[:-1]))
+    index = order[first]
+    out: list[Any] = [a[index]]
+    if return_index:
+        out.append(index)
+    if return_inverse:
+        inverse = np.empty(a.shape[0], dtype=np.intp)
+        inverse[order] = np.cumsum(first) - 1
+        out.append(inverse)
+    return out[0] if len(out) == 1 else tuple(out)

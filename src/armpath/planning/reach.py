@@ -51,6 +51,7 @@ from armpath.ik.seed_position import (
 )
 from armpath.ik.target import Orientation, ToolTarget
 from armpath.kinematics import position_jacobian, tool_pose, tool_position
+from armpath.model.lattice import unique_states
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
@@ -443,9 +444,9 @@ def _pair_grid(p: _Problem, fam: _Family, pair: tuple[int, int], n: int) -> IntA
     if not np.any(near):
         return np.zeros((0, 2), dtype=np.int64)
     vals = q[near][:, idx] / TICK_RAD
-    blocks = np.unique(np.floor(vals / block).astype(np.int64), axis=0)
+    blocks = unique_states(np.floor(vals / block).astype(np.int64))
     ring = np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1], indexing="ij"), -1).reshape(-1, 2)
-    blocks = np.unique((blocks[:, None, :] + ring[None]).reshape(-1, 2), axis=0)
+    blocks = unique_states((blocks[:, None, :] + ring[None]).reshape(-1, 2))
     offs = np.stack(np.meshgrid(np.arange(block), np.arange(block), indexing="ij"), -1)
     pairs = (blocks[:, None, :] * block + offs.reshape(-1, 2)[None]).reshape(-1, 2)
     keep = np.all((pairs >= box_lo[idx]) & (pairs <= box_hi[idx]), axis=-1)
@@ -500,7 +501,7 @@ def _lattice_candidates(
             keep(cands.reshape(-1, TIP_JOINTS))
     if not kept:
         return np.zeros((0, TIP_JOINTS), dtype=np.int64), np.zeros(0)
-    cands, index = np.unique(np.concatenate(kept), axis=0, return_index=True)
+    cands, index = unique_states(np.concatenate(kept), return_index=True)
     errs = np.concatenate(kept_err)[index]
     # polish: exhaustive +-1 tick neighbourhoods of the best states until nothing improves
     steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
@@ -508,10 +509,10 @@ def _lattice_candidates(
         check_time("polishing lattice states near the target")
         best_before = float(errs.min()) if errs.size else np.inf
         top = cands[np.argsort(errs)[:polish]]
-        near = np.unique((top[:, None, :] + steps[None, :, :]).reshape(-1, TIP_JOINTS), axis=0)
+        near = unique_states((top[:, None, :] + steps[None, :, :]).reshape(-1, TIP_JOINTS))
         near = near[np.all((near >= box_lo) & (near <= box_hi), axis=-1)]
         near_err = p.errors_of_ticks(near)
-        cands, index = np.unique(np.concatenate([cands, near]), axis=0, return_index=True)
+        cands, index = unique_states(np.concatenate([cands, near]), return_index=True)
         errs = np.r_[errs, near_err][index]
         if errs.min() >= best_before:
             break
@@ -526,14 +527,14 @@ def _diverse(cands: IntArray, order: IntArray, count: int, per_cell: int = 3) ->
     the feasible region finds a clear motion sooner when the best ones are blocked.
     """
     cells = np.floor_divide(cands[order], 50)
-    _, inverse = np.unique(cells, axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    _, inverse = unique_states(cells, return_inverse=True)
+    inverse = np.asarray(inverse, dtype=np.intp).reshape(-1)
     rank = np.zeros_like(inverse)
     seen: dict[int, int] = {}
     for k, c in enumerate(inverse.tolist()):
         rank[k] = seen.get(c, 0)
         seen[c] = rank[k] + 1
-    return order[rank < per_cell][:count]
+    return np.asarray(order[rank < per_cell][:count], dtype=np.int64)
 
 
 def _validated_problem(
@@ -820,9 +821,11 @@ def _goal_states(
         )
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
-    required = world.required(arm)
-    values, _ = world.pair_clearances(arm, p.full(q))
-    body_ok = np.all(np.where(is_tip, True, values - required >= body_buffer_mm), axis=-1)
+    # the family samples whose links keep the margin plus the buffer (the tool tip is not
+    # asked here); the broad-phase verdict of every pair at once
+    body_ok = world.satisfied(arm, p.full(q), np.where(is_tip, -np.inf, body_buffer_mm))
+    # a lattice state's tool tip only must not penetrate (its pairs require 0)
+    buffer = np.where(is_tip, 0.0, body_buffer_mm)
     if not np.any(body_ok):
         raise PlanningError(
             f"no configuration reaching ({', '.join(f'{v:g}' for v in p.target)}) mm keeps the "
@@ -865,8 +868,8 @@ def _goal_states(
             cands.append(c.reshape(-1, TIP_JOINTS))
         if not cands:
             continue
-        c5 = np.unique(np.concatenate(cands), axis=0)
-        c5 = np.unique((c5[:, None, :] + steps[None]).reshape(-1, TIP_JOINTS), axis=0)
+        c5 = unique_states(np.concatenate(cands))
+        c5 = unique_states((c5[:, None, :] + steps[None]).reshape(-1, TIP_JOINTS))
         c5 = c5[np.all((c5 >= p.lo_ticks) & (c5 <= p.hi_ticks), axis=-1)]
         errs = p.errors_of_ticks(c5)
         within = errs <= tolerance_mm
@@ -874,9 +877,7 @@ def _goal_states(
             continue
         c5, errs = c5[within], errs[within]
         full = np.hstack([c5, np.broadcast_to(p.start_ticks[TIP_JOINTS:], (c5.shape[0], 1))])
-        vals, _ = world.pair_clearances(arm, ticks_to_rad(full))
-        margin_left = vals - required
-        ok = np.all(np.where(is_tip, vals >= 0, margin_left >= body_buffer_mm), axis=-1)
+        ok = world.satisfied(arm, ticks_to_rad(full), buffer)
         if not np.any(ok):
             continue
         k = int(np.flatnonzero(ok)[np.argmin(errs[ok])])

@@ -34,6 +34,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
 from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
 from armpath.kinematics import forward_frames, jacobian_from_frames, tool_pose
+from armpath.model.lattice import unique_states
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
 from armpath.planning.motion_check import check_state_clear, motion_clearance
@@ -484,7 +485,7 @@ def reach_any_arm(
             continue
         cands = np.array(found)
         errs = np.array(errors)
-        cands, first = np.unique(cands, axis=0, return_index=True)
+        cands, first = unique_states(cands, return_index=True)
         errs = errs[first]
         order = np.argsort(errs, kind="stable")
         clear = world.slack(arm, grid.to_joint(cands[order[: 4 * max_motion_checks]])) >= 0

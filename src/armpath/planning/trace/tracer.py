@@ -20,6 +20,7 @@ from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.jit import njit
 from armpath.kinematics import position_jacobian, tool_position
+from armpath.model.lattice import unique_states
 from armpath.planning.trace.family import CurveFamily
 from armpath.planning.trace.reference import Piece
 
@@ -273,7 +274,7 @@ class Tracer:
                 found.append(self.lattice_near(base, n, b, qk))
         if not found:
             return np.zeros((0, qk.size), dtype=np.int64), np.zeros(0)
-        return self.valid_ends(qk, sk, np.unique(np.concatenate(found), axis=0), goal)
+        return self.valid_ends(qk, sk, unique_states(np.concatenate(found)), goal)
 
     def _toward_best(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """Near the end of an arc (a tight spot): small advances, the joints turned toward the
