@@ -11,13 +11,13 @@ SRC = ROOT / "src" / "armpath"
 
 # each module may import only from its own layer and the layers below (DESIGN.md)
 LAYERS = [
-    {"errors", "budget", "jit", "lazy", "angles", "model", "kinematics"},
+    {"errors", "budget", "jit", "lazy", "angles", "poses", "model", "kinematics"},
     {"geometry"},
     {"ik"},
     {"commands"},
     {"scenes", "planning", "workspace", "trajectory"},
     {"tasks"},
-    {"export", "results", "report", "viz", "viewer", "cli", "__main__"},
+    {"export", "results", "controller_export", "report", "viz", "viewer", "api", "cli", "__main__"},
 ]
 
 

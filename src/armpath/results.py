@@ -6,10 +6,10 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
@@ -19,17 +19,25 @@ from armpath.model.serial_arm import SerialArm
 from armpath.model.serialize import arm_from_dict
 from armpath.scenes import Scene, load_scene, scene_from_dict
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 RESULT_TASKS = ("reach", "trace", "spotweld", "plan")
 
 
-@dataclass(frozen=True)
-class PlannedResult:
-    """A result document with what it needs to be replayed: the arm, the scene, the command
-    sequence, the targets (``(K, 3)`` mm; empty if none) and the curve (``(M, 3)`` mm, trace
-    results only)."""
+@dataclass(frozen=True, repr=False)
+class Result:
+    """A planned result: its JSON document with what replaying it needs (the arm, the scene,
+    the command sequence, the targets ``(K, 3)`` mm, empty if none, and the curve ``(M, 3)``
+    mm of a trace). What :func:`armpath.reach` and the other tasks return, and what
+    :func:`load_result` reads back from a file the CLI or :meth:`save` wrote.
 
-    path: Path
+    Units at this boundary: joint values in degrees (mm for a prismatic joint), positions in
+    mm, commands in integer ticks of the arm's lattice (``arm.lattice``).
+    """
+
     task: str
     doc: dict[str, Any]
     arm: SerialArm
@@ -37,20 +45,124 @@ class PlannedResult:
     sequence: CommandSequence
     targets_mm: FloatArray
     curve_mm: FloatArray | None
+    #: the file it was read from or last saved to (None: in memory only)
+    path: Path | None = None
+
+    @property
+    def n_commands(self) -> int:
+        """Number of commands."""
+        return self.sequence.n_commands
+
+    @property
+    def commands(self) -> IntArray:
+        """The commands, ``(n_commands, n_joints)`` integer ticks (one row per command)."""
+        return np.array(self.sequence.commands, dtype=np.int64)
 
     @property
     def states_rad(self) -> FloatArray:
-        """Joint angles after each command, ``(n_commands + 1, 6)`` rad."""
+        """Joint values after each command, ``(n_commands + 1, n_joints)``, rad (prismatic
+        joints in the model's length unit); row 0 is the start."""
         return self.sequence.states_joint()
 
     @property
+    def states_deg(self) -> FloatArray:
+        """Joint values after each command, ``(n_commands + 1, n_joints)``, deg (mm for a
+        prismatic joint); row 0 is the start."""
+        return np.asarray(self.sequence.grid.display(self.sequence.states()))
+
+    @property
+    def tool_positions_mm(self) -> FloatArray:
+        """Tool point after each command, ``(n_commands + 1, 3)`` mm; row 0 is the start."""
+        scale = 1000.0 if self.arm.length_unit == "m" else 1.0
+        return np.asarray(tool_position(self.arm, self.states_rad) * scale)
+
+    @property
     def tip_path_mm(self) -> FloatArray:
-        """Fingertip position after each command, ``(n_commands + 1, 3)`` mm."""
-        return tool_position(self.arm, self.states_rad)
+        """Alias of :attr:`tool_positions_mm` (the seed arm's tool is its fingertip)."""
+        return self.tool_positions_mm
+
+    @property
+    def metrics(self) -> dict[str, Any]:
+        """The result's numbers as the document states them: commands, lower bound, error,
+        deviation and clearance (mm), and the plan's metrics where the task has them."""
+        keys = (
+            "n_commands",
+            "lower_bound_commands",
+            "error_mm",
+            "max_deviation_mm",
+            "coverage",
+            "metrics",
+            "clearance",
+        )
+        return {k: self.doc[k] for k in keys if k in self.doc}
+
+    def __repr__(self) -> str:
+        shown = ", ".join(
+            f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v!r}"
+            for k, v in self.metrics.items()
+            if not isinstance(v, dict)
+        )
+        where = f", path={str(self.path)!r}" if self.path is not None else ""
+        return (
+            f"Result(task={self.task!r}, arm={self.arm.name!r}, scene={self.scene.name!r}, "
+            f"{shown}{where})"
+        )
 
     def title(self) -> str:
-        n = self.sequence.n_commands
-        return f"{self.task}: {n} commands ({self.path.name})"
+        name = f" ({self.path.name})" if self.path is not None else ""
+        return f"{self.task}: {self.n_commands} commands{name}"
+
+    def to_json(self) -> str:
+        """The JSON document, as the CLI writes it."""
+        from armpath.export import json_text
+
+        return json_text(self.doc)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the JSON document to ``path`` (the same file the CLI's ``--json`` prints);
+        :func:`load_result` reads it back. Returns the path."""
+        from armpath.export import output_folder
+
+        out = Path(path).expanduser()
+        with output_folder(out.parent, prune=False) as folder:  # whole file or nothing
+            folder.write_text(out.name, self.to_json())
+        object.__setattr__(self, "path", out)
+        return out
+
+    def joint_trajectory(self, period_s: float | None = None) -> dict[str, Any]:
+        """The motion as a ROS ``trajectory_msgs/JointTrajectory`` message (a JSON-ready dict:
+        positions in rad, one point per state, ``period_s`` apart; see
+        :mod:`armpath.controller_export`)."""
+        from armpath.controller_export import DEFAULT_COMMAND_PERIOD_S, joint_trajectory
+
+        return joint_trajectory(self, DEFAULT_COMMAND_PERIOD_S if period_s is None else period_s)
+
+    def export_text(
+        self,
+        fmt: str,
+        period_s: float | None = None,
+        steps_per_tick: ArrayLike | None = None,
+    ) -> str:
+        """The motion for a controller: ``"csv"`` (time and joint values), ``"joint-trajectory"``
+        (ROS JSON) or ``"steps"`` (motor steps per command), as ``armpath export`` writes it."""
+        from armpath.controller_export import DEFAULT_COMMAND_PERIOD_S, export_text
+
+        period = DEFAULT_COMMAND_PERIOD_S if period_s is None else period_s
+        return export_text(self, fmt, period, steps_per_tick)
+
+    def plot(self, path: str | Path | None = None) -> Figure:
+        """The joint values after each command, one panel per joint (a matplotlib Figure);
+        written as a PNG to ``path`` when given."""
+        from armpath.viz.figures import plot_joint_angles
+
+        return plot_joint_angles(path, self.sequence, self.title())
+
+    def animate(self, path: str | Path, *, fps: int = 15, max_frames: int = 120) -> int:
+        """Write an animation of the motion (``.gif``, or ``.mp4`` with ffmpeg) to ``path``;
+        returns the number of frames."""
+        from armpath.viz.animation import result_animation, write_animation
+
+        return write_animation(path, result_animation(self), fps=fps, max_frames=max_frames)
 
 
 def _arm(model: dict[str, Any]) -> SerialArm:
@@ -95,7 +207,7 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     return loaded.with_wall_thickness(wall) if wall else loaded
 
 
-def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> PlannedResult:
+def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Result:
     """Read a result JSON document; its scene comes from ``scene`` or, if omitted, from the
     scene definition the document carries (older documents: the source it names, the built-in
     seed scene or a scene file that still exists)."""
@@ -124,8 +236,7 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Pl
     else:
         targets = np.zeros((0, 3))
     curve = doc.get("curve", {}).get("points_mm")
-    return PlannedResult(
-        p,
+    return Result(
         str(doc["task"]),
         doc,
         arm,
@@ -133,4 +244,8 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Pl
         sequence,
         targets,
         None if curve is None else np.asarray(curve, dtype=float).reshape(-1, 3),
+        p,
     )
+
+
+__all__ = ["RESULT_TASKS", "Result", "load_result"]

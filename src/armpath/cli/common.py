@@ -207,11 +207,6 @@ def _arm(link_radius_mm: float) -> SerialArm:
     return seed_arm(SeedArmGeometry(link_radius_mm=link_radius_mm))
 
 
-#: The scene of an arm that stands alone (no scene file, a model other than the seed arm):
-#: no obstacles, its links kept apart from each other.
-ALONE = {"name": "none (the arm alone)", "description": "no obstacles: self-collision only"}
-
-
 TipLinkOption = Annotated[
     str | None,
     typer.Option(
@@ -233,18 +228,12 @@ def task_setup(
     """The arm and the scene of a task command, decided once: the scene file (or the seed
     scene for the seed arm, or no obstacles for another arm standing alone), its ``[arm]`` or
     ``--model`` (which replaces the scene's model), and ``--link-radius`` (mm, every link)."""
-    from armpath.scenes import load_scene, scene_from_dict
-    from armpath.scenes.arm import scene_arm
+    from armpath.api import arm_and_scene, default_scene, load_scene
 
-    if scene_file is not None:
-        scene = load_scene(scene_file)
-    elif model in (None, "seed"):
-        scene = load_scene(None)
-    else:
-        scene = scene_from_dict(dict(ALONE), "none (the arm alone)")
+    scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
     if wall:
         scene = scene.with_wall_thickness(wall)
-    arm = scene_arm(scene, model, tip_link)
+    arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
             raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")

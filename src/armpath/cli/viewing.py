@@ -23,20 +23,20 @@ from armpath.errors import InvalidInputError
 
 if TYPE_CHECKING:
     from armpath.model.serial_arm import SerialArm
-    from armpath.results import PlannedResult
+    from armpath.results import Result
     from armpath.scenes import Scene
 
 
-def _standing(arm: SerialArm, scene: Scene) -> PlannedResult:
+def _standing(arm: SerialArm, scene: Scene) -> Result:
     """A result of no commands: the arm standing at its home pose in its scene."""
     from armpath.commands import CommandSequence
-    from armpath.results import PlannedResult
+    from armpath.results import Result
 
     start = arm.lattice.to_ticks(arm.home, "the arm's home pose")
     sequence = CommandSequence(start, np.zeros((0, arm.n_joints), dtype=np.int64), arm.lattice)
     doc = {"task": "plan", "model": {"name": arm.name}, "scene": {"name": scene.name}}
-    return PlannedResult(
-        Path(f"{arm.name}.json"), "plan", doc, arm, scene, sequence, np.zeros((0, 3)), None
+    return Result(
+        "plan", doc, arm, scene, sequence, np.zeros((0, 3)), None, Path(f"{arm.name}.json")
     )
 
 

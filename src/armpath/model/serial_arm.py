@@ -182,7 +182,7 @@ class Link:
     checked: bool = True
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class SerialArm:
     """An immutable serial arm model.
 
@@ -220,6 +220,10 @@ class SerialArm:
     #: The tool's approach axis in the tool frame (where a torch or gripper points): z unless
     #: the tool frame says otherwise (ur_description's ``ee_link`` points along x).
     approach_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+    def __repr__(self) -> str:
+        kinds = "".join("P" if j.kind == JointKind.PRISMATIC else "R" for j in self.joints)
+        return f"SerialArm({self.name!r}, {self.n_joints} joints {kinds}, {self.length_unit})"
 
     def __post_init__(self) -> None:
         n = len(self.joints)

@@ -23,7 +23,7 @@ from armpath.scenes.schema import (
 )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Scene:
     """A validated scene: the collision world and the task data."""
 
@@ -100,6 +100,10 @@ class Scene:
             raise
         except InvalidInputError as exc:
             raise SceneError(f"scene {self.source}: tasks.trace.curve: {exc}") from None
+
+    def __repr__(self) -> str:
+        names = ", ".join(self.world.obstacle_names) or "no obstacles"
+        return f"Scene({self.name!r}, {names}; from {self.source})"
 
     @property
     def workpieces(self) -> tuple[HollowFrustum, ...]:

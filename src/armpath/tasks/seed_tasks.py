@@ -7,8 +7,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import NDArray
 
 from armpath.errors import SceneError
+from armpath.geometry.curves import Curve
 from armpath.ik.target import AxisCone, Orientation
 from armpath.model.seed_arm import seed_arm
 from armpath.model.serial_arm import SerialArm
@@ -18,6 +20,9 @@ from armpath.planning.tour import TourResult, plan_tour
 from armpath.planning.trace import AxisRule, TraceOptions, TraceResult, plan_trace
 from armpath.scenes import Scene
 
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
 #: The seed tasks implemented so far, in SPEC order: (key, title).
 SEED_TASKS: tuple[tuple[str, str], ...] = (
     ("reach", "Task 1: reach the tool box"),
@@ -26,14 +31,25 @@ SEED_TASKS: tuple[tuple[str, str], ...] = (
 )
 
 
+def _start(model: SerialArm, start_ticks: IntArray | None) -> IntArray:
+    """The task's start: the given lattice state, else the arm's initial (home) pose."""
+    if start_ticks is not None:
+        return np.asarray(start_ticks, dtype=np.int64)
+    return model.lattice.to_ticks(model.home, "initial pose")
+
+
 def reach_task(
-    scene: Scene, arm: SerialArm | None = None, options: ReachOptions | None = None
+    scene: Scene,
+    arm: SerialArm | None = None,
+    options: ReachOptions | None = None,
+    start_ticks: IntArray | None = None,
 ) -> ReachResult:
-    """Task 1: from the arm's initial pose to the scene's reach target, fewest commands first."""
+    """Task 1: from the arm's initial pose (or ``start_ticks``) to the scene's reach target,
+    fewest commands first."""
     if scene.reach_target_mm is None:
         raise SceneError(f"scene {scene.source} defines no [tasks.reach] target_mm")
     model = arm or seed_arm()
-    start = model.lattice.to_ticks(model.home, "initial pose")
+    start = _start(model, start_ticks)
     return plan_reach(model, scene.world, start, scene.reach_target_mm, options)
 
 
@@ -46,13 +62,16 @@ def spotweld_task(
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
     tool_axis: AxisRule | None = None,
+    start_ticks: IntArray | None = None,
+    targets_mm: FloatArray | None = None,
 ) -> TourResult:
-    """Task 3: from the arm's initial pose through every spot weld of the scene, best order.
-    ``tool_axis``: the torch within a cone about the surface's inward normal at each weld (a
-    rule with ``normal``) or about a fixed direction."""
+    """Task 3: from the arm's initial pose (or ``start_ticks``) through every spot weld of the
+    scene (or the points ``targets_mm (K, 3)``), best order. ``tool_axis``: the torch within a
+    cone about the surface's inward normal at each weld (a rule with ``normal``) or about a
+    fixed direction."""
     model = arm or seed_arm()
-    start = model.lattice.to_ticks(model.home, "initial pose")
-    targets = scene.spotweld_targets_mm()
+    start = _start(model, start_ticks)
+    targets = scene.spotweld_targets_mm() if targets_mm is None else targets_mm
     rules: list[Orientation | None] | None = None
     if tool_axis is not None:
         rules = []
@@ -89,8 +108,12 @@ def trace_task(
     arm: SerialArm | None = None,
     options: TraceOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
+    start_ticks: IntArray | None = None,
+    curve: Curve | None = None,
 ) -> TraceResult:
-    """Task 2: from the arm's initial pose, trace every reachable part of the scene's curve."""
+    """Task 2: from the arm's initial pose (or ``start_ticks``), trace every reachable part of
+    the scene's curve (or ``curve``)."""
     model = arm or seed_arm()
-    start = model.lattice.to_ticks(model.home, "initial pose")
-    return plan_trace(model, scene.world, start, scene.trace_curve(), options, on_progress)
+    start = _start(model, start_ticks)
+    path = scene.trace_curve() if curve is None else curve
+    return plan_trace(model, scene.world, start, path, options, on_progress)

@@ -31,7 +31,7 @@ from armpath.geometry.primitives import HalfSpace
 from armpath.geometry.world import CollisionWorld, link_analysis
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
-from armpath.results import PlannedResult
+from armpath.results import Result
 from armpath.scenes import Scene
 from armpath.trajectory.quantize import joint_ticks
 from armpath.viewer.meshes import TriangleMesh, obstacle_mesh
@@ -85,7 +85,7 @@ class ArmViewer:
         *,
         host: str = "127.0.0.1",
         port: int = 8080,
-        result: PlannedResult | None = None,
+        result: Result | None = None,
         start_ticks: NDArray[np.int64] | None = None,
     ) -> None:
         import viser
@@ -369,7 +369,7 @@ class ArmViewer:
 
     # --- replay ----------------------------------------------------------------------------
 
-    def load_replay(self, result: PlannedResult) -> None:
+    def load_replay(self, result: Result) -> None:
         """Replay a result document: its commands, fingertip path, curve and targets."""
         if result.curve_mm is not None and len(result.curve_mm) > 1:
             c = result.curve_mm * MM
@@ -529,7 +529,7 @@ def free_port(host: str = "127.0.0.1") -> int:
 
 
 def replay_html(
-    result: PlannedResult,
+    result: Result,
     *,
     fps: float = 15.0,
     max_frames: int = 600,

@@ -22,7 +22,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
-from armpath.results import PlannedResult
+from armpath.results import Result
 from armpath.scenes import Scene
 from armpath.viz.figures import (
     POINT_LABEL,
@@ -96,7 +96,7 @@ def sequence_animation(
     )
 
 
-def result_animation(result: PlannedResult, substeps: int = 4) -> Animation:
+def result_animation(result: Result, substeps: int = 4) -> Animation:
     """The animation of a result document read back (``armpath.results.load_result``)."""
     return sequence_animation(
         result.arm,

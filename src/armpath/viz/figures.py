@@ -248,7 +248,7 @@ def _label_marks(ax: Axes, marks: list[tuple[int, str]], x_span: float) -> None:
 
 
 def plot_joint_angles(
-    path: str | Path,
+    path: str | Path | None,
     seq: CommandSequence,
     title: str = "",
     marks: Sequence[tuple[int, str]] = (),
@@ -259,7 +259,7 @@ def plot_joint_angles(
     Parameters
     ----------
     path
-        PNG file to write.
+        PNG file to write (None: the figure is only returned).
     seq
         The command sequence; x = k is the state after command k (0: the start).
     title
@@ -297,7 +297,8 @@ def plot_joint_angles(
     axes[-1].set_xlim(-0.015 * x_span, 1.015 * x_span)
     axes[-1].set_xlabel("command (0 = start; the angles after each command)")
     fig.suptitle(title or "joint angles after each command")
-    fig.savefig(path, dpi=110)
+    if path is not None:
+        fig.savefig(path, dpi=110)
     return fig
 
 

@@ -1,0 +1,374 @@
+"""armpath from Python: load an arm and a scene, plan, and get a :class:`~armpath.Result`.
+
+Units at this boundary are millimetres and degrees everywhere (mm for a prismatic joint's
+value); commands are integer ticks of the arm's lattice, one row per command. Every task
+returns a :class:`~armpath.results.Result` whose document is the JSON the CLI writes for the
+same task, so ``result.save(path)`` and ``armpath view --result path`` work alike.
+
+The arm and scene go together as on the command line: ``arm`` is a model (a
+:class:`~armpath.model.serial_arm.SerialArm`, a built-in name or a robot file) and ``scene`` a
+:class:`~armpath.scenes.Scene` or a scene file. Without a scene the seed arm works in the seed
+scene and any other arm stands alone (self-collision only); a named model placed in a scene
+stands where the scene's ``[arm]`` puts it.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armpath.budget import time_limit
+from armpath.errors import InvalidInputError
+from armpath.model.serial_arm import SerialArm
+from armpath.results import Result, load_result
+from armpath.scenes import Scene
+
+if TYPE_CHECKING:
+    from armpath.commands import CommandSequence
+    from armpath.geometry.curves import Curve
+    from armpath.ik.target import Orientation
+
+#: What names an arm: a model, a built-in model's name, or a robot file (``.json``, ``.urdf``).
+ArmLike = SerialArm | str | Path
+#: What names a scene: a scene, a scene file (``.toml``, ``.yaml``), or ``"seed"``.
+SceneLike = Scene | str | Path
+
+#: The scene of an arm that stands alone: no obstacles, its links kept apart from each other.
+ALONE_SCENE = {"name": "none (the arm alone)", "description": "no obstacles: self-collision only"}
+
+
+def load_arm(
+    model: str | Path = "seed",
+    *,
+    tip_link: str | None = None,
+    link_radius_mm: float | None = None,
+) -> SerialArm:
+    """An arm: a built-in model by name (``"seed"``, ``"ur5"``, ``"puma560"``, ...) or a robot
+    file (``.json`` D-H/MDH table, ``.urdf`` up to ``tip_link``); ``link_radius_mm`` gives
+    every link that radius (mm) for collision checks."""
+    from armpath.model.catalog import resolve_model
+
+    arm = resolve_model(str(model), tip_link)
+    if link_radius_mm is not None:
+        if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
+            raise InvalidInputError(f"link_radius_mm must be >= 0, got {link_radius_mm}")
+        arm = arm.with_link_radii(link_radius_mm * _length_scale(arm))
+    return arm
+
+
+def load_scene(source: SceneLike | None = None) -> Scene:
+    """A scene: a scene file (``.toml``, ``.yaml``), ``None`` or ``"seed"`` for the seed scene,
+    ``"none"`` for an empty cell (no obstacles)."""
+    from armpath.scenes import load_scene as load_scene_file
+    from armpath.scenes import scene_from_dict
+
+    if isinstance(source, Scene):
+        return source
+    if source is None or str(source) == "seed":
+        return load_scene_file(None)
+    if str(source) == "none":
+        return scene_from_dict(dict(ALONE_SCENE), "none (the arm alone)")
+    return load_scene_file(Path(source))
+
+
+def default_scene(arm: ArmLike | None) -> Scene:
+    """The scene of a task given no scene: the seed scene for the seed arm (or no arm), else
+    an empty cell where the arm stands alone."""
+    if isinstance(arm, SerialArm):
+        is_seed = arm.name == "seed"
+    else:
+        is_seed = arm is None or str(arm) == "seed"
+    return load_scene(None if is_seed else "none")
+
+
+def arm_and_scene(
+    arm: ArmLike | None = None,
+    scene: SceneLike | None = None,
+    *,
+    tip_link: str | None = None,
+) -> tuple[SerialArm, Scene]:
+    """The arm and the scene a task runs with, decided as the CLI decides them: the scene
+    given, else the seed scene for the seed arm and an empty one for any other arm; the arm
+    given (a model name or file is placed where the scene's ``[arm]`` stands it), else the
+    scene's arm."""
+    from armpath.scenes.arm import scene_arm
+
+    the_scene = default_scene(arm) if scene is None else load_scene(scene)
+    if isinstance(arm, SerialArm):
+        return arm, the_scene
+    return scene_arm(the_scene, None if arm is None else str(arm), tip_link), the_scene
+
+
+def _length_scale(arm: SerialArm) -> float:
+    """The arm's length unit per mm (1, or 0.001 for a model in metres)."""
+    return 1e-3 if arm.length_unit == "m" else 1.0
+
+
+def _start_ticks(arm: SerialArm, start_deg: ArrayLike | None) -> NDArray[np.int64]:
+    """The lattice state of ``start_deg`` (deg, mm for a prismatic joint); None: home."""
+    if start_deg is None:
+        return arm.lattice.to_ticks(arm.home, "the arm's home pose")
+    return arm.lattice.from_display(np.asarray(start_deg, dtype=np.float64), "start_deg")
+
+
+def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
+    p = np.asarray(values, dtype=np.float64)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise InvalidInputError(f"{what} must be three finite numbers (mm), got {values!r}")
+    return p
+
+
+def _orientation(
+    arm: SerialArm,
+    pose: Any,
+    angle_tolerance_deg: float,
+    tool_axis: ArrayLike | None,
+    axis_tolerance_deg: float,
+) -> Orientation | None:
+    """The orientation rule of a whole pose (:func:`armpath.poses.rotation_matrix` forms) or
+    of a tool-axis cone about a fixed direction."""
+    from armpath.ik.target import AxisCone, PoseOrientation
+    from armpath.poses import rotation_matrix
+
+    if pose is not None and tool_axis is not None:
+        raise InvalidInputError("give pose or tool_axis, not both")
+    for what, v in (
+        ("axis_tolerance_deg", axis_tolerance_deg),
+        ("angle_tolerance_deg", angle_tolerance_deg),
+    ):
+        if not (np.isfinite(v) and 0.0 <= v <= 180.0):
+            raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
+    if pose is not None:
+        return PoseOrientation(rotation_matrix(pose), math.radians(angle_tolerance_deg))
+    if tool_axis is not None:
+        return AxisCone(
+            _point(tool_axis, "tool_axis"),
+            math.radians(axis_tolerance_deg),
+            np.asarray(arm.approach_axis),
+        )
+    return None
+
+
+def _result(doc: dict[str, Any], arm: SerialArm, scene: Scene, seq: CommandSequence) -> Result:
+    """A result of a document the export layer wrote (rounded as the CLI prints it)."""
+    import json
+
+    from armpath.export import json_text
+
+    clean = json.loads(json_text(doc))
+    targets = clean.get("targets", [clean["target"]] if clean.get("target") else [])
+    curve = clean.get("curve", {}).get("points_mm")
+    return Result(
+        str(clean["task"]),
+        clean,
+        arm,
+        scene,
+        seq,
+        np.asarray(targets, dtype=np.float64).reshape(-1, 3),
+        None if curve is None else np.asarray(curve, dtype=np.float64).reshape(-1, 3),
+    )
+
+
+def reach(
+    arm: ArmLike | None,
+    target_mm: ArrayLike,
+    *,
+    scene: SceneLike | None = None,
+    start_deg: ArrayLike | None = None,
+    tolerance_mm: float = 0.05,
+    pose: Any = None,
+    angle_tolerance_deg: float = 5.0,
+    tool_axis: ArrayLike | None = None,
+    axis_tolerance_deg: float = 15.0,
+    time_limit_s: float | None = None,
+) -> Result:
+    """Reach ``target_mm`` (x, y, z) with the tool in the fewest commands, then the smallest
+    error, from ``start_deg`` (default: the arm's home pose), certified clear of the scene.
+
+    ``pose`` asks for the tool frame's rotation too (a 3x3 or 4x4 matrix, a quaternion
+    ``("wxyz", q)`` / ``("xyzw", q)``, or a ``scipy.spatial.transform.Rotation``; see
+    :mod:`armpath.poses`), within ``angle_tolerance_deg``; ``tool_axis`` keeps only the tool's
+    approach axis within ``axis_tolerance_deg`` of a direction. The result's ``doc`` holds
+    the lower bound on the commands and why fewer were rejected."""
+    from armpath.export import reach_result_dict
+    from armpath.planning.reach import ReachOptions, plan_reach
+
+    with time_limit(time_limit_s):
+        the_arm, the_scene = arm_and_scene(arm, scene)
+        target = _point(target_mm, "target_mm")
+        rule = _orientation(the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg)
+        found = plan_reach(
+            the_arm,
+            the_scene.world,
+            _start_ticks(the_arm, start_deg),
+            target * _length_scale(the_arm),
+            ReachOptions(tolerance_mm=tolerance_mm),
+            orientation=rule,
+        )
+        doc = reach_result_dict(found, the_arm, the_scene)
+    return _result(doc, the_arm, the_scene, found.sequence)
+
+
+def plan(
+    arm: ArmLike | None,
+    *,
+    to_deg: ArrayLike | None = None,
+    to_mm: ArrayLike | None = None,
+    scene: SceneLike | None = None,
+    start_deg: ArrayLike | None = None,
+    tolerance_mm: float = 0.05,
+    objective: str = "commands",
+    seed: int = 0,
+    time_limit_s: float | None = None,
+) -> Result:
+    """Plan a clear motion to the joint values ``to_deg`` or to a point ``to_mm`` (one of
+    them) from ``start_deg`` (default: home), around the scene's obstacles; ``objective``
+    (``"commands"``, ``"path"``, ``"energy"``) is what is minimised once the goal is reached;
+    ``seed`` seeds the random search."""
+    from armpath.export import plan_result_dict
+    from armpath.planning.choices import Objective
+    from armpath.planning.motion import MotionOptions, plan_motion
+    from armpath.planning.reach import goal_states
+
+    if (to_deg is None) == (to_mm is None):
+        raise InvalidInputError("give exactly one goal: to_deg or to_mm")
+    try:
+        goal_kind = Objective(objective)
+    except ValueError:
+        valid = ", ".join(o.value for o in Objective)
+        raise InvalidInputError(f"objective must be one of {valid}, got {objective!r}") from None
+    with time_limit(time_limit_s):
+        the_arm, the_scene = arm_and_scene(arm, scene)
+        start = _start_ticks(the_arm, start_deg)
+        options = MotionOptions(objective=goal_kind, seed=seed)
+        world = the_scene.world
+        target = None
+        if to_mm is not None:
+            target = _point(to_mm, "to_mm")
+            goals, _ = goal_states(
+                the_arm, world, start, target * _length_scale(the_arm), tolerance_mm
+            )
+            found = plan_motion(the_arm, world, start, goals, options, turn_copies=True)
+        else:
+            goal = the_arm.lattice.from_display(np.asarray(to_deg, dtype=np.float64), "to_deg")
+            found = plan_motion(the_arm, world, start, goal[None, :], options)
+        doc = plan_result_dict(
+            found,
+            the_arm,
+            the_scene,
+            goal_kind.value,
+            target,
+            tolerance_mm if target is not None else None,
+        )
+    return _result(doc, the_arm, the_scene, found.sequence)
+
+
+def trace(
+    arm: ArmLike | None,
+    curve: Curve | ArrayLike | None = None,
+    *,
+    scene: SceneLike | None = None,
+    start_deg: ArrayLike | None = None,
+    tolerance_mm: float = 0.1,
+    closed: bool = False,
+    seed: int = 0,
+    time_limit_s: float | None = None,
+) -> Result:
+    """Go along ``curve`` with the tool (a :class:`~armpath.geometry.curves.Curve`, or points
+    ``(M, 3)`` mm joined by straight pieces, ``closed`` back to the first; default: the
+    scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it, every reachable part, in
+    the fewest passes and commands; the document lists the arcs not traced and why."""
+    from armpath.export import trace_result_dict
+    from armpath.geometry.curves import Curve, Polyline
+    from armpath.planning.motion import MotionOptions
+    from armpath.planning.trace import TraceOptions
+    from armpath.tasks import trace_task
+
+    with time_limit(time_limit_s):
+        the_arm, the_scene = arm_and_scene(arm, scene)
+        path: Curve | None
+        if curve is None or isinstance(curve, Curve):
+            path = curve
+        else:
+            vertices = np.asarray(curve, dtype=np.float64) * _length_scale(the_arm)
+            path = Polyline("curve", vertices, closed=closed)
+        options = TraceOptions(tolerance_mm=tolerance_mm, motion=MotionOptions(seed=seed))
+        found = trace_task(
+            the_scene,
+            the_arm,
+            options,
+            start_ticks=_start_ticks(the_arm, start_deg),
+            curve=path,
+        )
+        doc = trace_result_dict(found, the_arm, the_scene)
+    return _result(doc, the_arm, the_scene, found.sequence)
+
+
+def spotweld(
+    arm: ArmLike | None,
+    welds_mm: ArrayLike | None = None,
+    *,
+    scene: SceneLike | None = None,
+    start_deg: ArrayLike | None = None,
+    order: str = "auto",
+    return_to_start: bool = False,
+    tolerance_mm: float = 0.05,
+    objective: str = "commands",
+    seed: int = 0,
+    time_limit_s: float | None = None,
+) -> Result:
+    """Visit the spot welds ``welds_mm (K, 3)`` (default: the scene's ``[tasks.spotweld]``)
+    in the best order (``order="auto"``: every order ranked by its lower bound, the best
+    planned; ``"given"``: as listed), optionally back to the start."""
+    from armpath.export import tour_result_dict
+    from armpath.planning.choices import Objective
+    from armpath.planning.motion import MotionOptions
+    from armpath.tasks import spotweld_task
+
+    try:
+        goal_kind = Objective(objective)
+    except ValueError:
+        valid = ", ".join(o.value for o in Objective)
+        raise InvalidInputError(f"objective must be one of {valid}, got {objective!r}") from None
+    with time_limit(time_limit_s):
+        the_arm, the_scene = arm_and_scene(arm, scene)
+        targets = None
+        if welds_mm is not None:
+            targets = np.asarray(welds_mm, dtype=np.float64)
+            if targets.ndim != 2 or targets.shape[1] != 3 or not np.all(np.isfinite(targets)):
+                raise InvalidInputError(
+                    f"welds_mm must be (K, 3) finite points (mm), got shape {targets.shape}"
+                )
+            targets = targets * _length_scale(the_arm)
+        found = spotweld_task(
+            the_scene,
+            the_arm,
+            order,
+            return_to_start,
+            tolerance_mm,
+            MotionOptions(objective=goal_kind, seed=seed),
+            start_ticks=_start_ticks(the_arm, start_deg),
+            targets_mm=targets,
+        )
+        doc = tour_result_dict(found, the_arm, the_scene, goal_kind.value)
+    return _result(doc, the_arm, the_scene, found.sequence)
+
+
+__all__ = [
+    "ALONE_SCENE",
+    "ArmLike",
+    "SceneLike",
+    "arm_and_scene",
+    "default_scene",
+    "load_arm",
+    "load_result",
+    "load_scene",
+    "plan",
+    "reach",
+    "spotweld",
+    "trace",
+]

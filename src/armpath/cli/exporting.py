@@ -1,0 +1,75 @@
+"""``armpath export``: a result file's commands as a timed trajectory for a controller."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from armpath.cli.common import _cli_errors, _numbers, app, out_console
+
+
+@app.command("export")
+def export_result(
+    result_file: Annotated[
+        Path,
+        typer.Argument(
+            help="A result file (reach.json, trace.json, ... or --json output).", show_default=False
+        ),
+    ],
+    fmt: Annotated[
+        str,
+        typer.Option(
+            "--format",
+            help="csv: time and joint values (deg / mm); joint-trajectory: the ROS "
+            "trajectory_msgs/JointTrajectory layout as JSON (rad); steps: motor steps per "
+            "command.",
+        ),
+    ] = "csv",
+    command_period: Annotated[
+        float | None,
+        typer.Option(
+            "--command-period",
+            help="Seconds per command (default 0.1).",
+            show_default=False,
+        ),
+    ] = None,
+    steps_per_tick: Annotated[
+        str | None,
+        typer.Option(
+            "--steps-per-tick",
+            metavar="N|N1,…,Nn",
+            help="Motor steps per tick: one number for every joint or one per joint (default 1).",
+            show_default=False,
+        ),
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write to this file (default: print).", show_default=False),
+    ] = None,
+) -> None:
+    """Convert a result's commands into a timed trajectory: the state after command k is
+    reached at k times the command period, each command moving the joints linearly."""
+    from armpath.controller_export import FORMATS
+    from armpath.errors import InvalidInputError
+    from armpath.export import output_folder
+    from armpath.results import load_result
+
+    with _cli_errors():
+        if fmt not in FORMATS:
+            raise InvalidInputError(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+        result = load_result(result_file)
+        steps: list[float] | None = None
+        if steps_per_tick is not None:
+            words = steps_per_tick.replace(",", " ").split()
+            count = 1 if len(words) == 1 else result.arm.n_joints
+            steps = _numbers(words, count, "--steps-per-tick") * (result.arm.n_joints // count)
+        text = result.export_text(fmt, command_period, steps)
+        if out is None:
+            typer.echo(text, nl=False)
+            return
+        target = out.expanduser()
+        with output_folder(target.parent, prune=False) as folder:
+            folder.write_text(target.name, text)
+        out_console.print(f"wrote {target}", markup=False)

@@ -1,0 +1,186 @@
+"""A result's commands as a timed trajectory a controller or a ROS tool can take.
+
+Each command moves every joint at once, linearly, over one command period: the state after
+command ``k`` is reached at ``t = k * period``. Three forms:
+
+* :func:`trajectory_csv`: one row per state, ``time_s`` then each joint's value (deg, or mm
+  for a prismatic joint);
+* :func:`joint_trajectory`: the ROS ``trajectory_msgs/JointTrajectory`` message layout as JSON
+  (``joint_names``; ``points`` with ``positions`` in rad, or m for a prismatic joint as ROS
+  expects, ``velocities``, ``time_from_start`` as ``{sec, nanosec}``);
+* :func:`step_counts`: per command, each joint's motor steps (its ticks times its steps per
+  tick), for stepper controllers.
+
+Times are whole nanoseconds (``k * period_ns``), so they increase strictly and exactly. A
+point's velocity is the central difference of its neighbours (one-sided at the ends, zero at
+the start and the end where the arm is at rest): what a spline-interpolating controller
+expects. The motion armpath certified is the linear one between points; a controller that
+splines through them deviates from it by its own interpolation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armpath.errors import InvalidInputError
+from armpath.export import csv_text
+from armpath.model.serial_arm import JointKind
+from armpath.results import Result
+
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
+#: The command period used when none is given (s): the seed controller's documents name none;
+#: 0.1 s moves a joint by at most 2 deg per period (20 deg/s).
+DEFAULT_COMMAND_PERIOD_S = 0.1
+#: Shortest and longest command period accepted (s).
+MIN_COMMAND_PERIOD_S, MAX_COMMAND_PERIOD_S = 1e-6, 3600.0
+#: Largest number of motor steps per tick accepted.
+MAX_STEPS_PER_TICK = 1_000_000
+#: The export formats of ``armpath export``.
+FORMATS = ("csv", "joint-trajectory", "steps")
+
+
+def _period_ns(period_s: float) -> int:
+    if not (math.isfinite(period_s) and MIN_COMMAND_PERIOD_S <= period_s <= MAX_COMMAND_PERIOD_S):
+        raise InvalidInputError(
+            f"the command period must be between {MIN_COMMAND_PERIOD_S:g} and "
+            f"{MAX_COMMAND_PERIOD_S:g} s, got {period_s}"
+        )
+    return round(period_s * 1e9)
+
+
+def state_times_ns(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S) -> IntArray:
+    """Time of each state ``(n_commands + 1,)``, integer nanoseconds from the start."""
+    return np.arange(result.n_commands + 1, dtype=np.int64) * _period_ns(period_s)
+
+
+def trajectory_csv(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S) -> str:
+    """CSV: ``time_s`` and each joint's value after each command (deg, mm if prismatic)."""
+    t = state_times_ns(result, period_s)
+    values = result.states_deg
+    units = result.arm.lattice.units
+    header = ["time_s"] + [f"{j.name}_{u}" for j, u in zip(result.arm.joints, units, strict=True)]
+    rows = [
+        [f"{int(tk) / 1e9:.9f}", *(f"{v:.6f}" for v in row)]
+        for tk, row in zip(t, values, strict=True)
+    ]
+    return csv_text(header, rows)
+
+
+def _ros_positions(result: Result) -> FloatArray:
+    """Joint positions as ROS expects them: rad, or m for a prismatic joint."""
+    q = result.states_rad
+    to_m = 1.0 if result.arm.length_unit == "m" else 1e-3
+    prismatic = np.array([j.kind == JointKind.PRISMATIC for j in result.arm.joints])
+    return np.asarray(np.where(prismatic, q * to_m, q))
+
+
+def point_velocities(positions: ArrayLike, times_s: ArrayLike) -> FloatArray:
+    """Velocities at the points: central differences inside, zero at the first and last
+    point (the arm starts and ends at rest)."""
+    p = np.asarray(positions, dtype=np.float64)
+    t = np.asarray(times_s, dtype=np.float64)
+    v = np.zeros_like(p)
+    if p.shape[0] > 2:
+        v[1:-1] = (p[2:] - p[:-2]) / (t[2:] - t[:-2])[:, None]
+    return v
+
+
+def joint_trajectory(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S) -> dict[str, Any]:
+    """The ``trajectory_msgs/JointTrajectory`` message of the result (a JSON-ready dict)."""
+    t_ns = state_times_ns(result, period_s)
+    positions = _ros_positions(result)
+    velocities = point_velocities(positions, t_ns / 1e9)
+    points = [
+        {
+            "positions": [float(x) for x in pos],
+            "velocities": [float(x) for x in vel],
+            "accelerations": [],
+            "effort": [],
+            "time_from_start": {
+                "sec": int(tk // 1_000_000_000),
+                "nanosec": int(tk % 1_000_000_000),
+            },
+        }
+        for pos, vel, tk in zip(positions, velocities, t_ns, strict=True)
+    ]
+    return {
+        "header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
+        "joint_names": [j.name for j in result.arm.joints],
+        "points": points,
+    }
+
+
+def steps_per_tick_of(result: Result, steps_per_tick: ArrayLike | None) -> IntArray:
+    """Each joint's motor steps per tick: one value for every joint, one per joint, or None
+    (1: a step is a tick)."""
+    n = result.arm.n_joints
+    if steps_per_tick is None:
+        return np.ones(n, dtype=np.int64)
+    s = np.asarray(steps_per_tick)
+    if s.ndim == 0:
+        s = np.full(n, s)
+    if s.shape != (n,) or not np.all(np.isfinite(s.astype(float))):
+        raise InvalidInputError(f"steps per tick: one value or {n} values, got {s.tolist()}")
+    if not np.all(s == np.round(s)) or not np.all((s >= 1) & (s <= MAX_STEPS_PER_TICK)):
+        raise InvalidInputError(
+            f"steps per tick must be whole numbers in [1, {MAX_STEPS_PER_TICK:,}], got {s.tolist()}"
+        )
+    return s.astype(np.int64)
+
+
+def step_counts(result: Result, steps_per_tick: ArrayLike | None = None) -> IntArray:
+    """Motor steps of each joint in each command, ``(n_commands, n_joints)``."""
+    return np.asarray(result.commands * steps_per_tick_of(result, steps_per_tick)[None, :])
+
+
+def steps_csv(
+    result: Result,
+    steps_per_tick: ArrayLike | None = None,
+    period_s: float = DEFAULT_COMMAND_PERIOD_S,
+) -> str:
+    """CSV: per command, its start time (s) and each joint's motor steps."""
+    steps = step_counts(result, steps_per_tick)
+    t = state_times_ns(result, period_s)[:-1]
+    header = ["command", "start_s"] + [f"{j.name}_steps" for j in result.arm.joints]
+    rows = [
+        [k + 1, f"{int(tk) / 1e9:.9f}", *(int(v) for v in row)]
+        for k, (tk, row) in enumerate(zip(t, steps, strict=True))
+    ]
+    return csv_text(header, rows)
+
+
+def export_text(
+    result: Result,
+    fmt: str,
+    period_s: float = DEFAULT_COMMAND_PERIOD_S,
+    steps_per_tick: ArrayLike | None = None,
+) -> str:
+    """The result in ``fmt`` (one of :data:`FORMATS`) as text."""
+    from armpath.export import json_text
+
+    if fmt == "csv":
+        return trajectory_csv(result, period_s)
+    if fmt == "joint-trajectory":
+        return json_text(joint_trajectory(result, period_s))
+    if fmt == "steps":
+        return steps_csv(result, steps_per_tick, period_s)
+    raise InvalidInputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+
+
+__all__ = [
+    "DEFAULT_COMMAND_PERIOD_S",
+    "FORMATS",
+    "export_text",
+    "joint_trajectory",
+    "point_velocities",
+    "state_times_ns",
+    "step_counts",
+    "steps_csv",
+    "trajectory_csv",
+]

@@ -1,0 +1,265 @@
+"""The Python API (issue 19): docs/api.md runs as written; results are the CLI's documents and
+replay independently; poses in every accepted form agree; exported trajectories replay to the
+commanded states with consistent times and velocities."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import independent
+import independent_replay as ir
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def seed_reach():
+    import armpath
+
+    return armpath.reach("seed", [300.0, 100.0, 200.0])
+
+
+def test_docs_api_examples_run(tmp_path, monkeypatch):
+    """Every ```python block of docs/api.md, in order, in one namespace, in a scratch folder."""
+    text = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert len(blocks) >= 7
+    covered = " ".join(blocks)
+    for call in (
+        "armpath.reach(",
+        "armpath.trace(",
+        "armpath.plan(",
+        "scene=cell",
+        ".save(",
+        "armpath.load_result(",
+        '("wxyz"',
+        "joint_trajectory(",
+    ):
+        assert call in covered, call
+    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    for block in blocks:
+        exec(compile(block, str(ROOT / "docs" / "api.md"), "exec"), namespace)
+    # what the examples computed, checked independently
+    result = namespace["result"]
+    tip = independent.points(result.states_deg[-1])[-1]
+    assert np.linalg.norm(tip - [300.0, 100.0, 200.0]) <= 0.05
+    assert (tmp_path / "reach.json").is_file() and (tmp_path / "reach_joints.png").is_file()
+    traced = namespace["traced"]
+    rep = ir.replay_result(
+        traced.doc,
+        ir.Scene.from_spec({"name": "none", "obstacles": []}),
+        ir.Truth(
+            start_deg=[0, -90, 0, 0, -90, 0],
+            curve=ir.polyline_curve(namespace["square"], closed=True),
+            tolerance=0.1,
+        ),
+    )
+    assert rep.ok, rep.problems
+    assert rep.facts["max_deviation_mm"] <= 0.1
+
+
+def test_reach_is_the_clis_document_and_replays(seed_reach, tmp_path):
+    """The API's document equals ``armpath reach --json`` for the same request, and the
+    independent replay accepts it (limits, target, clearance)."""
+    cli = subprocess.run(
+        [sys.executable, "-m", "armpath", "reach", "300", "100", "200", "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=tmp_path,
+    )
+    assert json.loads(cli.stdout) == seed_reach.doc
+    rep = ir.replay_result(
+        seed_reach.doc, truth=ir.Truth(start_deg=[0, -90, 0, 0, -90, 0], target=[300, 100, 200])
+    )
+    assert rep.ok, rep.problems
+    states = independent.replay([0, -90, 0, 0, -90, 0], seed_reach.commands)
+    np.testing.assert_allclose(seed_reach.states_deg, states, atol=1e-9)
+    np.testing.assert_allclose(
+        seed_reach.tool_positions_mm, independent.points(states)[:, -1], atol=1e-9
+    )
+
+
+def test_saved_result_loads_back_and_views_anywhere(seed_reach, tmp_path):
+    import armpath
+
+    path = seed_reach.save(tmp_path / "sub" / "r.json")
+    assert json.loads(path.read_text(encoding="utf-8")) == seed_reach.doc
+    back = armpath.load_result(path)
+    assert back.n_commands == seed_reach.n_commands and back.path == path
+    np.testing.assert_array_equal(back.commands, seed_reach.commands)
+    assert "n_commands=41" in repr(back) and "lower_bound_commands=41" in repr(back)
+    fig = back.plot()
+    assert len(fig.axes) == 6
+
+
+def test_poses_in_every_form_agree():
+    from scipy.spatial.transform import Rotation
+
+    from armpath.errors import InvalidInputError
+    from armpath.poses import pose_matrix, rotation_matrix
+
+    r = Rotation.from_euler("zyx", [30, -20, 75], degrees=True)
+    m = r.as_matrix()
+    xyzw = r.as_quat()
+    wxyz = np.roll(xyzw, 1)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = m, [1.0, 2.0, 3.0]
+    for form in (r, m, T, ("xyzw", xyzw), ("wxyz", wxyz)):
+        np.testing.assert_allclose(rotation_matrix(form), m, atol=1e-12)
+    np.testing.assert_allclose(pose_matrix(T)[:3, 3], [1.0, 2.0, 3.0])
+    for bad, message in (
+        (xyzw, "must say its order"),
+        (("wxzy", wxyz), "order must be one of"),
+        (("wxyz", 2 * wxyz), "unit length"),
+        (m * 2, "orthonormal"),
+        (np.diag([1.0, 1.0, -1.0]), "determinant"),
+        (np.zeros((2, 2)), "a pose must be"),
+    ):
+        with pytest.raises(InvalidInputError, match=message):
+            rotation_matrix(bad)
+
+
+def test_a_quaternion_pose_is_reached_within_its_angle():
+    """The tool frame of the final state (independent DH product for the UR5) is within the
+    angle tolerance of the quaternion asked for, and the tool point within 0.05 mm."""
+    from scipy.spatial.transform import Rotation
+
+    import armpath
+    from independent_dh import dh_pose
+
+    down = Rotation.from_euler("x", 180, degrees=True)
+    posed = armpath.reach(
+        "ur5", [400.0, 100.0, 300.0], pose=("xyzw", down.as_quat()), angle_tolerance_deg=2.0
+    )
+    d = np.pi / 180  # the UR5's standard D-H table (Universal Robots' published values)
+    T = dh_pose(
+        [0, -425.0, -392.25, 0, 0, 0],
+        [90 * d, 0, 0, 90 * d, -90 * d, 0],
+        [89.159, 0, 0, 109.15, 94.65, 82.3],
+        np.radians(posed.states_deg[-1]),
+    )
+    assert np.linalg.norm(T[:3, 3] - [400.0, 100.0, 300.0]) <= 0.05
+    angle = np.degrees((Rotation.from_matrix(T[:3, :3]) * down.inv()).magnitude())
+    assert angle <= 2.0 + 1e-6
+
+
+def test_joint_trajectory_replays_the_commands(seed_reach):
+    """Positions back on the lattice are the commanded states; times strictly increase by the
+    period in whole nanoseconds; interior velocities are the central differences and equal the
+    mean of the two commands' joint speeds; the ends are at rest."""
+    period = 0.037
+    msg = seed_reach.joint_trajectory(period_s=period)
+    assert msg["joint_names"] == [f"theta{i}" for i in range(1, 7)]
+    pts = msg["points"]
+    assert len(pts) == seed_reach.n_commands + 1
+    pos = np.array([p["positions"] for p in pts])
+    ticks = pos / (math.pi / 1800.0)
+    start = np.array([0, -900, 0, 0, -900, 0])
+    np.testing.assert_allclose(
+        ticks, start + np.vstack([0 * start, np.cumsum(seed_reach.commands, 0)]), atol=1e-6
+    )
+    t_ns = np.array(
+        [p["time_from_start"]["sec"] * 10**9 + p["time_from_start"]["nanosec"] for p in pts]
+    )
+    assert all(0 <= p["time_from_start"]["nanosec"] < 10**9 for p in pts)
+    np.testing.assert_array_equal(np.diff(t_ns), round(period * 1e9))
+    vel = np.array([p["velocities"] for p in pts])
+    speeds = np.diff(pos, axis=0) / period  # each command's joint speed (rad/s)
+    np.testing.assert_allclose(vel[1:-1], 0.5 * (speeds[1:] + speeds[:-1]), atol=1e-9)
+    assert np.all(vel[0] == 0) and np.all(vel[-1] == 0)
+
+
+def test_csv_and_steps_exports(seed_reach):
+    rows = [line.split(",") for line in seed_reach.export_text("csv", 0.25).splitlines()]
+    assert rows[0][0] == "time_s" and rows[0][1] == "theta1_deg"
+    values = np.array(rows[1:], dtype=float)
+    np.testing.assert_allclose(values[:, 0], 0.25 * np.arange(seed_reach.n_commands + 1))
+    np.testing.assert_allclose(values[:, 1:], seed_reach.states_deg, atol=1e-6)
+    steps = np.array(
+        [
+            r.split(",")
+            for r in seed_reach.export_text(
+                "steps", steps_per_tick=[1, 2, 3, 4, 5, 6]
+            ).splitlines()[1:]
+        ],
+        dtype=float,
+    )
+    np.testing.assert_array_equal(steps[:, 2:], seed_reach.commands * np.arange(1, 7))
+    np.testing.assert_array_equal(steps[:, 0], np.arange(1, seed_reach.n_commands + 1))
+
+
+def test_cli_export_writes_or_refuses(seed_reach, tmp_path):
+    src = seed_reach.save(tmp_path / "reach.json")
+    out = tmp_path / "traj.json"
+    ok = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "armpath",
+            "export",
+            str(src),
+            "--format",
+            "joint-trajectory",
+            "--command-period",
+            "0.05",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(out.read_text())["points"][2]["time_from_start"] == {
+        "sec": 0,
+        "nanosec": 100000000,
+    }
+    for args, message in (
+        (["--format", "ros"], "--format must be one of"),
+        (["--command-period", "0"], "command period must be between"),
+        (["--steps-per-tick", "1,2"], "--steps-per-tick"),
+    ):
+        bad = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "armpath",
+                "export",
+                str(src),
+                *args,
+                "--out",
+                str(tmp_path / "x"),
+            ],
+            capture_output=True,
+            text=True,
+        )
+        assert bad.returncode == 1 and bad.stderr.startswith("error:") and message in bad.stderr
+        assert len(bad.stderr.strip().splitlines()) == 1
+        assert not (tmp_path / "x").exists()
+
+
+def test_api_refuses_bad_input_with_clear_errors():
+    import armpath
+    from armpath.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match="target_mm must be three"):
+        armpath.reach("seed", [1.0, 2.0])
+    with pytest.raises(InvalidInputError, match="exactly one goal"):
+        armpath.plan("seed")
+    with pytest.raises(InvalidInputError, match="objective must be one of"):
+        armpath.plan("seed", to_deg=[0, -90, 0, 0, -90, 0], objective="fast")
+    with pytest.raises(InvalidInputError, match="welds_mm must be"):
+        armpath.spotweld("seed", [[1.0, 2.0]])
+    with pytest.raises(InvalidInputError, match="start_deg"):
+        armpath.reach("seed", [300.0, 100.0, 200.0], start_deg=[0.05, -90, 0, 0, -90, 0])
