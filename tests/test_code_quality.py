@@ -17,7 +17,18 @@ LAYERS = [
     {"commands"},
     {"scenes", "planning", "workspace", "trajectory"},
     {"tasks"},
-    {"export", "results", "controller_export", "report", "viz", "viewer", "api", "cli", "__main__"},
+    {
+        "export",
+        "results",
+        "schemas",
+        "controller_export",
+        "report",
+        "viz",
+        "viewer",
+        "api",
+        "cli",
+        "__main__",
+    },
 ]
 
 

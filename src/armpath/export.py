@@ -23,6 +23,7 @@ from armpath.errors import OutputError
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.model.serialize import arm_to_dict
+from armpath.schemas import SCHEMA_VERSION
 
 if TYPE_CHECKING:  # the result types, for annotations only: writing a result needs no planner
     from armpath.planning.motion import MotionPlan, PlanMetrics
@@ -105,6 +106,7 @@ def _document_head(task: str, arm: SerialArm, scene: Scene) -> dict[str, Any]:
     wall = scene.wall_thickness
     return {
         "task": task,
+        "schema_version": SCHEMA_VERSION,
         "armpath_version": __version__,
         "model": model_dict(arm),
         "scene": scene.describe(),

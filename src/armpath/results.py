@@ -18,6 +18,7 @@ from armpath.model.seed_arm import seed_arm, seed_geometry_from
 from armpath.model.serial_arm import SerialArm
 from armpath.model.serialize import arm_from_dict
 from armpath.scenes import Scene, load_scene, scene_from_dict
+from armpath.schemas import SCHEMA_VERSION
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -221,6 +222,12 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
     if not isinstance(doc, dict) or doc.get("task") not in RESULT_TASKS:
         raise InvalidInputError(
             f"result file {p}: expected an armpath result with task one of {RESULT_TASKS}"
+        )
+    version = doc.get("schema_version", 1)
+    if not isinstance(version, int) or version > SCHEMA_VERSION:
+        raise InvalidInputError(
+            f"result file {p}: schema_version {version!r} is newer than this armpath reads "
+            f"({SCHEMA_VERSION}); update armpath"
         )
     arm = _arm(doc.get("model", {}))
     try:

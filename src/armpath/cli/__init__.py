@@ -5,7 +5,7 @@ Every error armpath detects is printed as one line ``error: ...`` on stderr with
 usage errors (unknown option, missing or malformed value) are one ``error:`` line too, exit
 status 2. Each module registers its commands on the shared app: kinematics (fk, ik), tasks
 (reach, plan, spotweld, trace, run), workspace (workspace, blindzones, design-sweep), motion
-(trajectory, rcm), viewing (view, animate) and exporting (export).
+(trajectory, rcm), viewing (view, animate) and exporting (export, schema).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""``armpath export``: a result file's commands as a timed trajectory for a controller."""
+"""``armpath export`` (a result file's commands as a timed trajectory for a controller) and
+``armpath schema`` (the JSON Schema of a result kind)."""
 
 from __future__ import annotations
 
@@ -73,3 +74,20 @@ def export_result(
         with output_folder(target.parent, prune=False) as folder:
             folder.write_text(target.name, text)
         out_console.print(f"wrote {target}", markup=False)
+
+
+@app.command("schema")
+def schema(
+    kind: Annotated[
+        str,
+        typer.Argument(help="The result kind: reach, plan, trace or spotweld.", show_default=False),
+    ],
+) -> None:
+    """Print the JSON Schema (draft 2020-12) of a result kind's documents: every field, its type
+    and unit. Results carry the schema_version it describes."""
+    import json
+
+    from armpath.schemas import result_schema
+
+    with _cli_errors():
+        typer.echo(json.dumps(result_schema(kind), indent=2, ensure_ascii=False))
