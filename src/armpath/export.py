@@ -487,6 +487,11 @@ def _tidy(value: Any) -> Any:
     return value
 
 
+def json_line(doc: dict[str, Any]) -> str:
+    """``doc`` as one line of JSON, floats tidied like :func:`json_text`."""
+    return json.dumps(_tidy(doc), allow_nan=False)
+
+
 def json_text(doc: dict[str, Any]) -> str:
     """A result document as JSON text: floats tidied (see :func:`_tidy`), never NaN or inf."""
     return json.dumps(_tidy(doc), indent=2, allow_nan=False) + "\n"

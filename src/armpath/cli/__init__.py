@@ -3,9 +3,10 @@
 Angles on the command line are degrees, lengths mm; command increments are ticks of 0.1 deg.
 Every error armpath detects is printed as one line ``error: ...`` on stderr with exit status 1;
 usage errors (unknown option, missing or malformed value) are one ``error:`` line too, exit
-status 2. Each module registers its commands on the shared app: kinematics (fk, ik), tasks
-(reach, plan, spotweld, trace, run), workspace (workspace, blindzones, design-sweep), motion
-(trajectory, rcm), viewing (view, animate) and exporting (export, schema).
+status 2. Each module registers its commands on the shared app: kinematics (fk, ik), models
+(model show, model convert), tasks (reach, plan, spotweld, trace, run), workspace (workspace,
+blindzones, design-sweep), motion (trajectory, rcm), viewing (view, animate) and exporting
+(export, schema).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from armpath.cli.common import app, err_console, out_console
 from armpath.errors import ArmpathError
 
 # Register the commands, in the order --help lists them.
-for _module in ("kinematics", "tasks", "workspace", "motion", "viewing", "exporting"):
+for _module in ("kinematics", "models", "tasks", "workspace", "motion", "viewing", "exporting"):
     importlib.import_module(f"armpath.cli.{_module}")
 
 

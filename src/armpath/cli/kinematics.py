@@ -69,7 +69,9 @@ def fk(
                 "pose": [[float(c) for c in row] for row in pose],
                 "units": {"length": "mm", "angle": "deg", "joints": units},
             }
-            typer.echo(json.dumps(doc))
+            from armpath.export import json_line
+
+            typer.echo(json_line(doc))
         else:
             shown = _fmt(_to_display(arm, q), 1)
             table = Table(title=f"{arm.name}, q = {shown} ({', '.join(sorted(set(units)))})")

@@ -283,7 +283,8 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
 
 
 def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
-    """Load a robot from a JSON D-H file (``.json``) or a URDF (``.urdf``, up to ``tip_link``,
+    """Load a robot from a JSON file (``.json``: a D-H table, or armpath's model document as
+    ``armpath model convert --to json`` writes it) or a URDF (``.urdf``, up to ``tip_link``,
     default its deepest leaf link); lengths become mm."""
     p = Path(path)
     if not p.is_file():
@@ -301,4 +302,8 @@ def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise InvalidInputError(f"robot file {p.name!r} is not valid JSON: {exc}") from exc
+    if isinstance(doc, dict) and "joints" in doc and "version" in doc:
+        from armpath.model.serialize import arm_from_dict  # armpath's own model document
+
+        return arm_from_dict(doc, f"robot file {p.name!r}")
     return robot_from_dict(doc, name=p.stem)

@@ -1,0 +1,121 @@
+"""``armpath model show`` and ``armpath model convert``: look at a model, write it as a URDF or
+as armpath's model document."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from armpath.cli.common import TipLinkOption, _cli_errors, _to_display, app, out_console
+from armpath.model.catalog import BUILTIN_MODELS
+
+model_app = typer.Typer(
+    help="Look at an arm model and convert it (URDF, armpath's JSON model document)."
+)
+app.add_typer(model_app, name="model")
+
+
+@model_app.callback(invoke_without_command=True)
+def _model_help(ctx: typer.Context) -> None:
+    if ctx.invoked_subcommand is None:  # plain `armpath model`: its help, not an error
+        typer.echo(ctx.get_help())
+        raise typer.Exit(0)
+
+
+ModelArgument = Annotated[
+    str,
+    typer.Argument(
+        help=f"A built-in model ({', '.join(BUILTIN_MODELS)}) or a robot file (.json, .urdf).",
+        show_default=False,
+    ),
+]
+#: The formats ``model convert`` writes.
+CONVERT_FORMATS = ("urdf", "json")
+
+
+@model_app.command("show")
+def show(
+    model: ModelArgument,
+    tip_link: TipLinkOption = None,
+    json_out: Annotated[bool, typer.Option("--json", help="Print the model document.")] = False,
+) -> None:
+    """The model's joints (placement, axis, limits, command lattice), tool and base."""
+    from armpath.export import json_text
+    from armpath.model.catalog import resolve_model
+    from armpath.model.serialize import arm_to_dict
+
+    with _cli_errors():
+        arm = resolve_model(model, tip_link)
+        if json_out:
+            typer.echo(json_text(arm_to_dict(arm)), nl=False)
+            return
+        units = arm.lattice.units
+        table = Table(title=f"{arm.name}: {arm.n_joints} joints, lengths in {arm.length_unit}")
+        for col in ("joint", "kind", "axis", "limits", "tick", "max ticks"):
+            table.add_column(col)
+        shown_limits = _to_display(arm, np.vstack([arm.lower, arm.upper]))
+        for i, j in enumerate(arm.joints):
+            lo, hi = shown_limits[:, i]
+            lim = "none" if not (np.isfinite(lo) or np.isfinite(hi)) else f"{lo:g} … {hi:g}"
+            table.add_row(
+                j.name,
+                j.kind.value,
+                " ".join(f"{v:g}" for v in j.axis),
+                f"{lim} {units[i]}",
+                f"{arm.lattice.tick_display[i]:g} {units[i]}",
+                str(int(arm.lattice.max_ticks[i])),
+            )
+        out_console.print(table)
+        tool = np.asarray(arm.T_flange_tool)
+        out_console.print(
+            f"tool: {' '.join(f'{v:g}' for v in tool[:3, 3])} {arm.length_unit} from the flange, "
+            f"approach axis {' '.join(f'{v:g}' for v in arm.approach_axis)} (tool frame)",
+            markup=False,
+        )
+        base = np.asarray(arm.T_world_base)
+        out_console.print(
+            f"base at {' '.join(f'{v:g}' for v in base[:3, 3])} {arm.length_unit}; home "
+            f"{' '.join(f'{v:g}' for v in arm.lattice.display(arm.home))} ({', '.join(units)})",
+            markup=False,
+        )
+
+
+@model_app.command("convert")
+def convert(
+    model: ModelArgument,
+    to: Annotated[
+        str,
+        typer.Option(
+            "--to",
+            help="urdf (chain, limits and tool; metres) or json (armpath's model document: "
+            "also the command lattice, home pose and link radii; loads with --model).",
+            show_default=False,
+        ),
+    ],
+    out: Annotated[Path, typer.Option("--out", help="The file to write.", show_default=False)],
+    tip_link: TipLinkOption = None,
+) -> None:
+    """Write the model as a URDF or as armpath's model document; either loads back with the
+    same forward kinematics (--model FILE, a URDF with --tip-link tool)."""
+    from armpath.errors import InvalidInputError
+    from armpath.export import json_text, output_folder
+    from armpath.model.catalog import resolve_model
+    from armpath.model.serialize import arm_to_dict
+    from armpath.model.urdf_export import arm_to_urdf
+
+    with _cli_errors():
+        if to not in CONVERT_FORMATS:
+            raise InvalidInputError(f"--to must be one of {', '.join(CONVERT_FORMATS)}, got {to!r}")
+        wanted = ".urdf" if to == "urdf" else ".json"
+        if out.suffix.lower() != wanted:
+            raise InvalidInputError(f"--out must end in {wanted} for --to {to}, got {out.name!r}")
+        arm = resolve_model(model, tip_link)
+        text = arm_to_urdf(arm) if to == "urdf" else json_text(arm_to_dict(arm))
+        target = out.expanduser()
+        with output_folder(target.parent, prune=False) as folder:
+            folder.write_text(target.name, text)
+        out_console.print(f"wrote {target}", markup=False)

@@ -1,0 +1,90 @@
+"""``armpath model show|convert`` (issue 19, item 5): a model written as URDF loads back with the
+same forward kinematics (checked with yourdfpy's own kinematics, not armpath's) and as
+armpath's JSON model document loads back with --model."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from armpath.kinematics import tool_pose
+from armpath.model.catalog import BUILTIN_MODELS
+from armpath.model.serial_arm import SerialArm
+from armpath.model.urdf import arm_from_urdf
+from armpath.model.urdf_export import arm_to_urdf
+
+
+def _random_q(arm: SerialArm, count: int, seed: int) -> np.ndarray:
+    lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+    hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    return np.random.default_rng(seed).uniform(lo, hi, (count, arm.n_joints))
+
+
+def _placed_ur5() -> SerialArm:
+    from pathlib import Path
+
+    from armpath.scenes import load_scene
+    from armpath.scenes.arm import scene_arm
+
+    cell = Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml"
+    return scene_arm(load_scene(cell))  # on its pedestal, with a 120 mm torch
+
+
+@pytest.mark.parametrize("name", [*BUILTIN_MODELS, "ur5 in the cell"])
+def test_urdf_export_has_the_same_kinematics(name, tmp_path):
+    import yourdfpy
+
+    arm = _placed_ur5() if name == "ur5 in the cell" else BUILTIN_MODELS[name]()
+    path = tmp_path / "arm.urdf"
+    path.write_text(arm_to_urdf(arm), encoding="utf-8")
+    q = _random_q(arm, 40, seed=len(name))
+    want = tool_pose(arm, q)
+    # armpath reads it back
+    back = arm_from_urdf(path, "tool")
+    got = tool_pose(back, q)
+    assert np.abs(got[:, :3, 3] - want[:, :3, 3]).max() <= 1e-9
+    assert np.abs(got[:, :3, :3] - want[:, :3, :3]).max() <= 1e-12
+    # yourdfpy's own forward kinematics (metres) agrees
+    urdf = yourdfpy.URDF.load(str(path), load_meshes=False)
+    names = [j.name for j in arm.joints]
+    to_urdf = np.where([j.kind.value == "prismatic" for j in arm.joints], 1e-3, 1.0)  # mm -> m
+    for row, T in zip(q[:8], want[:8], strict=True):
+        urdf.update_cfg(dict(zip(names, row * to_urdf, strict=True)))
+        peer = urdf.get_transform("tool", "world")
+        assert np.abs(peer[:3, 3] * 1000.0 - T[:3, 3]).max() <= 1e-9
+        assert np.abs(peer[:3, :3] - T[:3, :3]).max() <= 1e-12
+
+
+def _cli(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "armpath", *args], capture_output=True, text=True, cwd=cwd
+    )
+
+
+def test_cli_convert_to_json_loads_back_with_model(tmp_path):
+    out = tmp_path / "painter.json"
+    r = _cli("model", "convert", "painter004", "--to", "json", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    q = ["10", "20", "30", "40", "50", "60"]
+    a = json.loads(_cli("fk", *q, "--model", "painter004", "--json").stdout)
+    b = json.loads(_cli("fk", *q, "--model", str(out), "--json").stdout)
+    np.testing.assert_allclose(a["pose"], b["pose"], atol=1e-9)
+    shown = _cli("model", "show", str(out))
+    assert shown.returncode == 0 and "painter004: 6 joints" in shown.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--to", "sdf", "--out", "x.sdf"], "--to must be one of urdf, json"),
+        (["--to", "urdf", "--out", "x.json"], "--out must end in .urdf"),
+    ],
+)
+def test_cli_convert_refuses_bad_requests(args, message, tmp_path):
+    r = _cli("model", "convert", "ur5", *args, cwd=tmp_path)
+    assert r.returncode == 1 and r.stderr.startswith("error:") and message in r.stderr
+    assert list(tmp_path.iterdir()) == []
