@@ -184,6 +184,7 @@ def reach(
     angle_tolerance_deg: float = 5.0,
     tool_axis: ArrayLike | None = None,
     axis_tolerance_deg: float = 15.0,
+    seed: int = 0,
     time_limit_s: float | None = None,
 ) -> Result:
     """Reach ``target_mm`` (x, y, z) with the tool in the fewest commands, then the smallest
@@ -193,7 +194,8 @@ def reach(
     ``("wxyz", q)`` / ``("xyzw", q)``, or a ``scipy.spatial.transform.Rotation``; see
     :mod:`armpath.poses`), within ``angle_tolerance_deg``; ``tool_axis`` keeps only the tool's
     approach axis within ``axis_tolerance_deg`` of a direction. The result's ``doc`` holds
-    the lower bound on the commands and why fewer were rejected."""
+    the lower bound on the commands and why fewer were rejected; ``seed`` seeds the random
+    parts of the search (sampling, planning around obstacles)."""
     from armpath.export import reach_result_dict
     from armpath.planning.reach import ReachOptions, plan_reach
 
@@ -207,6 +209,7 @@ def reach(
             _start_ticks(the_arm, start_deg),
             target * _length_scale(the_arm),
             ReachOptions(tolerance_mm=tolerance_mm),
+            seed=seed,
             orientation=rule,
         )
         doc = reach_result_dict(found, the_arm, the_scene)

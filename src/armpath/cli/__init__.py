@@ -20,7 +20,7 @@ from typing import Annotated, Any
 import typer
 
 from armpath import __version__
-from armpath.cli.common import app, err_console, out_console
+from armpath.cli.common import VERBOSE, app, err_console, out_console
 from armpath.errors import ArmpathError
 
 # Register the commands, in the order --help lists them.
@@ -31,7 +31,14 @@ for _module in ("kinematics", "models", "tasks", "workspace", "motion", "viewing
 @app.callback(invoke_without_command=True)
 def _root(
     version: Annotated[bool, typer.Option("--version", help="Print the version and exit.")] = False,
+    verbose: Annotated[
+        bool,
+        typer.Option(
+            "--verbose", "-v", help="Print every progress message on stderr, with its time."
+        ),
+    ] = False,
 ) -> None:
+    VERBOSE["on"] = verbose
     if version:
         out_console.print(f"armpath {__version__}")
         raise typer.Exit(0)
@@ -127,7 +134,9 @@ def main() -> None:
     """Console entry point: a usage error (unknown option, missing or malformed value) is one
     ``error:`` line naming the command's --help, exit status 2."""
     try:
-        rc = cli_command()(args=join_number_lists(sys.argv[1:]), standalone_mode=False)
+        rc = cli_command()(
+            args=join_number_lists(sys.argv[1:]), prog_name="armpath", standalone_mode=False
+        )
     except typer.Abort:
         err_console.print("error: interrupted", markup=False)
         sys.exit(130)

@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from armpath.scenes import Scene
 
 app = typer.Typer(
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
     no_args_is_help=True,
     help=(
@@ -150,6 +150,8 @@ def _error_line(message: str) -> NoReturn:
 #: Seconds before progress lines start when stderr is not a terminal: quick commands (and
 #: input refused up front) print nothing but their result or their one error line.
 PROGRESS_DELAY_S = 2.0
+#: ``armpath -v``: every progress message as a timed line on stderr, from the start.
+VERBOSE = {"on": False}
 
 
 @contextlib.contextmanager
@@ -158,22 +160,27 @@ def progress(title: str) -> Iterator[Callable[[str], None]]:
     has run for :data:`PROGRESS_DELAY_S`, one line per new message
     (``armpath: [12.3 s] message``), so logs and pipes show what a long command is doing.
 
-    Yields the callback that takes each progress message.
+    With ``-v`` (:data:`VERBOSE`) every message is a timed line from the start, on a terminal
+    too. Yields the callback that takes each progress message.
     """
-    if err_console.is_terminal:
+    verbose = VERBOSE["on"]
+    if err_console.is_terminal and not verbose:
         with err_console.status(title) as status:
             yield lambda msg: status.update(escape(msg))
         return
     started = time.monotonic()
     last = [title, ""]  # latest message, last printed
+    delay = 0.0 if verbose else PROGRESS_DELAY_S
 
     def say(msg: str) -> None:
         last[0] = msg
         elapsed = time.monotonic() - started
-        if elapsed >= PROGRESS_DELAY_S and msg != last[1]:
+        if elapsed >= delay and msg != last[1]:
             last[1] = msg
             err_console.print(f"armpath: [{elapsed:6.1f} s] {msg}", markup=False, soft_wrap=True)
 
+    if verbose:
+        say(title)
     yield say
 
 

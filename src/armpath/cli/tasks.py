@@ -322,6 +322,7 @@ def reach(
     scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = None,
     animate: AnimateOption = False,
+    seed: SeedOption = 0,
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Reach a point with the tool in the fewest commands, then the smallest error.
@@ -344,7 +345,9 @@ def reach(
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             with progress("planning the reach ..."):
-                result = plan_reach(arm, scene.world, start_ticks, xyz, options, orientation=rule)
+                result = plan_reach(
+                    arm, scene.world, start_ticks, xyz, options, seed=seed, orientation=rule
+                )
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene, animate)
         written = folder.written if folder is not None else []
@@ -840,6 +843,7 @@ def run(
     html: Annotated[
         bool, typer.Option("--html", help="Also write the report as summary.html.")
     ] = False,
+    seed: SeedOption = 0,
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Run a scene's tasks for its arm (default: the seed scene's three tasks: 1, reach the
@@ -848,6 +852,8 @@ def run(
     one-page report summary.md."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
     from armpath.export import output_folder, reach_result_dict, tour_result_dict, trace_result_dict
+    from armpath.planning.motion import MotionOptions
+    from armpath.planning.trace import TraceOptions
     from armpath.report import summary_html, summary_markdown
     from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
 
@@ -880,22 +886,27 @@ def run(
         with output_folder(out) as folder:
             if has["reach"]:
                 with progress(f"{titles['reach']} ..."):
-                    result = reach_task(scene, arm)
+                    result = reach_task(scene, arm, seed=seed)
                 _write_reach(folder, "reach", result, arm, scene, animate=True)
                 reach_doc = reach_result_dict(result, arm, scene)
             if has["trace"]:
                 with progress(f"{titles['trace']} ...") as say:
-                    traced = trace_task(scene, arm, on_progress=say)
+                    options = TraceOptions(motion=MotionOptions(seed=seed))
+                    traced = trace_task(scene, arm, options, on_progress=say)
                 trace_doc = trace_result_dict(traced, arm, scene)
                 _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
             if has["spotweld"]:
                 with progress(f"{titles['spotweld']} ...") as say:
-                    tour = spotweld_task(scene, arm, on_progress=say)
+                    tour = spotweld_task(
+                        scene, arm, options=MotionOptions(seed=seed), on_progress=say
+                    )
                 tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
                 _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
             if seed_job:  # the blind zones are the seed arm's and its workpiece's
                 with progress("blind zones ...") as say:
-                    blind = _blind_zones(arm, scene, 5.0, 1_000_000, 3, 0, say, scan_step_mm=16.0)
+                    blind = _blind_zones(
+                        arm, scene, 5.0, 1_000_000, 3, seed, say, scan_step_mm=16.0
+                    )
                 _write_blind_zones(folder, blind)
             tasks = [
                 (titles[key], doc)

@@ -43,14 +43,15 @@ def reach_task(
     arm: SerialArm | None = None,
     options: ReachOptions | None = None,
     start_ticks: IntArray | None = None,
+    seed: int = 0,
 ) -> ReachResult:
     """Task 1: from the arm's initial pose (or ``start_ticks``) to the scene's reach target,
-    fewest commands first."""
+    fewest commands first (``seed``: of the random parts of the search)."""
     if scene.reach_target_mm is None:
         raise SceneError(f"scene {scene.source} defines no [tasks.reach] target_mm")
     model = arm or seed_arm()
     start = _start(model, start_ticks)
-    return plan_reach(model, scene.world, start, scene.reach_target_mm, options)
+    return plan_reach(model, scene.world, start, scene.reach_target_mm, options, seed=seed)
 
 
 def spotweld_task(
