@@ -3,6 +3,7 @@ as armpath's model document."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Annotated
 
@@ -34,7 +35,8 @@ ModelArgument = Annotated[
     ),
 ]
 #: The formats ``model convert`` writes.
-CONVERT_FORMATS = ("urdf", "json")
+CONVERT_FORMATS = ("urdf", "json", "dh", "mdh")
+CONVENTION_OF = {"dh": "standard", "mdh": "modified"}
 
 
 @model_app.command("show")
@@ -91,19 +93,22 @@ def convert(
         str,
         typer.Option(
             "--to",
-            help="urdf (chain, limits and tool; metres) or json (armpath's model document: "
-            "also the command lattice, home pose and link radii; loads with --model).",
+            help="urdf (chain, limits and tool; metres), dh or mdh (a JSON robot file: the "
+            "standard or modified D-H table with base and tool transforms, mm and rad) or json "
+            "(armpath's model document: also the command lattice, home pose and link radii).",
             show_default=False,
         ),
     ],
     out: Annotated[Path, typer.Option("--out", help="The file to write.", show_default=False)],
     tip_link: TipLinkOption = None,
 ) -> None:
-    """Write the model as a URDF or as armpath's model document; either loads back with the
-    same forward kinematics (--model FILE, a URDF with --tip-link tool)."""
+    """Write the model as a URDF, a D-H or modified D-H robot file, or armpath's model document;
+    each loads back with the same forward kinematics (--model FILE; a URDF with --tip-link
+    tool)."""
     from armpath.errors import InvalidInputError
-    from armpath.export import json_text, output_folder
+    from armpath.export import output_folder
     from armpath.model.catalog import resolve_model
+    from armpath.model.dh_export import dh_document
     from armpath.model.serialize import arm_to_dict
     from armpath.model.urdf_export import arm_to_urdf
 
@@ -114,7 +119,11 @@ def convert(
         if out.suffix.lower() != wanted:
             raise InvalidInputError(f"--out must end in {wanted} for --to {to}, got {out.name!r}")
         arm = resolve_model(model, tip_link)
-        text = arm_to_urdf(arm) if to == "urdf" else json_text(arm_to_dict(arm))
+        if to == "urdf":
+            text = arm_to_urdf(arm)
+        else:  # a model keeps every digit (results round theirs)
+            doc = arm_to_dict(arm) if to == "json" else dh_document(arm, CONVENTION_OF[to])
+            text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
         target = out.expanduser()
         with output_folder(target.parent, prune=False) as folder:
             folder.write_text(target.name, text)
