@@ -263,3 +263,50 @@ def test_api_refuses_bad_input_with_clear_errors():
         armpath.spotweld("seed", [[1.0, 2.0]])
     with pytest.raises(InvalidInputError, match="start_deg"):
         armpath.reach("seed", [300.0, 100.0, 200.0], start_deg=[0.05, -90, 0, 0, -90, 0])
+
+
+def test_the_controllers_period_and_steps_come_from_the_scene_arm(tmp_path):
+    """A scene's ``[arm]`` names its controller's command period and motor steps per tick:
+    exports take them by default, results and model documents carry them, bad values are
+    refused at the boundary."""
+    import armpath
+    from armpath.errors import InvalidInputError
+    from armpath.model.serialize import arm_from_dict, arm_to_dict
+
+    cell = tmp_path / "stepper.toml"
+    cell.write_text(
+        'name = "stepper cell"\n[arm]\nmodel = "seed"\n'
+        "steps_per_tick = [8, 8, 4, 4, 2, 2]\ncommand_period_s = 0.02\n",
+        encoding="utf-8",
+    )
+    result = armpath.reach(None, [300.0, 100.0, 200.0], scene=cell)
+    arm = result.arm
+    assert arm.command_period_s == 0.02
+    assert arm.lattice.steps_per_tick.tolist() == [8, 8, 4, 4, 2, 2]
+    lattice = result.doc["model"]["lattice"]
+    assert lattice["steps_per_tick"] == [8, 8, 4, 4, 2, 2] and lattice["command_period_s"] == 0.02
+    rows = [line.split(",") for line in result.export_text("steps").splitlines()[1:]]
+    steps = np.array([r[2:] for r in rows], dtype=int)
+    np.testing.assert_array_equal(steps, result.commands * [8, 8, 4, 4, 2, 2])
+    times = [p["time_from_start"] for p in result.joint_trajectory()["points"][:3]]
+    assert times == [{"sec": 0, "nanosec": k * 20_000_000} for k in range(3)]
+    back = arm_from_dict(json.loads(json.dumps(arm_to_dict(arm))))
+    assert back.command_period_s == 0.02 and back.lattice.steps_per_tick.tolist() == [
+        8,
+        8,
+        4,
+        4,
+        2,
+        2,
+    ]
+    # the result file replays with the same controller
+    again = armpath.load_result(result.save(tmp_path / "r.json"))
+    assert again.export_text("steps") == result.export_text("steps")
+    for key, value, message in (
+        ("command_period_s", "0", "command period must be between"),
+        ("steps_per_tick", "0", "whole numbers in \\[1"),
+    ):
+        bad = tmp_path / "bad.toml"
+        bad.write_text(f'name = "bad"\n[arm]\nmodel = "seed"\n{key} = {value}\n', encoding="utf-8")
+        with pytest.raises(InvalidInputError, match=message):
+            armpath.reach(None, [300.0, 100.0, 200.0], scene=bad)

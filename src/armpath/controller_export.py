@@ -1,6 +1,7 @@
 """A result's commands as a timed trajectory a controller or a ROS tool can take.
 
-Each command moves every joint at once, linearly, over one command period: the state after
+Each command moves every joint at once, linearly, over one command period (the arm's
+``command_period_s``, 0.1 s unless its model or scene says, or the one given): the state after
 command ``k`` is reached at ``t = k * period``. Three forms:
 
 * :func:`trajectory_csv`: one row per state, ``time_s`` then each joint's value (deg, or mm
@@ -20,7 +21,6 @@ splines through them deviates from it by its own interpolation.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -28,38 +28,30 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.export import csv_text
+from armpath.model.lattice import check_command_period, check_steps_per_tick
 from armpath.model.serial_arm import JointKind
 from armpath.results import Result
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 
-#: The command period used when none is given (s): the seed controller's documents name none;
-#: 0.1 s moves a joint by at most 2 deg per period (20 deg/s).
-DEFAULT_COMMAND_PERIOD_S = 0.1
-#: Shortest and longest command period accepted (s).
-MIN_COMMAND_PERIOD_S, MAX_COMMAND_PERIOD_S = 1e-6, 3600.0
-#: Largest number of motor steps per tick accepted.
-MAX_STEPS_PER_TICK = 1_000_000
 #: The export formats of ``armpath export``.
 FORMATS = ("csv", "joint-trajectory", "steps")
 
 
-def _period_ns(period_s: float) -> int:
-    if not (math.isfinite(period_s) and MIN_COMMAND_PERIOD_S <= period_s <= MAX_COMMAND_PERIOD_S):
-        raise InvalidInputError(
-            f"the command period must be between {MIN_COMMAND_PERIOD_S:g} and "
-            f"{MAX_COMMAND_PERIOD_S:g} s, got {period_s}"
-        )
-    return round(period_s * 1e9)
+def _period_ns(result: Result, period_s: float | None) -> int:
+    """The command period in whole ns: ``period_s``, else the arm's (its controller's)."""
+    chosen = result.arm.command_period_s if period_s is None else period_s
+    return round(check_command_period(chosen) * 1e9)
 
 
-def state_times_ns(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S) -> IntArray:
-    """Time of each state ``(n_commands + 1,)``, integer nanoseconds from the start."""
-    return np.arange(result.n_commands + 1, dtype=np.int64) * _period_ns(period_s)
+def state_times_ns(result: Result, period_s: float | None = None) -> IntArray:
+    """Time of each state ``(n_commands + 1,)``, integer nanoseconds from the start
+    (``period_s`` per command; default: the arm's command period)."""
+    return np.arange(result.n_commands + 1, dtype=np.int64) * _period_ns(result, period_s)
 
 
-def trajectory_csv(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S) -> str:
+def trajectory_csv(result: Result, period_s: float | None = None) -> str:
     """CSV: ``time_s`` and each joint's value after each command (deg, mm if prismatic)."""
     t = state_times_ns(result, period_s)
     values = result.states_deg
@@ -91,7 +83,7 @@ def point_velocities(positions: ArrayLike, times_s: ArrayLike) -> FloatArray:
     return v
 
 
-def joint_trajectory(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S) -> dict[str, Any]:
+def joint_trajectory(result: Result, period_s: float | None = None) -> dict[str, Any]:
     """The ``trajectory_msgs/JointTrajectory`` message of the result (a JSON-ready dict)."""
     t_ns = state_times_ns(result, period_s)
     positions = _ros_positions(result)
@@ -118,20 +110,12 @@ def joint_trajectory(result: Result, period_s: float = DEFAULT_COMMAND_PERIOD_S)
 
 def steps_per_tick_of(result: Result, steps_per_tick: ArrayLike | None) -> IntArray:
     """Each joint's motor steps per tick: one value for every joint, one per joint, or None
-    (1: a step is a tick)."""
-    n = result.arm.n_joints
+    (the arm's controller's: 1 unless its model or the scene's ``[arm]`` says)."""
     if steps_per_tick is None:
-        return np.ones(n, dtype=np.int64)
-    s = np.asarray(steps_per_tick)
-    if s.ndim == 0:
-        s = np.full(n, s)
-    if s.shape != (n,) or not np.all(np.isfinite(s.astype(float))):
-        raise InvalidInputError(f"steps per tick: one value or {n} values, got {s.tolist()}")
-    if not np.all(s == np.round(s)) or not np.all((s >= 1) & (s <= MAX_STEPS_PER_TICK)):
-        raise InvalidInputError(
-            f"steps per tick must be whole numbers in [1, {MAX_STEPS_PER_TICK:,}], got {s.tolist()}"
-        )
-    return s.astype(np.int64)
+        steps = result.arm.lattice.steps_per_tick
+        assert steps is not None
+        return np.asarray(steps, dtype=np.int64)
+    return check_steps_per_tick(steps_per_tick, result.arm.n_joints)
 
 
 def step_counts(result: Result, steps_per_tick: ArrayLike | None = None) -> IntArray:
@@ -142,7 +126,7 @@ def step_counts(result: Result, steps_per_tick: ArrayLike | None = None) -> IntA
 def steps_csv(
     result: Result,
     steps_per_tick: ArrayLike | None = None,
-    period_s: float = DEFAULT_COMMAND_PERIOD_S,
+    period_s: float | None = None,
 ) -> str:
     """CSV: per command, its start time (s) and each joint's motor steps."""
     steps = step_counts(result, steps_per_tick)
@@ -158,7 +142,7 @@ def steps_csv(
 def export_text(
     result: Result,
     fmt: str,
-    period_s: float = DEFAULT_COMMAND_PERIOD_S,
+    period_s: float | None = None,
     steps_per_tick: ArrayLike | None = None,
 ) -> str:
     """The result in ``fmt`` (one of :data:`FORMATS`) as text."""
@@ -174,7 +158,6 @@ def export_text(
 
 
 __all__ = [
-    "DEFAULT_COMMAND_PERIOD_S",
     "FORMATS",
     "export_text",
     "joint_trajectory",

@@ -132,11 +132,12 @@ class Result:
 
     def joint_trajectory(self, period_s: float | None = None) -> dict[str, Any]:
         """The motion as a ROS ``trajectory_msgs/JointTrajectory`` message (a JSON-ready dict:
-        positions in rad, one point per state, ``period_s`` apart; see
+        positions in rad, one point per state, ``period_s`` apart (default: the arm's command
+        period); see
         :mod:`armpath.controller_export`)."""
-        from armpath.controller_export import DEFAULT_COMMAND_PERIOD_S, joint_trajectory
+        from armpath.controller_export import joint_trajectory
 
-        return joint_trajectory(self, DEFAULT_COMMAND_PERIOD_S if period_s is None else period_s)
+        return joint_trajectory(self, period_s)
 
     def export_text(
         self,
@@ -146,10 +147,9 @@ class Result:
     ) -> str:
         """The motion for a controller: ``"csv"`` (time and joint values), ``"joint-trajectory"``
         (ROS JSON) or ``"steps"`` (motor steps per command), as ``armpath export`` writes it."""
-        from armpath.controller_export import DEFAULT_COMMAND_PERIOD_S, export_text
+        from armpath.controller_export import export_text
 
-        period = DEFAULT_COMMAND_PERIOD_S if period_s is None else period_s
-        return export_text(self, fmt, period, steps_per_tick)
+        return export_text(self, fmt, period_s, steps_per_tick)
 
     def plot(self, path: str | Path | None = None) -> Figure:
         """The joint values after each command, one panel per joint (a matplotlib Figure);

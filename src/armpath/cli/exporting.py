@@ -32,7 +32,7 @@ def export_result(
         float | None,
         typer.Option(
             "--command-period",
-            help="Seconds per command (default 0.1).",
+            help="Seconds per command (default: the model's command_period_s, 0.1 s unless set).",
             show_default=False,
         ),
     ] = None,
@@ -41,7 +41,8 @@ def export_result(
         typer.Option(
             "--steps-per-tick",
             metavar="N|N1,…,Nn",
-            help="Motor steps per tick: one number for every joint or one per joint (default 1).",
+            help="Motor steps per tick: one number for every joint or one per joint (default: the "
+            "model's steps_per_tick, 1 unless set).",
             show_default=False,
         ),
     ] = None,

@@ -35,6 +35,42 @@ MIN_TICK_DEG, MAX_TICK_DEG = 1e-6, 10.0
 MIN_TICK_MM, MAX_TICK_MM = 1e-6, 100.0
 #: Most ticks one command may move a joint.
 MAX_TICKS_PER_COMMAND = 1_000_000
+#: Time one command takes (s) when the model names none: the seed papers name no period; 0.1 s
+#: moves a joint by at most 2 deg per command (20 deg/s).
+DEFAULT_COMMAND_PERIOD_S = 0.1
+#: Shortest and longest command period accepted (s).
+MIN_COMMAND_PERIOD_S, MAX_COMMAND_PERIOD_S = 1e-6, 3600.0
+#: Most motor steps per tick accepted (a stepper's microsteps per lattice tick).
+MAX_STEPS_PER_TICK = 1_000_000
+
+
+def check_command_period(period_s: float, what: str = "the command period") -> float:
+    """``period_s`` (s) if it lies in [:data:`MIN_COMMAND_PERIOD_S`,
+    :data:`MAX_COMMAND_PERIOD_S`], else :class:`InvalidInputError` naming the limits."""
+    value = float(period_s)
+    if not (np.isfinite(value) and MIN_COMMAND_PERIOD_S <= value <= MAX_COMMAND_PERIOD_S):
+        raise InvalidInputError(
+            f"{what} must be between {MIN_COMMAND_PERIOD_S:g} and {MAX_COMMAND_PERIOD_S:g} s, "
+            f"got {period_s}"
+        )
+    return value
+
+
+def check_steps_per_tick(steps: ArrayLike, n: int, what: str = "steps per tick") -> IntArray:
+    """Whole motor steps per tick, one for every joint or one per joint, in
+    [1, :data:`MAX_STEPS_PER_TICK`]."""
+    s = np.asarray(steps, dtype=np.float64)
+    if s.ndim == 0:
+        s = np.full(n, float(s))
+    if s.shape != (n,) or not np.all(np.isfinite(s)):
+        raise InvalidInputError(f"{what}: one value or {n} values, got {np.ravel(s).tolist()}")
+    if not np.all(s == np.round(s)) or not np.all((s >= 1) & (s <= MAX_STEPS_PER_TICK)):
+        raise InvalidInputError(
+            f"{what} must be whole numbers in [1, {MAX_STEPS_PER_TICK:,}], got {s.tolist()}"
+        )
+    return s.astype(np.int64)
+
+
 #: How close (in ticks) a joint value must be to a tick to count as on the lattice.
 ON_LATTICE_TICKS = 1e-6
 
@@ -43,12 +79,16 @@ ON_LATTICE_TICKS = 1e-6
 class Lattice:
     """Per joint: the tick (rad, or model length unit if prismatic) and the most ticks one
     command may move it (``max_ticks``); ``prismatic`` marks the joints whose tick is a
-    length, ``length_unit`` is the model's (``"mm"`` or ``"m"``)."""
+    length, ``length_unit`` is the model's (``"mm"`` or ``"m"``). ``steps_per_tick``: a stepper
+    controller's motor steps per tick (default 1 on every joint); ``command_period_s``: the time
+    one command takes."""
 
     tick: FloatArray
     max_ticks: IntArray
     prismatic: BoolArray
     length_unit: str = "mm"
+    steps_per_tick: IntArray | None = None
+    command_period_s: float = DEFAULT_COMMAND_PERIOD_S
 
     def __post_init__(self) -> None:
         tick = np.array(self.tick, dtype=np.float64).reshape(-1)
@@ -76,8 +116,12 @@ class Lattice:
                 f"ticks must be {MIN_TICK_DEG:g} to {MAX_TICK_DEG:g} deg (revolute) or "
                 f"{MIN_TICK_MM:g} to {MAX_TICK_MM:g} mm (prismatic), got {shown.tolist()}"
             )
-        for arr in (tick, max_ticks, prismatic):
+        steps = check_steps_per_tick(1 if self.steps_per_tick is None else self.steps_per_tick, n)
+        period = check_command_period(self.command_period_s)
+        for arr in (tick, max_ticks, prismatic, steps):
             arr.setflags(write=False)
+        object.__setattr__(self, "steps_per_tick", steps)
+        object.__setattr__(self, "command_period_s", period)
         object.__setattr__(self, "tick", tick)
         object.__setattr__(self, "max_ticks", max_ticks)
         object.__setattr__(self, "prismatic", prismatic)
@@ -186,11 +230,14 @@ class Lattice:
 
     def describe(self) -> dict[str, object]:
         """The lattice for result files: tick per joint in deg or mm, the most ticks a
-        command, the units."""
+        command, the units, motor steps per tick and the command period (s)."""
+        assert self.steps_per_tick is not None
         return {
             "tick": [float(f"{v:.12g}") for v in self.tick_display],
             "tick_unit": list(self.units),
             "max_ticks_per_command": [int(v) for v in self.max_ticks],
+            "steps_per_tick": [int(v) for v in self.steps_per_tick],
+            "command_period_s": float(self.command_period_s),
         }
 
     # -- commands ----------------------------------------------------------------------------

@@ -26,10 +26,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError, JointLimitError
 from armpath.model.lattice import (
+    DEFAULT_COMMAND_PERIOD_S,
     DEFAULT_MAX_TICKS,
     DEFAULT_PRISMATIC_TICK_MM,
     DEFAULT_REVOLUTE_TICK_RAD,
     Lattice,
+    check_command_period,
+    check_steps_per_tick,
 )
 
 FloatArray = NDArray[np.float64]
@@ -83,6 +86,8 @@ class Joint:
         default, 0.1 deg or 0.1 mm (:mod:`armpath.model.lattice`).
     max_ticks:
         The most ticks one command may move this joint (default 20).
+    steps_per_tick:
+        Motor steps per tick for a stepper controller (default 1: a step is a tick).
     """
 
     name: str
@@ -92,6 +97,7 @@ class Joint:
     limits: tuple[float, float] = (-np.inf, np.inf)
     tick: float | None = None
     max_ticks: int = DEFAULT_MAX_TICKS
+    steps_per_tick: int = 1
 
     def __post_init__(self) -> None:
         T = _frozen(self.T_parent_joint, (4, 4), f"joint {self.name!r} T_parent_joint")
@@ -120,6 +126,8 @@ class Joint:
                 f"{self.max_ticks}"
             )
         object.__setattr__(self, "max_ticks", int(self.max_ticks))
+        steps = check_steps_per_tick(self.steps_per_tick, 1, f"joint {self.name!r}: steps per tick")
+        object.__setattr__(self, "steps_per_tick", int(steps[0]))
 
     def same_as(self, other: Joint, atol: float = 1e-12) -> bool:
         """Whether ``other`` has the same placement, axis, kind, limits and lattice (names
@@ -131,6 +139,7 @@ class Joint:
             and np.allclose(self.limits, other.limits, atol=atol)
             and self._tick_or_default() == other._tick_or_default()
             and self.max_ticks == other.max_ticks
+            and self.steps_per_tick == other.steps_per_tick
         )
 
     def _tick_or_default(self) -> float:
@@ -220,6 +229,8 @@ class SerialArm:
     #: The tool's approach axis in the tool frame (where a torch or gripper points): z unless
     #: the tool frame says otherwise (ur_description's ``ee_link`` points along x).
     approach_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    #: The time one command takes on the arm's controller (s): the clock of timed exports.
+    command_period_s: float = DEFAULT_COMMAND_PERIOD_S
 
     def __repr__(self) -> str:
         kinds = "".join("P" if j.kind == JointKind.PRISMATIC else "R" for j in self.joints)
@@ -246,6 +257,7 @@ class SerialArm:
         object.__setattr__(self, "approach_axis", tuple(float(v) for v in a / np.linalg.norm(a)))
         if self.length_unit not in ("mm", "m"):
             raise InvalidInputError(f"length_unit must be 'mm' or 'm', got {self.length_unit!r}")
+        object.__setattr__(self, "command_period_s", check_command_period(self.command_period_s))
         self.check_limits(self.home, what="home pose")
 
     @property
@@ -272,6 +284,8 @@ class SerialArm:
             np.array([j.max_ticks for j in self.joints]),
             np.array([j.kind is JointKind.PRISMATIC for j in self.joints]),
             self.length_unit,
+            np.array([j.steps_per_tick for j in self.joints]),
+            self.command_period_s,
         )
 
     def placed(self, T_world_cell_base: ArrayLike) -> SerialArm:
@@ -379,22 +393,36 @@ class SerialArm:
         return replace(self, home=_frozen(home, (self.n_joints,), "home"))
 
     def with_lattice(
-        self, tick: ArrayLike | None = None, max_ticks: ArrayLike | None = None
+        self,
+        tick: ArrayLike | None = None,
+        max_ticks: ArrayLike | None = None,
+        steps_per_tick: ArrayLike | None = None,
+        command_period_s: float | None = None,
     ) -> SerialArm:
-        """The same arm with other ticks (per joint, rad or length unit; ``None`` keeps them)
-        and command limits (ticks per command)."""
+        """The same arm with other ticks (per joint, rad or length unit; ``None`` keeps them),
+        command limits (ticks per command), motor steps per tick and command period (s)."""
         n = self.n_joints
-        t = self.lattice.tick if tick is None else np.broadcast_to(np.asarray(tick, float), (n,))
-        m = (
-            self.lattice.max_ticks
-            if max_ticks is None
-            else np.broadcast_to(np.asarray(max_ticks), (n,))
+        old = self.lattice
+        t = old.tick if tick is None else np.broadcast_to(np.asarray(tick, float), (n,))
+        m = old.max_ticks if max_ticks is None else np.broadcast_to(np.asarray(max_ticks), (n,))
+        steps = (
+            old.steps_per_tick
+            if steps_per_tick is None
+            else check_steps_per_tick(steps_per_tick, n)
         )
-        Lattice(t, m, self.lattice.prismatic, self.length_unit)  # validates
+        period = old.command_period_s if command_period_s is None else command_period_s
+        new = Lattice(t, m, old.prismatic, self.length_unit, steps, period)  # validates
+        assert new.steps_per_tick is not None
         joints = tuple(
-            replace(j, tick=float(t[i]), max_ticks=int(m[i])) for i, j in enumerate(self.joints)
+            replace(
+                j,
+                tick=float(t[i]),
+                max_ticks=int(m[i]),
+                steps_per_tick=int(new.steps_per_tick[i]),
+            )
+            for i, j in enumerate(self.joints)
         )
-        return replace(self, joints=joints)
+        return replace(self, joints=joints, command_period_s=new.command_period_s)
 
     @property
     def lower(self) -> FloatArray:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from armpath.errors import InvalidInputError
+from armpath.model.lattice import DEFAULT_COMMAND_PERIOD_S
 from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
 
 #: Version of the document layout below.
@@ -39,6 +40,7 @@ def arm_to_dict(arm: SerialArm) -> dict[str, Any]:
                 "limits": [_limit(j.limits[0]), _limit(j.limits[1])],
                 "tick": float(arm.lattice.tick[i]),
                 "max_ticks": int(arm.lattice.max_ticks[i]),
+                "steps_per_tick": int(j.steps_per_tick),
             }
             for i, j in enumerate(arm.joints)
         ],
@@ -60,6 +62,7 @@ def arm_to_dict(arm: SerialArm) -> dict[str, Any]:
         "home": np.asarray(arm.home).tolist(),
         "parameters": [[k, float(v)] for k, v in arm.parameters],
         "approach_axis": list(arm.approach_axis),
+        "command_period_s": float(arm.command_period_s),
     }
 
 
@@ -86,6 +89,7 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
                 ),
                 float(j["tick"]),
                 int(j["max_ticks"]),
+                int(j.get("steps_per_tick", 1)),
             )
             for j in doc["joints"]
         )
@@ -112,6 +116,7 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             T_world_base=np.array(doc["T_world_base"], dtype=np.float64),
             parameters=tuple((str(k), float(v)) for k, v in doc.get("parameters", [])),
             approach_axis=tuple(doc.get("approach_axis", (0.0, 0.0, 1.0))),
+            command_period_s=float(doc.get("command_period_s", DEFAULT_COMMAND_PERIOD_S)),
         )
     except (KeyError, TypeError, ValueError, IndexError) as exc:
         raise InvalidInputError(f"{what}: incomplete or malformed arm ({exc!r})") from None

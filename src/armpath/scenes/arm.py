@@ -61,6 +61,10 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
         if most is not None and not np.all(most == np.round(most)):
             raise InvalidInputError(f"arm.max_ticks must be whole numbers, got {most.tolist()}")
         arm = arm.with_lattice(tick, None if most is None else most.astype(np.int64))
+    if spec.steps_per_tick is not None or spec.command_period_s is not None:
+        arm = arm.with_lattice(
+            steps_per_tick=spec.steps_per_tick, command_period_s=spec.command_period_s
+        )
     if spec.link_radii_mm is not None:
         radii = np.asarray(spec.link_radii_mm, dtype=np.float64) * mm
         arm = arm.with_link_radii(float(radii) if radii.ndim == 0 else radii.tolist())

@@ -235,7 +235,9 @@ class ArmSpec(_FiniteVec):
     file; ``tip_link``: a URDF's tool link), where it stands (``base``), its tool, its home
     pose (deg, or mm for prismatic joints), link radii (mm: one number, or the fixed base then
     one per joint) and command lattice (``tick``: deg or mm per joint, one number or one per
-    joint; ``max_ticks``: the most ticks a command, one number or one per joint)."""
+    joint; ``max_ticks``: the most ticks a command, one number or one per joint;
+    ``steps_per_tick``: a stepper controller's motor steps per tick; ``command_period_s``: the
+    time one command takes)."""
 
     model: str = "seed"
     tip_link: str | None = None
@@ -245,6 +247,8 @@ class ArmSpec(_FiniteVec):
     link_radii_mm: float | list[float] | None = None
     tick: float | list[float] | None = None
     max_ticks: int | list[int] | None = None
+    steps_per_tick: int | list[int] | None = None
+    command_period_s: float | None = None
 
 
 class SceneFile(_Strict):
