@@ -116,8 +116,12 @@ def test_poses_in_every_form_agree():
     wxyz = np.roll(xyzw, 1)
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = m, [1.0, 2.0, 3.0]
-    for form in (r, m, T, ("xyzw", xyzw), ("wxyz", wxyz)):
+    class SE3Like:  # spatialmath's SE3 and SO3 hold their matrix in ``A``
+        A = T
+
+    for form in (r, m, T, ("xyzw", xyzw), ("wxyz", wxyz), SE3Like()):
         np.testing.assert_allclose(rotation_matrix(form), m, atol=1e-12)
+    np.testing.assert_allclose(pose_matrix(SE3Like())[:3, 3], [1.0, 2.0, 3.0])
     np.testing.assert_allclose(pose_matrix(T)[:3, 3], [1.0, 2.0, 3.0])
     for bad, message in (
         (xyzw, "must say its order"),
