@@ -1,4 +1,4 @@
-"""A result's commands as a timed trajectory a controller or a ROS tool can take.
+"""A command sequence as a timed trajectory a controller or a ROS tool can take.
 
 Each command moves every joint at once, linearly, over one command period (the arm's
 ``command_period_s``, 0.1 s unless its model or scene says, or the one given): the state after
@@ -26,11 +26,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.export import csv_text
 from armpath.model.lattice import check_command_period, check_steps_per_tick
-from armpath.model.serial_arm import JointKind
-from armpath.results import Result
+from armpath.model.serial_arm import JointKind, SerialArm
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -39,24 +39,26 @@ FloatArray = NDArray[np.float64]
 FORMATS = ("csv", "joint-trajectory", "steps")
 
 
-def _period_ns(result: Result, period_s: float | None) -> int:
+def _period_ns(arm: SerialArm, period_s: float | None) -> int:
     """The command period in whole ns: ``period_s``, else the arm's (its controller's)."""
-    chosen = result.arm.command_period_s if period_s is None else period_s
+    chosen = arm.command_period_s if period_s is None else period_s
     return round(check_command_period(chosen) * 1e9)
 
 
-def state_times_ns(result: Result, period_s: float | None = None) -> IntArray:
+def state_times_ns(
+    arm: SerialArm, sequence: CommandSequence, period_s: float | None = None
+) -> IntArray:
     """Time of each state ``(n_commands + 1,)``, integer nanoseconds from the start
     (``period_s`` per command; default: the arm's command period)."""
-    return np.arange(result.n_commands + 1, dtype=np.int64) * _period_ns(result, period_s)
+    return np.arange(sequence.n_commands + 1, dtype=np.int64) * _period_ns(arm, period_s)
 
 
-def trajectory_csv(result: Result, period_s: float | None = None) -> str:
+def trajectory_csv(arm: SerialArm, sequence: CommandSequence, period_s: float | None = None) -> str:
     """CSV: ``time_s`` and each joint's value after each command (deg, mm if prismatic)."""
-    t = state_times_ns(result, period_s)
-    values = result.states_deg
-    units = result.arm.lattice.units
-    header = ["time_s"] + [f"{j.name}_{u}" for j, u in zip(result.arm.joints, units, strict=True)]
+    t = state_times_ns(arm, sequence, period_s)
+    values = sequence.grid.display(sequence.states())
+    units = arm.lattice.units
+    header = ["time_s"] + [f"{j.name}_{u}" for j, u in zip(arm.joints, units, strict=True)]
     rows = [
         [f"{int(tk) / 1e9:.9f}", *(f"{v:.6f}" for v in row)]
         for tk, row in zip(t, values, strict=True)
@@ -64,11 +66,11 @@ def trajectory_csv(result: Result, period_s: float | None = None) -> str:
     return csv_text(header, rows)
 
 
-def _ros_positions(result: Result) -> FloatArray:
+def _ros_positions(arm: SerialArm, sequence: CommandSequence) -> FloatArray:
     """Joint positions as ROS expects them: rad, or m for a prismatic joint."""
-    q = result.states_rad
-    to_m = 1.0 if result.arm.length_unit == "m" else 1e-3
-    prismatic = np.array([j.kind == JointKind.PRISMATIC for j in result.arm.joints])
+    q = sequence.states_joint()
+    to_m = 1.0 if arm.length_unit == "m" else 1e-3
+    prismatic = np.array([j.kind == JointKind.PRISMATIC for j in arm.joints])
     return np.asarray(np.where(prismatic, q * to_m, q))
 
 
@@ -83,10 +85,12 @@ def point_velocities(positions: ArrayLike, times_s: ArrayLike) -> FloatArray:
     return v
 
 
-def joint_trajectory(result: Result, period_s: float | None = None) -> dict[str, Any]:
-    """The ``trajectory_msgs/JointTrajectory`` message of the result (a JSON-ready dict)."""
-    t_ns = state_times_ns(result, period_s)
-    positions = _ros_positions(result)
+def joint_trajectory(
+    arm: SerialArm, sequence: CommandSequence, period_s: float | None = None
+) -> dict[str, Any]:
+    """The ``trajectory_msgs/JointTrajectory`` message of the motion (a JSON-ready dict)."""
+    t_ns = state_times_ns(arm, sequence, period_s)
+    positions = _ros_positions(arm, sequence)
     velocities = point_velocities(positions, t_ns / 1e9)
     points = [
         {
@@ -103,35 +107,38 @@ def joint_trajectory(result: Result, period_s: float | None = None) -> dict[str,
     ]
     return {
         "header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
-        "joint_names": [j.name for j in result.arm.joints],
+        "joint_names": [j.name for j in arm.joints],
         "points": points,
     }
 
 
-def steps_per_tick_of(result: Result, steps_per_tick: ArrayLike | None) -> IntArray:
+def steps_per_tick_of(arm: SerialArm, steps_per_tick: ArrayLike | None) -> IntArray:
     """Each joint's motor steps per tick: one value for every joint, one per joint, or None
     (the arm's controller's: 1 unless its model or the scene's ``[arm]`` says)."""
     if steps_per_tick is None:
-        steps = result.arm.lattice.steps_per_tick
+        steps = arm.lattice.steps_per_tick
         assert steps is not None
         return np.asarray(steps, dtype=np.int64)
-    return check_steps_per_tick(steps_per_tick, result.arm.n_joints)
+    return check_steps_per_tick(steps_per_tick, arm.n_joints)
 
 
-def step_counts(result: Result, steps_per_tick: ArrayLike | None = None) -> IntArray:
+def step_counts(
+    arm: SerialArm, sequence: CommandSequence, steps_per_tick: ArrayLike | None = None
+) -> IntArray:
     """Motor steps of each joint in each command, ``(n_commands, n_joints)``."""
-    return np.asarray(result.commands * steps_per_tick_of(result, steps_per_tick)[None, :])
+    return np.asarray(sequence.commands * steps_per_tick_of(arm, steps_per_tick)[None, :])
 
 
 def steps_csv(
-    result: Result,
+    arm: SerialArm,
+    sequence: CommandSequence,
     steps_per_tick: ArrayLike | None = None,
     period_s: float | None = None,
 ) -> str:
     """CSV: per command, its start time (s) and each joint's motor steps."""
-    steps = step_counts(result, steps_per_tick)
-    t = state_times_ns(result, period_s)[:-1]
-    header = ["command", "start_s"] + [f"{j.name}_steps" for j in result.arm.joints]
+    steps = step_counts(arm, sequence, steps_per_tick)
+    t = state_times_ns(arm, sequence, period_s)[:-1]
+    header = ["command", "start_s"] + [f"{j.name}_steps" for j in arm.joints]
     rows = [
         [k + 1, f"{int(tk) / 1e9:.9f}", *(int(v) for v in row)]
         for k, (tk, row) in enumerate(zip(t, steps, strict=True))
@@ -140,20 +147,21 @@ def steps_csv(
 
 
 def export_text(
-    result: Result,
+    arm: SerialArm,
+    sequence: CommandSequence,
     fmt: str,
     period_s: float | None = None,
     steps_per_tick: ArrayLike | None = None,
 ) -> str:
-    """The result in ``fmt`` (one of :data:`FORMATS`) as text."""
+    """The motion in ``fmt`` (one of :data:`FORMATS`) as text."""
     from armpath.export import json_text
 
     if fmt == "csv":
-        return trajectory_csv(result, period_s)
+        return trajectory_csv(arm, sequence, period_s)
     if fmt == "joint-trajectory":
-        return json_text(joint_trajectory(result, period_s))
+        return json_text(joint_trajectory(arm, sequence, period_s))
     if fmt == "steps":
-        return steps_csv(result, steps_per_tick, period_s)
+        return steps_csv(arm, sequence, steps_per_tick, period_s)
     raise InvalidInputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
 
 

@@ -23,6 +23,8 @@ from armpath.schemas import SCHEMA_VERSION
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from armpath.viz.animation import Animation
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 RESULT_TASKS = ("reach", "trace", "spotweld", "plan")
@@ -137,7 +139,7 @@ class Result:
         :mod:`armpath.controller_export`)."""
         from armpath.controller_export import joint_trajectory
 
-        return joint_trajectory(self, period_s)
+        return joint_trajectory(self.arm, self.sequence, period_s)
 
     def export_text(
         self,
@@ -149,7 +151,7 @@ class Result:
         (ROS JSON) or ``"steps"`` (motor steps per command), as ``armpath export`` writes it."""
         from armpath.controller_export import export_text
 
-        return export_text(self, fmt, period_s, steps_per_tick)
+        return export_text(self.arm, self.sequence, fmt, period_s, steps_per_tick)
 
     def plot(self, path: str | Path | None = None) -> Figure:
         """The joint values after each command, one panel per joint (a matplotlib Figure);
@@ -161,9 +163,24 @@ class Result:
     def animate(self, path: str | Path, *, fps: int = 15, max_frames: int = 120) -> int:
         """Write an animation of the motion (``.gif``, or ``.mp4`` with ffmpeg) to ``path``;
         returns the number of frames."""
-        from armpath.viz.animation import result_animation, write_animation
+        from armpath.viz.animation import write_animation
 
-        return write_animation(path, result_animation(self), fps=fps, max_frames=max_frames)
+        return write_animation(path, self.animation(), fps=fps, max_frames=max_frames)
+
+    def animation(self, substeps: int = 4) -> Animation:
+        """The motion as an animation (:func:`armpath.viz.animation.sequence_animation`):
+        ``substeps`` instants drawn per command."""
+        from armpath.viz.animation import sequence_animation
+
+        return sequence_animation(
+            self.arm,
+            self.scene,
+            self.sequence,
+            self.title(),
+            self.targets_mm,
+            self.curve_mm,
+            substeps,
+        )
 
 
 def _arm(model: dict[str, Any]) -> SerialArm:

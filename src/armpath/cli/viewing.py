@@ -140,7 +140,7 @@ def animate(
     targets and the curve (GIF with Pillow, MP4 with ffmpeg)."""
     from armpath.export import output_folder
     from armpath.results import load_result
-    from armpath.viz.animation import result_animation, write_animation
+    from armpath.viz.animation import write_animation
 
     with _cli_errors():
         if fps < 1 or frames < 2:
@@ -149,6 +149,6 @@ def animate(
         target = out if out is not None else result.with_suffix(".gif")
         with output_folder(target.parent, prune=False) as folder, progress("animating ..."):
             n = write_animation(
-                folder.file(target.name), result_animation(loaded), fps=fps, max_frames=frames
+                folder.file(target.name), loaded.animation(), fps=fps, max_frames=frames
             )
         out_console.print(f"wrote {target} ({n} frames)", markup=False)

@@ -22,7 +22,6 @@ from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
-from armpath.results import Result
 from armpath.scenes import Scene
 from armpath.viz.figures import (
     POINT_LABEL,
@@ -93,19 +92,6 @@ def sequence_animation(
         overlays.append(Overlay(targets, "target" if len(targets) == 1 else "targets", "points"))
     return Animation(
         arm, q, steps, title, scene=scene, overlays=tuple(overlays), clock="command {:4.0f}"
-    )
-
-
-def result_animation(result: Result, substeps: int = 4) -> Animation:
-    """The animation of a result document read back (``armpath.results.load_result``)."""
-    return sequence_animation(
-        result.arm,
-        result.scene,
-        result.sequence,
-        result.title(),
-        result.targets_mm,
-        result.curve_mm,
-        substeps,
     )
 
 
