@@ -116,6 +116,7 @@ def test_poses_in_every_form_agree():
     wxyz = np.roll(xyzw, 1)
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = m, [1.0, 2.0, 3.0]
+
     class SE3Like:  # spatialmath's SE3 and SO3 hold their matrix in ``A``
         A = T
 
