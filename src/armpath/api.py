@@ -233,21 +233,16 @@ def plan(
     (``"commands"``, ``"path"``, ``"energy"``) is what is minimised once the goal is reached;
     ``seed`` seeds the random search."""
     from armpath.export import plan_result_dict
-    from armpath.planning.choices import Objective
+    from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions, plan_motion
     from armpath.planning.reach import goal_states
 
     if (to_deg is None) == (to_mm is None):
         raise InvalidInputError("give exactly one goal: to_deg or to_mm")
-    try:
-        goal_kind = Objective(objective)
-    except ValueError:
-        valid = ", ".join(o.value for o in Objective)
-        raise InvalidInputError(f"objective must be one of {valid}, got {objective!r}") from None
+    options = MotionOptions(objective=objective_of(objective), seed=seed)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         start = _start_ticks(the_arm, start_deg)
-        options = MotionOptions(objective=goal_kind, seed=seed)
         world = the_scene.world
         target = None
         if to_mm is not None:
@@ -263,7 +258,7 @@ def plan(
             found,
             the_arm,
             the_scene,
-            goal_kind.value,
+            options.objective.value,
             target,
             tolerance_mm if target is not None else None,
         )
@@ -328,15 +323,11 @@ def spotweld(
     in the best order (``order="auto"``: every order ranked by its lower bound, the best
     planned; ``"given"``: as listed), optionally back to the start."""
     from armpath.export import tour_result_dict
-    from armpath.planning.choices import Objective
+    from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions
     from armpath.tasks import spotweld_task
 
-    try:
-        goal_kind = Objective(objective)
-    except ValueError:
-        valid = ", ".join(o.value for o in Objective)
-        raise InvalidInputError(f"objective must be one of {valid}, got {objective!r}") from None
+    options = MotionOptions(objective=objective_of(objective), seed=seed)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         targets = None
@@ -353,11 +344,11 @@ def spotweld(
             order,
             return_to_start,
             tolerance_mm,
-            MotionOptions(objective=goal_kind, seed=seed),
+            options,
             start_ticks=_start_ticks(the_arm, start_deg),
             targets_mm=targets,
         )
-        doc = tour_result_dict(found, the_arm, the_scene, goal_kind.value)
+        doc = tour_result_dict(found, the_arm, the_scene, options.objective.value)
     return _result(doc, the_arm, the_scene, found.sequence)
 
 

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from enum import StrEnum
 
+from armpath.errors import InvalidInputError
+
 
 class Objective(StrEnum):
     """What a plan minimises after reaching its goal."""
@@ -16,6 +18,15 @@ class Objective(StrEnum):
     ENERGY = "energy"  # weighted joint travel (deg)
 
 
+def objective_of(value: Objective | str) -> Objective:
+    """The objective named ``value``; :class:`InvalidInputError` lists the valid names."""
+    try:
+        return Objective(value)
+    except ValueError:
+        valid = ", ".join(o.value for o in Objective)
+        raise InvalidInputError(f"objective must be one of {valid}, got {value!r}") from None
+
+
 class VisitOrder(StrEnum):
     """How a tour orders its targets."""
 
@@ -23,4 +34,4 @@ class VisitOrder(StrEnum):
     GIVEN = "given"  # as listed
 
 
-__all__ = ["Objective", "VisitOrder"]
+__all__ = ["Objective", "VisitOrder", "objective_of"]

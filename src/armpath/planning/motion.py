@@ -43,7 +43,7 @@ from armpath.kinematics import (
 )
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.choices import Objective
+from armpath.planning.choices import Objective, objective_of
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.rrt import EdgeChecker, RrtOptions, rrt_connect, shortcut
 
@@ -112,7 +112,7 @@ class MotionOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "objective", _objective(self.objective))
+        object.__setattr__(self, "objective", objective_of(self.objective))
         if not (np.isfinite(self.buffer_mm) and self.buffer_mm >= 0):
             raise InvalidInputError(f"buffer must be >= 0 mm, got {self.buffer_mm}")
         if not (np.isfinite(self.sample_spacing_mm) and 0.01 <= self.sample_spacing_mm <= 100):
@@ -132,14 +132,6 @@ class MotionOptions:
             not (np.isfinite(w) and w >= 0) for w in self.energy_weights
         ):
             raise InvalidInputError(f"energy weights must be >= 0, got {self.energy_weights}")
-
-
-def _objective(value: Objective | str) -> Objective:
-    try:
-        return Objective(value)
-    except ValueError:
-        valid = ", ".join(o.value for o in Objective)
-        raise InvalidInputError(f"objective must be one of {valid}, got {value!r}") from None
 
 
 @dataclass(frozen=True, eq=False)
