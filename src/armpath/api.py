@@ -56,7 +56,7 @@ def load_arm(
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
             raise InvalidInputError(f"link_radius_mm must be >= 0, got {link_radius_mm}")
-        arm = arm.with_link_radii(link_radius_mm * _length_scale(arm))
+        arm = arm.with_link_radii(link_radius_mm / arm.mm_per_unit)
     return arm
 
 
@@ -101,11 +101,6 @@ def arm_and_scene(
     if isinstance(arm, SerialArm):
         return arm, the_scene
     return scene_arm(the_scene, None if arm is None else str(arm), tip_link), the_scene
-
-
-def _length_scale(arm: SerialArm) -> float:
-    """The arm's length unit per mm (1, or 0.001 for a model in metres)."""
-    return 1e-3 if arm.length_unit == "m" else 1.0
 
 
 def _start_ticks(arm: SerialArm, start_deg: ArrayLike | None) -> NDArray[np.int64]:
@@ -207,7 +202,7 @@ def reach(
             the_arm,
             the_scene.world,
             _start_ticks(the_arm, start_deg),
-            target * _length_scale(the_arm),
+            target / the_arm.mm_per_unit,
             ReachOptions(tolerance_mm=tolerance_mm),
             seed=seed,
             orientation=rule,
@@ -248,7 +243,7 @@ def plan(
         if to_mm is not None:
             target = _point(to_mm, "to_mm")
             goals, _ = goal_states(
-                the_arm, world, start, target * _length_scale(the_arm), tolerance_mm
+                the_arm, world, start, target / the_arm.mm_per_unit, tolerance_mm
             )
             found = plan_motion(the_arm, world, start, goals, options, turn_copies=True)
         else:
@@ -292,7 +287,7 @@ def trace(
         if curve is None or isinstance(curve, Curve):
             path = curve
         else:
-            vertices = np.asarray(curve, dtype=np.float64) * _length_scale(the_arm)
+            vertices = np.asarray(curve, dtype=np.float64) / the_arm.mm_per_unit
             path = Polyline("curve", vertices, closed=closed)
         options = TraceOptions(tolerance_mm=tolerance_mm, motion=MotionOptions(seed=seed))
         found = trace_task(
@@ -337,7 +332,7 @@ def spotweld(
                 raise InvalidInputError(
                     f"welds_mm must be (K, 3) finite points (mm), got shape {targets.shape}"
                 )
-            targets = targets * _length_scale(the_arm)
+            targets = targets / the_arm.mm_per_unit
         found = spotweld_task(
             the_scene,
             the_arm,

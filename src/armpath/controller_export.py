@@ -69,7 +69,7 @@ def trajectory_csv(arm: SerialArm, sequence: CommandSequence, period_s: float | 
 def _ros_positions(arm: SerialArm, sequence: CommandSequence) -> FloatArray:
     """Joint positions as ROS expects them: rad, or m for a prismatic joint."""
     q = sequence.states_joint()
-    to_m = 1.0 if arm.length_unit == "m" else 1e-3
+    to_m = arm.mm_per_unit / 1000.0
     prismatic = np.array([j.kind == JointKind.PRISMATIC for j in arm.joints])
     return np.asarray(np.where(prismatic, q * to_m, q))
 

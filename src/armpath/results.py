@@ -76,8 +76,7 @@ class Result:
     @property
     def tool_positions_mm(self) -> FloatArray:
         """Tool point after each command, ``(n_commands + 1, 3)`` mm; row 0 is the start."""
-        scale = 1000.0 if self.arm.length_unit == "m" else 1.0
-        return np.asarray(tool_position(self.arm, self.states_rad) * scale)
+        return np.asarray(tool_position(self.arm, self.states_rad) * self.arm.mm_per_unit)
 
     @property
     def tip_path_mm(self) -> FloatArray:

@@ -244,8 +244,7 @@ def task_setup(
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
             raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
-        scale = 1e-3 if arm.length_unit == "m" else 1.0
-        arm = arm.with_link_radii(link_radius_mm * scale)
+        arm = arm.with_link_radii(link_radius_mm / arm.mm_per_unit)
     return arm, scene
 
 

@@ -102,7 +102,7 @@ def solve_numerical(
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
     lo = np.where(prismatic & ~np.isfinite(arm.lower), -1000.0, lo)
     hi = np.where(prismatic & ~np.isfinite(arm.upper), 1000.0, hi)
-    position_tol = position_tolerance_mm * (1e-3 if arm.length_unit == "m" else 1.0)
+    position_tol = position_tolerance_mm / arm.mm_per_unit
     size = 1.0 + float(np.max(np.abs(forward_frames(arm, arm.home)[:, :3, 3])))
     rng = np.random.default_rng(rng_seed)
     starts = rng.uniform(lo, hi, size=(seeds, n))

@@ -25,13 +25,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.model.lattice import MM_PER_LENGTH_UNIT
 from armpath.model.serial_arm import Joint, JointKind, SerialArm
 from armpath.model.skeleton import link_radii, physical_links
 
 FloatArray = NDArray[np.float64]
 
 CONVENTIONS = ("standard", "modified")
-_LENGTH_TO_MM = {"mm": 1.0, "m": 1000.0}
 
 
 @dataclass(frozen=True)
@@ -200,7 +200,7 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
         raise InvalidInputError('robot file: units must be an object like {"length": "mm"}')
     length_unit = units.get("length", "mm")
     angle_unit = units.get("angle", "deg")
-    if length_unit not in _LENGTH_TO_MM:
+    if length_unit not in MM_PER_LENGTH_UNIT:
         raise InvalidInputError(
             f"robot file: units.length must be 'mm' or 'm', got {length_unit!r}"
         )
@@ -208,7 +208,7 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
         raise InvalidInputError(
             f"robot file: units.angle must be 'deg' or 'rad', got {angle_unit!r}"
         )
-    L = _LENGTH_TO_MM[length_unit]
+    L = MM_PER_LENGTH_UNIT[length_unit]
     A = np.pi / 180.0 if angle_unit == "deg" else 1.0
     links = doc.get("links")
     if not isinstance(links, list) or not links:

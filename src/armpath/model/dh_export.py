@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.errors import InvalidInputError
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -87,7 +88,7 @@ def _row(arm: SerialArm, i: int, a: float, alpha: float, d: float, theta: float)
     """One row of the robot file (mm, rad); limits in the joint's unit (rad or mm)."""
     joint = arm.joints[i]
     prismatic = joint.kind == JointKind.PRISMATIC
-    scale = 1000.0 if prismatic and arm.length_unit == "m" else 1.0
+    scale = arm.mm_per_unit if prismatic else 1.0
     lo, hi = joint.limits[0] * scale, joint.limits[1] * scale
     row: dict[str, Any] = {"a": a, "alpha": alpha, "d": d}
     if prismatic:
@@ -110,16 +111,15 @@ def dh_document(arm: SerialArm, convention: str = "standard") -> dict[str, Any]:
     """A JSON robot file of ``arm`` in ``convention`` (``"standard"`` or ``"modified"``):
     mm and rad, with the base and tool transforms that keep every tool pose."""
     if convention not in ("standard", "modified"):
-        raise ValueError(f"convention must be standard or modified, got {convention!r}")
-    scale = 1000.0 if arm.length_unit == "m" else 1.0
+        raise InvalidInputError(f"convention must be standard or modified, got {convention!r}")
+    scale = arm.mm_per_unit
     points, dirs, flange = _axes(arm)
     points = [p * scale for p in points]
     flange = flange.copy()
     flange[:3, 3] *= scale
-    tool_world = flange @ np.asarray(arm.T_flange_tool, dtype=np.float64)
-    tool_world[:3, 3] = flange[:3, 3] + flange[:3, :3] @ (
-        np.asarray(arm.T_flange_tool)[:3, 3] * scale
-    )
+    tool = np.array(arm.T_flange_tool, dtype=np.float64)
+    tool[:3, 3] *= scale
+    tool_world = flange @ tool
     n = arm.n_joints
     base_T = np.asarray(arm.T_world_base, dtype=np.float64)
     # a perpendicular to start from: the base's own x (or y), off the first axis

@@ -28,6 +28,8 @@ BoolArray = NDArray[np.bool_]
 DEFAULT_REVOLUTE_TICK_RAD = np.pi / 1800.0
 #: The default tick of a prismatic joint: 0.1 mm.
 DEFAULT_PRISMATIC_TICK_MM = 0.1
+#: Millimetres per length unit of a model (its ``length_unit``): the one place of this fact.
+MM_PER_LENGTH_UNIT = {"mm": 1.0, "m": 1000.0}
 #: The seed controller's largest command: 20 ticks (2 deg) per joint.
 DEFAULT_MAX_TICKS = 20
 #: Finest and coarsest tick accepted: 1e-6 deg (or mm) to 10 deg (or 100 mm).
@@ -107,7 +109,9 @@ class Lattice:
                 f"max ticks per command must be in [1, {MAX_TICKS_PER_COMMAND:,}], got "
                 f"{max_ticks.tolist()}"
             )
-        scale = 1000.0 if self.length_unit == "m" else 1.0
+        if self.length_unit not in MM_PER_LENGTH_UNIT:
+            raise InvalidInputError(f"length_unit must be 'mm' or 'm', got {self.length_unit!r}")
+        scale = MM_PER_LENGTH_UNIT[self.length_unit]
         shown = np.where(prismatic, tick * scale, np.degrees(tick))
         lo = np.where(prismatic, MIN_TICK_MM, MIN_TICK_DEG)
         hi = np.where(prismatic, MAX_TICK_MM, MAX_TICK_DEG)
@@ -199,7 +203,7 @@ class Lattice:
         """Tick states in display units: deg for revolute joints, mm for prismatic ones (exact
         decimal rounding at 1e-10)."""
         q = self.to_joint(ticks)
-        scale = 1000.0 if self.length_unit == "m" else 1.0
+        scale = self.mm_per_unit
         return np.asarray(
             np.round(np.where(self.prismatic, q * scale, np.degrees(q)), 10), dtype=np.float64
         )
@@ -211,13 +215,18 @@ class Lattice:
             raise InvalidInputError(
                 f"{what} needs {self.n_joints} joint values, got {v.shape[-1] if v.ndim else 1}"
             )
-        scale = 1000.0 if self.length_unit == "m" else 1.0
+        scale = self.mm_per_unit
         return self.to_ticks(np.where(self.prismatic, v / scale, np.radians(v)), what)
+
+    @property
+    def mm_per_unit(self) -> float:
+        """Millimetres per length unit of the model (1, or 1000 for metres)."""
+        return MM_PER_LENGTH_UNIT[self.length_unit]
 
     @property
     def tick_display(self) -> FloatArray:
         """Each joint's tick in display units (deg or mm)."""
-        scale = 1000.0 if self.length_unit == "m" else 1.0
+        scale = self.mm_per_unit
         return np.asarray(np.where(self.prismatic, self.tick * scale, np.degrees(self.tick)))
 
     @property

@@ -30,6 +30,7 @@ from armpath.model.lattice import (
     DEFAULT_MAX_TICKS,
     DEFAULT_PRISMATIC_TICK_MM,
     DEFAULT_REVOLUTE_TICK_RAD,
+    MM_PER_LENGTH_UNIT,
     Lattice,
     check_command_period,
     check_steps_per_tick,
@@ -264,11 +265,16 @@ class SerialArm:
     def n_joints(self) -> int:
         return len(self.joints)
 
+    @property
+    def mm_per_unit(self) -> float:
+        """Millimetres per length unit of the model (1, or 1000 for metres)."""
+        return MM_PER_LENGTH_UNIT[self.length_unit]
+
     @cached_property
     def lattice(self) -> Lattice:
         """The controller's command lattice: each joint's tick (its own, or 0.1 deg / 0.1 mm)
         and the most ticks a command may move it."""
-        mm = 1e-3 if self.length_unit == "m" else 1.0
+        mm = 1.0 / self.mm_per_unit  # model units per mm
         ticks = [
             j.tick
             if j.tick is not None

@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 
 from armpath.model.serial_arm import JointKind, SerialArm
 
-_MM_PER_UNIT = {"mm": 1.0, "m": 1000.0}
 #: Stand-in bounds of an unlimited prismatic joint (URDF requires limits for one): +-1 km.
 _UNLIMITED_PRISMATIC_M = 1000.0
 
@@ -38,7 +37,7 @@ def _origin(parent: ET.Element, T: NDArray[np.float64], to_m: float) -> None:
 
 def arm_to_urdf(arm: SerialArm) -> str:
     """The URDF text of ``arm`` (see the module's description)."""
-    to_m = _MM_PER_UNIT[arm.length_unit] / 1000.0
+    to_m = arm.mm_per_unit / 1000.0
     robot = ET.Element("robot", name=arm.name.replace(" ", "_"))
     names = ["world", "base", *(f"link_{i + 1}" for i in range(arm.n_joints)), "tool"]
     for name in names:

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError, SceneError
 from armpath.model.catalog import resolve_model
+from armpath.model.lattice import MM_PER_LENGTH_UNIT
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.scenes.build import rotation_matrix
 from armpath.scenes.scene import Scene
@@ -26,7 +27,7 @@ def placement_matrix(spec: PlacementSpec, length_unit: str = "mm") -> NDArray[np
     """The 4x4 transform of a placement (its position converted from mm to ``length_unit``)."""
     T = np.eye(4)
     T[:3, :3] = rotation_matrix(spec.rotation_deg)
-    T[:3, 3] = np.asarray(spec.position_mm) * (1e-3 if length_unit == "m" else 1.0)
+    T[:3, 3] = np.asarray(spec.position_mm) / MM_PER_LENGTH_UNIT[length_unit]
     return T
 
 
@@ -51,7 +52,7 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
     arm = _model(spec.model, base_dir, spec.tip_link)
     n = arm.n_joints
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-    mm = 1e-3 if arm.length_unit == "m" else 1.0
+    mm = 1.0 / arm.mm_per_unit  # model units per mm
     if spec.tick is not None or spec.max_ticks is not None:
         tick = None
         if spec.tick is not None:
