@@ -18,7 +18,7 @@ import pytest
 
 from armpath.errors import InvalidInputError
 from armpath.geometry.primitives import Box, HalfSpace
-from armpath.geometry.world import CollisionWorld, link_analysis
+from armpath.geometry.world import CollisionWorld, SlackGroup, link_analysis
 from armpath.kinematics import displacement_bounds, forward_frames, landmark_positions
 from armpath.model.catalog import BUILTIN_MODELS, puma560, ur5
 from armpath.model.dh import load_robot_file, robot_from_dict
@@ -431,3 +431,14 @@ def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file):
         checked += int(mask.sum())
     assert checked > 6 * n_pairs
     np.testing.assert_array_equal(world.slack(arm, q), np.min(slack, axis=1))
+    # with a floor: exact above it, between the true value and the floor at or below it
+    every = np.ones(n_pairs, dtype=bool)
+    true = np.min(slack, axis=1)
+    for floor in (np.median(true), rng.normal(np.median(true), 20.0, q.shape[0])):
+        (got,) = world.smallest_slacks(arm, q, [SlackGroup(every, np.inf, floor)])
+        above = true > floor
+        np.testing.assert_array_equal(got[above], true[above])
+        assert np.all(got[~above] >= true[~above]) and np.all(
+            got[~above] <= np.broadcast_to(floor, got.shape)[~above]
+        )
+        assert np.any(~above) and np.any(got[~above] > true[~above])  # work was skipped

@@ -250,3 +250,36 @@ def test_a_polyline_folding_back_is_followed_into_its_apex():
     gap = np.min(np.linalg.norm(curve[:, None, :] - tips[None, :, :], axis=-1), axis=1)
     step = np.linalg.norm(np.diff(tips, axis=0), axis=1).max()
     assert gap.max() <= 0.1 + step, (gap.max(), step)
+
+
+def test_reference_dp_layer_equals_brute_force():
+    """The DP layer's grid and cost pruning change no cost or lift-off: every node's cost
+    equals the plain minimum over all predecessors (traced within the step, or lifted), on
+    random layers with wrapping joints, clustered nodes and predecessors that cannot be
+    reached."""
+    from armpath.planning.trace.reference import _dp_layer
+
+    rng = np.random.default_rng(11)
+    for _ in range(30):
+        n, m, j = rng.integers(1, 300), rng.integers(1, 300), rng.integers(1, 6)
+        centers = rng.uniform(-170.0, 170.0, (4, j))
+        prev_q = centers[rng.integers(0, 4, n)] + rng.normal(0.0, rng.uniform(1, 40), (n, j))
+        q = centers[rng.integers(0, 4, m)] + rng.normal(0.0, rng.uniform(1, 40), (m, j))
+        wrap = rng.random(j) < 0.4
+        prev_cost = rng.uniform(0.0, 200.0, n)
+        prev_cost[rng.random(n) < 0.1] = np.inf
+        bonus = rng.uniform(0.0, 0.9, m)
+        max_step = float(rng.uniform(5.0, 30.0))
+        cost, arg, lifted = _dp_layer(prev_q, prev_cost, q, bonus, wrap, max_step, 120.0)
+        d = q[:, None, :] - prev_q[None, :, :]
+        d = np.where(wrap, (d + 180.0) % 360.0 - 180.0, d)
+        worst = np.abs(d).max(axis=-1)
+        traced = np.where(worst <= max_step, prev_cost + worst, np.inf) - bonus[:, None]
+        lift = prev_cost + 120.0 + 0.5 * worst - bonus[:, None]
+        want = np.minimum(traced.min(axis=1), lift.min(axis=1))
+        np.testing.assert_allclose(cost, want, rtol=0, atol=1e-9)
+        finite = np.isfinite(want)
+        assert np.all(arg[finite] >= 0) and np.all(arg[~finite] == -1)
+        rows = np.flatnonzero(finite)
+        chosen = np.where(lifted, lift[np.arange(m), arg], traced[np.arange(m), arg])
+        np.testing.assert_allclose(chosen[rows], want[rows], rtol=0, atol=1e-9)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -155,6 +156,16 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     out = LinkAnalysis(point_of, degenerate, length, chain, rigid)
     arm.__dict__["_link_analysis"] = out
     return out
+
+
+class SlackGroup(NamedTuple):
+    """One minimum :meth:`CollisionWorld.smallest_slacks` takes: over the pairs ``columns``
+    (a mask over the world's pairs), at most ``ceiling``, exact above ``floor`` (each a
+    scalar or one value per configuration)."""
+
+    columns: NDArray[np.bool_]
+    ceiling: FloatArray | float = np.inf
+    floor: FloatArray | float = -np.inf
 
 
 @dataclass(frozen=True, eq=False)
@@ -383,17 +394,23 @@ class CollisionWorld:
         self,
         arm: SerialArm,
         q: ArrayLike,
-        groups: Sequence[tuple[NDArray[np.bool_], FloatArray | float]],
+        groups: Sequence[SlackGroup | tuple[NDArray[np.bool_], FloatArray | float]],
     ) -> list[FloatArray]:
-        """For each ``(columns, ceiling)`` of ``groups``: per configuration of ``q (M, n)``,
-        ``min(ceiling, smallest clearance - required over the pairs in columns)``, where
-        ``columns`` is a mask over :meth:`pairs` and ``ceiling`` a scalar or ``(M,)``.
+        """For each group ``(columns, ceiling[, floor])`` of ``groups``: per configuration of
+        ``q (M, n)``, ``min(ceiling, smallest clearance - required over the pairs in
+        columns)``, where ``columns`` is a mask over :meth:`pairs` and ``ceiling`` a scalar or
+        ``(M,)``.
 
         Equal to the same minimum of :meth:`pair_clearances` (the same kernels on the same
         segments), but a pair is measured exactly only where its broad-phase lower bound (the
         part's distance to the obstacle's enclosing ball) is below the smallest slack known so
         far: first each configuration's pair of lowest bound, then the pairs still below.
         The minimum a caller takes with its own slacks (joint limits) is the natural ceiling.
+
+        A ``floor`` (scalar or ``(M,)``, default -inf) says which values the caller needs: a
+        configuration whose value is above its floor gets it exactly; one at or below gets a
+        value between the true one and the floor (measuring stops once the smallest slack known
+        is at the floor). A search for the largest value passes the best value it has.
         """
         pts = landmark_positions(arm, np.asarray(q, dtype=np.float64))
         if pts.ndim != 3:
@@ -431,8 +448,10 @@ class CollisionWorld:
             np.minimum.at(result, m_idx, slack)
 
         out = []
-        for columns, ceiling in groups:
+        for group in groups:
+            columns, ceiling, floor = SlackGroup(*group)
             result = np.array(np.broadcast_to(ceiling, (m_count,)), dtype=np.float64)
+            floors = np.broadcast_to(np.asarray(floor, dtype=np.float64), (m_count,))
             cols = np.asarray(columns, dtype=bool)
             if np.any(cols[n_obs_cols:]):
                 if self_slack is None:
@@ -447,9 +466,9 @@ class CollisionWorld:
                 # each configuration's pair of lowest bound first: it sets the bar the other
                 # pairs' bounds must pass to be measured
                 first = np.argmin(lb, axis=1)
-                rows = np.flatnonzero(lb[np.arange(m_count), first] < result)
+                rows = np.flatnonzero((lb[np.arange(m_count), first] < result) & (result > floors))
                 measure(result, rows, obstacle_cols[first[rows]])
-                below = lb < result[:, None]
+                below = (lb < result[:, None]) & (result > floors)[:, None]
                 below[rows, first[rows]] = False
                 m_idx, c_idx = np.nonzero(below)
                 measure(result, m_idx, obstacle_cols[c_idx])

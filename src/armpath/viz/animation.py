@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import shutil
+import subprocess
 import textwrap
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 from matplotlib.artist import Artist
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
 from matplotlib.figure import Figure
@@ -17,6 +17,7 @@ from matplotlib.text import Text
 from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
+from PIL import Image
 
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
@@ -222,14 +223,58 @@ def write_animation(
 ) -> int:
     """Write ``anim`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg); returns the
     number of frames. At most ``max_frames`` evenly spread states are drawn
-    (:func:`animation_frames`); the fingertip's path so far is traced in red."""
+    (:func:`animation_frames`); the fingertip's path so far is traced in red.
+
+    The still part (scene, axes, title, legend) is drawn once; each frame redraws only the arm,
+    its path and the caption over it (so the arm is never hidden behind an obstacle)."""
     out = Path(path)
     if out.suffix not in ANIMATION_FORMATS:
         raise InvalidInputError(f"animation must be one of {ANIMATION_FORMATS}, got {out.name!r}")
-    if out.suffix == ".mp4" and shutil.which("ffmpeg") is None:
+    ffmpeg = shutil.which("ffmpeg")
+    if out.suffix == ".mp4" and ffmpeg is None:
         raise InvalidInputError("MP4 needs ffmpeg on the PATH; write a .gif instead")
     frames = animation_frames(anim, max_frames, dpi)
-    animation = FuncAnimation(frames.figure, frames.draw, frames=frames.n_frames, blit=False)
-    writer = PillowWriter(fps=fps) if out.suffix == ".gif" else FFMpegWriter(fps=fps)
-    animation.save(str(out), writer=writer, dpi=dpi)
+    images = render_frames(frames)
+    if out.suffix == ".gif":
+        first, *rest = (Image.fromarray(rgba).convert("RGB") for rgba in images)
+        first.save(out, save_all=True, append_images=rest, duration=round(1000 / fps), loop=0)
+    else:
+        assert ffmpeg is not None
+        _write_mp4(ffmpeg, out, images, fps)
     return frames.n_frames
+
+
+def render_frames(frames: AnimationFrames) -> list[NDArray[np.uint8]]:
+    """Every frame of ``frames`` as an RGBA image ``(height, width, 4)``: the figure without
+    its moving artists is rendered once, then each frame restores it and draws only what
+    :attr:`AnimationFrames.draw` changed."""
+    fig = frames.figure
+    canvas = FigureCanvasAgg(fig)
+    moving = frames.draw(0)
+    for artist in moving:
+        artist.set_animated(True)
+    # the still part; drawing it also sets the 3-D projection the moving lines use
+    canvas.draw()  # type: ignore[no-untyped-call]
+    background = canvas.copy_from_bbox(fig.bbox)  # type: ignore[no-untyped-call]
+    out = []
+    for i in range(frames.n_frames):
+        canvas.restore_region(background)  # type: ignore[no-untyped-call]
+        for artist in frames.draw(i):
+            fig.draw_artist(artist)
+        out.append(np.array(canvas.buffer_rgba(), dtype=np.uint8))  # type: ignore[no-untyped-call]
+    return out
+
+
+def _write_mp4(ffmpeg: str, out: Path, images: list[NDArray[np.uint8]], fps: int) -> None:
+    """Encode RGBA ``images`` into ``out`` with ffmpeg (H.264, sides padded to even)."""
+    height, width = images[0].shape[:2]
+    command = [
+        ffmpeg, "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgba",
+        "-s", f"{width}x{height}", "-r", str(fps), "-i", "-",
+        "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-vcodec", "libx264",
+        str(out),
+    ]  # fmt: skip
+    done = subprocess.run(command, input=b"".join(i.tobytes() for i in images), check=False)
+    if done.returncode != 0:
+        out.unlink(missing_ok=True)
+        raise InvalidInputError(f"ffmpeg could not write {out.name} (exit {done.returncode})")

@@ -10,9 +10,10 @@ point) with ``direction . n <= 0`` (``n`` the outward normal) are searched, and 
 tool axis (within a cone about the surface normal, or a fixed direction) narrows them further.
 
 The family is searched over tool directions: :class:`SeedCurveFamily` by the seed arm's closed
-form (the wrist point on a sphere around the point, four geometric branches), polished by
-Nelder-Mead; :class:`GenericCurveFamily` for any other arm by the all-solutions IK of each tool
-direction with turns about it (six joints) or Levenberg-Marquardt from warm starts (other arms).
+form (the wrist point on a sphere around the point, four geometric branches), polished by a
+batched pattern search over the tool direction; :class:`GenericCurveFamily` for any other arm
+by the all-solutions IK of each tool direction with turns about it (six joints) or
+Levenberg-Marquardt from warm starts (other arms).
 
 A family member's *score* is its smallest slack: a pair's clearance less what it needs (mm) or a
 joint's distance to its limit (deg, counted 1:1 with mm -- only the sign decides).
@@ -29,7 +30,7 @@ from numpy.typing import NDArray
 from armpath.errors import InvalidInputError
 from armpath.geometry.curves import Curve
 from armpath.geometry.primitives import Obstacle, orthonormal_frame
-from armpath.geometry.world import CollisionWorld
+from armpath.geometry.world import CollisionWorld, SlackGroup
 from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.seed_position import family_from_wrist
 from armpath.ik.solve import complete_solver
@@ -47,6 +48,23 @@ TOUCH_MM = 1e-6
 _PAST_TANGENT = 0.02
 #: Branches of :func:`family_from_wrist` that differ geometrically (wrist flip dropped).
 _BRANCHES = (0, 2, 4, 6)
+#: The polish of the seed family (:meth:`SeedCurveFamily._polish`): the best grid members it
+#: starts from, the neighbours it scores each round, its first step and the step it stops
+#: below (rad, about 2.3 deg: the fine grid's spacing; about 0.006 deg), and its most rounds.
+_POLISH_STARTS = 3
+_POLISH_DIRECTIONS = 8
+_POLISH_STEP = 0.04
+_POLISH_TOLERANCE = 1e-4
+_POLISH_ROUNDS = 120
+_POLISH_GROW = 1.25
+_POLISH_SHRINK = 0.6
+_GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
+#: How many scores of a grid :meth:`CurveFamily.best` needs exactly (the polish's starts), and
+#: how many configurations of most joint-limit slack it scores first to find a floor for them.
+_EXACT_TOP = _POLISH_STARTS
+_FIRST_SCORED = 64
+#: Just below the tool tip's threshold: the floor that keeps the tip's verdict exact.
+_BELOW_TOUCH = float(np.nextafter(-TOUCH_MM, -np.inf))
 
 
 def fibonacci_directions(count: int) -> FloatArray:
@@ -271,31 +289,60 @@ class CurveFamily:
         return joint, pair, tip_ok
 
     def score(
-        self, q: FloatArray, limits: bool = True, obstacles: tuple[str, ...] | None = None
+        self,
+        q: FloatArray,
+        limits: bool = True,
+        obstacles: tuple[str, ...] | None = None,
+        floor: FloatArray | float = -np.inf,
+        ceiling: float = np.inf,
     ) -> FloatArray:
         """Smallest slack per configuration (-inf when the tool tip enters the surface).
 
         ``limits=False`` ignores joint limits; ``obstacles`` keeps only the pairs against those
-        obstacles (None: every pair, link pairs included; ``()``: no pair).
+        obstacles (None: every pair, link pairs included; ``()``: no pair). Scores above
+        ``floor`` (scalar or per configuration) are exact; one at or below it may be any value
+        between the true score and the floor (see :meth:`CollisionWorld.smallest_slacks`).
+        Scores above ``ceiling`` are reported as ``ceiling`` (no distance beyond it is measured).
         """
         q = np.asarray(q, dtype=np.float64)
+        top = np.full(q.shape[0], ceiling)
         if limits:
             with np.errstate(invalid="ignore"):
-                floor = np.asarray(
-                    np.degrees(np.min(np.minimum(self._hi - q, q - self._lo), axis=-1))
-                )
-        else:
-            floor = np.full(q.shape[0], np.inf)
+                room = np.degrees(np.min(np.minimum(self._hi - q, q - self._lo), axis=-1))
+            top = np.minimum(top, room)
         keep = self._columns(obstacles)
-        groups: list[tuple[BoolArray, FloatArray | float]] = [(keep, floor)] if np.any(keep) else []
+        groups = [SlackGroup(keep, top, floor)] if np.any(keep) else []
         if np.any(self._touch_cols):  # the tool tip only must not enter the surface
-            groups.append((self._touch_cols, -TOUCH_MM))
+            # (a floor just below the threshold keeps the verdict exact)
+            groups.append(SlackGroup(self._touch_cols, -TOUCH_MM, _BELOW_TOUCH))
         if not groups:
-            return floor
+            return top
         found = self.world.smallest_slacks(self.arm, q, groups)
-        out = found[0] if np.any(keep) else floor
+        out = found[0] if np.any(keep) else top
         if np.any(self._touch_cols):
             return np.where(found[-1] >= -TOUCH_MM, out, -np.inf)
+        return out
+
+    def _best_scores(
+        self, q: FloatArray, limits: bool, obstacles: tuple[str, ...] | None
+    ) -> FloatArray:
+        """Scores of ``q`` exact for its best :data:`_EXACT_TOP` (the others may be any value
+        between their true score and the last of those): the configurations of most
+        joint-limit slack are scored first, and their third best score is the floor of the
+        rest, which skips the distances of configurations that cannot be among the best."""
+        if q.shape[0] <= _FIRST_SCORED:
+            return self.score(q, limits, obstacles)
+        if limits:
+            with np.errstate(invalid="ignore"):
+                room = np.min(np.minimum(self._hi - q, q - self._lo), axis=-1)
+            first = np.argpartition(-np.nan_to_num(room, nan=-np.inf), _FIRST_SCORED)
+        else:
+            first = np.arange(q.shape[0])
+        head, rest = first[:_FIRST_SCORED], first[_FIRST_SCORED:]
+        out = np.empty(q.shape[0])
+        out[head] = self.score(q[head], limits, obstacles)
+        top = np.sort(out[head])[-_EXACT_TOP]
+        out[rest] = self.score(q[rest], limits, obstacles, floor=np.nextafter(top, -np.inf))
         return out
 
     def _columns(self, obstacles: tuple[str, ...] | None) -> NDArray[np.bool_]:
@@ -336,13 +383,13 @@ class CurveFamily:
         obstacles: tuple[str, ...] | None = None,
     ) -> Verdict:
         """The family member with the largest score at ``s``: grid, then (``fine``) a finer grid
-        polished where the arm has a way to (the seed arm: Nelder-Mead over the tool
+        polished where the arm has a way to (the seed arm: a pattern search over the tool
         direction)."""
         dirs = self.fine_dirs if fine else self.coarse_dirs
         q = self.configs(s, dirs)
         if q.shape[0] == 0:
             return Verdict(s, -np.inf, np.full(self.arm.n_joints, np.nan), ("out of reach",))
-        sc = self.score(q, limits, obstacles)
+        sc = self._best_scores(q, limits, obstacles)
         k = int(np.argmax(sc))
         best_q, best_sc = q[k], float(sc[k])
         if fine:
@@ -407,41 +454,63 @@ class SeedCurveFamily(CurveFamily):
         best_q: FloatArray,
         best_sc: float,
     ) -> tuple[FloatArray, float]:
-        c, _, n = self.frame(s)
-        axis = -n if self.surface is not None else np.array([0.0, 0.0, 1.0])
-        e1, e2 = orthonormal_frame(axis)
-        # the direction E - D of each candidate, as polar angles about ``axis``
-        pts_d = self._wrist_dirs(q, c)
+        """Pattern search over the tool direction from the best few grid members, all starts
+        at once: each round scores :data:`_POLISH_DIRECTIONS` neighbours of every start in
+        one batch, moves a start to its best neighbour or halves its step, and ends when
+        every step is below :data:`_POLISH_TOLERANCE` rad (at most :data:`_POLISH_ROUNDS`)."""
+        c, _, _ = self.frame(s)
+        starts = np.array([k for k in np.argsort(-sc)[:_POLISH_STARTS] if np.isfinite(sc[k])])
+        if starts.size == 0:
+            return best_q, best_sc
+        d0 = self._wrist_dirs(q[starts], c)  # the tool direction E - D of each start
+        branch = np.array([self._branch_of(q[k], c, d) for k, d in zip(starts, d0, strict=True)])
+        frames = np.array([orthonormal_frame(d) for d in d0])  # (S, 2, 3) across each direction
+        de = self.geometry.de_mm
 
-        def member(x: FloatArray, branch: int) -> FloatArray:
-            """The family member of ``branch`` whose tool direction has polar angles ``x``."""
-            u = np.cos(x[0]) * axis + np.sin(x[0]) * (np.cos(x[1]) * e1 + np.sin(x[1]) * e2)
-            sol = family_from_wrist(self.geometry, c, (c - self.geometry.de_mm * u)[None])
-            return np.asarray(np.r_[sol[0, _BRANCHES[branch]], 0.0], dtype=np.float64)
+        def members(x: FloatArray, which: NDArray[np.intp]) -> FloatArray:
+            """Members (M, 6) of the starts ``which`` at tangent offsets ``x (M, 2)`` rad."""
+            u = d0[which] + np.einsum("mk,mkj->mj", x, frames[which])
+            u /= np.linalg.norm(u, axis=-1, keepdims=True)
+            sol = family_from_wrist(self.geometry, c, c - de * u)
+            picked = sol[np.arange(which.size), np.asarray(_BRANCHES)[branch[which]]]
+            return np.concatenate([picked, np.zeros((which.size, 1))], axis=-1)
 
-        for k in np.argsort(-sc)[:3]:
-            if not np.isfinite(sc[k]):
+        def scores(cand: FloatArray, floor: FloatArray) -> FloatArray:
+            """Scores of ``cand``, exact where above ``floor`` (a start's score so far)."""
+            out = np.full(cand.shape[0], -np.inf)
+            ok = np.all(np.isfinite(cand), axis=-1)
+            if np.any(ok):
+                out[ok] = self.score(cand[ok], limits, obstacles, floor[ok])
+            return out
+
+        every = np.arange(starts.size)
+        x = np.zeros((starts.size, 2))
+        at = members(x, every)
+        fx = scores(at, np.full(starts.size, -np.inf))
+        step = np.full(starts.size, _POLISH_STEP)
+        for r in range(_POLISH_ROUNDS):
+            live = np.flatnonzero(step >= _POLISH_TOLERANCE)
+            if live.size == 0:
                 break
-            d = pts_d[k]
-            x0 = np.array([np.arccos(np.clip(d @ axis, -1, 1)), np.arctan2(d @ e2, d @ e1)])
-            branch = self._branch_of(q[k], c, d)
-
-            def objective(x: FloatArray, branch: int = branch) -> float:
-                cand = member(x, branch)
-                if not np.all(np.isfinite(cand)):
-                    return 1e6
-                return -float(self.score(cand[None], limits, obstacles)[0])
-
-            from scipy.optimize import minimize  # imported when first needed
-
-            res = minimize(
-                objective,
-                x0,
-                method="Nelder-Mead",
-                options={"xatol": 1e-4, "fatol": 1e-5, "maxfev": 250},
-            )
-            if -res.fun > best_sc:
-                best_q, best_sc = member(res.x, branch), float(-res.fun)
+            # the pattern turns by the golden angle each round, so that a ridge of the score
+            # (where two slacks are equal) is soon met along it
+            turn = 2.0 * np.pi * np.arange(_POLISH_DIRECTIONS) / _POLISH_DIRECTIONS + r * _GOLDEN
+            pattern = np.stack([np.cos(turn), np.sin(turn)], axis=-1)
+            trial = x[live, None, :] + step[live, None, None] * pattern  # (L, D, 2)
+            which = np.repeat(live, _POLISH_DIRECTIONS)
+            cand = members(trial.reshape(-1, 2), which)
+            val = scores(cand, fx[which]).reshape(live.size, _POLISH_DIRECTIONS)
+            j = np.argmax(val, axis=1)
+            gain = val[np.arange(live.size), j] > fx[live]
+            moved, stuck = live[gain], live[~gain]
+            x[moved] = trial[gain, j[gain]]
+            fx[moved] = val[gain, j[gain]]
+            at[moved] = cand.reshape(live.size, _POLISH_DIRECTIONS, -1)[gain, j[gain]]
+            step[moved] = np.minimum(step[moved] * _POLISH_GROW, _POLISH_STEP)
+            step[stuck] *= _POLISH_SHRINK
+        k = int(np.argmax(fx))
+        if fx[k] > best_sc:
+            return at[k], float(fx[k])
         return best_q, best_sc
 
     def _wrist_dirs(self, q: FloatArray, E: FloatArray) -> FloatArray:

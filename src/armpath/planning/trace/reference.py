@@ -29,6 +29,8 @@ FloatArray = NDArray[np.float64]
 _MAX_LAYER_STEP_DEG = 12.0
 #: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
 _LIFT_OFF_DEG = 120.0
+#: Slack (mm or deg) beyond which a reference node earns no more reward.
+_SLACK_COUNTED = 3.0
 #: Most family members kept on one layer (evenly over the tool directions).
 MAX_LAYER_NODES = 1500
 
@@ -39,6 +41,20 @@ def _joint_change(q_deg: FloatArray, here_deg: FloatArray, wrap: NDArray[np.bool
     d = q_deg - here_deg
     d = np.where(wrap, (d + 180.0) % 360.0 - 180.0, d)
     return np.asarray(np.abs(d).max(axis=-1), dtype=np.float64)
+
+
+#: Joints the DP's predecessor grid is keyed on (those that spread its nodes over most cells).
+_GRID_KEYS = 3
+
+
+@njit(cache=True)
+def _cell_index(
+    x: float, low: float, width: float, cells: int, wraps: bool
+) -> int:  # pragma: no cover - compiled
+    """The grid cell of joint value ``x`` (deg) along one key."""
+    if wraps:
+        x = (x + 180.0) % 360.0 - 180.0
+    return min(max(int(np.floor((x - low) / width)), 0), cells - 1)
 
 
 @njit(cache=True)
@@ -53,15 +69,105 @@ def _dp_layer(
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover - compiled
     """One DP layer: for each node of ``q`` (deg) the best predecessor in ``prev_q``, either
     traced (largest joint change <= ``max_step``, costing that change) or after a lift-off
-    (costing ``lift_cost`` plus half the change: a new pass)."""
-    n, m, j = prev_q.shape[0], q.shape[0], q.shape[1]
+    (costing ``lift_cost`` plus half the change: a new pass).
+
+    Traced predecessors are looked for in a grid over the :data:`_GRID_KEYS` joints that spread
+    the predecessors over most cells (cells at least ``max_step`` wide, so only a node's cell
+    and its neighbours can hold one; wrapping joints wrap round); lift-offs only where the
+    cheapest conceivable one could beat the best traced transition, predecessors cheapest
+    first, each measured only until it cannot win."""
+    m, j = q.shape[0], q.shape[1]
     cost = np.full(m, np.inf)
     arg = np.full(m, -1, dtype=np.int64)
     lifted = np.zeros(m, dtype=np.bool_)
+    live = np.flatnonzero(np.isfinite(prev_cost))
+    if live.size == 0:
+        return cost, arg, lifted
+    by_cost = live[np.argsort(prev_cost[live], kind="mergesort")]
+    # each joint's grid: lowest value, cell width and count, and how many cells it fills
+    low = np.zeros(j)
+    width = np.ones(j)
+    cells = np.ones(j, dtype=np.int64)
+    filled = np.zeros(j, dtype=np.int64)
+    for k in range(j):
+        if wrap[k]:
+            cells[k] = max(int(360.0 / max_step), 1)
+            low[k], width[k] = -180.0, 360.0 / cells[k]
+        else:
+            low[k] = np.min(prev_q[live, k])
+            spread = np.max(prev_q[live, k]) - low[k]
+            width[k] = max(max_step, spread / 64.0)
+            cells[k] = int(spread / width[k]) + 1
+        seen = np.zeros(cells[k], dtype=np.bool_)
+        for a in live:
+            seen[_cell_index(prev_q[a, k], low[k], width[k], cells[k], wrap[k])] = True
+        filled[k] = np.sum(seen)
+    keys = np.argsort(-filled, kind="mergesort")[: min(_GRID_KEYS, j)]
+    n_keys = keys.size
+    stride = np.ones(n_keys, dtype=np.int64)
+    for g in range(n_keys - 2, -1, -1):
+        stride[g] = stride[g + 1] * cells[keys[g + 1]]
+    n_cells = stride[0] * cells[keys[0]]
+    cell_of = np.zeros(live.size, dtype=np.int64)
+    for i in range(live.size):
+        for g in range(n_keys):
+            k = keys[g]
+            cell_of[i] += stride[g] * _cell_index(
+                prev_q[live[i], k], low[k], width[k], cells[k], wrap[k]
+            )
+    order = np.argsort(cell_of, kind="mergesort")
+    first = np.searchsorted(cell_of[order], np.arange(n_cells + 1))
+    at = np.zeros(n_keys, dtype=np.int64)
+    span = np.zeros(n_keys, dtype=np.int64)
+    step = np.zeros(n_keys, dtype=np.int64)
     for b in range(m):
-        for a in range(n):
-            if not np.isfinite(prev_cost[a]):
-                continue
+        for g in range(n_keys):
+            k = keys[g]
+            at[g] = _cell_index(q[b, k], low[k], width[k], cells[k], wrap[k])
+            span[g] = min(cells[k], 3)  # the cell and its neighbours (all, when fewer)
+        step[:] = 0
+        while True:  # every combination of neighbouring cells along the keys
+            cell = 0
+            inside = True
+            for g in range(n_keys):
+                k = keys[g]
+                c = at[g] + step[g] - 1 if span[g] == 3 else step[g]
+                if wrap[k]:
+                    c %= cells[k]
+                elif c < 0 or c >= cells[k]:
+                    inside = False
+                cell += stride[g] * c
+            if inside:
+                for i in range(first[cell], first[cell + 1]):
+                    a = live[order[i]]
+                    worst = 0.0
+                    for k in range(j):
+                        d = q[b, k] - prev_q[a, k]
+                        if wrap[k]:
+                            d = (d + 180.0) % 360.0 - 180.0
+                        d = abs(d)
+                        if d > worst:
+                            worst = d
+                            if worst > max_step:
+                                break
+                    if worst <= max_step:
+                        c = prev_cost[a] + worst - bonus[b]
+                        if c < cost[b]:
+                            cost[b] = c
+                            arg[b] = a
+            g = n_keys - 1
+            while g >= 0:
+                step[g] += 1
+                if step[g] < span[g]:
+                    break
+                step[g] = 0
+                g -= 1
+            if g < 0:
+                break
+        for a in by_cost:
+            base = prev_cost[a] + lift_cost - bonus[b]
+            if base >= cost[b]:
+                break  # this lift-off, and every later (costlier) one, cannot win
             worst = 0.0
             for k in range(j):
                 d = q[b, k] - prev_q[a, k]
@@ -70,13 +176,9 @@ def _dp_layer(
                 d = abs(d)
                 if d > worst:
                     worst = d
-            if worst <= max_step:
-                c = prev_cost[a] + worst - bonus[b]
-                if c < cost[b]:
-                    cost[b] = c
-                    arg[b] = a
-                    lifted[b] = False
-            c = prev_cost[a] + lift_cost + 0.5 * worst - bonus[b]
+                    if base + 0.5 * worst >= cost[b]:
+                        break
+            c = base + 0.5 * worst
             if c < cost[b]:
                 cost[b] = c
                 arg[b] = a
@@ -118,7 +220,8 @@ def reference_pieces(
         q = fam.configs(float(s), dirs)
         if q.shape[0] == 0:
             continue
-        sc = fam.score(q)
+        # scores above 3 count as 3 (the bonus below), so no distance beyond is measured
+        sc = fam.score(q, ceiling=_SLACK_COUNTED)
         best = float(np.max(sc))
         if best < 0:
             continue
@@ -138,7 +241,7 @@ def reference_pieces(
     back = []
     for k in range(1, len(nodes)):
         gap = nodes[k][0] - nodes[k - 1][0]
-        bonus = 0.3 * np.minimum(nodes[k][2], 3.0)
+        bonus = 0.3 * nodes[k][2]
         max_step = _MAX_LAYER_STEP_DEG * max(gap / 5.0, 1.0)
         cost, arg, lifted = _dp_layer(
             nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max_step, _LIFT_OFF_DEG
