@@ -79,7 +79,7 @@ def landmark_positions(arm: SerialArm, q: ArrayLike) -> FloatArray:
         picked = frames[:, index]
         pts = picked[..., :3, 3] + np.einsum("clij,lj->cli", picked[..., :3, :3], offsets)
         return np.asarray(pts.reshape(*qa.shape[:-1], len(arm.landmarks), 3))
-    chain = _compiled_chain(arm)
+    chain = compiled_chain(arm)
     out = _landmarks_kernel(flat, *chain)
     return np.asarray(out.reshape(*qa.shape[:-1], len(arm.landmarks), 3))
 
@@ -89,13 +89,13 @@ def landmark_positions(arm: SerialArm, q: ArrayLike) -> FloatArray:
 NUMPY_LANDMARK_BATCH = 8
 
 
-def _compiled_chain(
+def compiled_chain(
     arm: SerialArm,
 ) -> tuple[
     FloatArray, FloatArray, FloatArray, NDArray[np.bool_], FloatArray, NDArray[np.int64], FloatArray
 ]:
     """The arm as flat arrays for :func:`_landmarks_kernel` (cached on the arm)."""
-    cached = arm.__dict__.get("_compiled_chain")
+    cached = arm.__dict__.get("compiled_chain")
     if cached is None:
         cached = (
             np.ascontiguousarray(arm.T_world_base, dtype=np.float64),
@@ -106,7 +106,7 @@ def _compiled_chain(
             np.array([lm.frame for lm in arm.landmarks], dtype=np.int64),
             np.array([lm.offset for lm in arm.landmarks], dtype=np.float64).reshape(-1, 3),
         )
-        arm.__dict__["_compiled_chain"] = cached
+        arm.__dict__["compiled_chain"] = cached
     return cached  # type: ignore[no-any-return,unused-ignore]
 
 
@@ -134,49 +134,86 @@ def _landmarks_kernel(
     offsets: np.ndarray,
 ) -> np.ndarray:  # pragma: no cover - compiled
     n_cfg, n_j = q.shape
-    n_l = frames.shape[0]
-    out = np.empty((n_cfg, n_l, 3))
-    T = np.empty((4, 4))
-    A = np.empty((4, 4))
-    M = np.eye(4)
-    pos = np.empty((n_j + 2, 3, 4))  # every frame: rotation | origin
+    out = np.empty((n_cfg, frames.shape[0], 3))
+    scratch = landmark_scratch(n_j)
     for c in range(n_cfg):
-        T[:, :] = T_world_base
-        pos[0, :, :] = T[:3, :]
-        for i in range(n_j):
-            _affine_mul(T, T_parent_joint[i], A)
-            kx, ky, kz = axes[i, 0], axes[i, 1], axes[i, 2]
-            v = q[c, i]
-            if prismatic[i]:
-                for r in range(3):
-                    for k in range(3):
-                        M[r, k] = 1.0 if r == k else 0.0
-                M[0, 3], M[1, 3], M[2, 3] = v * kx, v * ky, v * kz
-            else:
-                s, co = np.sin(v), np.cos(v)
-                t = 1.0 - co
-                M[0, 0] = co + t * kx * kx
-                M[0, 1] = t * kx * ky - s * kz
-                M[0, 2] = t * kx * kz + s * ky
-                M[1, 0] = t * kx * ky + s * kz
-                M[1, 1] = co + t * ky * ky
-                M[1, 2] = t * ky * kz - s * kx
-                M[2, 0] = t * kx * kz - s * ky
-                M[2, 1] = t * ky * kz + s * kx
-                M[2, 2] = co + t * kz * kz
-                M[0, 3] = M[1, 3] = M[2, 3] = 0.0
-            _affine_mul(A, M, T)
-            pos[i + 1, :, :] = T[:3, :]
-        _affine_mul(T, T_flange_tool, A)
-        pos[n_j + 1, :, :] = A[:3, :]
-        for m in range(n_l):
-            f = frames[m]
-            o0, o1, o2 = offsets[m, 0], offsets[m, 1], offsets[m, 2]
-            for k in range(3):
-                out[c, m, k] = (
-                    pos[f, k, 3] + pos[f, k, 0] * o0 + pos[f, k, 1] * o1 + pos[f, k, 2] * o2
-                )
+        landmarks_into(
+            q[c],
+            T_world_base,
+            T_parent_joint,
+            axes,
+            prismatic,
+            T_flange_tool,
+            frames,
+            offsets,
+            scratch,
+            out[c],
+        )
     return out
+
+
+@njit(cache=True)
+def landmark_scratch(n_joints: int) -> np.ndarray:  # pragma: no cover - compiled
+    """Work space of :func:`landmarks_into` for an arm of ``n_joints``: three 4x4 transforms
+    and every frame's rotation and origin, ``(3 * 4 + (n + 2) * 3, 4)``."""
+    scratch = np.zeros((12 + (n_joints + 2) * 3, 4))
+    scratch[8:12] = np.eye(4)
+    return scratch
+
+
+@njit(cache=True)
+def landmarks_into(
+    q: np.ndarray,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+    frames: np.ndarray,
+    offsets: np.ndarray,
+    scratch: np.ndarray,
+    out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Landmark positions ``out (L, 3)`` of one configuration ``q (n,)`` (the arm as
+    :func:`compiled_chain` flattens it; ``scratch`` from :func:`landmark_scratch`)."""
+    n_j = q.shape[0]
+    T = scratch[0:4]
+    A = scratch[4:8]
+    M = scratch[8:12]
+    pos = scratch[12:].reshape(n_j + 2, 3, 4)  # every frame: rotation | origin
+    T[:, :] = T_world_base
+    pos[0, :, :] = T[:3, :]
+    for i in range(n_j):
+        _affine_mul(T, T_parent_joint[i], A)
+        kx, ky, kz = axes[i, 0], axes[i, 1], axes[i, 2]
+        v = q[i]
+        if prismatic[i]:
+            for r in range(3):
+                for k in range(3):
+                    M[r, k] = 1.0 if r == k else 0.0
+            M[0, 3], M[1, 3], M[2, 3] = v * kx, v * ky, v * kz
+        else:
+            s, co = np.sin(v), np.cos(v)
+            t = 1.0 - co
+            M[0, 0] = co + t * kx * kx
+            M[0, 1] = t * kx * ky - s * kz
+            M[0, 2] = t * kx * kz + s * ky
+            M[1, 0] = t * kx * ky + s * kz
+            M[1, 1] = co + t * ky * ky
+            M[1, 2] = t * ky * kz - s * kx
+            M[2, 0] = t * kx * kz - s * ky
+            M[2, 1] = t * ky * kz + s * kx
+            M[2, 2] = co + t * kz * kz
+            M[0, 3] = M[1, 3] = M[2, 3] = 0.0
+        _affine_mul(A, M, T)
+        pos[i + 1, :, :] = T[:3, :]
+    _affine_mul(T, T_flange_tool, A)
+    pos[n_j + 1, :, :] = A[:3, :]
+    for m in range(frames.shape[0]):
+        f = frames[m]
+        o0, o1, o2 = offsets[m, 0], offsets[m, 1], offsets[m, 2]
+        for k in range(3):
+            out[m, k] = pos[f, k, 3] + pos[f, k, 0] * o0 + pos[f, k, 1] * o1 + pos[f, k, 2] * o2
 
 
 def tool_pose(arm: SerialArm, q: ArrayLike) -> FloatArray:

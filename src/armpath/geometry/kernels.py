@@ -270,7 +270,7 @@ def _feature_distance(
 
 
 @njit(cache=True)
-def _segment_revolution(
+def segment_revolution(
     p: np.ndarray,
     k: int,
     origin: np.ndarray,
@@ -448,7 +448,7 @@ def segments_to_revolution(
     for c in range(n_chunks):
         cands = np.empty(8 + verts.shape[0] * 32)
         for k in range(c, k_count, n_chunks):
-            out[k] = _segment_revolution(p, k, origin, axis, verts, boundary, cands)
+            out[k] = segment_revolution(p, k, origin, axis, verts, boundary, cands)
     return out
 
 
@@ -559,41 +559,53 @@ def segments_to_box(
     out = np.empty(p0.shape[0])
     x = np.empty(3)
     for k in range(p0.shape[0]):
-        d2 = _segment_box_outside2(p0, p1, k, center, rot, half)
-        if d2 > 0.0:
-            out[k] = math.sqrt(d2)
-            continue
-        lo, hi = 0.0, 1.0
-        t1 = hi - _GOLDEN * (hi - lo)
-        t2 = lo + _GOLDEN * (hi - lo)
-        for j in range(3):
-            x[j] = p0[k, j] + t1 * (p1[k, j] - p0[k, j])
-        f1 = _box_sdf(x, center, rot, half)
-        for j in range(3):
-            x[j] = p0[k, j] + t2 * (p1[k, j] - p0[k, j])
-        f2 = _box_sdf(x, center, rot, half)
-        for _ in range(GOLDEN_ITERATIONS):
-            if f1 < f2:
-                hi, t2, f2 = t2, t1, f1
-                t1 = hi - _GOLDEN * (hi - lo)
-                for j in range(3):
-                    x[j] = p0[k, j] + t1 * (p1[k, j] - p0[k, j])
-                f1 = _box_sdf(x, center, rot, half)
-            else:
-                lo, t1, f1 = t1, t2, f2
-                t2 = lo + _GOLDEN * (hi - lo)
-                for j in range(3):
-                    x[j] = p0[k, j] + t2 * (p1[k, j] - p0[k, j])
-                f2 = _box_sdf(x, center, rot, half)
-        best = min(f1, f2)
-        for j in range(3):
-            x[j] = p0[k, j]
-        best = min(best, _box_sdf(x, center, rot, half))
-        for j in range(3):
-            x[j] = p1[k, j]
-        best = min(best, _box_sdf(x, center, rot, half))
-        out[k] = best
+        out[k] = segment_box(p0, p1, k, center, rot, half, x)
     return out
+
+
+@njit(cache=True)
+def segment_box(
+    p0: np.ndarray,
+    p1: np.ndarray,
+    k: int,
+    center: np.ndarray,
+    rot: np.ndarray,
+    half: np.ndarray,
+    x: np.ndarray,
+) -> float:  # pragma: no cover - compiled
+    """:func:`segments_to_box` of segment ``p0[k] -> p1[k]`` (``x``: scratch of 3)."""
+    d2 = _segment_box_outside2(p0, p1, k, center, rot, half)
+    if d2 > 0.0:
+        return math.sqrt(d2)
+    lo, hi = 0.0, 1.0
+    t1 = hi - _GOLDEN * (hi - lo)
+    t2 = lo + _GOLDEN * (hi - lo)
+    for j in range(3):
+        x[j] = p0[k, j] + t1 * (p1[k, j] - p0[k, j])
+    f1 = _box_sdf(x, center, rot, half)
+    for j in range(3):
+        x[j] = p0[k, j] + t2 * (p1[k, j] - p0[k, j])
+    f2 = _box_sdf(x, center, rot, half)
+    for _ in range(GOLDEN_ITERATIONS):
+        if f1 < f2:
+            hi, t2, f2 = t2, t1, f1
+            t1 = hi - _GOLDEN * (hi - lo)
+            for j in range(3):
+                x[j] = p0[k, j] + t1 * (p1[k, j] - p0[k, j])
+            f1 = _box_sdf(x, center, rot, half)
+        else:
+            lo, t1, f1 = t1, t2, f2
+            t2 = lo + _GOLDEN * (hi - lo)
+            for j in range(3):
+                x[j] = p0[k, j] + t2 * (p1[k, j] - p0[k, j])
+            f2 = _box_sdf(x, center, rot, half)
+    best = min(f1, f2)
+    for j in range(3):
+        x[j] = p0[k, j]
+    best = min(best, _box_sdf(x, center, rot, half))
+    for j in range(3):
+        x[j] = p1[k, j]
+    return min(best, _box_sdf(x, center, rot, half))
 
 
 @njit(cache=True)
@@ -607,33 +619,54 @@ def segment_segment_distance(
     """
     out = np.empty(a0.shape[0])
     for k in range(a0.shape[0]):
-        # scalars only: no temporary arrays in the loop
-        u0, u1, u2 = a1[k, 0] - a0[k, 0], a1[k, 1] - a0[k, 1], a1[k, 2] - a0[k, 2]
-        v0, v1, v2 = b1[k, 0] - b0[k, 0], b1[k, 1] - b0[k, 1], b1[k, 2] - b0[k, 2]
-        r0, r1, r2 = a0[k, 0] - b0[k, 0], a0[k, 1] - b0[k, 1], a0[k, 2] - b0[k, 2]
-        aa = u0 * u0 + u1 * u1 + u2 * u2
-        ee = v0 * v0 + v1 * v1 + v2 * v2
-        bb = u0 * v0 + u1 * v1 + u2 * v2
-        cc = u0 * r0 + u1 * r1 + u2 * r2
-        ff = v0 * r0 + v1 * r1 + v2 * r2
-        best = np.inf
-        den = aa * ee - bb * bb
-        if den > 1e-12 * aa * ee and den > 0.0:
-            s = (bb * ff - cc * ee) / den
-            t = (aa * ff - bb * cc) / den
-            if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
-                best = _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s, t)
-        # edges of the unit square: s = 0, s = 1 (optimise t); t = 0, t = 1 (optimise s)
-        for s_fix in (0.0, 1.0):
-            t = (ff + s_fix * bb) / ee if ee > 0.0 else 0.0
-            t = min(max(t, 0.0), 1.0)
-            best = min(best, _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s_fix, t))
-        for t_fix in (0.0, 1.0):
-            s = (t_fix * bb - cc) / aa if aa > 0.0 else 0.0
-            s = min(max(s, 0.0), 1.0)
-            best = min(best, _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s, t_fix))
-        out[k] = math.sqrt(best)
+        out[k] = segment_segment(
+            a0[k, 0], a0[k, 1], a0[k, 2], a1[k, 0], a1[k, 1], a1[k, 2],
+            b0[k, 0], b0[k, 1], b0[k, 2], b1[k, 0], b1[k, 1], b1[k, 2],
+        )  # fmt: skip
     return out
+
+
+@njit(cache=True)
+def segment_segment(
+    a00: float,
+    a01: float,
+    a02: float,
+    a10: float,
+    a11: float,
+    a12: float,
+    b00: float,
+    b01: float,
+    b02: float,
+    b10: float,
+    b11: float,
+    b12: float,
+) -> float:  # pragma: no cover - compiled
+    """:func:`segment_segment_distance` of one pair, from the end points' coordinates."""
+    u0, u1, u2 = a10 - a00, a11 - a01, a12 - a02
+    v0, v1, v2 = b10 - b00, b11 - b01, b12 - b02
+    r0, r1, r2 = a00 - b00, a01 - b01, a02 - b02
+    aa = u0 * u0 + u1 * u1 + u2 * u2
+    ee = v0 * v0 + v1 * v1 + v2 * v2
+    bb = u0 * v0 + u1 * v1 + u2 * v2
+    cc = u0 * r0 + u1 * r1 + u2 * r2
+    ff = v0 * r0 + v1 * r1 + v2 * r2
+    best = np.inf
+    den = aa * ee - bb * bb
+    if den > 1e-12 * aa * ee and den > 0.0:
+        s = (bb * ff - cc * ee) / den
+        t = (aa * ff - bb * cc) / den
+        if 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0:
+            best = _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s, t)
+    # edges of the unit square: s = 0, s = 1 (optimise t); t = 0, t = 1 (optimise s)
+    for s_fix in (0.0, 1.0):
+        t = (ff + s_fix * bb) / ee if ee > 0.0 else 0.0
+        t = min(max(t, 0.0), 1.0)
+        best = min(best, _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s_fix, t))
+    for t_fix in (0.0, 1.0):
+        s = (t_fix * bb - cc) / aa if aa > 0.0 else 0.0
+        s = min(max(s, 0.0), 1.0)
+        best = min(best, _pair_dist2(r0, r1, r2, u0, u1, u2, v0, v1, v2, s, t_fix))
+    return math.sqrt(best)
 
 
 @njit(cache=True, inline="always")
@@ -662,11 +695,19 @@ def segments_to_point(p0: np.ndarray, p1: np.ndarray, c: np.ndarray) -> np.ndarr
     """Distance of each segment ``p0[k] -> p1[k]`` to the point ``c[k]`` (all ``(K, 3)``)."""
     out = np.empty(p0.shape[0])
     for k in range(p0.shape[0]):
-        d0, d1, d2 = p1[k, 0] - p0[k, 0], p1[k, 1] - p0[k, 1], p1[k, 2] - p0[k, 2]
-        w0, w1, w2 = c[k, 0] - p0[k, 0], c[k, 1] - p0[k, 1], c[k, 2] - p0[k, 2]
-        dd = d0 * d0 + d1 * d1 + d2 * d2
-        t = (w0 * d0 + w1 * d1 + w2 * d2) / dd if dd > 0.0 else 0.0
-        t = min(max(t, 0.0), 1.0)
-        v0, v1, v2 = w0 - t * d0, w1 - t * d1, w2 - t * d2
-        out[k] = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        out[k] = segment_point(p0, p1, k, c[k, 0], c[k, 1], c[k, 2])
     return out
+
+
+@njit(cache=True)
+def segment_point(
+    p0: np.ndarray, p1: np.ndarray, k: int, c0: float, c1: float, c2: float
+) -> float:  # pragma: no cover - compiled
+    """Distance of segment ``p0[k] -> p1[k]`` to the point ``(c0, c1, c2)``."""
+    d0, d1, d2 = p1[k, 0] - p0[k, 0], p1[k, 1] - p0[k, 1], p1[k, 2] - p0[k, 2]
+    w0, w1, w2 = c0 - p0[k, 0], c1 - p0[k, 1], c2 - p0[k, 2]
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    t = (w0 * d0 + w1 * d1 + w2 * d2) / dd if dd > 0.0 else 0.0
+    t = min(max(t, 0.0), 1.0)
+    v0, v1, v2 = w0 - t * d0, w1 - t * d1, w2 - t * d2
+    return math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)

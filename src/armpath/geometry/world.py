@@ -32,15 +32,17 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
+from armpath.geometry.compiled_world import ObstacleTable, obstacle_table, segments_clear
 from armpath.geometry.kernels import segment_segment_distance, segments_to_point
 from armpath.geometry.primitives import Obstacle
-from armpath.kinematics import landmark_positions
+from armpath.kinematics import compiled_chain, landmark_positions
 from armpath.model.serial_arm import JointKind, Link, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -156,6 +158,11 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     out = LinkAnalysis(point_of, degenerate, length, chain, rigid)
     arm.__dict__["_link_analysis"] = out
     return out
+
+
+#: Most configurations :meth:`CollisionWorld.segments_satisfied` checks in one call of
+#: :meth:`CollisionWorld.satisfied` (worlds with a mesh).
+SATISFIED_CHUNK = 50_000
 
 
 class SlackGroup(NamedTuple):
@@ -524,6 +531,96 @@ class CollisionWorld:
             d = self._self_clearances(arm, pts.reshape(-1, *pts.shape[-2:])[live])
             ok[live] = np.all(d >= need[-n_self:], axis=-1)
         return ok.reshape(batch)
+
+    @cached_property
+    def _table(self) -> ObstacleTable | None:
+        return obstacle_table(self.obstacles)
+
+    def segments_satisfied(
+        self,
+        arm: SerialArm,
+        a: FloatArray,
+        b: FloatArray,
+        counts: IntArray,
+        extra: ArrayLike | float = 0.0,
+        strides: tuple[int, ...] = (1,),
+    ) -> NDArray[np.bool_]:
+        """Per joint-space segment ``a[e] -> b[e]`` (each ``(M, n)``), whether all its
+        ``counts[e] >= 2`` evenly spaced configurations (both ends included) keep every pair's
+        ``required + extra`` (the verdict of :meth:`satisfied` at each).
+
+        Samples on the coarsest of ``strides`` (and the last) are checked first, then finer
+        ones, and a segment stops at its first failing sample: most segments a planner tries
+        are blocked, usually where the coarse samples see it. With obstacles of closed form
+        only (not meshes) it is one compiled loop; otherwise :meth:`satisfied` per batch.
+        """
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        b = np.ascontiguousarray(b, dtype=np.float64)
+        counts = np.ascontiguousarray(counts, dtype=np.int64)
+        if a.shape != b.shape or a.ndim != 2 or counts.shape != a.shape[:1]:
+            raise InvalidInputError(
+                f"segments need (M, n) ends and (M,) counts, got {a.shape}, {b.shape}, "
+                f"{counts.shape}"
+            )
+        if np.any(counts < 2):
+            raise InvalidInputError("every segment needs at least 2 samples (its ends)")
+        bound = self._bound(arm)
+        need = bound.required + np.broadcast_to(
+            np.asarray(extra, dtype=np.float64), bound.required.shape
+        )
+        if not bound.pairs:
+            return np.ones(a.shape[0], dtype=bool)
+        table = self._table
+        if table is not None:
+            return np.asarray(
+                segments_clear(
+                    a,
+                    b,
+                    counts,
+                    np.array(strides, dtype=np.int64),
+                    *compiled_chain(arm),
+                    bound.link_start.astype(np.int64),
+                    bound.link_end.astype(np.int64),
+                    float(self.tip_exempt),
+                    bound.tip_split,
+                    bound.part_radius,
+                    np.ascontiguousarray(need),
+                    table.kinds,
+                    table.params,
+                    table.balls,
+                    table.profiles,
+                    table.boundary,
+                    table.n_vertices,
+                    bound.self_a0.astype(np.int64),
+                    bound.self_a1.astype(np.int64),
+                    bound.self_b0.astype(np.int64),
+                    bound.self_b1.astype(np.int64),
+                    bound.self_radii,
+                ),
+                dtype=bool,
+            )
+        owner = np.repeat(np.arange(a.shape[0]), counts)
+        start = np.cumsum(counts) - counts
+        local = np.arange(owner.size) - start[owner]
+        frac = local / (counts[owner] - 1)
+        last = local == counts[owner] - 1
+        level = np.full(owner.size, len(strides) - 1)
+        for k in range(len(strides) - 1, -1, -1):
+            level[(local % strides[k] == 0) | last] = k
+        ok = np.ones(a.shape[0], dtype=bool)
+        for k in range(len(strides)):
+            rows = np.flatnonzero((level == k) & ok[owner])
+            for s in range(0, rows.size, SATISFIED_CHUNK):
+                sel = rows[s : s + SATISFIED_CHUNK]
+                sel = sel[ok[owner[sel]]]
+                if sel.size == 0:
+                    continue
+                q = a[owner[sel]] + frac[sel, None] * (b - a)[owner[sel]]
+                bad = ~self.satisfied(arm, q, extra)
+                ok[owner[sel[bad]]] = False
+            if not np.any(ok):
+                break
+        return ok
 
     def _self_clearances(self, arm: SerialArm, pts: FloatArray) -> FloatArray:
         """Distances between the self-collision link pairs less their radii, ``(..., S)``."""

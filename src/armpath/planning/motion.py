@@ -202,8 +202,6 @@ def search_clearance_extra(
 
 #: Sample strides of :func:`edge_checker`'s coarse-to-fine passes along each segment.
 EDGE_STRIDES = (16, 1)
-#: Most configurations :func:`edge_checker` evaluates in one call of the world.
-EDGE_CHUNK = 50_000
 
 
 def edge_checker(
@@ -226,34 +224,12 @@ def edge_checker(
         b2 = np.atleast_2d(b)
         reach = np.abs(b2 - a2) @ R
         counts = np.maximum(np.ceil(reach / spacing_mm).astype(np.int64), 1) + 1
-        owner = np.repeat(np.arange(a2.shape[0]), counts)
-        start = np.cumsum(counts) - counts
-        frac = (np.arange(owner.size) - start[owner]) / (counts[owner] - 1)
-        ok = np.ones(a2.shape[0], dtype=bool)
         if not pairs:
-            return ok
+            return np.ones(a2.shape[0], dtype=bool)
         # coarse to fine: every EDGE_STRIDES[0]-th sample of each segment (and its end) first,
-        # then the samples between, only for segments not yet blocked. Most segments a search
-        # tries are blocked, and a blocked stretch is usually caught by the coarse samples;
-        # a segment that passes has had every sample checked, as before.
-        local = np.arange(owner.size) - start[owner]
-        last = local == counts[owner] - 1
-        level = np.full(owner.size, len(EDGE_STRIDES) - 1)
-        for k in range(len(EDGE_STRIDES) - 1, -1, -1):
-            level[(local % EDGE_STRIDES[k] == 0) | last] = k
-        for k in range(len(EDGE_STRIDES)):
-            rows = np.flatnonzero((level == k) & ok[owner])
-            for s in range(0, rows.size, EDGE_CHUNK):
-                sel = rows[s : s + EDGE_CHUNK]
-                sel = sel[ok[owner[sel]]]
-                if sel.size == 0:
-                    continue
-                q = a2[owner[sel]] + frac[sel, None] * (b2 - a2)[owner[sel]]
-                bad = ~world.satisfied(arm, q, extra)
-                ok[owner[sel[bad]]] = False
-            if not np.any(ok):
-                break
-        return ok
+        # then the samples between, only for segments not yet blocked; a segment that passes
+        # has had every sample checked
+        return world.segments_satisfied(arm, a2, b2, counts, extra, EDGE_STRIDES)
 
     return check
 

@@ -69,6 +69,8 @@ SURFACE_TOLERANCE_MM = 1e-6
 GOAL_COUNT = 12
 GOAL_BODY_BUFFER_MM = 1.5
 GOAL_SPREAD_DEG = 4.0
+#: Family samples checked for clearance at a time while goal states are picked.
+GOAL_SAMPLE_CHUNK = 8192
 #: Smallest and largest fingertip tolerance a reach accepts (mm).
 MIN_TOLERANCE_MM = 0.001
 MAX_TOLERANCE_MM = 100.0
@@ -821,25 +823,34 @@ def _goal_states(
         )
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
-    # the family samples whose links keep the margin plus the buffer (the tool tip is not
-    # asked here); the broad-phase verdict of every pair at once
-    body_ok = world.satisfied(arm, p.full(q), np.where(is_tip, -np.inf, body_buffer_mm))
     # a lattice state's tool tip only must not penetrate (its pairs require 0)
     buffer = np.where(is_tip, 0.0, body_buffer_mm)
-    if not np.any(body_ok):
+    # the family samples nearest the start first, whose links keep the margin plus the buffer
+    # (the tool tip is not asked here), each at least ``spread`` from those picked before;
+    # checked a chunk at a time until enough are picked
+    body_extra = np.where(is_tip, -np.inf, body_buffer_mm)
+    order = np.argsort(change, kind="stable")
+    spread = np.radians(spread_deg)
+    picked = np.zeros((0, q.shape[1]))
+    any_clear = False
+    for lo in range(0, order.size, GOAL_SAMPLE_CHUNK):
+        check_time("finding goal states")
+        chunk = q[order[lo : lo + GOAL_SAMPLE_CHUNK]]
+        chunk = chunk[world.satisfied(arm, p.full(chunk), body_extra)]
+        any_clear = any_clear or chunk.shape[0] > 0
+        for earlier in picked:  # far enough from every earlier pick
+            chunk = chunk[np.max(np.abs(chunk - earlier), axis=-1) >= spread]
+        while chunk.shape[0] and picked.shape[0] < 4 * count:
+            picked = np.vstack([picked, chunk[:1]])
+            chunk = chunk[1:][np.max(np.abs(chunk[1:] - chunk[0]), axis=-1) >= spread]
+        if picked.shape[0] >= 4 * count:
+            break
+    if not any_clear:
         raise PlanningError(
             f"no configuration reaching ({', '.join(f'{v:g}' for v in p.target)}) mm keeps the "
             f"links {world.margin:g} mm clear of the obstacles"
         )
-    q, change = q[body_ok], change[body_ok]
-    order = np.argsort(change, kind="stable")
-    spread = np.radians(spread_deg)
-    picks: list[FloatArray] = []
-    for i in order:
-        if all(np.max(np.abs(q[i] - c)) >= spread for c in picks):
-            picks.append(q[i])
-            if len(picks) >= 4 * count:
-                break
+    picks = list(picked)
     states: list[IntArray] = []
     errors: list[float] = []
     steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
@@ -877,10 +888,17 @@ def _goal_states(
             continue
         c5, errs = c5[within], errs[within]
         full = np.hstack([c5, np.broadcast_to(p.start_ticks[TIP_JOINTS:], (c5.shape[0], 1))])
-        ok = world.satisfied(arm, ticks_to_rad(full), buffer)
-        if not np.any(ok):
+        # the clear state of smallest error: candidates checked in order of error
+        by_error = np.argsort(errs, kind="stable")
+        k = -1
+        for lo in range(0, by_error.size, 64):
+            idx = by_error[lo : lo + 64]
+            ok = world.satisfied(arm, ticks_to_rad(full[idx]), buffer)
+            if np.any(ok):
+                k = int(idx[np.argmax(ok)])
+                break
+        if k < 0:
             continue
-        k = int(np.flatnonzero(ok)[np.argmin(errs[ok])])
         if any(np.array_equal(full[k], s) for s in states):
             continue
         states.append(full[k])

@@ -1,0 +1,276 @@
+"""The clearance rule along joint-space segments in one compiled loop (the planners' edge test).
+
+A planner asks thousands of times whether a straight joint-space segment keeps the clearance
+rule at samples along it. :func:`segments_satisfied` answers a batch of segments in one call of
+:func:`_segments_clear`: per segment, the samples coarse to fine, per sample the landmarks, the
+parts' capsules, each obstacle's broad phase (enclosing ball) and exact distance, then the link
+pairs, stopping at the first sample that breaks the rule. The verdict of every sample equals
+:meth:`CollisionWorld.satisfied` (the same kernels on the same numbers).
+
+Obstacles with a closed-form distance (half-spaces, spheres, capsules, boxes, solids of
+revolution) are packed into flat tables (:class:`ObstacleTable`); a world with any other kind (a
+mesh) has no table, and its callers use :meth:`CollisionWorld.satisfied` per batch of samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.geometry.kernels import (
+    segment_box,
+    segment_point,
+    segment_revolution,
+    segment_segment,
+)
+from armpath.geometry.primitives import (
+    Box,
+    Capsule,
+    HalfSpace,
+    Obstacle,
+    SolidOfRevolution,
+    Sphere,
+)
+from armpath.jit import njit
+from armpath.kinematics import landmark_scratch, landmarks_into
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+_HALF_SPACE, _SPHERE, _CAPSULE, _BOX, _REVOLUTION = range(5)
+
+
+@dataclass(frozen=True)
+class ObstacleTable:
+    """Obstacles as flat arrays for the compiled loop.
+
+    ``kinds`` one code per obstacle; ``params (O, 15)``: half-space point and normal, sphere
+    centre and radius, capsule ends and radius, box centre, half extents and rotation (row
+    major), solid of revolution origin and axis; ``balls (O, 4)`` enclosing ball centre and
+    radius (radius inf: none); ``profiles (O, V, 2)``, ``boundary (O, V)`` and ``n_vertices``
+    the solids of revolution's profiles, padded to the longest.
+    """
+
+    kinds: IntArray
+    params: FloatArray
+    balls: FloatArray
+    profiles: FloatArray
+    boundary: NDArray[np.bool_]
+    n_vertices: IntArray
+
+
+def obstacle_table(obstacles: tuple[Obstacle, ...]) -> ObstacleTable | None:
+    """:class:`ObstacleTable` of ``obstacles``, or None when one has no closed form here."""
+    count = len(obstacles)
+    kinds = np.zeros(count, dtype=np.int64)
+    params = np.zeros((count, 15))
+    balls = np.zeros((count, 4))
+    balls[:, 3] = np.inf
+    longest = max(
+        [o.profile.shape[0] for o in obstacles if isinstance(o, SolidOfRevolution)] or [1]
+    )
+    profiles = np.zeros((count, longest, 2))
+    boundary = np.zeros((count, longest), dtype=bool)
+    n_vertices = np.zeros(count, dtype=np.int64)
+    for i, o in enumerate(obstacles):
+        if isinstance(o, HalfSpace):
+            kinds[i] = _HALF_SPACE
+            params[i, :6] = np.r_[o.point, o.normal]
+        elif isinstance(o, Sphere):
+            kinds[i] = _SPHERE
+            params[i, :4] = np.r_[o.center, o.radius]
+        elif isinstance(o, Capsule):
+            kinds[i] = _CAPSULE
+            params[i, :7] = np.r_[o.start, o.end, o.radius]
+        elif isinstance(o, Box):
+            kinds[i] = _BOX
+            params[i] = np.r_[o.center, o.half_extents, o.rotation.reshape(-1)]
+        elif isinstance(o, SolidOfRevolution):
+            kinds[i] = _REVOLUTION
+            params[i, :6] = np.r_[o.origin, o.axis]
+            n = o.profile.shape[0]
+            profiles[i, :n] = o.profile
+            boundary[i, :n] = o.boundary_edges
+            n_vertices[i] = n
+        else:
+            return None
+        ball = o.enclosing_ball()
+        if ball is not None:
+            balls[i] = np.r_[ball[0], ball[1]]
+    return ObstacleTable(kinds, params, balls, profiles, boundary, n_vertices)
+
+
+@njit(cache=True)
+def _obstacle_distance(
+    o: int,
+    kinds: np.ndarray,
+    params: np.ndarray,
+    profiles: np.ndarray,
+    boundary: np.ndarray,
+    n_vertices: np.ndarray,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    seg: np.ndarray,
+    k: int,
+    work: np.ndarray,
+    cands: np.ndarray,
+) -> float:  # pragma: no cover - compiled
+    """Smallest signed distance of part ``k`` (``p0[k] -> p1[k]``, also in ``seg[k]`` as six
+    numbers) to obstacle ``o``: the value its class's ``segment_distance_bounds`` gives."""
+    kind = kinds[o]
+    c = params[o]
+    if kind == _HALF_SPACE:
+        d0 = (p0[k, 0] - c[0]) * c[3] + (p0[k, 1] - c[1]) * c[4] + (p0[k, 2] - c[2]) * c[5]
+        d1 = (p1[k, 0] - c[0]) * c[3] + (p1[k, 1] - c[1]) * c[4] + (p1[k, 2] - c[2]) * c[5]
+        return float(min(d0, d1))
+    if kind == _SPHERE:
+        return float(segment_point(p0, p1, k, c[0], c[1], c[2]) - c[3])
+    if kind == _CAPSULE:
+        a0, a1, a2 = p0[k, 0], p0[k, 1], p0[k, 2]
+        b0, b1, b2 = p1[k, 0], p1[k, 1], p1[k, 2]
+        return float(
+            segment_segment(a0, a1, a2, b0, b1, b2, c[0], c[1], c[2], c[3], c[4], c[5]) - c[6]
+        )
+    if kind == _BOX:
+        return float(segment_box(p0, p1, k, c[0:3], c[6:15].reshape(3, 3), c[3:6], work))
+    n = n_vertices[o]
+    return float(
+        segment_revolution(seg, k, c[0:3], c[3:6], profiles[o, :n], boundary[o, :n], cands)
+    )
+
+
+@njit(cache=True)
+def segments_clear(
+    a: np.ndarray,
+    b: np.ndarray,
+    counts: np.ndarray,
+    strides: np.ndarray,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+    frames: np.ndarray,
+    offsets: np.ndarray,
+    link_start: np.ndarray,
+    link_end: np.ndarray,
+    tip_exempt: float,
+    tip_split: bool,
+    part_radius: np.ndarray,
+    need: np.ndarray,
+    kinds: np.ndarray,
+    params: np.ndarray,
+    balls: np.ndarray,
+    profiles: np.ndarray,
+    boundary: np.ndarray,
+    n_vertices: np.ndarray,
+    self_a0: np.ndarray,
+    self_a1: np.ndarray,
+    self_b0: np.ndarray,
+    self_b1: np.ndarray,
+    self_radii: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - compiled
+    """Per segment ``a[e] -> b[e]`` sampled at ``counts[e]`` evenly spaced configurations,
+    whether every sample keeps every pair's ``need`` (pairs in :meth:`CollisionWorld.pairs`
+    order). Samples on the coarsest stride first (and the last), then finer; a segment stops at
+    its first failing sample."""
+    n_edges, n_j = a.shape
+    n_obs = kinds.shape[0]
+    n_links = link_start.shape[0]
+    n_parts = n_links + (1 if tip_split else 0)
+    n_self = self_radii.shape[0]
+    ok = np.ones(n_edges, dtype=np.bool_)
+    q = np.empty(n_j)
+    pts = np.empty((frames.shape[0], 3))
+    scratch = landmark_scratch(n_j)
+    p0 = np.empty((max(n_parts, 1), 3))
+    p1 = np.empty((max(n_parts, 1), 3))
+    seg = np.empty((max(n_parts, 1), 6))
+    work = np.empty(3)
+    cands = np.empty(8 + profiles.shape[1] * 32)
+    n_levels = strides.shape[0]
+    for e in range(n_edges):
+        count = counts[e]
+        for level in range(n_levels):
+            for i in range(count):
+                # the coarsest level whose stride the sample is on (the last is on every one)
+                own = n_levels - 1
+                for s in range(n_levels):
+                    if i % strides[s] == 0 or i == count - 1:
+                        own = s
+                        break
+                if own != level:
+                    continue
+                frac = i / (count - 1)
+                for j in range(n_j):
+                    q[j] = a[e, j] + frac * (b[e, j] - a[e, j])
+                landmarks_into(
+                    q,
+                    T_world_base,
+                    T_parent_joint,
+                    axes,
+                    prismatic,
+                    T_flange_tool,
+                    frames,
+                    offsets,
+                    scratch,
+                    pts,
+                )
+                for p in range(n_links):
+                    for t in range(3):
+                        p0[p, t] = pts[link_start[p], t]
+                        p1[p, t] = pts[link_end[p], t]
+                if tip_split:
+                    # the last link: its body up to the cut, then the bare tip from the cut
+                    last = n_links - 1
+                    d0 = p1[last, 0] - p0[last, 0]
+                    d1 = p1[last, 1] - p0[last, 1]
+                    d2 = p1[last, 2] - p0[last, 2]
+                    length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                    cut = min(max(tip_exempt / (length if length > 0 else 1.0), 0.0), 1.0)
+                    for t in range(3):
+                        end = p1[last, t]
+                        at = end - cut * (end - p0[last, t])
+                        p1[n_links, t] = end
+                        p0[n_links, t] = at
+                        p1[last, t] = at
+                for p in range(n_parts):
+                    for t in range(3):
+                        seg[p, t] = p0[p, t]
+                        seg[p, 3 + t] = p1[p, t]
+                clear = True
+                for o in range(n_obs):
+                    for p in range(n_parts):
+                        wanted = need[p * n_obs + o] + part_radius[p]
+                        if balls[o, 3] < np.inf:
+                            near = segment_point(p0, p1, p, balls[o, 0], balls[o, 1], balls[o, 2])
+                            if near - balls[o, 3] >= wanted:
+                                continue  # (also for a need of -inf: nothing asked)
+                        d = _obstacle_distance(
+                            o, kinds, params, profiles, boundary, n_vertices,
+                            p0, p1, seg, p, work, cands,
+                        )  # fmt: skip
+                        if d < wanted:
+                            clear = False
+                            break
+                    if not clear:
+                        break
+                if clear:
+                    for s in range(n_self):
+                        x0, x1 = self_a0[s], self_a1[s]
+                        y0, y1 = self_b0[s], self_b1[s]
+                        d = segment_segment(
+                            pts[x0, 0], pts[x0, 1], pts[x0, 2], pts[x1, 0], pts[x1, 1], pts[x1, 2],
+                            pts[y0, 0], pts[y0, 1], pts[y0, 2], pts[y1, 0], pts[y1, 1], pts[y1, 2],
+                        )  # fmt: skip
+                        if d - self_radii[s] < need[n_parts * n_obs + s]:
+                            clear = False
+                            break
+                if not clear:
+                    ok[e] = False
+                    break
+            if not ok[e]:
+                break
+    return ok
