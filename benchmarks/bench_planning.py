@@ -390,12 +390,12 @@ def ompl_solve(arm: SerialArm, prob: Problem, seed: int, cfg: OmplSettings) -> R
     path_rad[:, idx] = states
     path_rad[-1] = np.where(active, pre[gi], g_rad[gi])
     if np.array_equal(pre[gi], g_rad[gi]):
-        seq_raw = path_to_sequence(path_rad / TICK_RAD, prob.start, prob.goals[gi])
+        seq_raw = path_to_sequence(path_rad / TICK_RAD, prob.start, prob.goals[gi], arm.lattice)
         seq = merge_commands(seq_raw, check)
     else:
         pre_ticks = np.round(path_rad[-1] / TICK_RAD).astype(np.int64)
         last = CommandSequence.straight(pre_ticks, prob.goals[gi]).commands
-        raw = path_to_sequence(path_rad / TICK_RAD, prob.start, pre_ticks)
+        raw = path_to_sequence(path_rad / TICK_RAD, prob.start, pre_ticks, arm.lattice)
         merged = merge_commands(raw, check)
         seq_raw = CommandSequence(prob.start, np.vstack([raw.commands, last]))
         seq = CommandSequence(prob.start, np.vstack([merged.commands, last]))

@@ -4,8 +4,10 @@ A planner asks thousands of times whether a straight joint-space segment keeps t
 rule at samples along it. :func:`segments_satisfied` answers a batch of segments in one call of
 :func:`_segments_clear`: per segment, the samples coarse to fine, per sample the landmarks, the
 parts' capsules, each obstacle's broad phase (enclosing ball) and exact distance, then the link
-pairs, stopping at the first sample that breaks the rule. The verdict of every sample equals
-:meth:`CollisionWorld.satisfied` (the same kernels on the same numbers).
+pairs, stopping at the first sample that breaks the rule; samples that a neighbour's room
+already proves (the Lipschitz bound of :func:`armpath.kinematics.displacement_bounds`) are
+skipped. The verdict equals :meth:`CollisionWorld.satisfied` at every sample (the same kernels
+on the same numbers).
 
 Obstacles with a closed-form distance (half-spaces, spheres, capsules, boxes, solids of
 revolution) are packed into flat tables (:class:`ObstacleTable`); a world with any other kind (a
@@ -40,6 +42,8 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 _HALF_SPACE, _SPHERE, _CAPSULE, _BOX, _REVOLUTION = range(5)
+#: Room (length unit) kept back from a sample's proof of its neighbours, for rounding.
+_ROUNDING = 1e-9
 
 
 @dataclass(frozen=True)
@@ -171,11 +175,17 @@ def segments_clear(
     self_b0: np.ndarray,
     self_b1: np.ndarray,
     self_radii: np.ndarray,
+    reach: np.ndarray,
 ) -> np.ndarray:  # pragma: no cover - compiled
     """Per segment ``a[e] -> b[e]`` sampled at ``counts[e]`` evenly spaced configurations,
     whether every sample keeps every pair's ``need`` (pairs in :meth:`CollisionWorld.pairs`
     order). Samples on the coarsest stride first (and the last), then finer; a segment stops at
-    its first failing sample."""
+    its first failing sample.
+
+    A sample that passes with room to spare proves its neighbours pass too: ``reach`` bounds
+    how far any arm point moves per unit of each joint (:func:`displacement_bounds`), so a
+    pair's clearance changes by at most that much between samples (twice for two links), and
+    the samples within the smallest room are not evaluated. The verdict is the same."""
     n_edges, n_j = a.shape
     n_obs = kinds.shape[0]
     n_links = link_start.shape[0]
@@ -193,8 +203,16 @@ def segments_clear(
     n_levels = strides.shape[0]
     for e in range(n_edges):
         count = counts[e]
+        # how far any arm point can move from one sample to the next
+        step = 0.0
+        for j in range(n_j):
+            step += abs(b[e, j] - a[e, j]) * reach[j]
+        step /= count - 1
+        proven = np.zeros(count, dtype=np.bool_)
         for level in range(n_levels):
             for i in range(count):
+                if proven[i]:
+                    continue
                 # the coarsest level whose stride the sample is on (the last is on every one)
                 own = n_levels - 1
                 for s in range(n_levels):
@@ -240,14 +258,20 @@ def segments_clear(
                     for t in range(3):
                         seg[p, t] = p0[p, t]
                         seg[p, 3 + t] = p1[p, t]
+                # the smallest room any pair has beyond its need (a lower bound: the broad
+                # phase's where it decided); a point moves at most ``step`` per sample
+                room = np.inf
                 clear = True
                 for o in range(n_obs):
                     for p in range(n_parts):
                         wanted = need[p * n_obs + o] + part_radius[p]
+                        if wanted == -np.inf:
+                            continue  # nothing asked of this pair
                         if balls[o, 3] < np.inf:
                             near = segment_point(p0, p1, p, balls[o, 0], balls[o, 1], balls[o, 2])
                             if near - balls[o, 3] >= wanted:
-                                continue  # (also for a need of -inf: nothing asked)
+                                room = min(room, near - balls[o, 3] - wanted)
+                                continue
                         d = _obstacle_distance(
                             o, kinds, params, profiles, boundary, n_vertices,
                             p0, p1, seg, p, work, cands,
@@ -255,6 +279,7 @@ def segments_clear(
                         if d < wanted:
                             clear = False
                             break
+                        room = min(room, d - wanted)
                     if not clear:
                         break
                 if clear:
@@ -265,12 +290,22 @@ def segments_clear(
                             pts[x0, 0], pts[x0, 1], pts[x0, 2], pts[x1, 0], pts[x1, 1], pts[x1, 2],
                             pts[y0, 0], pts[y0, 1], pts[y0, 2], pts[y1, 0], pts[y1, 1], pts[y1, 2],
                         )  # fmt: skip
-                        if d - self_radii[s] < need[n_parts * n_obs + s]:
+                        wanted = need[n_parts * n_obs + s]
+                        if d - self_radii[s] < wanted:
                             clear = False
                             break
+                        room = min(room, 0.5 * (d - self_radii[s] - wanted))  # both links move
                 if not clear:
                     ok[e] = False
                     break
+                # the samples whose every pair keeps its need by this one's room pass too
+                if step > 0.0:
+                    spare = (room - _ROUNDING) / step
+                    spread = int(min(spare, count)) if spare > 0.0 else 0
+                else:
+                    spread = count
+                for j in range(max(i - spread, 0), min(i + spread, count - 1) + 1):
+                    proven[j] = True
             if not ok[e]:
                 break
     return ok

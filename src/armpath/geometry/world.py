@@ -30,7 +30,7 @@ The seed arm has no zero-length link and its pairs are AB-CD, AB-DE and BC-DE.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import NamedTuple
@@ -42,7 +42,7 @@ from armpath.errors import InvalidInputError
 from armpath.geometry.compiled_world import ObstacleTable, obstacle_table, segments_clear
 from armpath.geometry.kernels import segment_segment_distance, segments_to_point
 from armpath.geometry.primitives import Obstacle
-from armpath.kinematics import compiled_chain, landmark_positions
+from armpath.kinematics import compiled_chain, displacement_bounds, landmark_positions
 from armpath.model.serial_arm import JointKind, Link, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -178,7 +178,8 @@ class SlackGroup(NamedTuple):
 @dataclass(frozen=True, eq=False)
 class _ArmBinding:
     """What a :class:`CollisionWorld` computes once per arm: its parts and pairs, what each
-    pair requires, and the landmark indices of the parts' and self pairs' segments."""
+    pair requires, the landmark indices of the parts' and self pairs' segments, and how far a
+    point can move per unit of each joint (:func:`displacement_bounds`)."""
 
     parts: tuple[Part, ...]
     pairs: tuple[ClearancePair, ...]
@@ -192,6 +193,7 @@ class _ArmBinding:
     self_b0: IntArray
     self_b1: IntArray
     self_radii: FloatArray
+    reach: FloatArray
 
 
 @dataclass(frozen=True)
@@ -276,6 +278,7 @@ class CollisionWorld:
             self_radii=np.array(
                 [links[i].radius + links[j].radius for i, j in sp], dtype=np.float64
             ),
+            reach=displacement_bounds(arm),
         )
         self._bindings[id(arm)] = (arm, binding)
         return binding
@@ -564,41 +567,64 @@ class CollisionWorld:
             )
         if np.any(counts < 2):
             raise InvalidInputError("every segment needs at least 2 samples (its ends)")
+        return self.segment_checker(arm, extra, strides)(a, b, counts)
+
+    def segment_checker(
+        self, arm: SerialArm, extra: ArrayLike | float = 0.0, strides: tuple[int, ...] = (1,)
+    ) -> Callable[[FloatArray, FloatArray, IntArray], NDArray[np.bool_]]:
+        """:meth:`segments_satisfied` for ``arm``, ``extra`` and ``strides`` fixed, as a
+        function of ``(a, b, counts)`` (contiguous float64 ``(M, n)`` ends and int64 ``(M,)``
+        counts >= 2, not checked again): for planners that call it thousands of times."""
         bound = self._bound(arm)
-        need = bound.required + np.broadcast_to(
-            np.asarray(extra, dtype=np.float64), bound.required.shape
+        need = np.ascontiguousarray(
+            bound.required
+            + np.broadcast_to(np.asarray(extra, dtype=np.float64), bound.required.shape)
         )
-        if not bound.pairs:
-            return np.ones(a.shape[0], dtype=bool)
         table = self._table
-        if table is not None:
-            return np.asarray(
-                segments_clear(
-                    a,
-                    b,
-                    counts,
-                    np.array(strides, dtype=np.int64),
-                    *compiled_chain(arm),
-                    bound.link_start.astype(np.int64),
-                    bound.link_end.astype(np.int64),
-                    float(self.tip_exempt),
-                    bound.tip_split,
-                    bound.part_radius,
-                    np.ascontiguousarray(need),
-                    table.kinds,
-                    table.params,
-                    table.balls,
-                    table.profiles,
-                    table.boundary,
-                    table.n_vertices,
-                    bound.self_a0.astype(np.int64),
-                    bound.self_a1.astype(np.int64),
-                    bound.self_b0.astype(np.int64),
-                    bound.self_b1.astype(np.int64),
-                    bound.self_radii,
-                ),
-                dtype=bool,
+        if not bound.pairs:
+            return lambda a, b, counts: np.ones(a.shape[0], dtype=bool)
+        if table is None:
+            return lambda a, b, counts: self._segments_satisfied_batched(
+                arm, a, b, counts, extra, strides
             )
+        arm_args = (
+            np.array(strides, dtype=np.int64),
+            *compiled_chain(arm),
+            bound.link_start.astype(np.int64),
+            bound.link_end.astype(np.int64),
+            float(self.tip_exempt),
+            bound.tip_split,
+            bound.part_radius,
+            need,
+            table.kinds,
+            table.params,
+            table.balls,
+            table.profiles,
+            table.boundary,
+            table.n_vertices,
+            bound.self_a0.astype(np.int64),
+            bound.self_a1.astype(np.int64),
+            bound.self_b0.astype(np.int64),
+            bound.self_b1.astype(np.int64),
+            bound.self_radii,
+            bound.reach,
+        )
+
+        def check(a: FloatArray, b: FloatArray, counts: IntArray) -> NDArray[np.bool_]:
+            return np.asarray(segments_clear(a, b, counts, *arm_args), dtype=bool)
+
+        return check
+
+    def _segments_satisfied_batched(
+        self,
+        arm: SerialArm,
+        a: FloatArray,
+        b: FloatArray,
+        counts: IntArray,
+        extra: ArrayLike | float,
+        strides: tuple[int, ...],
+    ) -> NDArray[np.bool_]:
+        """:meth:`segments_satisfied` by :meth:`satisfied` on batches of samples (meshes)."""
         owner = np.repeat(np.arange(a.shape[0]), counts)
         start = np.cumsum(counts) - counts
         local = np.arange(owner.size) - start[owner]

@@ -215,21 +215,22 @@ def edge_checker(
     the whole segment. The tool tip keeps ``spacing_mm / 2``, which proves it never penetrates
     (a goal where it touches a surface is searched for at a retracted pre-goal).
     """
-    pairs = world.pairs(arm)
     extra = search_clearance_extra(arm, world, buffer_mm, spacing_mm)
     R = displacement_bounds(arm)
+    segments = world.segment_checker(arm, extra, EDGE_STRIDES)
 
     def check(a: FloatArray, b: FloatArray) -> NDArray[np.bool_]:
         a2 = np.atleast_2d(a)
         b2 = np.atleast_2d(b)
         reach = np.abs(b2 - a2) @ R
         counts = np.maximum(np.ceil(reach / spacing_mm).astype(np.int64), 1) + 1
-        if not pairs:
-            return np.ones(a2.shape[0], dtype=bool)
         # coarse to fine: every EDGE_STRIDES[0]-th sample of each segment (and its end) first,
-        # then the samples between, only for segments not yet blocked; a segment that passes
-        # has had every sample checked
-        return world.segments_satisfied(arm, a2, b2, counts, extra, EDGE_STRIDES)
+        # then the samples between, only for segments not yet blocked
+        return segments(
+            np.ascontiguousarray(a2, dtype=np.float64),
+            np.ascontiguousarray(b2, dtype=np.float64),
+            counts,
+        )
 
     return check
 
