@@ -14,6 +14,7 @@ Kernels defined after numba is loaded are plain numba dispatchers.
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 from collections.abc import Callable
@@ -101,4 +102,22 @@ def njit(func: Any = None, /, **options: Any) -> Any:
     return wrap(func) if func is not None else wrap
 
 
-__all__ = ["load_numba", "njit", "numba_loaded", "prange"]
+def threads_pay_off(n_items: int, threshold: int) -> bool:
+    """Whether a batch of ``n_items`` should run a kernel's parallel version: at least
+    ``threshold`` items (below, starting the threads costs more than they save) and a core to
+    spare (the one-minute load average at most the core count less one). On a machine whose
+    cores are all busy, numba's threads wait for each other and a batch runs several times
+    slower than on one thread, so there the serial version is taken."""
+    if n_items < threshold:
+        return False
+    cores = os.cpu_count() or 1
+    if cores < 2:
+        return False
+    try:
+        load = os.getloadavg()[0]
+    except OSError:  # not available on this platform: trust the size alone
+        return True
+    return load <= cores - 1.0
+
+
+__all__ = ["load_numba", "njit", "numba_loaded", "prange", "threads_pay_off"]

@@ -8,7 +8,7 @@ import math
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, Generic, NoReturn, TypeVar
 
 import numpy as np
 import typer
@@ -182,6 +182,64 @@ def progress(title: str) -> Iterator[Callable[[str], None]]:
     if verbose:
         say(title)
     yield say
+
+
+T = TypeVar("T")
+
+
+class BackgroundJob(Generic[T]):
+    """``fn()`` computed in a forked child process while the caller goes on (the machine's
+    other core); :meth:`result` waits for it and returns its value or raises its exception.
+
+    Start it before anything has run numba's threads (a fork then is safe). Where ``fork`` is
+    not available (Windows, macOS's default), ``fn`` runs when :meth:`result` is called."""
+
+    def __init__(self, fn: Callable[[], T]) -> None:
+        import multiprocessing
+        import os
+        import sys
+
+        self._fn = fn
+        self._conn: Any = None
+        self._process: Any = None
+        if "fork" in multiprocessing.get_all_start_methods() and (os.cpu_count() or 1) > 1:
+            context = multiprocessing.get_context("fork")
+            sys.stdout.flush()  # (else the child would write what is buffered once more)
+            sys.stderr.flush()
+            self._conn, child = context.Pipe(duplex=False)
+            self._process = context.Process(target=self._child, args=(child,), daemon=True)
+            self._process.start()
+            child.close()
+
+    def _child(self, conn: Any) -> None:  # pragma: no cover - runs in the child process
+        try:
+            conn.send((True, self._fn()))
+        except BaseException as exc:  # handed to the parent to raise
+            conn.send((False, exc))
+        finally:
+            conn.close()
+
+    def result(self) -> T:
+        if self._process is None:
+            return self._fn()
+        try:
+            ok, value = self._conn.recv()
+        except EOFError:
+            raise ArmpathError(
+                f"a background computation ended without a result (exit code "
+                f"{self._process.exitcode})"
+            ) from None
+        finally:
+            self._process.join()
+        if not ok:
+            raise value
+        return value  # type: ignore[no-any-return]
+
+    def cancel(self) -> None:
+        """Stop the child (when the caller gives up first)."""
+        if self._process is not None and self._process.is_alive():
+            self._process.terminate()
+            self._process.join()
 
 
 def _numbers(values: list[str], count: int, what: str) -> list[float]:

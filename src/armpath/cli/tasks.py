@@ -18,6 +18,7 @@ from armpath.cli.common import (
     BUILTIN_NAMES,
     LOOSE,
     AnimateOption,
+    BackgroundJob,
     JsonOption,
     LinkRadiusOption,
     ObjectiveOption,
@@ -883,47 +884,67 @@ def run(
             }
         reach_doc = trace_doc = tour_doc = None
         blind = None
-        with output_folder(out) as folder:
-            if has["reach"]:
-                with progress(f"{titles['reach']} ..."):
-                    result = reach_task(scene, arm, seed=seed)
-                _write_reach(folder, "reach", result, arm, scene, animate=True)
-                reach_doc = reach_result_dict(result, arm, scene)
-            if has["trace"]:
-                with progress(f"{titles['trace']} ...") as say:
-                    options = TraceOptions(motion=MotionOptions(seed=seed))
-                    traced = trace_task(scene, arm, options, on_progress=say)
-                trace_doc = trace_result_dict(traced, arm, scene)
-                _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
-            if has["spotweld"]:
-                with progress(f"{titles['spotweld']} ...") as say:
-                    tour = spotweld_task(
-                        scene, arm, options=MotionOptions(seed=seed), on_progress=say
-                    )
-                tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
-                _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
-            if seed_job:  # the blind zones are the seed arm's and its workpiece's
-                with progress("blind zones ...") as say:
-                    blind = _blind_zones(
-                        arm, scene, 5.0, 1_000_000, 3, seed, say, scan_step_mm=16.0
-                    )
-                _write_blind_zones(folder, blind)
-            tasks = [
-                (titles[key], doc)
-                for key, doc in (("reach", reach_doc), ("trace", trace_doc), ("spotweld", tour_doc))
-                if doc is not None
-            ]
-            heading = "seed tasks" if seed_job else f"{arm.name} in scene {scene.name}"
-            report = summary_markdown(
-                tasks,
-                blind.summary() if blind is not None else (),
-                [*folder.staged(), "summary.md"],
-                heading=heading,
+        # the blind zones (the seed arm's and its workpiece's) are independent of the tasks:
+        # they are computed on the other core meanwhile
+        blind_job = (
+            BackgroundJob(
+                lambda: _blind_zones(arm, scene, 5.0, 1_000_000, 3, seed, _quiet, scan_step_mm=16.0)
             )
-            folder.write_text("summary.md", report)
-            if html:
-                folder.write_text("summary.html", summary_html(report))
+            if seed_job
+            else None
+        )
+        try:
+            with output_folder(out) as folder:
+                if has["reach"]:
+                    with progress(f"{titles['reach']} ..."):
+                        result = reach_task(scene, arm, seed=seed)
+                    _write_reach(folder, "reach", result, arm, scene, animate=True)
+                    reach_doc = reach_result_dict(result, arm, scene)
+                if has["trace"]:
+                    with progress(f"{titles['trace']} ...") as say:
+                        options = TraceOptions(motion=MotionOptions(seed=seed))
+                        traced = trace_task(scene, arm, options, on_progress=say)
+                    trace_doc = trace_result_dict(traced, arm, scene)
+                    _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
+                if has["spotweld"]:
+                    with progress(f"{titles['spotweld']} ...") as say:
+                        tour = spotweld_task(
+                            scene, arm, options=MotionOptions(seed=seed), on_progress=say
+                        )
+                    tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
+                    _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
+                if blind_job is not None:
+                    with progress("blind zones ...") as say:
+                        say("blind zones: arm plane, meridian map and workpiece faces")
+                        blind = blind_job.result()
+                    _write_blind_zones(folder, blind)
+                tasks = [
+                    (titles[key], doc)
+                    for key, doc in (
+                        ("reach", reach_doc),
+                        ("trace", trace_doc),
+                        ("spotweld", tour_doc),
+                    )
+                    if doc is not None
+                ]
+                heading = "seed tasks" if seed_job else f"{arm.name} in scene {scene.name}"
+                report = summary_markdown(
+                    tasks,
+                    blind.summary() if blind is not None else (),
+                    [*folder.staged(), "summary.md"],
+                    heading=heading,
+                )
+                folder.write_text("summary.md", report)
+                if html:
+                    folder.write_text("summary.html", summary_html(report))
+        finally:
+            if blind_job is not None:
+                blind_job.cancel()  # (done by then, unless a task failed)
         _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading)
+
+
+def _quiet(_message: str) -> None:
+    """Progress messages nobody reads (a background job's)."""
 
 
 def _print_run(

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_time
 from armpath.errors import InvalidInputError
-from armpath.jit import njit, prange
+from armpath.jit import njit, prange, threads_pay_off
 
 try:
     import coal  # type: ignore[import-untyped]
@@ -623,7 +623,7 @@ def _points_to_triangles(
 
     Starting the threads costs about 100 µs on a busy machine, more than a small batch.
     """
-    parallel = points.shape[0] * tri.shape[0] >= _PARALLEL_PAIRS
+    parallel = threads_pay_off(points.shape[0] * tri.shape[0], _PARALLEL_PAIRS)
     kernel = _points_to_triangles_parallel if parallel else _points_to_triangles_serial
     dist, wind = kernel(points, tri, centre, reach, with_distance, with_winding)
     return np.asarray(dist, dtype=np.float64), np.asarray(wind, dtype=np.float64)

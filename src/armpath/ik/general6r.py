@@ -45,7 +45,7 @@ from armpath.ik.kernels import (
     trig_roots,
 )
 from armpath.ik.result import chain_length_scale
-from armpath.jit import njit, prange
+from armpath.jit import njit, prange, threads_pay_off
 from armpath.kinematics import _affine_mul, z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -885,7 +885,7 @@ class General6RSolver(CompiledSolver):
         N = T.shape[0]
         q, res, flags, count = padded_outputs(N, _CAP)
         split = np.zeros(N, dtype=np.int64)
-        kernel = _solve_parallel if N >= 64 else _solve_serial
+        kernel = _solve_parallel if threads_pay_off(N, 64) else _solve_serial
         kernel(
             self._C,
             self._P_cached,

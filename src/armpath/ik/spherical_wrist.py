@@ -35,7 +35,7 @@ from armpath.ik.kernels import (
     trig_roots,
 )
 from armpath.ik.result import chain_length_scale
-from armpath.jit import njit, prange
+from armpath.jit import njit, prange, threads_pay_off
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -591,7 +591,7 @@ class SphericalWristSolver(CompiledSolver):
     def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
         q, res, flags, count = padded_outputs(N, _CAP)
-        kernel = _solve_parallel if N >= 128 else _solve_serial
+        kernel = _solve_parallel if threads_pay_off(N, 128) else _solve_serial
         kernel(
             self._C,
             self._prismatic,

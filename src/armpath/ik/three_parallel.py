@@ -29,7 +29,7 @@ from armpath.errors import InvalidInputError
 from armpath.ik.compiled import CompiledSolver, KernelOutput, padded_outputs
 from armpath.ik.kernels import keep_solution, newton_polish, sort_solutions
 from armpath.ik.result import chain_length_scale
-from armpath.jit import njit, prange
+from armpath.jit import njit, prange, threads_pay_off
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -367,7 +367,7 @@ class ThreeParallelSolver(CompiledSolver):
     def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
         q, res, flags, count = padded_outputs(N, _CAP)
-        kernel = _solve_parallel if N >= 128 else _solve_serial
+        kernel = _solve_parallel if threads_pay_off(N, 128) else _solve_serial
         kernel(self._Cs, self._Cf, self._geo, self._reverse, T, self.accept, q, res, flags, count)
         zero = np.zeros(N, dtype=np.int64)
         return q, res, flags, count, zero, zero

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from armpath.budget import MAX_CHUNK, MAX_GRID_CELLS, MAX_SAMPLES, check_size, check_time
 from armpath.errors import InvalidInputError
 from armpath.geometry.world import CollisionWorld
-from armpath.jit import njit, prange
+from armpath.jit import njit, prange, threads_pay_off
 from armpath.kinematics import z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -326,7 +326,10 @@ def sample_workspace(
             q = _clear_samples(arm, world, q)
         kept += q.shape[0]
         if q.shape[0]:
-            outside += _mark_parallel(C, prismatic, q, spec.origin, spec.voxel, occupied, 64)
+            if threads_pay_off(q.shape[0], 4096):
+                outside += _mark_parallel(C, prismatic, q, spec.origin, spec.voxel, occupied, 64)
+            else:
+                outside += _mark(C, prismatic, q, spec.origin, spec.voxel, occupied)
         done += n
         if progress is not None:
             progress(done, samples)
