@@ -250,8 +250,9 @@ def main(argv: list[str] | None = None) -> int:
         if name in args.skip:
             continue
         print(f"{name} ...", flush=True)
+        before = len(rows)
         part(rows)
-        for r in rows[-12:]:
+        for r in rows[before:]:
             print("  " + " | ".join(r), flush=True)
     import numba
 

@@ -96,20 +96,21 @@ def test_the_numpy_landmarks_of_a_few_poses_equal_the_compiled_ones() -> None:
 
 
 def test_threads_are_used_only_for_big_batches_on_a_machine_with_a_core_to_spare(monkeypatch):
-    """The parallel kernels run only for batches of at least the threshold and only while the
-    one-minute load leaves a core free; otherwise the serial kernel (numba's threads stall
-    when every core is busy)."""
+    """The parallel kernels run only for batches of at least the threshold and only while no
+    more than the cores less one are busy (this thread counted); otherwise the serial kernel
+    (numba's threads stall when every core is busy)."""
     import os
 
-    from armpath.jit import threads_pay_off
+    from armpath import jit
 
+    assert jit._busy_cores() >= 1.0  # this thread is running, so it is among the busy ones
     monkeypatch.setattr(os, "cpu_count", lambda: 4)
-    monkeypatch.setattr(os, "getloadavg", lambda: (0.5, 0.5, 0.5))
-    assert threads_pay_off(128, 128) and not threads_pay_off(127, 128)
-    monkeypatch.setattr(os, "getloadavg", lambda: (3.2, 1.0, 1.0))
-    assert not threads_pay_off(10_000, 128)
-    monkeypatch.setattr(os, "getloadavg", lambda: (2.9, 1.0, 1.0))
-    assert threads_pay_off(10_000, 128)
+    monkeypatch.setattr(jit, "_busy_cores", lambda: 1.0)
+    assert jit.threads_pay_off(128, 128) and not jit.threads_pay_off(127, 128)
+    monkeypatch.setattr(jit, "_busy_cores", lambda: 4.0)
+    assert not jit.threads_pay_off(10_000, 128)
+    monkeypatch.setattr(jit, "_busy_cores", lambda: 3.0)
+    assert jit.threads_pay_off(10_000, 128)
     monkeypatch.setattr(os, "cpu_count", lambda: 1)
-    monkeypatch.setattr(os, "getloadavg", lambda: (0.0, 0.0, 0.0))
-    assert not threads_pay_off(10_000, 128)
+    monkeypatch.setattr(jit, "_busy_cores", lambda: 0.0)
+    assert not jit.threads_pay_off(10_000, 128)

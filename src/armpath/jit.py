@@ -105,19 +105,35 @@ def njit(func: Any = None, /, **options: Any) -> Any:
 def threads_pay_off(n_items: int, threshold: int) -> bool:
     """Whether a batch of ``n_items`` should run a kernel's parallel version: at least
     ``threshold`` items (below, starting the threads costs more than they save) and a core to
-    spare (the one-minute load average at most the core count less one). On a machine whose
-    cores are all busy, numba's threads wait for each other and a batch runs several times
-    slower than on one thread, so there the serial version is taken."""
+    spare: at most the cores less one in use now (Linux: the runnable threads of other processes
+    and this one; elsewhere the one-minute load average).
+    On a machine whose cores are all busy, numba's threads wait for each other and a batch runs
+    several times slower than on one thread, so there the serial version is taken."""
     if n_items < threshold:
         return False
     cores = os.cpu_count() or 1
     if cores < 2:
         return False
+    return _busy_cores() <= cores - 1.0
+
+
+def _busy_cores() -> float:
+    """Cores in use now: the threads of other processes that are running or ready to run,
+    plus this thread (this process's own threads, numba's workers among them, do not count)."""
     try:
-        load = os.getloadavg()[0]
+        with open("/proc/loadavg") as f:
+            runnable = float(f.read().split()[3].split("/")[0])
+        own = 0
+        for task in os.listdir("/proc/self/task"):
+            with open(f"/proc/self/task/{task}/stat") as f:
+                own += f.read().rsplit(")", 1)[1].split()[0] == "R"
+        return runnable - own + 1.0
+    except (OSError, IndexError, ValueError):
+        pass
+    try:
+        return os.getloadavg()[0]
     except OSError:  # not available on this platform: trust the size alone
-        return True
-    return load <= cores - 1.0
+        return 0.0
 
 
 __all__ = ["load_numba", "njit", "numba_loaded", "prange", "threads_pay_off"]

@@ -591,7 +591,7 @@ class SphericalWristSolver(CompiledSolver):
     def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
         q, res, flags, count = padded_outputs(N, _CAP)
-        kernel = _solve_parallel if threads_pay_off(N, 128) else _solve_serial
+        kernel = _solve_parallel if threads_pay_off(N, 64) else _solve_serial
         kernel(
             self._C,
             self._prismatic,

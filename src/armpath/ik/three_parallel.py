@@ -367,7 +367,7 @@ class ThreeParallelSolver(CompiledSolver):
     def _run(self, T: FloatArray) -> KernelOutput:
         N = T.shape[0]
         q, res, flags, count = padded_outputs(N, _CAP)
-        kernel = _solve_parallel if threads_pay_off(N, 128) else _solve_serial
+        kernel = _solve_parallel if threads_pay_off(N, 64) else _solve_serial
         kernel(self._Cs, self._Cf, self._geo, self._reverse, T, self.accept, q, res, flags, count)
         zero = np.zeros(N, dtype=np.int64)
         return q, res, flags, count, zero, zero
