@@ -138,3 +138,27 @@ def test_seed_geometry_round_trip_and_variants():
     np.testing.assert_allclose(pts[4], [0, 555, 75], atol=1e-9)
     with pytest.raises(InvalidInputError):
         SeedArmGeometry(ab_mm=-1)
+
+
+@pytest.mark.parametrize("name", ["seed", "ur5", "iiwa14"])
+def test_compiled_frames_and_jacobian_match_numpy_and_finite_differences(name):
+    """Batches of more than a few poses take the compiled frames: they equal the numpy chain
+    to rounding, the tool pose is their last frame, and the position Jacobian (compiled once
+    numba is loaded) equals central differences of the tool position."""
+    from armpath import jit
+    from armpath.kinematics import _forward_frames_numpy, position_jacobian, tool_pose
+    from armpath.model.catalog import BUILTIN_MODELS
+
+    arm = BUILTIN_MODELS[name]()
+    q = np.random.default_rng(4).uniform(-3.0, 3.0, (50, arm.n_joints))
+    frames = forward_frames(arm, q)
+    np.testing.assert_allclose(frames, _forward_frames_numpy(arm, q), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(tool_pose(arm, q), frames[:, -1], rtol=0, atol=1e-9)
+    jit.load_numba()
+    J = position_jacobian(arm, q)
+    h = 1e-6
+    for i in range(arm.n_joints):
+        dq = np.zeros(arm.n_joints)
+        dq[i] = h
+        fd = (tool_pose(arm, q + dq)[:, :3, 3] - tool_pose(arm, q - dq)[:, :3, 3]) / (2 * h)
+        np.testing.assert_allclose(J[:, :, i], fd, rtol=0, atol=1e-5)

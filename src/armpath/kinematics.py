@@ -48,8 +48,25 @@ def forward_frames(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """World poses of every frame, shape ``(..., n + 2, 4, 4)``.
 
     Index 0 is the base, index ``i`` (1..n) joint ``i`` after its motion, index ``n + 1`` the tool.
+    A compiled loop for more than a few poses, numpy for a few.
     """
     qa = _as_joint_array(arm, q)
+    if _compiled_pays(qa):
+        flat = np.ascontiguousarray(qa.reshape(-1, arm.n_joints))
+        out = _frames_kernel(flat, *compiled_chain(arm)[:5], True)
+        return np.asarray(out.reshape(*qa.shape[:-1], arm.n_joints + 2, 4, 4))
+    return _forward_frames_numpy(arm, qa)
+
+
+def _compiled_pays(qa: FloatArray) -> bool:
+    """Whether joint arrays ``qa`` take the compiled kinematics: batches of more than
+    :data:`NUMPY_LANDMARK_BATCH` poses. A few poses keep numpy's arithmetic (the planners'
+    single-pose Newton steps and projections give the same numbers as before), and loading
+    numba would cost more than they do (``armpath fk``)."""
+    return bool(qa.size > NUMPY_LANDMARK_BATCH * qa.shape[-1])
+
+
+def _forward_frames_numpy(arm: SerialArm, qa: FloatArray) -> FloatArray:
     batch = qa.shape[:-1]
     frames = np.empty((*batch, arm.n_joints + 2, 4, 4))
     T = np.broadcast_to(arm.T_world_base, (*batch, 4, 4))
@@ -73,7 +90,7 @@ def landmark_positions(arm: SerialArm, q: ArrayLike) -> FloatArray:
     if len(flat) <= NUMPY_LANDMARK_BATCH and not jit.numba_loaded():
         # a few poses in a process that has run no kernel yet (``armpath fk``): numpy is
         # quicker than loading numba
-        frames = forward_frames(arm, flat)
+        frames = _forward_frames_numpy(arm, flat)
         index = [lm.frame for lm in arm.landmarks]
         offsets = np.array([lm.offset for lm in arm.landmarks], dtype=np.float64).reshape(-1, 3)
         picked = frames[:, index]
@@ -216,6 +233,57 @@ def landmarks_into(
             out[m, k] = pos[f, k, 3] + pos[f, k, 0] * o0 + pos[f, k, 1] * o1 + pos[f, k, 2] * o2
 
 
+@njit(cache=True)
+def _frames_kernel(
+    q: np.ndarray,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+    every: bool,
+) -> np.ndarray:  # pragma: no cover - compiled
+    """Every frame ``(N, n + 2, 4, 4)`` of configurations ``q (N, n)`` (``every``), or only the
+    tool's ``(N, 1, 4, 4)``: the chain of :func:`landmarks_into` with whole transforms kept."""
+    n_cfg, n_j = q.shape
+    out = np.empty((n_cfg, n_j + 2 if every else 1, 4, 4))
+    T = np.empty((4, 4))
+    A = np.empty((4, 4))
+    M = np.eye(4)
+    for c in range(n_cfg):
+        T[:, :] = T_world_base
+        if every:
+            out[c, 0] = T
+        for i in range(n_j):
+            _affine_mul(T, T_parent_joint[i], A)
+            kx, ky, kz = axes[i, 0], axes[i, 1], axes[i, 2]
+            v = q[c, i]
+            if prismatic[i]:
+                for r in range(3):
+                    for k in range(3):
+                        M[r, k] = 1.0 if r == k else 0.0
+                M[0, 3], M[1, 3], M[2, 3] = v * kx, v * ky, v * kz
+            else:
+                s, co = np.sin(v), np.cos(v)
+                t = 1.0 - co
+                M[0, 0] = co + t * kx * kx
+                M[0, 1] = t * kx * ky - s * kz
+                M[0, 2] = t * kx * kz + s * ky
+                M[1, 0] = t * kx * ky + s * kz
+                M[1, 1] = co + t * ky * ky
+                M[1, 2] = t * ky * kz - s * kx
+                M[2, 0] = t * kx * kz - s * ky
+                M[2, 1] = t * ky * kz + s * kx
+                M[2, 2] = co + t * kz * kz
+                M[0, 3] = M[1, 3] = M[2, 3] = 0.0
+            _affine_mul(A, M, T)
+            if every:
+                out[c, i + 1] = T
+        _affine_mul(T, T_flange_tool, A)
+        out[c, n_j + 1 if every else 0] = A
+    return out
+
+
 def tool_pose(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """World pose of the tool frame, shape ``(..., 4, 4)``.
 
@@ -223,6 +291,10 @@ def tool_pose(arm: SerialArm, q: ArrayLike) -> FloatArray:
     for large batches.
     """
     qa = _as_joint_array(arm, q)
+    if _compiled_pays(qa):
+        flat = np.ascontiguousarray(qa.reshape(-1, arm.n_joints))
+        out = _frames_kernel(flat, *compiled_chain(arm)[:5], False)
+        return np.asarray(out.reshape(*qa.shape[:-1], 4, 4))
     T = np.broadcast_to(arm.T_world_base, (*qa.shape[:-1], 4, 4))
     for i, joint in enumerate(arm.joints):
         T = (T @ joint.T_parent_joint) @ _joint_motion(joint.axis, joint.kind, qa[..., i])
@@ -279,6 +351,11 @@ def geometric_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
 
 def jacobian_from_frames(arm: SerialArm, frames: FloatArray) -> FloatArray:
     """:func:`geometric_jacobian` from frames already computed by :func:`forward_frames`."""
+    if jit.numba_loaded():
+        flat = np.ascontiguousarray(frames.reshape(-1, *frames.shape[-3:]), dtype=np.float64)
+        chain = compiled_chain(arm)
+        out = _jacobian_kernel(flat, chain[2], chain[3])
+        return np.asarray(out.reshape(*frames.shape[:-3], 6, arm.n_joints))
     p_tool = frames[..., -1, :3, 3]
     J = np.zeros((*frames.shape[:-3], 6, arm.n_joints))
     for i, joint in enumerate(arm.joints):
@@ -289,6 +366,31 @@ def jacobian_from_frames(arm: SerialArm, frames: FloatArray) -> FloatArray:
             J[..., :3, i] = np.cross(z, p_tool - frames[..., i + 1, :3, 3])
             J[..., 3:, i] = z
     return J
+
+
+@njit(cache=True)
+def _jacobian_kernel(
+    frames: np.ndarray, axes: np.ndarray, prismatic: np.ndarray
+) -> np.ndarray:  # pragma: no cover - compiled
+    """:func:`jacobian_from_frames` of frames ``(N, n + 2, 4, 4)``: ``(N, 6, n)``."""
+    n_cfg, n_j = frames.shape[0], axes.shape[0]
+    out = np.zeros((n_cfg, 6, n_j))
+    for c in range(n_cfg):
+        px, py, pz = frames[c, n_j + 1, 0, 3], frames[c, n_j + 1, 1, 3], frames[c, n_j + 1, 2, 3]
+        for i in range(n_j):
+            F = frames[c, i + 1]
+            z0 = F[0, 0] * axes[i, 0] + F[0, 1] * axes[i, 1] + F[0, 2] * axes[i, 2]
+            z1 = F[1, 0] * axes[i, 0] + F[1, 1] * axes[i, 1] + F[1, 2] * axes[i, 2]
+            z2 = F[2, 0] * axes[i, 0] + F[2, 1] * axes[i, 1] + F[2, 2] * axes[i, 2]
+            if prismatic[i]:
+                out[c, 0, i], out[c, 1, i], out[c, 2, i] = z0, z1, z2
+            else:
+                r0, r1, r2 = px - F[0, 3], py - F[1, 3], pz - F[2, 3]
+                out[c, 0, i] = z1 * r2 - z2 * r1
+                out[c, 1, i] = z2 * r0 - z0 * r2
+                out[c, 2, i] = z0 * r1 - z1 * r0
+                out[c, 3, i], out[c, 4, i], out[c, 5, i] = z0, z1, z2
+    return out
 
 
 def _rotation_taking_z_to(axis: FloatArray) -> FloatArray:
