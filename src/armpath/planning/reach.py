@@ -199,7 +199,12 @@ class _Problem:
     def normalize(self, q: FloatArray) -> FloatArray:
         """Take unlimited joints to the turn nearest the start, others to [-pi, pi)."""
         s = self.start_rad
-        return np.where(self.unlimited, nearest_equivalent(q, s), wrap_to_pi(q))
+        out = np.empty_like(q)
+        free = np.flatnonzero(self.unlimited)
+        bound = np.flatnonzero(~self.unlimited)
+        out[..., free] = nearest_equivalent(q[..., free], s[free])
+        out[..., bound] = wrap_to_pi(q[..., bound])
+        return out
 
     def full(self, q5: ArrayLike) -> FloatArray:
         """Joints 1-5 (rad) completed with the start's joint 6."""
@@ -244,7 +249,14 @@ class _Family:
 
     def step_ticks(self, limit: float) -> float:
         """Largest joint step (ticks) between neighbouring samples where either is within
-        ``limit`` rad of largest change. Jumps over 90 deg are unlimited joints wrapping."""
+        ``limit`` rad of largest change. Jumps over 90 deg are unlimited joints wrapping.
+        (Remembered per ``limit``: every fixed pair of one search asks for the same.)"""
+        memo: dict[float, float] = self.__dict__.setdefault("_step_memo", {})
+        if limit not in memo:
+            memo[limit] = self._step_ticks(limit)
+        return memo[limit]
+
+    def _step_ticks(self, limit: float) -> float:
         steps = [0.0]
         for axis in (0, 1):
             d = np.abs(np.diff(self.q, axis=axis)).max(axis=-1) / TICK_RAD
