@@ -248,11 +248,15 @@ GAPS = """## Where the unmet goals lose their time (profiles)
   path's scoring of 4,000 family members every 5 mm (about 30 %) are dominated by the exact
   segment distance to the workpiece (`segments_to_revolution`, the tool tip touching its
   surface takes the slow path of that kernel); the tracer's projections about 25 %.
-- **Seed reach** (0.7 s in-process): spread over the lattice candidates around the solution
-  family (0.33 s), the family samples (0.19 s) and the minimax lower bound by SLSQP (0.17 s).
-- **First run**: compiling every numba kernel once (about 18 s); later runs load them from the
+- **Seed reach** (about 0.5 s in-process): spread over the lattice candidates around the
+  solution family (0.19 s), the family samples (0.16 s) and the minimax lower bound by SLSQP
+  (0.13 s); `armpath reach` adds the start-up and numba's loading of the kernels it needs.
+- **First run**: compiling every numba kernel once (about 19 s); later runs load them from the
   disk cache.
-- **Test suite** (about 6 min on 2 cores): the longest tests are the headless-Chromium viewer
+- **IK batches of PUMA 560 when idle** (this row varies between runs): the threads are taken
+  only when no other process is running at that moment; a run that finds one takes the serial
+  kernel (about 9.5 us a pose) instead of the parallel one (about 5 us).
+- **Test suite** (about 5.5 min on 2 cores): the longest tests are the headless-Chromium viewer
   (36 s), the UR5 cell's seam (34 s; the generic family search of a UR5), the stress sample
   (25 s) and the exhaustive lattice check of `test_reach.py` (23 s).
 """
