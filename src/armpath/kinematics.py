@@ -170,6 +170,33 @@ def _landmarks_kernel(
 
 
 @njit(cache=True)
+def _joint_motion_into(
+    axis: np.ndarray, prismatic: bool, v: float, M: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """The rigid motion of one joint at value ``v`` into the rows 0-2 of ``M`` (4x4): a turn
+    about the unit ``axis`` (Rodrigues) or a shift along it."""
+    kx, ky, kz = axis[0], axis[1], axis[2]
+    if prismatic:
+        for r in range(3):
+            for k in range(3):
+                M[r, k] = 1.0 if r == k else 0.0
+        M[0, 3], M[1, 3], M[2, 3] = v * kx, v * ky, v * kz
+    else:
+        s, co = np.sin(v), np.cos(v)
+        t = 1.0 - co
+        M[0, 0] = co + t * kx * kx
+        M[0, 1] = t * kx * ky - s * kz
+        M[0, 2] = t * kx * kz + s * ky
+        M[1, 0] = t * kx * ky + s * kz
+        M[1, 1] = co + t * ky * ky
+        M[1, 2] = t * ky * kz - s * kx
+        M[2, 0] = t * kx * kz - s * ky
+        M[2, 1] = t * ky * kz + s * kx
+        M[2, 2] = co + t * kz * kz
+        M[0, 3] = M[1, 3] = M[2, 3] = 0.0
+
+
+@njit(cache=True)
 def landmark_scratch(n_joints: int) -> np.ndarray:  # pragma: no cover - compiled
     """Work space of :func:`landmarks_into` for an arm of ``n_joints``: three 4x4 transforms
     and every frame's rotation and origin, ``(3 * 4 + (n + 2) * 3, 4)``."""
@@ -202,26 +229,7 @@ def landmarks_into(
     pos[0, :, :] = T[:3, :]
     for i in range(n_j):
         _affine_mul(T, T_parent_joint[i], A)
-        kx, ky, kz = axes[i, 0], axes[i, 1], axes[i, 2]
-        v = q[i]
-        if prismatic[i]:
-            for r in range(3):
-                for k in range(3):
-                    M[r, k] = 1.0 if r == k else 0.0
-            M[0, 3], M[1, 3], M[2, 3] = v * kx, v * ky, v * kz
-        else:
-            s, co = np.sin(v), np.cos(v)
-            t = 1.0 - co
-            M[0, 0] = co + t * kx * kx
-            M[0, 1] = t * kx * ky - s * kz
-            M[0, 2] = t * kx * kz + s * ky
-            M[1, 0] = t * kx * ky + s * kz
-            M[1, 1] = co + t * ky * ky
-            M[1, 2] = t * ky * kz - s * kx
-            M[2, 0] = t * kx * kz - s * ky
-            M[2, 1] = t * ky * kz + s * kx
-            M[2, 2] = co + t * kz * kz
-            M[0, 3] = M[1, 3] = M[2, 3] = 0.0
+        _joint_motion_into(axes[i], prismatic[i], q[i], M)
         _affine_mul(A, M, T)
         pos[i + 1, :, :] = T[:3, :]
     _affine_mul(T, T_flange_tool, A)
@@ -256,26 +264,7 @@ def _frames_kernel(
             out[c, 0] = T
         for i in range(n_j):
             _affine_mul(T, T_parent_joint[i], A)
-            kx, ky, kz = axes[i, 0], axes[i, 1], axes[i, 2]
-            v = q[c, i]
-            if prismatic[i]:
-                for r in range(3):
-                    for k in range(3):
-                        M[r, k] = 1.0 if r == k else 0.0
-                M[0, 3], M[1, 3], M[2, 3] = v * kx, v * ky, v * kz
-            else:
-                s, co = np.sin(v), np.cos(v)
-                t = 1.0 - co
-                M[0, 0] = co + t * kx * kx
-                M[0, 1] = t * kx * ky - s * kz
-                M[0, 2] = t * kx * kz + s * ky
-                M[1, 0] = t * kx * ky + s * kz
-                M[1, 1] = co + t * ky * ky
-                M[1, 2] = t * ky * kz - s * kx
-                M[2, 0] = t * kx * kz - s * ky
-                M[2, 1] = t * ky * kz + s * kx
-                M[2, 2] = co + t * kz * kz
-                M[0, 3] = M[1, 3] = M[2, 3] = 0.0
+            _joint_motion_into(axes[i], prismatic[i], q[c, i], M)
             _affine_mul(A, M, T)
             if every:
                 out[c, i + 1] = T
