@@ -4,6 +4,8 @@ scene's three tasks, the blind zones and the report)."""
 from __future__ import annotations
 
 import contextlib
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -17,6 +19,7 @@ from armpath.budget import MAX_SEARCHES
 from armpath.cli.common import (
     BUILTIN_NAMES,
     LOOSE,
+    VERBOSE,
     AnimateOption,
     BackgroundJob,
     JsonOption,
@@ -33,6 +36,7 @@ from armpath.cli.common import (
     _fmt,
     _numbers,
     app,
+    err_console,
     joint_state,
     out_console,
     progress,
@@ -888,7 +892,9 @@ def run(
         # they are computed on the other core meanwhile
         blind_job = (
             BackgroundJob(
-                lambda: _blind_zones(arm, scene, 5.0, 1_000_000, 3, seed, _quiet, scan_step_mm=16.0)
+                lambda: _blind_zones(
+                    arm, scene, 5.0, 1_000_000, 3, seed, _background_say(), scan_step_mm=16.0
+                )
             )
             if seed_job
             else None
@@ -943,8 +949,19 @@ def run(
         _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading)
 
 
-def _quiet(_message: str) -> None:
-    """Progress messages nobody reads (a background job's)."""
+def _background_say() -> Callable[[str], None]:
+    """Where a background job's progress goes: with ``-v`` timed lines on stderr as they
+    happen (between the tasks' own), otherwise nowhere (the run reports the job when it
+    waits for it)."""
+    if not VERBOSE["on"]:
+        return lambda _message: None
+    started = time.monotonic()
+
+    def say(message: str) -> None:
+        elapsed = time.monotonic() - started
+        err_console.print(f"armpath: [{elapsed:6.1f} s] {message}", markup=False, soft_wrap=True)
+
+    return say
 
 
 def _print_run(
