@@ -198,7 +198,7 @@ def _joint_motion_into(
 
 @njit(cache=True)
 def landmark_scratch(n_joints: int) -> np.ndarray:  # pragma: no cover - compiled
-    """Work space of :func:`landmarks_into` for an arm of ``n_joints``: three 4x4 transforms
+    """Work space of :func:`_chain_into` for an arm of ``n_joints``: three 4x4 transforms
     and every frame's rotation and origin, ``(3 * 4 + (n + 2) * 3, 4)``."""
     scratch = np.zeros((12 + (n_joints + 2) * 3, 4))
     scratch[8:12] = np.eye(4)
@@ -220,11 +220,32 @@ def landmarks_into(
 ) -> None:  # pragma: no cover - compiled
     """Landmark positions ``out (L, 3)`` of one configuration ``q (n,)`` (the arm as
     :func:`compiled_chain` flattens it; ``scratch`` from :func:`landmark_scratch`)."""
+    pos = _chain_into(q, T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch)
+    for m in range(frames.shape[0]):
+        f = frames[m]
+        o0, o1, o2 = offsets[m, 0], offsets[m, 1], offsets[m, 2]
+        for k in range(3):
+            out[m, k] = pos[f, k, 3] + pos[f, k, 0] * o0 + pos[f, k, 1] * o1 + pos[f, k, 2] * o2
+
+
+@njit(cache=True)
+def _chain_into(
+    q: np.ndarray,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+    scratch: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - compiled
+    """Every frame of one configuration ``q (n,)`` as rotation | origin rows ``(n + 2, 3, 4)``
+    (base, each joint after its motion, tool), a view into ``scratch``
+    (:func:`landmark_scratch`)."""
     n_j = q.shape[0]
     T = scratch[0:4]
     A = scratch[4:8]
     M = scratch[8:12]
-    pos = scratch[12:].reshape(n_j + 2, 3, 4)  # every frame: rotation | origin
+    pos = scratch[12:].reshape(n_j + 2, 3, 4)
     T[:, :] = T_world_base
     pos[0, :, :] = T[:3, :]
     for i in range(n_j):
@@ -234,11 +255,7 @@ def landmarks_into(
         pos[i + 1, :, :] = T[:3, :]
     _affine_mul(T, T_flange_tool, A)
     pos[n_j + 1, :, :] = A[:3, :]
-    for m in range(frames.shape[0]):
-        f = frames[m]
-        o0, o1, o2 = offsets[m, 0], offsets[m, 1], offsets[m, 2]
-        for k in range(3):
-            out[m, k] = pos[f, k, 3] + pos[f, k, 0] * o0 + pos[f, k, 1] * o1 + pos[f, k, 2] * o2
+    return pos
 
 
 @njit(cache=True)
@@ -252,24 +269,17 @@ def _frames_kernel(
     every: bool,
 ) -> np.ndarray:  # pragma: no cover - compiled
     """Every frame ``(N, n + 2, 4, 4)`` of configurations ``q (N, n)`` (``every``), or only the
-    tool's ``(N, 1, 4, 4)``: the chain of :func:`landmarks_into` with whole transforms kept."""
+    tool's ``(N, 1, 4, 4)``: :func:`_chain_into` with the last rows 0 0 0 1 added."""
     n_cfg, n_j = q.shape
-    out = np.empty((n_cfg, n_j + 2 if every else 1, 4, 4))
-    T = np.empty((4, 4))
-    A = np.empty((4, 4))
-    M = np.eye(4)
+    first = 0 if every else n_j + 1
+    out = np.zeros((n_cfg, n_j + 2 - first, 4, 4))
+    out[:, :, 3, 3] = 1.0
+    scratch = landmark_scratch(n_j)
     for c in range(n_cfg):
-        T[:, :] = T_world_base
-        if every:
-            out[c, 0] = T
-        for i in range(n_j):
-            _affine_mul(T, T_parent_joint[i], A)
-            _joint_motion_into(axes[i], prismatic[i], q[c, i], M)
-            _affine_mul(A, M, T)
-            if every:
-                out[c, i + 1] = T
-        _affine_mul(T, T_flange_tool, A)
-        out[c, n_j + 1 if every else 0] = A
+        pos = _chain_into(
+            q[c], T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch
+        )
+        out[c, :, :3, :] = pos[first:]
     return out
 
 
