@@ -85,7 +85,11 @@ def test_order_is_the_best_planned_and_every_order_ranked(task3):
     assert sorted(tuple(o["order"]) for o in orders) == sorted(itertools.permutations(range(1, 5)))
     planned = [o for o in orders if o["planned_commands"] is not None]
     assert planned and min(o["planned_commands"] for o in planned) == doc["n_commands"]
-    assert doc["n_commands"] >= doc["lower_bound_commands"]
+    # the bound over every order and goal configuration never exceeds the plan nor the bound
+    # through the planner's own goal states (the family holds them)
+    assert 0 < doc["lower_bound_commands"] <= doc["goal_states_bound_commands"] <= doc["n_commands"]
+    assert doc["lower_bound"]["gap_commands"] == doc["n_commands"] - doc["lower_bound_commands"]
+    assert all(o["family_bound_commands"] >= doc["lower_bound_commands"] for o in orders)
     chosen = next(o for o in orders if o["order"] == doc["order"])
     assert chosen["planned_commands"] == doc["n_commands"]
     # the legs add up and each needs at least its direct-motion count

@@ -72,6 +72,9 @@ def test_a_free_circle_is_traced_in_one_closed_pass(circle_trace):
     ang = np.unwrap(np.arctan2(tips[:, 1] - CENTER[1], tips[:, 0] - CENTER[0]))
     assert abs(ang[-1] - ang[0]) >= 2 * np.pi - 1e-3
     assert r.covered_mm >= r.curve.length - 1e-3
+    # the bound of a pass that may begin anywhere on the circle never exceeds the plan
+    assert r.lower_bound is not None and "anywhere" in r.lower_bound.method
+    assert 0 < r.lower_bound.commands <= r.n_commands
     # every command is legal and the motion is certified clear
     assert np.abs(np.diff(states, axis=0)).max() <= 20
     assert r.clearance.certified_ok
@@ -154,6 +157,10 @@ def test_run_reports_task_2(seed_run):
     assert "Task 2" in (out / "summary.md").read_text()
     assert len(doc["passes"]) == 1 and doc["max_deviation_mm"] <= doc["tolerance_mm"]
     assert doc["coverage"]["of_reachable"] > 0.999
+    bound = doc["lower_bound"]
+    assert 0 < doc["lower_bound_commands"] == bound["commands"] <= doc["n_commands"]
+    assert bound["parts_commands"]["approach"] > 0 and bound["parts_commands"]["along"] > 0
+    assert "lower bound" in (out / "summary.md").read_text()
     (bad,) = doc["unreachable"]
     assert "joint limits" in bad["reason"]
 

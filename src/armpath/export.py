@@ -26,6 +26,7 @@ from armpath.model.serialize import arm_to_dict
 from armpath.schemas import SCHEMA_VERSION
 
 if TYPE_CHECKING:  # the result types, for annotations only: writing a result needs no planner
+    from armpath.planning.bounds import CommandBound
     from armpath.planning.motion import MotionPlan, PlanMetrics
     from armpath.planning.motion_check import MotionClearance
     from armpath.planning.reach import ReachResult
@@ -207,20 +208,20 @@ def tour_result_dict(
         "tolerance_mm": result.tolerance_mm,
         "objective": objective,
         "metrics": metrics_dict(result.metrics),
-        "lower_bound_commands": result.order_lower_bounds[result.order],
-        "lower_bound": {
-            "commands": result.order_lower_bounds[result.order],
-            "method": (
-                "for the chosen order: fewest commands of direct motions (obstacles ignored) "
-                "through one of the candidate goal states per target; a bound for these goal "
-                "states, not over every configuration"
-            ),
-        },
+        "lower_bound_commands": None if result.lower_bound is None else result.lower_bound.commands,
+        "lower_bound": _bound_dict(result.lower_bound, seq.n_commands),
+        "goal_states_bound_commands": result.order_lower_bounds[result.order],
+        "goal_states_bound_method": (
+            "for the chosen order: fewest commands of direct motions (obstacles ignored) "
+            "through one of the candidate goal states per target (what ranks the orders); a "
+            "bound for these goal states, not over every configuration"
+        ),
         "orders_ranked": len(result.order_lower_bounds),
         "orders": [
             {
                 "order": [i + 1 for i in o],
                 "lower_bound_commands": b,
+                "family_bound_commands": result.order_family_bounds.get(o),
                 "planned_commands": result.orders_planned.get(o),
                 "not_planned_because": result.orders_not_planned.get(o),
             }
@@ -238,6 +239,19 @@ def tour_result_dict(
         ],
         "min_clearance_mm": _finite_or_none(result.clearance.min_clearance),
         "clearance": clearance_dict(result.clearance),
+    }
+
+
+def _bound_dict(bound: CommandBound | None, commands: int) -> dict[str, Any] | None:
+    """A lower bound, how it was computed, and the plan's gap to it (commands and percent of
+    the bound)."""
+    if bound is None:
+        return None
+    gap = commands - bound.commands
+    return {
+        **bound.describe(),
+        "gap_commands": gap,
+        "gap_percent": round(100.0 * gap / bound.commands, 2) if bound.commands else None,
     }
 
 
@@ -290,6 +304,8 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
             for t in result.transits
         ],
         "covered": [{"start_mm": p.start_mm, "end_mm": p.end_mm} for p in result.passes],
+        "lower_bound_commands": None if result.lower_bound is None else result.lower_bound.commands,
+        "lower_bound": _bound_dict(result.lower_bound, seq.n_commands),
         "not_traced": [
             {"start_mm": a.start_mm, "end_mm": a.end_mm, "reason": why}
             for a, why in result.not_traced

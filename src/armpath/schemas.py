@@ -244,6 +244,11 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
                 },
             ),
             "metrics": _METRICS,
+            "lower_bound_commands": _int(
+                "fewest commands of any plan tracing what this one traces (null: not computed)",
+                True,
+            ),
+            "lower_bound": _obj("the lower bound, how it was computed and the gap", nullable=True),
         },
         ("tolerance_mm", "curve", "passes", "covered", "not_traced", "coverage"),
     ),
@@ -270,8 +275,15 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
             "tolerance_mm": _num("largest error accepted (mm)"),
             "objective": _str("what was minimised"),
             "metrics": _METRICS,
-            "lower_bound_commands": _int("lower bound of the chosen order's commands", True),
-            "lower_bound": _obj("the lower bound and how it was computed", nullable=True),
+            "lower_bound_commands": _int(
+                "fewest commands of any tour: every order (or the given one) and every goal "
+                "configuration, obstacles ignored (null: not computed)",
+                True,
+            ),
+            "lower_bound": _obj("the lower bound, how it was computed and the gap", nullable=True),
+            "goal_states_bound_commands": _int(
+                "bound of the chosen order through the candidate goal states (ranks the orders)"
+            ),
             "orders_ranked": _int("visiting orders ranked by their bounds"),
             "orders": _array(
                 "the best-ranked orders with their bounds and plans", {"type": "object"}

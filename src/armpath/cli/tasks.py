@@ -563,6 +563,17 @@ def plan(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _bound_text(bound: dict[str, Any] | None, scope: str) -> str:
+    """A lower bound of a trace or tour and the plan's gap to it, in one line."""
+    if bound is None:
+        return "not computed"
+    gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
+    return (
+        f">= {bound['commands']} commands ({scope}, every configuration, obstacles ignored); "
+        f"plan {bound['gap_commands']} above it ({gap})"
+    )
+
+
 def _tour_summary(doc: dict[str, Any]) -> Table:
     table = Table(title="spot welds", show_header=False)
     table.add_column("quantity", style="bold")
@@ -570,8 +581,9 @@ def _tour_summary(doc: dict[str, Any]) -> Table:
     table.add_row(
         "commands",
         f"{doc['n_commands']}  (bound for the chosen goal states and order: "
-        f"{doc['lower_bound_commands']})",
+        f"{doc['goal_states_bound_commands']})",
     )
+    table.add_row("lower bound", _bound_text(doc["lower_bound"], "every order"))
     table.add_row("order", " → ".join(str(i) for i in doc["order"]))
     for v in doc["visits"]:
         table.add_row(
@@ -693,6 +705,7 @@ def _trace_summary(doc: dict[str, Any]) -> Table:
         f"{doc['n_commands']}  ({transit} moving onto the curve or between passes, "
         f"{doc['n_commands'] - transit} tracing)",
     )
+    table.add_row("lower bound", _bound_text(doc.get("lower_bound"), "one pass per span"))
     table.add_row("passes", str(len(doc["passes"])))
     for p in doc["pass_details"]:
         table.add_row(

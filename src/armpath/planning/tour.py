@@ -22,11 +22,13 @@ from numpy.typing import ArrayLike, NDArray
 from armpath.budget import check_time
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError, PlanningError
+from armpath.geometry.curves import Polyline
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.target import Orientation
 from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.bounds import CommandBound, tour_bound, tour_bound_any_order
 from armpath.planning.choices import VisitOrder
 from armpath.planning.motion import (
     MotionOptions,
@@ -37,6 +39,7 @@ from armpath.planning.motion import (
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.reach import goal_states
+from armpath.planning.trace.family import curve_family
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -68,6 +71,11 @@ class TourResult:
     orders_planned: dict[tuple[int, ...], int]
     tolerance_mm: float
     orders_not_planned: dict[tuple[int, ...], str] = field(default_factory=dict)
+    #: The fewest commands of any tour through the targets (every order, or the given one, and
+    #: every goal configuration; :func:`~armpath.planning.bounds.tour_bound`), None when not
+    #: computed; and each order's bound of the same kind (empty when not computed per order).
+    lower_bound: CommandBound | None = None
+    order_family_bounds: dict[tuple[int, ...], int] = field(default_factory=dict)
 
     @property
     def n_commands(self) -> int:
@@ -192,6 +200,9 @@ def plan_tour(
     say(f"ranking {len(orders):,} visiting order(s) by their lower bounds")
     bounds = _order_bounds(start, goals, orders, return_to_start, arm.lattice)
     ranking = sorted(orders, key=lambda o: (bounds[o], o))
+    family_bound, family_bounds = _family_bounds(
+        arm, world, start, pts, ranking, return_to_start, tolerance_mm, say
+    )
     ranked = ranking[:orders_to_plan]
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
     planned: dict[tuple[int, ...], int] = {}
@@ -275,4 +286,45 @@ def plan_tour(
         orders_planned=planned,
         tolerance_mm=tolerance_mm,
         orders_not_planned=not_planned,
+        lower_bound=family_bound,
+        order_family_bounds=family_bounds,
     )
+
+
+#: Most targets whose every order gets its own bound over the whole family (4! = 24 orders);
+#: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`.
+EXACT_ORDER_TARGETS = 4
+#: Most targets of a tour whose bound over the family is computed.
+MAX_BOUND_TARGETS = 24
+
+
+def _family_bounds(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start: IntArray,
+    pts: FloatArray,
+    orders: list[tuple[int, ...]],
+    back: bool,
+    tolerance_mm: float,
+    say: Callable[[str], None],
+) -> tuple[CommandBound | None, dict[tuple[int, ...], int]]:
+    """The bound over every goal configuration: per order for a given order or up to
+    :data:`EXACT_ORDER_TARGETS` targets, else the any-order bound; None beyond
+    :data:`MAX_BOUND_TARGETS` targets or where a target has no member within the limits."""
+    if pts.shape[0] > MAX_BOUND_TARGETS:
+        return None, {}
+    vertices = [pts[0]]
+    for p in pts[1:]:
+        if np.any(p != vertices[-1]):
+            vertices.append(p)
+    if len(vertices) == 1:  # the family needs a curve; any second point will do
+        vertices.append(vertices[0] + np.array([1.0, 0.0, 0.0]))
+    fam = curve_family(arm, world, Polyline("targets", np.array(vertices)))
+    q0 = arm.lattice.to_joint(start)
+    say("bounding the tour's commands over every goal configuration")
+    try:
+        if len(orders) == 1 or pts.shape[0] <= EXACT_ORDER_TARGETS:
+            return tour_bound(fam, q0, pts, tolerance_mm, orders, back, rounds=0, on_progress=say)
+        return tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say), {}
+    except PlanningError:
+        return None, {}

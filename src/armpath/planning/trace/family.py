@@ -185,6 +185,13 @@ class CurveFamily:
         ``dirs`` (every solution; members without a real solution dropped)."""
         raise NotImplementedError
 
+    def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Every family member ``(M, n)`` rad with the tool point at ``E`` and the tool along
+        ``dirs``, configurations with the same links included (the seed arm's wrist flip),
+        within the joint limits, with the index into ``dirs`` of each: what the lower bounds
+        (:mod:`armpath.planning.bounds`) sample the family by."""
+        raise NotImplementedError
+
     def same_links(self, q: FloatArray, half_turn: float) -> FloatArray:
         """Configurations ``(..., n)`` and the others with the same links, stacked
         ``(R, ..., n)`` (``half_turn``: 180 for degrees, pi for radians). Whole turns of
@@ -235,15 +242,22 @@ class CurveFamily:
     def allowed_dirs(self, s: float, dirs: FloatArray) -> FloatArray:
         """The directions of ``dirs`` the tool may point along at ``s``: into the surface (or
         along it) when the curve lies on one, and within the axis rule."""
+        kept = dirs[self.allowed_mask(s, dirs)]
+        if kept.shape[0] == 0 and self.rule is not None:
+            _, _, n = self.frame(s)
+            return (-n if self.rule.normal else np.asarray(self.rule.direction, float))[None]
+        return kept
+
+    def allowed_mask(self, s: float, dirs: FloatArray) -> BoolArray:
+        """Which of ``dirs`` the tool may point along at ``s`` (see :meth:`allowed_dirs`)."""
         _, _, n = self.frame(s)
+        ok = np.ones(dirs.shape[0], dtype=bool)
         if self.surface is not None:
-            dirs = dirs[dirs @ n <= _PAST_TANGENT]
+            ok &= dirs @ n <= _PAST_TANGENT
         if self.rule is not None:
             axis = -n if self.rule.normal else np.asarray(self.rule.direction, dtype=np.float64)
-            dirs = dirs[dirs @ axis >= np.cos(self.rule.tolerance_rad)]
-            if dirs.shape[0] == 0:
-                dirs = axis[None]
-        return dirs
+            ok &= dirs @ axis >= np.cos(self.rule.tolerance_rad)
+        return ok
 
     def axis_angles(self, q: FloatArray) -> FloatArray:
         """The angle (rad) between the tool's approach axis and the rule's axis (the surface's
@@ -420,6 +434,15 @@ class SeedCurveFamily(CurveFamily):
         q = np.concatenate([sol, np.zeros((*sol.shape[:-1], 1))], axis=-1).reshape(-1, 6)
         return q[np.all(np.isfinite(q), axis=-1)]
 
+    def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        wrist = E - self.geometry.de_mm * dirs
+        sol = family_from_wrist(self.geometry, E, wrist)  # (D, 8, 5): every branch and flip
+        q = np.concatenate([sol, np.zeros((*sol.shape[:-1], 1))], axis=-1).reshape(-1, 6)
+        index = np.repeat(np.arange(dirs.shape[0]), sol.shape[1])
+        ok = np.all(np.isfinite(q), axis=-1)
+        ok[ok] = self.arm.within_limits(q[ok])
+        return q[ok], index[ok]
+
     def same_links(self, q: FloatArray, half_turn: float) -> FloatArray:
         """Itself, its wrist flip (joint 4 + half a turn, joint 5 negated), its arm-side flip
         (joint 1 + half a turn, joints 2 and 3 negated, joint 4 - half a turn) and both."""
@@ -556,26 +579,40 @@ class GenericCurveFamily(CurveFamily):
         return 1 if not self.tip_joints[-1] else self.rolls
 
     def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
+        return self._solved(E, dirs)[0]
+
+    def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        q, index = self._solved(E, dirs)
+        ok = self.arm.within_limits(q)
+        return q[ok], index[ok]
+
+    def _solved(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Exact members and the index into ``dirs`` of each (see :meth:`configs_at`)."""
+        n = self.arm.n_joints
         if dirs.shape[0] == 0:
-            return np.zeros((0, self.arm.n_joints))
+            return np.zeros((0, n)), np.zeros(0, dtype=np.int64)
         Rs = _frames_along(dirs, self._turns, np.asarray(self.arm.approach_axis))
         if self._solver is not None:
             T = np.broadcast_to(np.eye(4), (Rs.shape[0], 4, 4)).copy()
             T[:, :3, :3] = Rs
             T[:, :3, 3] = E
-            q = self._solver.solve_batch(T).solutions.reshape(-1, self.arm.n_joints)
-            q = q[np.all(np.isfinite(q), axis=1)]
+            sol = self._solver.solve_batch(T).solutions  # (D * turns, S, n)
+            q = sol.reshape(-1, n)
+            index = np.repeat(np.arange(Rs.shape[0]) // self._turns, sol.shape[1])
         else:
-            q = self._numerical(E, Rs)
+            q, frame = self._numerical(E, Rs)
+            index = frame // self._turns
+        ok = np.all(np.isfinite(q), axis=1)
+        q, index = q[ok], index[ok]
         if q.shape[0] == 0:
-            return q
+            return q, index
         q = shift_into_limits(self.arm, q)
-        fam = GenericFamily(self.arm, ToolTarget(E))
-        ok = fam.exact(q)
-        return np.asarray(q[ok], dtype=np.float64)
+        ok = GenericFamily(self.arm, ToolTarget(E)).exact(q)
+        return np.asarray(q[ok], dtype=np.float64), np.asarray(index[ok], dtype=np.int64)
 
-    def _numerical(self, E: FloatArray, Rs: FloatArray) -> FloatArray:
-        """Levenberg-Marquardt for each tool frame of ``Rs``: continued from the solution found
+    def _numerical(self, E: FloatArray, Rs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Levenberg-Marquardt for each tool frame of ``Rs`` (the solutions found and the index
+        of the frame of each): continued from the solution found
         for the same frame at the last point (so that neighbouring points of a curve get
         neighbouring configurations, which the reference path can follow), otherwise from a
         fixed random start of that frame."""
@@ -597,7 +634,7 @@ class GenericCurveFamily(CurveFamily):
         good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
         for k in np.flatnonzero(good).tolist():
             self._last[keys[k]] = q[k]
-        return np.asarray(q[good], dtype=np.float64)
+        return np.asarray(q[good], dtype=np.float64), np.flatnonzero(good)
 
 
 def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = None) -> FloatArray:

@@ -31,6 +31,7 @@ from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.curves import Curve
 from armpath.geometry.world import CollisionWorld
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.bounds import CommandBound, trace_bound
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
@@ -42,7 +43,7 @@ from armpath.planning.motion import (
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.trace.certificate import certified_axis_angle, certified_deviation
-from armpath.planning.trace.family import AxisRule
+from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
 from armpath.planning.trace.reference import reference_pieces
 from armpath.planning.trace.tracer import _BODY_BUFFER_MM, Tracer
@@ -60,7 +61,8 @@ class TraceOptions:
     the reachability scan (see :func:`~armpath.planning.trace.curve_reachability`).
     ``motion``: options of the transits onto the curve and between passes. ``axis_rule``:
     where the tool's approach axis may point on the curve (:class:`AxisRule`: near the surface
-    normal, or a fixed direction); None: any direction from outside the surface.
+    normal, or a fixed direction); None: any direction from outside the surface. ``bound``:
+    compute the lower bound of the commands (:func:`~armpath.planning.bounds.trace_bound`).
     """
 
     tolerance_mm: float = 0.1
@@ -68,6 +70,7 @@ class TraceOptions:
     scan_step_mm: float = 4.0
     motion: MotionOptions = field(default_factory=MotionOptions)
     axis_rule: AxisRule | None = None
+    bound: bool = True
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.tolerance_mm) and 0.005 <= self.tolerance_mm <= 10.0):
@@ -127,6 +130,9 @@ class TraceResult:
     axis_rule: AxisRule | None = None
     #: Reachable pieces no pass could be moved onto (with why): reachable but not traced.
     not_traced: tuple[tuple[CurveArc, str], ...] = ()
+    #: The fewest commands any plan that traces what this one traces needs (see
+    #: :func:`~armpath.planning.bounds.trace_bound`), None when it was not computed.
+    lower_bound: CommandBound | None = None
 
     @property
     def n_commands(self) -> int:
@@ -274,6 +280,10 @@ def plan_trace(
     sequence = CommandSequence.from_states(all_states, arm.lattice)
     say("certifying the clearance of the whole motion")
     clearance = motion_clearance(arm, world, sequence, max_evaluations=400_000)
+    bound = None
+    if opts.bound:
+        say("bounding the fewest commands of this trace")
+        bound = _lower_bound(fam, arm.lattice.to_joint(start), passes, overlap > 0, opts, say)
     return TraceResult(
         sequence,
         curve,
@@ -287,7 +297,39 @@ def plan_trace(
         np.concatenate(prof_d) if prof_d else np.zeros(0),
         opts.axis_rule,
         tuple(not_traced),
+        bound,
     )
+
+
+def _lower_bound(
+    fam: CurveFamily,
+    q_start: FloatArray,
+    passes: list[TracePass],
+    around: bool,
+    opts: TraceOptions,
+    say: Callable[[str], None],
+) -> CommandBound | None:
+    """The bound of a plan that traces what ``passes`` cover, one pass per span (overlapping
+    spans merged); ``around``: a single pass all round a closed curve, which may begin
+    anywhere. None where the family has no member within the limits on a span."""
+    spans: list[list[float]] = []
+    for p in sorted(passes, key=lambda p: p.start_mm):
+        if spans and p.start_mm <= spans[-1][1]:
+            spans[-1][1] = max(spans[-1][1], p.end_mm)
+        else:
+            spans.append([p.start_mm, p.end_mm])
+    loop = around and len(spans) == 1
+    try:
+        return trace_bound(
+            fam,
+            q_start,
+            [(a, b) for a, b in spans],
+            opts.tolerance_mm,
+            loop=loop,
+            on_progress=say,
+        )
+    except PlanningError:
+        return None
 
 
 #: A stretch of a reachable arc between two passes longer than this (mm) is reported as not
