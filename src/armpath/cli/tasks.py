@@ -563,6 +563,10 @@ def plan(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _or_dash(value: object) -> str:
+    return "-" if value is None else str(value)
+
+
 def _bound_text(bound: dict[str, Any] | None, scope: str) -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line."""
     if bound is None:
@@ -1011,7 +1015,7 @@ def _print_run(
             f"2 trace the {trace_doc['curve']['definition'].get('name', 'curve')}, "
             f"{passes_text(len(trace_doc['passes']))}",
             str(trace_doc["n_commands"]),
-            "-",
+            f"{_or_dash(trace_doc.get('lower_bound_commands'))}*",
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
             f"{_mm(trace_doc['min_clearance_mm'])} (tip); "
             f"{_mm(trace_doc['clearance']['min_body_clearance_mm'])} (links)",
@@ -1020,7 +1024,8 @@ def _print_run(
         table.add_row(
             f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
             str(tour_doc["n_commands"]),
-            f"{tour_doc['lower_bound_commands']}*",
+            f"{_or_dash(tour_doc['lower_bound_commands'])}*, "
+            f"{tour_doc['goal_states_bound_commands']}**",
             f"{tour_doc['error_mm']:.4f} (largest)",
             f"{_mm(tour_doc['min_clearance_mm'])} (tip); "
             f"{_mm(tour_doc['clearance']['min_body_clearance_mm'])} (links)",
@@ -1039,10 +1044,18 @@ def _print_run(
             markup=False,
             soft_wrap=True,
         )
-    if tour_doc is not None:
+    if trace_doc is not None or tour_doc is not None:
         out_console.print(
-            "* Task 3's bound: direct motions between the chosen goal states, obstacles ignored.",
+            "* Tasks 2 and 3: bound over every configuration of the arm at the curve's points "
+            "or the welds, obstacles ignored (trace: one pass per traced arc; tour: every "
+            "order)."
+            + (
+                " ** Task 3: direct motions between the chosen goal states of this order."
+                if tour_doc is not None
+                else ""
+            ),
             markup=False,
+            soft_wrap=True,
         )
     if blind is not None:
         for line in blind.summary():

@@ -614,8 +614,8 @@ def tour_bound(
             "obstacles ignored; tool directions sampled and refined about the path, each "
             "distance less the samples' sampling errors), each leg rounded up to whole commands"
         ),
-        parts={"order": float(len(orders))},
         sampling={
+            "orders": float(len(orders)),
             "samples": float(sum(lay.size for lay in layers)),
             "largest_error_on_path_commands": largest,
         },
@@ -665,8 +665,10 @@ def tour_bound_any_order(
             "ignored; from the start or another target, whole commands, each distance less "
             "the samples' sampling errors)" + ("; plus the shortest way back" if back else "")
         ),
-        parts={"targets": float(targets.shape[0])},
-        sampling={"samples": float(sum(lay.size for lay in layers))},
+        sampling={
+            "targets": float(targets.shape[0]),
+            "samples": float(sum(lay.size for lay in layers)),
+        },
     )
 
 
