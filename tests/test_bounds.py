@@ -145,3 +145,44 @@ def test_a_two_point_trace_bound_agrees_with_slsqp_over_the_exact_family():
     assert along <= slsqp + 1e-6
     assert along >= slsqp - 0.6  # directions about 1.1 deg apart: errors about 0.25 each
     assert b.commands <= b.value + 1 and b.parts["approach"] > 0
+
+
+def test_a_family_with_turns_about_the_tool_axis_stays_below_slsqp():
+    """A tool point off the last joint's axis: the family has a third dimension (turns about
+    the tool axis), whose neighbours count in the sampling error; SLSQP on the textbook D-H
+    product with the tool's offset bounds it from above."""
+    import independent_dh as idh
+    from test_any_arm import TABLES
+
+    arm = resolve_model("ur5")
+    tool = np.eye(4)
+    tool[0, 3], tool[2, 3] = 50.0, 80.0
+    arm = arm.with_tool(tool)
+    start = arm.lattice.to_joint(arm.lattice.from_display([0, -90, 90, 0, 90, 0], "start"))
+    target = np.array([300.0, 200.0, 400.0])
+    curve = Polyline("t", np.array([target, target + np.array([1.0, 0.0, 0.0])]))
+    fam = curve_family(arm, CollisionWorld(()), curve)
+    assert fam.turns_per_direction > 1
+    b, _ = bounds.tour_bound(fam, start, target[None], 0.05, [(0,)], rounds=2)
+
+    a, alpha, d = TABLES["ur5"]
+
+    def tip(q):
+        return (idh.dh_pose(a, alpha, d, q) @ tool)[:3, 3]
+
+    rng = np.random.default_rng(0)
+    best = np.inf
+    for _ in range(30):
+        q0 = start + rng.uniform(-1.5, 1.5, 6)
+        cons = [
+            {"type": "eq", "fun": lambda z: tip(z[:6]) - target},
+            {"type": "ineq", "fun": lambda z: z[6] - np.abs(z[:6] - start) / STEP},
+        ]
+        bnds = [(lo, hi) for lo, hi in zip(arm.lower, arm.upper, strict=True)] + [(0, None)]
+        r = minimize(lambda z: z[6], np.r_[q0, 100.0], method="SLSQP", constraints=cons,
+                     bounds=bnds, options={"maxiter": 300})  # fmt: skip
+        if np.linalg.norm(tip(r.x[:6]) - target) < 1e-6:
+            best = min(best, float(np.max(np.abs(r.x[:6] - start)) / STEP))
+    assert np.isfinite(best)
+    assert b.value <= best + 1e-6
+    assert b.value >= best - 2.0

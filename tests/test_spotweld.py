@@ -90,6 +90,9 @@ def test_order_is_the_best_planned_and_every_order_ranked(task3):
     assert 0 < doc["lower_bound_commands"] <= doc["goal_states_bound_commands"] <= doc["n_commands"]
     assert doc["lower_bound"]["gap_commands"] == doc["n_commands"] - doc["lower_bound_commands"]
     assert all(o["family_bound_commands"] >= doc["lower_bound_commands"] for o in orders)
+    # every order whose bound is below the plan was planned (the few beyond the best two)
+    below = [o for o in orders if o["lower_bound_commands"] < doc["n_commands"]]
+    assert len(below) >= 3 and all(o["planned_commands"] is not None for o in below)
     chosen = next(o for o in orders if o["order"] == doc["order"])
     assert chosen["planned_commands"] == doc["n_commands"]
     # the legs add up and each needs at least its direct-motion count

@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 from armpath.lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from armpath.planning.bounds import CommandBound, tour_bound, trace_bound
     from armpath.planning.motion_check import MotionClearance, motion_clearance
     from armpath.planning.reach import LowerBound, ReachOptions, ReachResult, plan_reach
     from armpath.planning.trace import (
@@ -19,6 +20,7 @@ if TYPE_CHECKING:
 __getattr__, __dir__ = lazy_exports(
     __name__,
     {
+        "bounds": ("CommandBound", "tour_bound", "trace_bound"),
         "motion_check": (
             "MotionClearance",
             "motion_clearance",
@@ -40,6 +42,7 @@ __getattr__, __dir__ = lazy_exports(
 )
 
 __all__ = [
+    "CommandBound",
     "CurveReachability",
     "LowerBound",
     "MotionClearance",
@@ -51,4 +54,6 @@ __all__ = [
     "motion_clearance",
     "plan_reach",
     "plan_trace",
+    "tour_bound",
+    "trace_bound",
 ]

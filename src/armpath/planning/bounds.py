@@ -134,23 +134,27 @@ def _sampling_errors(
     period: FloatArray,
     missing: float,
     branch_gap: float,
+    own: bool,
 ) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
     """Per sample and joint, the largest difference to the nearest sample (Chebyshev) of each
     neighbouring direction that has one within ``branch_gap`` commands (a member farther is on
     another branch; ``missing`` where no neighbour has one); and per
     sample the farthest any of the arm's ``points`` ``(M, P, 3)`` moves to those neighbours
     (inf where none). Samples are sorted by direction; ``dir_ptr`` points at each
-    direction's first."""
+    direction's first. ``own``: the other samples of a sample's own direction are neighbours
+    too (a family sampled at several turns about each direction)."""
     m, j = u.shape
     err = np.zeros((m, j))
     moved = np.zeros(m)
     for i in range(m):
         d = node_dir[i]
         found = False
-        for p in range(nb_ptr[d], nb_ptr[d + 1]):
-            e = nb[p]
+        for p in range(nb_ptr[d] - (1 if own else 0), nb_ptr[d + 1]):
+            e = nb[p] if p >= nb_ptr[d] else d
             best, arg = np.inf, -1
             for k in range(dir_ptr[e], dir_ptr[e + 1]):
+                if k == i:
+                    continue
                 worst = 0.0
                 for c in range(j):
                     x = _wrapped(u[k, c] - u[i, c], period[c])
@@ -335,6 +339,8 @@ class FamilySampler:
         self.base_spacing = float(np.sqrt(4.0 * np.pi / self.base.shape[0]))
         #: how far any point of the arm moves per unit of each tip joint (model units per rad)
         self.reach = displacement_bounds(arm)[self.tip]
+        #: tool frames sampled about each direction (several: the family has a third dimension)
+        self.turns = fam.turns_per_direction
         self.required = fam.world.required(arm)
 
     def units(self, q: FloatArray) -> FloatArray:
@@ -373,7 +379,7 @@ class FamilySampler:
         missing = float(np.max(np.where(self.period > 0, self.period, 1e6)))
         points = landmark_positions(self.fam.arm, q)
         err, moved = _sampling_errors(
-            u, points, index, dir_ptr, nb_ptr, nb, self.period, missing, BRANCH_GAP
+            u, points, index, dir_ptr, nb_ptr, nb, self.period, missing, BRANCH_GAP, self.turns > 1
         )
         alone = err[:, 0] >= missing
         if np.any(alone) and not np.all(alone):

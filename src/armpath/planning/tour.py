@@ -4,9 +4,11 @@ For each target, :func:`~armpath.planning.reach.goal_states` gives a few clear l
 that put the fingertip on it. Every visiting order is ranked by a lower bound of its commands:
 a shortest path through the layers start -> goals of the 1st target -> goals of the 2nd ...,
 each step costing the commands of the direct motion (obstacles ignored, so no order can do
-better). The best-ranked orders are then planned leg by leg with
-:func:`~armpath.planning.motion.plan_motion` (direct where clear, else searched), and the order
-with the fewest planned commands wins.
+better for these goal states). The best-ranked orders are then planned leg by leg with
+:func:`~armpath.planning.motion.plan_motion` (direct where clear, else searched), then every
+next order whose bound is below the best plan so far (a few at most), and the order with the
+fewest planned commands wins. The tour's bound over every order and every goal configuration
+comes from :func:`~armpath.planning.bounds.tour_bound`.
 """
 
 from __future__ import annotations
@@ -92,6 +94,8 @@ MAX_AUTO_ORDER_TARGETS = 8
 MAX_TOUR_TARGETS = 500
 #: Orders listed with their bounds in a result (the best-ranked first).
 LISTED_ORDERS = 24
+#: Orders planned beyond the best-ranked ones while their bound is below the best plan.
+EXTRA_ORDERS = 4
 
 
 def _direct_commands(a: IntArray, b: IntArray, lattice: Lattice) -> FloatArray:
@@ -148,7 +152,8 @@ def plan_tour(
     """Plan a clear tour from ``start_ticks`` through every target (mm), optionally back.
 
     ``order`` is ``"auto"`` (every order ranked by its lower bound, the ``orders_to_plan`` best
-    planned; at most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
+    planned, then up to :data:`EXTRA_ORDERS` more while their bound is below the best plan; at
+    most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
     at most :data:`MAX_TOUR_TARGETS`). Raises :class:`PlanningError` when a target cannot be
     reached clear of the obstacles. ``orders_not_planned`` of the result says, for each ranked
     order that has no planned command count, why. ``orientations``: a tool orientation rule per
@@ -203,12 +208,17 @@ def plan_tour(
     family_bound, family_bounds = _family_bounds(
         arm, world, start, pts, ranking, return_to_start, tolerance_mm, say
     )
-    ranked = ranking[:orders_to_plan]
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
     planned: dict[tuple[int, ...], int] = {}
     not_planned: dict[tuple[int, ...], str] = {}
     failures: list[str] = []
-    for o in ranked:
+    # the best-ranked orders, then every next one whose bound is below the best plan so far
+    # (at most EXTRA_ORDERS more): the ranking is by bound, so the first that is not ends it
+    tried = 0
+    for o in ranking[: orders_to_plan + EXTRA_ORDERS]:
+        if tried >= orders_to_plan and (best is None or bounds[o] >= best[0]):
+            break
+        tried += 1
         name = "-".join(str(i + 1) for i in o)
         if best is not None and bounds[o] >= best[0]:
             not_planned[o] = (
@@ -247,8 +257,11 @@ def plan_tour(
         planned[o] = total
         if best is None or total < best[0]:
             best = (total, legs, o)
-    for o in ranking[orders_to_plan : orders_to_plan + LISTED_ORDERS]:
-        why = f"not planned: only the {orders_to_plan} best-ranked order(s) are planned"
+    for o in ranking[tried : tried + LISTED_ORDERS]:
+        why = (
+            f"not planned: the {orders_to_plan} best-ranked order(s) are planned, then those "
+            f"whose bound is below the best plan (at most {EXTRA_ORDERS} more)"
+        )
         if best is not None and bounds[o] >= best[0]:
             why += f"; its bound {bounds[o]} cannot beat the {best[0]} commands planned"
         elif best is not None:

@@ -185,6 +185,11 @@ class CurveFamily:
         ``dirs`` (every solution; members without a real solution dropped)."""
         raise NotImplementedError
 
+    @property
+    def turns_per_direction(self) -> int:
+        """Tool frames sampled about each tool direction (1: the turn moves no link)."""
+        return 1
+
     def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         """Every family member ``(M, n)`` rad with the tool point at ``E`` and the tool along
         ``dirs``, configurations with the same links included (the seed arm's wrist flip),
@@ -577,6 +582,10 @@ class GenericCurveFamily(CurveFamily):
     def _turns(self) -> int:
         # the turn about the tool axis moves no link when the tool point is on the last axis
         return 1 if not self.tip_joints[-1] else self.rolls
+
+    @property
+    def turns_per_direction(self) -> int:
+        return int(self._turns)
 
     def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
         return self._solved(E, dirs)[0]
