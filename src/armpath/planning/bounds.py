@@ -45,11 +45,29 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
+#: Largest joint change (commands) between members of neighbouring directions that are taken
+#: for one branch of the family (farther: the branch ends between them).
+BRANCH_GAP = 30.0
+#: Width (commands) of the cells that group predecessors in the shortest-path step.
+GROUP_CELL = 12.0
+#: Slack (model units) a sample may lack beyond what its error box allows and still be kept.
+CLEAR_MARGIN = 1e-6
+#: Sampling error (commands) below which a sample on the best path is not refined further.
+ERROR_GOAL = 0.05
+#: Finest direction spacing of a refinement (rad, about 0.05 deg).
+MIN_SPACING = float(np.radians(0.05))
+#: Refinement rounds after the first sampling.
+REFINE_ROUNDS = 1
+#: Layers of a trace bound per span (curve points, evenly spaced).
+LAYERS_PER_SPAN = 5
+#: Tool directions the family is first sampled along (about 2.3 deg apart).
+BASE_DIRECTIONS = 8000
+
 
 @dataclass(frozen=True)
 class CommandBound:
     """A lower bound on commands: ``commands`` (the value rounded up), the ``value`` in
-    fractional commands, its parts (``approach``, ``along``, ``between``...), how it was
+    fractional commands, its parts (a trace's ``approach`` and ``along``), how it was
     computed, and the joint path that attains it (the *guide*: configurations rad, one per
     layer, with the arc length of each layer for a trace)."""
 
@@ -467,25 +485,6 @@ class _Refiner:
             return False
         self.caps[k].append((d, 3.0 * h, h / 3.0))
         return True
-
-
-#: Largest joint change (commands) between members of neighbouring directions that are taken
-#: for one branch of the family (farther: the branch ends between them).
-BRANCH_GAP = 30.0
-#: Width (commands) of the cells that group predecessors in the shortest-path step.
-GROUP_CELL = 12.0
-#: Slack (model units) a sample may lack beyond what its error box allows and still be kept.
-CLEAR_MARGIN = 1e-6
-#: Sampling error (commands) below which a sample on the best path is not refined further.
-ERROR_GOAL = 0.05
-#: Finest direction spacing of a refinement (rad, about 0.05 deg).
-MIN_SPACING = float(np.radians(0.05))
-#: Refinement rounds after the first sampling.
-REFINE_ROUNDS = 1
-#: Layers of a trace bound per span (curve points, evenly spaced).
-LAYERS_PER_SPAN = 5
-#: Tool directions the family is first sampled along (about 2.3 deg apart).
-BASE_DIRECTIONS = 8000
 
 
 def trace_bound(
