@@ -40,7 +40,7 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
         if doc["task"] == "trace":
             body = doc["clearance"]["min_body_clearance_mm"]
             lines.append(
-                f"| {title} | {doc['n_commands']} | {_bound_cell(doc)} | "
+                f"| {title} | {doc['n_commands']} | {bound_cell(doc)} | "
                 f"{doc['max_deviation_mm']:.4f} (largest "
                 f"deviation of the continuous path) | {_mm(doc['min_clearance_mm'])} (tool tip) / "
                 f"{_mm(body)} (links) | {doc['wall_thickness'] or '-'} |"
@@ -49,7 +49,7 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
         bound, error = str(doc["lower_bound_commands"]), f"{doc['error_mm']:.4f}"
         clearance = _mm(doc["min_clearance_mm"])
         if doc["task"] == "spotweld":
-            bound = f"{_bound_cell(doc)}, {doc['goal_states_bound_commands']}*"
+            bound = f"{bound_cell(doc)}, {doc['goal_states_bound_commands']}*"
             error += " (largest)"
             body = doc["clearance"]["min_body_clearance_mm"]
             clearance = f"{clearance} (tool tip) / {_mm(body)} (links)"
@@ -66,8 +66,8 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
     return lines, notes
 
 
-def _bound_cell(doc: dict[str, Any]) -> str:
-    """A trace's or tour's lower bound for the table (- when not computed)."""
+def bound_cell(doc: dict[str, Any]) -> str:
+    """A trace's or tour's lower bound for a table (- when not computed)."""
     bound = doc.get("lower_bound_commands")
     return "-" if bound is None else str(bound)
 

@@ -563,10 +563,6 @@ def plan(
                 out_console.print(f"wrote {path}", markup=False)
 
 
-def _or_dash(value: object) -> str:
-    return "-" if value is None else str(value)
-
-
 def _bound_text(bound: dict[str, Any] | None, scope: str) -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line."""
     if bound is None:
@@ -992,7 +988,7 @@ def _print_run(
     heading: str,
 ) -> None:
     """The run's table of results on stdout and the files it wrote."""
-    from armpath.report import passes_text
+    from armpath.report import bound_cell, passes_text
 
     written = folder.written
     wall = scene.wall_thickness
@@ -1015,7 +1011,7 @@ def _print_run(
             f"2 trace the {trace_doc['curve']['definition'].get('name', 'curve')}, "
             f"{passes_text(len(trace_doc['passes']))}",
             str(trace_doc["n_commands"]),
-            f"{_or_dash(trace_doc.get('lower_bound_commands'))}*",
+            f"{bound_cell(trace_doc)}*",
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
             f"{_mm(trace_doc['min_clearance_mm'])} (tip); "
             f"{_mm(trace_doc['clearance']['min_body_clearance_mm'])} (links)",
@@ -1024,8 +1020,7 @@ def _print_run(
         table.add_row(
             f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
             str(tour_doc["n_commands"]),
-            f"{_or_dash(tour_doc['lower_bound_commands'])}*, "
-            f"{tour_doc['goal_states_bound_commands']}**",
+            f"{bound_cell(tour_doc)}*, {tour_doc['goal_states_bound_commands']}**",
             f"{tour_doc['error_mm']:.4f} (largest)",
             f"{_mm(tour_doc['min_clearance_mm'])} (tip); "
             f"{_mm(tour_doc['clearance']['min_body_clearance_mm'])} (links)",
