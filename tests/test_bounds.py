@@ -186,3 +186,49 @@ def test_a_family_with_turns_about_the_tool_axis_stays_below_slsqp():
     assert np.isfinite(best)
     assert b.value <= best + 1e-6
     assert b.value >= best - 2.0
+
+
+def test_delaunay_neighbours_of_many_directions():
+    """Past about 46,000 directions the product of two of qhull's (32-bit) indices overflows:
+    every direction must still have its ring of nearby neighbours, and they must be mutual."""
+    from armpath.planning.trace.family import fibonacci_directions
+
+    dirs = fibonacci_directions(60_000)
+    ptr, nb, triangles = bounds._delaunay_neighbours(dirs)
+    degree = np.diff(ptr)
+    assert degree.min() >= 3 and triangles.shape == (2 * dirs.shape[0] - 4, 3)
+    src = np.repeat(np.arange(dirs.shape[0]), degree)
+    pairs = set(zip(src.tolist(), nb.tolist(), strict=True))
+    assert all((b, a) in pairs for a, b in pairs)
+    spacing = np.sqrt(4 * np.pi / dirs.shape[0])
+    angles = np.arccos(np.clip(np.einsum("ij,ij->i", dirs[src], dirs[nb]), -1, 1))
+    assert angles.max() < 2.5 * spacing
+
+
+@pytest.mark.parametrize(("weld", "free_bound"), [(1, 61), (3, 49)])
+def test_a_weld_bound_sees_the_workpiece(weld, free_bound):
+    """Task 3's welds 2 and 4 lie inside the hollow workpiece: from the start, the clear goal
+    configurations are farther than those that ignore the workpiece. The bound over the members
+    that may be clear must exceed the workpiece-free bound, and never exceed what the exactly
+    clear members of a fine sampling attain (plain numpy over 64,000 tool directions, the
+    attaining member's fingertip checked with the independent forward kinematics)."""
+    from armpath.planning.trace.family import fibonacci_directions
+
+    arm = seed_arm()
+    scene = load_scene(None)
+    target = scene.spotweld_targets_mm()[weld]
+    start = arm.lattice.to_joint(arm.lattice.to_ticks(arm.home, "start"))
+    b = _single_target_bound(arm, scene.world, start, target)
+    free = _single_target_bound(arm, CollisionWorld(()), start, target)
+    assert free.commands == free_bound
+    curve = Polyline("t", np.array([target, target + np.array([1.0, 0.0, 0.0])]))
+    fam = curve_family(arm, scene.world, curve)
+    q, _ = fam.members(target, fibonacci_directions(64_000))
+    values, _ = scene.world.pair_clearances(arm, q)
+    clear = (values - scene.world.required(arm)).min(axis=-1) >= 0.0
+    change = np.abs(q[clear][:, :5] - start[:5]).max(axis=-1) / STEP
+    best = int(np.argmin(change))
+    assert np.linalg.norm(independent.points(np.degrees(q[clear][best]))[-1] - target) < 1e-6
+    attained = int(np.ceil(change[best] - 1e-9))  # whole commands
+    assert free.commands < b.commands <= attained
+    assert b.commands >= attained - 1

@@ -56,7 +56,8 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
             order = " → ".join(str(i) for i in doc["order"])
             notes.append(
                 f"\\* Task 3, order {order}: the first bound holds for every order and goal "
-                "configuration (obstacles ignored); the second counts direct motions between the "
+                "configuration that may be clear at the welds (obstacles ignored between them); "
+                "the second counts direct motions between the "
                 "chosen goal states of this order. The tool tip touches the wall at each weld."
             )
         lines.append(
@@ -78,8 +79,8 @@ def _bound_words(doc: dict[str, Any]) -> str:
     if b is None:
         return "no lower bound computed"
     return (
-        f"lower bound {b['commands']} commands over every configuration, obstacles ignored "
-        f"(plan {b['gap_commands']} above it)"
+        f"lower bound {b['commands']} commands over every configuration that may be clear, "
+        f"obstacles ignored between the sampled points (plan {b['gap_commands']} above it)"
     )
 
 

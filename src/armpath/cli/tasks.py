@@ -569,7 +569,8 @@ def _bound_text(bound: dict[str, Any] | None, scope: str) -> str:
         return "not computed"
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     return (
-        f">= {bound['commands']} commands ({scope}, every configuration, obstacles ignored); "
+        f">= {bound['commands']} commands ({scope}, every configuration that may be clear, "
+        "obstacles ignored between the sampled points); "
         f"plan {bound['gap_commands']} above it ({gap})"
     )
 
@@ -1041,9 +1042,9 @@ def _print_run(
         )
     if trace_doc is not None or tour_doc is not None:
         out_console.print(
-            "* Tasks 2 and 3: bound over every configuration of the arm at the curve's points "
-            "or the welds, obstacles ignored (trace: one pass per traced arc; tour: every "
-            "order)."
+            "* Tasks 2 and 3: bound over every configuration of the arm that may be clear at the "
+            "curve's points or the welds, obstacles ignored between them (trace: one pass per "
+            "traced arc; tour: every order)."
             + (
                 " ** Task 3: direct motions between the chosen goal states of this order."
                 if tour_doc is not None

@@ -8,10 +8,11 @@ the joints that move the tool point count (the others turn the tool about it).
 
 A trace's pass brings the tool point within the tolerance of every point of the curve, in
 order; a tour puts it within the tolerance of every target. Every configuration that does so
-belongs to the solution family there (:class:`~armpath.planning.trace.family.CurveFamily`,
-obstacles ignored -- a relaxation, so the bound holds whatever the scene). So the commands are
-at least the length of a shortest path from the start through the family at the layers (curve
-points every few mm; targets), in the Chebyshev metric.
+belongs to the solution family there (:class:`~armpath.planning.trace.family.CurveFamily`), and
+a plan's must also be clear of the obstacles. So the commands are at least the length of a
+shortest path from the start through the family at the layers (curve points every few mm;
+targets), in the Chebyshev metric, through the members that may be clear; the moves between
+layers ignore the obstacles (a relaxation, so the bound holds whatever the scene).
 
 The family is sampled over tool directions; each sample stands for the members of the
 directions around it and carries a per-joint *sampling error*: the largest difference to the
@@ -19,10 +20,14 @@ nearest member of each neighbouring direction (Delaunay neighbours on the sphere
 directions), plus the joint change that moves the tool point by the tolerance (pseudo-inverse
 of the position Jacobian). Distances between samples are taken less both samples' errors, so
 the shortest path through the samples is, up to that error estimate, no longer than any path
-through the family. Rounds refine the directions around the best path (caps of finer
-directions), which shrinks the errors where they count. The error estimate assumes the family
-varies no faster inside a direction cell than between neighbouring samples; the tests check
-the bounds against a differently computed one (SLSQP over the exact family) and the plans.
+through the family. A sample is dropped only when no member of its cell can be clear: its
+slack is worse than the arm's points move to its neighbours. Where a sample is kept only for
+that allowance (it is not clear itself), its direction cells are split (clearance levels),
+which shrinks the allowance and drops the cells that collide whole. Rounds refine the
+directions around the best path (caps of finer directions), which shrinks the errors where they
+count. The error estimate assumes the family varies no faster inside a direction cell than
+between neighbouring samples; the tests check the bounds against differently computed ones
+(SLSQP over the exact family; the exactly clear members of a fine sampling) and the plans.
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.geometry.primitives import orthonormal_frame
-from armpath.jit import njit
+from armpath.jit import njit, prange
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
 from armpath.model.serial_arm import JointKind
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
@@ -62,6 +67,17 @@ REFINE_ROUNDS = 1
 LAYERS_PER_SPAN = 5
 #: Tool directions the family is first sampled along (about 2.3 deg apart).
 BASE_DIRECTIONS = 8000
+#: Times the directions about samples kept only for what their neighbours allow (not clear
+#: themselves) are refined, twice as fine each time, at a tour's targets (seed Task 3: 0 levels
+#: bound 86 commands, 1 level 94, 2 levels 102 at about three times the time).
+TOUR_CLEAR_LEVELS = 1
+#: The same for a trace's layers: none (seed Task 2: one level raises the bound by less than a
+#: command at ten times the time; the curve's points are where most directions are clear).
+TRACE_CLEAR_LEVELS = 0
+#: Most directions of one layer (refinement stops before it would pass this).
+MAX_LAYER_DIRECTIONS = 200_000
+#: Sampling error standing for "no neighbour has a member" (commands).
+_MISSING = 1e6
 
 
 @dataclass(frozen=True)
@@ -120,18 +136,65 @@ def _cap(center: FloatArray, radius: float, spacing: float) -> FloatArray:
     return np.asarray(d / np.linalg.norm(d, axis=-1, keepdims=True), dtype=np.float64)
 
 
-def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray]:
+def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray, IntArray]:
     """Neighbours of each direction in the spherical Delaunay triangulation (the convex hull of
-    the unit vectors), as CSR ``(pointer, index)``."""
+    the unit vectors), as CSR ``(pointer, index)``, and the triangles ``(T, 3)``."""
     from scipy.spatial import ConvexHull
 
     tri = ConvexHull(dirs).simplices
     a = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2], tri[:, 1], tri[:, 2], tri[:, 0]])
     b = np.concatenate([tri[:, 1], tri[:, 2], tri[:, 0], tri[:, 0], tri[:, 1], tri[:, 2]])
+    a, b = a.astype(np.int64), b.astype(np.int64)  # n * n overflows qhull's int32
     pairs = np.unique(a * dirs.shape[0] + b)
     src, dst = pairs // dirs.shape[0], pairs % dirs.shape[0]
     ptr = np.searchsorted(src, np.arange(dirs.shape[0] + 1))
-    return ptr.astype(np.int64), dst.astype(np.int64)
+    return ptr.astype(np.int64), dst.astype(np.int64), tri.astype(np.int64)
+
+
+@dataclass(frozen=True)
+class _Samples:
+    """A layer's samples before the clearance filter: every direction tried ``dirs (D, 3)``
+    and, per member, its configuration, direction index, command units, the arm's points,
+    the tolerance's joint change (commands) and its slack (model units)."""
+
+    dirs: FloatArray
+    q: FloatArray
+    index: IntArray
+    u: FloatArray
+    points: FloatArray
+    tol_err: FloatArray
+    slack: FloatArray
+
+    @staticmethod
+    def empty(n_joints: int, n_tip: int) -> _Samples:
+        return _Samples(
+            dirs=np.zeros((0, 3)),
+            q=np.zeros((0, n_joints)),
+            index=np.zeros(0, dtype=np.int64),
+            u=np.zeros((0, n_tip)),
+            points=np.zeros((0, 0, 3)),
+            tol_err=np.zeros((0, n_tip)),
+            slack=np.zeros(0),
+        )
+
+
+def _midpoints(dirs: FloatArray, triangles: IntArray, refine: BoolArray) -> FloatArray:
+    """The midpoints (on the sphere) of the edges of every triangle with a vertex to
+    ``refine``: each such triangle is split in four, which halves its directions' cells."""
+    tri = triangles[np.any(refine[triangles], axis=1)]
+    edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    mid = dirs[edges[:, 0]] + dirs[edges[:, 1]]
+    return np.asarray(mid / np.linalg.norm(mid, axis=-1, keepdims=True), dtype=np.float64)
+
+
+def _distinct(new: FloatArray, old: FloatArray) -> FloatArray:
+    """The directions of ``new`` not already in ``old`` or earlier in ``new`` (qhull needs
+    distinct points)."""
+    key = np.round(np.vstack([old, new]) * 1e9).astype(np.int64)
+    _, first = np.unique(key, axis=0, return_index=True)
+    first = np.sort(first[first >= old.shape[0]])
+    return np.asarray(new[first - old.shape[0]], dtype=np.float64)
 
 
 @njit(cache=True)
@@ -269,7 +332,7 @@ def _groups(
     return members, starts, lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _advance(
     pu: FloatArray,
     pe: FloatArray,
@@ -300,10 +363,13 @@ def _advance(
     g = starts.size - 1
     cheapest = np.full(g, np.inf)
     for q in range(g):
-        for t in range(starts[q], starts[q + 1]):
-            cheapest[q] = min(cheapest[q], pc[members[t]])
-    bound = np.empty(g)
-    for r in range(tstarts.size - 1):
+        # each group's members cheapest first: a scan ends at the first too costly
+        seg = members[starts[q] : starts[q + 1]]
+        members[starts[q] : starts[q + 1]] = seg[np.argsort(pc[seg], kind="mergesort")]
+        cheapest[q] = pc[members[starts[q]]]
+    for r in prange(tstarts.size - 1):  # each group of targets on its own
+        bound = np.empty(g)
+        gap = np.empty(g)
         for q in range(g):
             worst = 0.0
             for c in range(j):
@@ -312,6 +378,7 @@ def _advance(
                     worst = x
             if whole:
                 worst = np.ceil(worst - 1e-9)
+            gap[q] = worst
             bound[q] = cheapest[q] + worst
         ranked = np.argsort(bound)
         for tb in range(tstarts[r], tstarts[r + 1]):
@@ -322,8 +389,8 @@ def _advance(
                     break
                 for t in range(starts[q], starts[q + 1]):
                     i = members[t]
-                    if pc[i] >= best:
-                        continue
+                    if pc[i] + gap[q] >= best:
+                        break
                     x = _edge(pu[i], pe[i], u[b], e[b], period, best - pc[i])
                     if whole:
                         x = np.ceil(x - 1e-9)
@@ -384,42 +451,102 @@ class FamilySampler:
         _, first = np.unique(key, axis=0, return_index=True)
         return np.asarray(out[np.sort(first)], dtype=np.float64)
 
-    def layer(self, E: FloatArray, dirs: FloatArray, allowed: BoolArray | None = None) -> Layer:
-        """The family at tool point ``E`` sampled along ``dirs`` (those ``allowed``)."""
-        nb_ptr, nb = _delaunay_neighbours(dirs)
-        pick = np.flatnonzero(allowed) if allowed is not None else np.arange(dirs.shape[0])
+    def layer(
+        self,
+        E: FloatArray,
+        dirs: FloatArray,
+        allowed: Callable[[FloatArray], BoolArray] | None = None,
+        *,
+        levels: int,
+    ) -> Layer:
+        """The family at tool point ``E`` sampled along ``dirs`` (those ``allowed``: a mask of
+        any directions). A sample that is not clear itself is kept when a member near it may be
+        (see :meth:`_filtered`); ``levels`` times, the triangles of directions about such
+        samples are split in four, which shrinks what their neighbours allow and so drops the
+        samples whose whole cell collides."""
+        acc = _Samples.empty(self.fam.arm.n_joints, int(self.tip.sum()))
+        new = np.asarray(dirs, dtype=np.float64)
+        for level in range(levels + 1):
+            check_time("bounding the commands")
+            acc = self._grown(acc, E, new, allowed)
+            lay, unsure, spacing, triangles = self._filtered(acc)
+            refine = np.zeros(acc.dirs.shape[0], dtype=bool)
+            refine[unsure] = spacing[unsure] / 2.0 >= MIN_SPACING
+            if level == levels or not np.any(refine):
+                break
+            new = _distinct(_midpoints(acc.dirs, triangles, refine), acc.dirs)
+            if acc.dirs.shape[0] + new.shape[0] > MAX_LAYER_DIRECTIONS:
+                break
+        return lay
+
+    def _grown(
+        self,
+        acc: _Samples,
+        E: FloatArray,
+        dirs: FloatArray,
+        allowed: Callable[[FloatArray], BoolArray] | None,
+    ) -> _Samples:
+        """``acc`` with the members along ``dirs`` added (configurations, command units, the
+        arm's points, the tolerance's joint change, the slack)."""
+        pick = np.flatnonzero(allowed(dirs)) if allowed is not None else np.arange(dirs.shape[0])
         q, index = self.fam.members(E, dirs[pick])
-        index = pick[index]
-        order = np.argsort(index, kind="stable")
-        q, index = q[order], index[order]
-        u = self.units(q)
-        dir_ptr = np.searchsorted(index, np.arange(dirs.shape[0] + 1)).astype(np.int64)
-        missing = float(np.max(np.where(self.period > 0, self.period, 1e6)))
-        points = landmark_positions(self.fam.arm, q)
-        err, moved = _sampling_errors(
-            u, points, index, dir_ptr, nb_ptr, nb, self.period, missing, BRANCH_GAP, self.turns > 1
-        )
-        alone = err[:, 0] >= missing
-        if np.any(alone) and not np.all(alone):
-            # no neighbouring direction has a member (a sliver of the family inside the joint
-            # limits): the layer's median error stands in for the unknown one
-            err[alone] = np.median(err[~alone], axis=0)
-            moved[alone] = np.median(moved[~alone])
+        index = pick[index] + acc.dirs.shape[0]
+        tol_err = np.zeros((q.shape[0], acc.u.shape[1]))
+        slack = np.zeros(q.shape[0])
         if q.shape[0]:
             J = position_jacobian(self.fam.arm, q)[:, :, self.tip]
             with np.errstate(all="ignore"):
                 pinv = np.linalg.pinv(J, rcond=1e-9)
             tol_err = self.tol * np.abs(pinv).sum(axis=-1) / self.step
-            tol_err = np.where(np.isfinite(tol_err), tol_err, missing)
-            err = err + tol_err
-            # a member nearby may be clear where the sample is not: keep each sample whose
-            # slack is no worse than the arm's points move to its neighbours (and within the
-            # tolerance); links are straight between those points, so none moves farther
+            tol_err = np.where(np.isfinite(tol_err), tol_err, _MISSING)
             values, _ = self.fam.world.pair_clearances(self.fam.arm, q)
             slack = (values - self.required).min(axis=-1, initial=np.inf)
-            keep = slack >= -(moved + (tol_err * self.step) @ self.reach + CLEAR_MARGIN)
-            u, err, q, index = u[keep], err[keep], q[keep], index[keep]
-        return Layer(u, err, q, dirs[index])
+        return _Samples(
+            dirs=np.vstack([acc.dirs, dirs]),
+            q=np.vstack([acc.q, q]),
+            index=np.concatenate([acc.index, index]),
+            u=np.vstack([acc.u, self.units(q)]),
+            points=np.concatenate([acc.points, landmark_positions(self.fam.arm, q)])
+            if acc.points.shape[0]
+            else landmark_positions(self.fam.arm, q),
+            tol_err=np.vstack([acc.tol_err, tol_err]),
+            slack=np.concatenate([acc.slack, slack]),
+        )
+
+    def _filtered(self, acc: _Samples) -> tuple[Layer, IntArray, FloatArray, IntArray]:
+        """The layer of the samples in ``acc`` with their errors; the samples kept only for
+        what their neighbours allow (indices into ``acc.dirs``); each direction's spacing (the
+        widest angle to its Delaunay neighbours, rad); the Delaunay triangles.
+
+        A sample is kept when its slack is no worse than the arm's points move to its
+        neighbours (and within the tolerance): a member nearby may then be clear where the
+        sample is not. Links are straight between those points, so none moves farther."""
+        order = np.argsort(acc.index, kind="stable")
+        q, index, u = acc.q[order], acc.index[order], acc.u[order]
+        n_dirs = acc.dirs.shape[0]
+        nb_ptr, nb, triangles = _delaunay_neighbours(acc.dirs)
+        src = np.repeat(np.arange(n_dirs), np.diff(nb_ptr))
+        cosines = np.einsum("ij,ij->i", acc.dirs[src], acc.dirs[nb])
+        spacing = np.zeros(n_dirs)
+        np.maximum.at(spacing, src, np.arccos(np.clip(cosines, -1.0, 1.0)))
+        dir_ptr = np.searchsorted(index, np.arange(n_dirs + 1)).astype(np.int64)
+        err, moved = _sampling_errors(
+            u, acc.points[order], index, dir_ptr, nb_ptr, nb, self.period, _MISSING,
+            BRANCH_GAP, self.turns > 1,
+        )  # fmt: skip
+        alone = err[:, 0] >= _MISSING
+        if np.any(alone) and not np.all(alone):
+            # no neighbouring direction has a member (a sliver of the family inside the joint
+            # limits): the layer's median error stands in for the unknown one
+            err[alone] = np.median(err[~alone], axis=0)
+            moved[alone] = np.median(moved[~alone])
+        tol_err, slack = acc.tol_err[order], acc.slack[order]
+        err = err + tol_err
+        allowance = moved + (tol_err * self.step) @ self.reach + CLEAR_MARGIN
+        keep = slack >= -allowance
+        unsure = np.unique(index[keep & (slack < 0.0)])
+        layer = Layer(u[keep], err[keep], q[keep], acc.dirs[index[keep]])
+        return layer, unsure, spacing, triangles
 
     def distance_from(self, q_start: FloatArray, layer: Layer, whole: bool = False) -> FloatArray:
         """Least commands from ``q_start`` (rad) to each sample's error box (rounded up to
@@ -438,6 +565,11 @@ class FamilySampler:
         if prev.size == 0 or nxt.size == 0:
             return np.full(nxt.size, np.inf), np.full(nxt.size, -1, dtype=np.int64)
         return _advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole, GROUP_CELL)
+
+
+def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:
+    """The tool directions the family allows at arc length ``s`` mm."""
+    return lambda dirs: fam.allowed_mask(s, dirs)
 
 
 def _path(layers: list[Layer], init: FloatArray, sampler: FamilySampler) -> tuple[float, list[int]]:
@@ -497,6 +629,7 @@ def trace_bound(
     rounds: int = REFINE_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
     directions: int = BASE_DIRECTIONS,
+    clear_levels: int = TRACE_CLEAR_LEVELS,
 ) -> CommandBound:
     """Fewest commands of any plan that passes the tool point along each span of the curve
     (arc lengths mm, ``a < b``) within ``tolerance_mm`` from ``q_start`` (rad).
@@ -528,7 +661,9 @@ def trace_bound(
         for k, s in enumerate(s_all):
             check_time("bounding the commands")
             dirs = refiner.directions(k)
-            flat.append(sampler.layer(points[k], dirs, fam.allowed_mask(float(s), dirs)))
+            flat.append(
+                sampler.layer(points[k], dirs, _allowed_at(fam, float(s)), levels=clear_levels)
+            )
         n_samples = sum(lay.size for lay in flat)
         rows = [flat[first[i] : first[i + 1]] for i in range(len(s_layers))]
         free, approach, path = [], [], []
@@ -558,9 +693,10 @@ def trace_bound(
         value=value,
         method=(
             "approach plus shortest path in the largest-joint metric through the solution "
-            f"family at {layers_per_span} points of each span (obstacles ignored; tool directions "
-            "sampled and refined about the path, each distance less the samples' sampling "
-            "errors); one pass per span, either direction"
+            f"family at {layers_per_span} points of each span (the members that may be clear "
+            "there; obstacles ignored between them; tool directions sampled and refined about "
+            "the path, each distance less the samples' sampling errors); one pass per span, "
+            "either direction"
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
         ),
         parts=parts,
@@ -583,11 +719,13 @@ def tour_bound(
     back: bool = False,
     rounds: int = REFINE_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
+    clear_levels: int = TOUR_CLEAR_LEVELS,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
     units) within ``tolerance_mm``: for each of ``orders``, a shortest path through the family
-    at each target (every goal configuration, obstacles ignored), each leg a whole number of
-    commands; ``back`` returns to the start. Returns the least over the orders and each
+    at each target (every goal configuration that may be clear, its cells split
+    ``clear_levels`` times where unsure; obstacles ignored between targets), each leg a whole
+    number of commands; ``back`` returns to the start. Returns the least over the orders and each
     order's bound."""
     say = on_progress or (lambda _m: None)
     sampler = FamilySampler(fam, tolerance_mm)
@@ -601,7 +739,7 @@ def tour_bound(
         layers = []
         for k, p in enumerate(targets):
             check_time("bounding the commands")
-            layers.append(sampler.layer(p, refiner.directions(k)))
+            layers.append(sampler.layer(p, refiner.directions(k), levels=clear_levels))
         best_value, best_order, path = _orders_through(
             sampler, layers, q_start, orders, back, per_order
         )
@@ -615,9 +753,10 @@ def tour_bound(
         value=best_value,
         method=(
             "least over every visiting order of a shortest path from the start through the "
-            "solution family at each target (every goal configuration within the tolerance, "
-            "obstacles ignored; tool directions sampled and refined about the path, each "
-            "distance less the samples' sampling errors), each leg rounded up to whole commands"
+            "solution family at each target (every goal configuration within the tolerance "
+            "that may be clear; obstacles ignored between the targets; tool directions "
+            "sampled, refined where clearance is unsure and about the path, each distance less "
+            "the samples' sampling errors), each leg rounded up to whole commands"
         ),
         sampling={
             "orders": float(len(orders)),
@@ -636,6 +775,7 @@ def tour_bound_any_order(
     tolerance_mm: float,
     back: bool = False,
     on_progress: Callable[[str], None] | None = None,
+    clear_levels: int = TOUR_CLEAR_LEVELS,
 ) -> CommandBound:
     """A cheaper bound of the best order for many targets: every target is entered once, from
     the start or from another target, so the commands are at least the sum over the targets of
@@ -646,7 +786,7 @@ def tour_bound_any_order(
     layers = []
     for p in targets:
         check_time("bounding the commands")
-        layers.append(sampler.layer(p, sampler.directions([])))
+        layers.append(sampler.layer(p, sampler.directions([]), levels=clear_levels))
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no family member within the joint limits")
     from_start = [float(sampler.distance_from(q_start, lay, whole=True).min()) for lay in layers]
@@ -666,9 +806,10 @@ def tour_bound_any_order(
         value=total,
         method=(
             "every target entered once: the sum over the targets of the shortest leg into its "
-            "solution family (every goal configuration within the tolerance, obstacles "
-            "ignored; from the start or another target, whole commands, each distance less "
-            "the samples' sampling errors)" + ("; plus the shortest way back" if back else "")
+            "solution family (every goal configuration within the tolerance that may be "
+            "clear; obstacles ignored between the targets; from the start or another target, "
+            "whole commands, each distance less the samples' sampling errors)"
+            + ("; plus the shortest way back" if back else "")
         ),
         sampling={
             "targets": float(targets.shape[0]),
