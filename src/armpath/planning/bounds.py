@@ -652,7 +652,7 @@ def trace_bound(
     refiner = _Refiner(sampler, s_all.size)
     points = [fam.frame(float(s))[0] for s in s_all]
     first = np.cumsum([0] + [s.size for s in s_layers])
-    value, parts = np.inf, {}
+    value, parts = -np.inf, {}
     guide_q = np.zeros((0, fam.arm.n_joints))
     largest_err, n_samples = 0.0, 0
     for r in range(rounds + 1):
@@ -680,10 +680,11 @@ def trace_bound(
                 bwd, _ = _path(row[::-1], sampler.distance_from(q_start, row[-1]), sampler)
                 approach.append(min(fwd, bwd))
         extra = [a - f for a, f in zip(approach, free, strict=True)]
-        value = float(sum(free) + min(extra))
-        parts = {"along": float(sum(free)), "approach": float(min(extra))}
-        guide_q = np.array([lay.q[p] for lay, p in zip(flat, path, strict=True)])
-        largest_err = max(float(lay.err[p].max()) for lay, p in zip(flat, path, strict=True))
+        if float(sum(free) + min(extra)) > value:  # every round bounds: the most of them holds
+            value = float(sum(free) + min(extra))
+            parts = {"along": float(sum(free)), "approach": float(min(extra))}
+            guide_q = np.array([lay.q[p] for lay, p in zip(flat, path, strict=True)])
+            largest_err = max(float(lay.err[p].max()) for lay, p in zip(flat, path, strict=True))
         if r == rounds or not any(
             [refiner.refine(k, lay, p) for k, (lay, p) in enumerate(zip(flat, path, strict=True))]
         ):
@@ -731,20 +732,25 @@ def tour_bound(
     sampler = FamilySampler(fam, tolerance_mm)
     refiner = _Refiner(sampler, targets.shape[0])
     per_order: dict[tuple[int, ...], int] = {}
-    best_value, best_order = np.inf, orders[0]
+    best_value, best_order = -np.inf, orders[0]
     path: list[int] = []
     layers: list[Layer] = []
     for r in range(rounds + 1):
         say(f"bounding the tour's commands: round {r + 1} of {rounds + 1}")
-        layers = []
+        now = []
         for k, p in enumerate(targets):
             check_time("bounding the commands")
-            layers.append(sampler.layer(p, refiner.directions(k), levels=clear_levels))
-        best_value, best_order, path = _orders_through(
-            sampler, layers, q_start, orders, back, per_order
-        )
+            now.append(sampler.layer(p, refiner.directions(k), levels=clear_levels))
+        round_orders: dict[tuple[int, ...], int] = {}
+        value, order, nodes = _orders_through(sampler, now, q_start, orders, back, round_orders)
+        # every round's samples bound every plan: the most of them holds (finer directions
+        # can lower a round's value where they bring new members closer)
+        for o, c in round_orders.items():
+            per_order[o] = max(per_order.get(o, c), c)
+        if value > best_value:
+            best_value, best_order, path, layers = value, order, nodes, now
         if r == rounds or not any(
-            [refiner.refine(t, layers[t], p) for t, p in zip(best_order, path, strict=True)]
+            [refiner.refine(t, now[t], p) for t, p in zip(order, nodes, strict=True)]
         ):
             break
     largest = max(float(layers[t].err[p].max()) for t, p in zip(best_order, path, strict=True))
