@@ -445,11 +445,7 @@ class FamilySampler:
             reach = radius + float(all_s[angle < radius + all_s].max(initial=h))
             new = _cap(center, reach, h)
             dirs, spacing = [all_d[keep], new], [all_s[keep], np.full(new.shape[0], h)]
-        out = np.vstack(dirs)
-        # drop near-duplicates (qhull needs distinct points)
-        key = np.round(out * 1e9).astype(np.int64)
-        _, first = np.unique(key, axis=0, return_index=True)
-        return np.asarray(out[np.sort(first)], dtype=np.float64)
+        return _distinct(np.vstack(dirs), np.zeros((0, 3)))
 
     def layer(
         self,
