@@ -67,6 +67,10 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
     return lines, notes
 
 
+#: What a trace's or tour's lower bound ranges over, in words.
+BOUND_SCOPE = "every configuration that may be clear, obstacles ignored between the sampled points"
+
+
 def bound_cell(doc: dict[str, Any]) -> str:
     """A trace's or tour's lower bound for a table (- when not computed)."""
     bound = doc.get("lower_bound_commands")
@@ -79,8 +83,8 @@ def _bound_words(doc: dict[str, Any]) -> str:
     if b is None:
         return "no lower bound computed"
     return (
-        f"lower bound {b['commands']} commands over every configuration that may be clear, "
-        f"obstacles ignored between the sampled points (plan {b['gap_commands']} above it)"
+        f"lower bound {b['commands']} commands over {BOUND_SCOPE} "
+        f"(plan {b['gap_commands']} above it)"
     )
 
 

@@ -565,12 +565,13 @@ def plan(
 
 def _bound_text(bound: dict[str, Any] | None, scope: str) -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line."""
+    from armpath.report import BOUND_SCOPE
+
     if bound is None:
         return "not computed"
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     return (
-        f">= {bound['commands']} commands ({scope}, every configuration that may be clear, "
-        "obstacles ignored between the sampled points); "
+        f">= {bound['commands']} commands ({scope}, {BOUND_SCOPE}); "
         f"plan {bound['gap_commands']} above it ({gap})"
     )
 

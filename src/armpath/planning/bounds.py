@@ -43,7 +43,7 @@ from armpath.errors import PlanningError
 from armpath.geometry.primitives import orthonormal_frame
 from armpath.jit import njit, prange
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
-from armpath.model.serial_arm import JointKind
+from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
 
 FloatArray = NDArray[np.float64]
@@ -166,13 +166,14 @@ class _Samples:
     slack: FloatArray
 
     @staticmethod
-    def empty(n_joints: int, n_tip: int) -> _Samples:
+    def empty(arm: SerialArm, n_tip: int) -> _Samples:
+        none = np.zeros((0, arm.n_joints))
         return _Samples(
             dirs=np.zeros((0, 3)),
-            q=np.zeros((0, n_joints)),
+            q=none,
             index=np.zeros(0, dtype=np.int64),
             u=np.zeros((0, n_tip)),
-            points=np.zeros((0, 0, 3)),
+            points=landmark_positions(arm, none),
             tol_err=np.zeros((0, n_tip)),
             slack=np.zeros(0),
         )
@@ -460,7 +461,7 @@ class FamilySampler:
         (see :meth:`_filtered`); ``levels`` times, the triangles of directions about such
         samples are split in four, which shrinks what their neighbours allow and so drops the
         samples whose whole cell collides."""
-        acc = _Samples.empty(self.fam.arm.n_joints, int(self.tip.sum()))
+        acc = _Samples.empty(self.fam.arm, int(self.tip.sum()))
         new = np.asarray(dirs, dtype=np.float64)
         for level in range(levels + 1):
             check_time("bounding the commands")
@@ -502,9 +503,7 @@ class FamilySampler:
             q=np.vstack([acc.q, q]),
             index=np.concatenate([acc.index, index]),
             u=np.vstack([acc.u, self.units(q)]),
-            points=np.concatenate([acc.points, landmark_positions(self.fam.arm, q)])
-            if acc.points.shape[0]
-            else landmark_positions(self.fam.arm, q),
+            points=np.concatenate([acc.points, landmark_positions(self.fam.arm, q)]),
             tol_err=np.vstack([acc.tol_err, tol_err]),
             slack=np.concatenate([acc.slack, slack]),
         )

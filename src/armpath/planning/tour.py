@@ -337,7 +337,7 @@ def _family_bounds(
     say("bounding the tour's commands over every goal configuration")
     try:
         if len(orders) == 1 or pts.shape[0] <= EXACT_ORDER_TARGETS:
-            return tour_bound(fam, q0, pts, tolerance_mm, orders, back, rounds=1, on_progress=say)
+            return tour_bound(fam, q0, pts, tolerance_mm, orders, back, on_progress=say)
         return tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say), {}
     except PlanningError:
         return None, {}
