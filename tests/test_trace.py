@@ -166,19 +166,20 @@ def test_run_reports_task_2(seed_run):
 
 
 def test_a_clamp_on_the_crack_forces_a_second_pass_with_a_planned_lift_off():
-    """A 20 mm sphere 2 mm off the crack: every point stays reachable (the tool slips under it
-    from one side or the other) but the family cannot be followed continuously past it, so the
-    arc needs two passes and a lift-off between them. Checked independently: the continuous tip
-    path of each pass within tolerance of the crack (independent crack), the links >= 1 mm from
-    the workpiece (independent distance), the table and the sphere (closed form) over the whole
-    motion, the tool tip never inside anything, the whole piece covered."""
+    """A 25 mm sphere 2 mm off the crack: every point stays reachable (the tool slips under it
+    from one side or the other) but the tracer cannot follow the family continuously past it (a
+    20 mm sphere it passes in one go), so the arc needs two passes and a lift-off between them.
+    Checked independently: the continuous tip path of each pass within tolerance of the crack
+    (independent crack), the links >= 1 mm from the workpiece (independent distance), the table
+    and the sphere (closed form) over the whole motion, the tool tip never inside anything, the
+    whole piece covered."""
     import tomllib
     from importlib import resources
 
     import independent_trace as it
 
     data = tomllib.loads(resources.files("armpath.scenes").joinpath("seed.toml").read_text())
-    center, radius = np.array([180.22, -148.626, 100.287]), 20.0
+    center, radius = np.array([179.308, -153.178, 102.144]), 25.0
     data["obstacles"].append(
         {"type": "sphere", "name": "clamp", "center": center.tolist(), "radius": radius}
     )

@@ -4,7 +4,8 @@ Pipeline (:func:`plan_motion`):
 
 1. **Direct**: the straight motion to each goal (fewest commands: ``ceil(largest change / 2 deg)``)
    is certified by :func:`~armpath.planning.motion_check.motion_clearance`; the first clear one
-   wins.
+   wins, unless a nearer goal (one needing fewer direct commands) is blocked: then the search
+   runs too and the shorter of the two is kept.
 2. **Search**: RRT-Connect in joint space (:mod:`armpath.planning.rrt`) with an edge test that
    samples each straight segment so densely that no arm point moves more than
    ``sample_spacing_mm`` between samples and demands the margin plus ``buffer_mm`` plus half that
@@ -370,8 +371,13 @@ def plan_motion(
                 best = plan
             if opts.objective is Objective.COMMANDS:
                 break
-    if best is not None:
+    if best is not None and (
+        opts.objective is not Objective.COMMANDS or best.direct_commands <= direct_counts.min()
+    ):
         return best
+    # a direct motion to a farther goal (a whole-turn copy, say) is kept only if the search
+    # finds nothing shorter to the nearer goals it could not reach directly
+    direct_best = best
 
     # 2.-4. search, onto the lattice, certify
     active = active_joints(arm)
@@ -515,6 +521,8 @@ def plan_motion(
         failures.append(f"search {attempt + 1}: lattice path fails the final check ({what})")
         buffer *= 1.5
         spacing *= 0.5
+    if direct_best is not None:
+        found.append(direct_best)
     if found:
         return min(found, key=lambda plan: score(plan.sequence))
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))

@@ -425,6 +425,36 @@ def _lift_off(
     return CommandSequence.from_states(np.array(states, dtype=np.int64), grid)
 
 
+def _enter_backward(
+    tracer: Tracer, q_from: IntArray, q_start: IntArray, opts: TraceOptions
+) -> MotionPlan:
+    """A transit from ``q_from`` into the tight state ``q_start`` at the start of an arc: the
+    arm lifts off from ``q_start`` (:func:`_lift_off`) to a state with room for the search, the
+    search plans the way there, and the lift-off is run backward (a command's continuous
+    motion is the same path either way, so its clearance holds backward too). The whole transit
+    is certified again."""
+    arm, world = tracer.arm, tracer.world
+    lift = _lift_off(arm, world, q_start, opts).states()
+    if lift.shape[0] < 2:
+        raise PlanningError("no lift-off from there gives the search room")
+    search = plan_motion(arm, world, q_from, lift[-1][None, :], opts.motion)
+    states = np.concatenate([search.sequence.states(), lift[-2::-1]])
+    seq = CommandSequence.from_states(states, tracer.grid)
+    mc = motion_clearance(arm, world, seq)
+    if not mc.certified_ok:  # the search's own leg is certified; this is the safety net
+        raise PlanningError("the lift-off run backward is not certified clear")
+    direct = int(CommandSequence.straight(q_from, q_start, lattice=tracer.grid).n_commands)
+    return MotionPlan(
+        seq,
+        0,
+        mc,
+        plan_metrics(arm, seq),
+        direct,
+        f"{search.method} + lift-off run backward",
+        search.searched_samples,
+    )
+
+
 def _enter(
     tracer: Tracer,
     reach: CurveReachability,
@@ -435,9 +465,11 @@ def _enter(
     """Move from ``q_from`` onto the curve near the start of the tracer's arc.
 
     The start of an arc is usually a tight spot (that is why the arc ends there): it is entered
-    only by a straight motion. Otherwise the entry is one of the first scan points along the arc
-    whose best configuration keeps the transit search's buffer plus half its sample spacing plus
-    0.5 mm of slack; the pass then runs back to the start of the arc before tracing forward.
+    by a straight motion, or by a search to a roomier state the arm can lift off to from there
+    and that lift-off run backward (:func:`_enter_backward`). Otherwise the entry is one of the
+    first scan points along the arc whose best configuration keeps the transit search's buffer
+    plus half its sample spacing plus 0.5 mm of slack; the pass then runs back to the start of
+    the arc before tracing forward.
     """
     arc = tracer.arc
     L = reach.curve.length
@@ -459,13 +491,16 @@ def _enter(
             failures.append(f"{s_try:.1f} mm: {exc}")
             continue
         say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm")
-        if i == 0:  # the tight start of the arc: only a straight motion can end there
+        if i == 0:  # the tight start of the arc: a straight motion, else a lift-off reversed
             seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
             mc = motion_clearance(tracer.arm, tracer.world, seq)
             if mc.certified_ok:
                 m = plan_metrics(tracer.arm, seq)
                 return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
-            failures.append(f"{s:.1f} mm: the straight motion there is blocked")
+            try:
+                return _enter_backward(tracer, q_from, q, opts), q, s
+            except PlanningError as exc:
+                failures.append(f"{s:.1f} mm: the straight motion there is blocked; {exc}")
             continue
         # one search per entry point but the last: another entry often works where one fails
         motion_opts = opts.motion if i == len(candidates) - 1 else replace(opts.motion, attempts=1)

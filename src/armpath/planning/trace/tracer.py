@@ -42,8 +42,17 @@ _AXIS_MARGIN_RAD = float(np.radians(0.2))
 #: progress measure that makes every pass end.
 MIN_ADVANCE_MM = 0.05
 _MIN_ADVANCE_MM = MIN_ADVANCE_MM
-#: Candidate advances along the curve per command (mm), tried largest first.
-_ADVANCES_MM = (20.0, 17.0, 14.0, 12.0, 10.0, 8.5, 7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0, 0.5)
+#: A pass has reached its goal when the tip's nearest curve point is this close to it (mm); the
+#: last command may advance less than :data:`MIN_ADVANCE_MM` to get there.
+GOAL_REACHED_MM = 1e-3
+#: Candidate advances along the curve per command (mm), tried largest first: every 0.5 mm, so
+#: a command ends within 0.5 mm of the farthest target it can reach (coarser steps cost the
+#: seed crack's trace about one command in twelve).
+_ADVANCES_MM = tuple(float(a) for a in np.arange(20.0, 0.25, -0.5))
+#: Within this distance of a pass's goal (mm), a pass that finds no command takes its last one
+#: back and turns toward the most slack instead, at most :data:`_MAX_BACKTRACKS` times a pass.
+_BACKTRACK_WITHIN_MM = 5.0
+_MAX_BACKTRACKS = 3
 
 
 def _offsets(joints: int) -> IntArray:
@@ -192,7 +201,11 @@ class Tracer:
         q_cand = self.grid.to_joint(cand)
         E_end = tool_position(self.arm, q_cand)
         d, s, sd = self.tip_checks(E_end, sk)
-        ok = self.in_band(d, sd, 0.1) & (sign * (s - sk) > _MIN_ADVANCE_MM)
+        # each command advances by the least advance, or ends the pass at its goal
+        ahead = (sign * (s - sk) > _MIN_ADVANCE_MM) | (
+            (sign * (s - sk) > 0.0) & (sign * (goal - s) <= GOAL_REACHED_MM)
+        )
+        ok = self.in_band(d, sd, 0.1) & ahead
         ok &= self.fam.axis_ok(q_cand, _AXIS_MARGIN_RAD)
         ok &= sign * (s - goal) <= self.tol
         cand, s, E_end = cand[ok], s[ok], E_end[ok]
@@ -244,7 +257,7 @@ class Tracer:
         last = None
         for adv in _ADVANCES_MM:
             s1 = sk + sign * min(adv, abs(goal - sk))
-            if abs(s1 - sk) <= _MIN_ADVANCE_MM or s1 == last:
+            if s1 in (sk, last):
                 continue
             last = s1
             drift = self.q_ref(s1) - self.q_ref(sk)
@@ -256,7 +269,7 @@ class Tracer:
                 k = int(np.argmax(sign * s - 0.05 * ref_gap))
                 return cand[k], float(s[k])
         if abs(goal - sk) <= 15.0:
-            return self._toward_best(qk, sk, goal)
+            return self._toward_best(qk, sk, goal) or self._onto_goal(qk, sk, goal)
         return None
 
     def _commands_toward(
@@ -295,6 +308,27 @@ class Tracer:
                 k = int(np.lexsort((-sign * s, -np.round(score, 2)))[0])
                 return cand[k], float(s[k])
         return None
+
+    def _onto_goal(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """The last command of a pass, when neither the reference nor the most slack leads
+        there: the lattice is searched about several members with the tip at the goal, the
+        joints turned from ``qk`` along the family (the null space of the tip's Jacobian) by up
+        to 1 deg either way. Lattice states with the tip in the band about one point are
+        sparse; more of the family holds more of them."""
+        qk_rad = self.grid.to_joint(qk)
+        J = position_jacobian(self.arm, qk_rad)[:, self.tip]
+        _, _, vt = np.linalg.svd(J)
+        moves = []
+        for v in vt[3:]:
+            full = np.zeros(qk_rad.size)
+            full[self.tip] = v / np.abs(v).max()
+            moves += [t * full for t in np.radians([0.25, -0.25, 0.5, -0.5, 1.0, -1.0])]
+        cand, s = self._commands_toward(qk, sk, goal, goal, moves)
+        if cand.shape[0] == 0:
+            return None
+        sign = 1.0 if goal >= sk else -1.0
+        k = int(np.argmax(sign * s))
+        return cand[k], float(s[k])
 
     def start_state(
         self, s_from: float, body_buffer_mm: float = _BODY_BUFFER_MM
@@ -340,25 +374,45 @@ class Tracer:
     def run(self, q_start: IntArray, s_start: float, goal: float) -> tuple[list[IntArray], float]:
         """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes).
 
+        Where no command continues within :data:`_BACKTRACK_WITHIN_MM` of the goal, the last
+        command is taken back and the tip turned toward the family member with the most slack
+        instead (at most :data:`_MAX_BACKTRACKS` times a pass): the farthest command can end
+        in a corner no lattice state leads out of.
+
         Terminates by design: the direction is fixed at the start, every accepted command
-        advances the tip by more than :data:`_MIN_ADVANCE_MM` in that direction (see
-        :meth:`valid_ends`), and the pass ends once the tip is within that distance of the goal
-        or past it. So the distance left decreases strictly and the number of commands is at
-        most ``(|goal - s_start| + tolerance) / _MIN_ADVANCE_MM``.
+        advances the tip by more than :data:`_MIN_ADVANCE_MM` in that direction or ends within
+        :data:`GOAL_REACHED_MM` of the goal (see :meth:`valid_ends`), and the pass ends there.
+        So between take-backs the distance left decreases strictly, and the
+        commands tried are at most ``(backtracks + 1) * (|goal - s_start| + tolerance) /
+        _MIN_ADVANCE_MM``.
         """
         direction = 1.0 if goal >= s_start else -1.0
-        states, sk, qk = [q_start], s_start, q_start
+        states, reached = [q_start], [s_start]
         budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
-        for _ in range(budget):
-            if direction * (goal - sk) <= _MIN_ADVANCE_MM:
+        backtracks = 0
+        for _ in range((_MAX_BACKTRACKS + 1) * budget):
+            qk, sk = states[-1], reached[-1]
+            if direction * (goal - sk) <= GOAL_REACHED_MM:
                 break
             check_time(f"tracing {self.arc.start_mm:.1f}..{self.arc.end_mm:.1f} mm of the curve")
             nxt = self.step(qk, sk, goal)
             if nxt is None:
-                break
+                if (
+                    backtracks == _MAX_BACKTRACKS
+                    or len(states) == 1
+                    or direction * (goal - sk) > _BACKTRACK_WITHIN_MM
+                ):
+                    break
+                backtracks += 1
+                states.pop()
+                reached.pop()
+                nxt = self._toward_best(states[-1], reached[-1], goal)
+                if nxt is None:
+                    break
             q_next, s_next = nxt
-            if direction * (s_next - sk) <= _MIN_ADVANCE_MM:  # cannot happen: valid_ends
-                raise AssertionError("tracer made no progress: step rule broken")
-            qk, sk = q_next, s_next
-            states.append(qk)
-        return states, sk
+            moved = direction * (s_next - reached[-1])
+            if moved <= _MIN_ADVANCE_MM and direction * (goal - s_next) > GOAL_REACHED_MM:
+                raise AssertionError("tracer made no progress: step rule broken")  # valid_ends
+            states.append(q_next)
+            reached.append(s_next)
+        return states, reached[-1]
