@@ -231,3 +231,6 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, targets=np.array(targets), tolerance=0.05))
     assert rep.facts["error_mm"] <= 0.05
     assert len(doc["visits"]) == 4
+    # goal states chosen together (armpath.planning.tour_guide): 393 commands with each weld's
+    # goal states picked nearest the start
+    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 240

@@ -41,7 +41,8 @@ from armpath.planning.motion import (
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.reach import goal_states
-from armpath.planning.trace.family import curve_family
+from armpath.planning.tour_guide import TourGuide
+from armpath.planning.trace.family import CurveFamily, curve_family
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -205,32 +206,41 @@ def plan_tour(
     say(f"ranking {len(orders):,} visiting order(s) by their lower bounds")
     bounds = _order_bounds(start, goals, orders, return_to_start, arm.lattice)
     ranking = sorted(orders, key=lambda o: (bounds[o], o))
+    fam = _targets_family(arm, world, pts) if pts.shape[0] <= MAX_BOUND_TARGETS else None
     family_bound, family_bounds = _family_bounds(
-        arm, world, start, pts, ranking, return_to_start, tolerance_mm, say
+        fam, start, pts, ranking, return_to_start, tolerance_mm, say
     )
-    best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
-    planned: dict[tuple[int, ...], int] = {}
-    not_planned: dict[tuple[int, ...], str] = {}
-    failures: list[str] = []
-    # the best-ranked orders, then every next one whose bound is below the best plan so far
-    # (at most EXTRA_ORDERS more): the ranking is by bound, so the first that is not ends it
-    tried = 0
-    for o in ranking[: orders_to_plan + EXTRA_ORDERS]:
-        if tried >= orders_to_plan and (best is None or bounds[o] >= best[0]):
-            break
-        tried += 1
-        name = "-".join(str(i + 1) for i in o)
-        if best is not None and bounds[o] >= best[0]:
-            not_planned[o] = (
-                f"not planned: its bound {bounds[o]} is no fewer than the {best[0]} commands "
-                f"planned for order {'-'.join(str(i + 1) for i in best[2])}"
-            )
-            continue
-        say(f"planning order {name} (lower bound {bounds[o]} commands)")
+    q0 = arm.lattice.to_joint(start)
+    guide = _tour_guide(fam, pts, tolerance_mm, orientations, say)
+    guide_paths: dict[tuple[int, ...], tuple[float, list[FloatArray]]] = {}
+    if guide is not None and len(orders) <= MAX_GUIDED_ORDERS:
+        for o in ranking:
+            found = guide.path(q0, o, return_to_start)
+            if found is not None:
+                guide_paths[o] = found
+    plan_first = orders_to_plan
+    guided_best = None  # planned whatever its bound for the goal states
+    if guide_paths:  # the order whose guided path is shortest is planned too
+        shortest = min(guide_paths, key=lambda o: (guide_paths[o][0], o))
+        if shortest not in ranking[:orders_to_plan]:
+            ranking.remove(shortest)
+            ranking.insert(orders_to_plan, shortest)
+            plan_first += 1
+        guided_best = shortest
+
+    def legs_of(o: tuple[int, ...], name: str, first: list[IntArray] | None) -> list[MotionPlan]:
+        """The legs of order ``o``: to the goal states ``first`` of each target where given
+        and reachable, else to the target's goal states."""
         legs: list[MotionPlan] = []
         state = start
-        try:
-            for t in o:
+        for i, t in enumerate(o):
+            leg = None
+            if first is not None:
+                try:
+                    leg = plan_motion(arm, world, state, first[i], opts, turn_copies=True)
+                except PlanningError:
+                    leg = None
+            if leg is None:
                 try:
                     leg = plan_motion(arm, world, state, goals[t], opts, turn_copies=True)
                 except PlanningError:
@@ -243,23 +253,63 @@ def plan_tour(
                         orientation=rule,
                     )  # fmt: skip
                     leg = plan_motion(arm, world, state, near, opts, turn_copies=True)
-                legs.append(leg)
-                state = leg.sequence.final_ticks
-            if return_to_start:
-                say(f"planning order {name}: back to the start")
-                leg = plan_motion(arm, world, state, start[None, :], opts)
-                legs.append(leg)
+            legs.append(leg)
+            state = leg.sequence.final_ticks
+        if return_to_start:
+            say(f"planning order {name}: back to the start")
+            legs.append(plan_motion(arm, world, state, start[None, :], opts))
+        return legs
+
+    best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
+    planned: dict[tuple[int, ...], int] = {}
+    not_planned: dict[tuple[int, ...], str] = {}
+    failures: list[str] = []
+    # the best-ranked orders, then every next one whose bound is below the best plan so far
+    # (at most EXTRA_ORDERS more): the ranking is by bound, so the first that is not ends it
+    tried = 0
+    for o in ranking[: plan_first + EXTRA_ORDERS]:
+        if tried >= plan_first and (best is None or bounds[o] >= best[0]):
+            break
+        tried += 1
+        name = "-".join(str(i + 1) for i in o)
+        if best is not None and bounds[o] >= best[0] and o != guided_best:
+            not_planned[o] = (
+                f"not planned: its bound {bounds[o]} is no fewer than the {best[0]} commands "
+                f"planned for order {'-'.join(str(i + 1) for i in best[2])}"
+            )
+            continue
+        say(f"planning order {name} (lower bound {bounds[o]} commands)")
+        try:
+            legs = legs_of(o, name, None)
         except PlanningError as exc:
             failures.append(f"order {name}: {exc}")
             not_planned[o] = f"planning failed: {exc}"
+            legs = []
+        guided = _guided_goals(guide, q0, o, guide_paths)
+        if guided is not None:
+            say(f"planning order {name} through the goal states chosen together")
+            try:
+                other = legs_of(o, name, guided)
+            except PlanningError:
+                other = []
+            if other and (not legs or _commands(other) < _commands(legs)):
+                legs = other
+                # the goal states of this order now include the guided ones
+                with_guided = list(goals)
+                for i, t in enumerate(o):
+                    with_guided[t] = np.vstack([guided[i], goals[t]])
+                bounds[o] = _order_bounds(start, with_guided, [o], return_to_start, arm.lattice)[o]
+        if not legs:
             continue
-        total = sum(leg.sequence.n_commands for leg in legs)
+        not_planned.pop(o, None)
+        total = _commands(legs)
         planned[o] = total
         if best is None or total < best[0]:
             best = (total, legs, o)
     for o in ranking[tried : tried + LISTED_ORDERS]:
         why = (
-            f"not planned: the {orders_to_plan} best-ranked order(s) are planned, then those "
+            f"not planned: the {orders_to_plan} best-ranked order(s) and the one whose "
+            "guided path is shortest are planned, then those "
             f"whose bound is below the best plan (at most {EXTRA_ORDERS} more)"
         )
         if best is not None and bounds[o] >= best[0]:
@@ -311,9 +361,61 @@ EXACT_ORDER_TARGETS = 4
 MAX_BOUND_TARGETS = 24
 
 
+def _targets_family(arm: SerialArm, world: CollisionWorld, pts: FloatArray) -> CurveFamily:
+    """The solution family of the tool point at the targets (a polyline through them)."""
+    vertices = [pts[0]]
+    for p in pts[1:]:
+        if np.any(p != vertices[-1]):
+            vertices.append(p)
+    if len(vertices) == 1:  # the family needs a curve; any second point will do
+        vertices.append(vertices[0] + np.array([1.0, 0.0, 0.0]))
+    return curve_family(arm, world, Polyline("targets", np.array(vertices)))
+
+
+#: Most visiting orders whose guided paths are all compared (4! = 24).
+MAX_GUIDED_ORDERS = 24
+
+
+def _commands(legs: list[MotionPlan]) -> int:
+    return sum(leg.sequence.n_commands for leg in legs)
+
+
+def _tour_guide(
+    fam: CurveFamily | None,
+    pts: FloatArray,
+    tolerance_mm: float,
+    orientations: Sequence[Orientation | None] | None,
+    say: Callable[[str], None],
+) -> TourGuide | None:
+    """Clear family members at every target (:class:`TourGuide`); None without a family or
+    with a tool orientation rule (the guide samples every tool direction)."""
+    if fam is None or (orientations is not None and any(o is not None for o in orientations)):
+        return None
+    say("sampling clear configurations at every target")
+    try:
+        return TourGuide.build(fam, pts, tolerance_mm)
+    except PlanningError:
+        return None
+
+
+def _guided_goals(
+    guide: TourGuide | None,
+    q0: FloatArray,
+    order: tuple[int, ...],
+    paths: dict[tuple[int, ...], tuple[float, list[FloatArray]]],
+) -> list[IntArray] | None:
+    """Lattice goal states along the guided path of ``order``, one array per target in
+    order; None without one."""
+    if guide is None:
+        return None
+    found = paths.get(order) or guide.path(q0, order, False)
+    if found is None:
+        return None
+    return guide.goal_states(q0, order, found[1])
+
+
 def _family_bounds(
-    arm: SerialArm,
-    world: CollisionWorld,
+    fam: CurveFamily | None,
     start: IntArray,
     pts: FloatArray,
     orders: list[tuple[int, ...]],
@@ -322,18 +424,12 @@ def _family_bounds(
     say: Callable[[str], None],
 ) -> tuple[CommandBound | None, dict[tuple[int, ...], int]]:
     """The bound over every goal configuration: per order for a given order or up to
-    :data:`EXACT_ORDER_TARGETS` targets, else the any-order bound; None beyond
-    :data:`MAX_BOUND_TARGETS` targets or where a target has no member within the limits."""
-    if pts.shape[0] > MAX_BOUND_TARGETS:
+    :data:`EXACT_ORDER_TARGETS` targets, else the any-order bound; None without a family
+    (beyond :data:`MAX_BOUND_TARGETS` targets) or where a target has no member within the
+    limits."""
+    if fam is None:
         return None, {}
-    vertices = [pts[0]]
-    for p in pts[1:]:
-        if np.any(p != vertices[-1]):
-            vertices.append(p)
-    if len(vertices) == 1:  # the family needs a curve; any second point will do
-        vertices.append(vertices[0] + np.array([1.0, 0.0, 0.0]))
-    fam = curve_family(arm, world, Polyline("targets", np.array(vertices)))
-    q0 = arm.lattice.to_joint(start)
+    q0 = fam.arm.lattice.to_joint(start)
     say("bounding the tour's commands over every goal configuration")
     try:
         if len(orders) == 1 or pts.shape[0] <= EXACT_ORDER_TARGETS:

@@ -1,0 +1,145 @@
+"""Goal states for a tour chosen together: a shortest path through clear members of the family.
+
+:func:`~armpath.planning.reach.goal_states` picks each target's goal states nearest the *start*:
+good for the first leg, often poor between targets (a UR5 whose welds sit on the far side of
+a workpiece reaches each of them in a different posture). Here the solution family at every
+target is sampled over tool directions (:class:`~armpath.planning.bounds.FamilySampler`, the
+samples of the tour's lower bound), the members whose links keep the margin plus a buffer are
+kept, and for a visiting order the shortest path from the start through one member per target
+is found (largest joint change per leg, whole commands, obstacles between the targets
+ignored). Each member on that path is then turned into lattice goal states next to it
+(:func:`~armpath.planning.reach_generic.generic_goal_states` on the members nearest it), and the
+tour is planned leg by leg to those.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.errors import ArmpathError
+from armpath.geometry.world import CollisionWorld
+from armpath.ik.family import shift_into_limits
+from armpath.ik.target import ToolTarget
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.bounds import FamilySampler, Layer
+from armpath.planning.reach import GOAL_BODY_BUFFER_MM
+from armpath.planning.reach_generic import generic_goal_states
+from armpath.planning.trace.family import CurveFamily
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Tool directions sampled at each target (before the clearance filter).
+GUIDE_DIRECTIONS = 2000
+#: Members nearest a path's member handed to the lattice search at each target.
+NEAREST_MEMBERS = 48
+#: Lattice goal states kept next to each path member.
+GUIDE_GOALS = 4
+
+
+@dataclass(frozen=True)
+class TourGuide:
+    """Clear members of the family at each target (command units, no sampling error)."""
+
+    arm: SerialArm
+    world: CollisionWorld
+    sampler: FamilySampler
+    layers: list[Layer]
+    targets: FloatArray
+    tolerance_mm: float
+
+    @staticmethod
+    def build(
+        fam: CurveFamily,
+        targets: FloatArray,
+        tolerance_mm: float,
+        body_buffer_mm: float = GOAL_BODY_BUFFER_MM,
+    ) -> TourGuide:
+        """Sample the family at every target and keep the members whose links keep the margin
+        plus ``body_buffer_mm`` (the tool tip: outside every obstacle)."""
+        arm, world = fam.arm, fam.world
+        sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS)
+        pairs = world.pairs(arm)
+        is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
+        need = np.where(is_tip, 0.0, world.required(arm) + body_buffer_mm)
+        layers = []
+        for p in targets:
+            check_time("choosing the tour's goal states")
+            lay = sampler.layer(p, sampler.directions([]), levels=0)
+            values, _ = world.pair_clearances(arm, lay.q)
+            ok = np.all(values >= need, axis=-1) if lay.size else np.zeros(0, dtype=bool)
+            layers.append(Layer(lay.u[ok], np.zeros_like(lay.err[ok]), lay.q[ok], lay.dirs[ok]))
+        return TourGuide(arm, world, sampler, layers, np.asarray(targets), tolerance_mm)
+
+    def path(
+        self, q_start: FloatArray, order: tuple[int, ...], back: bool
+    ) -> tuple[float, list[FloatArray]] | None:
+        """The shortest path from ``q_start`` (rad) through one clear member per target in
+        ``order`` (whole commands per leg; ``back``: and back to the start): its commands and
+        its members (rad, each turned nearest the one before); None when a target has none."""
+        layers = [self.layers[t] for t in order]
+        if any(lay.size == 0 for lay in layers):
+            return None
+        s = self.sampler
+        cost = s.distance_from(q_start, layers[0], whole=True)
+        args = []
+        for a, b in itertools.pairwise(layers):
+            check_time("choosing the tour's goal states")
+            cost, arg = s.advance(a, cost, b, whole=True)
+            args.append(arg)
+        if back:
+            cost = cost + s.distance_from(q_start, layers[-1], whole=True)
+        if not np.any(np.isfinite(cost)):
+            return None
+        j = int(np.argmin(cost))
+        total = float(cost[j])
+        picks = [j]
+        for arg in reversed(args):
+            picks.append(int(arg[picks[-1]]))
+        picks.reverse()
+        members, prev = [], q_start
+        for lay, k in zip(layers, picks, strict=True):
+            q = self._with_start(lay.q[k][None], q_start)
+            q = shift_into_limits(self.arm, q, prev)[0]
+            members.append(q)
+            prev = q
+        return total, members
+
+    def goal_states(
+        self, q_start: FloatArray, order: tuple[int, ...], members: list[FloatArray]
+    ) -> list[IntArray] | None:
+        """Lattice goal states next to each path member (nearest it first, at most
+        :data:`GUIDE_GOALS`), one array per target of ``order``; None when a member has none."""
+        grid = self.arm.lattice
+        out = []
+        for t, q in zip(order, members, strict=True):
+            check_time("choosing the tour's goal states")
+            lay = self.layers[t]
+            near = np.argsort(self.sampler.distance_from(q, lay), kind="stable")[:NEAREST_MEMBERS]
+            samples = shift_into_limits(self.arm, self._with_start(lay.q[near], q_start), q)
+            try:
+                states = generic_goal_states(
+                    self.arm,
+                    self.world,
+                    grid.nearest_ticks(q),
+                    ToolTarget(self.targets[t], None),
+                    self.tolerance_mm,
+                    GUIDE_GOALS,
+                    samples=np.vstack([q[None], samples]),
+                )
+            except ArmpathError:
+                return None
+            out.append(states)
+        return out
+
+    def _with_start(self, q: FloatArray, q_start: FloatArray) -> FloatArray:
+        """``q`` with the joints that do not move the tool point at their start values."""
+        out = np.array(q, dtype=np.float64, copy=True)
+        still = ~self.sampler.tip
+        out[:, still] = q_start[still]
+        return out

@@ -1,0 +1,110 @@
+"""Issue 21: goal states of a tour chosen together (armpath.planning.tour_guide).
+
+* the guided path through the clear members of every target is the shortest one: a brute force
+  over every combination of members (whole commands per leg, joints spanning a whole turn
+  measured the shorter way round, written here from the arm's limits) finds the same total;
+* its members reach their targets and keep the margin plus the buffer (independent forward
+  kinematics of the UR5 cell's arm, the cell's own clearance); the lattice goal states next to
+  them reach their targets within the tolerance;
+* (tests/test_ur5_cell.py) on the UR5 cell, the tour planned through them needs far fewer
+  commands than through goal states each picked nearest the start (393 before).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from armpath.ik.family import shift_into_limits
+from armpath.planning import tour
+from armpath.planning.tour_guide import TourGuide
+from armpath.scenes import load_scene
+from armpath.scenes.arm import scene_arm
+from test_ur5_cell import CELL, ur5_landmarks
+
+
+@pytest.fixture(scope="module")
+def cell():
+    scene = load_scene(CELL)
+    arm = scene_arm(scene)
+    pts = scene.spotweld_targets_mm()
+    fam = tour._targets_family(arm, scene.world, pts)
+    return scene, arm, pts, TourGuide.build(fam, pts, 0.05)
+
+
+def _brute_total(arm, q0, layers, tip):
+    """Every combination of one member per layer: the least sum of whole-command legs."""
+    step = (arm.lattice.tick * arm.lattice.max_ticks)[tip]
+    wraps = (arm.upper - arm.lower)[tip] >= 2 * np.pi
+    turn = 2 * np.pi / step
+
+    def legs(a, b):  # (A, J), (B, J) command units -> (A, B)
+        d = b[None, :, :] - a[:, None, :]
+        d = np.where(wraps, d - turn * np.round(d / turn), d)
+        return np.ceil(np.abs(d).max(axis=-1) - 1e-9)
+
+    u = [q[:, tip] / step for q in layers]
+    total = legs((q0[tip] / step)[None], u[0])[0]
+    for a, b in itertools.pairwise(u):
+        total = (total[:, None] + legs(a, b)).min(axis=0)
+    return float(total.min())
+
+
+def test_the_guided_path_is_the_shortest_through_its_members(cell):
+    _, arm, _, guide = cell
+    q0 = np.radians([0, -90, 90, -90, -90, 0])
+    rng = np.random.default_rng(5)
+    for order in [(0, 1, 2), (3, 1, 0), (2, 0, 3, 1)]:
+        # a few members per target, so that the brute force stays small
+        picked = []
+        for t in order:
+            lay = guide.layers[t]
+            keep = rng.choice(lay.size, min(lay.size, 30), replace=False)
+            picked.append(keep)
+        small = TourGuide(
+            guide.arm,
+            guide.world,
+            guide.sampler,
+            [
+                type(guide.layers[t])(
+                    guide.layers[t].u[k], guide.layers[t].err[k], guide.layers[t].q[k],
+                    guide.layers[t].dirs[k],
+                )
+                for t, k in zip(order, picked, strict=True)
+            ],
+            guide.targets[list(order)],
+            guide.tolerance_mm,
+        )  # fmt: skip
+        total, members = small.path(q0, tuple(range(len(order))), back=False)
+        truth = _brute_total(
+            arm, q0, [small.layers[i].q for i in range(len(order))], guide.sampler.tip
+        )
+        assert total == truth
+        # the members it returns are those of a path of that length (turned nearest each other)
+        prev = q0
+        length = 0.0
+        step = arm.lattice.tick * arm.lattice.max_ticks
+        for q in members:
+            assert np.allclose(shift_into_limits(arm, q[None], prev)[0], q)
+            length += np.ceil(np.abs(q - prev)[guide.sampler.tip] / step[guide.sampler.tip]).max()
+            prev = q
+        assert length >= total - 1e-9
+
+
+def test_guided_members_and_goal_states_reach_their_welds(cell):
+    scene, arm, pts, guide = cell
+    q0 = np.radians([0, -90, 90, -90, -90, 0])
+    order = (0, 3, 1, 2)
+    _, members = guide.path(q0, order, back=False)
+    tips = np.array([ur5_landmarks(np.degrees(q))[-1] for q in members])
+    assert np.abs(tips - pts[list(order)]).max() < 0.05
+    values, _ = scene.world.pair_clearances(arm, np.array(members))
+    is_tip = np.array([p.is_tip for p in scene.world.pairs(arm)])
+    assert np.all(values[:, ~is_tip] >= scene.world.required(arm)[~is_tip] + 1.5 - 1e-9)
+    goals = guide.goal_states(q0, order, members)
+    assert goals is not None
+    for t, states in zip(order, goals, strict=True):
+        tips = np.array([ur5_landmarks(np.degrees(arm.lattice.to_joint(s)))[-1] for s in states])
+        assert np.linalg.norm(tips - pts[t], axis=-1).max() <= 0.05
