@@ -625,6 +625,7 @@ def trace_bound(
     on_progress: Callable[[str], None] | None = None,
     directions: int = BASE_DIRECTIONS,
     clear_levels: int = TRACE_CLEAR_LEVELS,
+    with_errors: bool = True,
 ) -> CommandBound:
     """Fewest commands of any plan that passes the tool point along each span of the curve
     (arc lengths mm, ``a < b``) within ``tolerance_mm`` from ``q_start`` (rad).
@@ -633,6 +634,9 @@ def trace_bound(
     the approach from the start to the pass it begins with plus every pass's shortest path
     through the family at ``layers_per_span`` points (the moves between spans counted as zero).
     ``loop``: one span that is the whole closed curve, which a pass may begin anywhere on.
+    ``with_errors=False`` (a diagnostic, not a bound): the samples' sampling errors are left
+    out, which gives the shortest path through the samples themselves, what the bound tends to
+    as the sampling gets finer.
     """
     say = on_progress or (lambda _m: None)
     sampler = FamilySampler(fam, tolerance_mm, directions)
@@ -656,9 +660,8 @@ def trace_bound(
         for k, s in enumerate(s_all):
             check_time("bounding the commands")
             dirs = refiner.directions(k)
-            flat.append(
-                sampler.layer(points[k], dirs, _allowed_at(fam, float(s)), levels=clear_levels)
-            )
+            lay = sampler.layer(points[k], dirs, _allowed_at(fam, float(s)), levels=clear_levels)
+            flat.append(lay if with_errors else Layer(lay.u, 0.0 * lay.err, lay.q, lay.dirs))
         n_samples = sum(lay.size for lay in flat)
         rows = [flat[first[i] : first[i + 1]] for i in range(len(s_layers))]
         free, approach, path = [], [], []
@@ -694,6 +697,7 @@ def trace_bound(
             "the path, each distance less the samples' sampling errors); one pass per span, "
             "either direction"
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
+            + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         parts=parts,
         sampling={
