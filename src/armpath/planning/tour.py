@@ -7,7 +7,10 @@ each step costing the commands of the direct motion (obstacles ignored, so no or
 better for these goal states). The best-ranked orders are then planned leg by leg with
 :func:`~armpath.planning.motion.plan_motion` (direct where clear, else searched), then every
 next order whose bound is below the best plan so far (a few at most), and the order with the
-fewest planned commands wins. The tour's bound over every order and every goal configuration
+fewest planned commands wins. Each planned order is planned a second time through goal states
+chosen together (:mod:`~armpath.planning.tour_guide`: the shortest path through clear members
+of the family at every target), the shorter plan counting; the order whose such path is
+shortest is planned too. The tour's bound over every order and every goal configuration
 comes from :func:`~armpath.planning.bounds.tour_bound`.
 """
 
@@ -155,7 +158,10 @@ def plan_tour(
     ``order`` is ``"auto"`` (every order ranked by its lower bound, the ``orders_to_plan`` best
     planned, then up to :data:`EXTRA_ORDERS` more while their bound is below the best plan; at
     most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
-    at most :data:`MAX_TOUR_TARGETS`). Raises :class:`PlanningError` when a target cannot be
+    at most :data:`MAX_TOUR_TARGETS`). Without orientation rules, each planned order is also
+    planned through goal states chosen together (:class:`TourGuide`; up to
+    :data:`MAX_GUIDED_ORDERS` orders, the one whose guided path is shortest planned too) and the
+    shorter plan counts. Raises :class:`PlanningError` when a target cannot be
     reached clear of the obstacles. ``orders_not_planned`` of the result says, for each ranked
     order that has no planned command count, why. ``orientations``: a tool orientation rule per
     target (None: the tool point only).
@@ -285,7 +291,7 @@ def plan_tour(
             failures.append(f"order {name}: {exc}")
             not_planned[o] = f"planning failed: {exc}"
             legs = []
-        guided = _guided_goals(guide, q0, o, guide_paths)
+        guided = _guided_goals(guide, q0, o, return_to_start, guide_paths)
         if guided is not None:
             say(f"planning order {name} through the goal states chosen together")
             try:
@@ -402,13 +408,14 @@ def _guided_goals(
     guide: TourGuide | None,
     q0: FloatArray,
     order: tuple[int, ...],
+    back: bool,
     paths: dict[tuple[int, ...], tuple[float, list[FloatArray]]],
 ) -> list[IntArray] | None:
-    """Lattice goal states along the guided path of ``order``, one array per target in
-    order; None without one."""
+    """Lattice goal states along the guided path of ``order`` (found already in ``paths``),
+    one array per target in order; None without one."""
     if guide is None:
         return None
-    found = paths.get(order) or guide.path(q0, order, False)
+    found = paths.get(order) or guide.path(q0, order, back)
     if found is None:
         return None
     return guide.goal_states(q0, order, found[1])
