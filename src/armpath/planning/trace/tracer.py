@@ -404,10 +404,11 @@ class Tracer:
                 ):
                     break
                 backtracks += 1
-                states.pop()
-                reached.pop()
+                taken_back = states.pop(), reached.pop()
                 nxt = self._toward_best(states[-1], reached[-1], goal)
-                if nxt is None:
+                if nxt is None:  # no other way on: keep what was reached
+                    states.append(taken_back[0])
+                    reached.append(taken_back[1])
                     break
             q_next, s_next = nxt
             moved = direction * (s_next - reached[-1])
