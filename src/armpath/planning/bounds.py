@@ -120,6 +120,11 @@ class Layer:
     def size(self) -> int:
         return int(self.u.shape[0])
 
+    def without_errors(self) -> Layer:
+        """The same samples taken as exact (no sampling error): not a bound any more, the
+        shortest path through the samples themselves."""
+        return Layer(self.u, np.zeros_like(self.err), self.q, self.dirs)
+
 
 def _cap(center: FloatArray, radius: float, spacing: float) -> FloatArray:
     """Directions on a hexagonal grid of ``spacing`` rad within ``radius`` rad of ``center``."""
@@ -661,7 +666,7 @@ def trace_bound(
             check_time("bounding the commands")
             dirs = refiner.directions(k)
             lay = sampler.layer(points[k], dirs, _allowed_at(fam, float(s)), levels=clear_levels)
-            flat.append(lay if with_errors else Layer(lay.u, 0.0 * lay.err, lay.q, lay.dirs))
+            flat.append(lay if with_errors else lay.without_errors())
         n_samples = sum(lay.size for lay in flat)
         rows = [flat[first[i] : first[i + 1]] for i in range(len(s_layers))]
         free, approach, path = [], [], []

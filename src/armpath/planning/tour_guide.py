@@ -73,7 +73,7 @@ class TourGuide:
             lay = sampler.layer(p, sampler.directions([]), levels=0)
             values, _ = world.pair_clearances(arm, lay.q)
             ok = np.all(values >= need, axis=-1) if lay.size else np.zeros(0, dtype=bool)
-            layers.append(Layer(lay.u[ok], np.zeros_like(lay.err[ok]), lay.q[ok], lay.dirs[ok]))
+            layers.append(Layer(lay.u[ok], lay.err[ok], lay.q[ok], lay.dirs[ok]).without_errors())
         return TourGuide(arm, world, sampler, layers, np.asarray(targets), tolerance_mm)
 
     def path(

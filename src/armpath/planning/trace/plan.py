@@ -443,7 +443,7 @@ def _enter_backward(
     mc = motion_clearance(arm, world, seq)
     if not mc.certified_ok:  # the search's own leg is certified; this is the safety net
         raise PlanningError("the lift-off run backward is not certified clear")
-    direct = int(CommandSequence.straight(q_from, q_start, lattice=tracer.grid).n_commands)
+    direct = tracer.grid.commands_needed(q_start - q_from)
     return MotionPlan(
         seq,
         0,
