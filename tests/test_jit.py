@@ -3,6 +3,7 @@ kernels compiled after the deferral give the same numbers as the plain Python fu
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -114,3 +115,63 @@ def test_threads_are_used_only_for_big_batches_on_a_machine_with_a_core_to_spare
     monkeypatch.setattr(os, "cpu_count", lambda: 1)
     monkeypatch.setattr(jit, "_busy_cores", lambda: 0.0)
     assert not jit.threads_pay_off(10_000, 128)
+
+
+def test_a_forked_child_runs_a_parallel_kernel_its_parent_ran() -> None:
+    """Users' multiprocessing pools fork (Linux's default): a child running the bound's parallel
+    kernel after its parent did must give the same numbers, not be killed (GNU OpenMP does)."""
+    code = (
+        "import multiprocessing as mp, numpy as np\n"
+        "from armpath.planning import bounds\n"
+        "rng = np.random.default_rng(3)\n"
+        "pu, u = rng.normal(size=(2000, 6)), rng.normal(size=(1500, 6))\n"
+        "pc, e, period = rng.uniform(0, 5, 2000), np.zeros_like(u), np.zeros(6)\n"
+        "run = lambda: bounds._advance(pu, np.zeros_like(pu), pc, u, e, period, False, 0.5)[0]\n"
+        "parent = run()\n"
+        "brute = (pc[:, None] + np.abs(pu[:, None, :] - u[None, :, :]).max(axis=2)).min(axis=0)\n"
+        "assert np.allclose(parent, brute), 'kernel differs from brute force'\n"
+        "ctx = mp.get_context('fork')\n"
+        "q = ctx.Queue()\n"
+        "p = ctx.Process(target=lambda: q.put(run().tolist()))\n"
+        "p.start(); child = q.get(timeout=60); p.join()\n"
+        "assert p.exitcode == 0 and np.array_equal(child, parent), p.exitcode\n"
+        "print('ok')\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
+    env["NUMBA_NUM_THREADS"] = "2"
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+
+
+def test_threads_take_turns_at_the_parallel_kernel() -> None:
+    """numba's fork-safe work queue aborts the process when two threads run parallel kernels at
+    once; the bound's step holds :data:`armpath.jit.parallel_kernel_lock`, so threads (a user's
+    thread pool) get the numbers one thread gets."""
+    code = (
+        "import threading, types, numpy as np\n"
+        "from armpath.planning.bounds import FamilySampler, Layer\n"
+        "rng = np.random.default_rng(5)\n"
+        "def layer(m):\n"
+        "    return Layer(rng.normal(size=(m, 6)), np.zeros((m, 6)), np.zeros((m, 6)),"
+        " np.zeros((m, 3)))\n"
+        "a, b = layer(2500), layer(2000)\n"
+        "metric = types.SimpleNamespace(period=np.zeros(6))\n"
+        "cost = rng.uniform(0, 5, a.size)\n"
+        "one = FamilySampler.advance(metric, a, cost, b)[0]\n"
+        "out = []\n"
+        "def run():\n"
+        "    for _ in range(10):\n"
+        "        out.append(FamilySampler.advance(metric, a, cost, b)[0])\n"
+        "ts = [threading.Thread(target=run) for _ in range(3)]\n"
+        "[t.start() for t in ts]; [t.join() for t in ts]\n"
+        "assert len(out) == 30 and all(np.array_equal(c, one) for c in out)\n"
+        "print('ok')\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
+    env["NUMBA_NUM_THREADS"] = "2"
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]

@@ -9,7 +9,11 @@ armpath's modules are rebound to the dispatchers, so a kernel compiling a call t
 a numba function and calls from Python cost nothing extra. :data:`prange` is ``range`` until
 then and :func:`numba.prange` after, so a parallel loop compiles as one.
 
-Kernels defined after numba is loaded are plain numba dispatchers.
+Kernels defined after numba is loaded are plain numba dispatchers. Parallel kernels run on
+numba's fork-safe threading layer (TBB if installed, else its own work queue) unless
+``NUMBA_THREADING_LAYER`` says otherwise: GNU OpenMP, the default where TBB is absent, kills a
+forked child that runs a parallel kernel its parent ran. The work queue serves one caller at a
+time: call parallel kernels holding :data:`parallel_kernel_lock` (threads then take turns).
 """
 
 from __future__ import annotations
@@ -25,6 +29,9 @@ F = TypeVar("F", bound=Callable[..., Any])
 #: ``range`` until numba is loaded, then ``numba.prange``; a kernel's module imports it as
 #: ``from armpath.jit import prange`` and is rebound before any of its kernels compiles.
 prange: Any = range
+
+#: Held while a ``parallel=True`` kernel runs (see the module's description).
+parallel_kernel_lock = threading.Lock()
 
 _pending: list[_DeferredKernel] = []
 _numba: Any = None
@@ -62,6 +69,8 @@ def load_numba() -> Any:
             return _numba
         import numba
 
+        if not os.environ.get("NUMBA_THREADING_LAYER"):  # (see the module's description)
+            numba.config.THREADING_LAYER = "forksafe"  # type: ignore[attr-defined]
         for kernel in _pending:
             kernel.dispatcher = numba.njit(**kernel.options)(kernel.py_func)
         prange = numba.prange

@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.geometry.primitives import orthonormal_frame
-from armpath.jit import njit, prange
+from armpath.jit import njit, parallel_kernel_lock, prange
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
@@ -564,7 +564,8 @@ class FamilySampler:
         ``whole``: each step a whole number of commands (a leg between targets)."""
         if prev.size == 0 or nxt.size == 0:
             return np.full(nxt.size, np.inf), np.full(nxt.size, -1, dtype=np.int64)
-        return _advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole, GROUP_CELL)
+        with parallel_kernel_lock:
+            return _advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole, GROUP_CELL)
 
 
 def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:
