@@ -399,57 +399,9 @@ def test_link_radii_in_a_robot_file():
         robot_from_dict({"links": [_row()], "link_radii_mm": "thick"})
 
 
-@pytest.mark.parametrize("scene_file", ["seed", "ur5_cell"])
-def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file):
-    """The pruned minimum (broad-phase bounds, exact distances only where they can matter)
-    equals the plain minimum over :meth:`pair_clearances` for random configurations, random
-    pair masks and ceilings: pruning never changes a value."""
-    from pathlib import Path
-
-    from armpath.scenes import load_scene
-    from armpath.scenes.arm import scene_arm
-
-    root = Path(__file__).resolve().parents[1]
-    path = root / "examples" / "ur5_cell.toml" if scene_file == "ur5_cell" else None
-    scene = load_scene(path)
-    arm, world = scene_arm(scene), scene.world
-    rng = np.random.default_rng(7)
-    q = _within_limits(arm, 400, seed=3)
-    # some configurations near the home pose too, where most pairs are far apart
-    q = np.vstack([q, arm.home + rng.normal(0.0, 0.2, (200, arm.n_joints))])
-    values, _ = world.pair_clearances(arm, q)
-    slack = values - world.required(arm)
-    n_pairs = slack.shape[1]
-    assert n_pairs > 10
-    checked = 0
-    for trial in range(12):
-        mask = rng.random(n_pairs) < (1.0 if trial == 0 else 0.5)
-        ceiling = np.inf if trial < 3 else rng.normal(20.0, 30.0, q.shape[0])
-        (got,) = world.smallest_slacks(arm, q, [(mask, ceiling)])
-        want = np.minimum(ceiling, np.min(slack[:, mask], axis=1, initial=np.inf))
-        np.testing.assert_array_equal(got, want)
-        checked += int(mask.sum())
-    assert checked > 6 * n_pairs
-    np.testing.assert_array_equal(world.slack(arm, q), np.min(slack, axis=1))
-    # with a floor: exact above it, between the true value and the floor at or below it
-    every = np.ones(n_pairs, dtype=bool)
-    true = np.min(slack, axis=1)
-    for floor in (np.median(true), rng.normal(np.median(true), 20.0, q.shape[0])):
-        (got,) = world.smallest_slacks(arm, q, [SlackGroup(every, np.inf, floor)])
-        above = true > floor
-        np.testing.assert_array_equal(got[above], true[above])
-        assert np.all(got[~above] >= true[~above]) and np.all(
-            got[~above] <= np.broadcast_to(floor, got.shape)[~above]
-        )
-        assert np.any(~above) and np.any(got[~above] > true[~above])  # work was skipped
-
-
-@pytest.mark.parametrize("scene_file", ["seed", "ur5_cell", "every_kind"])
-def test_compiled_segment_check_equals_satisfied_at_every_sample(scene_file):
-    """The compiled edge test's verdict equals :meth:`CollisionWorld.satisfied` at every sample
-    of every segment (independent: all samples, no early exit, no coarse-to-fine order), for
-    the seed scene, the UR5 cell and a world with every obstacle kind of closed form, with and
-    without extra clearance; and the batched fallback (no table) agrees too."""
+def _scene_world(scene_file: str) -> tuple[SerialArm, CollisionWorld]:
+    """The seed scene's, the UR5 cell's, or the seed arm in a world with every obstacle kind of
+    closed form (a box turned about z among them)."""
     from pathlib import Path
 
     from scipy.spatial.transform import Rotation
@@ -473,6 +425,72 @@ def test_compiled_segment_check_equals_satisfied_at_every_sample(scene_file):
             cylinder("post", np.array([-150.0, -150.0, 0.0]), z, 30.0, 300.0),
         )
         world = CollisionWorld(obstacles, tip_exempt=5.0)
+    return arm, world
+
+
+@pytest.mark.parametrize("scene_file", ["seed", "ur5_cell", "every_kind"])
+def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file):
+    """The pruned minimum (broad-phase bounds, exact distances only where they can matter)
+    equals the plain minimum over :meth:`pair_clearances` for random configurations, random
+    pair masks and ceilings: pruning never changes a value. So does the compiled loop of
+    :meth:`CollisionWorld.slack` (with the boxes' axis gaps as a further broad phase), with
+    and without a ceiling, and the batched fallback of a world without a table."""
+    arm, world = _scene_world(scene_file)
+    rng = np.random.default_rng(7)
+    q = _within_limits(arm, 400, seed=3)
+    # some configurations near the home pose too, where most pairs are far apart
+    q = np.vstack([q, arm.home + rng.normal(0.0, 0.2, (200, arm.n_joints))])
+    values, _ = world.pair_clearances(arm, q)
+    slack = values - world.required(arm)
+    n_pairs = slack.shape[1]
+    assert n_pairs > 10
+    checked = 0
+    for trial in range(12):
+        mask = rng.random(n_pairs) < (1.0 if trial == 0 else 0.5)
+        ceiling = np.inf if trial < 3 else rng.normal(20.0, 30.0, q.shape[0])
+        (got,) = world.smallest_slacks(arm, q, [(mask, ceiling)])
+        want = np.minimum(ceiling, np.min(slack[:, mask], axis=1, initial=np.inf))
+        np.testing.assert_array_equal(got, want)
+        checked += int(mask.sum())
+    assert checked > 6 * n_pairs
+    np.testing.assert_array_equal(world.slack(arm, q), np.min(slack, axis=1))
+    assert world._table is not None
+    fallback = CollisionWorld(world.obstacles, world.margin, world.tip_exempt, world.self_margin)
+    fallback.__dict__["_table"] = None  # as for a world with a mesh
+    for ceiling in (0.0, 25.0):
+        want = np.minimum(np.min(slack, axis=1), ceiling)
+        np.testing.assert_array_equal(world.slack(arm, q, ceiling), want)
+        np.testing.assert_array_equal(fallback.slack(arm, q, ceiling), want)
+    assert 0.1 < np.mean(np.min(slack, axis=1) < 0.0) < 0.9  # colliding and clear both met
+    # with a floor: exact above it, between the true value and the floor at or below it
+    every = np.ones(n_pairs, dtype=bool)
+    true = np.min(slack, axis=1)
+    for floor in (np.median(true), rng.normal(np.median(true), 20.0, q.shape[0])):
+        # the compiled loop and the batched version may stop at different values below floors
+        for w in (world, fallback):
+            (got,) = w.smallest_slacks(arm, q, [SlackGroup(every, np.inf, floor)])
+            above = true > floor
+            np.testing.assert_array_equal(got[above], true[above])
+            assert np.all(got[~above] >= true[~above]) and np.all(
+                got[~above] <= np.broadcast_to(floor, got.shape)[~above]
+            )
+            assert np.any(~above) and np.any(got[~above] > true[~above])  # work was skipped
+    # several groups in one call (the compiled loop measures a pair once for all of them)
+    masks = [rng.random(n_pairs) < 0.5 for _ in range(3)]
+    ceilings = [np.inf, 10.0, rng.normal(20.0, 30.0, q.shape[0])]
+    found = world.smallest_slacks(arm, q, list(zip(masks, ceilings, strict=True)))
+    for got, mask, ceiling in zip(found, masks, ceilings, strict=True):
+        want = np.minimum(ceiling, np.min(slack[:, mask], axis=1, initial=np.inf))
+        np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("scene_file", ["seed", "ur5_cell", "every_kind"])
+def test_compiled_segment_check_equals_satisfied_at_every_sample(scene_file):
+    """The compiled edge test's verdict equals :meth:`CollisionWorld.satisfied` at every sample
+    of every segment (independent: all samples, no early exit, no coarse-to-fine order), for
+    the seed scene, the UR5 cell and a world with every obstacle kind of closed form, with and
+    without extra clearance; and the batched fallback (no table) agrees too."""
+    arm, world = _scene_world(scene_file)
     assert world._table is not None
     rng = np.random.default_rng(5)
     a = np.vstack(

@@ -146,6 +146,204 @@ def _obstacle_distance(
 
 
 @njit(cache=True)
+def _parts_into(
+    pts: np.ndarray,
+    link_start: np.ndarray,
+    link_end: np.ndarray,
+    tip_exempt: float,
+    tip_split: bool,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    seg: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """The parts' segments ``p0[p] -> p1[p]`` (also ``seg[p]`` as six numbers) from the
+    landmarks ``pts``: the links, the last one cut ``tip_exempt`` before its end when
+    ``tip_split`` (the bare tip is the extra last part), as :meth:`CollisionWorld._segments`."""
+    n_links = link_start.shape[0]
+    for p in range(n_links):
+        for t in range(3):
+            p0[p, t] = pts[link_start[p], t]
+            p1[p, t] = pts[link_end[p], t]
+    if tip_split:
+        # the last link: its body up to the cut, then the bare tip from the cut
+        last = n_links - 1
+        d0 = p1[last, 0] - p0[last, 0]
+        d1 = p1[last, 1] - p0[last, 1]
+        d2 = p1[last, 2] - p0[last, 2]
+        length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        cut = min(max(tip_exempt / (length if length > 0 else 1.0), 0.0), 1.0)
+        for t in range(3):
+            end = p1[last, t]
+            at = end - cut * (end - p0[last, t])
+            p1[n_links, t] = end
+            p0[n_links, t] = at
+            p1[last, t] = at
+    for p in range(p0.shape[0] if tip_split else n_links):
+        for t in range(3):
+            seg[p, t] = p0[p, t]
+            seg[p, 3 + t] = p1[p, t]
+
+
+@njit(cache=True)
+def _box_gap(
+    p0: np.ndarray, p1: np.ndarray, k: int, c: np.ndarray
+) -> float:  # pragma: no cover - compiled
+    """A lower bound of the distance from segment ``p0[k] -> p1[k]`` to the box of parameters
+    ``c`` (centre, half extents, rotation row major; see :class:`ObstacleTable`), as
+    :meth:`armpath.geometry.primitives.Box.broad_phase`."""
+    gap = -np.inf
+    for axis in range(3):
+        e0 = 0.0
+        e1 = 0.0
+        for t in range(3):
+            r = c[6 + 3 * t + axis]  # rotation[t, axis]: the box axis in world coordinates
+            e0 += (p0[k, t] - c[t]) * r
+            e1 += (p1[k, t] - c[t]) * r
+        h = c[3 + axis]
+        gap = max(gap, min(e0, e1) - h, -h - max(e0, e1), -h)
+    return gap
+
+
+@njit(cache=True)
+def configurations_slacks(
+    q: np.ndarray,
+    columns: np.ndarray,
+    ceilings: np.ndarray,
+    floors: np.ndarray,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+    frames: np.ndarray,
+    offsets: np.ndarray,
+    link_start: np.ndarray,
+    link_end: np.ndarray,
+    tip_exempt: float,
+    tip_split: bool,
+    part_radius: np.ndarray,
+    need: np.ndarray,
+    kinds: np.ndarray,
+    params: np.ndarray,
+    balls: np.ndarray,
+    profiles: np.ndarray,
+    boundary: np.ndarray,
+    n_vertices: np.ndarray,
+    self_a0: np.ndarray,
+    self_a1: np.ndarray,
+    self_b0: np.ndarray,
+    self_b1: np.ndarray,
+    self_radii: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - compiled
+    """:meth:`CollisionWorld.smallest_slacks` in one loop: per group ``g`` (pairs
+    ``columns[g]``) and configuration ``q[m]``, ``min(ceilings[g, m], smallest clearance less
+    need over the group's pairs)``, exact above ``floors[g, m]``; ``(G, M)``.
+
+    Exact above the floors, as the batched version (the same kernels on the same numbers);
+    below, the two may stop at different values. The group's link pairs first, then its
+    obstacle pair of lowest broad-phase bound (:func:`_broad_phase`), then the others in
+    order, each measured only where its bound is below the value so far, until the value is
+    at its floor. A distance is measured once per configuration whichever groups ask for it."""
+    n_obs = kinds.shape[0]
+    n_links = link_start.shape[0]
+    n_parts = n_links + (1 if tip_split else 0)
+    n_obs_cols = n_parts * n_obs
+    n_self = self_radii.shape[0]
+    n_groups = columns.shape[0]
+    out = np.empty((n_groups, q.shape[0]))
+    pts = np.empty((frames.shape[0], 3))
+    scratch = landmark_scratch(q.shape[1])
+    p0 = np.empty((max(n_parts, 1), 3))
+    p1 = np.empty((max(n_parts, 1), 3))
+    seg = np.empty((max(n_parts, 1), 6))
+    work = np.empty(3)
+    cands = np.empty(8 + profiles.shape[1] * 32)
+    lower = np.empty(n_obs_cols)
+    exact = np.empty(n_obs_cols)
+    measured = np.zeros(n_obs_cols, dtype=np.bool_)
+    self_slack = np.empty(n_self)
+    any_self = False
+    for g in range(n_groups):
+        for s in range(n_self):
+            any_self = any_self or columns[g, n_obs_cols + s]
+    for m in range(q.shape[0]):
+        landmarks_into(
+            q[m], T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, frames,
+            offsets, scratch, pts,
+        )  # fmt: skip
+        _parts_into(pts, link_start, link_end, tip_exempt, tip_split, p0, p1, seg)
+        for p in range(n_parts):
+            for o in range(n_obs):
+                k = p * n_obs + o
+                measured[k] = False
+                # (as the batched version rounds it; less an allowance, so a bound never
+                # passes the exact value it bounds)
+                lower[k] = _broad_phase(o, kinds, params, balls, p0, p1, p) - (
+                    (part_radius[p] + need[k]) + _ROUNDING
+                )
+        if any_self:
+            for s in range(n_self):
+                x0, x1 = self_a0[s], self_a1[s]
+                y0, y1 = self_b0[s], self_b1[s]
+                d = segment_segment(
+                    pts[x0, 0], pts[x0, 1], pts[x0, 2], pts[x1, 0], pts[x1, 1], pts[x1, 2],
+                    pts[y0, 0], pts[y0, 1], pts[y0, 2], pts[y1, 0], pts[y1, 1], pts[y1, 2],
+                )  # fmt: skip
+                self_slack[s] = d - self_radii[s] - need[n_obs_cols + s]
+        for g in range(n_groups):
+            low = ceilings[g, m]
+            for s in range(n_self):
+                if columns[g, n_obs_cols + s]:
+                    low = min(low, self_slack[s])
+            first = -1
+            for k in range(n_obs_cols):
+                if columns[g, k] and (first < 0 or lower[k] < lower[first]):
+                    first = k
+            # the pair of lowest bound first, then the others in order, each measured where
+            # its bound is below the value so far, until the value is at its floor
+            for step in range(n_obs_cols + 1):
+                k = first if step == 0 else step - 1
+                if k < 0 or (step > 0 and k == first) or not columns[g, k]:
+                    continue
+                if low <= floors[g, m]:
+                    break
+                if lower[k] >= low:
+                    continue
+                if not measured[k]:
+                    p, o = k // n_obs, k % n_obs
+                    d = _obstacle_distance(
+                        o, kinds, params, profiles, boundary, n_vertices, p0, p1, seg, p, work,
+                        cands,
+                    )  # fmt: skip
+                    exact[k] = d - part_radius[p] - need[k]
+                    measured[k] = True
+                low = min(low, exact[k])
+            out[g, m] = low
+    return out
+
+
+@njit(cache=True)
+def _broad_phase(
+    o: int,
+    kinds: np.ndarray,
+    params: np.ndarray,
+    balls: np.ndarray,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    k: int,
+) -> float:  # pragma: no cover - compiled
+    """A lower bound of the signed distance of part ``k`` to obstacle ``o``, as
+    :meth:`armpath.geometry.primitives.Obstacle.broad_phase` gives it: the distance to its
+    enclosing ball, for a box the larger of that and the gap along its axes (-inf: none)."""
+    low = -np.inf
+    if balls[o, 3] < np.inf:
+        low = segment_point(p0, p1, k, balls[o, 0], balls[o, 1], balls[o, 2]) - balls[o, 3]
+    if kinds[o] == _BOX:
+        low = max(low, _box_gap(p0, p1, k, params[o]))
+    return float(low)
+
+
+@njit(cache=True)
 def segments_clear(
     a: np.ndarray,
     b: np.ndarray,
@@ -236,28 +434,7 @@ def segments_clear(
                     scratch,
                     pts,
                 )
-                for p in range(n_links):
-                    for t in range(3):
-                        p0[p, t] = pts[link_start[p], t]
-                        p1[p, t] = pts[link_end[p], t]
-                if tip_split:
-                    # the last link: its body up to the cut, then the bare tip from the cut
-                    last = n_links - 1
-                    d0 = p1[last, 0] - p0[last, 0]
-                    d1 = p1[last, 1] - p0[last, 1]
-                    d2 = p1[last, 2] - p0[last, 2]
-                    length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                    cut = min(max(tip_exempt / (length if length > 0 else 1.0), 0.0), 1.0)
-                    for t in range(3):
-                        end = p1[last, t]
-                        at = end - cut * (end - p0[last, t])
-                        p1[n_links, t] = end
-                        p0[n_links, t] = at
-                        p1[last, t] = at
-                for p in range(n_parts):
-                    for t in range(3):
-                        seg[p, t] = p0[p, t]
-                        seg[p, 3 + t] = p1[p, t]
+                _parts_into(pts, link_start, link_end, tip_exempt, tip_split, p0, p1, seg)
                 # the smallest room any pair has beyond its need (a lower bound: the broad
                 # phase's where it decided); a point moves at most ``step`` per sample
                 room = np.inf

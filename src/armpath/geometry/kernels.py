@@ -627,6 +627,25 @@ def segment_segment_distance(
 
 
 @njit(cache=True)
+def indexed_segment_distances(
+    points: np.ndarray, a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.ndarray
+) -> np.ndarray:  # pragma: no cover - compiled
+    """:func:`segment_segment_distance` of segments ``points[m, a0[k]] -> points[m, a1[k]]``
+    and ``points[m, b0[k]] -> points[m, b1[k]]`` for every ``m`` of ``points (M, L, 3)`` and
+    ``k``: ``(M, K)``, without gathering the end points first."""
+    out = np.empty((points.shape[0], a0.shape[0]))
+    for m in range(points.shape[0]):
+        p = points[m]
+        for k in range(a0.shape[0]):
+            i, j, g, h = a0[k], a1[k], b0[k], b1[k]
+            out[m, k] = segment_segment(
+                p[i, 0], p[i, 1], p[i, 2], p[j, 0], p[j, 1], p[j, 2],
+                p[g, 0], p[g, 1], p[g, 2], p[h, 0], p[h, 1], p[h, 2],
+            )  # fmt: skip
+    return out
+
+
+@njit(cache=True)
 def segment_segment(
     a00: float,
     a01: float,

@@ -151,6 +151,15 @@ class Obstacle(ABC):
         """A ball ``(center, radius)`` containing the solid (broad phase), or None if unbounded."""
         return None
 
+    def broad_phase(self, a: FloatArray, b: FloatArray) -> FloatArray:
+        """A lower bound of the signed distance of each segment ``a[k] -> b[k]`` (``(K, 3)``
+        contiguous), ``(K,)``: the distance to :meth:`enclosing_ball` (-inf: none)."""
+        ball = self.enclosing_ball()
+        if ball is None:
+            return np.full(a.shape[0], -np.inf)
+        c = np.ascontiguousarray(np.broadcast_to(ball[0], a.shape))
+        return np.asarray(kernels.segments_to_point(a, b, c) - ball[1])
+
     def enclosing_solid(self) -> Obstacle | None:
         """A cheaper solid containing this one (second broad-phase level), or None."""
         return None
@@ -400,6 +409,22 @@ class Box(ExactSegmentDistance, Obstacle):
 
     def enclosing_ball(self) -> tuple[FloatArray, float]:
         return self.center, float(np.linalg.norm(self.half_extents))
+
+    def broad_phase(self, a: FloatArray, b: FloatArray) -> FloatArray:
+        """The ball's bound or, where larger, the widest gap between the segment's and the
+        box's extents along one box axis: every point's signed distance is at least
+        ``|x_i| - h_i`` on each axis ``i`` (box coordinates), and the least of that over a
+        segment is the gap (``-h_i`` where the segment crosses the middle plane)."""
+        gap = np.full(a.shape[0], -np.inf)
+        da, db = a - self.center, b - self.center
+        for i in range(3):
+            r, h = self.rotation[:, i], self.half_extents[i]
+            # (summed in the compiled loop's order, so both give the same numbers)
+            e0 = da[:, 0] * r[0] + da[:, 1] * r[1] + da[:, 2] * r[2]
+            e1 = db[:, 0] * r[0] + db[:, 1] * r[1] + db[:, 2] * r[2]
+            gap = np.maximum(gap, np.maximum(np.minimum(e0, e1) - h, -h - np.maximum(e0, e1)))
+            gap = np.maximum(gap, -h)
+        return np.asarray(np.maximum(super().broad_phase(a, b), gap))
 
     def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
         """Exact outside (piecewise quadratic); inside, golden-section search of the convex

@@ -39,8 +39,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.geometry.compiled_world import ObstacleTable, obstacle_table, segments_clear
-from armpath.geometry.kernels import segment_segment_distance, segments_to_point
+from armpath.geometry.compiled_world import (
+    ObstacleTable,
+    configurations_slacks,
+    obstacle_table,
+    segments_clear,
+)
+from armpath.geometry.kernels import indexed_segment_distances, segments_to_point
 from armpath.geometry.primitives import Obstacle
 from armpath.kinematics import compiled_chain, displacement_bounds, landmark_positions
 from armpath.model.serial_arm import JointKind, Link, SerialArm
@@ -412,9 +417,11 @@ class CollisionWorld:
         ``(M,)``.
 
         Equal to the same minimum of :meth:`pair_clearances` (the same kernels on the same
-        segments), but a pair is measured exactly only where its broad-phase lower bound (the
-        part's distance to the obstacle's enclosing ball) is below the smallest slack known so
-        far: first each configuration's pair of lowest bound, then the pairs still below.
+        segments), but a pair is measured exactly only where its broad-phase lower bound
+        (:meth:`Obstacle.broad_phase`) is below the smallest slack known so far: first each
+        configuration's pair of lowest bound, then the pairs still below. Where every obstacle
+        has a closed form this runs as one compiled loop (:func:`configurations_slacks`, the
+        same steps and values).
         The minimum a caller takes with its own slacks (joint limits) is the natural ceiling.
 
         A ``floor`` (scalar or ``(M,)``, default -inf) says which values the caller needs: a
@@ -422,10 +429,14 @@ class CollisionWorld:
         value between the true one and the floor (measuring stops once the smallest slack known
         is at the floor). A search for the largest value passes the best value it has.
         """
-        pts = landmark_positions(arm, np.asarray(q, dtype=np.float64))
-        if pts.ndim != 3:
-            raise InvalidInputError(f"configurations must have shape (M, n), got {pts.shape[:-1]}")
+        q = np.asarray(q, dtype=np.float64)
+        if q.ndim != 2:
+            raise InvalidInputError(f"configurations must have shape (M, n), got {q.shape}")
         bound = self._bound(arm)
+        table = self._table
+        if table is not None and groups:
+            return self._compiled_slacks(arm, q, groups, table)
+        pts = landmark_positions(arm, q)
         p0, p1 = self._segments(arm, pts)
         m_count, n_parts = p0.shape[0], p0.shape[1]
         n_obs = len(self.obstacles)
@@ -435,12 +446,7 @@ class CollisionWorld:
         # broad-phase lower bound of every obstacle pair's slack, (M, P * O) in pairs' order
         by_obstacle = np.full((m_count, n_parts, n_obs), -np.inf)
         for o, obstacle in enumerate(self.obstacles):
-            ball = obstacle.enclosing_ball()
-            if ball is not None:
-                c = np.ascontiguousarray(np.broadcast_to(ball[0], a.shape))
-                by_obstacle[:, :, o] = (segments_to_point(a, b, c) - ball[1]).reshape(
-                    m_count, n_parts
-                )
+            by_obstacle[:, :, o] = obstacle.broad_phase(a, b).reshape(m_count, n_parts)
         lower = by_obstacle.reshape(m_count, n_obs_cols)
         # (less a rounding allowance, so a bound never passes the exact value it bounds)
         lower -= np.repeat(bound.part_radius, n_obs) + bound.required[:n_obs_cols] + 1e-9
@@ -484,6 +490,48 @@ class CollisionWorld:
                 measure(result, m_idx, obstacle_cols[c_idx])
             out.append(result)
         return out
+
+    def _compiled_slacks(
+        self,
+        arm: SerialArm,
+        q: FloatArray,
+        groups: Sequence[SlackGroup | tuple[NDArray[np.bool_], FloatArray | float]],
+        table: ObstacleTable,
+    ) -> list[FloatArray]:
+        """:meth:`smallest_slacks` by :func:`configurations_slacks` (same values)."""
+        bound = self._bound(arm)
+        m_count = q.shape[0]
+        columns, ceilings, floors = [], [], []
+        for group in groups:
+            cols, ceiling, floor = SlackGroup(*group)
+            columns.append(np.asarray(cols, dtype=bool))
+            ceilings.append(np.broadcast_to(np.asarray(ceiling, dtype=np.float64), (m_count,)))
+            floors.append(np.broadcast_to(np.asarray(floor, dtype=np.float64), (m_count,)))
+        out = configurations_slacks(
+            np.ascontiguousarray(q),
+            np.ascontiguousarray(np.array(columns, dtype=np.bool_).reshape(len(groups), -1)),
+            np.ascontiguousarray(np.array(ceilings).reshape(len(groups), m_count)),
+            np.ascontiguousarray(np.array(floors).reshape(len(groups), m_count)),
+            *compiled_chain(arm),
+            bound.link_start.astype(np.int64),
+            bound.link_end.astype(np.int64),
+            float(self.tip_exempt),
+            bound.tip_split,
+            bound.part_radius,
+            bound.required,
+            table.kinds,
+            table.params,
+            table.balls,
+            table.profiles,
+            table.boundary,
+            table.n_vertices,
+            bound.self_a0.astype(np.int64),
+            bound.self_a1.astype(np.int64),
+            bound.self_b0.astype(np.int64),
+            bound.self_b1.astype(np.int64),
+            bound.self_radii,
+        )
+        return [np.array(row) for row in out]
 
     def satisfied(
         self, arm: SerialArm, q: ArrayLike, extra: ArrayLike | float = 0.0
@@ -651,13 +699,9 @@ class CollisionWorld:
     def _self_clearances(self, arm: SerialArm, pts: FloatArray) -> FloatArray:
         """Distances between the self-collision link pairs less their radii, ``(..., S)``."""
         bound = self._bound(arm)
-        flat = pts.reshape(-1, *pts.shape[-2:])
-
-        def ends(landmarks: IntArray) -> FloatArray:
-            return np.ascontiguousarray(flat[:, landmarks, :].reshape(-1, 3))
-
-        d = segment_segment_distance(
-            ends(bound.self_a0), ends(bound.self_a1), ends(bound.self_b0), ends(bound.self_b1)
+        flat = np.ascontiguousarray(pts.reshape(-1, *pts.shape[-2:]), dtype=np.float64)
+        d = indexed_segment_distances(
+            flat, bound.self_a0, bound.self_a1, bound.self_b0, bound.self_b1
         ).reshape(*pts.shape[:-2], len(bound.self_radii))
         return np.asarray(d - bound.self_radii)
 
@@ -667,8 +711,10 @@ class CollisionWorld:
         n_parts, n_obs = len(self._bound(arm).parts), len(self.obstacles)
         return values[..., : n_parts * n_obs].reshape(*values.shape[:-1], n_parts, n_obs)
 
-    def slack(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
-        """Per configuration, the smallest ``clearance - required`` over all pairs.
+    def slack(self, arm: SerialArm, q: ArrayLike, ceiling: float = np.inf) -> FloatArray:
+        """Per configuration, the smallest ``clearance - required`` over all pairs, at most
+        ``ceiling`` (a caller that needs only the negative values passes 0: the pairs whose
+        broad phase is above it are not measured).
 
         Non-negative exactly when the configuration satisfies the clearance rule. Measured
         with the broad phase of :meth:`smallest_slacks` (the same values).
@@ -676,7 +722,7 @@ class CollisionWorld:
         q = np.asarray(q, dtype=np.float64)
         flat = q.reshape(-1, q.shape[-1])
         every = np.ones(len(self._bound(arm).pairs), dtype=bool)
-        (lowest,) = self.smallest_slacks(arm, flat, [(every, np.inf)])
+        (lowest,) = self.smallest_slacks(arm, flat, [(every, ceiling)])
         return lowest.reshape(q.shape[:-1])
 
     def describe(self) -> dict[str, object]:

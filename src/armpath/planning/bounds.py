@@ -160,7 +160,8 @@ def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray, IntArray
 class _Samples:
     """A layer's samples before the clearance filter: every direction tried ``dirs (D, 3)``
     and, per member, its configuration, direction index, command units, the arm's points,
-    the tolerance's joint change (commands) and its slack (model units)."""
+    the tolerance's joint change (commands) and its slack (model units; 0 where it is
+    not negative, the only values the filter needs)."""
 
     dirs: FloatArray
     q: FloatArray
@@ -501,8 +502,9 @@ class FamilySampler:
                 pinv = np.linalg.pinv(J, rcond=1e-9)
             tol_err = self.tol * np.abs(pinv).sum(axis=-1) / self.step
             tol_err = np.where(np.isfinite(tol_err), tol_err, _MISSING)
-            values, _ = self.fam.world.pair_clearances(self.fam.arm, q)
-            slack = (values - self.required).min(axis=-1, initial=np.inf)
+            # only a negative slack matters (see _filtered): the broad phase skips the pairs
+            # that cannot be below zero, and every sample at or above it reads 0
+            slack = self.fam.world.slack(self.fam.arm, q, ceiling=0.0)
         return _Samples(
             dirs=np.vstack([acc.dirs, dirs]),
             q=np.vstack([acc.q, q]),
