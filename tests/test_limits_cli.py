@@ -4,8 +4,9 @@ blindzones, design-sweep, trajectory and rcm.
 Every input that sets the size of the work is refused before any work with one ``error:`` line
 on stderr that names the option to change, exit status 1, nothing on stdout and no output
 folder (nor a staging folder left beside it). The sizes refused here would need gigabytes or
-hours; they are refused from the arithmetic alone, so these runs take about a second each.
-``--time-limit`` ends long runs with the time-limit message and writes nothing.
+hours; they are refused from the arithmetic alone. The refusals run the CLI's entry point in
+the test's process (``cli_in_process``: no interpreter start per run); ``--time-limit``, which
+ends long runs with the time-limit message and writes nothing, is checked on real processes.
 """
 
 from __future__ import annotations
@@ -19,11 +20,15 @@ import numpy as np
 import pytest
 
 from armpath.budget import MAX_COMMANDS, MAX_PERIODS, MAX_WAYPOINTS
+from cli_in_process import run_in_process
 
 ARMPATH = [sys.executable, "-m", "armpath"]
 
 
-def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
+def _run(args: list[str], cwd: Path, process: bool = False) -> subprocess.CompletedProcess[str]:
+    """``armpath *args`` in ``cwd``: in this process, or a real one (``process``)."""
+    if not process:
+        return run_in_process(args, cwd)
     return subprocess.run([*ARMPATH, *args], capture_output=True, text=True, timeout=600, cwd=cwd)
 
 
@@ -37,12 +42,12 @@ def _error_line(proc: subprocess.CompletedProcess[str]) -> str:
     return errors[0]
 
 
-def _refused(tmp_path: Path, args: list[str], *needles: str) -> str:
-    """Run with ``--out``; exit 1, one error line containing every needle, no stdout, no
-    output or staging folder."""
+def _refused(tmp_path: Path, args: list[str], *needles: str, process: bool = False) -> str:
+    """Run with ``--out`` (in a real process if ``process``); exit 1, one error line containing
+    every needle, no stdout, no output or staging folder."""
     out = tmp_path / "out"
     before = set(tmp_path.iterdir())
-    proc = _run([*args, "--out", str(out)], tmp_path)
+    proc = _run([*args, "--out", str(out)], tmp_path, process)
     assert proc.returncode == 1, (proc.returncode, proc.stdout, proc.stderr)
     line = _error_line(proc)
     for needle in needles:
@@ -193,6 +198,7 @@ def test_trajectory_time_limit_ends_the_bounded_search(tmp_path):
         ["trajectory", "--waypoints", wp, "--bounded", "--time-limit", "1"],
         "time limit of 1 s ran out",
         "--time-limit",
+        process=True,
     )
 
 
@@ -264,6 +270,7 @@ def test_workspace_time_limit(tmp_path):
         ["workspace", "--samples", "200000000", "--time-limit", "1"],
         "time limit of 1 s ran out while sampling the workspace",
         "--time-limit",
+        process=True,
     )
 
 
@@ -293,6 +300,7 @@ def test_blindzones_time_limit(tmp_path):
         ["blindzones", "--time-limit", "1"],
         "time limit of 1 s ran out",
         "--time-limit",
+        process=True,
     )
 
 
@@ -327,6 +335,7 @@ def test_design_sweep_time_limit_stops_the_workers(tmp_path):
         ["design-sweep", "--samples", "4000000", "--jobs", "2", "--time-limit", "2"],
         "time limit of 2 s ran out while evaluating designs",
         "--time-limit",
+        process=True,
     )
 
 
