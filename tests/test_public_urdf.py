@@ -183,7 +183,7 @@ t = [0, 6.283185307179586]
         encoding="utf-8",
     )
     out = tmp_path / "trace"
-    proc = _armpath("trace", "--scene", str(scene), "--out", str(out), cwd=tmp_path)
+    proc = _armpath("trace", "--scene", str(scene), "--out", str(out), "--no-bound", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads((out / "trace.json").read_text())
     states = _replayed_states(doc)

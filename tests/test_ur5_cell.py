@@ -190,7 +190,7 @@ def test_seam_around_the_workpiece(tmp_path):
 
 def test_circle_in_free_space(tmp_path):
     """A 40 mm circle above the table beside the workpiece, as a parametric curve: traced
-    whole, within 0.1 mm, clear."""
+    whole, within 0.1 mm, clear (without the bound: --no-bound leaves it out)."""
     c, r = (330.0, -200.0, 150.0), 40.0
     scene = tmp_path / "circle.toml"
     text = CELL.read_text(encoding="utf-8").split("[tasks.reach]")[0]
@@ -202,7 +202,8 @@ def test_circle_in_free_space(tmp_path):
         + f"t = [0, {2 * math.pi!r}]\n",
         encoding="utf-8",
     )
-    doc = _armpath(["trace", "--scene", str(scene)], tmp_path)
+    doc = _armpath(["trace", "--scene", str(scene), "--no-bound"], tmp_path)
+    assert doc["lower_bound"] is None and doc["lower_bound_commands"] is None  # as asked
     phi = np.linspace(0.0, 2 * math.pi, 100_001)[:-1]
     circle = ir.DenseCurve(
         np.c_[c[0] + r * np.cos(phi), c[1] + r * np.sin(phi), np.full_like(phi, c[2])],

@@ -269,12 +269,16 @@ def trace(
     tolerance_mm: float = 0.1,
     closed: bool = False,
     seed: int = 0,
+    bound: bool = True,
     time_limit_s: float | None = None,
 ) -> Result:
     """Go along ``curve`` with the tool (a :class:`~armpath.geometry.curves.Curve`, or points
     ``(M, 3)`` mm joined by straight pieces, ``closed`` back to the first; default: the
     scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it, every reachable part, in
-    the fewest passes and commands; the document lists the arcs not traced and why."""
+    the fewest passes and commands; the document lists the arcs not traced and why.
+    ``bound``: also prove a lower bound on the commands of any plan (the document's
+    ``lower_bound``, with the plan's gap to it; takes about as long again as the plan);
+    False: ``None`` there."""
     from armpath.export import trace_result_dict
     from armpath.geometry.curves import Curve, Polyline
     from armpath.planning.motion import MotionOptions
@@ -289,7 +293,9 @@ def trace(
         else:
             vertices = np.asarray(curve, dtype=np.float64) / the_arm.mm_per_unit
             path = Polyline("curve", vertices, closed=closed)
-        options = TraceOptions(tolerance_mm=tolerance_mm, motion=MotionOptions(seed=seed))
+        options = TraceOptions(
+            tolerance_mm=tolerance_mm, motion=MotionOptions(seed=seed), bound=bound
+        )
         found = trace_task(
             the_scene,
             the_arm,

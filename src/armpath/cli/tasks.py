@@ -819,6 +819,14 @@ def trace(
     axis_tolerance: AxisToleranceOption = 15.0,
     link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
+    bound: Annotated[
+        bool,
+        typer.Option(
+            "--bound/--no-bound",
+            help="Prove a lower bound on the commands of any plan and report the gap "
+            "(takes about as long again as the plan; --no-bound: the plan only).",
+        ),
+    ] = True,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
@@ -834,7 +842,7 @@ def trace(
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
-            tolerance_mm=tolerance, motion=MotionOptions(seed=seed), axis_rule=rule
+            tolerance_mm=tolerance, motion=MotionOptions(seed=seed), axis_rule=rule, bound=bound
         )
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
