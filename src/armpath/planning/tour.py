@@ -19,7 +19,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -100,6 +100,11 @@ MAX_TOUR_TARGETS = 500
 LISTED_ORDERS = 24
 #: Orders planned beyond the best-ranked ones while their bound is below the best plan.
 EXTRA_ORDERS = 4
+#: A plan more than this times its order's goal-state bound is planned again with
+#: :data:`SECOND_LOOK_SEARCHES` searches per searched leg (keeping the shorter).
+SECOND_LOOK_RATIO = 1.25
+#: Searches per leg (different seeds, the best kept) of that second look.
+SECOND_LOOK_SEARCHES = 3
 
 
 def _direct_commands(a: IntArray, b: IntArray, lattice: Lattice) -> FloatArray:
@@ -234,7 +239,12 @@ def plan_tour(
             plan_first += 1
         guided_best = shortest
 
-    def legs_of(o: tuple[int, ...], name: str, first: list[IntArray] | None) -> list[MotionPlan]:
+    def legs_of(
+        o: tuple[int, ...],
+        name: str,
+        first: list[IntArray] | None,
+        opts: MotionOptions = opts,
+    ) -> list[MotionPlan]:
         """The legs of order ``o``: to the goal states ``first`` of each target where given
         and reachable, else to the target's goal states."""
         legs: list[MotionPlan] = []
@@ -325,6 +335,30 @@ def plan_tour(
         not_planned[o] = why
     if best is None:
         raise PlanningError("no order could be planned: " + "; ".join(failures))
+    if best[0] > SECOND_LOOK_RATIO * bounds[best[2]] and opts.searches < SECOND_LOOK_SEARCHES:
+        # far above what direct motions between its goal states need: the searched legs
+        # detour; more searches per leg (the best kept) find shorter ways round
+        o = best[2]
+        name = "-".join(str(i + 1) for i in o)
+        say(f"planning order {name} again, {SECOND_LOOK_SEARCHES} searches per leg")
+        more = replace(opts, searches=SECOND_LOOK_SEARCHES)
+        guided = _guided_goals(guide, q0, o, return_to_start, guide_paths)
+        for first in [None] if guided is None else [None, guided]:
+            try:
+                again = legs_of(o, name, first, more)
+            except PlanningError:
+                continue
+            if _commands(again) < best[0]:
+                best = (_commands(again), again, o)
+                planned[o] = best[0]
+                if first is not None:  # the goal states of this order include the guided ones
+                    with_guided = [
+                        np.vstack([first[o.index(t)], g]) if t in o else g
+                        for t, g in enumerate(goals)
+                    ]
+                    bounds[o] = _order_bounds(
+                        start, with_guided, [o], return_to_start, arm.lattice
+                    )[o]
     _, legs, chosen = best
     commands = np.vstack([leg.sequence.commands for leg in legs])
     sequence = CommandSequence(start, commands, arm.lattice)
