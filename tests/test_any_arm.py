@@ -251,3 +251,29 @@ def test_the_tool_approach_axis_belongs_to_the_tool():
     T = pose("ur5", arm.lattice.to_joint(r.sequence.final_ticks))
     assert np.linalg.norm(T[:3, 3] - target) <= 0.05
     assert np.degrees(np.arccos(np.clip(T[:3, 0] @ [0, 0, -1], -1, 1))) <= 5.0 + 1e-6
+
+
+def test_a_wrist_centre_tool_point_names_the_error_the_lattice_allows():
+    """The PUMA 560's flange point is its wrist centre: only joints 1-3 move it, one tick
+    each about 0.8 mm, so no lattice state is within 0.05 mm of most points. The refusal says
+    so and names the nearest error found; reaching with that tolerance then succeeds, and the
+    end state's tool point (the textbook D-H product, no tool) is that far from the target."""
+    import re
+
+    import armpath
+    from armpath.errors import PlanningError
+
+    target = np.array([400.0, 100.0, 300.0])
+    with pytest.raises(PlanningError) as refused:
+        armpath.reach("puma560", target, scene="none")
+    message = str(refused.value)
+    assert "joints that move the tool point there (1, 2, 3)" in message
+    nearest = float(re.search(r"the nearest found is ([\d.]+) mm away", message).group(1))
+    assert 0.05 < nearest < 1.0
+    allowed = nearest * 1.01
+    reached = armpath.reach("puma560", target, scene="none", tolerance_mm=allowed)
+    end = np.radians(reached.states_deg[-1])
+    a, alpha, d = TABLES["puma560"]
+    error = np.linalg.norm(idh.dh_pose(a, alpha, d, end)[:3, 3] - target)
+    assert error == pytest.approx(reached.doc["error_mm"], abs=1e-6)
+    assert 0.05 < error <= allowed

@@ -44,7 +44,10 @@ def test_api_results_of_any_arm_validate(tmp_path):
         armpath.plan("seed", to_deg=[10, -80, 10, 0, -90, 0]).doc,
         armpath.plan("seed", to_mm=[300.0, 100.0, 200.0]).doc,
         armpath.spotweld("seed", [[300.0, 100.0, 200.0], [250.0, -100.0, 250.0]], scene="none").doc,
-        armpath.trace("seed", [[250.0, -20.0, 250.0], [250.0, 20.0, 250.0]], scene="none").doc,
+        # (without the bound: a null lower bound must validate too; the seed run's has one)
+        armpath.trace(
+            "seed", [[250.0, -20.0, 250.0], [250.0, 20.0, 250.0]], scene="none", bound=False
+        ).doc,
     ]
     assert [d["task"] for d in docs] == ["reach", "plan", "plan", "spotweld", "trace"]
     for doc in docs:

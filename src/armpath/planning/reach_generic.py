@@ -574,9 +574,11 @@ def generic_goal_states(
     metric = command_metric(arm, samples, s_q)
     members = _diverse(samples, metric, 4 * count, np.full(arm.n_joints, np.radians(spread_deg)))
     states: list[IntArray] = []
+    within = 0  # lattice states within the tolerance, clear or not
     for q in members:
         check_time("finding goal states")
         cand, err = lattice_candidates(arm, target, q, tolerance)
+        within += cand.shape[0]
         if cand.shape[0] == 0:
             continue
         vals, _ = world.pair_clearances(arm, grid.to_joint(cand))
@@ -589,6 +591,8 @@ def generic_goal_states(
         states.append(cand[k])
         if len(states) >= count:
             break
+    if not states and within == 0:
+        raise PlanningError(_lattice_too_coarse(arm, target, members, tolerance, where))
     if not states:
         raise PlanningError(
             f"no lattice state within {tolerance:g} {arm.length_unit} of ({where}) "
@@ -597,6 +601,43 @@ def generic_goal_states(
     out = np.array(states, dtype=np.int64)
     order = np.argsort(grid.commands_needed_many(out - start), kind="stable")
     return out[order]
+
+
+def _lattice_too_coarse(
+    arm: SerialArm, target: ToolTarget, members: FloatArray, tolerance: float, where: str
+) -> str:
+    """Why no lattice state is within ``tolerance`` of the target near any of ``members``: how
+    far one tick moves the tool there, and the smallest error of a lattice state near them
+    (searched with the tolerance doubled up to eight times, over the first 16 members)."""
+    unit = arm.length_unit
+    F = forward_frames(arm, members[:1])
+    J = jacobian_from_frames(arm, F)[0][:3] * arm.lattice.tick
+    lever = np.linalg.norm(J, axis=0)
+    moving = np.flatnonzero(lever > 1e-9 * max(float(lever.max()), 1e-300))
+    joints = ", ".join(str(j + 1) for j in moving)
+    why = (
+        f"no lattice state puts the tool within {tolerance:g} {unit} of ({where}) {unit}: one "
+        f"tick of the joints that move the tool point there ({joints}) moves it "
+        f"{lever[moving].min():.3g}..{lever[moving].max():.3g} {unit}"
+    )
+    tol = tolerance
+    for _ in range(8):
+        tol *= 2.0
+        errors = [lattice_candidates(arm, target, q, tol)[1] for q in members[:16]]
+        found = np.concatenate(errors)
+        if found.size:
+            nearest = float(found.min())
+            hint = (
+                f" (only {moving.size} joints move the tool point: a tool offset from the "
+                "wrist centre lets the others take up the error)"
+                if moving.size <= 3
+                else ""
+            )
+            return (
+                f"{why}; the nearest found is {nearest:.3g} {unit} away: allow at least that "
+                f"(--tolerance){hint}"
+            )
+    return f"{why}; none within {tol:g} {unit} either"
 
 
 __all__ = [
