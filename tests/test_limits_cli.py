@@ -393,3 +393,15 @@ def test_plan_tolerance_is_checked_before_any_work(tmp_path, tolerance):
         "--tolerance must be between",
         "mm, got",
     )
+
+
+@pytest.mark.parametrize("tolerance", ["0", "-1", "1e9", "nan"])
+def test_spotweld_tolerance_is_checked_before_any_work(tmp_path, tolerance):
+    """spotweld --tolerance outside the range reach accepts is refused with the range (a
+    tolerance of 1e9 mm used to give a tour of no commands)."""
+    _refused(
+        tmp_path,
+        ["spotweld", "--tolerance", tolerance],
+        "tolerance must be between",
+        "mm, got",
+    )

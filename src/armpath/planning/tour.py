@@ -43,7 +43,7 @@ from armpath.planning.motion import (
     plan_motion,
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
-from armpath.planning.reach import goal_states
+from armpath.planning.reach import MAX_TOLERANCE_MM, MIN_TOLERANCE_MM, goal_states
 from armpath.planning.tour_guide import TourGuide
 from armpath.planning.trace.family import CurveFamily, curve_family
 
@@ -192,6 +192,11 @@ def plan_tour(
     if pts.shape[0] > MAX_TOUR_TARGETS:
         raise InvalidInputError(
             f"a tour visits at most {MAX_TOUR_TARGETS} targets, got {pts.shape[0]}"
+        )
+    if not (math.isfinite(tolerance_mm) and MIN_TOLERANCE_MM <= tolerance_mm <= MAX_TOLERANCE_MM):
+        raise InvalidInputError(
+            f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm, "
+            f"got {tolerance_mm}"
         )
     if not 1 <= orders_to_plan <= 100:
         raise InvalidInputError(f"orders to plan must be in [1, 100], got {orders_to_plan}")
