@@ -59,8 +59,9 @@ def _start_seed_run(config: pytest.Config) -> Path:
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(session, config, items):
     """Files that read ``armpath run``'s output go last, and the run starts in the background
-    as soon as the tests are collected: with one file per worker (``--dist loadfile``) no worker
-    then sits idle waiting for it while other files could run."""
+    as soon as the tests are collected: no worker then sits idle waiting for it while other
+    tests could run (``--dist worksteal`` hands the tests out from the front, an idle worker
+    taking over the rest of another's)."""
     files = {item.path for item in items if "seed_run" in getattr(item, "fixturenames", ())}
     if not files:
         return
