@@ -1,4 +1,6 @@
-"""The clearance rule along joint-space segments in one compiled loop (the planners' edge test).
+"""The clearance rule in compiled loops: along joint-space segments (the planners' edge test)
+and the smallest slacks of configurations (:func:`configurations_slacks`, behind
+:meth:`CollisionWorld.smallest_slacks`).
 
 A planner asks thousands of times whether a straight joint-space segment keeps the clearance
 rule at samples along it. :func:`segments_satisfied` answers a batch of segments in one call of
