@@ -117,6 +117,17 @@ def test_threads_are_used_only_for_big_batches_on_a_machine_with_a_core_to_spare
     assert not jit.threads_pay_off(10_000, 128)
 
 
+def _prints_ok_with_two_threads(code: str) -> None:
+    """Run ``code`` in a fresh interpreter with two numba threads and the default threading
+    layer; it must print ``ok``."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
+    env["NUMBA_NUM_THREADS"] = "2"
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+
+
 def test_a_forked_child_runs_a_parallel_kernel_its_parent_ran() -> None:
     """Users' multiprocessing pools fork (Linux's default): a child running the bound's parallel
     kernel after its parent did must give the same numbers, not be killed (GNU OpenMP does)."""
@@ -137,12 +148,7 @@ def test_a_forked_child_runs_a_parallel_kernel_its_parent_ran() -> None:
         "assert p.exitcode == 0 and np.array_equal(child, parent), p.exitcode\n"
         "print('ok')\n"
     )
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
-    env["NUMBA_NUM_THREADS"] = "2"
-    proc = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
-    )
-    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+    _prints_ok_with_two_threads(code)
 
 
 def test_threads_take_turns_at_the_parallel_kernel() -> None:
@@ -169,9 +175,4 @@ def test_threads_take_turns_at_the_parallel_kernel() -> None:
         "assert len(out) == 30 and all(np.array_equal(c, one) for c in out)\n"
         "print('ok')\n"
     )
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
-    env["NUMBA_NUM_THREADS"] = "2"
-    proc = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
-    )
-    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+    _prints_ok_with_two_threads(code)

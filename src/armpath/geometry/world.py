@@ -33,7 +33,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -491,6 +491,34 @@ class CollisionWorld:
             out.append(result)
         return out
 
+    def _kernel_args(
+        self, arm: SerialArm, need: FloatArray, table: ObstacleTable
+    ) -> tuple[Any, ...]:
+        """The arguments the compiled loops share, in their order: the arm's chain, its parts,
+        what each pair needs (``need``, in :meth:`pairs` order), the obstacle table and the
+        link pairs."""
+        bound = self._bound(arm)
+        return (
+            *compiled_chain(arm),
+            bound.link_start.astype(np.int64),
+            bound.link_end.astype(np.int64),
+            float(self.tip_exempt),
+            bound.tip_split,
+            bound.part_radius,
+            need,
+            table.kinds,
+            table.params,
+            table.balls,
+            table.profiles,
+            table.boundary,
+            table.n_vertices,
+            bound.self_a0.astype(np.int64),
+            bound.self_a1.astype(np.int64),
+            bound.self_b0.astype(np.int64),
+            bound.self_b1.astype(np.int64),
+            bound.self_radii,
+        )
+
     def _compiled_slacks(
         self,
         arm: SerialArm,
@@ -512,24 +540,7 @@ class CollisionWorld:
             np.ascontiguousarray(np.array(columns, dtype=np.bool_).reshape(len(groups), -1)),
             np.ascontiguousarray(np.array(ceilings).reshape(len(groups), m_count)),
             np.ascontiguousarray(np.array(floors).reshape(len(groups), m_count)),
-            *compiled_chain(arm),
-            bound.link_start.astype(np.int64),
-            bound.link_end.astype(np.int64),
-            float(self.tip_exempt),
-            bound.tip_split,
-            bound.part_radius,
-            bound.required,
-            table.kinds,
-            table.params,
-            table.balls,
-            table.profiles,
-            table.boundary,
-            table.n_vertices,
-            bound.self_a0.astype(np.int64),
-            bound.self_a1.astype(np.int64),
-            bound.self_b0.astype(np.int64),
-            bound.self_b1.astype(np.int64),
-            bound.self_radii,
+            *self._kernel_args(arm, bound.required, table),
         )
         return [np.array(row) for row in out]
 
@@ -637,24 +648,7 @@ class CollisionWorld:
             )
         arm_args = (
             np.array(strides, dtype=np.int64),
-            *compiled_chain(arm),
-            bound.link_start.astype(np.int64),
-            bound.link_end.astype(np.int64),
-            float(self.tip_exempt),
-            bound.tip_split,
-            bound.part_radius,
-            need,
-            table.kinds,
-            table.params,
-            table.balls,
-            table.profiles,
-            table.boundary,
-            table.n_vertices,
-            bound.self_a0.astype(np.int64),
-            bound.self_a1.astype(np.int64),
-            bound.self_b0.astype(np.int64),
-            bound.self_b1.astype(np.int64),
-            bound.self_radii,
+            *self._kernel_args(arm, need, table),
             bound.reach,
         )
 
