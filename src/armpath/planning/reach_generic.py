@@ -33,7 +33,7 @@ from armpath.errors import CollisionError, InvalidInputError, PlanningError, Unr
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
 from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
-from armpath.kinematics import forward_frames, jacobian_from_frames, tool_pose
+from armpath.kinematics import forward_frames, jacobian_from_frames, pose_frames, tool_pose
 from armpath.model.lattice import unique_states
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
@@ -135,8 +135,14 @@ def _refine_bound(
               for a, b in zip(lo, hi, strict=True)] + [(0.0, None)]  # fmt: skip
     o = target.orientation
 
+    last: list[tuple[bytes, FloatArray]] = []  # the frames of the last point (SLSQP asks a
+    # point's constraint and then its gradient)
+
     def frames(z: FloatArray) -> FloatArray:
-        return np.asarray(forward_frames(arm, z[:n][None])[0], dtype=np.float64)
+        key = np.asarray(z[:n], dtype=np.float64).tobytes()
+        if not last or last[0][0] != key:
+            last[:] = [(key, pose_frames(arm, z[:n]))]
+        return last[0][1]
 
     def pos_con(z: FloatArray) -> float:
         e = frames(z)[-1, :3, 3] - target.position
