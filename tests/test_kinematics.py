@@ -162,3 +162,18 @@ def test_compiled_frames_and_jacobian_match_numpy_and_finite_differences(name):
         dq[i] = h
         fd = (tool_pose(arm, q + dq)[:, :3, 3] - tool_pose(arm, q - dq)[:, :3, 3]) / (2 * h)
         np.testing.assert_allclose(J[:, :, i], fd, rtol=0, atol=1e-5)
+
+
+def test_one_pose_by_the_compiled_loop_equals_numpy_to_rounding():
+    """kinematics.pose_frames (the compiled loop for a single pose, the reach bound's solver)
+    gives forward_frames' numpy frames of that pose to rounding, for several arms."""
+    from armpath.kinematics import forward_frames, pose_frames
+    from armpath.model.catalog import resolve_model
+
+    rng = np.random.default_rng(11)
+    for name in ("seed", "ur5", "puma560", "iiwa14"):
+        arm = resolve_model(name, None)
+        for q in rng.uniform(-3.0, 3.0, (20, arm.n_joints)):
+            np.testing.assert_allclose(
+                pose_frames(arm, q), forward_frames(arm, q[None])[0], rtol=0, atol=1e-9
+            )
