@@ -52,8 +52,7 @@ def forward_frames(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """
     qa = _as_joint_array(arm, q)
     if _compiled_pays(qa):
-        flat = np.ascontiguousarray(qa.reshape(-1, arm.n_joints))
-        out = _frames_kernel(flat, *compiled_chain(arm)[:5], True)
+        out = _compiled_frames(arm, qa.reshape(-1, arm.n_joints))
         return np.asarray(out.reshape(*qa.shape[:-1], arm.n_joints + 2, 4, 4))
     return _forward_frames_numpy(arm, qa)
 
@@ -62,8 +61,13 @@ def pose_frames(arm: SerialArm, q: FloatArray) -> FloatArray:
     """:func:`forward_frames` of one configuration ``(n,)`` rad by the compiled loop whatever
     the batch size, ``(n + 2, 4, 4)``: for solvers that evaluate single poses thousands of
     times (about a tenth of numpy's cost per pose; equal to it to rounding)."""
-    flat = np.ascontiguousarray(np.asarray(q, dtype=np.float64).reshape(1, arm.n_joints))
-    return np.asarray(_frames_kernel(flat, *compiled_chain(arm)[:5], True)[0])
+    return np.asarray(_compiled_frames(arm, np.asarray(q, np.float64).reshape(1, arm.n_joints))[0])
+
+
+def _compiled_frames(arm: SerialArm, q: FloatArray) -> FloatArray:
+    """Every frame ``(N, n + 2, 4, 4)`` of configurations ``q (N, n)`` by the compiled loop."""
+    flat = np.ascontiguousarray(q, dtype=np.float64)
+    return np.asarray(_frames_kernel(flat, *compiled_chain(arm)[:5], True))
 
 
 def _compiled_pays(qa: FloatArray) -> bool:

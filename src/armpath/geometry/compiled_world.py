@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.geometry.kernels import (
+    point_segments_distance,
     segment_box,
     segment_point,
     segment_revolution,
@@ -285,12 +286,7 @@ def configurations_slacks(
                 )
         if any_self:
             for s in range(n_self):
-                x0, x1 = self_a0[s], self_a1[s]
-                y0, y1 = self_b0[s], self_b1[s]
-                d = segment_segment(
-                    pts[x0, 0], pts[x0, 1], pts[x0, 2], pts[x1, 0], pts[x1, 1], pts[x1, 2],
-                    pts[y0, 0], pts[y0, 1], pts[y0, 2], pts[y1, 0], pts[y1, 1], pts[y1, 2],
-                )  # fmt: skip
+                d = point_segments_distance(pts, self_a0[s], self_a1[s], self_b0[s], self_b1[s])
                 self_slack[s] = d - self_radii[s] - need[n_obs_cols + s]
         for g in range(n_groups):
             low = ceilings[g, m]
@@ -463,12 +459,9 @@ def segments_clear(
                         break
                 if clear:
                     for s in range(n_self):
-                        x0, x1 = self_a0[s], self_a1[s]
-                        y0, y1 = self_b0[s], self_b1[s]
-                        d = segment_segment(
-                            pts[x0, 0], pts[x0, 1], pts[x0, 2], pts[x1, 0], pts[x1, 1], pts[x1, 2],
-                            pts[y0, 0], pts[y0, 1], pts[y0, 2], pts[y1, 0], pts[y1, 1], pts[y1, 2],
-                        )  # fmt: skip
+                        d = point_segments_distance(
+                            pts, self_a0[s], self_a1[s], self_b0[s], self_b1[s]
+                        )
                         wanted = need[n_parts * n_obs + s]
                         if d - self_radii[s] < wanted:
                             clear = False

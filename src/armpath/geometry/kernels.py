@@ -635,14 +635,21 @@ def indexed_segment_distances(
     ``k``: ``(M, K)``, without gathering the end points first."""
     out = np.empty((points.shape[0], a0.shape[0]))
     for m in range(points.shape[0]):
-        p = points[m]
         for k in range(a0.shape[0]):
-            i, j, g, h = a0[k], a1[k], b0[k], b1[k]
-            out[m, k] = segment_segment(
-                p[i, 0], p[i, 1], p[i, 2], p[j, 0], p[j, 1], p[j, 2],
-                p[g, 0], p[g, 1], p[g, 2], p[h, 0], p[h, 1], p[h, 2],
-            )  # fmt: skip
+            out[m, k] = point_segments_distance(points[m], a0[k], a1[k], b0[k], b1[k])
     return out
+
+
+@njit(cache=True)
+def point_segments_distance(
+    p: np.ndarray, i: int, j: int, g: int, h: int
+) -> float:  # pragma: no cover - compiled
+    """:func:`segment_segment` of segments ``p[i] -> p[j]`` and ``p[g] -> p[h]`` of points
+    ``p (L, 3)`` (a pair of links between landmarks)."""
+    return segment_segment(
+        p[i, 0], p[i, 1], p[i, 2], p[j, 0], p[j, 1], p[j, 2],
+        p[g, 0], p[g, 1], p[g, 2], p[h, 0], p[h, 1], p[h, 2],
+    )  # fmt: skip
 
 
 @njit(cache=True)

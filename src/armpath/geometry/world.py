@@ -420,8 +420,8 @@ class CollisionWorld:
         segments), but a pair is measured exactly only where its broad-phase lower bound
         (:meth:`Obstacle.broad_phase`) is below the smallest slack known so far: first each
         configuration's pair of lowest bound, then the pairs still below. Where every obstacle
-        has a closed form this runs as one compiled loop (:func:`configurations_slacks`, the
-        same steps and values).
+        has a closed form this runs as one compiled loop (:func:`configurations_slacks`: the
+        same values wherever they are exact; below a floor the two may stop at different ones).
         The minimum a caller takes with its own slacks (joint limits) is the natural ceiling.
 
         A ``floor`` (scalar or ``(M,)``, default -inf) says which values the caller needs: a
@@ -526,7 +526,8 @@ class CollisionWorld:
         groups: Sequence[SlackGroup | tuple[NDArray[np.bool_], FloatArray | float]],
         table: ObstacleTable,
     ) -> list[FloatArray]:
-        """:meth:`smallest_slacks` by :func:`configurations_slacks` (same values)."""
+        """:meth:`smallest_slacks` by :func:`configurations_slacks` (the same values above the
+        floors)."""
         bound = self._bound(arm)
         m_count = q.shape[0]
         columns, ceilings, floors = [], [], []
