@@ -281,6 +281,35 @@ def plan_tour(
             legs.append(plan_motion(arm, world, state, start[None, :], opts))
         return legs
 
+    def plan_order(
+        o: tuple[int, ...], name: str, opts: MotionOptions = opts
+    ) -> tuple[list[MotionPlan], list[IntArray] | None, str | None]:
+        """The shorter of order ``o``'s plan to each target's goal states and its plan through
+        the goal states chosen together: the legs ([] when neither was planned), the guided
+        goal states when those legs go through them, and why the first plan failed."""
+        failure = None
+        try:
+            legs = legs_of(o, name, None, opts)
+        except PlanningError as exc:
+            legs, failure = [], str(exc)
+        guided = _guided_goals(guide, q0, o, return_to_start, guide_paths)
+        if guided is not None:
+            say(f"planning order {name} through the goal states chosen together")
+            try:
+                other = legs_of(o, name, guided, opts)
+            except PlanningError:
+                other = []
+            if other and (not legs or _commands(other) < _commands(legs)):
+                return other, guided, failure
+        return legs, None, failure
+
+    def count_guided(o: tuple[int, ...], guided: list[IntArray]) -> None:
+        """The bound of order ``o`` over its goal states with the guided ones among them."""
+        with_guided = list(goals)
+        for i, t in enumerate(o):
+            with_guided[t] = np.vstack([guided[i], goals[t]])
+        bounds[o] = _order_bounds(start, with_guided, [o], return_to_start, arm.lattice)[o]
+
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
     planned: dict[tuple[int, ...], int] = {}
     not_planned: dict[tuple[int, ...], str] = {}
@@ -300,26 +329,12 @@ def plan_tour(
             )
             continue
         say(f"planning order {name} (lower bound {bounds[o]} commands)")
-        try:
-            legs = legs_of(o, name, None)
-        except PlanningError as exc:
-            failures.append(f"order {name}: {exc}")
-            not_planned[o] = f"planning failed: {exc}"
-            legs = []
-        guided = _guided_goals(guide, q0, o, return_to_start, guide_paths)
-        if guided is not None:
-            say(f"planning order {name} through the goal states chosen together")
-            try:
-                other = legs_of(o, name, guided)
-            except PlanningError:
-                other = []
-            if other and (not legs or _commands(other) < _commands(legs)):
-                legs = other
-                # the goal states of this order now include the guided ones
-                with_guided = list(goals)
-                for i, t in enumerate(o):
-                    with_guided[t] = np.vstack([guided[i], goals[t]])
-                bounds[o] = _order_bounds(start, with_guided, [o], return_to_start, arm.lattice)[o]
+        legs, through, failure = plan_order(o, name)
+        if failure is not None:
+            failures.append(f"order {name}: {failure}")
+            not_planned[o] = f"planning failed: {failure}"
+        if through is not None:
+            count_guided(o, through)
         if not legs:
             continue
         not_planned.pop(o, None)
@@ -346,24 +361,12 @@ def plan_tour(
         o = best[2]
         name = "-".join(str(i + 1) for i in o)
         say(f"planning order {name} again, {SECOND_LOOK_SEARCHES} searches per leg")
-        more = replace(opts, searches=SECOND_LOOK_SEARCHES)
-        guided = _guided_goals(guide, q0, o, return_to_start, guide_paths)
-        for first in [None] if guided is None else [None, guided]:
-            try:
-                again = legs_of(o, name, first, more)
-            except PlanningError:
-                continue
-            if _commands(again) < best[0]:
-                best = (_commands(again), again, o)
-                planned[o] = best[0]
-                if first is not None:  # the goal states of this order include the guided ones
-                    with_guided = [
-                        np.vstack([first[o.index(t)], g]) if t in o else g
-                        for t, g in enumerate(goals)
-                    ]
-                    bounds[o] = _order_bounds(
-                        start, with_guided, [o], return_to_start, arm.lattice
-                    )[o]
+        again, through, _ = plan_order(o, name, replace(opts, searches=SECOND_LOOK_SEARCHES))
+        if again and _commands(again) < best[0]:
+            best = (_commands(again), again, o)
+            planned[o] = best[0]
+            if through is not None:
+                count_guided(o, through)
     _, legs, chosen = best
     commands = np.vstack([leg.sequence.commands for leg in legs])
     sequence = CommandSequence(start, commands, arm.lattice)
