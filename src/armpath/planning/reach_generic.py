@@ -270,13 +270,18 @@ def generic_bound(
     )
 
 
+def _tick_jacobian(arm: SerialArm, q: FloatArray) -> FloatArray:
+    """How far the tool point moves per tick of each joint at ``q``, ``(3, n)`` (length unit
+    per tick, linearised)."""
+    F = forward_frames(arm, q[None])
+    return np.asarray(jacobian_from_frames(arm, F)[0][:3] * arm.lattice.tick)
+
+
 def _box(arm: SerialArm, q: FloatArray, tol: float) -> tuple[IntArray, FloatArray]:
     """Integer offsets around ``q``'s nearest lattice state (a box, wider for joints that move
     the tool less, at most :data:`BOX_BUDGET` of them) and the tool's linearised move (model
     unit) for each offset from ``q`` itself."""
-    grid = arm.lattice
-    F = forward_frames(arm, q[None])[0]
-    J = jacobian_from_frames(arm, F[None])[0][:3] * grid.tick  # length unit per tick
+    J = _tick_jacobian(arm, q)
     lever = np.linalg.norm(J, axis=0)
     active = lever > 1e-9 * tol
     radius = np.zeros(arm.n_joints, dtype=np.int64)
@@ -616,9 +621,7 @@ def _lattice_too_coarse(
     far one tick moves the tool there, and the smallest error of a lattice state near them
     (searched with the tolerance doubled up to eight times, over the first 16 members)."""
     unit = arm.length_unit
-    F = forward_frames(arm, members[:1])
-    J = jacobian_from_frames(arm, F)[0][:3] * arm.lattice.tick
-    lever = np.linalg.norm(J, axis=0)
+    lever = np.linalg.norm(_tick_jacobian(arm, members[0]), axis=0)
     moving = np.flatnonzero(lever > 1e-9 * max(float(lever.max()), 1e-300))
     joints = ", ".join(str(j + 1) for j in moving)
     why = (
