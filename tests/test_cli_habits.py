@@ -55,7 +55,12 @@ def test_shell_completion_completes_commands_and_subcommands():
     assert complete("armpath mo", 1) == ["model"]
     assert complete("armpath model c", 2) == ["convert"]
     assert {"reach", "trace", "export", "schema"} <= set(complete("armpath ", 1))
-    shown = _cli("--show-completion", "bash")
+    # Typer names the shell from the process's ancestors (shellingham) and then ignores the
+    # argument; a test run started outside any shell has none. Its test switch makes the
+    # shell an argument instead.
+    shown = _cli(
+        "--show-completion", "bash", env={"_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION": "1"}
+    )
     assert shown.returncode == 0 and "_ARMPATH_COMPLETE" in shown.stdout
 
 
