@@ -4,14 +4,17 @@ From the current lattice state, the tracer looks for the command that carries th
 farthest along the curve: for each candidate advance it follows the reference path (pulled
 gently toward it), projects onto the curve point (offset outward by half the tolerance when the
 curve lies on a surface, so the tip neither leaves the band nor enters the surface), and
-searches the lattice around it. Candidates are pre-filtered by their linearized offset in the
-curve's normal plane, then checked exactly: end point within the band, the continuous motion
-sampled within the band and outside the surface, the clearance rule with a small buffer. Every
-accepted command advances the tool point by at least :data:`MIN_ADVANCE_MM` toward a fixed end,
-so every pass ends.
+searches the lattice around it (a box of offsets that grows where few lattice states lie
+near the curve: an arm whose tick moves the tool point far has few). Candidates are
+pre-filtered by their linearized offset in the curve's normal plane, then checked exactly: end
+point within the band, the continuous motion sampled within the band and outside the surface,
+the clearance rule with a small buffer. Every accepted command advances the tool point by at
+least :data:`MIN_ADVANCE_MM` toward a fixed end, so every pass ends.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,8 +31,17 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: Lattice offsets searched around a projected configuration, per joint that moves the tool
-#: point (ticks): +-4 for up to five such joints (the seed arm), fewer for more joints.
+#: point (ticks): +-4 for up to five such joints (the seed arm), fewer for more joints. The
+#: box grows by one tick at a time while fewer than :data:`_MIN_CANDIDATES` of its states lie
+#: near the target and it keeps at most :data:`_MAX_BOX_OFFSETS` offsets.
 _BOX = {5: 4, 6: 3, 7: 2}
+#: Lattice states near the target that a search around one configuration looks for. The seed
+#: arm's box of +-4 holds fewer on its crack one time in twenty (median 87); a UR5's tick moves
+#: the tool point about twice as far and its box holds a median of 8, too few for the tracer to
+#: go on (the UR5 cell's seam took four passes). 16 did best of 16, 32, 48, 64 and 128 on both.
+_MIN_CANDIDATES = 16
+#: Most offsets of a grown box (+-6 ticks for five joints, +-4 for six; 16 bytes each).
+_MAX_BOX_OFFSETS = 600_000
 #: Instants per command at which a candidate's continuous motion is checked while searching.
 _PATH_SAMPLES = 16
 #: Extra clearance the links keep while tracing, so the certification of the continuous motion
@@ -55,11 +67,26 @@ _BACKTRACK_WITHIN_MM = 5.0
 _MAX_BACKTRACKS = 3
 
 
-def _offsets(joints: int) -> IntArray:
-    """Every integer offset of a box of ``joints`` joints (see :data:`_BOX`)."""
-    radius = _BOX.get(joints, 4 if joints < 5 else 1)
+def _box_radii(joints: int, largest_step: int) -> list[int]:
+    """The radii (ticks) of the boxes searched for ``joints`` joints, smallest first, none
+    wider than a command's ``largest_step`` (ticks)."""
+    radius = min(_BOX.get(joints, 4 if joints < 5 else 1), largest_step)
+    radii = [radius]
+    while (2 * radii[-1] + 3) ** joints <= _MAX_BOX_OFFSETS and radii[-1] < largest_step:
+        radii.append(radii[-1] + 1)
+    return radii
+
+
+@functools.cache
+def _offsets(joints: int, radius: int) -> tuple[IntArray, FloatArray]:
+    """Every integer offset of a box of ``joints`` joints, +-``radius`` ticks, as integers and
+    as floats (shared, read-only)."""
     box = np.arange(-radius, radius + 1)
-    return np.stack(np.meshgrid(*[box] * joints, indexing="ij"), -1).reshape(-1, joints)
+    offsets = np.stack(np.meshgrid(*[box] * joints, indexing="ij"), -1).reshape(-1, joints)
+    as_float = offsets.astype(np.float64)
+    offsets.flags.writeable = False
+    as_float.flags.writeable = False
+    return offsets, as_float
 
 
 @njit(cache=True)
@@ -94,8 +121,7 @@ class Tracer:
         pairs = self.world.pairs(self.arm)
         self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
         self.layers, self.ref = piece.layers, piece.ref
-        self.offsets = _offsets(int(self.tip.sum()))
-        self.offsets_f = self.offsets.astype(np.float64)
+        self.radii = _box_radii(int(self.tip.sum()), int(self.grid.max_ticks[self.tip].min()))
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
         s_arr = np.asarray(s, dtype=np.float64)
@@ -172,14 +198,20 @@ class Tracer:
         self, base: FloatArray, n: FloatArray, b: FloatArray, fixed: IntArray
     ) -> IntArray:
         """Lattice states around ``base`` (rad) whose tip, linearized, is within half the
-        tolerance of the base's tip in the normal plane."""
+        tolerance of the base's tip in the normal plane: those of the smallest box (see
+        :data:`_BOX`) that holds :data:`_MIN_CANDIDATES` of them, or of the largest."""
         tick = self.grid.tick[self.tip]
         J = position_jacobian(self.arm, base)[:, self.tip]
         A_t = (np.stack([n, b]) @ J).T * tick[:, None]  # mm per tick
         exact = base[self.tip] / tick
         rounded = np.round(exact).astype(np.int64)
-        keep = _within_disc(self.offsets_f, A_t, (rounded - exact) @ A_t, (self.tol / 2) ** 2)
-        cand = rounded + self.offsets[keep]
+        shift = (rounded - exact) @ A_t
+        for radius in self.radii:
+            offsets, offsets_f = _offsets(int(self.tip.sum()), radius)
+            keep = _within_disc(offsets_f, A_t, shift, (self.tol / 2) ** 2)
+            if np.count_nonzero(keep) >= _MIN_CANDIDATES:
+                break
+        cand = rounded + offsets[keep]
         out = np.broadcast_to(np.asarray(fixed, dtype=np.int64), (cand.shape[0], self.tip.size))
         out = out.copy()
         out[:, self.tip] = cand
