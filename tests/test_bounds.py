@@ -55,9 +55,11 @@ def test_shortest_path_step_equals_brute_force(whole):
         e = rng.uniform(0, 0.5, u.shape)
         pc = rng.uniform(0, 50, 300)
         pc[rng.uniform(size=300) < 0.1] = np.inf
-        cost, arg = bounds._advance(pu, pe, pc, u, e, period, whole, bounds.GROUP_CELL)
+        cost, arg = bounds._advance_serial(pu, pe, pc, u, e, period, whole, bounds.GROUP_CELL)
         truth = _brute_advance(pu, pe, pc, u, e, period, whole)
         np.testing.assert_allclose(cost, truth, atol=1e-9)
+        threaded = bounds._advance_parallel(pu, pe, pc, u, e, period, whole, bounds.GROUP_CELL)
+        np.testing.assert_array_equal(threaded[0], cost)
         # the predecessor given attains the cost
         again = _brute_advance(pu[arg[:1]], pe[arg[:1]], pc[arg[:1]], u[:1], e[:1], period, whole)
         assert again[0] == pytest.approx(cost[0], abs=1e-9)

@@ -99,12 +99,20 @@ def test_the_numpy_landmarks_of_a_few_poses_equal_the_compiled_ones() -> None:
 def test_threads_are_used_only_for_big_batches_on_a_machine_with_a_core_to_spare(monkeypatch):
     """The parallel kernels run only for batches of at least the threshold and only while no
     more than the cores less one are busy (this thread counted); otherwise the serial kernel
-    (numba's threads stall when every core is busy)."""
+    (numba's threads stall when every core is busy). Never where numba may use one thread or
+    in a child forked after numba's threads started."""
     import os
 
     from armpath import jit
 
     assert jit._busy_cores() >= 1.0  # this thread is running, so it is among the busy ones
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "1")
+    monkeypatch.setattr(jit, "_numba", None)  # numba not loaded: the variable decides
+    assert jit._one_thread()
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "4")
+    assert not jit._one_thread()
+    monkeypatch.undo()
+    monkeypatch.setattr(jit, "_one_thread", lambda: False)
     monkeypatch.setattr(os, "cpu_count", lambda: 4)
     monkeypatch.setattr(jit, "_busy_cores", lambda: 1.0)
     assert jit.threads_pay_off(128, 128) and not jit.threads_pay_off(127, 128)
@@ -112,16 +120,24 @@ def test_threads_are_used_only_for_big_batches_on_a_machine_with_a_core_to_spare
     assert not jit.threads_pay_off(10_000, 128)
     monkeypatch.setattr(jit, "_busy_cores", lambda: 3.0)
     assert jit.threads_pay_off(10_000, 128)
+    monkeypatch.setattr(jit, "_one_thread", lambda: True)
+    assert not jit.threads_pay_off(10_000, 128)
+    monkeypatch.setattr(jit, "_one_thread", lambda: False)
+    monkeypatch.setattr(jit, "_forked_after_threads", True)
+    assert not jit.threads_pay_off(10_000, 128)
+    monkeypatch.setattr(jit, "_forked_after_threads", False)
     monkeypatch.setattr(os, "cpu_count", lambda: 1)
     monkeypatch.setattr(jit, "_busy_cores", lambda: 0.0)
     assert not jit.threads_pay_off(10_000, 128)
 
 
-def _prints_ok_with_two_threads(code: str) -> None:
-    """Run ``code`` in a fresh interpreter with two numba threads and the default threading
-    layer; it must print ``ok``."""
+def _prints_ok_with_two_threads(code: str, layer: str | None = None) -> None:
+    """Run ``code`` in a fresh interpreter with two numba threads and the threading ``layer``
+    (numba's default when None); it must print ``ok``."""
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
     env["NUMBA_NUM_THREADS"] = "2"
+    if layer is not None:
+        env["NUMBA_THREADING_LAYER"] = layer
     proc = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
     )
@@ -129,16 +145,24 @@ def _prints_ok_with_two_threads(code: str) -> None:
 
 
 def test_a_forked_child_runs_a_parallel_kernel_its_parent_ran() -> None:
-    """Users' multiprocessing pools fork (Linux's default): a child running the bound's parallel
-    kernel after its parent did must give the same numbers, not be killed (GNU OpenMP does)."""
+    """Users' multiprocessing pools fork (Linux's default): a child running the bound's step
+    after its parent ran it on numba's threads must give the same numbers, not be killed (GNU
+    OpenMP kills a child that runs a parallel region: the child takes the serial kernel)."""
     code = (
-        "import multiprocessing as mp, numpy as np\n"
-        "from armpath.planning import bounds\n"
+        "import multiprocessing as mp, types, numpy as np\n"
+        "from armpath import jit\n"
+        "from armpath.planning.bounds import FamilySampler, Layer\n"
+        "jit._busy_cores = lambda: 1.0  # a core to spare, whatever else this machine runs\n"
         "rng = np.random.default_rng(3)\n"
         "pu, u = rng.normal(size=(2000, 6)), rng.normal(size=(1500, 6))\n"
-        "pc, e, period = rng.uniform(0, 5, 2000), np.zeros_like(u), np.zeros(6)\n"
-        "run = lambda: bounds._advance(pu, np.zeros_like(pu), pc, u, e, period, False, 0.5)[0]\n"
+        "a = Layer(pu, np.zeros_like(pu), np.zeros_like(pu), np.zeros((2000, 3)))\n"
+        "b = Layer(u, np.zeros_like(u), np.zeros_like(u), np.zeros((1500, 3)))\n"
+        "pc, metric = rng.uniform(0, 5, 2000), types.SimpleNamespace(period=np.zeros(6))\n"
+        "assert jit.threads_pay_off(a.size * b.size, 1_000_000)\n"
+        "run = lambda: FamilySampler.advance(metric, a, pc, b)[0]\n"
         "parent = run()\n"
+        "import numba.np.ufunc.parallel as threads\n"
+        "assert threads._is_initialized, 'the parent ran no parallel kernel'\n"
         "brute = (pc[:, None] + np.abs(pu[:, None, :] - u[None, :, :]).max(axis=2)).min(axis=0)\n"
         "assert np.allclose(parent, brute), 'kernel differs from brute force'\n"
         "ctx = mp.get_context('fork')\n"
@@ -152,12 +176,15 @@ def test_a_forked_child_runs_a_parallel_kernel_its_parent_ran() -> None:
 
 
 def test_threads_take_turns_at_the_parallel_kernel() -> None:
-    """numba's fork-safe work queue aborts the process when two threads run parallel kernels at
-    once; the bound's step holds :data:`armpath.jit.parallel_kernel_lock`, so threads (a user's
-    thread pool) get the numbers one thread gets."""
+    """numba's work queue (its threading layer where OpenMP is missing) aborts the process when
+    two threads run parallel kernels at once; the bound's step holds
+    :data:`armpath.jit.parallel_kernel_lock`, so threads (a user's thread pool) get the numbers
+    one thread gets."""
     code = (
         "import threading, types, numpy as np\n"
+        "from armpath import jit\n"
         "from armpath.planning.bounds import FamilySampler, Layer\n"
+        "jit._busy_cores = lambda: 1.0  # a core to spare: the parallel kernel runs\n"
         "rng = np.random.default_rng(5)\n"
         "def layer(m):\n"
         "    return Layer(rng.normal(size=(m, 6)), np.zeros((m, 6)), np.zeros((m, 6)),"
@@ -173,6 +200,8 @@ def test_threads_take_turns_at_the_parallel_kernel() -> None:
         "ts = [threading.Thread(target=run) for _ in range(3)]\n"
         "[t.start() for t in ts]; [t.join() for t in ts]\n"
         "assert len(out) == 30 and all(np.array_equal(c, one) for c in out)\n"
+        "import numba\n"
+        "assert numba.threading_layer() == 'workqueue'\n"
         "print('ok')\n"
     )
-    _prints_ok_with_two_threads(code)
+    _prints_ok_with_two_threads(code, layer="workqueue")

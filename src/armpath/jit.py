@@ -9,11 +9,18 @@ armpath's modules are rebound to the dispatchers, so a kernel compiling a call t
 a numba function and calls from Python cost nothing extra. :data:`prange` is ``range`` until
 then and :func:`numba.prange` after, so a parallel loop compiles as one.
 
-Kernels defined after numba is loaded are plain numba dispatchers. Parallel kernels run on
-numba's fork-safe threading layer (TBB if installed, else its own work queue) unless
-``NUMBA_THREADING_LAYER`` says otherwise: GNU OpenMP, the default where TBB is absent, kills a
-forked child that runs a parallel kernel its parent ran. The work queue serves one caller at a
-time: call parallel kernels holding :data:`parallel_kernel_lock` (threads then take turns).
+Kernels defined after numba is loaded are plain numba dispatchers.
+
+Every parallel kernel has a serial twin (a separate function: numba's disk cache does not tell
+a function's parallel and serial compilations apart), and :func:`threads_pay_off` picks one.
+It picks the serial one in a process forked after numba's threads started (GNU OpenMP, numba's
+threading layer where TBB is absent, kills a forked child that runs a parallel region; users'
+``multiprocessing`` pools fork on Linux) and when numba may use one thread
+(``NUMBA_NUM_THREADS=1``), where the parallel one would only cost its compilation. numba's
+fork-safe work queue would avoid the first, but it ran the trace bound's step two to four
+times slower than OpenMP, and at times slower than one thread. Where numba falls back to the
+work queue (no OpenMP) it serves one caller at a time: call parallel kernels holding
+:data:`parallel_kernel_lock` (threads then take turns).
 """
 
 from __future__ import annotations
@@ -69,8 +76,6 @@ def load_numba() -> Any:
             return _numba
         import numba
 
-        if not os.environ.get("NUMBA_THREADING_LAYER"):  # (see the module's description)
-            numba.config.THREADING_LAYER = "forksafe"  # type: ignore[attr-defined]
         for kernel in _pending:
             kernel.dispatcher = numba.njit(**kernel.options)(kernel.py_func)
         prange = numba.prange
@@ -117,13 +122,38 @@ def threads_pay_off(n_items: int, threshold: int) -> bool:
     spare: at most the cores less one in use now (Linux: the runnable threads of other processes
     and this one; elsewhere the one-minute load average).
     On a machine whose cores are all busy, numba's threads wait for each other and a batch runs
-    several times slower than on one thread, so there the serial version is taken."""
-    if n_items < threshold:
+    several times slower than on one thread, so there the serial version is taken. Never in a
+    process forked after numba's threads started, nor where numba may use one thread (see the
+    module's description)."""
+    if n_items < threshold or _forked_after_threads or _one_thread():
         return False
     cores = os.cpu_count() or 1
     if cores < 2:
         return False
     return _busy_cores() <= cores - 1.0
+
+
+#: Whether this process was forked from one whose numba threads had started (see the module's
+#: description); set in the child at the fork.
+_forked_after_threads = False
+
+
+def _note_fork_in_child() -> None:
+    global _forked_after_threads
+    threads = sys.modules.get("numba.np.ufunc.parallel")
+    if threads is not None and getattr(threads, "_is_initialized", False):
+        _forked_after_threads = True
+
+
+if hasattr(os, "register_at_fork"):  # not on Windows, which does not fork
+    os.register_at_fork(after_in_child=_note_fork_in_child)
+
+
+def _one_thread() -> bool:
+    """Whether numba may use only one thread in this process (``NUMBA_NUM_THREADS``)."""
+    if _numba is not None:
+        return int(_numba.config.NUMBA_NUM_THREADS) < 2
+    return os.environ.get("NUMBA_NUM_THREADS", "").strip() == "1"
 
 
 def _busy_cores() -> float:

@@ -545,21 +545,25 @@ def _build_bvh(vertices: FloatArray, faces: IntArray) -> coal.BVHModelOBBRSS:
     return bvh
 
 
-def _points_to_triangles_impl(
+@njit(cache=True)
+def _point_to_triangles(
+    i: int,
     points: np.ndarray,
     tri: np.ndarray,
     centre: np.ndarray,
     reach: np.ndarray,
     with_distance: bool,
     with_winding: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Distance to the nearest triangle and generalized winding number, per point.
+    dist: np.ndarray,
+    wind: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Distance to the nearest triangle and generalized winding number of point ``i``.
 
     ``points`` is ``(N, 3)``, ``tri`` ``(F, 3, 3)`` (outward-wound corners), ``centre``
     ``(F, 3)`` and ``reach`` ``(F,)`` a ball around each triangle (centroid and largest corner
-    distance). Returns ``(distance (N,), winding (N,))``; with ``with_distance`` False the
-    distances are not computed (zeros), nor the winding numbers of points whose
-    ``with_winding`` ``(N,)`` is False (zeros: the caller knows they are outside).
+    distance). Writes point ``i``'s into ``dist`` and ``wind`` ``(N,)``; with ``with_distance``
+    False the distances are not computed (left as they are), nor the winding numbers of points
+    whose ``with_winding`` ``(N,)`` is False (zeros: the caller knows they are outside).
 
     Distance: where the point projects inside a triangle it is the distance to the triangle's
     plane; otherwise the nearest point lies on the triangle's boundary, the nearest of its three
@@ -571,44 +575,67 @@ def _points_to_triangles_impl(
     ``tan(Ω / 2) = A·(B×C) / (|A||B||C| + (A·B)|C| + (A·C)|B| + (B·C)|A|)`` for the corners
     ``A, B, C`` relative to the point): 1 inside a closed mesh, 0 outside.
     """
-    n_pts, n_tri = points.shape[0], tri.shape[0]
-    dist = np.zeros(n_pts)
-    wind = np.empty(n_pts)
-    for i in prange(n_pts):
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        best = np.inf
-        omega = 0.0
-        solid_angles = with_winding[i]
-        for f in range(n_tri):
-            ax, ay, az = tri[f, 0, 0] - px, tri[f, 0, 1] - py, tri[f, 0, 2] - pz
-            bx, by, bz = tri[f, 1, 0] - px, tri[f, 1, 1] - py, tri[f, 1, 2] - pz
-            cx, cy, cz = tri[f, 2, 0] - px, tri[f, 2, 1] - py, tri[f, 2, 2] - pz
-            if solid_angles:
-                la = math.sqrt(ax * ax + ay * ay + az * az)
-                lb = math.sqrt(bx * bx + by * by + bz * bz)
-                lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-                det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
-                den = (
-                    la * lb * lc
-                    + (ax * bx + ay * by + az * bz) * lc
-                    + (ax * cx + ay * cy + az * cz) * lb
-                    + (bx * cx + by * cy + bz * cz) * la
-                )
-                omega += 2.0 * math.atan2(det, den)
-            if with_distance:
-                gx, gy, gz = centre[f, 0] - px, centre[f, 1] - py, centre[f, 2] - pz
-                gap = math.sqrt(gx * gx + gy * gy + gz * gz) - reach[f]
-                if gap <= 0.0 or gap * gap < best:
-                    d2 = _point_triangle_distance_sq(ax, ay, az, bx, by, bz, cx, cy, cz)
-                    best = min(best, d2)
+    px, py, pz = points[i, 0], points[i, 1], points[i, 2]
+    best = np.inf
+    omega = 0.0
+    solid_angles = with_winding[i]
+    for f in range(tri.shape[0]):
+        ax, ay, az = tri[f, 0, 0] - px, tri[f, 0, 1] - py, tri[f, 0, 2] - pz
+        bx, by, bz = tri[f, 1, 0] - px, tri[f, 1, 1] - py, tri[f, 1, 2] - pz
+        cx, cy, cz = tri[f, 2, 0] - px, tri[f, 2, 1] - py, tri[f, 2, 2] - pz
+        if solid_angles:
+            la = math.sqrt(ax * ax + ay * ay + az * az)
+            lb = math.sqrt(bx * bx + by * by + bz * bz)
+            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
+            det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+            den = (
+                la * lb * lc
+                + (ax * bx + ay * by + az * bz) * lc
+                + (ax * cx + ay * cy + az * cz) * lb
+                + (bx * cx + by * cy + bz * cz) * la
+            )
+            omega += 2.0 * math.atan2(det, den)
         if with_distance:
-            dist[i] = math.sqrt(best)
-        wind[i] = omega / (4.0 * math.pi)
+            gx, gy, gz = centre[f, 0] - px, centre[f, 1] - py, centre[f, 2] - pz
+            gap = math.sqrt(gx * gx + gy * gy + gz * gz) - reach[f]
+            if gap <= 0.0 or gap * gap < best:
+                d2 = _point_triangle_distance_sq(ax, ay, az, bx, by, bz, cx, cy, cz)
+                best = min(best, d2)
+    if with_distance:
+        dist[i] = math.sqrt(best)
+    wind[i] = omega / (4.0 * math.pi)
+
+
+@njit(cache=True)
+def _points_to_triangles_serial(
+    points: np.ndarray,
+    tri: np.ndarray,
+    centre: np.ndarray,
+    reach: np.ndarray,
+    with_distance: bool,
+    with_winding: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """:func:`_point_to_triangles` of every point ``(N, 3)``: distances and winding numbers."""
+    dist, wind = np.zeros(points.shape[0]), np.zeros(points.shape[0])
+    for i in range(points.shape[0]):
+        _point_to_triangles(i, points, tri, centre, reach, with_distance, with_winding, dist, wind)
     return dist, wind
 
 
-_points_to_triangles_serial = njit(cache=True)(_points_to_triangles_impl)
-_points_to_triangles_parallel = njit(cache=True, parallel=True)(_points_to_triangles_impl)
+@njit(cache=True, parallel=True)
+def _points_to_triangles_parallel(
+    points: np.ndarray,
+    tri: np.ndarray,
+    centre: np.ndarray,
+    reach: np.ndarray,
+    with_distance: bool,
+    with_winding: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """:func:`_points_to_triangles_serial` on numba's threads."""
+    dist, wind = np.zeros(points.shape[0]), np.zeros(points.shape[0])
+    for i in prange(points.shape[0]):
+        _point_to_triangles(i, points, tri, centre, reach, with_distance, with_winding, dist, wind)
+    return dist, wind
 
 
 def _points_to_triangles(
@@ -619,7 +646,7 @@ def _points_to_triangles(
     with_distance: bool,
     with_winding: NDArray[np.bool_],
 ) -> tuple[FloatArray, FloatArray]:
-    """:func:`_points_to_triangles_impl`, threaded only for large batches.
+    """:func:`_point_to_triangles` of every point, threaded only for large batches.
 
     Starting the threads costs about 100 µs on a busy machine, more than a small batch.
     """

@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.geometry.primitives import orthonormal_frame
-from armpath.jit import njit, parallel_kernel_lock, prange
+from armpath.jit import njit, parallel_kernel_lock, prange, threads_pay_off
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
@@ -55,6 +55,8 @@ BoolArray = NDArray[np.bool_]
 BRANCH_GAP = 30.0
 #: Width (commands) of the cells that group predecessors in the shortest-path step.
 GROUP_CELL = 12.0
+#: Pairs of samples of two layers from which the shortest-path step runs on numba's threads.
+_PARALLEL_PAIRS = 1_000_000
 #: Slack (model units) a sample may lack beyond what its error box allows and still be kept.
 CLEAR_MARGIN = 1e-6
 #: Sampling error (commands) below which a sample on the best path is not refined further.
@@ -339,8 +341,99 @@ def _groups(
     return members, starts, lo, hi
 
 
-@njit(cache=True, parallel=True)
-def _advance(
+@njit(cache=True)
+def _advance_groups(
+    pu: FloatArray,
+    pe: FloatArray,
+    pc: FloatArray,
+    u: FloatArray,
+    e: FloatArray,
+    period: FloatArray,
+    cell: float,
+) -> tuple[
+    IntArray,
+    IntArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    IntArray,
+    IntArray,
+    FloatArray,
+    FloatArray,
+]:  # pragma: no cover - compiled
+    """The groups of :func:`_advance_serial`: the predecessors with a finite cost (members in
+    group order, each group cheapest first, where each group starts, its box, its cheapest
+    cost) and the targets (members, starts, boxes)."""
+    live = np.flatnonzero(np.isfinite(pc))
+    members, starts, lo, hi = _groups(pu, pe, live, period, cell)
+    targets, tstarts, tlo, thi = _groups(u, e, np.arange(u.shape[0]), period, cell)
+    g = starts.size - 1
+    cheapest = np.full(g, np.inf)
+    for q in range(g):
+        # each group's members cheapest first: a scan ends at the first too costly
+        seg = members[starts[q] : starts[q + 1]]
+        members[starts[q] : starts[q + 1]] = seg[np.argsort(pc[seg], kind="mergesort")]
+        cheapest[q] = pc[members[starts[q]]]
+    return members, starts, lo, hi, cheapest, targets, tstarts, tlo, thi
+
+
+@njit(cache=True)
+def _advance_target_group(
+    r: int,
+    pu: FloatArray,
+    pe: FloatArray,
+    pc: FloatArray,
+    u: FloatArray,
+    e: FloatArray,
+    period: FloatArray,
+    whole: bool,
+    members: IntArray,
+    starts: IntArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    cheapest: FloatArray,
+    targets: IntArray,
+    tstarts: IntArray,
+    tlo: FloatArray,
+    thi: FloatArray,
+    cost: FloatArray,
+    arg: IntArray,
+) -> None:  # pragma: no cover - compiled
+    """The costs and predecessors of the targets of group ``r`` (see :func:`_advance_serial`)."""
+    g = starts.size - 1
+    bound = np.empty(g)
+    gap = np.empty(g)
+    for q in range(g):
+        worst = 0.0
+        for c in range(pu.shape[1]):
+            x = _gap(lo[q, c], hi[q, c], tlo[r, c], thi[r, c], period[c])
+            if x > worst:
+                worst = x
+        if whole:
+            worst = np.ceil(worst - 1e-9)
+        gap[q] = worst
+        bound[q] = cheapest[q] + worst
+    ranked = np.argsort(bound)
+    for tb in range(tstarts[r], tstarts[r + 1]):
+        b = targets[tb]
+        best, barg = np.inf, -1
+        for q in ranked:
+            if bound[q] >= best:
+                break
+            for t in range(starts[q], starts[q + 1]):
+                i = members[t]
+                if pc[i] + gap[q] >= best:
+                    break
+                x = _edge(pu[i], pe[i], u[b], e[b], period, best - pc[i])
+                if whole:
+                    x = np.ceil(x - 1e-9)
+                if pc[i] + x < best:
+                    best, barg = pc[i] + x, i
+        cost[b], arg[b] = best, barg
+
+
+@njit(cache=True)
+def _advance_serial(
     pu: FloatArray,
     pe: FloatArray,
     pc: FloatArray,
@@ -358,52 +451,45 @@ def _advance(
     between two groups' boxes plus the cheapest cost of the predecessor group bounds every
     pair from below, so for each group of samples the predecessor groups are taken in the
     order of that bound, and a sample's search ends when the bound reaches the best found."""
-    j = pu.shape[1]
-    m = u.shape[0]
-    cost = np.full(m, np.inf)
-    arg = np.full(m, -1, dtype=np.int64)
-    live = np.flatnonzero(np.isfinite(pc))
-    if live.size == 0 or m == 0:
+    cost = np.full(u.shape[0], np.inf)
+    arg = np.full(u.shape[0], -1, dtype=np.int64)
+    if not np.any(np.isfinite(pc)) or u.shape[0] == 0:
         return cost, arg
-    members, starts, lo, hi = _groups(pu, pe, live, period, cell)
-    targets, tstarts, tlo, thi = _groups(u, e, np.arange(m), period, cell)
-    g = starts.size - 1
-    cheapest = np.full(g, np.inf)
-    for q in range(g):
-        # each group's members cheapest first: a scan ends at the first too costly
-        seg = members[starts[q] : starts[q + 1]]
-        members[starts[q] : starts[q + 1]] = seg[np.argsort(pc[seg], kind="mergesort")]
-        cheapest[q] = pc[members[starts[q]]]
-    for r in prange(tstarts.size - 1):  # each group of targets on its own
-        bound = np.empty(g)
-        gap = np.empty(g)
-        for q in range(g):
-            worst = 0.0
-            for c in range(j):
-                x = _gap(lo[q, c], hi[q, c], tlo[r, c], thi[r, c], period[c])
-                if x > worst:
-                    worst = x
-            if whole:
-                worst = np.ceil(worst - 1e-9)
-            gap[q] = worst
-            bound[q] = cheapest[q] + worst
-        ranked = np.argsort(bound)
-        for tb in range(tstarts[r], tstarts[r + 1]):
-            b = targets[tb]
-            best, barg = np.inf, -1
-            for q in ranked:
-                if bound[q] >= best:
-                    break
-                for t in range(starts[q], starts[q + 1]):
-                    i = members[t]
-                    if pc[i] + gap[q] >= best:
-                        break
-                    x = _edge(pu[i], pe[i], u[b], e[b], period, best - pc[i])
-                    if whole:
-                        x = np.ceil(x - 1e-9)
-                    if pc[i] + x < best:
-                        best, barg = pc[i] + x, i
-            cost[b], arg[b] = best, barg
+    members, starts, lo, hi, cheapest, targets, tstarts, tlo, thi = _advance_groups(
+        pu, pe, pc, u, e, period, cell
+    )
+    for r in range(tstarts.size - 1):
+        _advance_target_group(
+            r, pu, pe, pc, u, e, period, whole, members, starts, lo, hi, cheapest,
+            targets, tstarts, tlo, thi, cost, arg,
+        )  # fmt: skip
+    return cost, arg
+
+
+@njit(cache=True, parallel=True)
+def _advance_parallel(
+    pu: FloatArray,
+    pe: FloatArray,
+    pc: FloatArray,
+    u: FloatArray,
+    e: FloatArray,
+    period: FloatArray,
+    whole: bool,
+    cell: float,
+) -> tuple[FloatArray, IntArray]:  # pragma: no cover - compiled
+    """:func:`_advance_serial` with each group of targets on numba's threads."""
+    cost = np.full(u.shape[0], np.inf)
+    arg = np.full(u.shape[0], -1, dtype=np.int64)
+    if not np.any(np.isfinite(pc)) or u.shape[0] == 0:
+        return cost, arg
+    members, starts, lo, hi, cheapest, targets, tstarts, tlo, thi = _advance_groups(
+        pu, pe, pc, u, e, period, cell
+    )
+    for r in prange(tstarts.size - 1):
+        _advance_target_group(
+            r, pu, pe, pc, u, e, period, whole, members, starts, lo, hi, cheapest,
+            targets, tstarts, tlo, thi, cost, arg,
+        )  # fmt: skip
     return cost, arg
 
 
@@ -566,8 +652,11 @@ class FamilySampler:
         ``whole``: each step a whole number of commands (a leg between targets)."""
         if prev.size == 0 or nxt.size == 0:
             return np.full(nxt.size, np.inf), np.full(nxt.size, -1, dtype=np.int64)
+        args = (prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole, GROUP_CELL)
+        if not threads_pay_off(prev.size * nxt.size, _PARALLEL_PAIRS):
+            return _advance_serial(*args)
         with parallel_kernel_lock:
-            return _advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole, GROUP_CELL)
+            return _advance_parallel(*args)
 
 
 def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:
@@ -575,24 +664,28 @@ def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]
     return lambda dirs: fam.allowed_mask(s, dirs)
 
 
-def _path(layers: list[Layer], init: FloatArray, sampler: FamilySampler) -> tuple[float, list[int]]:
-    """Shortest path through ``layers`` from costs ``init`` at the first: its cost and the
-    sample it takes on each layer."""
-    cost = init
+def _path(
+    layers: list[Layer], init: FloatArray, sampler: FamilySampler
+) -> tuple[float, list[int], list[FloatArray]]:
+    """Shortest path through ``layers`` from costs ``init`` at the first: its cost, the sample
+    it takes on each layer, and the least cost of reaching each sample of each layer."""
+    costs = [init]
     args = []
     for k in range(1, len(layers)):
         check_time("bounding the commands")
-        cost, arg = sampler.advance(layers[k - 1], cost, layers[k])
+        cost, arg = sampler.advance(layers[k - 1], costs[-1], layers[k])
+        costs.append(cost)
         args.append(arg)
+    cost = costs[-1]
     if cost.size == 0 or not np.any(np.isfinite(cost)):
-        return np.inf, []
+        return np.inf, [], costs
     j = int(np.argmin(cost))
     best = float(cost[j])
     path = [j]
     for arg in reversed(args):
         j = int(arg[j])
         path.append(j)
-    return best, path[::-1]
+    return best, path[::-1], costs
 
 
 class _Refiner:
@@ -674,16 +767,19 @@ def trace_bound(
         rows = [flat[first[i] : first[i + 1]] for i in range(len(s_layers))]
         free, approach, path = [], [], []
         for row in rows:
-            f, p = _path(row, np.zeros(row[0].size), sampler)
+            f, p, free_costs = _path(row, np.zeros(row[0].size), sampler)
             if not p:
                 raise PlanningError("a traced span has no family member within the joint limits")
             free.append(f)
             path += p
             if loop:
-                approach.append(_loop_with_approach(row, sampler, q_start))
+                approach.append(_loop_with_approach(row, sampler, q_start, free_costs))
             else:
-                fwd, _ = _path(row, sampler.distance_from(q_start, row[0]), sampler)
-                bwd, _ = _path(row[::-1], sampler.distance_from(q_start, row[-1]), sampler)
+                fwd, _, _ = _path(row, sampler.distance_from(q_start, row[0]), sampler)
+                # the pass run backward: the approach to a sample of the last layer, then the
+                # free path from it back to the first layer, which is as long as the free
+                # path found to it from the first (every step's distance is symmetric)
+                bwd = float(np.min(free_costs[-1] + sampler.distance_from(q_start, row[-1])))
                 approach.append(min(fwd, bwd))
         extra = [a - f for a, f in zip(approach, free, strict=True)]
         if float(sum(free) + min(extra)) > value:  # every round bounds: the most of them holds
@@ -878,17 +974,20 @@ def _orders_through(
     return best_value, best_order, path
 
 
-def _loop_with_approach(row: list[Layer], sampler: FamilySampler, q_start: FloatArray) -> float:
+def _loop_with_approach(
+    row: list[Layer], sampler: FamilySampler, q_start: FloatArray, free_costs: list[FloatArray]
+) -> float:
     """A closed curve traced from anywhere on it, either way round: the path through the layers
     in order with one free cut (the move from the last layer back to the first is dropped, a
     relaxation); the approach is charged at the sample where the pass begins, on either side of
-    the cut."""
+    the cut. ``free_costs``: the least cost of each sample from anywhere on the first layer
+    (what :func:`_path` gives from zero costs)."""
     app = [sampler.distance_from(q_start, lay) for lay in row]
-    before = np.zeros(row[0].size)  # the piece before the cut, begun at the first layer
+    before = free_costs[0]  # the piece before the cut, begun at the first layer
     after = app[0].copy()  # the piece after the cut (the pass began at the first layer)
     for k in range(1, len(row)):
         check_time("bounding the commands")
-        b_next, _ = sampler.advance(row[k - 1], before, row[k])
+        b_next = free_costs[k]
         a_next, _ = sampler.advance(row[k - 1], after, row[k])
         # the cut between layers k - 1 and k: the pass begins at k (going forward), or at
         # k - 1 (going backward) and then resumes anywhere at k
