@@ -1177,11 +1177,11 @@ def replay_result(
             goal = np.rint(np.asarray(truth.goal_deg, float) * TICKS_PER_DEG).astype(np.int64)
             if not np.array_equal(states[-1], goal):
                 P.append(f"ends at {(states[-1] / 10).tolist()}, goal {list(truth.goal_deg)}")
-        lb = doc.get("lower_bound_commands")
-        if lb is not None and task == "reach" and len(states) - 1 < int(lb):
-            P.append(f"{len(states) - 1} commands beat the claimed lower bound {lb}")
         if len(states) - 1 < need:
             P.append("fewer commands than the joint changes need (impossible)")
+    lb = doc.get("lower_bound_commands")
+    if lb is not None and task in ("reach", "trace", "spotweld") and len(states) - 1 < int(lb):
+        P.append(f"{len(states) - 1} commands beat the claimed lower bound {lb}")
     if task == "spotweld":
         _check_spotweld(doc, truth, tips, states, tol, P, rep.facts)
     if task == "trace":

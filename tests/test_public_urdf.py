@@ -185,7 +185,9 @@ t = [0, 6.283185307179586]
     out = tmp_path / "trace"
     proc = _armpath("trace", "--scene", str(scene), "--out", str(out), "--no-bound", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
+    assert "not computed (--no-bound)" in proc.stdout  # the summary says why there is none
     doc = json.loads((out / "trace.json").read_text())
+    assert doc["lower_bound"] is None and doc["lower_bound_commands"] is None
     states = _replayed_states(doc)
     ref = PinocchioArm(path, "tool0", [f"{n}_joint" for n in _UR5_JOINTS])
     t = np.linspace(0.0, 1.0, 21)

@@ -388,6 +388,10 @@ def test_rejects_a_trace_off_its_curve_and_welds_off_their_points(seed_run):
     doc = copy.deepcopy(welds)
     doc["visits"][0]["after_command"] -= 1
     _rejects(doc, what="missed by")
+    for result in (trace, welds):  # a bound above the plan's own commands cannot hold
+        doc = copy.deepcopy(result)
+        doc["lower_bound_commands"] = doc["n_commands"] + 1
+        _rejects(doc, what="beat the claimed lower bound")
 
 
 def test_an_overclaimed_lower_bound_is_rejected(stress):

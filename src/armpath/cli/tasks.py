@@ -563,12 +563,13 @@ def plan(
                 out_console.print(f"wrote {path}", markup=False)
 
 
-def _bound_text(bound: dict[str, Any] | None, scope: str) -> str:
-    """A lower bound of a trace or tour and the plan's gap to it, in one line."""
+def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
+    """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
+    what to say without one)."""
     from armpath.report import BOUND_SCOPE
 
     if bound is None:
-        return "not computed"
+        return missing
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     return (
         f">= {bound['commands']} commands ({scope}, {BOUND_SCOPE}); "
@@ -695,7 +696,7 @@ def spotweld(
                 out_console.print(f"wrote {path}", markup=False)
 
 
-def _trace_summary(doc: dict[str, Any]) -> Table:
+def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     table = Table(
         title=f"trace {doc['curve']['definition'].get('name', 'curve')}", show_header=False
     )
@@ -707,7 +708,12 @@ def _trace_summary(doc: dict[str, Any]) -> Table:
         f"{doc['n_commands']}  ({transit} moving onto the curve or between passes, "
         f"{doc['n_commands'] - transit} tracing)",
     )
-    table.add_row("lower bound", _bound_text(doc.get("lower_bound"), "one pass per span"))
+    missing = (
+        "not computed (--no-bound)"
+        if bound_skipped
+        else "none: the solution family has no member within the limits on a traced span"
+    )
+    table.add_row("lower bound", _bound_text(doc.get("lower_bound"), "one pass per span", missing))
     table.add_row("passes", str(len(doc["passes"])))
     for p in doc["pass_details"]:
         table.add_row(
@@ -855,7 +861,7 @@ def trace(
         if json_out:
             typer.echo(json_text(doc), nl=False)
         else:
-            out_console.print(_trace_summary(doc))
+            out_console.print(_trace_summary(doc, bound_skipped=not bound))
             for path in folder.written if folder is not None else []:
                 out_console.print(f"wrote {path}", markup=False)
 
