@@ -20,7 +20,7 @@ from armpath.errors import InvalidInputError
 from armpath.geometry.primitives import Box, HalfSpace
 from armpath.geometry.world import CollisionWorld, SlackGroup, link_analysis
 from armpath.kinematics import displacement_bounds, forward_frames, landmark_positions
-from armpath.model.catalog import BUILTIN_MODELS, puma560, ur5
+from armpath.model.catalog import BUILTIN_MODELS, puma560, resolve_model, ur5
 from armpath.model.dh import load_robot_file, robot_from_dict
 from armpath.model.serial_arm import JointKind, Landmark, Link, SerialArm
 from armpath.model.urdf import arm_from_urdf
@@ -518,3 +518,34 @@ def test_compiled_segment_check_equals_satisfied_at_every_sample(scene_file):
         np.testing.assert_array_equal(
             fallback.segments_satisfied(arm, a, b, counts, extra, (8, 1)), want
         )
+
+
+def test_the_ur5_elbow_cannot_fold_past_its_band_whatever_the_other_joints():
+    """The elbow's self-collision ranges: every sampled configuration inside them breaks the
+    rule whatever the other joints are. The pair behind them, upper arm and forearm
+    (``L2 - L3b``), keeps the same clearance whatever the other joints are (a scan of the elbow
+    every 0.005 deg at four settings of them), and breaks the rule within 0.2 deg before the
+    upper range. The seed arm and the PUMA 560 have none (their joint limits stop them first)."""
+    arm = ur5()
+    bands = SELF_ONLY.joint_bands(arm)
+    assert sorted(bands) == [2] and len(bands[2]) == 2
+    rng = np.random.default_rng(7)
+    for lo, hi in bands[2]:
+        assert np.degrees(hi - lo) > 20.0 and lo < np.radians(180.0) * np.sign(lo + hi) < hi
+        q = rng.uniform(arm.lower, arm.upper, size=(400, 6))
+        q[:, 2] = rng.uniform(lo, hi, size=400)
+        assert not SELF_ONLY.satisfied(arm, q).any()
+    first_up = min(lo for lo, hi in bands[2] if lo > 0)
+    pair = [p.label for p in SELF_ONLY.pairs(arm)].index("L2 - L3b")
+    required = SELF_ONLY.required(arm)[pair]
+    slacks = []
+    for row in np.vstack([arm.home, rng.uniform(arm.lower, arm.upper, size=(3, 6))]):
+        q = np.repeat(row[None, :], 4001, axis=0)
+        q[:, 2] = first_up + np.radians(np.arange(4001) * 0.005 - 10.0)
+        slacks.append(SELF_ONLY.pair_clearances(arm, q)[0][:, pair] - required)
+        fails = slacks[-1] < 0.0
+        assert fails[-1]
+        assert 0.0 <= np.degrees(first_up - q[int(np.argmax(fails)), 2]) <= 0.2
+    assert np.ptp(np.array(slacks), axis=0).max() <= 1e-6
+    for name in ("seed", "puma560"):
+        assert SELF_ONLY.joint_bands(resolve_model(name)) == {}

@@ -16,6 +16,8 @@ independent truth.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize
@@ -65,10 +67,10 @@ def test_shortest_path_step_equals_brute_force(whole):
         assert again[0] == pytest.approx(cost[0], abs=1e-9)
 
 
-def _single_target_bound(arm, world, start_rad, target):
+def _single_target_bound(arm, world, start_rad, target, rounds=4):
     curve = Polyline("t", np.array([target, target + np.array([1.0, 0.0, 0.0])]))
     fam = curve_family(arm, world, curve)
-    b, per = bounds.tour_bound(fam, start_rad, target[None], 0.05, [(0,)], rounds=4)
+    b, per = bounds.tour_bound(fam, start_rad, target[None], 0.05, [(0,)], rounds=rounds)
     assert per[(0,)] == b.commands
     return b
 
@@ -238,3 +240,39 @@ def test_a_weld_bound_sees_the_workpiece(weld, free_bound):
     attained = int(np.ceil(change[best] - 1e-9))  # whole commands
     assert free.commands < b.commands <= attained
     assert b.commands >= attained - 1
+
+
+def test_a_ur5_weld_bound_keeps_the_elbow_on_its_side_of_the_fold(monkeypatch):
+    """The UR5 cell's first weld from home: the nearest clear goal configuration the bound may
+    use without the elbow's self-collision ranges is a whole turn of the elbow away from one the
+    arm can reach (the elbow would fold through the upper arm). With them the bound rises, and
+    stays at or below what the exactly clear members of a fine sampling attain with the elbow
+    kept on its side (plain numpy over 20,000 tool directions: every other joint the shorter
+    way round, the elbow measured between -163.6 and 163.6 deg where its home 90 deg lies)."""
+    from armpath.geometry.world import CollisionWorld as World
+    from armpath.planning.trace.family import fibonacci_directions
+    from armpath.scenes.arm import scene_arm
+
+    scene = load_scene(Path(__file__).parents[1] / "examples" / "ur5_cell.toml")
+    arm = scene_arm(scene)
+    home = np.radians([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
+    target = np.array([360.0, 0.0, 120.0])
+    bands = scene.world.joint_bands(arm)
+    assert [np.degrees(r).round(1).tolist() for r in bands[2]] == [
+        [-196.4, -163.6],
+        [163.6, 196.4],
+    ]
+    b = _single_target_bound(arm, scene.world, home, target, rounds=1)
+    monkeypatch.setattr(World, "joint_bands", lambda self, arm: {})
+    across = _single_target_bound(arm, scene.world, home, target, rounds=1)
+    curve = Polyline("t", np.array([target, target + np.array([1.0, 0.0, 0.0])]))
+    q, _ = curve_family(arm, scene.world, curve).members(target, fibonacci_directions(20_000))
+    values, _ = scene.world.pair_clearances(arm, q)
+    clear = (values - scene.world.required(arm)).min(axis=-1) >= 0.0
+    d = np.degrees(q - home)
+    d = (d + 180.0) % 360.0 - 180.0
+    elbow = (np.degrees(q[:, 2]) + 180.0) % 360.0 - 180.0
+    assert np.all(np.abs(elbow[clear]) < 163.6)  # no clear member inside the ranges
+    d[:, 2] = elbow - 90.0
+    attained = int(np.ceil(np.abs(d[clear][:, :5]).max(axis=-1).min() / 2.0 - 1e-9))
+    assert across.commands < b.commands <= attained

@@ -47,7 +47,12 @@ from armpath.geometry.compiled_world import (
 )
 from armpath.geometry.kernels import indexed_segment_distances, segments_to_point
 from armpath.geometry.primitives import Obstacle
-from armpath.kinematics import compiled_chain, displacement_bounds, landmark_positions
+from armpath.kinematics import (
+    compiled_chain,
+    displacement_bounds,
+    forward_frames,
+    landmark_positions,
+)
 from armpath.model.serial_arm import JointKind, Link, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -81,6 +86,39 @@ class ClearancePair:
     @property
     def label(self) -> str:
         return f"{self.part} - {self.other}"
+
+
+#: Step of the scan of a joint for the self-collision ranges it cannot cross (rad, 0.05 deg).
+_BAND_STEP_RAD = float(np.radians(0.05))
+
+
+def _carrying_frames(
+    arm: SerialArm, frame: int, offset: tuple[float, float, float]
+) -> tuple[int, int]:
+    """The frames (0 base, i after joint i) that carry the point ``offset`` of frame ``frame``
+    (n + 1: the tool) rigidly, first and last: a point on a revolute joint's axis is carried by
+    the frames on both sides of that joint."""
+    n = arm.n_joints
+    p = np.array([*offset, 1.0])
+    if frame == n + 1:
+        p, frame = arm.T_flange_tool @ p, n
+
+    def on_axis(point: FloatArray, k: int) -> bool:  # point in the frame of joint k (0-based)
+        joint = arm.joints[k]
+        scale = max(float(np.linalg.norm(point[:3])), 1.0)
+        turns = joint.kind is JointKind.REVOLUTE
+        return turns and float(np.linalg.norm(np.cross(point[:3], joint.axis))) <= 1e-9 * scale
+
+    first, down = frame, p
+    while first >= 1 and on_axis(down, first - 1):
+        down, first = arm.joints[first - 1].T_parent_joint @ down, first - 1
+    last, up = frame, p
+    while last < n:
+        nxt = np.linalg.solve(arm.joints[last].T_parent_joint, up)
+        if not on_axis(nxt, last):
+            break
+        up, last = nxt, last + 1
+    return first, last
 
 
 @dataclass(frozen=True, eq=False)
@@ -690,6 +728,74 @@ class CollisionWorld:
             if not np.any(ok):
                 break
         return ok
+
+    def joint_bands(self, arm: SerialArm) -> dict[int, tuple[tuple[float, float], ...]]:
+        """Ranges of single joints where the self-collision rule fails whatever the others are.
+
+        A pair of links whose four end points are carried by the frames on either side of one
+        revolute joint ``k`` (a point on a joint's axis counts as carried by the frame before
+        it: the joint turns it about itself) keeps a clearance that depends on joint ``k``
+        alone. Each such joint is scanned over its limits every :data:`_BAND_STEP_RAD`;
+        between two samples whose slacks are both below minus half a step times the fastest
+        the pair's distance can change (the farthest of its points from the axis, per rad),
+        every value fails. Returns joint index (0-based) -> the failing ranges (rad), merged;
+        the arm cannot move that joint across them. Computed once per arm and margins.
+        """
+        key = (self.self_margin, self.margin)
+        cache: dict[Any, dict[int, tuple[tuple[float, float], ...]]] = arm.__dict__.setdefault(
+            "_joint_bands", {}
+        )
+        if key not in cache:
+            cache[key] = self._joint_bands(arm)
+        return cache[key]
+
+    def _joint_bands(self, arm: SerialArm) -> dict[int, tuple[tuple[float, float], ...]]:
+        bound = self._bound(arm)
+        if len(bound.self_radii) == 0:
+            return {}
+        n = arm.n_joints
+        # the frames that carry each point rigidly, first and last
+        carried = np.array([_carrying_frames(arm, lm.frame, lm.offset) for lm in arm.landmarks])
+        first, own = carried[:, 0], carried[:, 1]
+        # a link is carried by the frames that carry both its ends; the pair's distance depends
+        # on the joints between the frames carrying the one and the other
+        a_lo = np.maximum(first[bound.self_a0], first[bound.self_a1])
+        a_hi = np.minimum(own[bound.self_a0], own[bound.self_a1])
+        b_lo = np.maximum(first[bound.self_b0], first[bound.self_b1])
+        b_hi = np.minimum(own[bound.self_b0], own[bound.self_b1])
+        ends = np.stack([bound.self_a0, bound.self_a1, bound.self_b0, bound.self_b1], axis=1)
+        # joint k (frame k + 1) alone: one link carried up to frame k, the other from k + 1
+        below = np.where(a_hi < b_lo, a_hi, b_hi)
+        above = np.where(a_hi < b_lo, b_lo, a_lo)
+        required = self.required(arm)[-len(bound.self_radii) :]
+        q0 = np.clip(np.zeros(n), arm.lower, arm.upper)
+        bands: dict[int, tuple[tuple[float, float], ...]] = {}
+        for k in range(n):
+            joint = arm.joints[k]
+            pairs = np.flatnonzero((below == k) & (above == k + 1))
+            if joint.kind is not JointKind.REVOLUTE or pairs.size == 0:
+                continue
+            count = int(np.ceil((arm.upper[k] - arm.lower[k]) / _BAND_STEP_RAD)) + 1
+            angles = np.linspace(arm.lower[k], arm.upper[k], count)
+            q = np.repeat(q0[None, :], count, axis=0)
+            q[:, k] = angles
+            pts = landmark_positions(arm, q)
+            slack = (self._self_clearances(arm, pts)[:, pairs] - required[pairs]).min(axis=1)
+            axis_origin = forward_frames(arm, q0)[k + 1, :3, 3]
+            used = np.unique(ends[pairs])
+            rate = float(np.linalg.norm(pts[0, used] - axis_origin, axis=-1).max())
+            step = float(angles[1] - angles[0]) if count > 1 else 0.0
+            fails = np.maximum(slack[:-1], slack[1:]) + rate * step / 2.0 < 0.0
+            ranges: list[tuple[float, float]] = []
+            for i in np.flatnonzero(fails):
+                a, b = float(angles[i]), float(angles[i + 1])
+                if ranges and ranges[-1][1] >= a:
+                    ranges[-1] = (ranges[-1][0], b)
+                else:
+                    ranges.append((a, b))
+            if ranges:
+                bands[k] = tuple(ranges)
+        return bands
 
     def _self_clearances(self, arm: SerialArm, pts: FloatArray) -> FloatArray:
         """Distances between the self-collision link pairs less their radii, ``(..., S)``."""

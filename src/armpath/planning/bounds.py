@@ -497,7 +497,11 @@ class FamilySampler:
     """Samples the family of one arm at points, with sampling errors (see the module)."""
 
     def __init__(
-        self, fam: CurveFamily, tolerance_mm: float, directions: int | None = None
+        self,
+        fam: CurveFamily,
+        tolerance_mm: float,
+        directions: int | None = None,
+        q_start: FloatArray | None = None,
     ) -> None:
         arm = fam.arm
         self.fam = fam
@@ -511,6 +515,24 @@ class FamilySampler:
         revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])[self.tip]
         turns = revolute & ~(span < 2.0 * np.pi)
         self.period = np.where(turns, 2.0 * np.pi / step, 0.0)
+        #: per tip joint (index among them) that a self-collision range it cannot cross
+        #: confines (:meth:`CollisionWorld.joint_bands`), the range of command units the arm
+        #: keeps from ``q_start`` and the turn (units) between copies of a value; such a joint
+        #: is measured within its range, not round the turn
+        self.windows: list[tuple[int, float, float, float]] = []
+        if q_start is not None:
+            tip_index = np.cumsum(self.tip) - 1
+            for k, ranges in fam.world.joint_bands(arm).items():
+                if not self.tip[k]:
+                    continue
+                x, lo, hi = float(q_start[k]), float(arm.lower[k]), float(arm.upper[k])
+                if any(a < x < b for a, b in ranges):
+                    continue  # the start itself breaks the rule there: no range to keep
+                lo = max([lo, *(b for a, b in ranges if b <= x)])
+                hi = min([hi, *(a for a, b in ranges if a >= x)])
+                j = int(tip_index[k])
+                self.windows.append((j, lo / step[j], hi / step[j], 2.0 * np.pi / step[j]))
+                self.period[j] = 0.0
         self.tol = tolerance_mm / arm.mm_per_unit
         base = fam.coarse_dirs if directions is None else fibonacci_directions(directions)
         self.base = np.asarray(base, dtype=np.float64)
@@ -522,8 +544,24 @@ class FamilySampler:
         self.required = fam.world.required(arm)
 
     def units(self, q: FloatArray) -> FloatArray:
-        """Command units of the tip joints of configurations ``(..., n)`` rad."""
-        return np.asarray(np.asarray(q)[..., self.tip] / self.step, dtype=np.float64)
+        """Command units of the tip joints of configurations ``(..., n)`` rad; a joint with a
+        range to keep (:attr:`windows`) takes the copy of its value (whole turns) nearest it."""
+        u = np.asarray(np.asarray(q)[..., self.tip] / self.step, dtype=np.float64)
+        for j, lo, hi, turn in self.windows:
+            x = u[..., j]
+            above = x + turn * np.ceil((lo - x) / turn)  # the lowest copy at or above lo
+            below = above - turn
+            u[..., j] = np.where(np.maximum(above - hi, 0.0) <= lo - below, above, below)
+        return u
+
+    def outside_windows(self, u: FloatArray, err: FloatArray) -> BoolArray:
+        """Samples (command units ``(M, J)``, errors ``(M, J)``) whose every nearby member lies
+        outside a joint's range to keep: farther out than the sample's error."""
+        out = np.zeros(u.shape[0], dtype=bool)
+        for j, lo, hi, _ in self.windows:
+            gap = np.maximum(np.maximum(lo - u[:, j], u[:, j] - hi), 0.0)
+            out |= gap > err[:, j] + 1e-9
+        return out
 
     def directions(self, caps: list[tuple[FloatArray, float, float]]) -> FloatArray:
         """The base directions with finer caps ``(center, radius, spacing)`` rad: a coarser
@@ -631,7 +669,7 @@ class FamilySampler:
         tol_err, slack = acc.tol_err[order], acc.slack[order]
         err = err + tol_err
         allowance = moved + (tol_err * self.step) @ self.reach + CLEAR_MARGIN
-        keep = slack >= -allowance
+        keep = (slack >= -allowance) & ~self.outside_windows(u, err)
         unsure = np.unique(index[keep & (slack < 0.0)])
         layer = Layer(u[keep], err[keep], q[keep], acc.dirs[index[keep]])
         return layer, unsure, spacing, triangles
@@ -740,7 +778,7 @@ def trace_bound(
     as the sampling gets finer.
     """
     say = on_progress or (lambda _m: None)
-    sampler = FamilySampler(fam, tolerance_mm, directions)
+    sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
     inset = 0.5
     s_layers = []
     for a, b in spans_mm:
@@ -797,7 +835,8 @@ def trace_bound(
         method=(
             "approach plus shortest path in the largest-joint metric through the solution "
             f"family at {layers_per_span} points of each span (the members that may be clear "
-            "there; obstacles ignored between them; tool directions sampled and refined about "
+            "there; obstacles ignored between them, but not a joint's own self-collision ranges; "
+            "tool directions sampled and refined about "
             "the path, each distance less the samples' sampling errors); one pass per span, "
             "either direction"
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
@@ -832,7 +871,7 @@ def tour_bound(
     number of commands; ``back`` returns to the start. Returns the least over the orders and each
     order's bound."""
     say = on_progress or (lambda _m: None)
-    sampler = FamilySampler(fam, tolerance_mm)
+    sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     refiner = _Refiner(sampler, targets.shape[0])
     per_order: dict[tuple[int, ...], int] = {}
     best_value, best_order = -np.inf, orders[0]
@@ -863,7 +902,8 @@ def tour_bound(
         method=(
             "least over every visiting order of a shortest path from the start through the "
             "solution family at each target (every goal configuration within the tolerance "
-            "that may be clear; obstacles ignored between the targets; tool directions "
+            "that may be clear; obstacles ignored between the targets, but not a joint's own "
+            "self-collision ranges; tool directions "
             "sampled, refined where clearance is unsure and about the path, each distance less "
             "the samples' sampling errors), each leg rounded up to whole commands"
         ),
@@ -891,7 +931,7 @@ def tour_bound_any_order(
     the shortest such leg (whole commands each), plus the shortest way back with ``back``."""
     say = on_progress or (lambda _m: None)
     say(f"bounding the tour's commands ({targets.shape[0]} targets, any order)")
-    sampler = FamilySampler(fam, tolerance_mm)
+    sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     layers = []
     for p in targets:
         check_time("bounding the commands")
@@ -916,7 +956,8 @@ def tour_bound_any_order(
         method=(
             "every target entered once: the sum over the targets of the shortest leg into its "
             "solution family (every goal configuration within the tolerance that may be "
-            "clear; obstacles ignored between the targets; from the start or another target, "
+            "clear; obstacles ignored between the targets, but not a joint's own self-collision "
+            "ranges; from the start or another target, "
             "whole commands, each distance less the samples' sampling errors)"
             + ("; plus the shortest way back" if back else "")
         ),
