@@ -738,8 +738,9 @@ class CollisionWorld:
         alone. Each such joint is scanned over its limits every :data:`_BAND_STEP_RAD`;
         between two samples whose slacks are both below minus half a step times the fastest
         the pair's distance can change (the farthest of its points from the axis, per rad),
-        every value fails. Returns joint index (0-based) -> the failing ranges (rad), merged;
-        the arm cannot move that joint across them. Computed once per arm and margins.
+        every value fails. Returns joint index (0-based) -> the failing ranges (rad), merged,
+        within the joint's limits and two turns about zero (the ranges repeat every turn); the
+        arm cannot move that joint across them. Computed once per arm and margins.
         """
         key = (self.self_margin, self.margin)
         cache: dict[Any, dict[int, tuple[tuple[float, float], ...]]] = arm.__dict__.setdefault(
@@ -775,8 +776,10 @@ class CollisionWorld:
             pairs = np.flatnonzero((below == k) & (above == k + 1))
             if joint.kind is not JointKind.REVOLUTE or pairs.size == 0:
                 continue
-            count = int(np.ceil((arm.upper[k] - arm.lower[k]) / _BAND_STEP_RAD)) + 1
-            angles = np.linspace(arm.lower[k], arm.upper[k], count)
+            # the ranges repeat every turn: two turns hold every one an unlimited joint meets
+            lo, hi = max(float(arm.lower[k]), -2.0 * np.pi), min(float(arm.upper[k]), 2.0 * np.pi)
+            count = int(np.ceil((hi - lo) / _BAND_STEP_RAD)) + 1
+            angles = np.linspace(lo, hi, count)
             q = np.repeat(q0[None, :], count, axis=0)
             q[:, k] = angles
             pts = landmark_positions(arm, q)

@@ -526,10 +526,18 @@ class FamilySampler:
                 if not self.tip[k]:
                     continue
                 x, lo, hi = float(q_start[k]), float(arm.lower[k]), float(arm.upper[k])
-                if any(a < x < b for a, b in ranges):
+                near = round(x / (2.0 * np.pi))  # the ranges repeat every turn
+                copies = [
+                    (a + 2.0 * np.pi * m, b + 2.0 * np.pi * m)
+                    for a, b in ranges
+                    for m in range(near - 2, near + 3)
+                ]
+                if any(a < x < b for a, b in copies):
                     continue  # the start itself breaks the rule there: no range to keep
-                lo = max([lo, *(b for a, b in ranges if b <= x)])
-                hi = min([hi, *(a for a, b in ranges if a >= x)])
+                lo = max([lo, *(b for a, b in copies if b <= x)])
+                hi = min([hi, *(a for a, b in copies if a >= x)])
+                if not (np.isfinite(lo) and np.isfinite(hi)):
+                    continue
                 j = int(tip_index[k])
                 self.windows.append((j, lo / step[j], hi / step[j], 2.0 * np.pi / step[j]))
                 self.period[j] = 0.0
