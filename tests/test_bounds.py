@@ -276,3 +276,34 @@ def test_a_ur5_weld_bound_keeps_the_elbow_on_its_side_of_the_fold(monkeypatch):
     d[:, 2] = elbow - 90.0
     attained = int(np.ceil(np.abs(d[clear][:, :5]).max(axis=-1).min() / 2.0 - 1e-9))
     assert across.commands < b.commands <= attained
+
+
+def test_a_joint_without_limits_keeps_to_the_turn_it_starts_in():
+    """A UR5 from its D-H table with no joint limits (links without radius): its elbow's
+    ranges repeat every turn, so the bound keeps the elbow between the copies about its
+    start, whichever turn that is in, and measures it there rather than round the turn."""
+    from armpath.model.dh import robot_from_dict
+
+    a, alpha, d = (
+        [0, -425.0, -392.25, 0, 0, 0],
+        [90, 0, 0, 90, -90, 0],
+        [89.159, 0, 0, 109.15, 94.65, 82.3],
+    )
+    arm = robot_from_dict(
+        {"links": [{"a": a[i], "alpha": alpha[i], "d": d[i], "limits": None} for i in range(6)]}
+    )
+    world = CollisionWorld(())
+    assert not np.isfinite(arm.upper).any()
+    ranges = world.joint_bands(arm)[2]
+    assert all(abs(abs(np.degrees(lo + hi) / 2) - 180.0) < 0.5 for lo, hi in ranges)
+    target = np.array([300.0, 200.0, 300.0])
+    fam = curve_family(
+        arm, world, Polyline("t", np.array([target, target + np.array([1.0, 0, 0])]))
+    )
+    for elbow, (lo, hi) in ((90.0, (-180.0, 180.0)), (450.0, (180.0, 540.0))):
+        sampler = bounds.FamilySampler(fam, 0.05, q_start=np.radians([0, -90, elbow, -90, -90, 0]))
+        ((j, w_lo, w_hi, _),) = sampler.windows
+        assert j == 2 and sampler.period[2] == 0.0
+        assert abs(2.0 * w_lo - lo) < 0.5 and abs(2.0 * w_hi - hi) < 0.5  # units of 2 deg
+        u = sampler.units(np.radians([[0, -90, -100.0, -90, -90, 0]]))
+        assert lo < 2.0 * u[0, 2] < hi  # the copy of -100 deg in the start's turn
