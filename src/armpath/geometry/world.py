@@ -121,6 +121,23 @@ def _carrying_frames(
     return first, last
 
 
+def into_windows(
+    q: FloatArray, windows: Sequence[tuple[int, float, float]]
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Configurations ``(M, n)`` rad with each windowed joint turned by whole turns into its
+    window (:meth:`CollisionWorld.joint_windows`; else to the copy nearest it), and whether
+    every such joint fits."""
+    out = np.array(q, dtype=np.float64, copy=True)
+    inside = np.ones(out.shape[0], dtype=bool)
+    for k, lo, hi in windows:
+        above = lo + (out[:, k] - lo) % (2.0 * np.pi)  # the lowest copy at or above lo
+        below = above - 2.0 * np.pi
+        fits = above <= hi
+        out[:, k] = np.where(fits | (above - hi <= lo - below), above, below)
+        inside &= fits
+    return out, inside
+
+
 @dataclass(frozen=True, eq=False)
 class LinkAnalysis:
     """What the clearance rule needs to know about an arm's links (see the module docstring).
@@ -749,6 +766,31 @@ class CollisionWorld:
         if key not in cache:
             cache[key] = self._joint_bands(arm)
         return cache[key]
+
+    def joint_windows(
+        self, arm: SerialArm, q_start: ArrayLike
+    ) -> tuple[tuple[int, float, float], ...]:
+        """Per joint with self-collision ranges (:meth:`joint_bands`), the values it can reach
+        from ``q_start`` (rad): ``(joint, low, high)`` between the nearest ranges (or their
+        whole-turn copies) on either side, within its limits. A joint whose start lies inside
+        one of its ranges is left out."""
+        start = np.asarray(q_start, dtype=np.float64)
+        out = []
+        for k, ranges in self.joint_bands(arm).items():
+            x, lo, hi = float(start[k]), float(arm.lower[k]), float(arm.upper[k])
+            near = round(x / (2.0 * np.pi))  # the ranges repeat every turn
+            copies = [
+                (a + 2.0 * np.pi * m, b + 2.0 * np.pi * m)
+                for a, b in ranges
+                for m in range(near - 2, near + 3)
+            ]
+            if any(a < x < b for a, b in copies):
+                continue
+            lo = max([lo, *(b for a, b in copies if b <= x)])
+            hi = min([hi, *(a for a, b in copies if a >= x)])
+            if np.isfinite(lo) and np.isfinite(hi):
+                out.append((k, lo, hi))
+        return tuple(out)
 
     def _joint_bands(self, arm: SerialArm) -> dict[int, tuple[tuple[float, float], ...]]:
         bound = self._bound(arm)

@@ -522,25 +522,11 @@ class FamilySampler:
         self.windows: list[tuple[int, float, float, float]] = []
         if q_start is not None:
             tip_index = np.cumsum(self.tip) - 1
-            for k, ranges in fam.world.joint_bands(arm).items():
-                if not self.tip[k]:
-                    continue
-                x, lo, hi = float(q_start[k]), float(arm.lower[k]), float(arm.upper[k])
-                near = round(x / (2.0 * np.pi))  # the ranges repeat every turn
-                copies = [
-                    (a + 2.0 * np.pi * m, b + 2.0 * np.pi * m)
-                    for a, b in ranges
-                    for m in range(near - 2, near + 3)
-                ]
-                if any(a < x < b for a, b in copies):
-                    continue  # the start itself breaks the rule there: no range to keep
-                lo = max([lo, *(b for a, b in copies if b <= x)])
-                hi = min([hi, *(a for a, b in copies if a >= x)])
-                if not (np.isfinite(lo) and np.isfinite(hi)):
-                    continue
-                j = int(tip_index[k])
-                self.windows.append((j, lo / step[j], hi / step[j], 2.0 * np.pi / step[j]))
-                self.period[j] = 0.0
+            for k, lo, hi in fam.world.joint_windows(arm, q_start):
+                if self.tip[k]:
+                    j = int(tip_index[k])
+                    self.windows.append((j, lo / step[j], hi / step[j], 2.0 * np.pi / step[j]))
+                    self.period[j] = 0.0
         self.tol = tolerance_mm / arm.mm_per_unit
         base = fam.coarse_dirs if directions is None else fibonacci_directions(directions)
         self.base = np.asarray(base, dtype=np.float64)

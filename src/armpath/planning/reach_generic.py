@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.commands import CommandSequence
 from armpath.errors import CollisionError, InvalidInputError, PlanningError, UnreachableError
-from armpath.geometry.world import CollisionWorld
+from armpath.geometry.world import CollisionWorld, into_windows
 from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
 from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
 from armpath.kinematics import forward_frames, jacobian_from_frames, pose_frames, tool_pose
@@ -560,6 +560,15 @@ def generic_goal_states(
     if samples.shape[0] == 0:
         raise UnreachableError(f"target ({where}) {arm.length_unit} is out of reach")
     samples = shift_into_limits(arm, samples, s_q)
+    # a joint that cannot cross its own self-collision ranges reaches only the copies of its
+    # values on the start's side of them (the UR5's elbow): measured there, or not at all
+    samples, reachable = into_windows(samples, world.joint_windows(arm, s_q))
+    samples = samples[reachable]
+    if samples.shape[0] == 0:
+        raise PlanningError(
+            f"every configuration reaching ({where}) {arm.length_unit} lies beyond a joint's "
+            "self-collision range from the start"
+        )
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
     required = world.required(arm)
