@@ -191,9 +191,9 @@ class BackgroundJob(Generic[T]):
     """``fn()`` computed in a forked child process while the caller goes on (the machine's
     other core); :meth:`result` waits for it and returns its value or raises its exception.
 
-    The child may run parallel kernels its parent ran (armpath's numba threading layer is
-    fork-safe, see :mod:`armpath.jit`). Where ``fork`` is not available (Windows, macOS's
-    default), ``fn`` runs when :meth:`result` is called."""
+    The child may run any kernel: where its parent had started numba's threads it takes the
+    kernels' serial versions (GNU OpenMP would kill it; see :mod:`armpath.jit`). Where ``fork``
+    is not available (Windows, macOS's default), ``fn`` runs when :meth:`result` is called."""
 
     def __init__(self, fn: Callable[[], T]) -> None:
         import multiprocessing
