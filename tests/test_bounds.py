@@ -302,7 +302,7 @@ def test_a_joint_without_limits_keeps_to_the_turn_it_starts_in():
     )
     for elbow, (lo, hi) in ((90.0, (-180.0, 180.0)), (450.0, (180.0, 540.0))):
         sampler = bounds.FamilySampler(fam, 0.05, q_start=np.radians([0, -90, elbow, -90, -90, 0]))
-        ((j, w_lo, w_hi, _),) = sampler.windows
+        ((j, w_lo, w_hi),) = sampler.windows
         assert j == 2 and sampler.period[2] == 0.0
         assert abs(2.0 * w_lo - lo) < 0.5 and abs(2.0 * w_hi - hi) < 0.5  # units of 2 deg
         u = sampler.units(np.radians([[0, -90, -100.0, -90, -90, 0]]))

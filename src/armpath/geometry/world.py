@@ -750,8 +750,8 @@ class CollisionWorld:
         """Ranges of single joints where the self-collision rule fails whatever the others are.
 
         A pair of links whose four end points are carried by the frames on either side of one
-        revolute joint ``k`` (a point on a joint's axis counts as carried by the frame before
-        it: the joint turns it about itself) keeps a clearance that depends on joint ``k``
+        revolute joint ``k`` (a point on a joint's axis counts as carried by the frames on both
+        sides of it: the joint turns it about itself) keeps a clearance that depends on joint ``k``
         alone. Each such joint is scanned over its limits every :data:`_BAND_STEP_RAD`;
         between two samples whose slacks are both below minus half a step times the fastest
         the pair's distance can change (the farthest of its points from the axis, per rad),

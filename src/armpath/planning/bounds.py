@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.geometry.primitives import orthonormal_frame
+from armpath.geometry.world import into_windows
 from armpath.jit import njit, parallel_kernel_lock, prange, threads_pay_off
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -515,18 +516,21 @@ class FamilySampler:
         revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])[self.tip]
         turns = revolute & ~(span < 2.0 * np.pi)
         self.period = np.where(turns, 2.0 * np.pi / step, 0.0)
-        #: per tip joint (index among them) that a self-collision range it cannot cross
-        #: confines (:meth:`CollisionWorld.joint_bands`), the range of command units the arm
-        #: keeps from ``q_start`` and the turn (units) between copies of a value; such a joint
-        #: is measured within its range, not round the turn
-        self.windows: list[tuple[int, float, float, float]] = []
-        if q_start is not None:
-            tip_index = np.cumsum(self.tip) - 1
-            for k, lo, hi in fam.world.joint_windows(arm, q_start):
-                if self.tip[k]:
-                    j = int(tip_index[k])
-                    self.windows.append((j, lo / step[j], hi / step[j], 2.0 * np.pi / step[j]))
-                    self.period[j] = 0.0
+        #: the tip joints that a self-collision range they cannot cross confines
+        #: (:meth:`CollisionWorld.joint_windows` from ``q_start``): rad, by joint index; such a
+        #: joint is measured within its range, not round the turn
+        self.joint_windows = tuple(
+            w
+            for w in (fam.world.joint_windows(arm, q_start) if q_start is not None else ())
+            if self.tip[w[0]]
+        )
+        #: the same ranges in command units, by index among the tip joints
+        self.windows: list[tuple[int, float, float]] = []
+        tip_index = np.cumsum(self.tip) - 1
+        for k, lo, hi in self.joint_windows:
+            j = int(tip_index[k])
+            self.windows.append((j, lo / step[j], hi / step[j]))
+            self.period[j] = 0.0
         self.tol = tolerance_mm / arm.mm_per_unit
         base = fam.coarse_dirs if directions is None else fibonacci_directions(directions)
         self.base = np.asarray(base, dtype=np.float64)
@@ -539,20 +543,19 @@ class FamilySampler:
 
     def units(self, q: FloatArray) -> FloatArray:
         """Command units of the tip joints of configurations ``(..., n)`` rad; a joint with a
-        range to keep (:attr:`windows`) takes the copy of its value (whole turns) nearest it."""
-        u = np.asarray(np.asarray(q)[..., self.tip] / self.step, dtype=np.float64)
-        for j, lo, hi, turn in self.windows:
-            x = u[..., j]
-            above = x + turn * np.ceil((lo - x) / turn)  # the lowest copy at or above lo
-            below = above - turn
-            u[..., j] = np.where(np.maximum(above - hi, 0.0) <= lo - below, above, below)
-        return u
+        range to keep (:attr:`joint_windows`) takes the copy of its value (whole turns) nearest
+        it (:func:`into_windows`)."""
+        q = np.asarray(q, dtype=np.float64)
+        if self.joint_windows:
+            flat = into_windows(q.reshape(-1, q.shape[-1]), self.joint_windows)[0]
+            q = flat.reshape(q.shape)
+        return np.asarray(q[..., self.tip] / self.step, dtype=np.float64)
 
     def outside_windows(self, u: FloatArray, err: FloatArray) -> BoolArray:
         """Samples (command units ``(M, J)``, errors ``(M, J)``) whose every nearby member lies
         outside a joint's range to keep: farther out than the sample's error."""
         out = np.zeros(u.shape[0], dtype=bool)
-        for j, lo, hi, _ in self.windows:
+        for j, lo, hi in self.windows:
             gap = np.maximum(np.maximum(lo - u[:, j], u[:, j] - hi), 0.0)
             out |= gap > err[:, j] + 1e-9
         return out
