@@ -291,3 +291,36 @@ def test_reference_dp_layer_equals_brute_force():
         rows = np.flatnonzero(finite)
         chosen = np.where(lifted, lift[np.arange(m), arg], traced[np.arange(m), arg])
         np.testing.assert_allclose(chosen[rows], want[rows], rtol=0, atol=1e-9)
+
+
+def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeypatch):
+    """The reference DP's path zigzags between its coarse samples of the family; straightened,
+    every layer still puts the fingertip on its curve point (independent forward kinematics),
+    within the joint limits and clear of everything, its ends where they were, and its joint
+    changes add up to clearly less."""
+    from armpath.planning.trace import reference
+    from armpath.planning.trace.family import curve_family
+    from armpath.planning.trace.reachability import CurveArc
+    from armpath.scenes import seed_scene
+
+    scene = seed_scene()
+    arm, curve = seed_arm(), scene.trace_curve()
+    fam = curve_family(arm, scene.world, curve)
+    arc, q_from = CurveArc(1000.0, 1240.0), np.radians([0.0, -90.0, 0.0, 0.0, -90.0, 0.0])
+    (straight,) = reference.reference_pieces(fam, arc, 5.0, q_from)
+    monkeypatch.setattr(reference, "_STRAIGHTEN_ROUNDS", 0)
+    (raw,) = reference.reference_pieces(fam, arc, 5.0, q_from)
+    np.testing.assert_array_equal(straight.layers, raw.layers)
+    np.testing.assert_array_equal(straight.ref[[0, -1]], raw.ref[[0, -1]])
+    tips = independent.points(np.degrees(straight.ref))[:, 4]
+    assert np.linalg.norm(tips - curve.at_arc_length(straight.layers), axis=-1).max() < 1e-5
+    assert arm.within_limits(straight.ref).all()
+    values, _ = scene.world.pair_clearances(arm, straight.ref)
+    links = ~np.array([p.is_tip for p in scene.world.pairs(arm)])
+    assert np.all(values[:, links] >= scene.world.required(arm)[links] - 1e-9)
+    assert independent.Workpiece("normal").distance(tips).min() >= -1e-6  # the tip: outside
+
+    def worth(ref):  # commands' worth of the largest joint changes, layer to layer
+        return np.abs(np.diff(np.degrees(ref), axis=0)).max(axis=1).sum() / 2.0
+
+    assert worth(straight.ref) < 0.85 * worth(raw.ref)
