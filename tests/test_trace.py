@@ -324,3 +324,39 @@ def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeyp
         return np.abs(np.diff(np.degrees(ref), axis=0)).max(axis=1).sum() / 2.0
 
     assert worth(straight.ref) < 0.85 * worth(raw.ref)
+
+
+def test_a_line_whose_end_is_nearer_is_traced_from_its_end(monkeypatch):
+    """The reference DP costs the approach too, either way along the arc: a line whose end
+    (not its start) lies nearer the arm is traced from its end (independent forward
+    kinematics: the tip's closest point runs from the end to the start, within the tolerance at
+    50 instants per command, covering the line), in fewer commands than tracing it forward."""
+    import armpath.planning.trace.plan as trace_plan
+
+    V = np.array([[150.0, 350.0, 150.0], [20.0, 450.0, 120.0]])
+    args = (
+        seed_arm(),
+        scene_from_dict(TABLE_ONLY).world,
+        deg_to_ticks([0, -90, 0, 0, -90, 0]),
+        Polyline("line", V),
+        TraceOptions(tolerance_mm=0.1, bound=False),
+    )
+    res = plan_trace(*args)
+    (p,) = res.passes
+    assert p.backward
+    states = res.sequence.states()[p.first : p.last + 1]
+    t = np.linspace(0.0, 1.0, 51)
+    q = states[:-1, None, :] + t[None, :, None] * np.diff(states, axis=0)[:, None, :]
+    tips = independent.points(q.reshape(-1, 6) / 10.0)[:, 4]
+    axis = (V[1] - V[0]) / np.linalg.norm(V[1] - V[0])
+    along = np.clip((tips - V[0]) @ axis, 0.0, np.linalg.norm(V[1] - V[0]))
+    off = np.linalg.norm(tips - (V[0] + along[:, None] * axis), axis=-1)
+    assert off.max() <= 0.1
+    assert along[0] >= along.max() - 0.1 and along[-1] <= 1e-3  # from the end to the start
+    assert along.max() >= np.linalg.norm(V[1] - V[0]) - 1e-3
+    # forward only
+    forward_only = trace_plan.reference_pieces
+    monkeypatch.setattr(trace_plan, "reference_pieces", lambda *a: forward_only(*a[:4], (False,)))
+    fwd = plan_trace(*args)
+    assert not fwd.passes[0].backward
+    assert fwd.sequence.n_commands > res.sequence.n_commands

@@ -294,6 +294,7 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
                 "start_mm": p.start_mm,
                 "end_mm": p.end_mm,
                 "length_mm": p.covered_mm,
+                "direction": "backward" if p.backward else "forward",
                 "max_deviation_mm": p.max_deviation_mm,
                 "max_deviation_bound_mm": p.max_deviation_bound_mm,
             }

@@ -221,7 +221,9 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
                 {"type": "array", "items": {"type": "integer"}},
             ),
             "pass_details": _array(
-                "each pass: its states, commands, arc and deviation", {"type": "object"}
+                "each pass: its states, commands, arc, direction (forward: from start_mm to end_mm,"
+                " backward: from end_mm) and deviation",
+                {"type": "object"},
             ),
             "transits": _array("the motions between passes", {"type": "object"}),
             "covered": _array("the arcs traced", _ARC),

@@ -718,8 +718,9 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     for p in doc["pass_details"]:
         table.add_row(
             f"  states {p['states'][0]}-{p['states'][1]}",
-            f"arc {p['start_mm']:.2f} .. {p['end_mm']:.2f} mm ({p['length_mm']:.2f} mm), "
-            f"largest deviation {p['max_deviation_mm']:.4f} mm",
+            f"arc {p['start_mm']:.2f} .. {p['end_mm']:.2f} mm ({p['length_mm']:.2f} mm"
+            + (", traced from its end" if p.get("direction") == "backward" else "")
+            + f"), largest deviation {p['max_deviation_mm']:.4f} mm",
         )
     cov = doc["coverage"]
     table.add_row(

@@ -45,8 +45,8 @@ from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.trace.certificate import certified_axis_angle, certified_deviation
 from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
-from armpath.planning.trace.reference import reference_pieces
-from armpath.planning.trace.tracer import _BODY_BUFFER_MM, Tracer
+from armpath.planning.trace.reference import Piece, reference_pieces
+from armpath.planning.trace.tracer import _BODY_BUFFER_MM, GOAL_REACHED_MM, Tracer
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -85,7 +85,7 @@ class TraceOptions:
 class TracePass:
     """One continuous pass: the tip follows the curve from state ``first`` to state ``last``
     (state 0 is the start, state k the state after command k), covering arc lengths
-    ``start_mm``..``end_mm``."""
+    ``start_mm``..``end_mm``, from ``end_mm`` toward ``start_mm`` when ``backward``."""
 
     first: int
     last: int
@@ -98,6 +98,7 @@ class TracePass:
     #: for the surface normal, whose largest angle is found by refined sampling).
     max_axis_angle_rad: float | None = None
     max_axis_angle_bound_rad: float | None = None
+    backward: bool = False
 
     @property
     def covered_mm(self) -> float:
@@ -186,90 +187,27 @@ def plan_trace(
         )
     fam = reach.family
     start = np.asarray(start_ticks, dtype=np.int64)
-    states: list[IntArray] = [start]
-    passes: list[TracePass] = []
-    transits: list[Transit] = []
-    not_traced: list[tuple[CurveArc, str]] = []
-    prof_s: list[FloatArray] = []
-    prof_d: list[FloatArray] = []
     arcs = list(reach.reachable)
     overlap = 0.0
     if curve.closed and len(arcs) == 1 and arcs[0].length_mm >= curve.length - 1e-9:
         # all around: run on a little past the start so the covered ends meet
         arcs = [CurveArc(arcs[0].start_mm, arcs[0].start_mm + curve.length)]
         overlap = 2.0 * opts.tolerance_mm
-    queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
-    queue[-1] = (queue[-1][0], overlap)
-    while queue:
-        check_time("tracing the curve")
-        arc, run_on = queue.pop(0)
-        pieces = reference_pieces(fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1]))
-        for k, piece in enumerate(pieces):
-            last_piece = k == len(pieces) - 1
-            say(
-                f"tracing pass {len(passes) + 1}: {piece.arc.start_mm:.1f}.."
-                f"{piece.arc.end_mm:.1f} mm of the curve"
-            )
-            tracer = Tracer(fam, piece, opts.tolerance_mm)
-            tracer.align(arm.lattice.to_joint(states[-1]))
-            here = len(states) - 1
-            if passes:  # lift off first, to where the transit's search has room
-                states.extend(list(_lift_off(arm, world, states[-1], opts).states()[1:]))
-            try:
-                motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
-            except PlanningError as exc:
-                # this piece is reachable but cannot be entered from here: report it, go on
-                not_traced.append((piece.arc, str(exc)))
-                continue
-            states.extend(list(motion.sequence.states()[1:]))
-            transits.append(Transit(here, len(states) - 1, motion.method))
-            first = len(states) - 1
-            pass_states = [q_entry]
-            if s_entry > piece.arc.start_mm + 0.05:  # back to the start of the piece first
-                pass_states, s_entry = tracer.run(q_entry, s_entry, piece.arc.start_mm)
-            goal = piece.arc.end_mm + (run_on if last_piece else 0.0)
-            ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
-            pass_states += ahead[1:]
-            states.extend(pass_states[1:])
-            if len(pass_states) == 1:  # entered but no command along the curve: not a pass
-                resume = max(s_reached, piece.arc.start_mm) + 2.0
-                if resume < arc.end_mm - 0.5:
-                    queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
-                break
-            dev, dev_bound, ps, pd = certified_deviation(
-                arm, curve, np.array(pass_states), piece.arc.start_mm
-            )
-            prof_s.append(ps)
-            prof_d.append(pd)
-            angle, angle_bound = None, None
-            if opts.axis_rule is not None:
-                angle, angle_bound = certified_axis_angle(
-                    arm, fam.axis_angles, np.array(pass_states), not opts.axis_rule.normal
-                )
-            passes.append(
-                TracePass(
-                    first,
-                    len(states) - 1,
-                    float(ps.min()),
-                    float(ps.max()),
-                    dev,
-                    dev_bound,
-                    angle,
-                    angle_bound,
-                )
-            )
-            if s_reached < piece.arc.end_mm - 0.5:
-                # stuck: the rest of the arc gets new passes. The rest starts at least 1 mm past
-                # this piece's start (skipping 2 mm if this pass made no progress), so every
-                # arc put back is shorter by 1 mm or more and the loop ends.
-                resume = (
-                    s_reached
-                    if s_reached > piece.arc.start_mm + 1.0
-                    else max(s_reached, piece.arc.start_mm) + 2.0
-                )
-                if resume < arc.end_mm - 0.5:
-                    queue.insert(0, (CurveArc(resume, arc.end_mm), run_on))
-                break
+    # each arc the way its reference DP finds cheaper; where that traced a piece backward, the
+    # curve is traced forward only as well and the better plan kept (the DP sees the approach,
+    # not how hard a tight end is to finish in): the most of the curve, the fewest passes, the
+    # fewest commands
+    forward = None
+    try:
+        run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, (False, True))
+    except PlanningError:
+        run = forward = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, (False,))
+    if forward is None and any(p.backward for p in run.pieces):
+        say("tracing again, every piece forward")
+        forward = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, (False,))
+        run = forward if forward.better_than(run) else run
+    states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
+    prof_s, prof_d = run.profile_s, run.profile_d
     not_traced += _gaps_between_passes(arcs, passes, not_traced)
     if not passes:
         raise PlanningError(
@@ -425,6 +363,147 @@ def _lift_off(
     return CommandSequence.from_states(np.array(states, dtype=np.int64), grid)
 
 
+@dataclass(frozen=True)
+class _Tracing:
+    """The passes and transits of one way of tracing the arcs (see :func:`_trace_arcs`)."""
+
+    states: list[IntArray]
+    passes: list[TracePass]
+    transits: list[Transit]
+    not_traced: list[tuple[CurveArc, str]]
+    profile_s: list[FloatArray]
+    profile_d: list[FloatArray]
+    pieces: list[Piece]
+
+    @property
+    def covered_mm(self) -> float:
+        return float(sum(p.end_mm - p.start_mm for p in self.passes))
+
+    def better_than(self, other: _Tracing) -> bool:
+        """Whether this tracing covers more of the curve (by over 0.5 mm), or as much in fewer
+        passes, or in as many with fewer commands."""
+        if abs(self.covered_mm - other.covered_mm) > 0.5:
+            return self.covered_mm > other.covered_mm
+        mine, theirs = (len(self.passes), len(self.states)), (len(other.passes), len(other.states))
+        return mine < theirs
+
+
+def _trace_arcs(
+    arm: SerialArm,
+    world: CollisionWorld,
+    reach: CurveReachability,
+    start: IntArray,
+    arcs: list[CurveArc],
+    overlap: float,
+    opts: TraceOptions,
+    say: Callable[[str], None],
+    directions: tuple[bool, ...],
+) -> _Tracing:
+    """Trace ``arcs`` in turn from ``start`` (the last one running on by ``overlap`` mm), each
+    piece in the cheaper of ``directions`` (False: forward, True: backward) by its reference
+    DP. An arc whose pass gets stuck is put back shorter by 1 mm or more, so the loop ends."""
+    fam = reach.family
+    curve = reach.curve
+    states: list[IntArray] = [start]
+    traced_pieces: list[Piece] = []
+    passes: list[TracePass] = []
+    transits: list[Transit] = []
+    not_traced: list[tuple[CurveArc, str]] = []
+    prof_s: list[FloatArray] = []
+    prof_d: list[FloatArray] = []
+    queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
+    queue[-1] = (queue[-1][0], overlap)
+    while queue:
+        check_time("tracing the curve")
+        arc, run_on = queue.pop(0)
+        pieces = reference_pieces(
+            fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1]), directions
+        )
+        traced_pieces += pieces
+        for k, piece in enumerate(pieces):
+            last_piece = k == len(pieces) - 1
+            say(
+                f"tracing pass {len(passes) + 1}: {piece.arc.start_mm:.1f}.."
+                f"{piece.arc.end_mm:.1f} mm of the curve"
+            )
+            tracer = Tracer(fam, piece, opts.tolerance_mm)
+            tracer.align(arm.lattice.to_joint(states[-1]))
+            here = len(states) - 1
+            if passes:  # lift off first, to where the transit's search has room
+                states.extend(list(_lift_off(arm, world, states[-1], opts).states()[1:]))
+            try:
+                motion, q_entry, s_entry = _enter(tracer, reach, states[-1], opts, say)
+            except PlanningError as exc:
+                # this piece is reachable but cannot be entered from here: report it, go on
+                not_traced.append((piece.arc, str(exc)))
+                continue
+            states.extend(list(motion.sequence.states()[1:]))
+            transits.append(Transit(here, len(states) - 1, motion.method))
+            first = len(states) - 1
+            pass_states = [q_entry]
+            sign = -1.0 if piece.backward else 1.0
+            begin, finish = (
+                (piece.arc.end_mm, piece.arc.start_mm)
+                if piece.backward
+                else (piece.arc.start_mm, piece.arc.end_mm)
+            )
+            if sign * (s_entry - begin) > GOAL_REACHED_MM:  # back to where the piece begins first
+                pass_states, s_entry = tracer.run(q_entry, s_entry, begin)
+            goal = finish + sign * (run_on if last_piece else 0.0)
+            ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
+            pass_states += ahead[1:]
+            states.extend(pass_states[1:])
+            if len(pass_states) == 1:  # entered but no command along the curve: not a pass
+                rest = _rest_of_arc(arc, piece, s_reached, made_pass=False)
+                if rest is not None:
+                    queue.insert(0, (rest, run_on))
+                break
+            dev, dev_bound, ps, pd = certified_deviation(arm, curve, np.array(pass_states), begin)
+            prof_s.append(ps)
+            prof_d.append(pd)
+            angle, angle_bound = None, None
+            if opts.axis_rule is not None:
+                angle, angle_bound = certified_axis_angle(
+                    arm, fam.axis_angles, np.array(pass_states), not opts.axis_rule.normal
+                )
+            passes.append(
+                TracePass(
+                    first,
+                    len(states) - 1,
+                    float(ps.min()),
+                    float(ps.max()),
+                    dev,
+                    dev_bound,
+                    angle,
+                    angle_bound,
+                    piece.backward,
+                )
+            )
+            if sign * (finish - s_reached) > 0.5:
+                # stuck: the rest of the arc gets new passes (see _rest_of_arc)
+                rest = _rest_of_arc(arc, piece, s_reached, made_pass=True)
+                if rest is not None:
+                    queue.insert(0, (rest, run_on))
+                break
+    return _Tracing(states, passes, transits, not_traced, prof_s, prof_d, traced_pieces)
+
+
+def _rest_of_arc(arc: CurveArc, piece: Piece, s_reached: float, made_pass: bool) -> CurveArc | None:
+    """What is left of ``arc`` to trace after a pass on ``piece`` stopped at ``s_reached`` (mm)
+    short of the piece's far end, or None when less than 0.5 mm is left. The rest resumes where
+    the pass stopped, or 2 mm past where the piece begins when the pass made no progress (or
+    no pass was made): so every arc put back is shorter by 1 mm or more and the loop ends."""
+    if piece.backward:
+        begin = piece.arc.end_mm
+        moved = made_pass and s_reached < begin - 1.0
+        resume = s_reached if moved else min(s_reached, begin) - 2.0
+        return CurveArc(arc.start_mm, resume) if resume > arc.start_mm + 0.5 else None
+    begin = piece.arc.start_mm
+    moved = made_pass and s_reached > begin + 1.0
+    resume = s_reached if moved else max(s_reached, begin) + 2.0
+    return CurveArc(resume, arc.end_mm) if resume < arc.end_mm - 0.5 else None
+
+
 def _enter_backward(
     tracer: Tracer, q_from: IntArray, q_start: IntArray, opts: TraceOptions
 ) -> MotionPlan:
@@ -462,14 +541,15 @@ def _enter(
     opts: TraceOptions,
     say: Callable[[str], None],
 ) -> tuple[MotionPlan, IntArray, float]:
-    """Move from ``q_from`` onto the curve near the start of the tracer's arc.
+    """Move from ``q_from`` onto the curve near where the tracer's piece begins (its start, or
+    its end for a piece traced backward).
 
-    The start of an arc is usually a tight spot (that is why the arc ends there): it is entered
+    The end of an arc is usually a tight spot (that is why the arc ends there): it is entered
     by a straight motion, or by a search to a roomier state the arm can lift off to from there
     and that lift-off run backward (:func:`_enter_backward`). Otherwise the entry is one of the
-    first scan points along the arc whose best configuration keeps the transit search's buffer
-    plus half its sample spacing plus 0.5 mm of slack; the pass then runs back to the start of
-    the arc before tracing forward.
+    first scan points along the piece whose best configuration keeps the transit search's buffer
+    plus half its sample spacing plus 0.5 mm of slack; the pass then runs back to where the
+    piece begins before tracing on.
     """
     arc = tracer.arc
     L = reach.curve.length
@@ -482,7 +562,10 @@ def _enter(
     inside = (scan_s >= arc.start_mm) & (scan_s <= arc.end_mm)
     need = opts.motion.buffer_mm + opts.motion.sample_spacing_mm / 2 + 0.5
     roomy = scan_s[inside & (scores >= need)]
-    candidates = [arc.start_mm, *roomy[:3].tolist()]
+    if tracer.backward:  # the piece begins at its end
+        candidates = [arc.end_mm, *roomy[::-1][:3].tolist()]
+    else:
+        candidates = [arc.start_mm, *roomy[:3].tolist()]
     failures = []
     for i, s_try in enumerate(candidates):
         try:
@@ -509,8 +592,9 @@ def _enter(
         except PlanningError as exc:
             failures.append(f"{s:.1f} mm: {exc}")
     # no room for a searched transit anywhere: straight motions onto the first scan points of
-    # the arc where the links keep the tracer's small buffer
-    tight = scan_s[inside & (scores >= _BODY_BUFFER_MM)][:8]
+    # the piece where the links keep the tracer's small buffer
+    tight = scan_s[inside & (scores >= _BODY_BUFFER_MM)]
+    tight = (tight[::-1] if tracer.backward else tight)[:8]
     for s_try in tight.tolist():
         check_time("moving onto the curve")
         try:

@@ -205,11 +205,13 @@ def _dp_layer(
 
 @dataclass(frozen=True)
 class Piece:
-    """A piece of a reachable arc traced in one pass, with its reference path (layers, rad)."""
+    """A piece of a reachable arc traced in one pass, with its reference path (layers, rad;
+    both in increasing arc length), traced from its end toward its start when ``backward``."""
 
     arc: CurveArc
     layers: FloatArray
     ref: FloatArray
+    backward: bool = False
 
 
 def straightened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArray:
@@ -246,7 +248,11 @@ def straightened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> Float
 
 
 def reference_pieces(
-    fam: CurveFamily, arc: CurveArc, step: float, q_from: FloatArray
+    fam: CurveFamily,
+    arc: CurveArc,
+    step: float,
+    q_from: FloatArray,
+    directions: tuple[bool, ...] = (False, True),
 ) -> list[Piece]:
     """Reference paths through the solution family along ``arc``, as few pieces (passes) as
     possible.
@@ -254,8 +260,11 @@ def reference_pieces(
     Dynamic programming over layers of the family every ``step`` mm: nodes keep a slack, a traced
     transition costs the largest joint change (at most :data:`_MAX_LAYER_STEP_DEG`: the family
     must be followed continuously), a lift-off costs :data:`_LIFT_OFF_DEG` more (a new pass). The
-    first layer's cost is the largest joint change from ``q_from``. The wrist flip (joint 4 + 180
-    deg, joint 5 negated) moves no link, so it is chosen per piece afterwards.
+    first layer's cost is the largest joint change from ``q_from``, and the DP runs each way of
+    ``directions`` along the arc (False: forward, True: backward): the cheaper way is traced
+    (the pieces come in the order traced, each ``backward`` when traced from its end). The
+    wrist flip (joint 4 + 180 deg, joint 5 negated) moves no link, so it is chosen per piece
+    afterwards.
     """
     a, b = arc.start_mm, arc.end_mm
     tip = fam.tip_joints
@@ -283,32 +292,15 @@ def reference_pieces(
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
     wrap = fam.unlimited[tip]
     here = np.degrees(q_from[tip])
-    first = [nodes[0][1]]
-    flip0 = fam.flipped(nodes[0][1])
-    if flip0 is not None:
-        first.append(flip0)
-    cost = np.min([_joint_change(q, here, wrap) for q in first], axis=0)
-    back = []
-    for k in range(1, len(nodes)):
-        gap = nodes[k][0] - nodes[k - 1][0]
-        bonus = 0.3 * nodes[k][2]
-        max_step = _MAX_LAYER_STEP_DEG * max(gap / 5.0, 1.0)
-        cost, arg, lifted = _dp_layer(
-            nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max_step, _LIFT_OFF_DEG
-        )
-        back.append((arg, lifted))
-    j = int(np.argmin(cost))
-    path, lifts = [j], []
-    for k in range(len(back) - 1, -1, -1):
-        arg, lifted = back[k]
-        if lifted[j]:
-            lifts.append(k + 1)  # a new pass starts at layer k + 1
-        j = int(arg[j])
-        path.append(j)
-    path.reverse()
-    ref = np.array([nodes[k][1][path[k]] for k in range(len(nodes))])
-    s_nodes = np.array([x[0] for x in nodes])
-    cuts = [0, *sorted(lifts), len(nodes)]
+    # either way along the arc, whichever the DP finds cheaper: its first layer costs the
+    # approach from q_from, so an arc whose far end is nearer is traced from there
+    routes = [(*_route(fam, nodes[::-1] if backward else nodes, here, wrap), backward)
+              for backward in directions]  # fmt: skip
+    _, path, lifts, backward = min(routes, key=lambda r: (r[0], r[3]))
+    seq = nodes[::-1] if backward else nodes
+    ref = np.array([seq[k][1][path[k]] for k in range(len(seq))])
+    s_seq = np.array([x[0] for x in seq])
+    cuts = [0, *sorted(lifts), len(seq)]
     pieces = []
     prev = here
     for i in range(len(cuts) - 1):
@@ -321,17 +313,56 @@ def reference_pieces(
         ):
             part = flipped
         prev = part[-1]
+        layers = s_seq[lo:hi]
+        # where the piece begins: the arc's end, else the layer before it (the lift-off)
+        begin = (b if backward else a) if i == 0 else float(s_seq[lo - 1])
+        finish = (a if backward else b) if i == len(cuts) - 2 else float(s_seq[hi - 1])
+        if backward:  # stored along the curve, traced the other way
+            part, layers, begin, finish = part[::-1], layers[::-1], finish, begin
         rad = np.radians(part)
         rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
         # the joints that do not move the tool point are left to the tracer (it keeps them)
         full = np.zeros((rad.shape[0], fam.arm.n_joints))
         full[:, tip] = rad
-        full = straightened(fam, s_nodes[lo:hi], full)
-        start = a if i == 0 else float(s_nodes[lo - 1])
-        end = b if i == len(cuts) - 2 else float(s_nodes[hi - 1])
-        layers = s_nodes[lo:hi]
+        full = straightened(fam, layers, full)
         if layers.size == 1:  # a one-layer piece: a constant reference
             layers = np.array([layers[0], layers[0] + 1e-9])
             full = np.vstack([full, full])
-        pieces.append(Piece(CurveArc(start, end), layers, full))
+        pieces.append(Piece(CurveArc(begin, finish), layers, full, backward))
     return pieces
+
+
+def _route(
+    fam: CurveFamily,
+    nodes: list[tuple[float, FloatArray, FloatArray]],
+    here: FloatArray,
+    wrap: NDArray[np.bool_],
+) -> tuple[float, list[int], list[int]]:
+    """The DP through ``nodes`` (layers in the order traced: arc length, members' tip joints
+    in deg, slack) from the tip joints ``here`` (deg): its cost, the member picked on each
+    layer and the layers where a new pass starts."""
+    first = [nodes[0][1]]
+    flip0 = fam.flipped(nodes[0][1])
+    if flip0 is not None:
+        first.append(flip0)
+    cost = np.min([_joint_change(q, here, wrap) for q in first], axis=0)
+    back = []
+    for k in range(1, len(nodes)):
+        gap = abs(nodes[k][0] - nodes[k - 1][0])
+        bonus = 0.3 * nodes[k][2]
+        max_step = _MAX_LAYER_STEP_DEG * max(gap / 5.0, 1.0)
+        cost, arg, lifted = _dp_layer(
+            nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max_step, _LIFT_OFF_DEG
+        )
+        back.append((arg, lifted))
+    j = int(np.argmin(cost))
+    total = float(cost[j])
+    path, lifts = [j], []
+    for k in range(len(back) - 1, -1, -1):
+        arg, lifted = back[k]
+        if lifted[j]:
+            lifts.append(k + 1)  # a new pass starts at layer k + 1
+        j = int(arg[j])
+        path.append(j)
+    path.reverse()
+    return total, path, lifts

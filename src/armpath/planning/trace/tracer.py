@@ -121,6 +121,7 @@ class Tracer:
         pairs = self.world.pairs(self.arm)
         self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
         self.layers, self.ref = piece.layers, piece.ref
+        self.backward = piece.backward
         self.radii = _box_radii(int(self.tip.sum()), int(self.grid.max_ticks[self.tip].min()))
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
@@ -131,8 +132,9 @@ class Tracer:
         )
 
     def align(self, q_start: FloatArray) -> None:
-        """Shift unlimited joints of the reference by whole turns to start near ``q_start``."""
-        first = self.q_ref(self.layers[0])
+        """Shift unlimited joints of the reference by whole turns to start (where the piece is
+        traced from) near ``q_start``."""
+        first = self.q_ref(self.layers[-1] if self.backward else self.layers[0])
         turns = np.round((q_start - first) / (2 * np.pi)) * self.wrap
         self.ref = self.ref + turns * 2 * np.pi
 
@@ -365,11 +367,14 @@ class Tracer:
     def start_state(
         self, s_from: float, body_buffer_mm: float = _BODY_BUFFER_MM
     ) -> tuple[IntArray, float]:
-        """A lattice state with the tip in the band as close after ``s_from`` as found, whose
-        links keep ``body_buffer_mm`` beyond the clearance rule."""
+        """A lattice state with the tip in the band as close after ``s_from`` as found (before
+        it, for a piece traced backward), whose links keep ``body_buffer_mm`` beyond the
+        clearance rule."""
         extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
+        sign = -1.0 if self.backward else 1.0
+        edge = self.arc.end_mm if self.backward else self.arc.start_mm
         for gap in (0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 6.4):
-            s0 = s_from + gap
+            s0 = s_from + sign * gap
             E, n, b = self.target(s0)
             ref = self.q_ref(s0)
             bases = [ref]
@@ -392,11 +397,12 @@ class Tracer:
                     continue
                 q_cand = self.grid.to_joint(cand)
                 d, s, sd = self.tip_checks(tool_position(self.arm, q_cand), s0)
-                ok = self.in_band(d, sd, 0.1) & (s >= self.arc.start_mm - self.tol)
+                ok = self.in_band(d, sd, 0.1)
+                ok &= sign * (s - edge) >= -self.tol  # not before where the piece begins
                 ok &= self.fam.axis_ok(q_cand, _AXIS_MARGIN_RAD)
                 ok &= self.world.satisfied(self.arm, self.grid.to_joint(cand), extra)
                 if np.any(ok):
-                    k = int(np.argmin(np.where(ok, s, np.inf)))
+                    k = int(np.argmin(np.where(ok, sign * s, np.inf)))
                     return cand[k], float(s[k])
         raise PlanningError(
             f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
