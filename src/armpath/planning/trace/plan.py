@@ -193,19 +193,7 @@ def plan_trace(
         # all around: run on a little past the start so the covered ends meet
         arcs = [CurveArc(arcs[0].start_mm, arcs[0].start_mm + curve.length)]
         overlap = 2.0 * opts.tolerance_mm
-    # each arc the way its reference DP finds cheaper; where that traced a piece backward, the
-    # curve is traced forward only as well and the better plan kept (the DP sees the approach,
-    # not how hard a tight end is to finish in): the most of the curve, the fewest passes, the
-    # fewest commands
-    forward = None
-    try:
-        run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, (False, True))
-    except PlanningError:
-        run = forward = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, (False,))
-    if forward is None and any(p.backward for p in run.pieces):
-        say("tracing again, every piece forward")
-        forward = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, (False,))
-        run = forward if forward.better_than(run) else run
+    run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
     states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
     prof_s, prof_d = run.profile_s, run.profile_d
     not_traced += _gaps_between_passes(arcs, passes, not_traced)
@@ -365,7 +353,8 @@ def _lift_off(
 
 @dataclass(frozen=True)
 class _Tracing:
-    """The passes and transits of one way of tracing the arcs (see :func:`_trace_arcs`)."""
+    """What tracing the arcs made (see :func:`_trace_arcs`): states, passes, transits, arcs
+    not traced and the deviation profile."""
 
     states: list[IntArray]
     passes: list[TracePass]
@@ -373,19 +362,6 @@ class _Tracing:
     not_traced: list[tuple[CurveArc, str]]
     profile_s: list[FloatArray]
     profile_d: list[FloatArray]
-    pieces: list[Piece]
-
-    @property
-    def covered_mm(self) -> float:
-        return float(sum(p.end_mm - p.start_mm for p in self.passes))
-
-    def better_than(self, other: _Tracing) -> bool:
-        """Whether this tracing covers more of the curve (by over 0.5 mm), or as much in fewer
-        passes, or in as many with fewer commands."""
-        if abs(self.covered_mm - other.covered_mm) > 0.5:
-            return self.covered_mm > other.covered_mm
-        mine, theirs = (len(self.passes), len(self.states)), (len(other.passes), len(other.states))
-        return mine < theirs
 
 
 def _trace_arcs(
@@ -397,15 +373,13 @@ def _trace_arcs(
     overlap: float,
     opts: TraceOptions,
     say: Callable[[str], None],
-    directions: tuple[bool, ...],
 ) -> _Tracing:
     """Trace ``arcs`` in turn from ``start`` (the last one running on by ``overlap`` mm), each
-    piece in the cheaper of ``directions`` (False: forward, True: backward) by its reference
-    DP. An arc whose pass gets stuck is put back shorter by 1 mm or more, so the loop ends."""
+    piece the way its reference DP chose. An arc whose pass gets stuck is put back shorter by
+    1 mm or more, so the loop ends."""
     fam = reach.family
     curve = reach.curve
     states: list[IntArray] = [start]
-    traced_pieces: list[Piece] = []
     passes: list[TracePass] = []
     transits: list[Transit] = []
     not_traced: list[tuple[CurveArc, str]] = []
@@ -416,10 +390,7 @@ def _trace_arcs(
     while queue:
         check_time("tracing the curve")
         arc, run_on = queue.pop(0)
-        pieces = reference_pieces(
-            fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1]), directions
-        )
-        traced_pieces += pieces
+        pieces = reference_pieces(fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1]))
         for k, piece in enumerate(pieces):
             last_piece = k == len(pieces) - 1
             say(
@@ -485,7 +456,7 @@ def _trace_arcs(
                 if rest is not None:
                     queue.insert(0, (rest, run_on))
                 break
-    return _Tracing(states, passes, transits, not_traced, prof_s, prof_d, traced_pieces)
+    return _Tracing(states, passes, transits, not_traced, prof_s, prof_d)
 
 
 def _rest_of_arc(arc: CurveArc, piece: Piece, s_reached: float, made_pass: bool) -> CurveArc | None:

@@ -48,6 +48,11 @@ _STRAIGHTEN_SLACK = 0.1
 #: Newton steps that bring a moved layer's tip back onto its curve point, and how close (mm).
 _PROJECT_STEPS = 6
 _ON_POINT_MM = 1e-6
+#: How much cheaper (deg of the reference DP's cost, 2 deg a command) tracing an arc from its
+#: end must be to be chosen: the DP sees the approach but not how hard a tight end is to
+#: finish in. On the seed crack the end is nearer by 14 deg (7 commands of approach; 13 as
+#: planned), but finishing in the tight start cost 11 more commands along (93 against 82).
+BACKWARD_MARGIN_DEG = 20.0
 #: Most family members kept on one layer (evenly over the tool directions).
 MAX_LAYER_NODES = 1500
 
@@ -261,8 +266,10 @@ def reference_pieces(
     transition costs the largest joint change (at most :data:`_MAX_LAYER_STEP_DEG`: the family
     must be followed continuously), a lift-off costs :data:`_LIFT_OFF_DEG` more (a new pass). The
     first layer's cost is the largest joint change from ``q_from``, and the DP runs each way of
-    ``directions`` along the arc (False: forward, True: backward): the cheaper way is traced
-    (the pieces come in the order traced, each ``backward`` when traced from its end). The
+    ``directions`` along the arc (False: forward, True: backward): backward is traced where it
+    is cheaper by more than :data:`BACKWARD_MARGIN_DEG` and needs no lift-off (the pieces come
+    in the order traced, each ``backward`` when traced from its end; a backward second pass
+    was seen to find no way in where the forward one did, a 25 mm clamp on the seed crack). The
     wrist flip (joint 4 + 180 deg, joint 5 negated) moves no link, so it is chosen per piece
     afterwards.
     """
@@ -292,11 +299,15 @@ def reference_pieces(
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
     wrap = fam.unlimited[tip]
     here = np.degrees(q_from[tip])
-    # either way along the arc, whichever the DP finds cheaper: its first layer costs the
-    # approach from q_from, so an arc whose far end is nearer is traced from there
-    routes = [(*_route(fam, nodes[::-1] if backward else nodes, here, wrap), backward)
-              for backward in directions]  # fmt: skip
-    _, path, lifts, backward = min(routes, key=lambda r: (r[0], r[3]))
+    # either way along the arc: backward in one pass where the DP finds it cheaper by a margin
+    # (its first layer costs the approach, so an arc whose end is nearer is traced from there)
+    routes = {back: _route(fam, nodes[::-1] if back else nodes, here, wrap) for back in directions}
+    backward = (
+        True in routes
+        and not routes[True][2]
+        and (False not in routes or routes[True][0] < routes[False][0] - BACKWARD_MARGIN_DEG)
+    )
+    _, path, lifts = routes[backward]
     seq = nodes[::-1] if backward else nodes
     ref = np.array([seq[k][1][path[k]] for k in range(len(seq))])
     s_seq = np.array([x[0] for x in seq])
