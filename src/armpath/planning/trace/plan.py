@@ -45,7 +45,7 @@ from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.trace.certificate import certified_axis_angle, certified_deviation
 from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
-from armpath.planning.trace.reference import Piece, reference_pieces
+from armpath.planning.trace.reference import Piece, _joint_change, reference_pieces
 from armpath.planning.trace.tracer import _BODY_BUFFER_MM, GOAL_REACHED_MM, Tracer
 
 FloatArray = NDArray[np.float64]
@@ -422,12 +422,7 @@ def _trace_arcs(
             transits.append(Transit(here, len(states) - 1, motion.method))
             first = len(states) - 1
             pass_states = [q_entry]
-            sign = -1.0 if piece.backward else 1.0
-            begin, finish = (
-                (piece.arc.end_mm, piece.arc.start_mm)
-                if piece.backward
-                else (piece.arc.start_mm, piece.arc.end_mm)
-            )
+            sign, begin, finish = piece.sign, piece.begin_mm, piece.finish_mm
             if sign * (s_entry - begin) > GOAL_REACHED_MM:  # back to where the piece begins first
                 pass_states, s_entry = tracer.run(q_entry, s_entry, begin)
             goal = finish + sign * (run_on if last_piece else 0.0)
@@ -485,10 +480,9 @@ def _nearest_loop_start(
         if q.shape[0] == 0:
             continue
         q = q[fam.score(q, ceiling=_LOOP_START_SLACK) >= _LOOP_START_SLACK]
-        turn = np.abs(q - q_from)[:, tip]
-        turn = np.where(fam.unlimited[tip], np.pi - np.abs(turn % (2 * np.pi) - np.pi), turn)
-        if turn.shape[0] and float(turn.max(axis=1).min()) < best:
-            best, pick = float(turn.max(axis=1).min()), float(s0)
+        turn = _joint_change(np.degrees(q[:, tip]), np.degrees(q_from[tip]), fam.unlimited[tip])
+        if turn.size and float(turn.min()) < best:
+            best, pick = float(turn.min()), float(s0)
     return pick
 
 
@@ -497,12 +491,11 @@ def _rest_of_arc(arc: CurveArc, piece: Piece, s_reached: float, made_pass: bool)
     short of the piece's far end, or None when less than 0.5 mm is left. The rest resumes where
     the pass stopped, or 2 mm past where the piece begins when the pass made no progress (or
     no pass was made): so every arc put back is shorter by 1 mm or more and the loop ends."""
+    begin = piece.begin_mm
     if piece.backward:
-        begin = piece.arc.end_mm
         moved = made_pass and s_reached < begin - 1.0
         resume = s_reached if moved else min(s_reached, begin) - 2.0
         return CurveArc(arc.start_mm, resume) if resume > arc.start_mm + 0.5 else None
-    begin = piece.arc.start_mm
     moved = made_pass and s_reached > begin + 1.0
     resume = s_reached if moved else max(s_reached, begin) + 2.0
     return CurveArc(resume, arc.end_mm) if resume < arc.end_mm - 0.5 else None
@@ -566,10 +559,7 @@ def _enter(
     inside = (scan_s >= arc.start_mm) & (scan_s <= arc.end_mm)
     need = opts.motion.buffer_mm + opts.motion.sample_spacing_mm / 2 + 0.5
     roomy = scan_s[inside & (scores >= need)]
-    if tracer.backward:  # the piece begins at its end
-        candidates = [arc.end_mm, *roomy[::-1][:3].tolist()]
-    else:
-        candidates = [arc.start_mm, *roomy[:3].tolist()]
+    candidates = [tracer.piece.begin_mm, *tracer.piece.in_order(roomy)[:3].tolist()]
     failures = []
     for i, s_try in enumerate(candidates):
         try:
@@ -597,8 +587,7 @@ def _enter(
             failures.append(f"{s:.1f} mm: {exc}")
     # no room for a searched transit anywhere: straight motions onto the first scan points of
     # the piece where the links keep the tracer's small buffer
-    tight = scan_s[inside & (scores >= _BODY_BUFFER_MM)]
-    tight = (tight[::-1] if tracer.backward else tight)[:8]
+    tight = tracer.piece.in_order(scan_s[inside & (scores >= _BODY_BUFFER_MM)])[:8]
     for s_try in tight.tolist():
         check_time("moving onto the curve")
         try:

@@ -218,6 +218,25 @@ class Piece:
     ref: FloatArray
     backward: bool = False
 
+    @property
+    def sign(self) -> float:
+        """+1 traced toward growing arc length, -1 backward."""
+        return -1.0 if self.backward else 1.0
+
+    @property
+    def begin_mm(self) -> float:
+        """Where the piece is traced from (its start, or its end backward)."""
+        return self.arc.end_mm if self.backward else self.arc.start_mm
+
+    @property
+    def finish_mm(self) -> float:
+        """Where the piece is traced to."""
+        return self.arc.start_mm if self.backward else self.arc.end_mm
+
+    def in_order(self, s_mm: FloatArray) -> FloatArray:
+        """Arc lengths (ascending) in the order the piece is traced."""
+        return s_mm[::-1] if self.backward else s_mm
+
 
 def straightened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArray:
     """The reference ``ref`` (rad, one row per layer at arc lengths ``layers`` mm) pulled

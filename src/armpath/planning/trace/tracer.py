@@ -64,9 +64,8 @@ _ADVANCES_MM = tuple(float(a) for a in np.arange(20.0, 0.25, -0.5))
 #: Within this distance of a pass's goal (mm), a command that advances less than
 #: :data:`_CREEP_MM` is compared with one onto the goal along the family
 #: (:meth:`Tracer._onto_goal`), and where no command advances, the most slack or the goal is
-#: tried: where the family narrows
-#: toward an arc's end, the seed crack traced from its far end crept 17 commands over its last
-#: 7 mm (89 commands along instead of 93 with this).
+#: tried: where the family narrows toward an arc's end, the seed crack traced from its far end
+#: crept 17 commands over its last 7 mm (89 commands along instead of 93 with this).
 _ENDGAME_MM = 15.0
 _CREEP_MM = 1.0
 #: Within this distance of a pass's goal (mm), a pass that finds no command takes its last one
@@ -128,8 +127,8 @@ class Tracer:
         self.tip = fam.tip_joints
         pairs = self.world.pairs(self.arm)
         self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
+        self.piece = piece
         self.layers, self.ref = piece.layers, piece.ref
-        self.backward = piece.backward
         self.radii = _box_radii(int(self.tip.sum()), int(self.grid.max_ticks[self.tip].min()))
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
@@ -142,7 +141,7 @@ class Tracer:
     def align(self, q_start: FloatArray) -> None:
         """Shift unlimited joints of the reference by whole turns to start (where the piece is
         traced from) near ``q_start``."""
-        first = self.q_ref(self.layers[-1] if self.backward else self.layers[0])
+        first = self.q_ref(self.piece.begin_mm)
         turns = np.round((q_start - first) / (2 * np.pi)) * self.wrap
         self.ref = self.ref + turns * 2 * np.pi
 
@@ -385,8 +384,7 @@ class Tracer:
         it, for a piece traced backward), whose links keep ``body_buffer_mm`` beyond the
         clearance rule."""
         extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
-        sign = -1.0 if self.backward else 1.0
-        edge = self.arc.end_mm if self.backward else self.arc.start_mm
+        sign, edge = self.piece.sign, self.piece.begin_mm
         for gap in (0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 6.4):
             s0 = s_from + sign * gap
             E, n, b = self.target(s0)
