@@ -98,7 +98,8 @@ def landmark_positions(arm: SerialArm, q: ArrayLike) -> FloatArray:
     configuration for the seed arm), equal to :func:`forward_frames` to rounding.
     """
     qa = _as_joint_array(arm, q)
-    flat = np.ascontiguousarray(qa.reshape(-1, arm.n_joints))
+    # contiguous and writable whatever the caller's array: one compiled signature of the kernel
+    flat = np.require(qa.reshape(-1, arm.n_joints), requirements=("C", "W"))
     if len(flat) <= NUMPY_LANDMARK_BATCH and not jit.numba_loaded():
         # a few poses in a process that has run no kernel yet (``armpath fk``): numpy is
         # quicker than loading numba
@@ -213,7 +214,8 @@ def landmark_scratch(n_joints: int) -> np.ndarray:  # pragma: no cover - compile
     """Work space of :func:`_chain_into` for an arm of ``n_joints``: three 4x4 transforms
     and every frame's rotation and origin, ``(3 * 4 + (n + 2) * 3, 4)``."""
     scratch = np.zeros((12 + (n_joints + 2) * 3, 4))
-    scratch[8:12] = np.eye(4)
+    for i in range(4):
+        scratch[8 + i, i] = 1.0
     return scratch
 
 
@@ -258,16 +260,26 @@ def _chain_into(
     A = scratch[4:8]
     M = scratch[8:12]
     pos = scratch[12:].reshape(n_j + 2, 3, 4)
-    T[:, :] = T_world_base
-    pos[0, :, :] = T[:3, :]
+    copy_into(T_world_base, T)
+    copy_into(T, pos[0])
     for i in range(n_j):
         _affine_mul(T, T_parent_joint[i], A)
         _joint_motion_into(axes[i], prismatic[i], q[i], M)
         _affine_mul(A, M, T)
-        pos[i + 1, :, :] = T[:3, :]
+        copy_into(T, pos[i + 1])
     _affine_mul(T, T_flange_tool, A)
-    pos[n_j + 1, :, :] = A[:3, :]
+    copy_into(A, pos[n_j + 1])
     return pos
+
+
+@njit(cache=True)
+def copy_into(src: np.ndarray, dst: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Copy the rows and columns that 2-D ``src`` and ``dst`` share (the smaller of their
+    sizes), element by element: numba compiles slice assignment through its general
+    broadcasting code, seconds for every kernel using it."""
+    for i in range(min(src.shape[0], dst.shape[0])):
+        for j in range(min(src.shape[1], dst.shape[1])):
+            dst[i, j] = src[i, j]
 
 
 @njit(cache=True)
@@ -285,13 +297,14 @@ def _frames_kernel(
     n_cfg, n_j = q.shape
     first = 0 if every else n_j + 1
     out = np.zeros((n_cfg, n_j + 2 - first, 4, 4))
-    out[:, :, 3, 3] = 1.0
     scratch = landmark_scratch(n_j)
     for c in range(n_cfg):
         pos = _chain_into(
             q[c], T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch
         )
-        out[c, :, :3, :] = pos[first:]
+        for f in range(first, n_j + 2):
+            copy_into(pos[f], out[c, f - first])
+            out[c, f - first, 3, 3] = 1.0
     return out
 
 

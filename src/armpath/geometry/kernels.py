@@ -442,8 +442,10 @@ def segments_to_revolution(
     k_count = p0.shape[0]
     out = np.empty(k_count)
     p = np.empty((k_count, 6))
-    p[:, :3] = p0
-    p[:, 3:] = p1
+    for k in range(k_count):  # element by element: slice assignment is slow to compile
+        for i in range(3):
+            p[k, i] = p0[k, i]
+            p[k, 3 + i] = p1[k, i]
     n_chunks = min(k_count, 64)
     for c in range(n_chunks):
         cands = np.empty(8 + verts.shape[0] * 32)

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 from armpath.errors import InvalidInputError
 from armpath.ik.compiled import CompiledSolver, KernelOutput, padded_outputs
 from armpath.ik.kernels import (
+    copy_system,
     fk_error_jacobian,
     keep_solution,
     lu_solve_into,
@@ -46,7 +47,7 @@ from armpath.ik.kernels import (
 )
 from armpath.ik.result import chain_length_scale
 from armpath.jit import njit, prange, threads_pay_off
-from armpath.kinematics import _affine_mul, z_axis_chain
+from armpath.kinematics import _affine_mul, copy_into, z_axis_chain
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -87,10 +88,12 @@ def _mrz(A: FloatArray, phi: float) -> FloatArray:
 
 @njit(cache=True)
 def _rigid_inv(T: FloatArray) -> FloatArray:
-    out = np.eye(4)
-    R = T[:3, :3].T.copy()
-    out[:3, :3] = R
-    out[:3, 3] = -(R @ np.ascontiguousarray(T[:3, 3]))
+    out = np.zeros((4, 4))
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = T[j, i]
+        out[i, 3] = -(T[0, i] * T[0, 3] + T[1, i] * T[1, 3] + T[2, i] * T[2, 3])
+    out[3, 3] = 1.0
     return out
 
 
@@ -363,8 +366,7 @@ def _refine(
         if size < 1e-14 or (size < 1e-11 and size > 0.25 * previous):
             break  # converged, or stalled at rounding level
         previous = size
-        Jw[:, :] = J
-        ew[:] = err
+        copy_system(J, err, Jw, ew)
         if lu_solve_into(Jw, ew, dq) == 0.0:
             break
         if deflate:
@@ -398,8 +400,7 @@ def _refine(
             col += J[r, i] * J[r, i]
         norms *= np.sqrt(col)
     if norms > 0.0:
-        Jw[:, :] = J
-        ew[:] = err
+        copy_system(J, err, Jw, ew)
         ratio = abs(lu_solve_into(Jw, ew, dq)) / norms
     pos = np.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
     rot = np.sqrt(err[3] ** 2 + err[4] ** 2 + err[5] ** 2)
@@ -426,12 +427,14 @@ def _loop_constants(
         for i in range(6):
             j = (start + i) % 6
             order[i] = j
-            K[i] = _mm(_mm(C[6], Tinv), C[0]) if j == 5 else C[j + 1]
+            copy_into(_mm(_mm(C[6], Tinv), C[0]) if j == 5 else C[j + 1], K[i])
         return K, order, 1.0
     for i in range(6):
         j = (start - i) % 6
         order[i] = j
-        K[i] = _mm(_mm(_rigid_inv(C[0]), T), _rigid_inv(C[6])) if j == 0 else _rigid_inv(C[j])
+        copy_into(
+            _mm(_mm(_rigid_inv(C[0]), T), _rigid_inv(C[6])) if j == 0 else _rigid_inv(C[j]), K[i]
+        )
     return K, order, -1.0
 
 
@@ -602,7 +605,9 @@ def _solve_split(
                 M[r, 0] = m0 * cz + m1 * sz
                 M[r, 1] = -m0 * sz + m1 * cz
             _affine_mul(M, K[i], Mb)
-            M[:, :] = Mb
+            for r in range(4):
+                for k in range(4):
+                    M[r, k] = Mb[r, k]
         z0 = M[0, 0] * K[5, 0, 0] + M[1, 0] * K[5, 0, 1] + M[2, 0] * K[5, 0, 2]
         z1 = M[0, 1] * K[5, 0, 0] + M[1, 1] * K[5, 0, 1] + M[2, 1] * K[5, 0, 2]
         phis[c, 5] = np.arctan2(z1, z0)
@@ -652,7 +657,7 @@ def _solve_pose(
         else:
             D = np.empty((4, 4, 4))
             for i in range(4):
-                D[i] = K[i + 1]
+                copy_into(K[i + 1], D[i])
             P = lhs_coefficients(D, deltas, grid, basis_inv)
         count = _solve_split(
             K,
@@ -677,7 +682,8 @@ def _solve_pose(
         for c in range(count):
             for i in range(6):
                 guess[order[i]] = sign * phis[c, i]
-            q[:] = guess
+            for i in range(6):
+                q[i] = guess[i]
             pos, rot, ratio = _refine(C, T, q, newton_iterations, guess, False, scratch)
             if not (pos <= accept and rot <= accept):
                 suspicious = True
@@ -694,7 +700,8 @@ def _solve_pose(
             suspicious = True
             # Two candidates met (or a near-double root): look for the partner by deflation.
             known = out_q[dup if dup >= 0 else kept - 1].copy()
-            q[:] = guess
+            for i in range(6):
+                q[i] = guess[i]
             pos, rot, ratio = _refine(C, T, q, 4 * newton_iterations, known, True, scratch)
             if pos <= accept and rot <= accept:
                 pos, rot, ratio = _refine(C, T, q, newton_iterations, known, False, scratch)

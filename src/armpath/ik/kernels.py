@@ -42,7 +42,8 @@ def lu_solve_into(A: FloatArray, rhs: FloatArray, x: FloatArray) -> float:
                 big = abs(A[r, k])
                 piv = r
         if big == 0.0:
-            x[:] = 0.0
+            for i in range(n):
+                x[i] = 0.0
             return 0.0
         if piv != k:
             for c in range(n):
@@ -364,6 +365,16 @@ def prepare_targets(Ts: FloatArray, length_scale: float) -> FloatArray:
 
 
 @njit(cache=True)
+def copy_system(J: FloatArray, err: FloatArray, Jw: FloatArray, ew: FloatArray) -> None:
+    """``Jw = J``, ``ew = err`` (6 x 6 and 6) element by element: numba compiles whole-slice
+    assignment through its general broadcasting code, seconds per kernel that uses it."""
+    for i in range(6):
+        ew[i] = err[i]
+        for k in range(6):
+            Jw[i, k] = J[i, k]
+
+
+@njit(cache=True)
 def newton_polish(
     C: FloatArray,
     prismatic: NDArray[np.bool_],
@@ -389,8 +400,7 @@ def newton_polish(
             size2 += err[i] * err[i]
         if size2 < 1e-26:
             break  # closed-form candidates are usually exact already
-        Jw[:, :] = J
-        ew[:] = err
+        copy_system(J, err, Jw, ew)
         if lu_solve_into(Jw, ew, dq) == 0.0:
             break
         for i in range(6):
@@ -402,8 +412,7 @@ def newton_polish(
         for r in range(6):
             col2 += J[r, i] * J[r, i]
         norms *= max(np.sqrt(col2), 1e-300)
-    Jw[:, :] = J
-    ew[:] = err
+    copy_system(J, err, Jw, ew)
     ratio = abs(lu_solve_into(Jw, ew, dq)) / norms
     pos = np.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
     rot = np.sqrt(err[3] ** 2 + err[4] ** 2 + err[5] ** 2)
@@ -460,7 +469,8 @@ def keep_solution(
             out_flags[m] |= flag
             return kept, m
     if kept < out_q.shape[0]:
-        out_q[kept] = q
+        for i in range(q.shape[0]):
+            out_q[kept, i] = q[i]
         out_res[kept, 0] = pos
         out_res[kept, 1] = rot
         out_flags[kept] = flag

@@ -255,8 +255,10 @@ def _solve_pose(
         else:
             a = np.zeros(5)
             b = np.zeros(5)
-            a[:] = fit[:5]
-            b[1:] = fit[5:]
+            for i in range(5):  # element by element: slice assignment is slow to compile
+                a[i] = fit[i]
+                if i > 0:
+                    b[i] = fit[4 + i]
             nroots = max(0, trig_roots(a, b, _SCAN_COS, _SCAN_SIN, _SCAN, roots, doubles))
     if prism3:
         for r in range(nroots):
@@ -531,6 +533,8 @@ class SphericalWristSolver(CompiledSolver):
         C[:, :3, 3] /= self.length_scale
         self._C = np.ascontiguousarray(C)
         self._prismatic = np.array([k is JointKind.PRISMATIC for k in kinds])
+        # read-only like the other solvers' constant: the kernels they share compile once
+        self._prismatic.setflags(write=False)
         self._any_prismatic = bool(self._prismatic.any())
         c4 = centre[0] / self.length_scale
         c6 = centre[1] / self.length_scale

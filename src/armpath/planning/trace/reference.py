@@ -313,7 +313,7 @@ def reference_pieces(
         keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
         if keep.size > MAX_LAYER_NODES:  # evenly over the tool directions
             keep = keep[np.linspace(0, keep.size - 1, MAX_LAYER_NODES).astype(np.int64)]
-        nodes.append((float(s), np.degrees(q[keep][:, tip]), sc[keep]))
+        nodes.append((float(s), np.ascontiguousarray(np.degrees(q[keep][:, tip])), sc[keep]))
     if not nodes:
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
     wrap = fam.unlimited[tip]
