@@ -68,6 +68,8 @@ _ADVANCES_MM = tuple(float(a) for a in np.arange(20.0, 0.25, -0.5))
 #: crept 17 commands over its last 7 mm (89 commands along instead of 93 with this).
 _ENDGAME_MM = 15.0
 _CREEP_MM = 1.0
+#: Commands compared there by how far the command after each gets.
+_LOOKAHEAD = 6
 #: Within this distance of a pass's goal (mm), a pass that finds no command takes its last one
 #: back and turns toward the most slack instead, at most :data:`_MAX_BACKTRACKS` times a pass.
 _BACKTRACK_WITHIN_MM = 5.0
@@ -292,9 +294,33 @@ class Tracer:
 
     def step(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """The command from ``qk`` that carries the tip farthest along the curve toward arc
-        length ``goal``."""
+        length ``goal``; within :data:`_ENDGAME_MM` of it, of the :data:`_LOOKAHEAD` best, the
+        one after which the next command gets farthest (where the family narrows, the farthest
+        command can end where the next ones creep)."""
+        options = self._options(qk, sk, goal)
+        if not options:
+            return None
+        if len(options) == 1 or abs(goal - sk) > _ENDGAME_MM:
+            return options[0]
+        sign = 1.0 if goal >= sk else -1.0
+        best, best_value = options[0], -np.inf
+        for q1, s1 in options:
+            if sign * (goal - s1) <= GOAL_REACHED_MM:
+                return q1, s1
+            after = self._options(q1, s1, goal)
+            value = sign * (after[0][1] if after else s1 - sign * _ENDGAME_MM)
+            if value > best_value + 1e-9:
+                best, best_value = (q1, s1), value
+        return best
+
+    def _options(self, qk: IntArray, sk: float, goal: float) -> list[tuple[IntArray, float]]:
+        """The best commands from ``qk`` toward ``goal``, best first: the one that carries the
+        tip farthest (near the reference), and within :data:`_ENDGAME_MM` of the goal the next
+        ones of that advance (at most :data:`_LOOKAHEAD`) and a command onto the goal along the
+        family where the best creeps; empty when none is valid."""
         qk_rad = self.grid.to_joint(qk)
         sign = 1.0 if goal >= sk else -1.0
+        endgame = abs(goal - sk) <= _ENDGAME_MM
         last = None
         for adv in _ADVANCES_MM:
             s1 = sk + sign * min(adv, abs(goal - sk))
@@ -307,17 +333,20 @@ class Tracer:
             if cand.shape[0]:
                 gap = np.abs(self.grid.to_joint(cand) - self.q_ref(s))[:, self.tip]
                 ref_gap = np.degrees(gap).max(axis=1)
-                k = int(np.argmax(sign * s - 0.05 * ref_gap))
-                if abs(s[k] - sk) < _CREEP_MM and abs(goal - sk) <= _ENDGAME_MM:
+                order = np.argsort(-(sign * s - 0.05 * ref_gap), kind="stable")
+                order = order[: _LOOKAHEAD if endgame else 1]
+                out = [(cand[k], float(s[k])) for k in order]
+                if abs(s[order[0]] - sk) < _CREEP_MM and endgame:
                     # creeping near the goal (a tight end): a command onto the goal itself
                     # along the family may get farther
                     onto = self._onto_goal(qk, sk, goal)
-                    if onto is not None and sign * (onto[1] - s[k]) > 0:
-                        return onto
-                return cand[k], float(s[k])
-        if abs(goal - sk) <= _ENDGAME_MM:
-            return self._toward_best(qk, sk, goal) or self._onto_goal(qk, sk, goal)
-        return None
+                    if onto is not None and sign * (onto[1] - s[order[0]]) > 0:
+                        out.insert(0, onto)
+                return out
+        if endgame:
+            found = self._toward_best(qk, sk, goal) or self._onto_goal(qk, sk, goal)
+            return [found] if found is not None else []
+        return []
 
     def _commands_toward(
         self, qk: IntArray, sk: float, s1: float, goal: float, moves: list[FloatArray]
