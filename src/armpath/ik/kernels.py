@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.jit import njit
-from armpath.kinematics import _affine_mul
+from armpath.kinematics import _affine_mul, copy_into
 
 FloatArray = NDArray[np.float64]
 
@@ -366,12 +366,12 @@ def prepare_targets(Ts: FloatArray, length_scale: float) -> FloatArray:
 
 @njit(cache=True)
 def copy_system(J: FloatArray, err: FloatArray, Jw: FloatArray, ew: FloatArray) -> None:
-    """``Jw = J``, ``ew = err`` (6 x 6 and 6) element by element: numba compiles whole-slice
-    assignment through its general broadcasting code, seconds per kernel that uses it."""
+    """``Jw = J``, ``ew = err`` (6 x 6 and 6) element by element
+    (:func:`~armpath.kinematics.copy_into`: numba compiles whole-slice assignment through its
+    general broadcasting code, seconds per kernel that uses it)."""
+    copy_into(J, Jw)
     for i in range(6):
         ew[i] = err[i]
-        for k in range(6):
-            Jw[i, k] = J[i, k]
 
 
 @njit(cache=True)

@@ -368,8 +368,8 @@ class _Tracing:
 
 #: Points along a closed curve where :func:`_nearest_loop_start` looks for the member nearest
 #: the arm, and the slack (mm or deg) such a member keeps: begun there, the UR5 cell's 40 mm
-#: circle takes 103 commands rather than 108, its 80 mm circle 114 rather than 122, the seam 182
-#: either way.
+#: circle took 103 commands rather than 108 (102 since the tracer's endgame looks ahead), its
+#: 80 mm circle 114 rather than 122, the seam 182 either way.
 _LOOP_STARTS = 24
 _LOOP_START_SLACK = 0.3
 
