@@ -360,3 +360,21 @@ def test_a_line_whose_end_is_nearer_is_traced_from_its_end(monkeypatch):
     fwd = plan_trace(*args)
     assert not fwd.passes[0].backward
     assert fwd.sequence.n_commands > res.sequence.n_commands
+
+
+def test_only_unlimited_revolute_joints_repeat_after_a_turn():
+    """A joint without limits turns whole turns to the same links only if it is revolute: an
+    unlimited prismatic joint (a linear axis) is never wrapped by 360 deg."""
+    from armpath.geometry.world import CollisionWorld
+    from armpath.model.dh import robot_from_dict
+    from armpath.planning.trace.family import GenericCurveFamily
+
+    links = [
+        {"a": 0, "alpha": -90, "d": 0, "theta": 0, "type": "prismatic"},  # no limits: unlimited
+        {"a": 300, "alpha": 0, "d": 0},  # no limits: unlimited
+        {"a": 250, "alpha": 0, "d": 0, "limits": [-150, 150]},
+    ]
+    arm = robot_from_dict({"links": links})
+    curve = Polyline("line", np.array([[300.0, 100.0, 0.0], [300.0, -100.0, 0.0]]))
+    fam = GenericCurveFamily(arm, CollisionWorld(()), curve)
+    assert fam.unlimited.tolist() == [False, True, False]

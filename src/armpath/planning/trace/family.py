@@ -37,7 +37,7 @@ from armpath.ik.solve import complete_solver
 from armpath.ik.target import ToolTarget
 from armpath.kinematics import landmark_positions, tool_pose
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
-from armpath.model.serial_arm import SerialArm
+from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -159,8 +159,10 @@ class CurveFamily:
         self._labels = [p.label for p in pairs]
         self._others = [p.other for p in pairs]
         self._is_self = np.array([p.is_self for p in pairs], dtype=bool)
-        #: joints without limits (turning by whole turns gives the same links)
-        self.unlimited = ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
+        #: revolute joints without limits (turning by whole turns gives the same links; an
+        #: unlimited prismatic joint does not repeat)
+        revolute = np.array([j.kind is JointKind.REVOLUTE for j in self.arm.joints])
+        self.unlimited = revolute & ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
         self._lo = np.where(np.isfinite(self.arm.lower), self.arm.lower, -np.inf)
         self._hi = np.where(np.isfinite(self.arm.upper), self.arm.upper, np.inf)
 
