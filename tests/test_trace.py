@@ -378,3 +378,24 @@ def test_only_unlimited_revolute_joints_repeat_after_a_turn():
     curve = Polyline("line", np.array([[300.0, 100.0, 0.0], [300.0, -100.0, 0.0]]))
     fam = GenericCurveFamily(arm, CollisionWorld(()), curve)
     assert fam.unlimited.tolist() == [False, True, False]
+
+
+def test_an_arc_without_a_reference_is_reported_not_traced(monkeypatch):
+    """Where the reference DP finds no clear member on an arc (a short rest of an arc in a
+    tight spot, after a pass got stuck), the arc is listed as not traced with the reason, like
+    any other, instead of the whole trace failing on it."""
+    from armpath.errors import PlanningError
+    from armpath.planning.trace import plan
+
+    def no_reference(fam, arc, step, q_from):
+        raise PlanningError(f"no clear configuration found on the arc {arc.start_mm:.3f}..")
+
+    monkeypatch.setattr(plan, "reference_pieces", no_reference)
+    scene = scene_from_dict(TABLE_ONLY)
+    line = Polyline("line", np.array([[300.0, 0.0, 300.0], [400.0, 0.0, 300.0]]))
+    start = deg_to_ticks(np.array([0.0, -90.0, 0.0, 0.0, -90.0, 0.0]))
+    with pytest.raises(PlanningError) as err:
+        plan_trace(seed_arm(), scene.world, start, line, TraceOptions(bound=False))
+    assert str(err.value).startswith(
+        "no reachable part of curve 'line' could be traced: 0.0..100.0 mm: no clear configuration"
+    )

@@ -400,7 +400,15 @@ def _trace_arcs(
     while queue:
         check_time("tracing the curve")
         arc, run_on = queue.pop(0)
-        pieces = reference_pieces(fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1]))
+        try:
+            pieces = reference_pieces(
+                fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1])
+            )
+        except PlanningError as exc:
+            # no clear member on the reference's layers (a short rest of an arc in a tight
+            # spot): reported with the arcs not traced; the passes made so far stand
+            not_traced.append((arc, str(exc)))
+            continue
         for k, piece in enumerate(pieces):
             last_piece = k == len(pieces) - 1
             say(
