@@ -15,6 +15,7 @@ least :data:`MIN_ADVANCE_MM` toward a fixed end, so every pass ends.
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -114,6 +115,13 @@ def _within_disc(
     return out
 
 
+def _frozen(q: IntArray) -> IntArray:
+    """A read-only copy of the lattice state ``q`` (kept by the tracer's memo)."""
+    out = np.array(q, dtype=np.int64, copy=True)
+    out.flags.writeable = False
+    return out
+
+
 class Tracer:
     """Greedy lattice tracing of one arc along a reference path through the family."""
 
@@ -132,6 +140,10 @@ class Tracer:
         self.piece = piece
         self.layers, self.ref = piece.layers, piece.ref
         self.radii = _box_radii(int(self.tip.sum()), int(self.grid.max_ticks[self.tip].min()))
+        #: what :meth:`_options` and :meth:`_toward_best` found, by method, state and arc lengths
+        #: (the endgame's lookahead asks again for the state it then moves to, and a take-back
+        #: again for the state before); emptied when the reference turns (:meth:`align`)
+        self._found: dict[tuple[str, bytes, float, float], Any] = {}
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
         s_arr = np.asarray(s, dtype=np.float64)
@@ -146,6 +158,7 @@ class Tracer:
         first = self.q_ref(self.piece.begin_mm)
         turns = np.round((q_start - first) / (2 * np.pi)) * self.wrap
         self.ref = self.ref + turns * 2 * np.pi
+        self._found.clear()
 
     def matched(self, q: FloatArray, like: FloatArray) -> FloatArray:
         """The representation of each configuration's links (``q`` ``(6,)`` or ``(M, 6)``)
@@ -314,6 +327,13 @@ class Tracer:
         return best
 
     def _options(self, qk: IntArray, sk: float, goal: float) -> list[tuple[IntArray, float]]:
+        """:meth:`_find_options`, once per state and arc lengths."""
+        key = ("options", np.asarray(qk, np.int64).tobytes(), sk, goal)
+        if key not in self._found:
+            self._found[key] = [(_frozen(q), s) for q, s in self._find_options(qk, sk, goal)]
+        return list(self._found[key])
+
+    def _find_options(self, qk: IntArray, sk: float, goal: float) -> list[tuple[IntArray, float]]:
         """The best commands from ``qk`` toward ``goal``, best first: the one that carries the
         tip farthest (near the reference), and within :data:`_ENDGAME_MM` of the goal the next
         ones of that advance (at most :data:`_LOOKAHEAD`) and a command onto the goal along the
@@ -366,6 +386,17 @@ class Tracer:
         return self.valid_ends(qk, sk, unique_states(np.concatenate(found)), goal)
 
     def _toward_best(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """:meth:`_find_toward_best`, once per state and arc lengths."""
+        key = ("toward_best", np.asarray(qk, np.int64).tobytes(), sk, goal)
+        if key not in self._found:
+            found = self._find_toward_best(qk, sk, goal)
+            self._found[key] = None if found is None else (_frozen(found[0]), found[1])
+        result: tuple[IntArray, float] | None = self._found[key]
+        return result
+
+    def _find_toward_best(
+        self, qk: IntArray, sk: float, goal: float
+    ) -> tuple[IntArray, float] | None:
         """Near the end of an arc (a tight spot): small advances, the joints turned toward the
         family member with the most slack there rather than along the reference."""
         qk_rad = self.grid.to_joint(qk)
