@@ -605,9 +605,7 @@ def _solve_split(
                 M[r, 0] = m0 * cz + m1 * sz
                 M[r, 1] = -m0 * sz + m1 * cz
             _affine_mul(M, K[i], Mb)
-            for r in range(4):
-                for k in range(4):
-                    M[r, k] = Mb[r, k]
+            copy_into(Mb, M)
         z0 = M[0, 0] * K[5, 0, 0] + M[1, 0] * K[5, 0, 1] + M[2, 0] * K[5, 0, 2]
         z1 = M[0, 1] * K[5, 0, 0] + M[1, 1] * K[5, 0, 1] + M[2, 1] * K[5, 0, 2]
         phis[c, 5] = np.arctan2(z1, z0)
