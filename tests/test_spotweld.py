@@ -92,9 +92,10 @@ def test_order_is_the_best_planned_and_every_order_ranked(task3):
     assert all(o["family_bound_commands"] >= doc["lower_bound_commands"] for o in orders)
     # every order whose bound is below the plan was planned (the few beyond the best two)
     below = [o for o in orders if o["lower_bound_commands"] < doc["n_commands"]]
-    assert len(below) >= 3 and all(o["planned_commands"] is not None for o in below)
+    assert below and all(o["planned_commands"] is not None for o in below)
     chosen = next(o for o in orders if o["order"] == doc["order"])
     assert chosen["planned_commands"] == doc["n_commands"]
+    assert doc["n_commands"] <= 133  # the README's Task 3 (goal states chosen together)
     # the legs add up and each needs at least its direct-motion count
     assert sum(leg["commands"] for leg in doc["legs"]) == doc["n_commands"]
     assert all(leg["commands"] >= leg["direct_commands"] for leg in doc["legs"])

@@ -6,6 +6,9 @@
 * its members reach their targets and keep the margin plus the buffer (independent forward
   kinematics of the UR5 cell's arm, the cell's own clearance); the lattice goal states next to
   them reach their targets within the tolerance;
+* a guide built with a smaller buffer and then narrowed to a larger one holds exactly the
+  members of a guide built with the larger one, each keeping its room (independent forward
+  kinematics: the members still reach their welds);
 * (tests/test_ur5_cell.py) on the UR5 cell, the tour planned through them needs far fewer
   commands than through goal states each picked nearest the start (393 before).
 """
@@ -108,3 +111,17 @@ def test_guided_members_and_goal_states_reach_their_welds(cell):
     for t, states in zip(order, goals, strict=True):
         tips = np.array([ur5_landmarks(np.degrees(arm.lattice.to_joint(s)))[-1] for s in states])
         assert np.linalg.norm(tips - pts[t], axis=-1).max() <= 0.05
+
+
+def test_a_narrowed_guide_holds_what_a_guide_built_so_holds(cell):
+    scene, arm, pts, guide = cell  # built with the default buffer, 1.5 mm
+    fam = tour._targets_family(arm, scene.world, pts)
+    wide = TourGuide.build(fam, pts, 0.05, 0.5)
+    narrowed = wide.with_buffer(1.5)
+    for t in range(len(pts)):
+        assert wide.layers[t].size > guide.layers[t].size > 0
+        np.testing.assert_array_equal(narrowed.layers[t].q, guide.layers[t].q)
+        np.testing.assert_array_equal(narrowed.room[t], guide.room[t])
+        assert wide.room[t].min() >= 0.5 and narrowed.room[t].min() >= 1.5
+        tips = np.array([ur5_landmarks(np.degrees(q))[-1] for q in wide.layers[t].q[::25]])
+        assert np.linalg.norm(tips - pts[t], axis=-1).max() < 0.05

@@ -10,8 +10,10 @@ next order whose bound is below the best plan so far (a few at most), and the or
 fewest planned commands wins. Each planned order is planned a second time through goal states
 chosen together (:mod:`~armpath.planning.tour_guide`: the shortest path through clear members
 of the family at every target), the shorter plan counting; the order whose such path is
-shortest is planned too. The tour's bound over every order and every goal configuration
-comes from :func:`~armpath.planning.bounds.tour_bound`.
+shortest is planned too, and for each room the members keep beyond the margin
+(:data:`GUIDE_BUFFERS_MM`: less room lets them lie nearer each other, at the price of tighter
+legs) the :data:`GUIDED_ORDERS` orders whose guided paths are shortest. The tour's bound over
+every order and every goal configuration comes from :func:`~armpath.planning.bounds.tour_bound`.
 """
 
 from __future__ import annotations
@@ -43,7 +45,12 @@ from armpath.planning.motion import (
     plan_motion,
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
-from armpath.planning.reach import MAX_TOLERANCE_MM, MIN_TOLERANCE_MM, goal_states
+from armpath.planning.reach import (
+    GOAL_BODY_BUFFER_MM,
+    MAX_TOLERANCE_MM,
+    MIN_TOLERANCE_MM,
+    goal_states,
+)
 from armpath.planning.tour_guide import TourGuide
 from armpath.planning.trace.family import CurveFamily, curve_family
 
@@ -165,11 +172,13 @@ def plan_tour(
     most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
     at most :data:`MAX_TOUR_TARGETS`). Without orientation rules, each planned order is also
     planned through goal states chosen together (:class:`TourGuide`; up to
-    :data:`MAX_GUIDED_ORDERS` orders, the one whose guided path is shortest planned too) and the
-    shorter plan counts. Raises :class:`PlanningError` when a target cannot be
-    reached clear of the obstacles. ``orders_not_planned`` of the result says, for each ranked
-    order that has no planned command count, why. ``orientations``: a tool orientation rule per
-    target (None: the tool point only).
+    :data:`MAX_GUIDED_ORDERS` orders, the one whose guided path is shortest planned too, and at
+    each of :data:`GUIDE_BUFFERS_MM` the :data:`GUIDED_ORDERS` whose guided paths are shortest
+    and no longer than the best plan) and the shorter plan counts. Raises
+    :class:`PlanningError` when a target cannot be reached clear of the obstacles.
+    ``orders_not_planned`` of the result says, for each ranked order that has no planned command
+    count, why. ``orientations``: a tool orientation rule per target (None: the tool point
+    only).
     """
     try:
         order = VisitOrder(order)
@@ -227,7 +236,8 @@ def plan_tour(
         fam, start, pts, ranking, return_to_start, tolerance_mm, say
     )
     q0 = arm.lattice.to_joint(start)
-    guide = _tour_guide(fam, pts, tolerance_mm, orientations, say)
+    guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say)
+    guide = None if guide_all is None else guide_all.with_buffer(GUIDE_BUFFERS_MM[0])
     guide_paths: dict[tuple[int, ...], tuple[float, list[FloatArray]]] = {}
     if guide is not None and len(orders) <= MAX_GUIDED_ORDERS:
         for o in ranking:
@@ -342,6 +352,36 @@ def plan_tour(
         planned[o] = total
         if best is None or total < best[0]:
             best = (total, legs, o)
+    # goal states chosen together at every buffer: members nearer the obstacles can lie nearer
+    # each other (the seed's Task 3: 141 commands with 1.5 mm, 133 with 0.5 mm)
+    if guide_all is not None and len(orders) <= MAX_GUIDED_ORDERS:
+        for buffer in GUIDE_BUFFERS_MM:
+            buffered = guide_all.with_buffer(buffer)
+            paths = {}
+            for o in orders:
+                found = buffered.path(q0, o, return_to_start)
+                if found is not None:
+                    paths[o] = found
+            for o in sorted(paths, key=lambda o: (paths[o][0], o))[:GUIDED_ORDERS]:
+                if (buffer == GUIDE_BUFFERS_MM[0] and o in planned) or (
+                    best is not None and paths[o][0] >= best[0]
+                ):
+                    continue  # planned so already, or its members are too far apart to beat it
+                guided = buffered.goal_states(q0, o, paths[o][1])
+                if guided is None:
+                    continue
+                name = "-".join(str(i + 1) for i in o)
+                say(f"planning order {name} through goal states keeping {buffer:g} mm more")
+                try:
+                    legs = legs_of(o, name, guided)
+                except PlanningError:
+                    continue
+                total = _commands(legs)
+                planned[o] = min(planned.get(o, total), total)
+                not_planned.pop(o, None)
+                if best is None or total < best[0]:
+                    best = (total, legs, o)
+                    count_guided(o, guided)
     for o in ranking[tried : tried + LISTED_ORDERS]:
         why = (
             f"not planned: the {orders_to_plan} best-ranked order(s) and the one whose "
@@ -422,6 +462,12 @@ def _targets_family(arm: SerialArm, world: CollisionWorld, pts: FloatArray) -> C
 
 #: Most visiting orders whose guided paths are all compared (4! = 24).
 MAX_GUIDED_ORDERS = 24
+#: The room (mm) beyond the margin that the members of a guided path keep: the first for the
+#: planned orders' second plan, each for the :data:`GUIDED_ORDERS` orders whose guided paths
+#: are shortest.
+GUIDE_BUFFERS_MM = (GOAL_BODY_BUFFER_MM, 0.5)
+#: Orders planned through their guided goal states at each buffer.
+GUIDED_ORDERS = 4
 
 
 def _commands(legs: list[MotionPlan]) -> int:
@@ -441,7 +487,7 @@ def _tour_guide(
         return None
     say("sampling clear configurations at every target")
     try:
-        return TourGuide.build(fam, pts, tolerance_mm)
+        return TourGuide.build(fam, pts, tolerance_mm, min(GUIDE_BUFFERS_MM))
     except PlanningError:
         return None
 

@@ -15,7 +15,7 @@ tour is planned leg by leg to those.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -52,6 +52,9 @@ class TourGuide:
     layers: list[Layer]
     targets: FloatArray
     tolerance_mm: float
+    #: each member's room (mm): the least clearance of its links beyond the margin, per layer
+    #: (empty: not known)
+    room: tuple[FloatArray, ...] = ()
 
     @staticmethod
     def build(
@@ -66,15 +69,33 @@ class TourGuide:
         sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS)
         pairs = world.pairs(arm)
         is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
-        need = np.where(is_tip, 0.0, world.required(arm) + body_buffer_mm)
-        layers = []
+        required = world.required(arm)
+        layers, rooms = [], []
         for p in targets:
             check_time("choosing the tour's goal states")
             lay = sampler.layer(p, sampler.directions([]), levels=0)
             values, _ = world.pair_clearances(arm, lay.q)
-            ok = np.all(values >= need, axis=-1) if lay.size else np.zeros(0, dtype=bool)
+            if lay.size:
+                room = np.min(values[:, ~is_tip] - required[~is_tip], axis=-1, initial=np.inf)
+                ok = (room >= body_buffer_mm) & np.all(values[:, is_tip] >= 0.0, axis=-1)
+            else:
+                room, ok = np.zeros(0), np.zeros(0, dtype=bool)
             layers.append(Layer(lay.u[ok], lay.err[ok], lay.q[ok], lay.dirs[ok]).without_errors())
-        return TourGuide(arm, world, sampler, layers, np.asarray(targets), tolerance_mm)
+            rooms.append(room[ok])
+        return TourGuide(
+            arm, world, sampler, layers, np.asarray(targets), tolerance_mm, tuple(rooms)
+        )
+
+    def with_buffer(self, body_buffer_mm: float) -> TourGuide:
+        """This guide with only the members whose links keep the margin plus
+        ``body_buffer_mm`` (at least the buffer it was built with)."""
+        keep = [room >= body_buffer_mm for room in self.room]
+        layers = [
+            Layer(lay.u[k], lay.err[k], lay.q[k], lay.dirs[k])
+            for lay, k in zip(self.layers, keep, strict=True)
+        ]
+        rooms = tuple(room[k] for room, k in zip(self.room, keep, strict=True))
+        return replace(self, layers=layers, room=rooms)
 
     def path(
         self, q_start: FloatArray, order: tuple[int, ...], back: bool
