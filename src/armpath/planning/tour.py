@@ -383,10 +383,13 @@ def plan_tour(
                     best = (total, legs, o)
                     count_guided(o, guided)
     for o in ranking[tried : tried + LISTED_ORDERS]:
+        if o in planned:  # planned through the goal states chosen together
+            continue
         why = (
             f"not planned: the {orders_to_plan} best-ranked order(s) and the one whose "
             "guided path is shortest are planned, then those "
-            f"whose bound is below the best plan (at most {EXTRA_ORDERS} more)"
+            f"whose bound is below the best plan (at most {EXTRA_ORDERS} more) and the "
+            f"{GUIDED_ORDERS} whose guided paths are shortest at each room kept"
         )
         if best is not None and bounds[o] >= best[0]:
             why += f"; its bound {bounds[o]} cannot beat the {best[0]} commands planned"

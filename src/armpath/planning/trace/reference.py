@@ -70,8 +70,8 @@ _PROJECT_STEPS = 6
 _ON_POINT_MM = 1e-6
 #: How much cheaper (deg of the reference DP's cost, 2 deg a command) tracing an arc from its
 #: end must be to be chosen: the DP sees the approach but not how hard a tight end is to
-#: finish in. The seed crack's end is nearer by 14 deg: traced from there 152 commands (70
-#: onto the crack, 82 along) against 163 forward (83 + 80).
+#: finish in. The seed crack's end is nearer by 14 deg: traced from there 145 commands (70
+#: onto the crack, 75 along) against 156 forward (83 + 73).
 BACKWARD_MARGIN_DEG = 10.0
 #: Most family members kept on one layer (evenly over the tool directions).
 MAX_LAYER_NODES = 1500
