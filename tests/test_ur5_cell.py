@@ -241,5 +241,6 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     assert len(doc["visits"]) == 4
     # goal states chosen together (armpath.planning.tour_guide): 393 commands with each weld's
     # goal states picked nearest the start; planned again with three searches per leg, being
-    # far above the goal states' bound (SECOND_LOOK_RATIO): 173 rather than 194
-    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 185
+    # far above the goal states' bound (SECOND_LOOK_RATIO): 173 rather than 194; through members
+    # keeping 0.5 mm beyond the margin as well as 1.5 mm (tour.GUIDE_BUFFERS_MM): 164
+    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 164
