@@ -240,7 +240,7 @@ class DHRobot:
         def col(key: str, scale: float | np.ndarray) -> np.ndarray:
             return np.array([float(r.get(key, 0.0)) for r in rows]) * scale
 
-        lims = [r.get("limits", [None, None]) for r in rows]
+        lims = [r.get("limits") or [None, None] for r in rows]  # null: unlimited
         lower = np.array([-math.inf if lo is None else float(lo) for lo, _ in lims]) * qs
         upper = np.array([math.inf if hi is None else float(hi) for _, hi in lims]) * qs
 

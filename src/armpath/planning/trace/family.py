@@ -165,6 +165,9 @@ class CurveFamily:
         self.unlimited = revolute & ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
         self._lo = np.where(np.isfinite(self.arm.lower), self.arm.lower, -np.inf)
         self._hi = np.where(np.isfinite(self.arm.upper), self.arm.upper, np.inf)
+        #: joint values to the units slack is read in: deg for a revolute joint, mm (model
+        #: units) for a prismatic one
+        self._to_slack_units = np.where(revolute, 180.0 / np.pi, 1.0)
 
     # -- what differs between arms ------------------------------------------------------------
     @cached_property
@@ -298,11 +301,11 @@ class CurveFamily:
         return self.configs_at(c, self.allowed_dirs(s, dirs))
 
     def slacks(self, q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Per configuration: joint slacks ``(M, n)`` deg, pair slacks ``(M, K)`` mm (the tool
-        tip against the surface excluded: NaN) and whether the tool tip stays out of the surface.
-        """
+        """Per configuration: joint slacks ``(M, n)`` deg (mm for a prismatic joint), pair
+        slacks ``(M, K)`` mm (the tool tip against the surface excluded: NaN) and whether the
+        tool tip stays out of the surface."""
         with np.errstate(invalid="ignore"):
-            joint = np.degrees(np.minimum(self._hi - q, q - self._lo))
+            joint = np.minimum(self._hi - q, q - self._lo) * self._to_slack_units
         values, _ = self.world.pair_clearances(self.arm, q)
         pair = values - self._required
         tip_ok = np.all(pair[:, self._touch_cols] >= -TOUCH_MM, axis=-1)
@@ -329,7 +332,9 @@ class CurveFamily:
         top = np.full(q.shape[0], ceiling)
         if limits:
             with np.errstate(invalid="ignore"):
-                room = np.degrees(np.min(np.minimum(self._hi - q, q - self._lo), axis=-1))
+                room = np.min(
+                    np.minimum(self._hi - q, q - self._lo) * self._to_slack_units, axis=-1
+                )
             top = np.minimum(top, room)
         keep = self._columns(obstacles)
         groups = [SlackGroup(keep, top, floor)] if np.any(keep) else []
@@ -355,7 +360,9 @@ class CurveFamily:
             return self.score(q, limits, obstacles)
         if limits:
             with np.errstate(invalid="ignore"):
-                room = np.min(np.minimum(self._hi - q, q - self._lo), axis=-1)
+                room = np.min(
+                    np.minimum(self._hi - q, q - self._lo) * self._to_slack_units, axis=-1
+                )
             first = np.argpartition(-np.nan_to_num(room, nan=-np.inf), _FIRST_SCORED)
         else:
             first = np.arange(q.shape[0])
@@ -390,7 +397,12 @@ class CurveFamily:
         for j in np.flatnonzero(joint <= lowest + within):
             which = "upper" if self._hi[j] - q[j] < q[j] - self._lo[j] else "lower"
             limit = self._hi[j] if which == "upper" else self._lo[j]
-            out.append(f"joint {j + 1} at its {which} limit {np.degrees(limit):g} deg")
+            value, unit = (
+                (float(np.degrees(limit)), "deg")
+                if self._to_slack_units[j] != 1.0
+                else (limit, "mm")
+            )
+            out.append(f"joint {j + 1} at its {which} limit {value:g} {unit}")
         for k in np.flatnonzero(np.nan_to_num(pair, nan=np.inf) <= lowest + within):
             need = self._required[k]
             out.append(f"{self._labels[k]} clearance {pair[k] + need:.3f} mm (needs {need:g})")

@@ -45,7 +45,12 @@ from armpath.planning.motion_check import MotionClearance, motion_clearance
 from armpath.planning.trace.certificate import certified_axis_angle, certified_deviation
 from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
-from armpath.planning.trace.reference import Piece, _joint_change, reference_pieces
+from armpath.planning.trace.reference import (
+    CommandUnits,
+    Piece,
+    _joint_change,
+    reference_pieces,
+)
 from armpath.planning.trace.tracer import _BODY_BUFFER_MM, GOAL_REACHED_MM, Tracer
 
 FloatArray = NDArray[np.float64]
@@ -480,7 +485,7 @@ def _nearest_loop_start(
     nearest ``q_from`` (rad; largest joint change of the joints that move the tool point, whole
     turns of unlimited joints the shorter way) among those with :data:`_LOOP_START_SLACK` of
     slack; ``s_first`` when none has."""
-    tip = fam.tip_joints
+    tip, units = fam.tip_joints, CommandUnits.of_family(fam)
     best, pick = np.inf, s_first
     for s0 in s_first + np.arange(_LOOP_STARTS) * length_mm / _LOOP_STARTS:
         check_time("choosing where to begin the curve")
@@ -488,7 +493,7 @@ def _nearest_loop_start(
         if q.shape[0] == 0:
             continue
         q = q[fam.score(q, ceiling=_LOOP_START_SLACK) >= _LOOP_START_SLACK]
-        turn = _joint_change(np.degrees(q[:, tip]), np.degrees(q_from[tip]), fam.unlimited[tip])
+        turn = _joint_change(units.units(q[:, tip]), units.units(q_from[tip]), units.period)
         if turn.size and float(turn.min()) < best:
             best, pick = float(turn.min()), float(s0)
     return pick

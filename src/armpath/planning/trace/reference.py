@@ -39,12 +39,14 @@ IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 #: Largest joint change between reference layers 5 mm apart that still counts as following the
-#: solution family continuously (deg).
-_MAX_LAYER_STEP_DEG = 12.0
-#: What a lift-off (a new pass) costs in the reference DP, as a joint change (deg).
-_LIFT_OFF_DEG = 120.0
-#: Slack (mm or deg) beyond which a reference node earns no more reward.
+#: solution family continuously (commands: 12 deg where a command moves a joint 2 deg).
+_MAX_LAYER_STEP = 6.0
+#: What a lift-off (a new pass) costs in the reference DP, as a joint change (commands).
+_LIFT_OFF = 60.0
+#: Slack (mm or deg) beyond which a reference node earns no more reward, and the reward per
+#: unit of slack (commands).
 _SLACK_COUNTED = 3.0
+_SLACK_REWARD = 0.15
 #: Rounds of :func:`straightened` on each level (each round moves every layer of the level
 #: once, odd then even ones). Coarse to fine, the seed crack's reference goes from 112 to 72.5
 #: commands' worth (20 rounds are as short; one level of 150 rounds on every layer: 74.6), the
@@ -68,20 +70,47 @@ _BEND_WEIGHT = 1.0
 #: Newton steps that bring a moved layer's tip back onto its curve point, and how close (mm).
 _PROJECT_STEPS = 6
 _ON_POINT_MM = 1e-6
-#: How much cheaper (deg of the reference DP's cost, 2 deg a command) tracing an arc from its
+#: How much cheaper (commands of the reference DP's cost) tracing an arc from its
 #: end must be to be chosen: the DP sees the approach but not how hard a tight end is to
 #: finish in. The seed crack's end is nearer by 14 deg: traced from there 145 commands (70
 #: onto the crack, 75 along) against 156 forward (83 + 73).
-BACKWARD_MARGIN_DEG = 10.0
+BACKWARD_MARGIN = 5.0
 #: Most family members kept on one layer (evenly over the tool directions).
 MAX_LAYER_NODES = 1500
 
 
-def _joint_change(q_deg: FloatArray, here_deg: FloatArray, wrap: NDArray[np.bool_]) -> FloatArray:
-    """Largest joint change (deg) from ``here_deg`` to each row of ``q_deg`` (unlimited joints
-    by the shorter way round)."""
-    d = q_deg - here_deg
-    d = np.where(wrap, (d + 180.0) % 360.0 - 180.0, d)
+@dataclass(frozen=True)
+class CommandUnits:
+    """The tip joints of a family in command units: ``step`` what one command moves each (rad,
+    or model units for a prismatic joint), ``period`` a whole turn in commands for an unlimited
+    revolute joint (0 for the others). The reference DP measures joint changes so, which is
+    what commands cost whatever the joint's kind and lattice."""
+
+    step: FloatArray
+    period: FloatArray
+
+    @staticmethod
+    def of_family(fam: CurveFamily) -> CommandUnits:
+        grid, tip = fam.arm.lattice, fam.tip_joints
+        step = (np.asarray(grid.tick, dtype=np.float64) * grid.max_ticks)[tip]
+        return CommandUnits(step, np.where(fam.unlimited[tip], 2.0 * np.pi / step, 0.0))
+
+    def units(self, q_tip: FloatArray) -> FloatArray:
+        """Tip-joint values (rad, model units) in commands."""
+        return np.asarray(q_tip, dtype=np.float64) / self.step
+
+    def flipped(self, fam: CurveFamily, u: FloatArray) -> FloatArray | None:
+        """:meth:`CurveFamily.flipped` of tip-joint values in commands."""
+        other = fam.flipped(np.degrees(u * self.step))
+        return None if other is None else np.radians(other) / self.step
+
+
+def _joint_change(u: FloatArray, here: FloatArray, period: FloatArray) -> FloatArray:
+    """Largest joint change (commands) from ``here`` to each row of ``u`` (both in commands;
+    joints with a ``period`` by the shorter way round)."""
+    d = u - here
+    turn = np.where(period > 0, period, 1.0)
+    d = d - np.where(period > 0, turn * np.floor(d / turn + 0.5), 0.0)
     return np.asarray(np.abs(d).max(axis=-1), dtype=np.float64)
 
 
@@ -91,11 +120,11 @@ _GRID_KEYS = 3
 
 @njit(cache=True)
 def _cell_index(
-    x: float, low: float, width: float, cells: int, wraps: bool
+    x: float, low: float, width: float, cells: int, period: float
 ) -> int:  # pragma: no cover - compiled
-    """The grid cell of joint value ``x`` (deg) along one key."""
-    if wraps:
-        x = (x + 180.0) % 360.0 - 180.0
+    """The grid cell of joint value ``x`` (commands) along one key."""
+    if period > 0.0:
+        x -= period * np.floor(x / period + 0.5)
     return min(max(int(np.floor((x - low) / width)), 0), cells - 1)
 
 
@@ -105,17 +134,17 @@ def _dp_layer(
     prev_cost: FloatArray,
     q: FloatArray,
     bonus: FloatArray,
-    wrap: NDArray[np.bool_],
+    period: FloatArray,
     max_step: float,
     lift_cost: float,
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover - compiled
-    """One DP layer: for each node of ``q`` (deg) the best predecessor in ``prev_q``, either
+    """One DP layer: for each node of ``q`` (commands) the best predecessor in ``prev_q``, either
     traced (largest joint change <= ``max_step``, costing that change) or after a lift-off
     (costing ``lift_cost`` plus half the change: a new pass).
 
     Traced predecessors are looked for in a grid over the :data:`_GRID_KEYS` joints that spread
     the predecessors over most cells (cells at least ``max_step`` wide, so only a node's cell
-    and its neighbours can hold one; wrapping joints wrap round); lift-offs only where the
+    and its neighbours can hold one; joints with a ``period`` wrap round); lift-offs only where the
     cheapest conceivable one could beat the best traced transition, predecessors cheapest
     first, each measured only until it cannot win."""
     m, j = q.shape[0], q.shape[1]
@@ -132,9 +161,9 @@ def _dp_layer(
     cells = np.ones(j, dtype=np.int64)
     filled = np.zeros(j, dtype=np.int64)
     for k in range(j):
-        if wrap[k]:
-            cells[k] = max(int(360.0 / max_step), 1)
-            low[k], width[k] = -180.0, 360.0 / cells[k]
+        if period[k] > 0.0:
+            cells[k] = max(int(period[k] / max_step), 1)
+            low[k], width[k] = -0.5 * period[k], period[k] / cells[k]
         else:
             low[k] = np.min(prev_q[live, k])
             spread = np.max(prev_q[live, k]) - low[k]
@@ -142,7 +171,7 @@ def _dp_layer(
             cells[k] = int(spread / width[k]) + 1
         seen = np.zeros(cells[k], dtype=np.bool_)
         for a in live:
-            seen[_cell_index(prev_q[a, k], low[k], width[k], cells[k], wrap[k])] = True
+            seen[_cell_index(prev_q[a, k], low[k], width[k], cells[k], period[k])] = True
         filled[k] = np.sum(seen)
     keys = np.argsort(-filled, kind="mergesort")[: min(_GRID_KEYS, j)]
     n_keys = keys.size
@@ -155,7 +184,7 @@ def _dp_layer(
         for g in range(n_keys):
             k = keys[g]
             cell_of[i] += stride[g] * _cell_index(
-                prev_q[live[i], k], low[k], width[k], cells[k], wrap[k]
+                prev_q[live[i], k], low[k], width[k], cells[k], period[k]
             )
     order = np.argsort(cell_of, kind="mergesort")
     first = np.searchsorted(cell_of[order], np.arange(n_cells + 1))
@@ -165,7 +194,7 @@ def _dp_layer(
     for b in range(m):
         for g in range(n_keys):
             k = keys[g]
-            at[g] = _cell_index(q[b, k], low[k], width[k], cells[k], wrap[k])
+            at[g] = _cell_index(q[b, k], low[k], width[k], cells[k], period[k])
             span[g] = min(cells[k], 3)  # the cell and its neighbours (all, when fewer)
         step[:] = 0
         while True:  # every combination of neighbouring cells along the keys
@@ -174,7 +203,7 @@ def _dp_layer(
             for g in range(n_keys):
                 k = keys[g]
                 c = at[g] + step[g] - 1 if span[g] == 3 else step[g]
-                if wrap[k]:
+                if period[k] > 0.0:
                     c %= cells[k]
                 elif c < 0 or c >= cells[k]:
                     inside = False
@@ -185,8 +214,8 @@ def _dp_layer(
                     worst = 0.0
                     for k in range(j):
                         d = q[b, k] - prev_q[a, k]
-                        if wrap[k]:
-                            d = (d + 180.0) % 360.0 - 180.0
+                        if period[k] > 0.0:
+                            d -= period[k] * np.floor(d / period[k] + 0.5)
                         d = abs(d)
                         if d > worst:
                             worst = d
@@ -213,8 +242,8 @@ def _dp_layer(
             worst = 0.0
             for k in range(j):
                 d = q[b, k] - prev_q[a, k]
-                if wrap[k]:
-                    d = (d + 180.0) % 360.0 - 180.0
+                if period[k] > 0.0:
+                    d -= period[k] * np.floor(d / period[k] + 0.5)
                 d = abs(d)
                 if d > worst:
                     worst = d
@@ -453,11 +482,12 @@ def reference_pieces(
     possible.
 
     Dynamic programming over layers of the family every ``step`` mm: nodes keep a slack, a traced
-    transition costs the largest joint change (at most :data:`_MAX_LAYER_STEP_DEG`: the family
-    must be followed continuously), a lift-off costs :data:`_LIFT_OFF_DEG` more (a new pass). The
+    transition costs the largest joint change in commands (:class:`CommandUnits`; at most
+    :data:`_MAX_LAYER_STEP`: the family must be followed continuously), a lift-off costs
+    :data:`_LIFT_OFF` more (a new pass). The
     first layer's cost is the largest joint change from ``q_from``, and the DP runs each way of
     ``directions`` along the arc (False: forward, True: backward): backward is traced where it
-    is cheaper by more than :data:`BACKWARD_MARGIN_DEG` and needs no lift-off (the pieces come
+    is cheaper by more than :data:`BACKWARD_MARGIN` and needs no lift-off (the pieces come
     in the order traced, each ``backward`` when traced from its end; a backward second pass
     was seen to find no way in where the forward one did, a 25 mm clamp on the seed crack). The
     wrist flip (joint 4 + 180 deg, joint 5 negated) moves no link, so it is chosen per piece
@@ -465,6 +495,7 @@ def reference_pieces(
     """
     a, b = arc.start_mm, arc.end_mm
     tip = fam.tip_joints
+    units = CommandUnits.of_family(fam)
     inset = min(1.0, 0.1 * (b - a))
     n = max(int(np.ceil((b - a - 2 * inset) / step)), 1)
     nodes: list[tuple[float, FloatArray, FloatArray]] = []
@@ -484,18 +515,18 @@ def reference_pieces(
         keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
         if keep.size > MAX_LAYER_NODES:  # evenly over the tool directions
             keep = keep[np.linspace(0, keep.size - 1, MAX_LAYER_NODES).astype(np.int64)]
-        nodes.append((float(s), np.ascontiguousarray(np.degrees(q[keep][:, tip])), sc[keep]))
+        nodes.append((float(s), np.ascontiguousarray(units.units(q[keep][:, tip])), sc[keep]))
     if not nodes:
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
     wrap = fam.unlimited[tip]
-    here = np.degrees(q_from[tip])
+    here = units.units(q_from[tip])
     # either way along the arc: backward in one pass where the DP finds it cheaper by a margin
     # (its first layer costs the approach, so an arc whose end is nearer is traced from there)
-    routes = {back: _route(fam, nodes[::-1] if back else nodes, here, wrap) for back in directions}
+    routes = {back: _route(fam, nodes[::-1] if back else nodes, here, units) for back in directions}
     backward = (
         True in routes
         and not routes[True][2]
-        and (False not in routes or routes[True][0] < routes[False][0] - BACKWARD_MARGIN_DEG)
+        and (False not in routes or routes[True][0] < routes[False][0] - BACKWARD_MARGIN)
     )
     _, path, lifts = routes[backward]
     seq = nodes[::-1] if backward else nodes
@@ -507,10 +538,11 @@ def reference_pieces(
     for i in range(len(cuts) - 1):
         lo, hi = cuts[i], cuts[i + 1]
         part = ref[lo:hi]
-        flipped = fam.flipped(part)
+        flipped = units.flipped(fam, part)
         if (
             flipped is not None
-            and _joint_change(flipped[:1], prev, wrap)[0] < _joint_change(part[:1], prev, wrap)[0]
+            and _joint_change(flipped[:1], prev, units.period)[0]
+            < _joint_change(part[:1], prev, units.period)[0]
         ):
             part = flipped
         prev = part[-1]
@@ -520,7 +552,7 @@ def reference_pieces(
         finish = (a if backward else b) if i == len(cuts) - 2 else float(s_seq[hi - 1])
         if backward:  # stored along the curve, traced the other way
             part, layers, begin, finish = part[::-1], layers[::-1], finish, begin
-        rad = np.radians(part)
+        rad = part * units.step
         rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
         # the joints that do not move the tool point are left to the tracer (it keeps them)
         full = np.zeros((rad.shape[0], fam.arm.n_joints))
@@ -537,23 +569,23 @@ def _route(
     fam: CurveFamily,
     nodes: list[tuple[float, FloatArray, FloatArray]],
     here: FloatArray,
-    wrap: NDArray[np.bool_],
+    units: CommandUnits,
 ) -> tuple[float, list[int], list[int]]:
     """The DP through ``nodes`` (layers in the order traced: arc length, members' tip joints
-    in deg, slack) from the tip joints ``here`` (deg): its cost, the member picked on each
-    layer and the layers where a new pass starts."""
+    in commands, slack) from the tip joints ``here`` (commands): its cost, the member picked
+    on each layer and the layers where a new pass starts."""
     first = [nodes[0][1]]
-    flip0 = fam.flipped(nodes[0][1])
+    flip0 = units.flipped(fam, nodes[0][1])
     if flip0 is not None:
         first.append(flip0)
-    cost = np.min([_joint_change(q, here, wrap) for q in first], axis=0)
+    cost = np.min([_joint_change(q, here, units.period) for q in first], axis=0)
     back = []
     for k in range(1, len(nodes)):
         gap = abs(nodes[k][0] - nodes[k - 1][0])
-        bonus = 0.3 * nodes[k][2]
-        max_step = _MAX_LAYER_STEP_DEG * max(gap / 5.0, 1.0)
+        bonus = _SLACK_REWARD * nodes[k][2]
+        max_step = _MAX_LAYER_STEP * max(gap / 5.0, 1.0)
         cost, arg, lifted = _dp_layer(
-            nodes[k - 1][1], cost, nodes[k][1], bonus, wrap, max_step, _LIFT_OFF_DEG
+            nodes[k - 1][1], cost, nodes[k][1], bonus, units.period, max_step, _LIFT_OFF
         )
         back.append((arg, lifted))
     j = int(np.argmin(cost))

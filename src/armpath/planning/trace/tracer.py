@@ -135,6 +135,10 @@ class Tracer:
         self.wrap = fam.unlimited
         self.grid = fam.arm.lattice
         self.tip = fam.tip_joints
+        #: joint changes in degree equivalents: a command's largest move counts 2 (so degrees
+        #: for a revolute joint that moves 2 deg a command, half the mm of a prismatic joint
+        #: that moves 2 mm); what the tracer's joint-move thresholds are written in
+        self.deg_eq = 2.0 / (np.asarray(self.grid.tick, dtype=np.float64) * self.grid.max_ticks)
         pairs = self.world.pairs(self.arm)
         self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
         self.piece = piece
@@ -348,11 +352,12 @@ class Tracer:
                 continue
             last = s1
             drift = self.q_ref(s1) - self.q_ref(sk)
-            pull = np.clip(0.3 * (self.q_ref(sk) - qk_rad), -np.radians(0.5), np.radians(0.5))
+            half = 0.5 / self.deg_eq
+            pull = np.clip(0.3 * (self.q_ref(sk) - qk_rad), -half, half)
             cand, s = self._commands_toward(qk, sk, s1, goal, [drift + pull, drift])
             if cand.shape[0]:
                 gap = np.abs(self.grid.to_joint(cand) - self.q_ref(s))[:, self.tip]
-                ref_gap = np.degrees(gap).max(axis=1)
+                ref_gap = (gap * self.deg_eq[self.tip]).max(axis=1)
                 order = np.argsort(-(sign * s - 0.05 * ref_gap), kind="stable")
                 order = order[: _LOOKAHEAD if endgame else 1]
                 out = [(cand[k], float(s[k])) for k in order]
@@ -373,13 +378,13 @@ class Tracer:
     ) -> tuple[IntArray, FloatArray]:
         """Valid next states (see :meth:`valid_ends`) near the tip target at ``s1``: each joint
         move (rad) from ``qk`` is projected onto the target and the lattice searched around it
-        (moves that end up more than 2.3 deg from ``qk`` are dropped)."""
+        (moves that end up more than 2.3 deg from ``qk`` are dropped: :attr:`deg_eq`)."""
         qk_rad = self.grid.to_joint(qk)
         E, n, b = self.target(s1)
         found = []
         for move in moves:
             base = self.project(qk_rad + move, E)
-            if np.degrees(np.abs(base - qk_rad)).max() <= 2.3:
+            if (np.abs(base - qk_rad) * self.deg_eq).max() <= 2.3:
                 found.append(self.lattice_near(base, n, b, qk))
         if not found:
             return np.zeros((0, qk.size), dtype=np.int64), np.zeros(0)
@@ -407,7 +412,9 @@ class Tracer:
             if not v.reachable:
                 continue
             turn = self.matched(v.q, qk_rad) - qk_rad
-            moves = [np.clip(turn, -np.radians(t), np.radians(t)) for t in (1.9, 1.0, 0.5, 0.25)]
+            moves = [
+                np.clip(turn, -t / self.deg_eq, t / self.deg_eq) for t in (1.9, 1.0, 0.5, 0.25)
+            ]
             cand, s = self._commands_toward(qk, sk, s1, goal, moves)
             if cand.shape[0]:
                 # the most slack first (a tight spot), then the farthest
@@ -429,7 +436,7 @@ class Tracer:
         for v in vt[3:]:
             full = np.zeros(qk_rad.size)
             full[self.tip] = v / np.abs(v).max()
-            moves += [t * full for t in np.radians([0.25, -0.25, 0.5, -0.5, 1.0, -1.0])]
+            moves += [t * full / self.deg_eq for t in (0.25, -0.25, 0.5, -0.5, 1.0, -1.0)]
         cand, s = self._commands_toward(qk, sk, goal, goal, moves)
         if cand.shape[0] == 0:
             return None
@@ -453,7 +460,7 @@ class Tracer:
             q = self.fam.configs(s0, self.fam.fine_dirs)
             if q.shape[0]:
                 q = self.matched(q, ref)
-                turn = np.degrees(np.abs(q - ref)[:, self.tip].max(axis=1))
+                turn = (np.abs(q - ref) * self.deg_eq)[:, self.tip].max(axis=1)
                 score = np.where(turn <= 30.0, self.fam.score(q), -np.inf)
                 roomy = score >= body_buffer_mm
                 pick = (
