@@ -64,6 +64,8 @@ _SHORTEN_ROUNDS = 30
 _SHORTEN_REGION = 2.0
 _SHORTEN_REGION_MAX = 20.0
 _SHORTEN_REGION_MIN = 1e-3
+#: Least gain (commands) the linear program must promise for another round.
+_SHORTEN_GAIN = 1e-3
 #: What :func:`shortened` charges per command unit of the path's second differences, beside
 #: its largest joint changes.
 _BEND_WEIGHT = 1.0
@@ -372,7 +374,8 @@ def shortened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArr
     trust region, its joint limits as linear constraints; the linear program's answer is brought
     back onto the curve points (Newton), each layer checked as in :func:`straightened`, and the
     new path kept only if it costs less (the region then grows, else shrinks). At most
-    :data:`_SHORTEN_ROUNDS` rounds: it ends by design."""
+    :data:`_SHORTEN_ROUNDS` rounds, fewer once the linear program promises less than
+    :data:`_SHORTEN_GAIN`: it ends by design."""
     from scipy.optimize import linprog  # imported when first needed
     from scipy.sparse import coo_matrix
 
@@ -404,8 +407,8 @@ def shortened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArr
         bounds[:n_z] = np.where(fixed, 0.0, region).reshape(-1, 1) * [-1.0, 1.0]
         res = linprog(c, A_ub=coo_matrix(A, shape=(b.size, c.size)), b_ub=b, bounds=bounds,
                       method="highs")  # fmt: skip
-        if res.status != 0:
-            break
+        if res.status != 0 or res.fun > cost_now - _SHORTEN_GAIN:
+            break  # no answer, or the linearised path cannot get shorter: done
         z = res.x[:n_z].reshape(n_layers, r)
         q = ref.copy()
         q[:, tip] = (u + np.einsum("lmr,lr->lm", N, z)) * step
