@@ -464,9 +464,10 @@ def _shorten_constraints(
         )
         col = np.hstack([zc[k + 1], zc[k], zc[k - 1], (n_z + n_seg + (k - 1) * m + j)[:, None]])
         add(coef, col, -sign * (u[k + 1, j] - 2.0 * u[k, j] + u[k - 1, j]))
-    # the joint limits
-    k = np.repeat(np.arange(n_layers), m)
-    j = np.tile(np.arange(m), n_layers)
+    # the joint limits of the interior layers (the end layers do not move; a value there a
+    # rounding outside its limit would make the program infeasible)
+    k = np.repeat(np.arange(1, n_layers - 1), m)
+    j = np.tile(np.arange(m), n_layers - 2)
     upper, lower = np.isfinite(hi[j]), np.isfinite(lo[j])
     add(N[k, j][upper], zc[k][upper], hi[j][upper] - u[k, j][upper])
     add(-N[k, j][lower], zc[k][lower], u[k, j][lower] - lo[j][lower])
