@@ -356,16 +356,18 @@ def plan_tour(
     # each other (the seed's Task 3: 141 commands with 1.5 mm, 133 with 0.5 mm)
     if guide_all is not None and len(orders) <= MAX_GUIDED_ORDERS:
         for buffer in GUIDE_BUFFERS_MM:
-            buffered = guide_all.with_buffer(buffer)
-            paths = {}
-            for o in orders:
-                found = buffered.path(q0, o, return_to_start)
-                if found is not None:
-                    paths[o] = found
+            first = buffer == GUIDE_BUFFERS_MM[0]
+            if first and guide is not None:  # the guide above: its paths are found already
+                buffered, paths = guide, guide_paths
+            else:
+                buffered = guide_all.with_buffer(buffer)
+                paths = {}
+                for o in orders:
+                    found = buffered.path(q0, o, return_to_start)
+                    if found is not None:
+                        paths[o] = found
             for o in sorted(paths, key=lambda o: (paths[o][0], o))[:GUIDED_ORDERS]:
-                if (buffer == GUIDE_BUFFERS_MM[0] and o in planned) or (
-                    best is not None and paths[o][0] >= best[0]
-                ):
+                if (first and o in planned) or (best is not None and paths[o][0] >= best[0]):
                     continue  # planned so already, or its members are too far apart to beat it
                 guided = buffered.goal_states(q0, o, paths[o][1])
                 if guided is None:

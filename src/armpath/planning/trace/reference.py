@@ -74,7 +74,7 @@ _PROJECT_STEPS = 6
 _ON_POINT_MM = 1e-6
 #: How much cheaper (commands of the reference DP's cost) tracing an arc from its
 #: end must be to be chosen: the DP sees the approach but not how hard a tight end is to
-#: finish in. The seed crack's end is nearer by 14 deg: traced from there 145 commands (70
+#: finish in. The seed crack's end is nearer by 7 commands: traced from there 145 commands (70
 #: onto the crack, 75 along) against 156 forward (83 + 73).
 BACKWARD_MARGIN = 5.0
 #: Most family members kept on one layer (evenly over the tool directions).
@@ -385,12 +385,12 @@ def shortened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArr
     r = m - 3  # the family's dimension at a point, linearised
     if n_layers < 3 or r <= 0:
         return ref
-    grid = arm.lattice
-    step = (np.asarray(grid.tick, dtype=np.float64) * grid.max_ticks)[tip]
-    lo, hi = arm.lower[tip] / step, arm.upper[tip] / step
+    units = CommandUnits.of_family(fam)
+    step = units.step
+    lo, hi = units.units(arm.lower[tip]), units.units(arm.upper[tip])
     points = np.array([fam.frame(float(s))[0] for s in layers])
     floor = np.minimum(fam.score(ref, ceiling=_STRAIGHTEN_SLACK), _STRAIGHTEN_SLACK)
-    cost_now, region = _commands_worth(ref[:, tip] / step), _SHORTEN_REGION
+    cost_now, region = _commands_worth(units.units(ref[:, tip])), _SHORTEN_REGION
     n_z, n_seg, n_bend = n_layers * r, n_layers - 1, (n_layers - 2) * m
     # variables: z (the move of each layer in its null space), t (each step's largest joint
     # change), b (each second difference's size per joint)
@@ -399,7 +399,7 @@ def shortened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArr
     fixed[[0, -1]] = True
     for _ in range(_SHORTEN_ROUNDS):
         check_time("shortening the reference path along the curve")
-        u = ref[:, tip] / step
+        u = units.units(ref[:, tip])
         J = position_jacobian(arm, ref)[..., tip] * step
         N = np.transpose(np.linalg.svd(J)[2][:, 3:, :], (0, 2, 1))  # (L, m, r)
         A, b = _shorten_constraints(u, N, lo, hi, n_z, n_seg)
@@ -416,7 +416,7 @@ def shortened(fam: CurveFamily, layers: FloatArray, ref: FloatArray) -> FloatArr
         ok = _may_move(fam, q, points, floor)
         ok[[0, -1]] = False
         trial = np.where(ok[:, None], q, ref)
-        cost = _commands_worth(trial[:, tip] / step)
+        cost = _commands_worth(units.units(trial[:, tip]))
         if cost < cost_now - 1e-9:
             ref, cost_now, region = trial, cost, min(region * 1.5, _SHORTEN_REGION_MAX)
         else:
