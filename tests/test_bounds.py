@@ -28,6 +28,7 @@ from armpath.geometry.curves import Polyline
 from armpath.model.catalog import resolve_model
 from armpath.model.seed_arm import seed_arm
 from armpath.planning import bounds
+from armpath.planning.bounds import metric, sampling
 from armpath.planning.trace.family import curve_family
 from armpath.scenes import load_scene
 from test_any_arm import TOOL_MM, independent_bound
@@ -57,10 +58,10 @@ def test_shortest_path_step_equals_brute_force(whole):
         e = rng.uniform(0, 0.5, u.shape)
         pc = rng.uniform(0, 50, 300)
         pc[rng.uniform(size=300) < 0.1] = np.inf
-        cost, arg = bounds._advance_serial(pu, pe, pc, u, e, period, whole, bounds.GROUP_CELL)
+        cost, arg = metric._advance_serial(pu, pe, pc, u, e, period, whole, metric.GROUP_CELL)
         truth = _brute_advance(pu, pe, pc, u, e, period, whole)
         np.testing.assert_allclose(cost, truth, atol=1e-9)
-        threaded = bounds._advance_parallel(pu, pe, pc, u, e, period, whole, bounds.GROUP_CELL)
+        threaded = metric._advance_parallel(pu, pe, pc, u, e, period, whole, metric.GROUP_CELL)
         np.testing.assert_array_equal(threaded[0], cost)
         # the predecessor given attains the cost
         again = _brute_advance(pu[arg[:1]], pe[arg[:1]], pc[arg[:1]], u[:1], e[:1], period, whole)
@@ -202,7 +203,7 @@ def test_delaunay_neighbours_of_many_directions():
     from armpath.planning.trace.family import fibonacci_directions
 
     dirs = fibonacci_directions(60_000)
-    ptr, nb, triangles = bounds._delaunay_neighbours(dirs)
+    ptr, nb, triangles = sampling._delaunay_neighbours(dirs)
     degree = np.diff(ptr)
     assert degree.min() >= 3 and triangles.shape == (2 * dirs.shape[0] - 4, 3)
     src = np.repeat(np.arange(dirs.shape[0]), degree)

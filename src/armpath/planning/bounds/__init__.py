@@ -1,0 +1,45 @@
+"""Lower bounds on the commands of traces and tours, over the arm's whole solution family.
+
+A command moves joint ``j`` by at most its largest step ``m_j``, so a motion from ``q`` to
+``q'`` takes at least ``max_j |q'_j - q_j| / m_j`` commands: the largest-joint (Chebyshev)
+distance in *command units* ``u_j = q_j / m_j`` (revolute joints whose range spans a whole
+turn the shorter way round). Only
+the joints that move the tool point count (the others turn the tool about it).
+
+A trace's pass brings the tool point within the tolerance of every point of the curve, in
+order; a tour puts it within the tolerance of every target. Every configuration that does so
+belongs to the solution family there (:class:`~armpath.planning.trace.family.CurveFamily`), and
+a plan's must also be clear of the obstacles. So the commands are at least the length of a
+shortest path from the start through the family at the layers (curve points every few mm;
+targets), in the Chebyshev metric, through the members that may be clear; the moves between
+layers ignore the obstacles (a relaxation, so the bound holds whatever the scene).
+
+The family is sampled over tool directions; each sample stands for the members of the
+directions around it and carries a per-joint *sampling error*: the largest difference to the
+nearest member of each neighbouring direction (Delaunay neighbours on the sphere of
+directions), plus the joint change that moves the tool point by the tolerance (pseudo-inverse
+of the position Jacobian). Distances between samples are taken less both samples' errors, so
+the shortest path through the samples is, up to that error estimate, no longer than any path
+through the family. A sample is dropped only when no member of its cell can be clear: its
+slack is worse than the arm's points move to its neighbours. Where a sample is kept only for
+that allowance (it is not clear itself), its direction cells are split (clearance levels),
+which shrinks the allowance and drops the cells that collide whole. Rounds refine the
+directions around the best path (caps of finer directions), which shrinks the errors where they
+count. The error estimate assumes the family varies no faster inside a direction cell than
+between neighbouring samples; the tests check the bounds against differently computed ones
+(SLSQP over the exact family; the exactly clear members of a fine sampling) and the plans.
+"""
+
+from armpath.planning.bounds.sampling import FamilySampler, Layer
+from armpath.planning.bounds.tour import tour_bound, tour_bound_any_order
+from armpath.planning.bounds.trace import trace_bound
+from armpath.planning.bounds.value import CommandBound
+
+__all__ = [
+    "CommandBound",
+    "FamilySampler",
+    "Layer",
+    "tour_bound",
+    "tour_bound_any_order",
+    "trace_bound",
+]

@@ -1,0 +1,471 @@
+"""The solution family sampled over tool directions, with sampling errors (see the package)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.geometry.primitives import orthonormal_frame
+from armpath.geometry.world import into_windows
+from armpath.jit import njit
+from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
+from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.bounds.metric import _wrapped, advance
+from armpath.planning.trace.family import CurveFamily, fibonacci_directions
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: Largest joint change (commands) between members of neighbouring directions that are taken
+#: for one branch of the family (farther: the branch ends between them).
+BRANCH_GAP = 30.0
+#: Slack (model units) a sample may lack beyond what its error box allows and still be kept.
+CLEAR_MARGIN = 1e-6
+#: Sampling error (commands) below which a sample on the best path is not refined further.
+ERROR_GOAL = 0.05
+#: Finest direction spacing of a refinement (rad, about 0.05 deg).
+MIN_SPACING = float(np.radians(0.05))
+#: Refinement rounds after the first sampling.
+REFINE_ROUNDS = 1
+#: Tool directions the family is first sampled along (about 2.3 deg apart).
+BASE_DIRECTIONS = 8000
+#: Most directions of one layer (refinement stops before it would pass this).
+MAX_LAYER_DIRECTIONS = 200_000
+#: Sampling error standing for "no neighbour has a member" (commands).
+_MISSING = 1e6
+
+
+@dataclass(frozen=True)
+class Layer:
+    """Samples of the family at one point: command units ``u (M, J)`` of the tip joints, their
+    errors ``err (M, J)`` (commands), the configurations ``q (M, n)`` rad and the tool
+    direction of each ``dirs (M, 3)``; ``direction (M,)`` the index of each sample's direction
+    among those the layer was sampled along, ``clear (M,)`` whether the sample itself keeps the
+    clearance rule (not only may a member near it: see :meth:`FamilySampler.layer`). Both
+    default to -1 and False (layers built by hand)."""
+
+    u: FloatArray
+    err: FloatArray
+    q: FloatArray
+    dirs: FloatArray
+    direction: IntArray | None = None
+    clear: BoolArray | None = None
+
+    def __post_init__(self) -> None:
+        if self.direction is None:
+            object.__setattr__(self, "direction", np.full(self.size, -1, dtype=np.int64))
+        if self.clear is None:
+            object.__setattr__(self, "clear", np.zeros(self.size, dtype=bool))
+
+    @property
+    def size(self) -> int:
+        return int(self.u.shape[0])
+
+    def without_errors(self) -> Layer:
+        """The same samples taken as exact (no sampling error): not a bound any more, the
+        shortest path through the samples themselves."""
+        return Layer(self.u, np.zeros_like(self.err), self.q, self.dirs, self.direction, self.clear)
+
+    def subset(self, keep: BoolArray | IntArray) -> Layer:
+        """The samples ``keep`` (a mask or indices)."""
+        assert self.direction is not None and self.clear is not None
+        return Layer(
+            self.u[keep],
+            self.err[keep],
+            self.q[keep],
+            self.dirs[keep],
+            self.direction[keep],
+            self.clear[keep],
+        )
+
+
+def _cap(center: FloatArray, radius: float, spacing: float) -> FloatArray:
+    """Directions on a hexagonal grid of ``spacing`` rad within ``radius`` rad of ``center``."""
+    e1, e2 = orthonormal_frame(center[None])
+    k = int(np.ceil(radius / spacing)) + 1
+    i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1), indexing="ij")
+    x = spacing * (i + 0.5 * j).ravel()
+    y = spacing * (np.sqrt(3.0) / 2.0 * j).ravel()
+    keep = x * x + y * y <= radius * radius
+    t = np.tan(np.hypot(x[keep], y[keep]))
+    r = np.hypot(x[keep], y[keep])
+    scale = np.where(r > 0, t / np.where(r > 0, r, 1.0), 1.0)
+    d = center + (x[keep] * scale)[:, None] * e1 + (y[keep] * scale)[:, None] * e2
+    return np.asarray(d / np.linalg.norm(d, axis=-1, keepdims=True), dtype=np.float64)
+
+
+def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray, IntArray]:
+    """Neighbours of each direction in the spherical Delaunay triangulation (the convex hull of
+    the unit vectors), as CSR ``(pointer, index)``, and the triangles ``(T, 3)``."""
+    from scipy.spatial import ConvexHull
+
+    tri = ConvexHull(dirs).simplices
+    a = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2], tri[:, 1], tri[:, 2], tri[:, 0]])
+    b = np.concatenate([tri[:, 1], tri[:, 2], tri[:, 0], tri[:, 0], tri[:, 1], tri[:, 2]])
+    a, b = a.astype(np.int64), b.astype(np.int64)  # n * n overflows qhull's int32
+    pairs = np.unique(a * dirs.shape[0] + b)
+    src, dst = pairs // dirs.shape[0], pairs % dirs.shape[0]
+    ptr = np.searchsorted(src, np.arange(dirs.shape[0] + 1))
+    return ptr.astype(np.int64), dst.astype(np.int64), tri.astype(np.int64)
+
+
+@dataclass(frozen=True)
+class _Samples:
+    """A layer's samples before the clearance filter: every direction tried ``dirs (D, 3)``
+    and, per member, its configuration, direction index, command units, the arm's points,
+    the tolerance's joint change (commands) and its slack (model units; 0 where it is
+    not negative, the only values the filter needs)."""
+
+    dirs: FloatArray
+    q: FloatArray
+    index: IntArray
+    u: FloatArray
+    points: FloatArray
+    tol_err: FloatArray
+    slack: FloatArray
+
+    @staticmethod
+    def empty(arm: SerialArm, n_tip: int) -> _Samples:
+        none = np.zeros((0, arm.n_joints))
+        return _Samples(
+            dirs=np.zeros((0, 3)),
+            q=none,
+            index=np.zeros(0, dtype=np.int64),
+            u=np.zeros((0, n_tip)),
+            points=landmark_positions(arm, none),
+            tol_err=np.zeros((0, n_tip)),
+            slack=np.zeros(0),
+        )
+
+
+def _midpoints(dirs: FloatArray, triangles: IntArray, refine: BoolArray) -> FloatArray:
+    """The midpoints (on the sphere) of the edges of every triangle with a vertex to
+    ``refine``: each such triangle is split in four, which halves its directions' cells."""
+    tri = triangles[np.any(refine[triangles], axis=1)]
+    edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    mid = dirs[edges[:, 0]] + dirs[edges[:, 1]]
+    return np.asarray(mid / np.linalg.norm(mid, axis=-1, keepdims=True), dtype=np.float64)
+
+
+def _distinct(new: FloatArray, old: FloatArray) -> FloatArray:
+    """The directions of ``new`` not already in ``old`` or earlier in ``new`` (qhull needs
+    distinct points)."""
+    key = np.round(np.vstack([old, new]) * 1e9).astype(np.int64)
+    _, first = np.unique(key, axis=0, return_index=True)
+    first = np.sort(first[first >= old.shape[0]])
+    return np.asarray(new[first - old.shape[0]], dtype=np.float64)
+
+
+@njit(cache=True)
+def _sampling_errors(
+    u: FloatArray,
+    points: FloatArray,
+    node_dir: IntArray,
+    dir_ptr: IntArray,
+    nb_ptr: IntArray,
+    nb: IntArray,
+    period: FloatArray,
+    missing: float,
+    branch_gap: float,
+    own: bool,
+) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
+    """Per sample and joint, the largest difference to the nearest sample (Chebyshev) of each
+    neighbouring direction that has one within ``branch_gap`` commands (a member farther is on
+    another branch; ``missing`` where no neighbour has one); and per
+    sample the farthest any of the arm's ``points`` ``(M, P, 3)`` moves to those neighbours
+    (inf where none). Samples are sorted by direction; ``dir_ptr`` points at each
+    direction's first. ``own``: the other samples of a sample's own direction are neighbours
+    too (a family sampled at several turns about each direction)."""
+    m, j = u.shape
+    err = np.zeros((m, j))
+    moved = np.zeros(m)
+    for i in range(m):
+        d = node_dir[i]
+        found = False
+        for p in range(nb_ptr[d] - (1 if own else 0), nb_ptr[d + 1]):
+            e = nb[p] if p >= nb_ptr[d] else d
+            best, arg = np.inf, -1
+            for k in range(dir_ptr[e], dir_ptr[e + 1]):
+                if k == i:
+                    continue
+                worst = 0.0
+                for c in range(j):
+                    x = _wrapped(u[k, c] - u[i, c], period[c])
+                    if x > worst:
+                        worst = x
+                        if worst >= best:
+                            break
+                if worst < best:
+                    best, arg = worst, k
+            if arg >= 0 and best <= branch_gap:  # farther: another branch, not a neighbour
+                found = True
+                for c in range(j):
+                    x = _wrapped(u[arg, c] - u[i, c], period[c])
+                    if x > err[i, c]:
+                        err[i, c] = x
+                for t in range(points.shape[1]):
+                    x = 0.0
+                    for c in range(3):
+                        x += (points[arg, t, c] - points[i, t, c]) ** 2
+                    moved[i] = max(moved[i], np.sqrt(x))
+        if not found:
+            err[i, :] = missing
+            moved[i] = np.inf
+    return err, moved
+
+
+class FamilySampler:
+    """Samples the family of one arm at points, with sampling errors (see the module)."""
+
+    def __init__(
+        self,
+        fam: CurveFamily,
+        tolerance_mm: float,
+        directions: int | None = None,
+        q_start: FloatArray | None = None,
+    ) -> None:
+        arm = fam.arm
+        self.fam = fam
+        self.tip = np.asarray(fam.tip_joints, dtype=bool)
+        grid = arm.lattice
+        step = (np.asarray(grid.tick, dtype=np.float64) * grid.max_ticks)[self.tip]
+        self.step = step
+        # a revolute joint whose range spans a whole turn is measured the shorter way round:
+        # the family's samples take one of its turns, a plan may take the other
+        span = (arm.upper - arm.lower)[self.tip]
+        revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])[self.tip]
+        turns = revolute & ~(span < 2.0 * np.pi)
+        self.period = np.where(turns, 2.0 * np.pi / step, 0.0)
+        #: the tip joints that a self-collision range they cannot cross confines
+        #: (:meth:`CollisionWorld.joint_windows` from ``q_start``): rad, by joint index; such a
+        #: joint is measured within its range, not round the turn
+        self.joint_windows = tuple(
+            w
+            for w in (fam.world.joint_windows(arm, q_start) if q_start is not None else ())
+            if self.tip[w[0]]
+        )
+        #: the same ranges in command units, by index among the tip joints
+        self.windows: list[tuple[int, float, float]] = []
+        tip_index = np.cumsum(self.tip) - 1
+        for k, lo, hi in self.joint_windows:
+            j = int(tip_index[k])
+            self.windows.append((j, lo / step[j], hi / step[j]))
+            self.period[j] = 0.0
+        self.tol = tolerance_mm / arm.mm_per_unit
+        base = fam.coarse_dirs if directions is None else fibonacci_directions(directions)
+        self.base = np.asarray(base, dtype=np.float64)
+        self.base_spacing = float(np.sqrt(4.0 * np.pi / self.base.shape[0]))
+        #: how far any point of the arm moves per unit of each tip joint (model units per rad)
+        self.reach = displacement_bounds(arm)[self.tip]
+        #: tool frames sampled about each direction (several: the family has a third dimension)
+        self.turns = fam.turns_per_direction
+        self.required = fam.world.required(arm)
+
+    def units(self, q: FloatArray) -> FloatArray:
+        """Command units of the tip joints of configurations ``(..., n)`` rad; a joint with a
+        range to keep (:attr:`joint_windows`) takes the copy of its value (whole turns) nearest
+        it (:func:`into_windows`)."""
+        q = np.asarray(q, dtype=np.float64)
+        if self.joint_windows:
+            flat = into_windows(q.reshape(-1, q.shape[-1]), self.joint_windows)[0]
+            q = flat.reshape(q.shape)
+        return np.asarray(q[..., self.tip] / self.step, dtype=np.float64)
+
+    def outside_windows(self, u: FloatArray, err: FloatArray) -> BoolArray:
+        """Samples (command units ``(M, J)``, errors ``(M, J)``) whose every nearby member lies
+        outside a joint's range to keep: farther out than the sample's error."""
+        out = np.zeros(u.shape[0], dtype=bool)
+        for j, lo, hi in self.windows:
+            gap = np.maximum(np.maximum(lo - u[:, j], u[:, j] - hi), 0.0)
+            out |= gap > err[:, j] + 1e-9
+        return out
+
+    def directions(self, caps: list[tuple[FloatArray, float, float]]) -> FloatArray:
+        """The base directions with finer caps ``(center, radius, spacing)`` rad: a coarser
+        direction is dropped only where its whole cell lies inside a finer cap, and each cap
+        reaches one coarser spacing beyond its radius, so the union covers every direction."""
+        dirs = [self.base]
+        spacing = [np.full(self.base.shape[0], self.base_spacing)]
+        for center, radius, h in sorted(caps, key=lambda c: -c[2]):
+            all_d, all_s = np.vstack(dirs), np.concatenate(spacing)
+            angle = np.arccos(np.clip(all_d @ center, -1.0, 1.0))
+            keep = ~((all_s > h) & (angle < radius - all_s))
+            reach = radius + float(all_s[angle < radius + all_s].max(initial=h))
+            new = _cap(center, reach, h)
+            dirs, spacing = [all_d[keep], new], [all_s[keep], np.full(new.shape[0], h)]
+        return _distinct(np.vstack(dirs), np.zeros((0, 3)))
+
+    def layer(
+        self,
+        E: FloatArray,
+        dirs: FloatArray,
+        allowed: Callable[[FloatArray], BoolArray] | None = None,
+        *,
+        levels: int,
+    ) -> Layer:
+        """The family at tool point ``E`` sampled along ``dirs`` (those ``allowed``: a mask of
+        any directions). A sample that is not clear itself is kept when a member near it may be
+        (see :meth:`_filtered`); ``levels`` times, the triangles of directions about such
+        samples are split in four, which shrinks what their neighbours allow and so drops the
+        samples whose whole cell collides."""
+        acc = _Samples.empty(self.fam.arm, int(self.tip.sum()))
+        new = np.asarray(dirs, dtype=np.float64)
+        for level in range(levels + 1):
+            check_time("bounding the commands")
+            acc = self._grown(acc, E, new, allowed)
+            lay, unsure, spacing, triangles = self._filtered(acc)
+            refine = np.zeros(acc.dirs.shape[0], dtype=bool)
+            refine[unsure] = spacing[unsure] / 2.0 >= MIN_SPACING
+            if level == levels or not np.any(refine):
+                break
+            new = _distinct(_midpoints(acc.dirs, triangles, refine), acc.dirs)
+            if acc.dirs.shape[0] + new.shape[0] > MAX_LAYER_DIRECTIONS:
+                break
+        return lay
+
+    def _grown(
+        self,
+        acc: _Samples,
+        E: FloatArray,
+        dirs: FloatArray,
+        allowed: Callable[[FloatArray], BoolArray] | None,
+    ) -> _Samples:
+        """``acc`` with the members along ``dirs`` added (configurations, command units, the
+        arm's points, the tolerance's joint change, the slack)."""
+        pick = np.flatnonzero(allowed(dirs)) if allowed is not None else np.arange(dirs.shape[0])
+        q, index = self.fam.members(E, dirs[pick])
+        index = pick[index] + acc.dirs.shape[0]
+        tol_err = np.zeros((q.shape[0], acc.u.shape[1]))
+        slack = np.zeros(q.shape[0])
+        if q.shape[0]:
+            J = position_jacobian(self.fam.arm, q)[:, :, self.tip]
+            with np.errstate(all="ignore"):
+                pinv = np.linalg.pinv(J, rcond=1e-9)
+            tol_err = self.tol * np.abs(pinv).sum(axis=-1) / self.step
+            tol_err = np.where(np.isfinite(tol_err), tol_err, _MISSING)
+            # only a negative slack matters (see _filtered): the broad phase skips the pairs
+            # that cannot be below zero, and every sample at or above it reads 0
+            slack = self.fam.world.slack(self.fam.arm, q, ceiling=0.0)
+        return _Samples(
+            dirs=np.vstack([acc.dirs, dirs]),
+            q=np.vstack([acc.q, q]),
+            index=np.concatenate([acc.index, index]),
+            u=np.vstack([acc.u, self.units(q)]),
+            points=np.concatenate([acc.points, landmark_positions(self.fam.arm, q)]),
+            tol_err=np.vstack([acc.tol_err, tol_err]),
+            slack=np.concatenate([acc.slack, slack]),
+        )
+
+    def _filtered(self, acc: _Samples) -> tuple[Layer, IntArray, FloatArray, IntArray]:
+        """The layer of the samples in ``acc`` with their errors; the samples kept only for
+        what their neighbours allow (indices into ``acc.dirs``); each direction's spacing (the
+        widest angle to its Delaunay neighbours, rad); the Delaunay triangles.
+
+        A sample is kept when its slack is no worse than the arm's points move to its
+        neighbours (and within the tolerance): a member nearby may then be clear where the
+        sample is not. Links are straight between those points, so none moves farther."""
+        order = np.argsort(acc.index, kind="stable")
+        q, index, u = acc.q[order], acc.index[order], acc.u[order]
+        n_dirs = acc.dirs.shape[0]
+        nb_ptr, nb, triangles = _delaunay_neighbours(acc.dirs)
+        src = np.repeat(np.arange(n_dirs), np.diff(nb_ptr))
+        cosines = np.einsum("ij,ij->i", acc.dirs[src], acc.dirs[nb])
+        spacing = np.zeros(n_dirs)
+        np.maximum.at(spacing, src, np.arccos(np.clip(cosines, -1.0, 1.0)))
+        dir_ptr = np.searchsorted(index, np.arange(n_dirs + 1)).astype(np.int64)
+        err, moved = _sampling_errors(
+            u, acc.points[order], index, dir_ptr, nb_ptr, nb, self.period, _MISSING,
+            BRANCH_GAP, self.turns > 1,
+        )  # fmt: skip
+        alone = err[:, 0] >= _MISSING
+        if np.any(alone) and not np.all(alone):
+            # no neighbouring direction has a member (a sliver of the family inside the joint
+            # limits): the layer's median error stands in for the unknown one
+            err[alone] = np.median(err[~alone], axis=0)
+            moved[alone] = np.median(moved[~alone])
+        tol_err, slack = acc.tol_err[order], acc.slack[order]
+        err = err + tol_err
+        allowance = moved + (tol_err * self.step) @ self.reach + CLEAR_MARGIN
+        keep = (slack >= -allowance) & ~self.outside_windows(u, err)
+        unsure = np.unique(index[keep & (slack < 0.0)])
+        clear = (slack >= 0.0) & ~self.outside_windows(u, np.zeros_like(err))
+        layer = Layer(u[keep], err[keep], q[keep], acc.dirs[index[keep]], index[keep], clear[keep])
+        return layer, unsure, spacing, triangles
+
+    def distance_from(self, q_start: FloatArray, layer: Layer, whole: bool = False) -> FloatArray:
+        """Least commands from ``q_start`` (rad) to each sample's error box (rounded up to
+        whole commands when ``whole``)."""
+        d = self.units(q_start)[None, :] - layer.u
+        period = np.where(self.period > 0, self.period, 1.0)
+        d = np.where(self.period > 0, d - period * np.floor(d / period + 0.5), d)
+        out = np.maximum(np.abs(d) - layer.err, 0.0).max(axis=-1, initial=0.0)
+        return np.asarray(np.ceil(out - 1e-9) if whole else out, dtype=np.float64)
+
+    def advance(
+        self, prev: Layer, cost: FloatArray, nxt: Layer, whole: bool = False
+    ) -> tuple[FloatArray, IntArray]:
+        """Shortest-path costs at ``nxt`` from ``cost`` at ``prev`` (and the predecessors);
+        ``whole``: each step a whole number of commands (a leg between targets)."""
+        return advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole)
+
+
+def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:
+    """The tool directions the family allows at arc length ``s`` mm."""
+    return lambda dirs: fam.allowed_mask(s, dirs)
+
+
+def _path(
+    layers: list[Layer], init: FloatArray, sampler: FamilySampler
+) -> tuple[float, list[int], list[FloatArray]]:
+    """Shortest path through ``layers`` from costs ``init`` at the first: its cost, the sample
+    it takes on each layer, and the least cost of reaching each sample of each layer."""
+    costs = [init]
+    args = []
+    for k in range(1, len(layers)):
+        check_time("bounding the commands")
+        cost, arg = sampler.advance(layers[k - 1], costs[-1], layers[k])
+        costs.append(cost)
+        args.append(arg)
+    cost = costs[-1]
+    if cost.size == 0 or not np.any(np.isfinite(cost)):
+        return np.inf, [], costs
+    j = int(np.argmin(cost))
+    best = float(cost[j])
+    path = [j]
+    for arg in reversed(args):
+        j = int(arg[j])
+        path.append(j)
+    return best, path[::-1], costs
+
+
+class _Refiner:
+    """The directions of each layer and their refinement: after each round, caps of directions
+    three times finer go round the samples on the best path whose error is above
+    :data:`ERROR_GOAL`."""
+
+    def __init__(self, sampler: FamilySampler, count: int) -> None:
+        self.sampler = sampler
+        self.caps: list[list[tuple[FloatArray, float, float]]] = [[] for _ in range(count)]
+
+    def directions(self, k: int) -> FloatArray:
+        return self.sampler.directions(self.caps[k])
+
+    def refine(self, k: int, layer: Layer, sample: int) -> bool:
+        """Refine layer ``k`` round its ``sample``; False when it needs none."""
+        if float(layer.err[sample].max()) <= ERROR_GOAL:
+            return False
+        d = layer.dirs[sample]
+        h = self.sampler.base_spacing
+        for center, radius, spacing in self.caps[k]:
+            if np.arccos(np.clip(center @ d, -1.0, 1.0)) < radius:
+                h = min(h, spacing)
+        if h / 3.0 < MIN_SPACING:
+            return False
+        self.caps[k].append((d, 3.0 * h, h / 3.0))
+        return True

@@ -1,0 +1,35 @@
+"""What a lower bound on commands reports."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class CommandBound:
+    """A lower bound on commands: ``commands`` (the value rounded up), the ``value`` in
+    fractional commands, its parts (a trace's ``approach`` and ``along``), how it was
+    computed, and the joint path that attains it (the *guide*: configurations rad, one per
+    layer, with the arc length of each layer for a trace)."""
+
+    commands: int
+    value: float
+    method: str
+    parts: dict[str, float] = field(default_factory=dict)
+    sampling: dict[str, float] = field(default_factory=dict)
+    guide_q: FloatArray | None = None
+    guide_s_mm: FloatArray | None = None
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "commands": self.commands,
+            "value_commands": round(self.value, 4),
+            "method": self.method,
+            "parts_commands": {k: round(v, 4) for k, v in self.parts.items()},
+            "sampling": {k: round(v, 6) for k, v in self.sampling.items()},
+        }
