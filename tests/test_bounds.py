@@ -308,3 +308,161 @@ def test_a_joint_without_limits_keeps_to_the_turn_it_starts_in():
         assert abs(2.0 * w_lo - lo) < 0.5 and abs(2.0 * w_hi - hi) < 0.5  # units of 2 deg
         u = sampler.units(np.radians([[0, -90, -100.0, -90, -90, 0]]))
         assert lo < 2.0 * u[0, 2] < hi  # the copy of -100 deg in the start's turn
+
+
+class _Metric:
+    """The shortest-path step of :class:`FamilySampler` on plain command units (no family):
+    what the relaxations call."""
+
+    advance = bounds.FamilySampler.advance
+
+    def __init__(self, period):
+        self.period = period
+
+
+def _random_layers(rng, sizes, joints=4):
+    out = []
+    for m in sizes:
+        u = rng.uniform(-20, 20, (m, joints))
+        e = rng.uniform(0, 0.4, (m, joints))
+        out.append(bounds.Layer(u, e, np.zeros((m, 6)), np.zeros((m, 3))))
+    return out
+
+
+def _box_distance(a, ea, b, eb, period):
+    d = b - a
+    turn = np.where(period > 0, period, 1.0)
+    d = np.abs(np.where(period > 0, d - turn * np.round(d / turn), d))
+    return float(np.maximum(d - ea - eb, 0.0).max(initial=0.0))
+
+
+def _brute_chain(layers, joins, app, period):
+    """Every choice of one sample per layer and every place the approach may be charged (the
+    first layer, the last, either side of a LOOP or FREE join, whose move is then dropped):
+    the least total and, per layer and sample, the least total through it."""
+    import itertools
+
+    from armpath.planning.bounds.search import Join
+
+    K = len(layers)
+    places = [("first", 0), ("last", K - 1)] + [
+        (side, k) for k, j in enumerate(joins) if j is not Join.MOVE for side in ("before", "after")
+    ]
+    through = [np.full(lay.size, np.inf) for lay in layers]
+    best = np.inf
+    for pick in itertools.product(*[range(lay.size) for lay in layers]):
+        moves = []
+        for k, j in enumerate(joins):
+            a, b = layers[k], layers[k + 1]
+            d = _box_distance(
+                a.u[pick[k]], a.err[pick[k]], b.u[pick[k + 1]], b.err[pick[k + 1]], period
+            )
+            moves.append(0.0 if j is Join.FREE else d)
+        for where, k in places:
+            if where in ("first", "last"):
+                total = sum(moves) + app[k][pick[k]]
+            else:
+                layer = k if where == "before" else k + 1
+                total = sum(moves) - moves[k] + app[layer][pick[layer]]
+            best = min(best, total)
+            for t in range(K):
+                through[t][pick[t]] = min(through[t][pick[t]], total)
+    return best, through
+
+
+@pytest.mark.parametrize(
+    "joins",
+    [["move"] * 3, ["loop"] * 4, ["move", "free", "move"], ["loop", "loop", "free", "loop"]],
+)
+def test_the_chain_relaxation_equals_brute_force(joins):
+    """The trace bound's dynamic programme over samples and an approach flag (one pass, a
+    closed curve begun anywhere, several spans in any order) against every choice of samples
+    and of where the approach is charged."""
+    from armpath.planning.bounds.search import Chain, Join
+
+    rng = np.random.default_rng(len(joins) * 7 + joins.count("free"))
+    joins = [Join(j) for j in joins]
+    period = np.array([90.0, 0.0, 0.0, 90.0])
+    metric = _Metric(period)
+    for _ in range(4):
+        layers = _random_layers(rng, rng.integers(1, 5, len(joins) + 1))
+        app = [rng.uniform(0, 30, lay.size) for lay in layers]
+        found = Chain(joins).solve(metric, layers, app)
+        truth, through = _brute_chain(layers, joins, app, period)
+        assert found.total == pytest.approx(truth, abs=1e-9)
+        for got, want in zip(found.through, through, strict=True):
+            np.testing.assert_allclose(got, want, atol=1e-9)
+        # the path given attains the total, its approach charged where it says
+        assert found.approach <= found.total + 1e-9 and len(found.samples) == len(layers)
+
+
+def test_the_orders_relaxation_equals_brute_force():
+    """The tour bound's programme over orders (legs whole commands, back to the start or not)
+    against every order and every choice of samples."""
+    import itertools
+
+    from armpath.planning.bounds.search import Orders, all_orders
+
+    rng = np.random.default_rng(11)
+    period = np.zeros(4)
+    metric = _Metric(period)
+    for back in (False, True):
+        layers = _random_layers(rng, [3, 2, 4, 3])
+        app = [np.ceil(rng.uniform(0, 30, lay.size)) for lay in layers]
+        found = Orders(all_orders(4), back).solve(metric, layers, app)
+        best, per_order = np.inf, {}
+        through = [np.full(lay.size, np.inf) for lay in layers]
+        for o in all_orders(4):
+            for pick in itertools.product(*[range(layers[t].size) for t in o]):
+                total = app[o[0]][pick[0]]
+                for (s, i), (t, j) in itertools.pairwise(zip(o, pick, strict=True)):
+                    a, b = layers[s], layers[t]
+                    total += np.ceil(
+                        _box_distance(a.u[i], a.err[i], b.u[j], b.err[j], period) - 1e-9
+                    )
+                if back:
+                    total += app[o[-1]][pick[-1]]
+                best = min(best, total)
+                per_order[o] = min(per_order.get(o, np.inf), total)
+                for t, i in zip(o, pick, strict=True):
+                    through[t][i] = min(through[t][i], total)
+        assert found.total == pytest.approx(best)
+        assert found.per_order == {o: int(v) for o, v in per_order.items()}
+        for got, want in zip(found.through, through, strict=True):
+            np.testing.assert_allclose(got, want)
+        assert per_order[found.order] == best
+
+
+def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
+    """Branch and bound drops the direction cells whose least cost is above the incumbent. On
+    the samples the search ends with, the relaxation through every sample (dropped ones too)
+    must cost exactly what it costs through the kept ones; neither that nor the search's bound
+    (the most of its rounds) is above the clear path it found; and cells were dropped (the
+    check is not empty)."""
+    from armpath.planning.bounds.sampling import _allowed_at
+    from armpath.planning.bounds.search import CellSearch, Chain, Join
+
+    arm = resolve_model("ur5")
+    start = arm.lattice.to_joint(arm.lattice.from_display([0, -90, 90, 0, 90, 0], "start"))
+    curve = Polyline("t", np.array([[300.0, 150.0, 350.0], [400.0, -100.0, 200.0]]))
+    fam = curve_family(arm, CollisionWorld(()), curve)
+    sampler = bounds.FamilySampler(fam, 0.1, 500, start)
+    s = np.linspace(0.5, curve.length - 0.5, 4)
+    chain = Chain([Join.MOVE] * 3)
+    search = CellSearch(
+        sampler, chain, [fam.frame(float(x))[0] for x in s],
+        [_allowed_at(fam, float(x)) for x in s], start,
+    )  # fmt: skip
+    found = search.run(rounds=6)
+    assert found is not None and np.isfinite(found.clear_path)
+    every = [site.layer for site in search.sites]
+    kept = [site.live() for site in search.sites]
+    dropped = sum(lay.size for lay in every) - sum(lay.size for lay in kept)
+    assert dropped > 0
+
+    def total(layers):
+        app = [sampler.distance_from(start, lay) for lay in layers]
+        return chain.solve(sampler, layers, app).total
+
+    assert total(every) == pytest.approx(total(kept), abs=1e-9)
+    assert max(found.value, total(kept)) <= found.clear_path + 1e-9

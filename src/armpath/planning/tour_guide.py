@@ -73,7 +73,7 @@ class TourGuide:
         layers, rooms = [], []
         for p in targets:
             check_time("choosing the tour's goal states")
-            lay = sampler.layer(p, sampler.directions([]), levels=0)
+            lay = sampler.layer(p, sampler.base, levels=0)
             values, _ = world.pair_clearances(arm, lay.q)
             if lay.size:
                 room = np.min(values[:, ~is_tip] - required[~is_tip], axis=-1, initial=np.inf)

@@ -10,24 +10,27 @@ A trace's pass brings the tool point within the tolerance of every point of the 
 order; a tour puts it within the tolerance of every target. Every configuration that does so
 belongs to the solution family there (:class:`~armpath.planning.trace.family.CurveFamily`), and
 a plan's must also be clear of the obstacles. So the commands are at least the length of a
-shortest path from the start through the family at the layers (curve points every few mm;
-targets), in the Chebyshev metric, through the members that may be clear; the moves between
-layers ignore the obstacles (a relaxation, so the bound holds whatever the scene).
+shortest path from the start through the family at a few *sites* (curve points; targets), in
+the Chebyshev metric, through the members that may be clear; the moves between sites ignore
+the obstacles (a relaxation, so the bound holds whatever the scene).
 
-The family is sampled over tool directions; each sample stands for the members of the
-directions around it and carries a per-joint *sampling error*: the largest difference to the
-nearest member of each neighbouring direction (Delaunay neighbours on the sphere of
-directions), plus the joint change that moves the tool point by the tolerance (pseudo-inverse
-of the position Jacobian). Distances between samples are taken less both samples' errors, so
-the shortest path through the samples is, up to that error estimate, no longer than any path
-through the family. A sample is dropped only when no member of its cell can be clear: its
-slack is worse than the arm's points move to its neighbours. Where a sample is kept only for
-that allowance (it is not clear itself), its direction cells are split (clearance levels),
-which shrinks the allowance and drops the cells that collide whole. Rounds refine the
-directions around the best path (caps of finer directions), which shrinks the errors where they
-count. The error estimate assumes the family varies no faster inside a direction cell than
-between neighbouring samples; the tests check the bounds against differently computed ones
-(SLSQP over the exact family; the exactly clear members of a fine sampling) and the plans.
+The family is sampled over tool directions (:mod:`~armpath.planning.bounds.sampling`); each
+sample stands for the members of the directions around it and carries a per-joint *sampling
+error*: the largest difference to the nearest member of each neighbouring direction (Delaunay
+neighbours on the sphere of directions), plus the joint change that moves the tool point by the
+tolerance (pseudo-inverse of the position Jacobian). Distances between samples are taken less
+both samples' errors (:mod:`~armpath.planning.bounds.metric`), so the shortest path through the
+samples is, up to that error estimate, no longer than any path through the family. A sample is
+dropped only when no member of its cell can be clear: its slack is worse than the arm's points
+move to its neighbours. The relaxation is then searched by branch and bound over the direction
+cells (:mod:`~armpath.planning.bounds.search`): a path through samples that are clear
+themselves bounds the relaxation's optimum from above, the cells that cannot hold a cheaper
+path are dropped, and the cells where the bound runs are split where their error or their
+clearance is unsure (a cell kept only for what its neighbours allow may collide whole). The
+error estimate assumes the family varies no faster inside a direction cell than between
+neighbouring samples; the tests check the bounds against differently computed ones (SLSQP over
+the exact family; the exactly clear members of a fine sampling), the relaxations' programmes
+against brute force, and the plans.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer

@@ -9,7 +9,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.geometry.primitives import orthonormal_frame
 from armpath.geometry.world import into_windows
 from armpath.jit import njit
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
@@ -26,14 +25,8 @@ BoolArray = NDArray[np.bool_]
 BRANCH_GAP = 30.0
 #: Slack (model units) a sample may lack beyond what its error box allows and still be kept.
 CLEAR_MARGIN = 1e-6
-#: Sampling error (commands) below which a sample on the best path is not refined further.
-ERROR_GOAL = 0.05
 #: Finest direction spacing of a refinement (rad, about 0.05 deg).
 MIN_SPACING = float(np.radians(0.05))
-#: Refinement rounds after the first sampling.
-REFINE_ROUNDS = 1
-#: Tool directions the family is first sampled along (about 2.3 deg apart).
-BASE_DIRECTIONS = 8000
 #: Most directions of one layer (refinement stops before it would pass this).
 MAX_LAYER_DIRECTIONS = 200_000
 #: Sampling error standing for "no neighbour has a member" (commands).
@@ -82,21 +75,6 @@ class Layer:
             self.direction[keep],
             self.clear[keep],
         )
-
-
-def _cap(center: FloatArray, radius: float, spacing: float) -> FloatArray:
-    """Directions on a hexagonal grid of ``spacing`` rad within ``radius`` rad of ``center``."""
-    e1, e2 = orthonormal_frame(center[None])
-    k = int(np.ceil(radius / spacing)) + 1
-    i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1), indexing="ij")
-    x = spacing * (i + 0.5 * j).ravel()
-    y = spacing * (np.sqrt(3.0) / 2.0 * j).ravel()
-    keep = x * x + y * y <= radius * radius
-    t = np.tan(np.hypot(x[keep], y[keep]))
-    r = np.hypot(x[keep], y[keep])
-    scale = np.where(r > 0, t / np.where(r > 0, r, 1.0), 1.0)
-    d = center + (x[keep] * scale)[:, None] * e1 + (y[keep] * scale)[:, None] * e2
-    return np.asarray(d / np.linalg.norm(d, axis=-1, keepdims=True), dtype=np.float64)
 
 
 def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray, IntArray]:
@@ -286,21 +264,6 @@ class FamilySampler:
             out |= gap > err[:, j] + 1e-9
         return out
 
-    def directions(self, caps: list[tuple[FloatArray, float, float]]) -> FloatArray:
-        """The base directions with finer caps ``(center, radius, spacing)`` rad: a coarser
-        direction is dropped only where its whole cell lies inside a finer cap, and each cap
-        reaches one coarser spacing beyond its radius, so the union covers every direction."""
-        dirs = [self.base]
-        spacing = [np.full(self.base.shape[0], self.base_spacing)]
-        for center, radius, h in sorted(caps, key=lambda c: -c[2]):
-            all_d, all_s = np.vstack(dirs), np.concatenate(spacing)
-            angle = np.arccos(np.clip(all_d @ center, -1.0, 1.0))
-            keep = ~((all_s > h) & (angle < radius - all_s))
-            reach = radius + float(all_s[angle < radius + all_s].max(initial=h))
-            new = _cap(center, reach, h)
-            dirs, spacing = [all_d[keep], new], [all_s[keep], np.full(new.shape[0], h)]
-        return _distinct(np.vstack(dirs), np.zeros((0, 3)))
-
     def layer(
         self,
         E: FloatArray,
@@ -418,54 +381,3 @@ class FamilySampler:
 def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:
     """The tool directions the family allows at arc length ``s`` mm."""
     return lambda dirs: fam.allowed_mask(s, dirs)
-
-
-def _path(
-    layers: list[Layer], init: FloatArray, sampler: FamilySampler
-) -> tuple[float, list[int], list[FloatArray]]:
-    """Shortest path through ``layers`` from costs ``init`` at the first: its cost, the sample
-    it takes on each layer, and the least cost of reaching each sample of each layer."""
-    costs = [init]
-    args = []
-    for k in range(1, len(layers)):
-        check_time("bounding the commands")
-        cost, arg = sampler.advance(layers[k - 1], costs[-1], layers[k])
-        costs.append(cost)
-        args.append(arg)
-    cost = costs[-1]
-    if cost.size == 0 or not np.any(np.isfinite(cost)):
-        return np.inf, [], costs
-    j = int(np.argmin(cost))
-    best = float(cost[j])
-    path = [j]
-    for arg in reversed(args):
-        j = int(arg[j])
-        path.append(j)
-    return best, path[::-1], costs
-
-
-class _Refiner:
-    """The directions of each layer and their refinement: after each round, caps of directions
-    three times finer go round the samples on the best path whose error is above
-    :data:`ERROR_GOAL`."""
-
-    def __init__(self, sampler: FamilySampler, count: int) -> None:
-        self.sampler = sampler
-        self.caps: list[list[tuple[FloatArray, float, float]]] = [[] for _ in range(count)]
-
-    def directions(self, k: int) -> FloatArray:
-        return self.sampler.directions(self.caps[k])
-
-    def refine(self, k: int, layer: Layer, sample: int) -> bool:
-        """Refine layer ``k`` round its ``sample``; False when it needs none."""
-        if float(layer.err[sample].max()) <= ERROR_GOAL:
-            return False
-        d = layer.dirs[sample]
-        h = self.sampler.base_spacing
-        for center, radius, spacing in self.caps[k]:
-            if np.arccos(np.clip(center @ d, -1.0, 1.0)) < radius:
-                h = min(h, spacing)
-        if h / 3.0 < MIN_SPACING:
-            return False
-        self.caps[k].append((d, 3.0 * h, h / 3.0))
-        return True

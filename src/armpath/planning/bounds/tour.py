@@ -9,7 +9,8 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
-from armpath.planning.bounds.sampling import REFINE_ROUNDS, FamilySampler, Layer, _Refiner
+from armpath.planning.bounds.sampling import FamilySampler, Layer
+from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Orders
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -18,8 +19,8 @@ IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 #: Times the directions about samples kept only for what their neighbours allow (not clear
-#: themselves) are refined, twice as fine each time, at a tour's targets (seed Task 3: 0 levels
-#: bound 86 commands, 1 level 94, 2 levels 102 at about three times the time).
+#: themselves) are split at every target before the search, twice as fine each time (seed
+#: Task 3: with none the search's budget ends at 93 commands, with one at 103).
 TOUR_CLEAR_LEVELS = 1
 
 
@@ -30,61 +31,55 @@ def tour_bound(
     tolerance_mm: float,
     orders: list[tuple[int, ...]],
     back: bool = False,
-    rounds: int = REFINE_ROUNDS,
+    rounds: int = SEARCH_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
     clear_levels: int = TOUR_CLEAR_LEVELS,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
-    units) within ``tolerance_mm``: for each of ``orders``, a shortest path through the family
-    at each target (every goal configuration that may be clear, its cells split
-    ``clear_levels`` times where unsure; obstacles ignored between targets), each leg a whole
-    number of commands; ``back`` returns to the start. Returns the least over the orders and each
-    order's bound."""
+    units) within ``tolerance_mm``: over ``orders``, a shortest path through the family at each
+    target (every goal configuration that may be clear, its cells split ``clear_levels`` times
+    where unsure; obstacles ignored between targets), each leg a whole number of commands;
+    ``back`` returns to the start. The family is searched by branch and bound for ``rounds``
+    rounds at most (:class:`~armpath.planning.bounds.search.CellSearch`). Returns the least
+    over the orders and each order's bound (:attr:`CellSearch.per_order`)."""
     say = on_progress or (lambda _m: None)
+    say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
-    refiner = _Refiner(sampler, targets.shape[0])
-    per_order: dict[tuple[int, ...], int] = {}
-    best_value, best_order = -np.inf, orders[0]
-    path: list[int] = []
-    layers: list[Layer] = []
-    for r in range(rounds + 1):
-        say(f"bounding the tour's commands: round {r + 1} of {rounds + 1}")
-        now = []
-        for k, p in enumerate(targets):
-            check_time("bounding the commands")
-            now.append(sampler.layer(p, refiner.directions(k), levels=clear_levels))
-        round_orders: dict[tuple[int, ...], int] = {}
-        value, order, nodes = _orders_through(sampler, now, q_start, orders, back, round_orders)
-        # every round's samples bound every plan: the most of them holds (finer directions
-        # can lower a round's value where they bring new members closer)
-        for o, c in round_orders.items():
-            per_order[o] = max(per_order.get(o, c), c)
-        if value > best_value:
-            best_value, best_order, path, layers = value, order, nodes, now
-        if r == rounds or not any(
-            [refiner.refine(t, now[t], p) for t, p in zip(order, nodes, strict=True)]
-        ):
-            break
-    largest = max(float(layers[t].err[p].max()) for t, p in zip(best_order, path, strict=True))
+    search = CellSearch(
+        sampler,
+        Orders(orders, back),
+        list(np.asarray(targets, dtype=np.float64)),
+        [None] * targets.shape[0],
+        q_start,
+        whole=True,
+        levels=clear_levels,
+    )
+    found = search.run(rounds, say)
+    if found is None:
+        raise PlanningError("a target has no family member within the joint limits")
     bound = CommandBound(
-        commands=int(np.ceil(best_value - 1e-9)),
-        value=best_value,
+        commands=int(np.ceil(found.value - 1e-9)),
+        value=found.value,
         method=(
             "least over every visiting order of a shortest path from the start through the "
             "solution family at each target (every goal configuration within the tolerance "
             "that may be clear; obstacles ignored between the targets, but not a joint's own "
-            "self-collision ranges; tool directions "
-            "sampled, refined where clearance is unsure and about the path, each distance less "
-            "the samples' sampling errors), each leg rounded up to whole commands"
+            "self-collision ranges; tool directions sampled, each distance less the samples' "
+            "sampling errors, and searched by branch and bound: cells that cannot hold a path "
+            "shorter than one through clear members dropped, the others split where their "
+            "error or clearance is unsure), each leg rounded up to whole commands"
         ),
         sampling={
             "orders": float(len(orders)),
-            "samples": float(sum(lay.size for lay in layers)),
-            "largest_error_on_path_commands": largest,
-        },
-        guide_q=np.array([layers[t].q[p] for t, p in zip(best_order, path, strict=True)]),
+            "rounds": float(found.rounds),
+            "samples": float(found.samples),
+            "directions": float(found.directions),
+            "largest_error_on_path_commands": found.largest_error,
+        }
+        | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {}),
+        guide_q=found.bound_q[list(found.order)],
     )
-    return bound, per_order
+    return bound, search.per_order
 
 
 def tour_bound_any_order(
@@ -105,7 +100,7 @@ def tour_bound_any_order(
     layers = []
     for p in targets:
         check_time("bounding the commands")
-        layers.append(sampler.layer(p, sampler.directions([]), levels=clear_levels))
+        layers.append(sampler.layer(p, sampler.base, levels=clear_levels))
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no family member within the joint limits")
     from_start = [float(sampler.distance_from(q_start, lay, whole=True).min()) for lay in layers]

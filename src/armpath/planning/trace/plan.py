@@ -216,7 +216,8 @@ def plan_trace(
     bound = None
     if opts.bound:
         say("bounding the fewest commands of this trace")
-        bound = _lower_bound(fam, arm.lattice.to_joint(start), passes, overlap > 0, opts, say)
+        q0 = arm.lattice.to_joint(start)
+        bound = _lower_bound(fam, q0, passes, overlap > 0, sequence.n_commands, opts, say)
     return TraceResult(
         sequence,
         curve,
@@ -239,12 +240,14 @@ def _lower_bound(
     q_start: FloatArray,
     passes: list[TracePass],
     around: bool,
+    planned: int,
     opts: TraceOptions,
     say: Callable[[str], None],
 ) -> CommandBound | None:
     """The bound of a plan that traces what ``passes`` cover, one pass per span (overlapping
     spans merged); ``around``: a single pass all round a closed curve, which may begin
-    anywhere. None where the family has no member within the limits on a span."""
+    anywhere; ``planned`` the plan's commands (the search need not look at what costs more).
+    None where the family has no member within the limits on a span."""
     spans: list[list[float]] = []
     for p in sorted(passes, key=lambda p: p.start_mm):
         if spans and p.start_mm <= spans[-1][1]:
@@ -260,6 +263,7 @@ def _lower_bound(
             opts.tolerance_mm,
             loop=loop,
             on_progress=say,
+            upper_commands=float(planned),
         )
     except PlanningError:
         return None

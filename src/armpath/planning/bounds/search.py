@@ -1,0 +1,480 @@
+"""Branch and bound over the family's direction cells for the relaxations the bounds solve.
+
+A bound's *relaxation* is a shortest path from the start through the family at a few *sites*
+(curve points, targets), in the largest-joint metric in commands, obstacles ignored between
+the sites. Two kinds:
+
+* a *chain* (:class:`Chain`, a trace): the sites in one sequence; between two, a *join* says
+  what a plan does there: :attr:`Join.MOVE` moves from a member of one to a member of the
+  next (the distance); :attr:`Join.LOOP` the same, or the pass begins there on a closed curve
+  (the move dropped: the approach from the start is charged at the member on either side
+  instead); :attr:`Join.FREE` counts nothing (between the spans of a trace, traced in any
+  order), and the approach may be charged there too. The approach is charged exactly once:
+  at the first site, at the last (the chain traced backward) or at a LOOP or FREE join.
+* *orders* (:class:`Orders`, a tour): the sites in any of several orders from the start, each
+  leg a whole number of commands, back to the start or not.
+
+A forward dynamic programme gives every sample the least cost of reaching it, a backward one
+the least cost from it to the end; their sum is the least cost of any path through the
+sample's cell, each distance less both samples' sampling errors, so it bounds every path
+through the cell's members from below. The same programme through the samples that are
+themselves clear, taken as exact, gives a path the relaxation allows: its cost is an upper
+bound of the relaxation's optimum (the *incumbent*; a caller may give a lower one, the
+commands of a plan). A cell whose least cost is above the incumbent holds no optimal path, so
+its direction is dropped from the search (*pruned*); the cells whose least cost is within
+:data:`SPLIT_WINDOW` of the bound and whose sampling error or clearance is unsure are split
+(the triangles of directions about them split in four), cheapest first. Rounds repeat until the
+bound is within :data:`GAP_GOAL` of the incumbent, nothing is left to split, the bound has not
+risen for :data:`STALL_ROUNDS` rounds, or a budget (:data:`SEARCH_ROUNDS`, :data:`MAX_SAMPLES`,
+:data:`TOTAL_DIRECTIONS`) is spent. Every round's
+value bounds the relaxation (as far as the sampling errors hold, see the package); the largest
+is kept. A round's errors shrink where cells split and the incumbent only falls, so a pruned
+cell stays prunable.
+"""
+
+from __future__ import annotations
+
+import enum
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.planning.bounds.sampling import (
+    MAX_LAYER_DIRECTIONS,
+    MIN_SPACING,
+    FamilySampler,
+    Layer,
+    _distinct,
+    _midpoints,
+    _Samples,
+)
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: Rounds of the search at most (each samples, bounds, prunes and splits once).
+SEARCH_ROUNDS = 16
+#: The search stops once its bound is this close to the incumbent (commands).
+GAP_GOAL = 0.25
+#: Sampling error (commands) a cell that may hold an optimal path is split down to.
+SEARCH_ERROR_GOAL = 0.02
+#: Cells whose least cost is within this much of the bound (commands) are split (cheapest
+#: first): the bound rises where the paths that hold it down run.
+SPLIT_WINDOW = 1.0
+#: Directions one site splits about in one round at most (cheapest cells first; each split
+#: adds about three).
+SPLITS_PER_ROUND = 2000
+#: Rounds in a row without a higher bound after which the search stops (the cells left to
+#: split lie where the family itself changes fast: near a singular configuration a joint
+#: turns a long way within one cell, however small).
+STALL_ROUNDS = 2
+#: Live samples of all sites together past which the search splits no more: each round's
+#: dynamic programmes take time about in proportion to the square of a site's samples.
+MAX_SAMPLES = 50_000
+#: Directions of all sites together at most (memory: a few hundred bytes each).
+TOTAL_DIRECTIONS = 1_000_000
+#: Cost (commands) above the incumbent that a cell's least cost may reach and still be kept:
+#: rounding only.
+_PRUNE_SLACK = 1e-6
+
+
+class Join(enum.Enum):
+    """What happens between two consecutive sites of a chain (see the module)."""
+
+    MOVE = "move"
+    LOOP = "loop"
+    FREE = "free"
+
+
+@dataclass(frozen=True)
+class Solution:
+    """A relaxation solved on given samples: the least ``total`` (commands; inf when no path
+    reaches the end), per site the least cost of a path through each sample (``through``), the
+    path attaining the total (the sample it takes at each site), the approach's part of it, and
+    the order of the sites it visits (a tour's; the sites' own order for a chain); a tour's
+    least total of each order, rounded up."""
+
+    total: float
+    through: list[FloatArray]
+    samples: list[int]
+    approach: float
+    order: tuple[int, ...]
+    per_order: dict[tuple[int, ...], int] = field(default_factory=dict)
+
+
+def _flip(
+    prev0: FloatArray, app_prev: FloatArray, app_next: FloatArray
+) -> tuple[FloatArray, IntArray]:
+    """Costs at the next site with the approach charged at the join (at the member before it,
+    from which the chain was traced backward, or at the member after it), from the costs
+    ``prev0`` before it with the approach not yet charged; the predecessor of each."""
+    m = app_next.shape[0]
+    if prev0.size == 0 or not np.any(np.isfinite(prev0)):
+        return np.full(m, np.inf), np.full(m, -1, dtype=np.int64)
+    before = prev0 + app_prev
+    i_before = int(np.argmin(before))
+    i_free = int(np.argmin(prev0))
+    after = prev0[i_free] + app_next
+    take_after = after < before[i_before]
+    cost = np.where(take_after, after, before[i_before])
+    arg = np.where(take_after, i_free, i_before).astype(np.int64)
+    return np.asarray(cost, dtype=np.float64), arg
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A trace's relaxation: the sites in sequence, ``joins[k]`` between sites ``k`` and
+    ``k + 1`` (see the module)."""
+
+    joins: list[Join]
+
+    def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
+        """Both programmes over each sample and a flag (0: the approach not charged yet, 1:
+        charged), and the path attaining the least total."""
+        K = len(layers)
+        fwd = [np.stack([np.zeros(layers[0].size), app[0]], axis=1)]
+        ptr = [np.full((layers[0].size, 2), -1, dtype=np.int64)]  # predecessor * 2 + its flag
+        for k in range(1, K):
+            check_time("bounding the commands")
+            prev, cur, join = layers[k - 1], layers[k], self.joins[k - 1]
+            cost = np.full((cur.size, 2), np.inf)
+            arg = np.full((cur.size, 2), -1, dtype=np.int64)
+            for f in (0, 1):
+                if join is Join.FREE:
+                    if prev.size and np.any(np.isfinite(fwd[-1][:, f])):
+                        i = int(np.argmin(fwd[-1][:, f]))
+                        cost[:, f], arg[:, f] = fwd[-1][i, f], 2 * i + f
+                else:
+                    c, a = sampler.advance(prev, fwd[-1][:, f], cur)
+                    cost[:, f], arg[:, f] = c, np.where(a >= 0, 2 * a + f, -1)
+            if join is not Join.MOVE:
+                c, a = _flip(fwd[-1][:, 0], app[k - 1], app[k])
+                better = c < cost[:, 1]
+                cost[better, 1], arg[better, 1] = c[better], 2 * a[better]
+            fwd.append(cost)
+            ptr.append(arg)
+        bwd = [np.stack([app[-1], np.zeros(layers[-1].size)], axis=1)]
+        for k in range(K - 2, -1, -1):
+            check_time("bounding the commands")
+            nxt, cur, join = layers[k + 1], layers[k], self.joins[k]
+            cost = np.full((cur.size, 2), np.inf)
+            for f in (0, 1):
+                if join is Join.FREE:
+                    cost[:, f] = float(np.min(bwd[0][:, f], initial=np.inf))
+                else:
+                    cost[:, f] = sampler.advance(nxt, bwd[0][:, f], cur)[0]
+            if join is not Join.MOVE:
+                cost[:, 0] = np.minimum(cost[:, 0], _flip(bwd[0][:, 1], app[k + 1], app[k])[0])
+            bwd.insert(0, cost)
+        through = [
+            np.asarray((f + b).min(axis=1), dtype=np.float64) for f, b in zip(fwd, bwd, strict=True)
+        ]
+        charged = fwd[-1][:, 1]
+        uncharged = fwd[-1][:, 0] + app[-1]
+        total = float(min(np.min(charged, initial=np.inf), np.min(uncharged, initial=np.inf)))
+        order = tuple(range(K))
+        if not np.isfinite(total):
+            return Solution(total, through, [], np.nan, order)
+        # the path, back from the end
+        if np.min(charged) <= np.min(uncharged):
+            i, f, approach = int(np.argmin(charged)), 1, np.nan
+        else:
+            i, f = int(np.argmin(uncharged)), 0
+            approach = float(app[-1][i])
+        samples = [i]
+        for k in range(K - 1, 0, -1):
+            pi, pf = divmod(int(ptr[k][i, f]), 2)
+            if f == 1 and pf == 0:  # the approach was charged at this join: on which side?
+                gap = fwd[k][i, 1] - fwd[k - 1][pi, 0]
+                near_after = abs(gap - app[k][i]) <= abs(gap - app[k - 1][pi])
+                approach = float(app[k][i] if near_after else app[k - 1][pi])
+            i, f = pi, pf
+            samples.append(i)
+        if f == 1:  # charged at the first site
+            approach = float(app[0][i])
+        return Solution(total, through, samples[::-1], approach, order)
+
+
+@dataclass(frozen=True)
+class Orders:
+    """A tour's relaxation: the sites visited in each of ``orders`` from the start (legs whole
+    commands), ``back`` to the start."""
+
+    orders: list[tuple[int, ...]]
+    back: bool
+
+    def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
+        K = len(layers)
+        prefix: dict[tuple[int, ...], tuple[FloatArray, IntArray | None]] = {}
+        suffix: dict[tuple[int, ...], FloatArray] = {}
+
+        def forward(o: tuple[int, ...]) -> FloatArray:
+            if o not in prefix:
+                if len(o) == 1:
+                    prefix[o] = (app[o[0]], None)
+                else:
+                    check_time("bounding the tour's commands")
+                    before = forward(o[:-1])
+                    prefix[o] = sampler.advance(layers[o[-2]], before, layers[o[-1]], whole=True)
+            return prefix[o][0]
+
+        def backward(o: tuple[int, ...]) -> FloatArray:
+            if o not in suffix:
+                if len(o) == 1:
+                    suffix[o] = app[o[0]] if self.back else np.zeros(layers[o[0]].size)
+                else:
+                    check_time("bounding the tour's commands")
+                    after = backward(o[1:])
+                    suffix[o] = sampler.advance(layers[o[1]], after, layers[o[0]], whole=True)[0]
+            return suffix[o]
+
+        through = [np.full(lay.size, np.inf) for lay in layers]
+        best, best_order = np.inf, self.orders[0]
+        per_order = {}
+        for o in self.orders:
+            end = forward(o) + backward(o[-1:])
+            value = float(np.min(end, initial=np.inf))
+            if np.isfinite(value):
+                per_order[o] = int(np.ceil(value - 1e-9))
+            if value < best:
+                best, best_order = value, o
+            for i in range(len(o)):
+                t = o[i]
+                through[t] = np.minimum(through[t], forward(o[: i + 1]) + backward(o[i:]))
+        if not np.isfinite(best):
+            return Solution(best, through, [], np.nan, best_order, per_order)
+        # the path of the best order, back from its last site
+        o = best_order
+        i = int(np.argmin(forward(o) + backward(o[-1:])))
+        picks = [i]
+        for n in range(len(o), 1, -1):
+            arg = prefix[o[:n]][1]
+            assert arg is not None
+            i = int(arg[i])
+            picks.append(i)
+        picks = picks[::-1]
+        samples = [-1] * K
+        for t, p in zip(o, picks, strict=True):
+            samples[t] = p
+        return Solution(best, through, samples, float(app[o[0]][picks[0]]), o, per_order)
+
+
+def all_orders(count: int) -> list[tuple[int, ...]]:
+    """Every visiting order of ``count`` sites."""
+    return list(itertools.permutations(range(count)))
+
+
+@dataclass
+class _Site:
+    """The search's state at one site: the tool point, which directions the family allows
+    there, every member sampled so far, which directions may still hold an optimal path,
+    and the layer filtered from the members (recomputed when new directions come)."""
+
+    point: FloatArray
+    allowed: Callable[[FloatArray], BoolArray] | None
+    acc: _Samples
+    alive: BoolArray
+    layer: Layer
+    triangles: IntArray
+    spacing: FloatArray
+    unsure: BoolArray
+    levels: int
+
+    def live(self) -> Layer:
+        """The samples of directions still alive."""
+        assert self.layer.direction is not None
+        return self.layer.subset(self.alive[self.layer.direction])
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """What the search found: the bound (``value``, commands) and the approach's part of its
+    path, the order its path visits the sites in; the least cost of a path through clear
+    samples (``clear_path``: an upper bound of the relaxation's optimum; inf when none was
+    found) and its configurations (one per site in site order, rad; None without one); the bound's
+    path's configurations; the rounds run, the samples and directions of the last, and the
+    largest sampling error on the bound's path (commands)."""
+
+    value: float
+    approach: float
+    order: tuple[int, ...]
+    clear_path: float
+    clear_q: FloatArray | None
+    bound_q: FloatArray
+    rounds: int
+    samples: int
+    directions: int
+    largest_error: float
+
+
+class CellSearch:
+    """Branch and bound over the direction cells of a relaxation's sites (see the module).
+
+    ``levels``: before the search, the cells kept only for what their neighbours allow are
+    split that many times at every site, as :meth:`FamilySampler.layer` does."""
+
+    def __init__(
+        self,
+        sampler: FamilySampler,
+        relaxation: Chain | Orders,
+        points: list[FloatArray],
+        allowed: list[Callable[[FloatArray], BoolArray] | None],
+        q_start: FloatArray,
+        *,
+        directions: FloatArray | None = None,
+        whole: bool = False,
+        with_errors: bool = True,
+        levels: int = 0,
+    ) -> None:
+        self.sampler = sampler
+        self.relaxation = relaxation
+        #: per order of a tour, the most commands any round proves for it: a round's least
+        #: total of the order, or the incumbent its cells were dropped against if less (a
+        #: dropped cell holds no path of any order cheaper than that)
+        self.per_order: dict[tuple[int, ...], int] = {}
+        self.q_start = q_start
+        self.whole = whole
+        self.with_errors = with_errors
+        base = sampler.base if directions is None else directions
+        self.sites = [self._site(p, a, base, levels) for p, a in zip(points, allowed, strict=True)]
+
+    def _site(
+        self,
+        point: FloatArray,
+        allowed: Callable[[FloatArray], BoolArray] | None,
+        base: FloatArray,
+        levels: int,
+    ) -> _Site:
+        s = self.sampler
+        acc = s._grown(_Samples.empty(s.fam.arm, int(s.tip.sum())), point, base, allowed)
+        empty = Layer(np.zeros((0, 0)), np.zeros((0, 0)), np.zeros((0, 0)), np.zeros((0, 3)))
+        site = _Site(
+            point, allowed, acc, np.ones(acc.dirs.shape[0], dtype=bool), empty,
+            np.zeros((0, 3), dtype=np.int64), np.zeros(0), np.zeros(0, dtype=bool), levels,
+        )  # fmt: skip
+        self._filter(site)
+        for _ in range(levels):
+            check_time("bounding the commands")
+            refine = site.unsure & (site.spacing / 2.0 >= MIN_SPACING)
+            if not np.any(refine) or self._split(site, refine) == 0:
+                break
+        return site
+
+    def _filter(self, site: _Site) -> None:
+        layer, unsure, spacing, triangles = self.sampler._filtered(site.acc)
+        site.layer = layer if self.with_errors else layer.without_errors()
+        site.spacing, site.triangles = spacing, triangles
+        site.unsure = np.zeros(site.acc.dirs.shape[0], dtype=bool)
+        site.unsure[unsure] = True
+
+    def _split(self, site: _Site, refine: BoolArray) -> int:
+        """Split the triangles of directions about ``refine``; the count of new directions."""
+        new = _distinct(_midpoints(site.acc.dirs, site.triangles, refine), site.acc.dirs)
+        if new.shape[0] == 0:
+            return 0
+        site.acc = self.sampler._grown(site.acc, site.point, new, site.allowed)
+        site.alive = np.concatenate([site.alive, np.ones(new.shape[0], dtype=bool)])
+        self._filter(site)
+        return int(new.shape[0])
+
+    def _approach(self, layers: list[Layer]) -> list[FloatArray]:
+        return [self.sampler.distance_from(self.q_start, lay, self.whole) for lay in layers]
+
+    def run(
+        self,
+        rounds: int = SEARCH_ROUNDS,
+        say: Callable[[str], None] | None = None,
+        upper: float = np.inf,
+    ) -> SearchResult | None:
+        """Search ``rounds`` rounds at most, from the incumbent ``upper`` (commands; a plan's)
+        if lower than any found; None when no path reaches the end (a site without a sample
+        in the first round)."""
+        say = say or (lambda _m: None)
+        best: SearchResult | None = None
+        clear_total, clear_q = np.inf, None
+        pruned_against = np.inf
+        stalled = 0
+        for r in range(1, rounds + 1):
+            live = [site.live() for site in self.sites]
+            found = self.relaxation.solve(self.sampler, live, self._approach(live))
+            cap = np.ceil(pruned_against - 1e-9) if np.isfinite(pruned_against) else np.inf
+            for o, c in found.per_order.items():
+                self.per_order[o] = max(self.per_order.get(o, 0), int(min(c, cap)))
+            if not np.isfinite(found.total):
+                break
+            exact = [lay.subset(np.asarray(lay.clear)).without_errors() for lay in live]
+            clear = self.relaxation.solve(self.sampler, exact, self._approach(exact))
+            if clear.total < clear_total:
+                clear_total = clear.total
+                clear_q = np.array([lay.q[i] for lay, i in zip(exact, clear.samples, strict=True)])
+            incumbent = min(float(upper), clear_total)
+            samples = sum(lay.size for lay in live)
+            directions = sum(site.acc.dirs.shape[0] for site in self.sites)
+            stalled = 0 if best is None or found.total > best.value + 1e-9 else stalled + 1
+            if best is None or found.total > best.value:
+                on_path = [(lay, i) for lay, i in zip(live, found.samples, strict=True) if i >= 0]
+                best = SearchResult(
+                    found.total, found.approach, found.order, clear_total, clear_q,
+                    np.array([lay.q[i] for lay, i in on_path]), r, samples, directions,
+                    max(float(lay.err[i].max()) for lay, i in on_path),
+                )  # fmt: skip
+            else:
+                best = SearchResult(
+                    best.value, best.approach, best.order, clear_total, clear_q, best.bound_q,
+                    r, samples, directions, best.largest_error,
+                )  # fmt: skip
+            say(
+                f"bounding the commands: round {r}: at least {best.value:.2f}, a clear path "
+                f"{clear_total:.2f}, {samples} samples of {directions} directions"
+            )
+            if (
+                r == rounds
+                or incumbent - best.value <= GAP_GOAL
+                or samples > MAX_SAMPLES
+                or stalled >= STALL_ROUNDS
+            ):
+                break
+            pruned_against = incumbent
+            if not self._prune_and_split(live, found, incumbent, directions, samples):
+                break
+        return best
+
+    def _prune_and_split(
+        self, live: list[Layer], found: Solution, incumbent: float, directions: int, samples: int
+    ) -> bool:
+        """Drop the directions whose every live sample costs more than the incumbent; split,
+        cheapest first, the cells within :data:`SPLIT_WINDOW` of the bound whose error or
+        clearance is unsure, no more at a site than the samples left to :data:`MAX_SAMPLES`
+        allow (a split adds up to six directions). False when nothing was split."""
+        split_any = False
+        window = found.total + SPLIT_WINDOW
+        per_direction = samples / max(directions, 1)
+        share = (MAX_SAMPLES - samples) / (6.0 * max(per_direction, 1.0) * len(self.sites))
+        cap = int(max(min(SPLITS_PER_ROUND, share), 0))
+        for site, lay, through in zip(self.sites, live, found.through, strict=True):
+            assert lay.direction is not None
+            keep = through <= incumbent + _PRUNE_SLACK
+            sampled = np.zeros(site.alive.shape[0], dtype=bool)
+            sampled[lay.direction] = True
+            hold = np.zeros(site.alive.shape[0], dtype=bool)
+            hold[lay.direction[keep]] = True
+            site.alive &= hold | ~sampled
+            wants = keep & (through <= window)
+            wants &= (lay.err.max(axis=1) > SEARCH_ERROR_GOAL) | site.unsure[lay.direction]
+            wants &= site.spacing[lay.direction] / 2.0 >= MIN_SPACING
+            room = min(MAX_LAYER_DIRECTIONS - site.acc.dirs.shape[0], TOTAL_DIRECTIONS - directions)
+            if not np.any(wants) or room <= 0 or cap == 0:
+                continue
+            order = np.argsort(through[wants], kind="stable")
+            pick = np.unique(lay.direction[wants][order][: min(cap, room // 3)])
+            refine = np.zeros(site.alive.shape[0], dtype=bool)
+            refine[pick] = True
+            added = self._split(site, refine)
+            directions += added
+            split_any |= added > 0
+        return split_any
