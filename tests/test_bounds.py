@@ -434,11 +434,11 @@ def test_the_orders_relaxation_equals_brute_force():
 
 
 def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
-    """Branch and bound drops the direction cells whose least cost is above the incumbent. On
-    the samples the search ends with, the relaxation through every sample (dropped ones too)
-    must cost exactly what it costs through the kept ones; neither that nor the search's bound
-    (the most of its rounds) is above the clear path it found; and cells were dropped (the
-    check is not empty)."""
+    """Branch and bound drops the direction cells whose least cost is above the incumbent: a
+    round by hand drops exactly the directions whose every sample costs more. After the search,
+    every path through the members it sampled, those of dropped cells too, taken as exact (each
+    a path the relaxation allows), must cost at least its bound; the clear path it reports is
+    one of them; and cells were dropped (the check is not empty)."""
     from armpath.planning.bounds.sampling import _allowed_at
     from armpath.planning.bounds.search import CellSearch, Chain, Join
 
@@ -447,22 +447,38 @@ def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
     curve = Polyline("t", np.array([[300.0, 150.0, 350.0], [400.0, -100.0, 200.0]]))
     fam = curve_family(arm, CollisionWorld(()), curve)
     sampler = bounds.FamilySampler(fam, 0.1, 500, start)
-    s = np.linspace(0.5, curve.length - 0.5, 4)
-    chain = Chain([Join.MOVE] * 3)
+    s = np.linspace(0.5, curve.length - 0.5, 3)
+    chain = Chain([Join.MOVE] * 2)
     search = CellSearch(
         sampler, chain, [fam.frame(float(x))[0] for x in s],
         [_allowed_at(fam, float(x)) for x in s], start,
     )  # fmt: skip
-    found = search.run(rounds=6)
+    # one round by hand, pruned against an incumbent one command above its least cost: the
+    # directions dropped are exactly those whose every sample costs more than that
+    live = [site.live() for site in search.sites]
+    first = chain.solve(sampler, live, [sampler.distance_from(start, lay) for lay in live])
+    alive_before = [site.alive.copy() for site in search.sites]
+    incumbent = first.total + 1.0
+    samples = sum(lay.size for lay in live)
+    directions = sum(site.acc.dirs.shape[0] for site in search.sites)
+    search._prune_and_split(live, first, incumbent, directions, samples)
+    for site, lay, through, before in zip(
+        search.sites, live, first.through, alive_before, strict=True
+    ):
+        holds = np.zeros(before.shape[0], dtype=bool)
+        holds[lay.direction[through <= incumbent]] = True
+        sampled = np.zeros(before.shape[0], dtype=bool)
+        sampled[lay.direction] = True
+        now = site.alive[: before.shape[0]]
+        np.testing.assert_array_equal(now[sampled], holds[sampled])
+        assert np.all(now[~sampled] == before[~sampled])
+    found = search.run(rounds=4)
     assert found is not None and np.isfinite(found.clear_path)
-    every = [site.layer for site in search.sites]
-    kept = [site.live() for site in search.sites]
-    dropped = sum(lay.size for lay in every) - sum(lay.size for lay in kept)
-    assert dropped > 0
-
-    def total(layers):
-        app = [sampler.distance_from(start, lay) for lay in layers]
-        return chain.solve(sampler, layers, app).total
-
-    assert total(every) == pytest.approx(total(kept), abs=1e-9)
-    assert max(found.value, total(kept)) <= found.clear_path + 1e-9
+    exact = [site.layer.without_errors() for site in search.sites]
+    dropped = [~site.alive[lay.direction] for site, lay in zip(search.sites, exact, strict=True)]
+    assert sum(int(d.sum()) for d in dropped) > 0
+    app = [sampler.distance_from(start, lay) for lay in exact]
+    paths = chain.solve(sampler, exact, app)
+    for through, d in zip(paths.through, dropped, strict=True):
+        assert through[d].min() >= found.value - 1e-9
+    assert found.value <= paths.total + 1e-9 <= found.clear_path + 1e-9

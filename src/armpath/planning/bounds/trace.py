@@ -61,7 +61,7 @@ def trace_bound(
     counted as zero). ``loop``: one span that
     is the whole closed curve, which a pass may begin anywhere on. The family is sampled along
     ``directions`` tool directions at first and searched by branch and bound for ``rounds``
-    rounds at most (:class:`~armpath.planning.bounds.search.ChainSearch`).
+    rounds at most (:class:`~armpath.planning.bounds.search.CellSearch`).
     ``upper_commands``: the commands of a plan that traces the spans, if known (the search
     drops the cells that cannot hold a path cheaper than it).
     ``with_errors=False`` (a diagnostic, not a bound): the samples' sampling errors are left
@@ -95,8 +95,8 @@ def trace_bound(
             f"family at {s_all.size} points of the traced spans (the members that may be clear "
             "there; obstacles ignored between them, but not a joint's own self-collision ranges; "
             "tool directions sampled, each distance less the samples' sampling errors, and "
-            "searched by branch and bound: cells that cannot hold a path shorter than one "
-            "through clear members dropped, the others split); one pass per span, "
+            "searched by branch and bound: cells that cannot hold a path shorter than the plan "
+            "or than one through clear members dropped, the others split); one pass per span, "
             "either direction"
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
