@@ -28,8 +28,10 @@ bound is within :data:`GAP_GOAL` of the incumbent, nothing is left to split, the
 risen for :data:`STALL_ROUNDS` rounds, or a budget (:data:`SEARCH_ROUNDS`, :data:`MAX_SAMPLES`,
 :data:`TOTAL_DIRECTIONS`) is spent. Every round's
 value bounds the relaxation (as far as the sampling errors hold, see the package); the largest
-is kept. A round's errors shrink where cells split and the incumbent only falls, so a pruned
-cell stays prunable.
+is kept. A dropped cell holds no path cheaper than the incumbent it was dropped against, as far
+as that round's errors hold, and is not looked at again (its error can still change as its
+neighbours split: the test checks instead that no exact path through the sampled members,
+dropped ones included, is cheaper than the bound).
 """
 
 from __future__ import annotations
