@@ -185,3 +185,30 @@ def test_mesh_broad_phase_keeps_the_verdict(tmp_path):
         exact = np.all(values - world.required(ARM) >= margin, axis=-1)
         np.testing.assert_array_equal(world.satisfied(ARM, q, margin), exact)
         assert 0.05 < exact.mean() < 0.95
+
+
+def test_a_searched_motion_does_not_turn_a_joint_round_to_a_copy_of_its_goal():
+    """Between two of the UR5 cell's welds the direct motion is blocked, so the motion is
+    searched; the goals' whole-turn copies are goals too (a joint that cannot get round the near
+    way may reach the copy). The search once reached the copy of a wrist goal 340 deg away and
+    took 188 commands where 15 do: the first search now looks only for the goals within half a
+    turn of the nearest one. The plan replays on the lattice, reaches its goal and turns no joint
+    by more than a half turn."""
+    from armpath.scenes.arm import scene_arm
+    from test_ur5_cell import CELL
+
+    scene = load_scene(CELL)
+    arm = scene_arm(scene)
+    start = np.array([1478, -429, 1298, -1790, -365, 0])
+    goals = np.array(
+        [[1526, -439, 1042, -1446, -659, 0], [1514, -433, 1033, -1414, -621, 0],
+         [1519, -438, 1084, -1560, -637, 0], [1505, -425, 1119, -1673, -592, 0]]
+    )  # fmt: skip
+    plan = plan_motion(arm, scene.world, start, goals, MotionOptions(), turn_copies=True)
+    assert plan.method != "direct"
+    states = plan.sequence.states()
+    assert np.array_equal(states[0], start)
+    assert any(np.array_equal(states[-1], g) for g in goals)  # a goal itself, not a copy
+    assert np.abs(np.diff(states, axis=0)).max() <= arm.lattice.max_ticks.max()
+    assert np.abs(states - start).max() < 1800  # ticks: no joint turned by half a turn
+    assert plan.sequence.n_commands <= 30

@@ -125,3 +125,49 @@ def test_a_narrowed_guide_holds_what_a_guide_built_so_holds(cell):
         assert wide.room[t].min() >= 0.5 and narrowed.room[t].min() >= 1.5
         tips = np.array([ur5_landmarks(np.degrees(q))[-1] for q in wide.layers[t].q[::25]])
         assert np.linalg.norm(tips - pts[t], axis=-1).max() < 0.05
+
+
+def test_a_guide_from_the_start_keeps_the_elbow_on_its_side_of_the_fold(cell):
+    """The UR5's elbow cannot fold its forearm through the upper arm (163.6-196.4 deg either
+    way): a guide given the start measures it on the start's side, as the tour's bound does, so
+    no guided member or goal state asks the elbow to cross the fold (without the start, the
+    seed of the UR5 cell's first leg of 116 commands: a member at 231.8 deg, 70 commands away
+    the short way round, 116 the way the arm can go). Its guided path is the shortest through
+    its members with the elbow measured so (brute force, the elbow not wrapped)."""
+    scene, arm, pts, _ = cell
+    q0 = np.radians([0, -90, 90, -90, -90, 0])
+    fam = tour._targets_family(arm, scene.world, pts)
+    guide = TourGuide.build(fam, pts, 0.05, q_start=q0)
+    tip = guide.sampler.tip
+
+    def elbow_deg(q):
+        return (np.degrees(np.asarray(q)[..., 2]) + 180.0) % 360.0 - 180.0
+
+    members = [elbow_deg(lay.q) for lay in guide.layers]
+    assert all(np.abs(m).max() < 163.6 for m in members)  # no clear member inside the fold
+    kept = [lay.q.copy() for lay in guide.layers]
+    for q in kept:
+        q[:, 2] = np.radians(elbow_deg(q))
+    step = (arm.lattice.tick * arm.lattice.max_ticks)[tip]
+    wraps = ((arm.upper - arm.lower)[tip] >= 2 * np.pi) & (np.flatnonzero(tip) != 2)
+    turn = 2 * np.pi / step
+
+    def legs(a, b):
+        d = b[None, :, :] - a[:, None, :]
+        d = np.where(wraps, d - turn * np.round(d / turn), d)
+        return np.ceil(np.abs(d).max(axis=-1) - 1e-9)
+
+    for order in [(0, 1, 2, 3), (0, 3, 2, 1), (1, 0, 3, 2)]:
+        total, path = guide.path(q0, order, back=False)
+        u = [kept[t][:, tip] / step for t in order]
+        brute = legs((q0[tip] / step)[None], u[0])[0]
+        for a, b in itertools.pairwise(u):
+            brute = (brute[:, None] + legs(a, b)).min(axis=0)
+        assert total == brute.min()
+        # the members and the goal states next to them: the elbow within 163.6 deg of zero,
+        # on the start's side, never across the fold
+        assert all(abs(np.degrees(q[2])) < 163.6 for q in path)
+        goals = guide.goal_states(q0, order, path)
+        assert goals is not None
+        for states in goals:
+            assert np.abs(np.degrees(arm.lattice.to_joint(states)[:, 2])).max() < 163.6

@@ -245,5 +245,8 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     # keeping 0.5 mm beyond the margin as well as 1.5 mm (tour.GUIDE_BUFFERS_MM): 164 on the
     # machine where that was measured, 175 (legs 116 + 23 + 20 + 16) with the same code and
     # package versions on another (an AVX-512 EPYC): the tour's choices among nearly equal
-    # lattice states differ between the two, where exactly was not found
-    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 175
+    # lattice states differ between the two, where exactly was not found. The guide measuring
+    # the elbow on the start's side of its fold and searched legs looking for the goals within
+    # half a turn first (no wrist turned round to a goal's copy): 131 (76 + 17 + 28 + 10) on
+    # the second machine; the limit leaves the first machine room
+    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 140

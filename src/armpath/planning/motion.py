@@ -440,9 +440,18 @@ def plan_motion(
             return check(a * scale, b * scale)
 
         say(f"searching (search {attempt + 1}, buffer {buffer:g} mm)")
+        # the first search looks only for the goals within half a turn of the nearest one: a
+        # whole-turn copy is a goal for a joint that cannot get round the near way (an elbow
+        # folding through its upper arm), and a tree that happens to reach it first would
+        # turn the joint all the way round
+        pick = np.flatnonzero(
+            direct_counts <= direct_counts.min() + FAR_GOAL_COMMANDS
+            if attempt == 0
+            else np.ones(goals.shape[0], dtype=bool)
+        )
         res = rrt_connect(
             s_rad / scale,
-            goals_search / scale,
+            goals_search[pick] / scale,
             lower / scale,
             upper / scale,
             check_scaled,
@@ -476,7 +485,7 @@ def plan_motion(
                     upper = np.where(active, upper, s_rad)
             goals_search = np.where(active, pre, s_rad)
             continue
-        gi = res.goal_index
+        gi = int(pick[res.goal_index])
         path = res.path.copy()
         # inactive joints: goal value at the end
         path[-1] = np.where(active, pre[gi], g_rad[gi]) / scale
@@ -530,6 +539,9 @@ def plan_motion(
 
 #: Most goal states one motion search takes: the given ones and their whole-turn copies.
 MAX_SEARCH_GOALS = 64
+#: Goals farther than this (commands of a direct motion) beyond the nearest one are left out of
+#: a motion's first search (half a turn at 2 deg a command).
+FAR_GOAL_COMMANDS = 90
 
 
 def with_turn_copies(arm: SerialArm, goals: IntArray, start: IntArray) -> IntArray:

@@ -236,7 +236,7 @@ def plan_tour(
         fam, start, pts, ranking, return_to_start, tolerance_mm, say
     )
     q0 = arm.lattice.to_joint(start)
-    guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say)
+    guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say, arm.lattice.to_joint(start))
     guide = None if guide_all is None else guide_all.with_buffer(GUIDE_BUFFERS_MM[0])
     guide_paths: dict[tuple[int, ...], tuple[float, list[FloatArray]]] = {}
     if guide is not None and len(orders) <= MAX_GUIDED_ORDERS:
@@ -485,6 +485,7 @@ def _tour_guide(
     tolerance_mm: float,
     orientations: Sequence[Orientation | None] | None,
     say: Callable[[str], None],
+    q_start: FloatArray,
 ) -> TourGuide | None:
     """Clear family members at every target (:class:`TourGuide`); None without a family or
     with a tool orientation rule (the guide samples every tool direction)."""
@@ -492,7 +493,7 @@ def _tour_guide(
         return None
     say("sampling clear configurations at every target")
     try:
-        return TourGuide.build(fam, pts, tolerance_mm, min(GUIDE_BUFFERS_MM))
+        return TourGuide.build(fam, pts, tolerance_mm, min(GUIDE_BUFFERS_MM), q_start)
     except PlanningError:
         return None
 

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import ArmpathError
-from armpath.geometry.world import CollisionWorld
+from armpath.geometry.world import CollisionWorld, into_windows
 from armpath.ik.family import shift_into_limits
 from armpath.ik.target import ToolTarget
 from armpath.model.serial_arm import SerialArm
@@ -62,11 +62,12 @@ class TourGuide:
         targets: FloatArray,
         tolerance_mm: float,
         body_buffer_mm: float = GOAL_BODY_BUFFER_MM,
+        q_start: FloatArray | None = None,
     ) -> TourGuide:
         """Sample the family at every target and keep the members whose links keep the margin
         plus ``body_buffer_mm`` (the tool tip: outside every obstacle)."""
         arm, world = fam.arm, fam.world
-        sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS)
+        sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS, q_start)
         pairs = world.pairs(arm)
         is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
         required = world.required(arm)
@@ -126,7 +127,7 @@ class TourGuide:
         members, prev = [], q_start
         for lay, k in zip(layers, picks, strict=True):
             q = self._with_start(lay.q[k][None], q_start)
-            q = shift_into_limits(self.arm, q, prev)[0]
+            q = self._kept(shift_into_limits(self.arm, q, prev))[0]
             members.append(q)
             prev = q
         return total, members
@@ -142,7 +143,9 @@ class TourGuide:
             check_time("choosing the tour's goal states")
             lay = self.layers[t]
             near = np.argsort(self.sampler.distance_from(q, lay), kind="stable")[:NEAREST_MEMBERS]
-            samples = shift_into_limits(self.arm, self._with_start(lay.q[near], q_start), q)
+            samples = self._kept(
+                shift_into_limits(self.arm, self._with_start(lay.q[near], q_start), q)
+            )
             try:
                 states = generic_goal_states(
                     self.arm,
@@ -157,6 +160,13 @@ class TourGuide:
                 return None
             out.append(states)
         return out
+
+    def _kept(self, q: FloatArray) -> FloatArray:
+        """Configurations ``(M, n)`` with each joint its self-collision ranges confine turned
+        onto the start's side of them (the copy :meth:`FamilySampler.units` measures)."""
+        if not self.sampler.joint_windows:
+            return q
+        return into_windows(q, self.sampler.joint_windows)[0]
 
     def _with_start(self, q: FloatArray, q_start: FloatArray) -> FloatArray:
         """``q`` with the joints that do not move the tool point at their start values."""
