@@ -469,8 +469,10 @@ def _targets_family(arm: SerialArm, world: CollisionWorld, pts: FloatArray) -> C
 MAX_GUIDED_ORDERS = 24
 #: The room (mm) beyond the margin that the members of a guided path keep: the first for the
 #: planned orders' second plan, each for the :data:`GUIDED_ORDERS` orders whose guided paths
-#: are shortest.
-GUIDE_BUFFERS_MM = (GOAL_BODY_BUFFER_MM, 0.5)
+#: are shortest (their lattice goal states keep :data:`GOAL_BODY_BUFFER_MM` all the same). The
+#: UR5 cell's welds: 131 commands with 1.5 and 0.5 mm, 119 with 0.2 mm too (0.1 and 0.05 mm
+#: more: 119; the seed's Task 3 135 with any of these).
+GUIDE_BUFFERS_MM = (GOAL_BODY_BUFFER_MM, 0.5, 0.2)
 #: Orders planned through their guided goal states at each buffer.
 GUIDED_ORDERS = 4
 
