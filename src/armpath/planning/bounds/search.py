@@ -135,6 +135,10 @@ class Chain:
 
     joins: list[Join]
 
+    def narrowed(self, found: Solution, incumbent: float) -> Chain:
+        """The same chain (only a tour's orders can be dropped)."""
+        return self
+
     def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
         """Both programmes over each sample and a flag (0: the approach not charged yet, 1:
         charged), and the path attaining the least total."""
@@ -209,6 +213,13 @@ class Orders:
 
     orders: list[tuple[int, ...]]
     back: bool
+
+    def narrowed(self, found: Solution, incumbent: float) -> Orders:
+        """Without the orders whose every path costs more than ``incumbent`` (by ``found``,
+        solved on these samples: no cell dropped later can make them cheaper), which hold no
+        optimal tour; each round then solves fewer."""
+        keep = [o for o in self.orders if found.per_order.get(o, 0) <= incumbent + 1e-9]
+        return Orders(keep or self.orders, self.back)
 
     def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
         K = len(layers)
@@ -442,6 +453,7 @@ class CellSearch:
             ):
                 break
             pruned_against = incumbent
+            self.relaxation = self.relaxation.narrowed(found, incumbent)
             if not self._prune_and_split(live, found, incumbent, directions, samples):
                 break
         return best
