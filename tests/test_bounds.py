@@ -431,6 +431,10 @@ def test_the_orders_relaxation_equals_brute_force():
         for got, want in zip(found.through, through, strict=True):
             np.testing.assert_allclose(got, want)
         assert per_order[found.order] == best
+        # the orders a round drops: exactly those whose every path costs more than the incumbent
+        kept = Orders(all_orders(4), back).narrowed(found, best + 2.0).orders
+        assert set(kept) == {o for o, v in per_order.items() if v <= best + 2.0}
+        assert found.order in kept
 
 
 def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
