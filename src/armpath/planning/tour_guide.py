@@ -143,9 +143,7 @@ class TourGuide:
             check_time("choosing the tour's goal states")
             lay = self.layers[t]
             near = np.argsort(self.sampler.distance_from(q, lay), kind="stable")[:NEAREST_MEMBERS]
-            samples = self._kept(
-                shift_into_limits(self.arm, self._with_start(lay.q[near], q_start), q)
-            )
+            samples = shift_into_limits(self.arm, self._with_start(lay.q[near], q_start), q)
             try:
                 states = generic_goal_states(
                     self.arm,

@@ -277,12 +277,23 @@ class FamilySampler:
         (see :meth:`_filtered`); ``levels`` times, the triangles of directions about such
         samples are split in four, which shrinks what their neighbours allow and so drops the
         samples whose whole cell collides."""
-        acc = _Samples.empty(self.fam.arm, int(self.tip.sum()))
-        new = np.asarray(dirs, dtype=np.float64)
+        return self.sampled(E, dirs, allowed, levels=levels)[1][0]
+
+    def sampled(
+        self,
+        E: FloatArray,
+        dirs: FloatArray,
+        allowed: Callable[[FloatArray], BoolArray] | None = None,
+        *,
+        levels: int,
+    ) -> tuple[_Samples, tuple[Layer, IntArray, FloatArray, IntArray]]:
+        """What :meth:`layer` samples: every member (:class:`_Samples`) and what
+        :meth:`_filtered` makes of them."""
+        acc = self._grown(_Samples.empty(self.fam.arm, int(self.tip.sum())), E, dirs, allowed)
         for level in range(levels + 1):
             check_time("bounding the commands")
-            acc = self._grown(acc, E, new, allowed)
-            lay, unsure, spacing, triangles = self._filtered(acc)
+            filtered = self._filtered(acc)
+            _, unsure, spacing, triangles = filtered
             refine = np.zeros(acc.dirs.shape[0], dtype=bool)
             refine[unsure] = spacing[unsure] / 2.0 >= MIN_SPACING
             if level == levels or not np.any(refine):
@@ -290,7 +301,21 @@ class FamilySampler:
             new = _distinct(_midpoints(acc.dirs, triangles, refine), acc.dirs)
             if acc.dirs.shape[0] + new.shape[0] > MAX_LAYER_DIRECTIONS:
                 break
-        return lay
+            acc = self._grown(acc, E, new, allowed)
+        return acc, filtered
+
+    def split(
+        self,
+        acc: _Samples,
+        E: FloatArray,
+        refine: BoolArray,
+        triangles: IntArray,
+        allowed: Callable[[FloatArray], BoolArray] | None,
+    ) -> _Samples:
+        """``acc`` with the members along the new directions of the triangles about ``refine``
+        split in four (``acc`` itself when there are none)."""
+        new = _distinct(_midpoints(acc.dirs, triangles, refine), acc.dirs)
+        return acc if new.shape[0] == 0 else self._grown(acc, E, new, allowed)
 
     def _grown(
         self,

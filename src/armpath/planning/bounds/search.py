@@ -37,9 +37,8 @@ dropped ones included, is cheaper than the bound).
 from __future__ import annotations
 
 import enum
-import itertools
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -50,8 +49,6 @@ from armpath.planning.bounds.sampling import (
     MIN_SPACING,
     FamilySampler,
     Layer,
-    _distinct,
-    _midpoints,
     _Samples,
 )
 
@@ -134,6 +131,8 @@ class Chain:
     ``k + 1`` (see the module)."""
 
     joins: list[Join]
+    #: moves in fractional commands (a trace's passes run on between the points)
+    whole = False
 
     def narrowed(self, found: Solution, incumbent: float) -> Chain:
         """The same chain (only a tour's orders can be dropped)."""
@@ -213,6 +212,8 @@ class Orders:
 
     orders: list[tuple[int, ...]]
     back: bool
+    #: every leg a whole number of commands (it ends at its target)
+    whole = True
 
     def narrowed(self, found: Solution, incumbent: float) -> Orders:
         """Without the orders whose every path costs more than ``incumbent`` (by ``found``,
@@ -233,7 +234,7 @@ class Orders:
                 else:
                     check_time("bounding the tour's commands")
                     before = forward(o[:-1])
-                    prefix[o] = sampler.advance(layers[o[-2]], before, layers[o[-1]], whole=True)
+                    prefix[o] = sampler.advance(layers[o[-2]], before, layers[o[-1]], self.whole)
             return prefix[o][0]
 
         def backward(o: tuple[int, ...]) -> FloatArray:
@@ -243,7 +244,7 @@ class Orders:
                 else:
                     check_time("bounding the tour's commands")
                     after = backward(o[1:])
-                    suffix[o] = sampler.advance(layers[o[1]], after, layers[o[0]], whole=True)[0]
+                    suffix[o] = sampler.advance(layers[o[1]], after, layers[o[0]], self.whole)[0]
             return suffix[o]
 
         through = [np.full(lay.size, np.inf) for lay in layers]
@@ -277,11 +278,6 @@ class Orders:
         return Solution(best, through, samples, float(app[o[0]][picks[0]]), o, per_order)
 
 
-def all_orders(count: int) -> list[tuple[int, ...]]:
-    """Every visiting order of ``count`` sites."""
-    return list(itertools.permutations(range(count)))
-
-
 @dataclass
 class _Site:
     """The search's state at one site: the tool point, which directions the family allows
@@ -296,7 +292,6 @@ class _Site:
     triangles: IntArray
     spacing: FloatArray
     unsure: BoolArray
-    levels: int
 
     def live(self) -> Layer:
         """The samples of directions still alive."""
@@ -339,8 +334,6 @@ class CellSearch:
         allowed: list[Callable[[FloatArray], BoolArray] | None],
         q_start: FloatArray,
         *,
-        directions: FloatArray | None = None,
-        whole: bool = False,
         with_errors: bool = True,
         levels: int = 0,
     ) -> None:
@@ -351,35 +344,22 @@ class CellSearch:
         #: dropped cell holds no path of any order cheaper than that)
         self.per_order: dict[tuple[int, ...], int] = {}
         self.q_start = q_start
-        self.whole = whole
         self.with_errors = with_errors
-        base = sampler.base if directions is None else directions
-        self.sites = [self._site(p, a, base, levels) for p, a in zip(points, allowed, strict=True)]
+        self.sites = [self._site(p, a, levels) for p, a in zip(points, allowed, strict=True)]
 
     def _site(
-        self,
-        point: FloatArray,
-        allowed: Callable[[FloatArray], BoolArray] | None,
-        base: FloatArray,
-        levels: int,
+        self, point: FloatArray, allowed: Callable[[FloatArray], BoolArray] | None, levels: int
     ) -> _Site:
-        s = self.sampler
-        acc = s._grown(_Samples.empty(s.fam.arm, int(s.tip.sum())), point, base, allowed)
-        empty = Layer(np.zeros((0, 0)), np.zeros((0, 0)), np.zeros((0, 0)), np.zeros((0, 3)))
-        site = _Site(
-            point, allowed, acc, np.ones(acc.dirs.shape[0], dtype=bool), empty,
-            np.zeros((0, 3), dtype=np.int64), np.zeros(0), np.zeros(0, dtype=bool), levels,
-        )  # fmt: skip
-        self._filter(site)
-        for _ in range(levels):
-            check_time("bounding the commands")
-            refine = site.unsure & (site.spacing / 2.0 >= MIN_SPACING)
-            if not np.any(refine) or self._split(site, refine) == 0:
-                break
+        acc, filtered = self.sampler.sampled(point, self.sampler.base, allowed, levels=levels)
+        layer, _, spacing, triangles = filtered
+        alive = np.ones(acc.dirs.shape[0], dtype=bool)
+        site = _Site(point, allowed, acc, alive, layer, triangles, spacing, alive)
+        self._set(site, filtered)
         return site
 
-    def _filter(self, site: _Site) -> None:
-        layer, unsure, spacing, triangles = self.sampler._filtered(site.acc)
+    def _set(self, site: _Site, filtered: tuple[Layer, IntArray, FloatArray, IntArray]) -> None:
+        """Take what :meth:`FamilySampler._filtered` made of the site's members."""
+        layer, unsure, spacing, triangles = filtered
         site.layer = layer if self.with_errors else layer.without_errors()
         site.spacing, site.triangles = spacing, triangles
         site.unsure = np.zeros(site.acc.dirs.shape[0], dtype=bool)
@@ -387,16 +367,17 @@ class CellSearch:
 
     def _split(self, site: _Site, refine: BoolArray) -> int:
         """Split the triangles of directions about ``refine``; the count of new directions."""
-        new = _distinct(_midpoints(site.acc.dirs, site.triangles, refine), site.acc.dirs)
-        if new.shape[0] == 0:
-            return 0
-        site.acc = self.sampler._grown(site.acc, site.point, new, site.allowed)
-        site.alive = np.concatenate([site.alive, np.ones(new.shape[0], dtype=bool)])
-        self._filter(site)
-        return int(new.shape[0])
+        before = site.acc.dirs.shape[0]
+        site.acc = self.sampler.split(site.acc, site.point, refine, site.triangles, site.allowed)
+        added = int(site.acc.dirs.shape[0] - before)
+        if added:
+            site.alive = np.concatenate([site.alive, np.ones(added, dtype=bool)])
+            self._set(site, self.sampler._filtered(site.acc))
+        return added
 
     def _approach(self, layers: list[Layer]) -> list[FloatArray]:
-        return [self.sampler.distance_from(self.q_start, lay, self.whole) for lay in layers]
+        whole = self.relaxation.whole
+        return [self.sampler.distance_from(self.q_start, lay, whole) for lay in layers]
 
     def run(
         self,
@@ -437,9 +418,9 @@ class CellSearch:
                     max(float(lay.err[i].max()) for lay, i in on_path),
                 )  # fmt: skip
             else:
-                best = SearchResult(
-                    best.value, best.approach, best.order, clear_total, clear_q, best.bound_q,
-                    r, samples, directions, best.largest_error,
+                best = replace(
+                    best, clear_path=clear_total, clear_q=clear_q, rounds=r, samples=samples,
+                    directions=directions,
                 )  # fmt: skip
             say(
                 f"bounding the commands: round {r}: at least {best.value:.2f}, a clear path "

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
-from armpath.planning.bounds.sampling import FamilySampler, Layer
+from armpath.planning.bounds.sampling import FamilySampler
 from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Orders
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
@@ -51,7 +51,6 @@ def tour_bound(
         list(np.asarray(targets, dtype=np.float64)),
         [None] * targets.shape[0],
         q_start,
-        whole=True,
         levels=clear_levels,
     )
     found = search.run(rounds, say)
@@ -131,50 +130,3 @@ def tour_bound_any_order(
             "samples": float(sum(lay.size for lay in layers)),
         },
     )
-
-
-def _orders_through(
-    sampler: FamilySampler,
-    layers: list[Layer],
-    q_start: FloatArray,
-    orders: list[tuple[int, ...]],
-    back: bool,
-    per_order: dict[tuple[int, ...], int],
-) -> tuple[float, tuple[int, ...], list[int]]:
-    """Each order's shortest path from the start through the targets' layers (into
-    ``per_order``, rounded up), legs in whole commands, orders sharing their prefixes; the
-    least, its order and the sample it takes at each target.
-
-    Paths already as long as the least total found are dropped (legs cost no less than 0, so
-    none of them can beat it); an order whose every path was dropped is bounded by that total.
-    Orders that are likely best should come first."""
-    if any(lay.size == 0 for lay in layers):
-        raise PlanningError("a target has no family member within the joint limits")
-    first = [sampler.distance_from(q_start, lay, whole=True) for lay in layers]
-    memo: dict[tuple[int, ...], tuple[FloatArray, list[IntArray]]] = {}
-    best_value, best_order, path = np.inf, orders[0], []
-
-    def prefix(o: tuple[int, ...]) -> tuple[FloatArray, list[IntArray]]:
-        if o not in memo:
-            if len(o) == 1:
-                memo[o] = (first[o[0]], [])
-            else:
-                cost, args = prefix(o[:-1])
-                check_time("bounding the tour's commands")
-                live = np.where(cost < best_value, cost, np.inf)
-                nxt, arg = sampler.advance(layers[o[-2]], live, layers[o[-1]], whole=True)
-                memo[o] = (nxt, [*args, arg])
-        return memo[o]
-
-    for o in orders:
-        cost, args = prefix(o)
-        if back:
-            cost = cost + sampler.distance_from(q_start, layers[o[-1]], whole=True)
-        j = int(np.argmin(cost))
-        per_order[o] = int(np.ceil(min(float(cost[j]), best_value) - 1e-9))
-        if cost[j] < best_value:
-            nodes = [j]
-            for arg in reversed(args):
-                nodes.append(int(arg[nodes[-1]]))
-            best_value, best_order, path = float(cost[j]), o, nodes[::-1]
-    return best_value, best_order, path
