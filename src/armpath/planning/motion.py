@@ -444,8 +444,10 @@ def plan_motion(
         # whole-turn copy is a goal for a joint that cannot get round the near way (an elbow
         # folding through its upper arm), and a tree that happens to reach it first would
         # turn the joint all the way round
+        turning = grid.max_step[~grid.prismatic]  # only revolute joints have turn copies
+        far = FAR_GOAL_TURNS * 2.0 * np.pi / turning.max() if turning.size else np.inf
         pick = np.flatnonzero(
-            direct_counts <= direct_counts.min() + FAR_GOAL_COMMANDS
+            direct_counts <= direct_counts.min() + far
             if attempt == 0
             else np.ones(goals.shape[0], dtype=bool)
         )
@@ -539,9 +541,10 @@ def plan_motion(
 
 #: Most goal states one motion search takes: the given ones and their whole-turn copies.
 MAX_SEARCH_GOALS = 64
-#: Goals farther than this (commands of a direct motion) beyond the nearest one are left out of
-#: a motion's first search (half a turn at 2 deg a command).
-FAR_GOAL_COMMANDS = 90
+#: Goals farther than this beyond the nearest one (turns of the revolute joint that moves
+#: farthest in a command: 90 commands at 2 deg a command) are left out of a motion's first
+#: search.
+FAR_GOAL_TURNS = 0.5
 
 
 def with_turn_copies(arm: SerialArm, goals: IntArray, start: IntArray) -> IntArray:
