@@ -6,6 +6,11 @@
 * its members reach their targets and keep the margin plus the buffer (independent forward
   kinematics of the UR5 cell's arm, the cell's own clearance); the lattice goal states next to
   them reach their targets within the tolerance;
+* the lattice goal state taken next to a guide's member is the one nearest it: a brute force over
+  the lattice about a seed Task 3 member on the workpiece's inner wall (independent forward
+  kinematics and clearance of tests/independent_replay.py) finds none nearer that reaches the
+  weld within the tolerance and keeps the rule (the most accurate state, taken before, lay 4
+  commands away along the wrist; the member itself, its tool point on the wall, was dropped);
 * a guide built with a smaller buffer and then narrowed to a larger one holds exactly the
   members of a guide built with the larger one, each keeping its room (independent forward
   kinematics: the members still reach their welds);
@@ -16,12 +21,19 @@
 from __future__ import annotations
 
 import itertools
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import independent_replay as ir
 from armpath.ik.family import shift_into_limits
+from armpath.ik.target import ToolTarget
+from armpath.kinematics import position_jacobian, tool_position
+from armpath.model.seed_arm import seed_arm
 from armpath.planning import tour
+from armpath.planning.reach_generic import generic_goal_states
 from armpath.planning.tour_guide import TourGuide
 from armpath.scenes import load_scene
 from armpath.scenes.arm import scene_arm
@@ -171,3 +183,55 @@ def test_a_guide_from_the_start_keeps_the_elbow_on_its_side_of_the_fold(cell):
         assert goals is not None
         for states in goals:
             assert np.abs(np.degrees(arm.lattice.to_joint(states)[:, 2])).max() < 163.6
+
+
+def test_the_goal_state_next_to_a_member_is_the_nearest_clear_one():
+    scene = load_scene()  # the seed scene: Task 3's welds on the workpiece's inner wall
+    arm = seed_arm()
+    pts = scene.spotweld_targets_mm()
+    fam = tour._targets_family(arm, scene.world, pts)
+    q0 = np.radians([0.0, -90.0, 0.0, 0.0, -90.0, 0.0])
+    guide = TourGuide.build(fam, pts, 0.05, 0.5, q0)
+    _, members = guide.path(q0, (0, 2, 3, 1), back=False)
+    q = members[0]  # its tool point on the wall at weld 1
+    grid = arm.lattice
+    start = grid.nearest_ticks(q)
+    (pick,) = generic_goal_states(
+        arm, scene.world, start, ToolTarget(pts[0], None), 0.05, 1, body_buffer=0.0,
+        samples=q[None], nearest_member=True,
+    )  # fmt: skip
+    # brute force: every lattice state within 6 ticks of the member's nearest (joint 6, which
+    # does not move the tool point, kept), independent kinematics and clearance
+    box = np.stack(np.meshgrid(*[np.arange(-6, 7)] * 5, indexing="ij"), -1).reshape(-1, 5)
+    states = np.repeat(start[None], box.shape[0], axis=0)
+    states[:, :5] += box
+    deg = states / 10.0
+    tips = ir.SeedArm.points(deg)[:, 4]
+    within = np.linalg.norm(tips - pts[0], axis=-1) <= 0.05
+    seed_spec = tomllib.loads(
+        (Path(__file__).parents[1] / "src/armpath/scenes/seed.toml").read_text()
+    )
+    world = ir.Scene.from_spec(seed_spec)
+    clear = np.zeros(len(states), dtype=bool)
+    clear[within] = ir.config_slack(ir.SeedArm(), world, deg[within], 0.5) >= 0.0
+    away = np.abs(deg - np.degrees(q)).max(axis=1) / 2.0  # commands of 2 deg
+    assert np.count_nonzero(clear) >= 1
+    pick_deg = pick / 10.0
+    assert np.linalg.norm(ir.SeedArm.points(pick_deg)[4] - pts[0]) <= 0.05
+    assert ir.config_slack(ir.SeedArm(), world, pick_deg[None], 0.5)[0] >= -1e-6
+    pick_away = np.abs(pick_deg - np.degrees(q)).max() / 2.0
+    assert pick_away <= away[clear].min() + 1e-9
+    assert pick_away < 0.5  # within a command of the member
+    # a weld given a hair inside the wall (coordinates rounded): the member solved onto it is
+    # kept, and the lattice states next to it that keep out of the wall are found
+    radial = np.r_[pts[0][:2] - (210.0, 0.0), 0.0]
+    inside = pts[0] + 1e-6 * radial / np.linalg.norm(radial)
+    assert scene.world.obstacles[1].signed_distance(inside) < 0.0
+    J = position_jacobian(arm, q)
+    q_in = q + np.linalg.pinv(J) @ (inside - tool_position(arm, q))
+    (state,) = generic_goal_states(
+        arm, scene.world, start, ToolTarget(inside, None), 0.05, 1, body_buffer=0.0,
+        samples=q_in[None], nearest_member=True,
+    )  # fmt: skip
+    assert np.linalg.norm(ir.SeedArm.points(state / 10.0)[4] - inside) <= 0.05
+    assert ir.config_slack(ir.SeedArm(), world, (state / 10.0)[None], 0.5)[0] >= -1e-6

@@ -546,10 +546,16 @@ def generic_goal_states(
     spread_deg: float = 4.0,
     samples: FloatArray | None = None,
     rng: np.random.Generator | None = None,
+    nearest_member: bool = False,
 ) -> IntArray:
     """Lattice states within ``tolerance`` of the target whose links keep the margin plus
     ``body_buffer`` (the tool tip only must not enter), at most ``count``, spread over the
-    family (members at least ``spread_deg`` apart), nearest the start in commands first."""
+    family (members at least ``spread_deg`` apart), nearest the start in commands first.
+
+    Next to each member the clear lattice state with the smallest error is taken, or with
+    ``nearest_member`` the one nearest the member in commands (the smallest error among
+    equals): members chosen for where they lie (a tour's guide) keep their place, where the
+    most accurate state can lie degrees away along a wrist joint."""
     grid = arm.lattice
     start = np.asarray(start_ticks, dtype=np.int64)
     s_q = grid.to_joint(start)
@@ -584,7 +590,9 @@ def generic_goal_states(
         [0.0 if (c.part == tool_link and c.other in touched) else body_buffer for c in pairs]
     )
     values, _ = world.pair_clearances(arm, samples)
-    body_ok = np.all(np.where(is_tip, values >= 0, values - required >= buffer), axis=-1)
+    # a member's tool point is on the target, which may lie on a surface: rounding puts it a
+    # hair inside; the lattice states near it are held to the rule exactly below
+    body_ok = np.all(np.where(is_tip, values >= -tolerance, values - required >= buffer), axis=-1)
     if not np.any(body_ok):
         raise PlanningError(
             f"no configuration reaching ({where}) {arm.length_unit} keeps the links "
@@ -605,7 +613,12 @@ def generic_goal_states(
         ok = np.all(np.where(is_tip, vals >= 0, vals - required >= buffer), axis=-1)
         if not np.any(ok):
             continue
-        k = int(np.flatnonzero(ok)[np.argmin(err[ok])])
+        idx = np.flatnonzero(ok)
+        if nearest_member:
+            away = np.round(command_metric(arm, grid.to_joint(cand[idx]), q), 9)
+            k = int(idx[np.lexsort((err[idx], away))[0]])
+        else:
+            k = int(idx[np.argmin(err[idx])])
         if any(np.array_equal(cand[k], s) for s in states):
             continue
         states.append(cand[k])

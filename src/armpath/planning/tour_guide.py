@@ -133,10 +133,15 @@ class TourGuide:
         return total, members
 
     def goal_states(
-        self, q_start: FloatArray, order: tuple[int, ...], members: list[FloatArray]
+        self,
+        q_start: FloatArray,
+        order: tuple[int, ...],
+        members: list[FloatArray],
+        nearest: bool = True,
     ) -> list[IntArray] | None:
         """Lattice goal states next to each path member (nearest it first, at most
-        :data:`GUIDE_GOALS`), one array per target of ``order``; None when a member has none."""
+        :data:`GUIDE_GOALS`; the first is the clear lattice state nearest the member itself
+        where it has one), one array per target of ``order``; None when a member has none."""
         grid = self.arm.lattice
         out = []
         for t, q in zip(order, members, strict=True):
@@ -153,6 +158,7 @@ class TourGuide:
                     self.tolerance_mm,
                     GUIDE_GOALS,
                     samples=np.vstack([q[None], samples]),
+                    nearest_member=nearest,
                 )
             except ArmpathError:
                 return None
