@@ -174,7 +174,8 @@ def plan_tour(
     planned through goal states chosen together (:class:`TourGuide`; up to
     :data:`MAX_GUIDED_ORDERS` orders, the one whose guided path is shortest planned too, and at
     each of :data:`GUIDE_BUFFERS_MM` the :data:`GUIDED_ORDERS` whose guided paths are shortest
-    and no longer than the best plan) and the shorter plan counts. Raises
+    and no longer than the best plan, through the lattice goal states nearest the guide's members
+    and through the most accurate ones: :data:`GUIDED_NEAREST`) and the shorter plan counts. Raises
     :class:`PlanningError` when a target cannot be reached clear of the obstacles.
     ``orders_not_planned`` of the result says, for each ranked order that has no planned command
     count, why. ``orientations``: a tool orientation rule per target (None: the tool point
@@ -380,7 +381,11 @@ def plan_tour(
                     if guided is None:
                         continue
                     name = "-".join(str(i + 1) for i in o)
-                    say(f"planning order {name} through goal states keeping {buffer:g} mm more")
+                    kind = "nearest its members" if nearest else "most accurate"
+                    say(
+                        f"planning order {name} through goal states keeping {buffer:g} mm "
+                        f"more ({kind})"
+                    )
                     try:
                         legs = legs_of(o, name, guided)
                     except PlanningError:
