@@ -16,6 +16,7 @@ independent truth.
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -489,3 +490,62 @@ def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
     for through, d in zip(paths.through, dropped, strict=True):
         assert through[d].min() >= found.value - 1e-9
     assert found.value <= paths.total + 1e-9 <= found.clear_path + 1e-9
+
+
+def _brute_polyline(s, u, k, gap):
+    """Every choice of k points with the first and last, consecutive ones ``gap`` apart: the
+    longest largest-joint polyline (-inf when none)."""
+    n, best, arg = s.size, -np.inf, None
+    for mid in itertools.combinations(range(1, n - 1), k - 2):
+        idx = [0, *mid, n - 1]
+        if np.any(np.diff(s[idx]) < gap):
+            continue
+        length = sum(np.abs(u[b] - u[a]).max() for a, b in itertools.pairwise(idx))
+        if length > best:
+            best, arg = length, idx
+    return best, arg
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_layers_where_a_path_turns_hold_its_longest_polyline(seed):
+    from armpath.planning.bounds import trace as bt
+
+    rng = np.random.default_rng(seed)
+    s = np.cumsum(rng.uniform(0.5, 3.0, 11))
+    u = np.cumsum(rng.normal(0.0, 2.0, (11, 3)), axis=0)
+    for k in range(2, 7):
+        for gap in (0.0, 2.0, 4.0):
+            picks, length = bt._longest_polyline(s, u, k, gap)
+            best, _ = _brute_polyline(s, u, k, gap)
+            if not np.isfinite(best):
+                assert picks == [] and length == -np.inf
+                continue
+            assert length == pytest.approx(best, abs=1e-12)
+            assert picks[0] == 0 and picks[-1] == s.size - 1 and len(picks) == k
+            assert np.all(np.diff(s[picks]) >= gap)
+            again = sum(np.abs(u[b] - u[a]).max() for a, b in itertools.pairwise(picks))
+            assert again == pytest.approx(length, abs=1e-12)
+    # a span: more layers while each adds at least LAYER_GAIN to the longest polyline; the
+    # span's ends (inset) are the first and last layer
+    span = (float(s[0]) - 1.0, float(s[-1]) + 1.0)  # the path's ends beyond the insets
+    (layers,) = bt.turning_layers([span], s, u)
+    gap = bt._LAYER_GAP_SHARE * (span[1] - span[0])
+    lengths = {k: _brute_polyline(s, u, k, gap)[0] for k in range(2, 9)}
+    k = 2
+    while k < bt.MAX_TURNING_LAYERS and lengths[k + 1] >= lengths[k] + bt.LAYER_GAIN:
+        k += 1
+    assert layers.size == k
+    assert layers[0] == s[0] and layers[-1] == s[-1]
+    # too few of the path's points on a span: evenly spaced layers
+    (even,) = bt.turning_layers([(100.0, 200.0)], s, u)
+    np.testing.assert_allclose(even, np.linspace(100.5, 199.5, bt.LAYERS_PER_SPAN))
+
+
+def test_a_closed_curve_pass_is_unwrapped_from_where_it_begins():
+    from armpath.planning.trace.plan import unwrapped_along
+
+    length = 500.0
+    for begin, steps in ((480.0, 7.3), (20.0, -6.1), (980.0, 9.9)):
+        true = begin + 0.4 + steps * np.arange(80)  # crosses the curve's start point
+        raw = np.mod(true, length)
+        np.testing.assert_allclose(unwrapped_along(raw, length, begin), true, atol=1e-9)

@@ -30,6 +30,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.curves import Curve
 from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
 from armpath.planning.motion import (
@@ -217,7 +218,7 @@ def plan_trace(
     if opts.bound:
         say("bounding the fewest commands of this trace")
         q0 = arm.lattice.to_joint(start)
-        bound = _lower_bound(fam, q0, passes, overlap > 0, sequence.n_commands, opts, say)
+        bound = _lower_bound(fam, q0, passes, overlap > 0, sequence, opts, say)
     return TraceResult(
         sequence,
         curve,
@@ -240,14 +241,15 @@ def _lower_bound(
     q_start: FloatArray,
     passes: list[TracePass],
     around: bool,
-    planned: int,
+    sequence: CommandSequence,
     opts: TraceOptions,
     say: Callable[[str], None],
 ) -> CommandBound | None:
     """The bound of a plan that traces what ``passes`` cover, one pass per span (overlapping
-    spans merged); ``around``: a single pass all round a closed curve, which may begin
-    anywhere; ``planned`` the plan's commands (the search need not look at what costs more).
-    None where the family has no member within the limits on a span."""
+    spans merged), its points placed where the plan's joint path turns; ``around``: a single
+    pass all round a closed curve, which may begin anywhere; ``sequence`` the plan (the search
+    need not look at what costs more than its commands). None where the family has no member
+    within the limits on a span."""
     spans: list[list[float]] = []
     for p in sorted(passes, key=lambda p: p.start_mm):
         if spans and p.start_mm <= spans[-1][1]:
@@ -255,6 +257,12 @@ def _lower_bound(
         else:
             spans.append([p.start_mm, p.end_mm])
     loop = around and len(spans) == 1
+    q_all = sequence.states_joint()
+    path_mm, path_q = [], []
+    for p in passes:
+        q = q_all[p.first : p.last + 1]
+        path_mm.append(_pass_arc_lengths(fam, q, p))
+        path_q.append(q)
     try:
         return trace_bound(
             fam,
@@ -263,10 +271,33 @@ def _lower_bound(
             opts.tolerance_mm,
             loop=loop,
             on_progress=say,
-            upper_commands=float(planned),
+            upper_commands=float(sequence.n_commands),
+            path_mm=np.concatenate(path_mm),
+            path_q=np.vstack(path_q),
         )
     except PlanningError:
         return None
+
+
+def _pass_arc_lengths(fam: CurveFamily, q: FloatArray, p: TracePass) -> FloatArray:
+    """Arc lengths (mm) of the curve points nearest the tool point at a pass's states ``q``
+    (rad), on a closed curve unwrapped along the pass from where it begins, as its
+    ``start_mm``..``end_mm`` count them."""
+    _, s = fam.curve.closest(tool_position(fam.arm, q))
+    s = np.asarray(s, dtype=np.float64)
+    if not fam.curve.closed:
+        return s
+    return unwrapped_along(s, fam.curve.length, p.end_mm if p.backward else p.start_mm)
+
+
+def unwrapped_along(s_mm: FloatArray, length_mm: float, begin_mm: float) -> FloatArray:
+    """Arc lengths ``s_mm`` (mm, each in ``[0, length_mm)``) of consecutive points along a
+    closed curve of that length, unwrapped: the first taken nearest ``begin_mm``, each next
+    one nearest the one before (consecutive points are less than half the curve apart)."""
+    step = np.diff(s_mm)
+    step -= length_mm * np.round(step / length_mm)
+    first = s_mm[0] + length_mm * np.round((begin_mm - s_mm[0]) / length_mm)
+    return np.asarray(first + np.r_[0.0, np.cumsum(step)], dtype=np.float64)
 
 
 #: A stretch of a reachable arc between two passes longer than this (mm) is reported as not
