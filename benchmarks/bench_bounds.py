@@ -31,9 +31,10 @@ import report
 from report import table
 
 from armpath.model.seed_arm import seed_arm
-from armpath.planning.bounds import CommandBound, tour_bound, trace_bound
+from armpath.planning.bounds import CommandBound, tour_bound
+from armpath.planning.bounds.search import SEARCH_ROUNDS
 from armpath.planning.tour import _targets_family
-from armpath.planning.trace.plan import TraceOptions
+from armpath.planning.trace.plan import TraceOptions, trace_plan_bound
 from armpath.scenes import load_scene, seed_scene
 from armpath.scenes.arm import scene_arm
 from armpath.tasks import spotweld_task, trace_task
@@ -51,18 +52,14 @@ def _trace_case(name: str, scene, arm) -> list[str]:
     t = time.perf_counter()
     res = trace_task(scene, arm, TraceOptions(bound=False))
     plan_s = time.perf_counter() - t
-    fam = res.reachability.family
-    q0 = res.sequence.grid.to_joint(res.sequence.start_ticks)
-    spans = sorted((p.start_mm, p.end_mm) for p in res.passes)
-    loop = len(res.passes) == 1 and res.passes[0].end_mm - res.passes[0].start_mm >= (
-        fam.curve.length - 1e-6
-    )
 
-    def bound(**kw: object) -> CommandBound:
-        return trace_bound(fam, q0, spans, res.tolerance_mm, loop=loop, **kw)  # type: ignore[arg-type]
+    def bound(rounds: int = SEARCH_ROUNDS) -> CommandBound:
+        found = trace_plan_bound(res, rounds=rounds)  # what the trace reports with its bound
+        assert found is not None
+        return found
 
     first, first_s = _timed(lambda: bound(rounds=1))
-    full, full_s = _timed(lambda: bound(upper_commands=float(res.n_commands)))
+    full, full_s = _timed(bound)
     return _row(name, res.n_commands, plan_s, first, first_s, full, full_s)
 
 

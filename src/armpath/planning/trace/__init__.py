@@ -21,6 +21,7 @@ if TYPE_CHECKING:
         TraceResult,
         Transit,
         plan_trace,
+        trace_plan_bound,
     )
     from armpath.planning.trace.reachability import (
         CurveArc,
@@ -48,6 +49,7 @@ __getattr__, __dir__ = lazy_exports(
             "TraceResult",
             "Transit",
             "plan_trace",
+            "trace_plan_bound",
         ),
         "reachability": (
             "CurveArc",
@@ -77,4 +79,5 @@ __all__ = [
     "curve_family",
     "curve_reachability",
     "plan_trace",
+    "trace_plan_bound",
 ]

@@ -33,6 +33,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
+from armpath.planning.bounds.search import SEARCH_ROUNDS
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
@@ -214,12 +215,7 @@ def plan_trace(
     sequence = CommandSequence.from_states(all_states, arm.lattice)
     say("certifying the clearance of the whole motion")
     clearance = motion_clearance(arm, world, sequence, max_evaluations=400_000)
-    bound = None
-    if opts.bound:
-        say("bounding the fewest commands of this trace")
-        q0 = arm.lattice.to_joint(start)
-        bound = _lower_bound(fam, q0, passes, overlap > 0, sequence, opts, say)
-    return TraceResult(
+    result = TraceResult(
         sequence,
         curve,
         reach,
@@ -232,45 +228,59 @@ def plan_trace(
         np.concatenate(prof_d) if prof_d else np.zeros(0),
         opts.axis_rule,
         tuple(not_traced),
-        bound,
+        None,
     )
+    if not opts.bound:
+        return result
+    say("bounding the fewest commands of this trace")
+    bound = trace_plan_bound(result, around=overlap > 0, on_progress=say)
+    return replace(result, lower_bound=bound)
 
 
-def _lower_bound(
-    fam: CurveFamily,
-    q_start: FloatArray,
-    passes: list[TracePass],
-    around: bool,
-    sequence: CommandSequence,
-    opts: TraceOptions,
-    say: Callable[[str], None],
+def trace_plan_bound(
+    result: TraceResult,
+    around: bool | None = None,
+    rounds: int = SEARCH_ROUNDS,
+    on_progress: Callable[[str], None] | None = None,
 ) -> CommandBound | None:
-    """The bound of a plan that traces what ``passes`` cover, one pass per span (overlapping
-    spans merged), its points placed where the plan's joint path turns; ``around``: a single
-    pass all round a closed curve, which may begin anywhere; ``sequence`` the plan (the search
-    need not look at what costs more than its commands). None where the family has no member
-    within the limits on a span."""
+    """The lower bound of the commands of any plan that traces what ``result``'s passes cover
+    (what :func:`plan_trace` reports): one pass per span (overlapping spans merged), the
+    family's points placed where the plan's joint path turns or evenly
+    (:func:`~armpath.planning.bounds.trace_bound`), searched ``rounds`` rounds at most.
+    ``around``: a single pass all round a closed curve, which may begin anywhere (None: so when
+    the curve is closed and reachable all round). None where the family has no member within
+    the limits on a span."""
+    fam = result.reachability.family
+    arcs = result.reachability.reachable
+    if around is None:
+        around = (
+            result.curve.closed
+            and len(arcs) == 1
+            and arcs[0].length_mm >= result.curve.length - 1e-9
+        )
     spans: list[list[float]] = []
-    for p in sorted(passes, key=lambda p: p.start_mm):
+    for p in sorted(result.passes, key=lambda p: p.start_mm):
         if spans and p.start_mm <= spans[-1][1]:
             spans[-1][1] = max(spans[-1][1], p.end_mm)
         else:
             spans.append([p.start_mm, p.end_mm])
     loop = around and len(spans) == 1
+    sequence = result.sequence
     q_all = sequence.states_joint()
     path_mm, path_q = [], []
-    for p in passes:
+    for p in result.passes:
         q = q_all[p.first : p.last + 1]
         path_mm.append(_pass_arc_lengths(fam, q, p))
         path_q.append(q)
     try:
         return trace_bound(
             fam,
-            q_start,
+            sequence.grid.to_joint(sequence.start_ticks),
             [(a, b) for a, b in spans],
-            opts.tolerance_mm,
+            result.tolerance_mm,
             loop=loop,
-            on_progress=say,
+            rounds=rounds,
+            on_progress=on_progress,
             upper_commands=float(sequence.n_commands),
             path_mm=np.concatenate(path_mm),
             path_q=np.vstack(path_q),
