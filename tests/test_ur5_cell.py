@@ -250,6 +250,39 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     # half a turn first (no wrist turned round to a goal's copy): 131 (76 + 17 + 28 + 10) on
     # the second machine; with members keeping only 0.2 mm beyond the margin tried too: 119
     # (77 + 14 + 18 + 10); through the lattice goal states nearest the guide's members as
-    # well as the most accurate ones (tour.GUIDED_NEAREST): 118 (77 + 16 + 16 + 9); the limit
-    # leaves the first machine room
-    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 128
+    # well as the most accurate ones (tour.GUIDED_NEAREST): 118 (77 + 16 + 16 + 9); the kept
+    # legs merged where certified straight motions need fewer commands: 115 (77 + 15 + 15 + 8);
+    # the limit leaves the first machine room
+    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 124
+
+
+def test_a_certified_merge_shortens_a_leg_between_two_welds():
+    """A searched motion from one weld to the next backs off the surface, searches and comes
+    back down in three parts merged apart; merged across them where a straight motion's
+    continuous motion is certified, it needs fewer commands: same ends, every command legal,
+    and the independent replay accepts its clearance."""
+    from armpath.export import plan_result_dict
+    from armpath.planning.motion import MotionOptions, plan_motion
+    from armpath.planning.reach import goal_states
+    from armpath.scenes.arm import scene_arm
+    from armpath.scenes.load import load_scene
+
+    scene = load_scene(CELL)
+    arm = scene_arm(scene)
+    home = arm.lattice.from_display(HOME_DEG, "home")
+    welds = scene.spotweld_targets_mm()
+    at_weld_4 = goal_states(arm, scene.world, home, welds[3], 0.05)[0][1]
+    to_weld_1, _ = goal_states(arm, scene.world, home, welds[0], 0.05)
+    apart = plan_motion(
+        arm, scene.world, at_weld_4, to_weld_1, MotionOptions(), turn_copies=True,
+        certified_merge=False,
+    )  # fmt: skip
+    merged = plan_motion(arm, scene.world, at_weld_4, to_weld_1, MotionOptions(), turn_copies=True)
+    assert "certified merge" in merged.method and "certified merge" not in apart.method
+    assert merged.direct_commands <= merged.sequence.n_commands < apart.sequence.n_commands
+    np.testing.assert_array_equal(merged.sequence.start_ticks, apart.sequence.start_ticks)
+    np.testing.assert_array_equal(merged.sequence.final_ticks, apart.sequence.final_ticks)
+    assert np.abs(merged.sequence.commands).max() <= 20
+    doc = plan_result_dict(merged, arm, scene, "commands", None, None)
+    start_deg = arm.lattice.display(at_weld_4)
+    _accepted(doc, ir.Truth(start_deg=start_deg))

@@ -36,11 +36,12 @@ from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, tour_bound, tour_bound_any_order
-from armpath.planning.choices import VisitOrder
+from armpath.planning.choices import Objective, VisitOrder
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
     PlanMetrics,
+    merged_certified,
     plan_metrics,
     plan_motion,
 )
@@ -274,13 +275,17 @@ def plan_tour(
                     if chosen.shape[0] == 0:
                         continue
                     try:
-                        leg = plan_motion(arm, world, state, chosen, opts, turn_copies=True)
+                        leg = plan_motion(
+                            arm, world, state, chosen, opts, turn_copies=True, certified_merge=False
+                        )
                         break
                     except PlanningError:
                         leg = None
             if leg is None:
                 try:
-                    leg = plan_motion(arm, world, state, goals[t], opts, turn_copies=True)
+                    leg = plan_motion(
+                        arm, world, state, goals[t], opts, turn_copies=True, certified_merge=False
+                    )
                 except PlanningError:
                     # the goal states nearest the start may lie on other branches than where
                     # the arm is now: take the target's goal states nearest here and try again
@@ -290,12 +295,14 @@ def plan_tour(
                         arm, world, state, pts[t], tolerance_mm, goals_per_target,
                         orientation=rule,
                     )  # fmt: skip
-                    leg = plan_motion(arm, world, state, near, opts, turn_copies=True)
+                    leg = plan_motion(
+                        arm, world, state, near, opts, turn_copies=True, certified_merge=False
+                    )
             legs.append(leg)
             state = leg.sequence.final_ticks
         if return_to_start:
             say(f"planning order {name}: back to the start")
-            legs.append(plan_motion(arm, world, state, start[None, :], opts))
+            legs.append(plan_motion(arm, world, state, start[None, :], opts, certified_merge=False))
         return legs
 
     def plan_order(
@@ -425,6 +432,11 @@ def plan_tour(
             if through is not None:
                 count_guided(o, through)
     _, legs, chosen = best
+    if opts.objective is Objective.COMMANDS:
+        # the kept legs only: each certified merge costs about a quarter second
+        say("merging the legs' commands where a certified straight motion needs fewer")
+        legs = [merged_certified(arm, world, leg) for leg in legs]
+        planned[chosen] = _commands(legs)
     commands = np.vstack([leg.sequence.commands for leg in legs])
     sequence = CommandSequence(start, commands, arm.lattice)
     visits = []
