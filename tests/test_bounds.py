@@ -549,3 +549,29 @@ def test_a_closed_curve_pass_is_unwrapped_from_where_it_begins():
         true = begin + 0.4 + steps * np.arange(80)  # crosses the curve's start point
         raw = np.mod(true, length)
         np.testing.assert_allclose(unwrapped_along(raw, length, begin), true, atol=1e-9)
+
+
+def test_a_redundant_arms_bound_is_reported_as_an_estimate():
+    """The family is sampled over tool directions (and turns about them where those move a
+    link): that covers it for six joints or fewer that move the tool point, not for a seven-
+    joint arm's self-motion, whose bound is then flagged as not proven."""
+    target = np.array([450.0, 60.0, 300.0])
+    curve = Polyline("t", np.array([target, target + np.array([1.0, 0.0, 0.0])]))
+    tool = np.eye(4)
+    tool[0, 3], tool[2, 3] = 50.0, 80.0
+    arms = {
+        "seed": (seed_arm(), True),
+        "ur5": (resolve_model("ur5"), True),
+        "ur5 with an offset tool": (resolve_model("ur5").with_tool(tool), True),
+        "iiwa14": (resolve_model("iiwa14"), False),
+    }
+    for name, (arm, covered) in arms.items():
+        fam = curve_family(arm, CollisionWorld(()), curve)
+        sampler = sampling.FamilySampler(fam, 0.05)
+        moving = int(np.count_nonzero(fam.tip_joints))
+        assert sampler.covers_family is covered, name
+        assert covered == (moving - 3 <= 2 + (fam.turns_per_direction > 1)), name
+    fam = curve_family(arms["iiwa14"][0], CollisionWorld(()), curve)
+    q0 = np.zeros(7)
+    b, _ = bounds.tour_bound(fam, q0, target[None], 0.05, [(0,)], rounds=1)
+    assert not b.proven and b.describe()["proven"] is False

@@ -71,10 +71,22 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
 BOUND_SCOPE = "every configuration that may be clear, obstacles ignored between the sampled points"
 
 
+#: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).
+UNPROVEN = "estimate, not proven: the arm's self-motion is not sampled"
+
+
+def proven(doc: dict[str, Any]) -> bool:
+    """Whether a result's lower bound is a proof (results written before the flag: yes)."""
+    b = doc.get("lower_bound")
+    return b is None or bool(b.get("proven", True))
+
+
 def bound_cell(doc: dict[str, Any]) -> str:
-    """A trace's or tour's lower bound for a table (- when not computed)."""
+    """A trace's or tour's lower bound for a table (- when not computed; ~N an estimate)."""
     bound = doc.get("lower_bound_commands")
-    return "-" if bound is None else str(bound)
+    if bound is None:
+        return "-"
+    return str(bound) if proven(doc) else f"~{bound}"
 
 
 def _bound_words(doc: dict[str, Any]) -> str:
@@ -82,10 +94,11 @@ def _bound_words(doc: dict[str, Any]) -> str:
     b = doc.get("lower_bound")
     if b is None:
         return "no lower bound computed"
-    return (
+    words = (
         f"lower bound {b['commands']} commands over {BOUND_SCOPE} "
         f"(plan {b['gap_commands']} above it)"
     )
+    return words if proven(doc) else f"{words}; {UNPROVEN}"
 
 
 def _figures(names: Sequence[str], available: set[str]) -> str:

@@ -247,7 +247,8 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
             ),
             "metrics": _METRICS,
             "lower_bound_commands": _int(
-                "fewest commands of any plan tracing what this one traces (null: not computed)",
+                "fewest commands of any plan tracing what this one traces (null: not "
+                "computed; an estimate where lower_bound.proven is false)",
                 True,
             ),
             "lower_bound": _obj("the lower bound, how it was computed and the gap", nullable=True),
@@ -279,7 +280,8 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
             "metrics": _METRICS,
             "lower_bound_commands": _int(
                 "fewest commands of any tour: every order (or the given one) and every goal "
-                "configuration, obstacles ignored (null: not computed)",
+                "configuration, obstacles ignored (null: not computed; an estimate where "
+                "lower_bound.proven is false)",
                 True,
             ),
             "lower_bound": _obj("the lower bound, how it was computed and the gap", nullable=True),

@@ -566,11 +566,16 @@ def plan(
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
-    from armpath.report import BOUND_SCOPE
+    from armpath.report import BOUND_SCOPE, UNPROVEN
 
     if bound is None:
         return missing
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
+    if not bound.get("proven", True):
+        return (
+            f"~{bound['commands']} commands ({UNPROVEN}; {scope}); "
+            f"plan {bound['gap_commands']} above it ({gap})"
+        )
     return (
         f">= {bound['commands']} commands ({scope}, {BOUND_SCOPE}); "
         f"plan {bound['gap_commands']} above it ({gap})"

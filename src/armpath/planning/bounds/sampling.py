@@ -244,6 +244,10 @@ class FamilySampler:
         #: tool frames sampled about each direction (several: the family has a third dimension)
         self.turns = fam.turns_per_direction
         self.required = fam.world.required(arm)
+        #: whether the samples cover the family: the tip joints beyond the tool point's three
+        #: are no more than the sampled tool direction (two) and turn about it (one, where
+        #: several turns are sampled); a redundant arm's self-motion is not sampled
+        self.covers_family = int(self.tip.sum()) - 3 <= 2 + (1 if self.turns > 1 else 0)
 
     def units(self, q: FloatArray) -> FloatArray:
         """Command units of the tip joints of configurations ``(..., n)`` rad; a joint with a

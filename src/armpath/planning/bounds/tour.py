@@ -57,6 +57,7 @@ def tour_bound(
     if found is None:
         raise PlanningError("a target has no family member within the joint limits")
     bound = CommandBound(
+        proven=sampler.covers_family,
         commands=int(np.ceil(found.value - 1e-9)),
         value=found.value,
         method=(
@@ -115,6 +116,7 @@ def tour_bound_any_order(
     if back:
         total += min(from_start)
     return CommandBound(
+        proven=sampler.covers_family,
         commands=int(np.ceil(total - 1e-9)),
         value=total,
         method=(

@@ -182,6 +182,7 @@ def trace_bound(
             "first round bounds higher"
         )
     return CommandBound(
+        proven=sampler.covers_family,
         commands=max(int(np.ceil(found.value - 1e-9)), 0),
         value=found.value,
         method=(

@@ -15,7 +15,9 @@ class CommandBound:
     """A lower bound on commands: ``commands`` (the value rounded up), the ``value`` in
     fractional commands, its parts (a trace's ``approach`` and ``along``), how it was
     computed, and the joint path that attains it (the *guide*: configurations rad, one per
-    layer, with the arc length of each layer for a trace)."""
+    layer, with the arc length of each layer for a trace). ``proven``: False where the samples
+    do not cover the family (an arm with more joints than the tool point and its direction
+    need: one member of its self-motion per tool frame); the value is then an estimate."""
 
     commands: int
     value: float
@@ -24,11 +26,13 @@ class CommandBound:
     sampling: dict[str, float] = field(default_factory=dict)
     guide_q: FloatArray | None = None
     guide_s_mm: FloatArray | None = None
+    proven: bool = True
 
     def describe(self) -> dict[str, object]:
         return {
             "commands": self.commands,
             "value_commands": round(self.value, 4),
+            "proven": self.proven,
             "method": self.method,
             "parts_commands": {k: round(v, 4) for k, v in self.parts.items()},
             "sampling": {k: round(v, 6) for k, v in self.sampling.items()},
