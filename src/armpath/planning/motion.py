@@ -334,14 +334,20 @@ CERTIFIED_MERGE_CHECKS = 64
 CERTIFIED_MERGE_BATCH = 8
 
 
-def merged_certified(arm: SerialArm, world: CollisionWorld, plan: MotionPlan) -> MotionPlan:
+def merged_certified(
+    arm: SerialArm,
+    world: CollisionWorld,
+    plan: MotionPlan,
+    energy_weights: ArrayLike | None = None,
+) -> MotionPlan:
     """``plan`` with runs of its commands replaced by fewer straight ones whose continuous
     motion is certified (:func:`merge_commands` with :func:`certified_edges`): a searched
     motion's retreat from a surface, its path and its approach to a surface are merged apart,
     each held off the surfaces by the search's edge test, so commands across them can often
     go. Costs about 5 ms a check (at most :data:`CERTIFIED_MERGE_CHECKS`): the UR5 cell's
     welds 118 -> 115 commands, the seed's Task 3 127 -> 126 (its first leg 70 -> 69, a direct
-    motion's count)."""
+    motion's count). ``energy_weights``: what the merged plan's energy is weighted by (as the
+    plan's own)."""
     seq = plan.sequence
     if seq.n_commands < 2:
         return plan
@@ -358,7 +364,7 @@ def merged_certified(arm: SerialArm, world: CollisionWorld, plan: MotionPlan) ->
         plan,
         sequence=merged,
         clearance=mc,
-        metrics=plan_metrics(arm, merged, None),
+        metrics=plan_metrics(arm, merged, energy_weights),
         method=plan.method + " + certified merge",
     )
 
@@ -602,7 +608,7 @@ def plan_motion(
     if found:
         kept = min(found, key=lambda plan: score(plan.sequence))
         if certified_merge and opts.objective is Objective.COMMANDS:
-            kept = merged_certified(arm, world, kept)
+            kept = merged_certified(arm, world, kept, weights)
         return kept
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
 

@@ -435,7 +435,7 @@ def plan_tour(
     if opts.objective is Objective.COMMANDS:
         # the kept legs only: each certified merge costs about a quarter second
         say("merging the legs' commands where a certified straight motion needs fewer")
-        legs = [merged_certified(arm, world, leg) for leg in legs]
+        legs = [merged_certified(arm, world, leg, opts.energy_weights) for leg in legs]
         planned[chosen] = _commands(legs)
     commands = np.vstack([leg.sequence.commands for leg in legs])
     sequence = CommandSequence(start, commands, arm.lattice)

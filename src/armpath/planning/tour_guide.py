@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import ArmpathError
-from armpath.geometry.world import CollisionWorld, into_windows
+from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import shift_into_limits
 from armpath.ik.target import ToolTarget
 from armpath.model.serial_arm import SerialArm
@@ -127,7 +127,7 @@ class TourGuide:
         members, prev = [], q_start
         for lay, k in zip(layers, picks, strict=True):
             q = self._with_start(lay.q[k][None], q_start)
-            q = self._kept(shift_into_limits(self.arm, q, prev))[0]
+            q = self.sampler.within_windows(shift_into_limits(self.arm, q, prev))[0]
             members.append(q)
             prev = q
         return total, members
@@ -140,8 +140,9 @@ class TourGuide:
         nearest: bool = True,
     ) -> list[IntArray] | None:
         """Lattice goal states next to each path member (nearest it first, at most
-        :data:`GUIDE_GOALS`; the first is the clear lattice state nearest the member itself
-        where it has one), one array per target of ``order``; None when a member has none."""
+        :data:`GUIDE_GOALS`; next to each member sampled, the clear lattice state ``nearest`` it,
+        else the most accurate one: :func:`generic_goal_states`), one array per target of
+        ``order``; None when a member has none."""
         grid = self.arm.lattice
         out = []
         for t, q in zip(order, members, strict=True):
@@ -164,13 +165,6 @@ class TourGuide:
                 return None
             out.append(states)
         return out
-
-    def _kept(self, q: FloatArray) -> FloatArray:
-        """Configurations ``(M, n)`` with each joint its self-collision ranges confine turned
-        onto the start's side of them (the copy :meth:`FamilySampler.units` measures)."""
-        if not self.sampler.joint_windows:
-            return q
-        return into_windows(q, self.sampler.joint_windows)[0]
 
     def _with_start(self, q: FloatArray, q_start: FloatArray) -> FloatArray:
         """``q`` with the joints that do not move the tool point at their start values."""

@@ -249,15 +249,20 @@ class FamilySampler:
         #: several turns are sampled); a redundant arm's self-motion is not sampled
         self.covers_family = int(self.tip.sum()) - 3 <= 2 + (1 if self.turns > 1 else 0)
 
-    def units(self, q: FloatArray) -> FloatArray:
-        """Command units of the tip joints of configurations ``(..., n)`` rad; a joint with a
-        range to keep (:attr:`joint_windows`) takes the copy of its value (whole turns) nearest
-        it (:func:`into_windows`)."""
+    def within_windows(self, q: FloatArray) -> FloatArray:
+        """Configurations ``(..., n)`` rad with each joint that has a range to keep
+        (:attr:`joint_windows`) at the copy of its value (whole turns) nearest it
+        (:func:`into_windows`): on the start's side of its self-collision ranges."""
         q = np.asarray(q, dtype=np.float64)
-        if self.joint_windows:
-            flat = into_windows(q.reshape(-1, q.shape[-1]), self.joint_windows)[0]
-            q = flat.reshape(q.shape)
-        return np.asarray(q[..., self.tip] / self.step, dtype=np.float64)
+        if not self.joint_windows:
+            return q
+        flat = into_windows(q.reshape(-1, q.shape[-1]), self.joint_windows)[0]
+        return np.asarray(flat.reshape(q.shape), dtype=np.float64)
+
+    def units(self, q: FloatArray) -> FloatArray:
+        """Command units of the tip joints of configurations ``(..., n)`` rad, each joint with a
+        range to keep measured on the start's side of it (:meth:`within_windows`)."""
+        return np.asarray(self.within_windows(q)[..., self.tip] / self.step, dtype=np.float64)
 
     def outside_windows(self, u: FloatArray, err: FloatArray) -> BoolArray:
         """Samples (command units ``(M, J)``, errors ``(M, J)``) whose every nearby member lies

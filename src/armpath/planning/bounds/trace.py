@@ -75,9 +75,9 @@ def turning_layers(
             continue
         order = inside[np.argsort(path_mm[inside], kind="stable")]
         s, u = np.clip(path_mm[order], lo, hi), path_u[order]
-        picks, length = _longest_polyline(s, u, 2, _LAYER_GAP_SHARE * (b - a))
-        while len(picks) < max_layers:
-            more, longer = _longest_polyline(s, u, len(picks) + 1, _LAYER_GAP_SHARE * (b - a))
+        polylines = _longest_polylines(s, u, max(max_layers, 2), _LAYER_GAP_SHARE * (b - a))
+        picks, length = polylines[2]
+        for more, longer in polylines[3:]:
             if not more or longer < length + gain:
                 break
             picks, length = more, longer
@@ -85,27 +85,34 @@ def turning_layers(
     return out
 
 
-def _longest_polyline(s: FloatArray, u: FloatArray, k: int, gap: float) -> tuple[list[int], float]:
-    """The ``k`` points of a path (arc lengths ``s`` ascending, values ``u``), its first and
-    last among them and consecutive ones at least ``gap`` apart in ``s``, whose polyline is
-    longest in the largest-joint metric: their indices and that length ([] and -inf when no
-    ``k`` points are so far apart)."""
+def _longest_polylines(
+    s: FloatArray, u: FloatArray, k_max: int, gap: float
+) -> list[tuple[list[int], float]]:
+    """For each ``k`` up to ``k_max`` (the list's index; 0 and 1 unused), the ``k`` points of a
+    path (arc lengths ``s`` ascending, values ``u``), its first and last among them and
+    consecutive ones at least ``gap`` apart in ``s``, whose polyline is longest in the
+    largest-joint metric: their indices and that length ([] and -inf when no ``k`` points are
+    so far apart). One dynamic programme: the best ``j``-point polyline to each point."""
     n = s.size
     d = np.abs(u[:, None, :] - u[None, :, :]).max(axis=-1)  # (n, n)
     far = (s[None, :] - s[:, None]) >= gap  # far[m, i]: i may follow m
-    best = np.full((k, n), -np.inf)
-    back = np.zeros((k, n), dtype=np.int64)
+    best = np.full((k_max, n), -np.inf)
+    back = np.zeros((k_max, n), dtype=np.int64)
     best[0, 0] = 0.0
-    for j in range(1, k):
+    for j in range(1, k_max):
         through = np.where(far, best[j - 1][:, None] + d, -np.inf)  # (from m, to i)
         back[j] = np.argmax(through, axis=0)
         best[j] = through[back[j], np.arange(n)]
-    if not np.isfinite(best[k - 1, n - 1]):
-        return [], -np.inf
-    picks = [n - 1]
-    for j in range(k - 1, 0, -1):
-        picks.append(int(back[j, picks[-1]]))
-    return picks[::-1], float(best[k - 1, n - 1])
+    out: list[tuple[list[int], float]] = [([], -np.inf), ([], -np.inf)]
+    for k in range(2, k_max + 1):
+        if not np.isfinite(best[k - 1, n - 1]):
+            out.append(([], -np.inf))
+            continue
+        picks = [n - 1]
+        for j in range(k - 1, 0, -1):
+            picks.append(int(back[j, picks[-1]]))
+        out.append((picks[::-1], float(best[k - 1, n - 1])))
+    return out
 
 
 def trace_bound(

@@ -19,7 +19,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -196,7 +196,7 @@ def plan_trace(
     start = np.asarray(start_ticks, dtype=np.int64)
     arcs = list(reach.reachable)
     overlap = 0.0
-    if curve.closed and len(arcs) == 1 and arcs[0].length_mm >= curve.length - 1e-9:
+    if _all_round(curve, arcs):
         # all around: begun where the family comes nearest the arm, run on a little past the
         # start so that the covered ends meet
         a0 = _nearest_loop_start(fam, arm.lattice.to_joint(start), curve.length, arcs[0].start_mm)
@@ -233,31 +233,29 @@ def plan_trace(
     if not opts.bound:
         return result
     say("bounding the fewest commands of this trace")
-    bound = trace_plan_bound(result, around=overlap > 0, on_progress=say)
+    bound = trace_plan_bound(result, on_progress=say)
     return replace(result, lower_bound=bound)
+
+
+def _all_round(curve: Curve, arcs: Sequence[CurveArc]) -> bool:
+    """Whether ``curve`` is closed and its reachable ``arcs`` are the whole of it: it is then
+    traced in one pass all round, begun anywhere."""
+    return curve.closed and len(arcs) == 1 and arcs[0].length_mm >= curve.length - 1e-9
 
 
 def trace_plan_bound(
     result: TraceResult,
-    around: bool | None = None,
     rounds: int = SEARCH_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
 ) -> CommandBound | None:
     """The lower bound of the commands of any plan that traces what ``result``'s passes cover
-    (what :func:`plan_trace` reports): one pass per span (overlapping spans merged), the
-    family's points placed where the plan's joint path turns or evenly
-    (:func:`~armpath.planning.bounds.trace_bound`), searched ``rounds`` rounds at most.
-    ``around``: a single pass all round a closed curve, which may begin anywhere (None: so when
-    the curve is closed and reachable all round). None where the family has no member within
-    the limits on a span."""
+    (what :func:`plan_trace` reports): one pass per span (overlapping spans merged; a closed
+    curve reachable all round in one pass that may begin anywhere), the family's points placed
+    where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
+    searched ``rounds`` rounds at most. None where the family has no member within the limits
+    on a span."""
     fam = result.reachability.family
-    arcs = result.reachability.reachable
-    if around is None:
-        around = (
-            result.curve.closed
-            and len(arcs) == 1
-            and arcs[0].length_mm >= result.curve.length - 1e-9
-        )
+    around = _all_round(result.curve, result.reachability.reachable)
     spans: list[list[float]] = []
     for p in sorted(result.passes, key=lambda p: p.start_mm):
         if spans and p.start_mm <= spans[-1][1]:
