@@ -115,6 +115,15 @@ SECOND_LOOK_RATIO = 1.25
 SECOND_LOOK_SEARCHES = 3
 
 
+class _AbandonedError(Exception):
+    """A tour's order given up while planned: it cannot need fewer ``commands`` than the
+    best plan so far."""
+
+    def __init__(self, commands: int) -> None:
+        super().__init__(f"needs at least {commands} commands")
+        self.commands = commands
+
+
 def _direct_commands(a: IntArray, b: IntArray, lattice: Lattice) -> FloatArray:
     """Fewest direct-motion commands from each state of ``a`` ``(A, n)`` to each of ``b``
     ``(B, n)``: ``(A, B)``."""
@@ -176,7 +185,9 @@ def plan_tour(
     :data:`MAX_GUIDED_ORDERS` orders, the one whose guided path is shortest planned too, and at
     each of :data:`GUIDE_BUFFERS_MM` the :data:`GUIDED_ORDERS` whose guided paths are shortest
     and no longer than the best plan, through the lattice goal states nearest the guide's members
-    and through the most accurate ones: :data:`GUIDED_NEAREST`) and the shorter plan counts. Raises
+    and through the most accurate ones: :data:`GUIDED_NEAREST`) and the shorter plan counts; such
+    a plan is given up before a leg once its legs so far plus the fewest direct-motion commands
+    through the goal states still to go reach the plan it would have to beat. Raises
     :class:`PlanningError` when a target cannot be reached clear of the obstacles.
     ``orders_not_planned`` of the result says, for each ranked order that has no planned command
     count, why. ``orientations``: a tool orientation rule per target (None: the tool point
@@ -261,12 +272,23 @@ def plan_tour(
         name: str,
         first: list[IntArray] | None,
         opts: MotionOptions = opts,
+        ceiling: int | None = None,
     ) -> list[MotionPlan]:
         """The legs of order ``o``: to the goal states ``first`` of each target where given
-        and reachable, else to the target's goal states."""
+        and reachable, else to the target's goal states. With a ``ceiling`` (commands), the
+        order is abandoned (:class:`_AbandonedError`) before a leg once the legs so far plus the
+        fewest direct-motion commands through the goal states still to go reach it."""
         legs: list[MotionPlan] = []
         state = start
         for i, t in enumerate(o):
+            if ceiling is not None:
+                ahead = list(goals)
+                for k, later in enumerate(o[i:], start=i):
+                    if first is not None:
+                        ahead[later] = np.vstack([first[k], goals[later]])
+                rest = _order_bounds(state, ahead, [o[i:]], return_to_start, arm.lattice)[o[i:]]
+                if _commands(legs) + rest >= ceiling:
+                    raise _AbandonedError(_commands(legs) + rest)
             leg = None
             if first is not None:
                 # the goal state nearest the guide's member first: a motion to the set takes
@@ -320,8 +342,8 @@ def plan_tour(
         if guided is not None:
             say(f"planning order {name} through the goal states chosen together")
             try:
-                other = legs_of(o, name, guided, opts)
-            except PlanningError:
+                other = legs_of(o, name, guided, opts, _commands(legs) if legs else None)
+            except (PlanningError, _AbandonedError):
                 other = []
             if other and (not legs or _commands(other) < _commands(legs)):
                 return other, guided, failure
@@ -394,7 +416,10 @@ def plan_tour(
                         f"more ({kind})"
                     )
                     try:
-                        legs = legs_of(o, name, guided)
+                        legs = legs_of(o, name, guided, ceiling=None if best is None else best[0])
+                    except _AbandonedError as exc:
+                        say(f"abandoned order {name}: it needs at least {exc.commands} commands")
+                        continue
                     except PlanningError:
                         continue
                     total = _commands(legs)
