@@ -91,6 +91,31 @@ def test_reach_is_the_clis_document_and_replays(seed_reach, tmp_path):
     )
 
 
+def test_plan_to_a_point_with_a_tool_axis_is_the_clis_document(tmp_path):
+    """``armpath.plan`` to a point with a tool-axis rule and ``armpath plan --to-xyz
+    --tool-axis`` are one path (the same document); the independent seed kinematics put the
+    tool point within the tolerance and the last link within the cone, at the angle reported."""
+    import armpath
+
+    api = armpath.plan("seed", to_mm=[300.0, 100.0, 200.0], tool_axis=[0, 0, -1],
+                       axis_tolerance_deg=20.0)  # fmt: skip
+    cli = subprocess.run(
+        [sys.executable, "-m", "armpath", "plan", "--to-xyz", "300", "100", "200",
+         "--tool-axis", "0", "0", "-1", "--axis-tolerance", "20", "--json"],
+        capture_output=True, text=True, check=True, cwd=tmp_path,
+    )  # fmt: skip
+    assert json.loads(cli.stdout) == api.doc
+    states = independent.replay(api.doc["initial_deg"], api.doc["commands"])
+    pts = independent.points(states[-1:])[0]
+    assert np.linalg.norm(pts[-1] - [300.0, 100.0, 200.0]) <= 0.05
+    axis = (pts[-1] - pts[-2]) / np.linalg.norm(pts[-1] - pts[-2])
+    angle = np.degrees(np.arccos(axis @ [0.0, 0.0, -1.0]))
+    assert angle <= 20.0
+    assert api.doc["tool_orientation"]["angle_deg"] == pytest.approx(angle, abs=1e-6)
+    with pytest.raises(armpath.errors.InvalidInputError, match="go with to_mm"):
+        armpath.plan("seed", to_deg=[0, -90, 0, 0, -90, 0], tool_axis=[0, 0, -1])
+
+
 def test_saved_result_loads_back_and_views_anywhere(seed_reach, tmp_path):
     import armpath
 

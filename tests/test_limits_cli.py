@@ -390,7 +390,7 @@ def test_plan_tolerance_is_checked_before_any_work(tmp_path, tolerance):
     _refused(
         tmp_path,
         ["plan", "--to-xyz", "300", "0", "200", "--tolerance", tolerance],
-        "--tolerance must be between",
+        "tolerance must be between",
         "mm, got",
     )
 

@@ -219,34 +219,60 @@ def plan(
     scene: SceneLike | None = None,
     start_deg: ArrayLike | None = None,
     tolerance_mm: float = 0.05,
+    pose: Any = None,
+    angle_tolerance_deg: float = 5.0,
+    tool_axis: ArrayLike | None = None,
+    axis_tolerance_deg: float = 15.0,
     objective: str = "commands",
+    energy_weights: ArrayLike | None = None,
     seed: int = 0,
     time_limit_s: float | None = None,
 ) -> Result:
     """Plan a clear motion to the joint values ``to_deg`` or to a point ``to_mm`` (one of
     them) from ``start_deg`` (default: home), around the scene's obstacles; ``objective``
-    (``"commands"``, ``"path"``, ``"energy"``) is what is minimised once the goal is reached;
-    ``seed`` seeds the random search."""
+    (``"commands"``, ``"path"``, ``"energy"``, that one with ``energy_weights`` per joint) is
+    what is minimised once the goal is reached; ``seed`` seeds the random search. With
+    ``to_mm``, ``pose`` or ``tool_axis`` rule the tool's rotation at the goal as for
+    :func:`reach` (what ``armpath plan --to-xyz`` does: both call
+    :func:`~armpath.planning.reach.plan_to_point`)."""
     from armpath.export import plan_result_dict
     from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions, plan_motion
-    from armpath.planning.reach import goal_states
+    from armpath.planning.reach import plan_to_point
 
     if (to_deg is None) == (to_mm is None):
         raise InvalidInputError("give exactly one goal: to_deg or to_mm")
-    options = MotionOptions(objective=objective_of(objective), seed=seed)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
+        weights = None
+        if energy_weights is not None:
+            w = np.asarray(energy_weights, dtype=np.float64)
+            if w.shape != (the_arm.n_joints,):
+                raise InvalidInputError(
+                    f"energy_weights needs one number per joint ({the_arm.n_joints}), got {w.size}"
+                )
+            weights = tuple(float(v) for v in w)
+        options = MotionOptions(
+            objective=objective_of(objective), energy_weights=weights, seed=seed
+        )
         start = _start_ticks(the_arm, start_deg)
         world = the_scene.world
-        target = None
+        target, rule = None, None
         if to_mm is not None:
             target = _point(to_mm, "to_mm")
-            goals, _ = goal_states(
-                the_arm, world, start, target / the_arm.mm_per_unit, tolerance_mm
+            rule = _orientation(the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg)
+            found = plan_to_point(
+                the_arm,
+                world,
+                start,
+                target / the_arm.mm_per_unit,
+                tolerance_mm,
+                options,
+                rule,
             )
-            found = plan_motion(the_arm, world, start, goals, options, turn_copies=True)
         else:
+            if pose is not None or tool_axis is not None:
+                raise InvalidInputError("pose and tool_axis go with to_mm")
             goal = the_arm.lattice.from_display(np.asarray(to_deg, dtype=np.float64), "to_deg")
             found = plan_motion(the_arm, world, start, goal[None, :], options)
         doc = plan_result_dict(
@@ -256,6 +282,7 @@ def plan(
             options.objective.value,
             target,
             tolerance_mm if target is not None else None,
+            rule,
         )
     return _result(doc, the_arm, the_scene, found.sequence)
 

@@ -26,6 +26,7 @@ from armpath.model.serialize import arm_to_dict
 from armpath.schemas import SCHEMA_VERSION
 
 if TYPE_CHECKING:  # the result types, for annotations only: writing a result needs no planner
+    from armpath.ik.target import Orientation
     from armpath.planning.bounds import CommandBound
     from armpath.planning.motion import MotionPlan, PlanMetrics
     from armpath.planning.motion_check import MotionClearance
@@ -376,8 +377,13 @@ def plan_result_dict(
     objective: str,
     target_mm: FloatArray | None,
     tolerance_mm: float | None,
+    orientation: Orientation | None = None,
 ) -> dict[str, Any]:
-    """The JSON document of a general motion plan (``armpath plan``)."""
+    """The JSON document of a general motion plan (``armpath plan``); with an
+    ``orientation`` rule of the tool at the target, the rule and the angle reached."""
+    from armpath.ik.target import ToolTarget
+    from armpath.kinematics import tool_pose
+
     seq = plan.sequence
     tip = tool_position(arm, seq.states_joint()[-1])
     doc: dict[str, Any] = {
@@ -397,6 +403,14 @@ def plan_result_dict(
         doc["target"] = np.asarray(target_mm).tolist()
         doc["error_mm"] = float(np.linalg.norm(tip - target_mm))
         doc["tolerance_mm"] = tolerance_mm
+        doc["tool_orientation"] = None
+        if orientation is not None:
+            R = tool_pose(arm, seq.states_joint()[-1])[:3, :3]
+            angle = ToolTarget(np.asarray(target_mm, dtype=np.float64), orientation).angles(R)
+            doc["tool_orientation"] = {
+                **orientation.describe(),
+                "angle_deg": float(np.degrees(angle)),
+            }
     return doc
 
 

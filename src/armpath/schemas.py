@@ -198,6 +198,7 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
             "target": _TARGET,
             "error_mm": _num("distance of the tool point from the target (mm)"),
             "tolerance_mm": _num("largest error accepted (mm)"),
+            "tool_orientation": _ORIENTATION,
         },
         ("objective", "metrics", "method"),
     ),

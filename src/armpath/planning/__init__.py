@@ -8,7 +8,13 @@ from armpath.lazy import lazy_exports
 if TYPE_CHECKING:
     from armpath.planning.bounds import CommandBound, tour_bound, trace_bound
     from armpath.planning.motion_check import MotionClearance, motion_clearance
-    from armpath.planning.reach import LowerBound, ReachOptions, ReachResult, plan_reach
+    from armpath.planning.reach import (
+        LowerBound,
+        ReachOptions,
+        ReachResult,
+        plan_reach,
+        plan_to_point,
+    )
     from armpath.planning.trace import (
         CurveReachability,
         TraceOptions,
@@ -30,6 +36,7 @@ __getattr__, __dir__ = lazy_exports(
             "ReachOptions",
             "ReachResult",
             "plan_reach",
+            "plan_to_point",
         ),
         "trace": (
             "CurveReachability",
@@ -53,6 +60,7 @@ __all__ = [
     "curve_reachability",
     "motion_clearance",
     "plan_reach",
+    "plan_to_point",
     "plan_trace",
     "tour_bound",
     "trace_bound",

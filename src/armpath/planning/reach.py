@@ -23,6 +23,7 @@ joint by at most ``2N`` degrees, so
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,7 +55,7 @@ from armpath.kinematics import position_jacobian, tool_pose, tool_position
 from armpath.model.lattice import unique_states
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.motion import MotionOptions, plan_motion
+from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 
 FloatArray = NDArray[np.float64]
@@ -813,6 +814,38 @@ def goal_states(
     p = _validated_problem(arm, world, start_ticks, target_mm)
     fam = _reachable_family(p, sphere_step_deg, tolerance_mm, 0)
     return _goal_states(p, fam, tolerance_mm, count, body_buffer_mm, spread_deg)
+
+
+def plan_to_point(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: ArrayLike,
+    target_mm: ArrayLike,
+    tolerance_mm: float = 0.05,
+    options: MotionOptions | None = None,
+    orientation: Orientation | None = None,
+    on_progress: Callable[[str], None] | None = None,
+) -> MotionPlan:
+    """A clear motion from ``start_ticks`` to a lattice state that puts the tool point within
+    ``tolerance_mm`` of ``target_mm`` (and keeps ``orientation``, a rule of the tool's
+    rotation): the target's goal states (:func:`goal_states`), then
+    :func:`~armpath.planning.motion.plan_motion` to the nearest it reaches (their whole-turn
+    copies too). What ``armpath plan --to-xyz`` and :func:`armpath.plan` do; unlike
+    :func:`plan_reach`, the objective of ``options`` is minimised and no bound is proven.
+    """
+    if not (np.isfinite(tolerance_mm) and MIN_TOLERANCE_MM <= tolerance_mm <= MAX_TOLERANCE_MM):
+        raise InvalidInputError(
+            f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm, "
+            f"got {tolerance_mm}"
+        )
+    say = on_progress or (lambda _msg: None)
+    say("goal states at the target")
+    goals, _ = goal_states(
+        arm, world, start_ticks, target_mm, tolerance_mm, orientation=orientation
+    )
+    return plan_motion(
+        arm, world, start_ticks, goals, options, on_progress=on_progress, turn_copies=True
+    )
 
 
 def _goal_states(
