@@ -106,12 +106,9 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     units = _units_text(grid.units)
     table.add_row("target", f"{_fmt(result.target_mm, 3)} mm")
     if result.orientation is not None and result.angle_rad is not None:
-        o = result.orientation.describe()
-        table.add_row(
-            "tool orientation",
-            f"{np.degrees(result.angle_rad):.3f} deg from the {str(o['type']).replace('_', ' ')} "
-            f"(tolerance {o['tolerance_deg']:g} deg)",
-        )
+        described = result.orientation.describe()
+        angle_deg = float(np.degrees(result.angle_rad))
+        table.add_row("tool orientation", _orientation_text(described, angle_deg))
     table.add_row("start", f"{_fmt(grid.display(seq.start_ticks), 1)} {units}")
     if result.is_provably_fewest:
         claim = f"lower bound {lb.commands}: provably fewest"
@@ -364,6 +361,12 @@ def reach(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+def _orientation_text(rule: dict[str, Any], angle_deg: float) -> str:
+    """The angle reached from an orientation rule (its ``describe()``), with its tolerance."""
+    kind = str(rule["type"]).replace("_", " ")
+    return f"{angle_deg:.3f} deg from the {kind} (tolerance {rule['tolerance_deg']:g} deg)"
+
+
 def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     table = Table(title=title, show_header=False)
     table.add_column("quantity", style="bold")
@@ -376,6 +379,9 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
         table.add_row(
             "tool point error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
         )
+    if doc.get("tool_orientation"):
+        rule = doc["tool_orientation"]
+        table.add_row("tool orientation", _orientation_text(rule, rule["angle_deg"]))
     table.add_row("method", str(doc["method"]))
     table.add_row(
         "objectives",
