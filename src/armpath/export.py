@@ -393,7 +393,9 @@ def plan_result_dict(
         "objective": objective,
         "metrics": metrics_dict(plan.metrics),
         "direct_commands": plan.direct_commands,
-        "lower_bound_commands": plan.direct_commands,
+        # a joint goal's straight motion bounds every plan to it; a point's goal states are a
+        # few of the lattice states at the point, so the direct motion to them bounds nothing
+        "lower_bound_commands": plan.direct_commands if target_mm is None else None,
         "method": plan.method,
         "search_samples": plan.searched_samples,
         "min_clearance_mm": _finite_or_none(plan.clearance.min_clearance),

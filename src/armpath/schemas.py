@@ -191,8 +191,14 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
         {
             "objective": _str("what was minimised: commands, path or energy"),
             "metrics": _METRICS,
-            "direct_commands": _int("commands of the straight joint-space motion", True),
-            "lower_bound_commands": _int("fewest commands any plan needs", True),
+            "direct_commands": _int(
+                "commands of the straight joint-space motion to the goal (state)", True
+            ),
+            "lower_bound_commands": _int(
+                "fewest commands any plan to the joint goal needs (its straight motion); null "
+                "for a point goal, whose bound over every pose at the point armpath reach proves",
+                True,
+            ),
             "method": _str("direct or the search that found the motion"),
             "search_samples": _int("states the search sampled", True),
             "target": _TARGET,

@@ -372,9 +372,14 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     table.add_column("quantity", style="bold")
     table.add_column("value")
     m = doc["metrics"]
-    table.add_row(
-        "commands", f"{doc['n_commands']}  (direct-motion bound {doc['lower_bound_commands']})"
-    )
+    if doc["lower_bound_commands"] is not None:
+        count = f"{doc['n_commands']}  (direct-motion bound {doc['lower_bound_commands']})"
+    else:
+        count = (
+            f"{doc['n_commands']}  (a direct motion to its goal state needs "
+            f"{doc['direct_commands']}; armpath reach proves a bound at the point)"
+        )
+    table.add_row("commands", count)
     if "error_mm" in doc:
         table.add_row(
             "tool point error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"
