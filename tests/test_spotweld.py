@@ -114,3 +114,32 @@ def test_files_and_figures_written(task3):
     assert {"spotweld_motion.png", "spotweld_joints.png"} <= names
     rows = (out / "spotweld.csv").read_text().strip().splitlines()
     assert len(rows) == doc["n_commands"] + 1
+
+
+def test_the_bound_that_gives_up_a_tour_is_the_least_through_its_goal_states():
+    """What a tour's plan is given up against (the fewest direct-motion commands from where the
+    arm is through one goal state per target still to go, in order, optionally back) equals
+    brute force over every choice of goal states, each leg's commands counted independently
+    (the largest tick change over 20, rounded up): so a plan given up could not have needed
+    fewer commands than its legs so far plus this."""
+    from armpath.model.seed_arm import seed_arm
+    from armpath.planning.tour import _order_bounds
+
+    lattice = seed_arm().lattice
+    rng = np.random.default_rng(7)
+    for back in (False, True):
+        state = rng.integers(-900, 900, 6)
+        goals = [rng.integers(-900, 900, (int(rng.integers(1, 5)), 6)) for _ in range(4)]
+        orders = [(2, 0, 3), (1, 3), (3, 1, 0, 2)]
+        found = _order_bounds(state, goals, orders, back, lattice)
+
+        def legs(a, b):
+            return int(np.ceil(np.abs(np.asarray(b) - np.asarray(a)).max() / 20))
+
+        for order in orders:
+            best = min(
+                sum(legs(a, b) for a, b in itertools.pairwise([state, *picks]))
+                + (legs(picks[-1], state) if back else 0)
+                for picks in itertools.product(*(goals[t] for t in order))
+            )
+            assert found[order] == best
