@@ -345,11 +345,14 @@ def spotweld(
     tolerance_mm: float = 0.05,
     objective: str = "commands",
     seed: int = 0,
+    bound: bool = True,
     time_limit_s: float | None = None,
 ) -> Result:
     """Visit the spot welds ``welds_mm (K, 3)`` (default: the scene's ``[tasks.spotweld]``)
     in the best order (``order="auto"``: every order ranked by its lower bound, the best
-    planned; ``"given"``: as listed), optionally back to the start."""
+    planned; ``"given"``: as listed), optionally back to the start. ``bound``: also prove a
+    lower bound on the commands of any tour, over every order and goal configuration (the
+    document's ``lower_bound``; the seed's Task 3 10 s of 22); False: ``None`` there."""
     from armpath.export import tour_result_dict
     from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions
@@ -375,6 +378,7 @@ def spotweld(
             options,
             start_ticks=_start_ticks(the_arm, start_deg),
             targets_mm=targets,
+            bound=bound,
         )
         doc = tour_result_dict(found, the_arm, the_scene, options.objective.value)
     return _result(doc, the_arm, the_scene, found.sequence)

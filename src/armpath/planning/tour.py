@@ -174,6 +174,7 @@ def plan_tour(
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
     orientations: Sequence[Orientation | None] | None = None,
+    bound: bool = True,
 ) -> TourResult:
     """Plan a clear tour from ``start_ticks`` through every target (mm), optionally back.
 
@@ -191,7 +192,9 @@ def plan_tour(
     :class:`PlanningError` when a target cannot be reached clear of the obstacles.
     ``orders_not_planned`` of the result says, for each ranked order that has no planned command
     count, why. ``orientations``: a tool orientation rule per target (None: the tool point
-    only).
+    only). ``bound``: prove the lower bound over every order and goal configuration
+    (:func:`~armpath.planning.bounds.tour_bound`; False: the result's ``lower_bound`` is None,
+    the orders' bounds for their goal states are kept).
     """
     try:
         order = VisitOrder(order)
@@ -246,7 +249,7 @@ def plan_tour(
     ranking = sorted(orders, key=lambda o: (bounds[o], o))
     fam = _targets_family(arm, world, pts) if pts.shape[0] <= MAX_BOUND_TARGETS else None
     family_bound, family_bounds = _family_bounds(
-        fam, start, pts, ranking, return_to_start, tolerance_mm, say
+        fam if bound else None, start, pts, ranking, return_to_start, tolerance_mm, say
     )
     q0 = arm.lattice.to_joint(start)
     guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say, arm.lattice.to_joint(start))

@@ -65,11 +65,12 @@ def spotweld_task(
     tool_axis: AxisRule | None = None,
     start_ticks: IntArray | None = None,
     targets_mm: FloatArray | None = None,
+    bound: bool = True,
 ) -> TourResult:
     """Task 3: from the arm's initial pose (or ``start_ticks``) through every spot weld of the
     scene (or the points ``targets_mm (K, 3)``), best order. ``tool_axis``: the torch within a
     cone about the surface's inward normal at each weld (a rule with ``normal``) or about a
-    fixed direction."""
+    fixed direction. ``bound``: prove the tour's lower bound (False: the plan only)."""
     model = arm or seed_arm()
     start = _start(model, start_ticks)
     targets = scene.spotweld_targets_mm() if targets_mm is None else targets_mm
@@ -101,6 +102,7 @@ def spotweld_task(
         options=options,
         on_progress=on_progress,
         orientations=rules,
+        bound=bound,
     )
 
 
