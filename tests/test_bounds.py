@@ -157,6 +157,39 @@ def test_a_two_point_trace_bound_agrees_with_slsqp_over_the_exact_family():
     assert b.commands <= b.value + 1 and b.parts["approach"] > 0
 
 
+def test_a_larger_sample_budget_searches_on_and_stays_below_slsqp():
+    """The search's budget of live samples (``max_samples``) stops it: a small budget stops it
+    within a round or two, a larger one searches on from the same rounds, so its bound is no
+    lower; both stay below the independent SLSQP optimum over the exact family (the pass
+    between the two points), and a budget outside the range is refused with the range."""
+    from armpath.errors import InvalidInputError
+
+    arm = seed_arm()
+    scene = load_scene(None)
+    fam = curve_family(arm, scene.world, scene.trace_curve())
+    start = arm.lattice.to_joint(np.array([0, -900, 0, 0, -900, 0]))
+    found = {
+        n: bounds.trace_bound(fam, start, [(700.0, 761.0)], 0.1, layers_per_span=2,
+                              directions=2000, max_samples=n)
+        for n in (1_000, 20_000)
+    }  # fmt: skip
+    small, large = found[1_000], found[20_000]
+    assert small.sampling["rounds"] < large.sampling["rounds"]
+    assert small.sampling["samples"] < large.sampling["samples"]
+    assert small.value <= large.value + 1e-9
+    # the clear path it reports: exact members on the two points (independent FK), and a pass
+    # the relaxation allows either way round, so no bound may exceed its cost
+    a, b = (np.asarray(q, dtype=np.float64) for q in large.guide_q)
+    for q, s_mm in zip((a, b), large.guide_s_mm, strict=True):
+        tip = independent.points(np.degrees(q))[-1]
+        assert np.linalg.norm(tip - fam.frame(float(s_mm))[0]) <= 1e-6
+    d = lambda x, y: float(np.abs((x - y)[:5]).max() / STEP)  # noqa: E731
+    path = min(d(start, a) + d(a, b), d(start, b) + d(b, a))
+    assert small.value <= large.value <= path + 1e-9
+    with pytest.raises(InvalidInputError, match="between 1,000 and 2,000,000"):
+        bounds.trace_bound(fam, start, [(700.0, 761.0)], 0.1, max_samples=10)
+
+
 def test_a_family_with_turns_about_the_tool_axis_stays_below_slsqp():
     """A tool point off the last joint's axis: the family has a third dimension (turns about
     the tool axis), whose neighbours count in the sampling error; SLSQP on the textbook D-H

@@ -405,3 +405,11 @@ def test_spotweld_tolerance_is_checked_before_any_work(tmp_path, tolerance):
         "tolerance must be between",
         "mm, got",
     )
+
+
+@pytest.mark.parametrize(
+    ("task", "samples"), [("trace", "10"), ("spotweld", "3000000"), ("trace", "2500000")]
+)
+def test_a_bound_sample_budget_outside_its_range_is_refused(tmp_path, task, samples):
+    """--bound-samples outside 1,000..2,000,000 is refused with the range before any work."""
+    _refused(tmp_path, [task, "--bound-samples", samples], "bound samples must be between", "got")

@@ -22,6 +22,7 @@ from armpath.cli.common import (
     VERBOSE,
     AnimateOption,
     BackgroundJob,
+    BoundSamplesOption,
     JsonOption,
     LinkRadiusOption,
     ObjectiveOption,
@@ -674,6 +675,7 @@ def spotweld(
             "the plan and its goal states' bound only).",
         ),
     ] = True,
+    bound_samples: BoundSamplesOption = None,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
@@ -700,6 +702,7 @@ def spotweld(
                     on_progress=say,
                     tool_axis=axis_rule(tool_axis, axis_tolerance),
                     bound=bound,
+                    bound_samples=bound_samples,
                 )
             doc = tour_result_dict(result, arm, scene, objective.value)
             if folder is not None:
@@ -850,6 +853,7 @@ def trace(
             "(a few seconds more: the seed's Task 2 4 s of its 17; --no-bound: the plan only).",
         ),
     ] = True,
+    bound_samples: BoundSamplesOption = None,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
@@ -865,7 +869,11 @@ def trace(
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
-            tolerance_mm=tolerance, motion=MotionOptions(seed=seed), axis_rule=rule, bound=bound
+            tolerance_mm=tolerance,
+            motion=MotionOptions(seed=seed),
+            axis_rule=rule,
+            bound=bound,
+            bound_samples=bound_samples,
         )
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()

@@ -36,6 +36,7 @@ from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, tour_bound, tour_bound_any_order
+from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.choices import Objective, VisitOrder
 from armpath.planning.motion import (
     MotionOptions,
@@ -175,6 +176,7 @@ def plan_tour(
     on_progress: Callable[[str], None] | None = None,
     orientations: Sequence[Orientation | None] | None = None,
     bound: bool = True,
+    bound_samples: int | None = None,
 ) -> TourResult:
     """Plan a clear tour from ``start_ticks`` through every target (mm), optionally back.
 
@@ -193,7 +195,8 @@ def plan_tour(
     ``orders_not_planned`` of the result says, for each ranked order that has no planned command
     count, why. ``orientations``: a tool orientation rule per target (None: the tool point
     only). ``bound``: prove the lower bound over every order and goal configuration
-    (:func:`~armpath.planning.bounds.tour_bound`; False: the result's ``lower_bound`` is None,
+    (:func:`~armpath.planning.bounds.tour_bound`, its search holding up to ``bound_samples``
+    live samples: more, a tighter bound, later; False: the result's ``lower_bound`` is None,
     the orders' bounds for their goal states are kept).
     """
     try:
@@ -223,6 +226,7 @@ def plan_tour(
             f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm, "
             f"got {tolerance_mm}"
         )
+    check_max_samples(bound_samples)
     if not 1 <= orders_to_plan <= 100:
         raise InvalidInputError(f"orders to plan must be in [1, 100], got {orders_to_plan}")
     start = np.asarray(start_ticks, dtype=np.int64)
@@ -249,8 +253,9 @@ def plan_tour(
     ranking = sorted(orders, key=lambda o: (bounds[o], o))
     fam = _targets_family(arm, world, pts) if pts.shape[0] <= MAX_BOUND_TARGETS else None
     family_bound, family_bounds = _family_bounds(
-        fam if bound else None, start, pts, ranking, return_to_start, tolerance_mm, say
-    )
+        fam if bound else None, start, pts, ranking, return_to_start, tolerance_mm, say,
+        bound_samples,
+    )  # fmt: skip
     q0 = arm.lattice.to_joint(start)
     guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say, arm.lattice.to_joint(start))
     guide = None if guide_all is None else guide_all.with_buffer(GUIDE_BUFFERS_MM[0])
@@ -582,6 +587,7 @@ def _family_bounds(
     back: bool,
     tolerance_mm: float,
     say: Callable[[str], None],
+    max_samples: int | None = None,
 ) -> tuple[CommandBound | None, dict[tuple[int, ...], int]]:
     """The bound over every goal configuration: per order for a given order or up to
     :data:`EXACT_ORDER_TARGETS` targets, else the any-order bound; None without a family
@@ -593,7 +599,9 @@ def _family_bounds(
     say("bounding the tour's commands over every goal configuration")
     try:
         if len(orders) == 1 or pts.shape[0] <= EXACT_ORDER_TARGETS:
-            return tour_bound(fam, q0, pts, tolerance_mm, orders, back, on_progress=say)
+            return tour_bound(
+                fam, q0, pts, tolerance_mm, orders, back, on_progress=say, max_samples=max_samples
+            )
         return tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say), {}
     except PlanningError:
         return None, {}

@@ -34,14 +34,16 @@ def tour_bound(
     rounds: int = SEARCH_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
     clear_levels: int = TOUR_CLEAR_LEVELS,
+    max_samples: int | None = None,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
     units) within ``tolerance_mm``: over ``orders``, a shortest path through the family at each
     target (every goal configuration that may be clear, its cells split ``clear_levels`` times
     where unsure; obstacles ignored between targets), each leg a whole number of commands;
     ``back`` returns to the start. The family is searched by branch and bound for ``rounds``
-    rounds at most (:class:`~armpath.planning.bounds.search.CellSearch`). Returns the least
-    over the orders and each order's bound (:attr:`CellSearch.per_order`)."""
+    rounds at most and until it holds ``max_samples`` live samples
+    (:class:`~armpath.planning.bounds.search.CellSearch`). Returns the least over the orders
+    and each order's bound (:attr:`CellSearch.per_order`)."""
     say = on_progress or (lambda _m: None)
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
@@ -52,6 +54,7 @@ def tour_bound(
         [None] * targets.shape[0],
         q_start,
         levels=clear_levels,
+        max_samples=max_samples,
     )
     found = search.run(rounds, say)
     if found is None:

@@ -129,6 +129,7 @@ def trace_bound(
     upper_commands: float = np.inf,
     path_mm: FloatArray | None = None,
     path_q: FloatArray | None = None,
+    max_samples: int | None = None,
 ) -> CommandBound:
     """Fewest commands of any plan that passes the tool point along each span of the curve
     (arc lengths mm, ``a < b``) within ``tolerance_mm`` from ``q_start`` (rad).
@@ -142,7 +143,8 @@ def trace_bound(
     bounds higher is searched on. ``loop``: one span that
     is the whole closed curve, which a pass may begin anywhere on. The family is sampled along
     ``directions`` tool directions at first and searched by branch and bound for ``rounds``
-    rounds at most (:class:`~armpath.planning.bounds.search.CellSearch`).
+    rounds at most and until it holds ``max_samples`` live samples
+    (:class:`~armpath.planning.bounds.search.CellSearch`).
     ``upper_commands``: the commands of a plan that traces the spans, if known (the search
     drops the cells that cannot hold a path cheaper than it).
     ``with_errors=False`` (a diagnostic, not a bound): the samples' sampling errors are left
@@ -170,6 +172,7 @@ def trace_bound(
             [_allowed_at(fam, float(s)) for s in s_all],
             q_start,
             with_errors=with_errors,
+            max_samples=max_samples,
         )
         first = search.run(1, on_progress, upper=upper_commands)
         if first is None:

@@ -33,7 +33,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
-from armpath.planning.bounds.search import SEARCH_ROUNDS
+from armpath.planning.bounds.search import SEARCH_ROUNDS, check_max_samples
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
@@ -69,7 +69,9 @@ class TraceOptions:
     ``motion``: options of the transits onto the curve and between passes. ``axis_rule``:
     where the tool's approach axis may point on the curve (:class:`AxisRule`: near the surface
     normal, or a fixed direction); None: any direction from outside the surface. ``bound``:
-    compute the lower bound of the commands (:func:`~armpath.planning.bounds.trace_bound`).
+    compute the lower bound of the commands (:func:`~armpath.planning.bounds.trace_bound`),
+    its search holding up to ``bound_samples`` live samples (None:
+    :data:`~armpath.planning.bounds.search.MAX_SAMPLES`; more: a tighter bound, later).
     """
 
     tolerance_mm: float = 0.1
@@ -78,6 +80,7 @@ class TraceOptions:
     motion: MotionOptions = field(default_factory=MotionOptions)
     axis_rule: AxisRule | None = None
     bound: bool = True
+    bound_samples: int | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.tolerance_mm) and 0.005 <= self.tolerance_mm <= 10.0):
@@ -86,6 +89,7 @@ class TraceOptions:
             )
         if not self.layer_step_mm > 0:
             raise InvalidInputError("layer step must be > 0 mm")
+        check_max_samples(self.bound_samples)
 
 
 @dataclass(frozen=True)
@@ -233,7 +237,7 @@ def plan_trace(
     if not opts.bound:
         return result
     say("bounding the fewest commands of this trace")
-    bound = trace_plan_bound(result, on_progress=say)
+    bound = trace_plan_bound(result, on_progress=say, max_samples=opts.bound_samples)
     return replace(result, lower_bound=bound)
 
 
@@ -247,13 +251,14 @@ def trace_plan_bound(
     result: TraceResult,
     rounds: int = SEARCH_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
+    max_samples: int | None = None,
 ) -> CommandBound | None:
     """The lower bound of the commands of any plan that traces what ``result``'s passes cover
     (what :func:`plan_trace` reports): one pass per span (overlapping spans merged; a closed
     curve reachable all round in one pass that may begin anywhere), the family's points placed
     where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
-    searched ``rounds`` rounds at most. None where the family has no member within the limits
-    on a span."""
+    searched ``rounds`` rounds at most and until it holds ``max_samples`` live samples. None
+    where the family has no member within the limits on a span."""
     fam = result.reachability.family
     around = _all_round(result.curve, result.reachability.reachable)
     spans: list[list[float]] = []
@@ -282,6 +287,7 @@ def trace_plan_bound(
             upper_commands=float(sequence.n_commands),
             path_mm=np.concatenate(path_mm),
             path_q=np.vstack(path_q),
+            max_samples=max_samples,
         )
     except PlanningError:
         return None
