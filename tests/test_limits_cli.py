@@ -408,7 +408,8 @@ def test_spotweld_tolerance_is_checked_before_any_work(tmp_path, tolerance):
 
 
 @pytest.mark.parametrize(
-    ("task", "samples"), [("trace", "10"), ("spotweld", "3000000"), ("trace", "2500000")]
+    ("task", "samples"),
+    [("trace", "10"), ("spotweld", "3000000"), ("trace", "2500000"), ("run", "5")],
 )
 def test_a_bound_sample_budget_outside_its_range_is_refused(tmp_path, task, samples):
     """--bound-samples outside 1,000..2,000,000 is refused with the range before any work."""

@@ -54,11 +54,15 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
             body = doc["clearance"]["min_body_clearance_mm"]
             clearance = f"{clearance} (tool tip) / {_mm(body)} (links)"
             order = " → ".join(str(i) for i in doc["order"])
+            first = (
+                "the first bound holds for every order and goal configuration that may be clear "
+                "at the welds (obstacles ignored between them)"
+                if doc.get("lower_bound") is not None
+                else "no bound over every order was computed (-)"
+            )
             notes.append(
-                f"\\* Task 3, order {order}: the first bound holds for every order and goal "
-                "configuration that may be clear at the welds (obstacles ignored between them); "
-                "the second counts direct motions between the "
-                "chosen goal states of this order. The tool tip touches the wall at each weld."
+                f"\\* Task 3, order {order}: {first}; the second counts direct motions between "
+                "the chosen goal states of this order. The tool tip touches the wall at each weld."
             )
         lines.append(
             f"| {title} | {doc['n_commands']} | {bound} | {error} | {clearance} | "

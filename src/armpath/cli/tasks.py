@@ -903,6 +903,15 @@ def run(
         bool, typer.Option("--html", help="Also write the report as summary.html.")
     ] = False,
     seed: SeedOption = 0,
+    bound: Annotated[
+        bool,
+        typer.Option(
+            "--bound/--no-bound",
+            help="Prove the lower bounds of the trace and the tour and report the gaps "
+            "(the seed tasks: about 15 s of the run; --no-bound: the plans only).",
+        ),
+    ] = True,
+    bound_samples: BoundSamplesOption = None,
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Run a scene's tasks for its arm (default: the seed scene's three tasks: 1, reach the
@@ -911,12 +920,14 @@ def run(
     one-page report summary.md."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
     from armpath.export import output_folder, reach_result_dict, tour_result_dict, trace_result_dict
+    from armpath.planning.bounds.search import check_max_samples
     from armpath.planning.motion import MotionOptions
     from armpath.planning.trace import TraceOptions
     from armpath.report import summary_html, summary_markdown
     from armpath.tasks import SEED_TASKS, reach_task, spotweld_task, trace_task
 
     with _cli_errors(time_limit):
+        check_max_samples(bound_samples)  # before any task runs
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         titles = dict(SEED_TASKS)
         has = {
@@ -962,14 +973,23 @@ def run(
                     reach_doc = reach_result_dict(result, arm, scene)
                 if has["trace"]:
                     with progress(f"{titles['trace']} ...") as say:
-                        options = TraceOptions(motion=MotionOptions(seed=seed))
+                        options = TraceOptions(
+                            motion=MotionOptions(seed=seed),
+                            bound=bound,
+                            bound_samples=bound_samples,
+                        )
                         traced = trace_task(scene, arm, options, on_progress=say)
                     trace_doc = trace_result_dict(traced, arm, scene)
                     _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
                 if has["spotweld"]:
                     with progress(f"{titles['spotweld']} ...") as say:
                         tour = spotweld_task(
-                            scene, arm, options=MotionOptions(seed=seed), on_progress=say
+                            scene,
+                            arm,
+                            options=MotionOptions(seed=seed),
+                            on_progress=say,
+                            bound=bound,
+                            bound_samples=bound_samples,
                         )
                     tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
                     _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
