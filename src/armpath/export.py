@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from armpath import __version__
 from armpath.commands import CommandSequence
 from armpath.errors import OutputError
-from armpath.kinematics import tool_position
+from armpath.kinematics import tool_pose, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.model.serialize import arm_to_dict
 from armpath.schemas import SCHEMA_VERSION
@@ -382,7 +382,6 @@ def plan_result_dict(
     """The JSON document of a general motion plan (``armpath plan``); with an
     ``orientation`` rule of the tool at the target, the rule and the angle reached."""
     from armpath.ik.target import ToolTarget
-    from armpath.kinematics import tool_pose
 
     seq = plan.sequence
     tip = tool_position(arm, seq.states_joint()[-1])

@@ -140,23 +140,25 @@ def _order_bounds(
 ) -> dict[tuple[int, ...], int]:
     """For every order, the fewest direct-motion commands through one goal state per target
     (a shortest path through the layers of goal states; obstacles ignored, so a lower bound for
-    these goal states). The step costs between targets are computed once."""
-    first = [_direct_commands(start[None, :], g, lattice)[0] for g in goals]
-    between = {
-        (i, j): _direct_commands(goals[i], goals[j], lattice)
-        for i in range(len(goals))
-        for j in range(len(goals))
-        if i != j
-    }
-    home = [_direct_commands(g, start[None, :], lattice)[:, 0] for g in goals]
+    these goal states). The step costs between two targets are computed once, when an order
+    first takes that step (a few orders of many targets take few of the possible steps)."""
+    first: dict[int, FloatArray] = {}
+    between: dict[tuple[int, int], FloatArray] = {}
+    home: dict[int, FloatArray] = {}
     out: dict[tuple[int, ...], int] = {}
     for k, order in enumerate(orders):
         if k % 1024 == 0:
             check_time("ranking the visiting orders")
+        if order[0] not in first:
+            first[order[0]] = _direct_commands(start[None, :], goals[order[0]], lattice)[0]
         cost = first[order[0]]
         for a, b in itertools.pairwise(order):
+            if (a, b) not in between:
+                between[(a, b)] = _direct_commands(goals[a], goals[b], lattice)
             cost = np.min(cost[:, None] + between[(a, b)], axis=0)
         if back:
+            if order[-1] not in home:
+                home[order[-1]] = _direct_commands(goals[order[-1]], start[None, :], lattice)[:, 0]
             cost = cost + home[order[-1]]
         out[order] = int(np.min(cost))
     return out
@@ -288,12 +290,13 @@ def plan_tour(
         fewest direct-motion commands through the goal states still to go reach it."""
         legs: list[MotionPlan] = []
         state = start
+        # the goal states each leg may go to, by target (what the bound below counts)
+        ahead = list(goals)
+        if first is not None:
+            for k, t in enumerate(o):
+                ahead[t] = np.vstack([first[k], goals[t]])
         for i, t in enumerate(o):
             if ceiling is not None:
-                ahead = list(goals)
-                for k, later in enumerate(o[i:], start=i):
-                    if first is not None:
-                        ahead[later] = np.vstack([first[k], goals[later]])
                 rest = _order_bounds(state, ahead, [o[i:]], return_to_start, arm.lattice)[o[i:]]
                 if _commands(legs) + rest >= ceiling:
                     raise _AbandonedError(_commands(legs) + rest)

@@ -25,8 +25,8 @@ its direction is dropped from the search (*pruned*); the cells whose least cost 
 :data:`SPLIT_WINDOW` of the bound and whose sampling error or clearance is unsure are split
 (the triangles of directions about them split in four), cheapest first. Rounds repeat until the
 bound is within :data:`GAP_GOAL` of the incumbent, nothing is left to split, the bound has not
-risen for :data:`STALL_ROUNDS` rounds, or a budget (:data:`SEARCH_ROUNDS`, the live samples,
-:data:`MAX_SAMPLES` unless the caller gives more, :data:`TOTAL_DIRECTIONS`) is spent. Every round's
+risen for :data:`STALL_ROUNDS` rounds, or a budget is spent (:data:`SEARCH_ROUNDS`, the live
+samples: :data:`MAX_SAMPLES` unless the caller gives more, :data:`TOTAL_DIRECTIONS`). Every round's
 value bounds the relaxation (as far as the sampling errors hold, see the package); the largest
 is kept. A dropped cell holds no path cheaper than the incumbent it was dropped against, as far
 as that round's errors hold, and is not looked at again (its error can still change as its
