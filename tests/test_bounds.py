@@ -609,3 +609,35 @@ def test_a_redundant_arms_bound_is_reported_as_an_estimate():
     q0 = np.zeros(7)
     b, _ = bounds.tour_bound(fam, q0, target[None], 0.05, [(0,)], rounds=1)
     assert not b.proven and b.describe()["proven"] is False
+
+
+def test_a_tour_estimate_without_sampling_errors_is_its_own_paths_cost():
+    """``with_errors=False`` (the benchmark's estimate of what the bound tends to) is no bound:
+    reported unproven, at least the bound and at most the clear path it reports (a path
+    through some of the same samples), and the cost of its own path recomputed here from its
+    configurations (whole commands per leg, a joint with a whole turn of range measured the
+    shorter way round)."""
+    arm = resolve_model("ur5")
+    tool = np.eye(4)
+    tool[2, 3] = 100.0
+    arm = arm.with_tool(tool)
+    start = arm.lattice.to_joint(arm.lattice.from_display([0, -90, 90, 0, 90, 0], "start"))
+    targets = np.array([[300.0, 200.0, 400.0], [420.0, -150.0, 250.0]])
+    curve = Polyline("t", targets)
+    fam = curve_family(arm, CollisionWorld(()), curve)
+    orders = [(0, 1), (1, 0)]
+    b, _ = bounds.tour_bound(fam, start, targets, 0.05, orders, rounds=2)
+    est, _ = bounds.tour_bound(fam, start, targets, 0.05, orders, rounds=2, with_errors=False)
+    assert b.proven and not est.proven and "WITHOUT" in est.method
+    assert b.value <= est.value + 1e-9
+    assert est.value <= est.sampling["clear_path_commands"] + 1e-9
+    tip = np.asarray(fam.tip_joints, dtype=bool)
+    step = (arm.lattice.tick * arm.lattice.max_ticks)[tip]
+    turns = (arm.upper - arm.lower)[tip] >= 2 * np.pi
+    cost, q = 0.0, start
+    for nxt in est.guide_q:
+        d = np.abs(nxt - q)[tip]
+        d = np.where(turns, np.minimum(d % (2 * np.pi), 2 * np.pi - d % (2 * np.pi)), d)
+        cost += np.ceil((d / step).max() - 1e-9)
+        q = nxt
+    assert est.value == pytest.approx(cost, abs=1e-9)

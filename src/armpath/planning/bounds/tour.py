@@ -35,6 +35,7 @@ def tour_bound(
     on_progress: Callable[[str], None] | None = None,
     clear_levels: int = TOUR_CLEAR_LEVELS,
     max_samples: int | None = None,
+    with_errors: bool = True,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
     units) within ``tolerance_mm``: over ``orders``, a shortest path through the family at each
@@ -43,7 +44,10 @@ def tour_bound(
     ``back`` returns to the start. The family is searched by branch and bound for ``rounds``
     rounds at most and until it holds ``max_samples`` live samples
     (:class:`~armpath.planning.bounds.search.CellSearch`). Returns the least over the orders
-    and each order's bound (:attr:`CellSearch.per_order`)."""
+    and each order's bound (:attr:`CellSearch.per_order`). ``with_errors=False`` (a
+    diagnostic, not a bound): the samples' sampling errors are left out, which gives the
+    shortest path through the samples themselves, what the bound tends to as the sampling gets
+    finer."""
     say = on_progress or (lambda _m: None)
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
@@ -55,12 +59,13 @@ def tour_bound(
         q_start,
         levels=clear_levels,
         max_samples=max_samples,
+        with_errors=with_errors,
     )
     found = search.run(rounds, say)
     if found is None:
         raise PlanningError("a target has no family member within the joint limits")
     bound = CommandBound(
-        proven=sampler.covers_family,
+        proven=sampler.covers_family and with_errors,
         commands=int(np.ceil(found.value - 1e-9)),
         value=found.value,
         method=(
@@ -71,6 +76,7 @@ def tour_bound(
             "sampling errors, and searched by branch and bound: cells that cannot hold a path "
             "shorter than one through clear members dropped, the others split where their "
             "error or clearance is unsure), each leg rounded up to whole commands"
+            + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         sampling={
             "orders": float(len(orders)),

@@ -192,7 +192,7 @@ def trace_bound(
             "first round bounds higher"
         )
     return CommandBound(
-        proven=sampler.covers_family,
+        proven=sampler.covers_family and with_errors,
         commands=max(int(np.ceil(found.value - 1e-9)), 0),
         value=found.value,
         method=(

@@ -252,13 +252,15 @@ def trace_plan_bound(
     rounds: int = SEARCH_ROUNDS,
     on_progress: Callable[[str], None] | None = None,
     max_samples: int | None = None,
+    with_errors: bool = True,
 ) -> CommandBound | None:
     """The lower bound of the commands of any plan that traces what ``result``'s passes cover
     (what :func:`plan_trace` reports): one pass per span (overlapping spans merged; a closed
     curve reachable all round in one pass that may begin anywhere), the family's points placed
     where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
     searched ``rounds`` rounds at most and until it holds ``max_samples`` live samples. None
-    where the family has no member within the limits on a span."""
+    where the family has no member within the limits on a span. ``with_errors=False``: the
+    estimate without the samples' sampling errors (not a bound; see the search)."""
     fam = result.reachability.family
     around = _all_round(result.curve, result.reachability.reachable)
     spans: list[list[float]] = []
@@ -288,6 +290,7 @@ def trace_plan_bound(
             path_mm=np.concatenate(path_mm),
             path_q=np.vstack(path_q),
             max_samples=max_samples,
+            with_errors=with_errors,
         )
     except PlanningError:
         return None
