@@ -291,6 +291,15 @@ def test_api_refuses_bad_input_with_clear_errors():
         armpath.plan("seed", to_deg=[0, -90, 0, 0, -90, 0], objective="fast")
     with pytest.raises(InvalidInputError, match="welds_mm must be"):
         armpath.spotweld("seed", [[1.0, 2.0]])
+    # coordinates beyond 1e9 mm are refused before any work (1e200 used to overflow the
+    # nearest-point search into a wrong answer and a warning)
+    limit = r"beyond the largest coordinate accepted \(1e\+09 mm\)"
+    with pytest.raises(InvalidInputError, match="target_mm: 1e\\+200 mm is " + limit):
+        armpath.reach("seed", [1e200, 0.0, 0.0])
+    with pytest.raises(InvalidInputError, match="to_mm: -2e\\+09 mm is " + limit):
+        armpath.plan("seed", to_mm=[0.0, -2e9, 0.0])
+    with pytest.raises(InvalidInputError, match="welds_mm: 3e\\+10 mm is " + limit):
+        armpath.spotweld("seed", [[100.0, 0.0, 50.0], [0.0, 0.0, 3e10]])
     with pytest.raises(InvalidInputError, match="start_deg"):
         armpath.reach("seed", [300.0, 100.0, 200.0], start_deg=[0.05, -90, 0, 0, -90, 0])
 

@@ -408,6 +408,20 @@ def test_spotweld_tolerance_is_checked_before_any_work(tmp_path, tolerance):
 
 
 @pytest.mark.parametrize(
+    "args",
+    [
+        ["reach", "1e200", "0", "0"],
+        ["plan", "--to-xyz", "0", "0", "-5e9"],
+        ["reach", "0", "2e9", "1"],
+    ],
+)
+def test_target_coordinates_beyond_the_limit_are_refused(tmp_path, args):
+    """A target point beyond 1e9 mm (the limit scenes have) is refused before any work, the
+    limit named (1e200 mm used to overflow the nearest-point search: a warning, a wrong point)."""
+    _refused(tmp_path, args, "mm is beyond the largest coordinate accepted (1e+09 mm)")
+
+
+@pytest.mark.parametrize(
     ("task", "samples"),
     [("trace", "10"), ("spotweld", "3000000"), ("trace", "2500000"), ("run", "5")],
 )

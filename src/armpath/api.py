@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import time_limit
+from armpath.budget import check_point_mm, time_limit
 from armpath.errors import InvalidInputError
 from armpath.model.serial_arm import SerialArm
 from armpath.results import Result, load_result
@@ -117,6 +117,13 @@ def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
     return p
 
 
+def _point_mm(values: ArrayLike, what: str) -> NDArray[np.float64]:
+    """A target point (mm): three finite numbers within :data:`MAX_COORDINATE_MM`."""
+    p = _point(values, what)
+    check_point_mm(p.tolist(), what)
+    return p
+
+
 def _orientation(
     arm: SerialArm,
     pose: Any,
@@ -196,7 +203,7 @@ def reach(
 
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
-        target = _point(target_mm, "target_mm")
+        target = _point_mm(target_mm, "target_mm")
         rule = _orientation(the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg)
         found = plan_reach(
             the_arm,
@@ -259,7 +266,7 @@ def plan(
         world = the_scene.world
         target, rule = None, None
         if to_mm is not None:
-            target = _point(to_mm, "to_mm")
+            target = _point_mm(to_mm, "to_mm")
             rule = _orientation(the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg)
             found = plan_to_point(
                 the_arm,
@@ -377,6 +384,7 @@ def spotweld(
                 raise InvalidInputError(
                     f"welds_mm must be (K, 3) finite points (mm), got shape {targets.shape}"
                 )
+            check_point_mm(targets.ravel().tolist(), "welds_mm")
             targets = targets / the_arm.mm_per_unit
         found = spotweld_task(
             the_scene,

@@ -37,8 +37,8 @@ MAX_DESIGNS = 10_000
 MAX_SEARCHES = 100
 #: Largest number of parallel jobs.
 MAX_JOBS = 256
-#: Largest coordinate or size a scene or curve may use (mm): 1000 km. Beyond it squared
-#: distances lose every digit a 0.01 mm clearance needs (and overflow near 1e154 mm).
+#: Largest coordinate or size a scene, curve or target point may use (mm): 1000 km. Beyond it
+#: squared distances lose every digit a 0.01 mm clearance needs (and overflow near 1e154 mm).
 MAX_COORDINATE_MM = 1e9
 #: Largest time limit accepted (s): one week.
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0
@@ -130,6 +130,20 @@ def check_size(count: float, limit: float, what: str, option: str) -> None:
         )
 
 
+def check_point_mm(values: list[float], what: str) -> list[float]:
+    """``values`` (a point's coordinates, mm), or :class:`InvalidInputError` when one is not
+    finite or beyond :data:`MAX_COORDINATE_MM` (the limit named)."""
+    for x in values:
+        if not math.isfinite(x):
+            raise InvalidInputError(f"{what}: {x!r} is not a finite number")
+        if abs(x) > MAX_COORDINATE_MM:
+            raise InvalidInputError(
+                f"{what}: {x:g} mm is beyond the largest coordinate accepted "
+                f"({MAX_COORDINATE_MM:g} mm)"
+            )
+    return values
+
+
 __all__ = [
     "MAX_COMMANDS",
     "MAX_COORDINATE_MM",
@@ -140,6 +154,7 @@ __all__ = [
     "MAX_SAMPLES",
     "MAX_TIME_LIMIT_S",
     "Deadline",
+    "check_point_mm",
     "check_size",
     "check_time",
     "check_time_limit_value",

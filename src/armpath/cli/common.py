@@ -271,6 +271,13 @@ def _numbers(values: list[str], count: int, what: str) -> list[float]:
     return out
 
 
+def _point_mm(values: list[str], what: str) -> list[float]:
+    """Three coordinates (mm) of a target point: finite numbers within the coordinate limit."""
+    from armpath.budget import check_point_mm
+
+    return check_point_mm(_numbers(values, 3, what), what)
+
+
 def _scene(scene_file: Path | None, wall: WallThickness | str | None) -> Scene:
     from armpath.scenes import load_scene
 

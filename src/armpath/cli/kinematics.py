@@ -22,6 +22,7 @@ from armpath.cli.common import (
     _from_display,
     _joint_units,
     _numbers,
+    _point_mm,
     _to_display,
     app,
     err_console,
@@ -181,7 +182,7 @@ def ik(
             result = solve_ik(arm, target, method=method, seeds=seeds, near=near_q)
         else:
             assert xyz is not None
-            target = np.array(_numbers([str(v) for v in xyz], 3, "--xyz"))
+            target = np.array(_point_mm([str(v) for v in xyz], "--xyz"))
             result = solve_ik(arm, target, position_only=True, seeds=seeds, near=near_q)
         units = _joint_units(arm)
         sols = _to_display(arm, result.solutions)

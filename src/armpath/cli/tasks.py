@@ -36,6 +36,7 @@ from armpath.cli.common import (
     _cli_errors,
     _fmt,
     _numbers,
+    _point_mm,
     app,
     err_console,
     joint_state,
@@ -340,7 +341,7 @@ def reach(
 
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
-        xyz = _numbers(target, 3, "target X Y Z (mm)")
+        xyz = _point_mm(target, "target X Y Z (mm)")
         start_ticks = joint_state(arm, start, "--from")
         rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance, arm.approach_axis)
         options = ReachOptions(tolerance_mm=tolerance)
@@ -537,7 +538,7 @@ def plan(
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             if to_xyz is not None:
-                xyz = np.array(_numbers([str(v) for v in to_xyz], 3, "--to-xyz X Y Z (mm)"))
+                xyz = np.array(_point_mm([str(v) for v in to_xyz], "--to-xyz X Y Z (mm)"))
                 _plan_to_point(
                     arm,
                     scene,
