@@ -447,3 +447,53 @@ def test_an_arm_with_a_prismatic_joint_follows_the_curve_in_few_passes(tmp_path)
         on[k] = np.linalg.norm(dense - p, axis=1).min() <= 0.1 + 1e-6
     for a, b in doc["passes"]:  # the states of each pass (a transit between them may leave)
         assert on[a : b + 1].all()
+
+
+@pytest.mark.parametrize("tolerance_mm", [0.1, 10.0])
+def test_lattice_states_near_a_target_are_the_disc_and_at_most_the_cap(tolerance_mm):
+    """The tracer's candidates around a configuration: the states of its box whose tool point,
+    linearized (here by finite differences of the independent kinematics), lies within half the
+    tolerance of the base's in the curve's normal plane; all of them where they are few (the
+    seed crack's 0.1 mm), and at most ``_MAX_CANDIDATES`` spread through the box where a wide
+    tolerance holds nearly the whole box (10 mm: 57,503 of its 59,049 states; tracing took
+    minutes)."""
+    from armpath.planning.trace import tracer as tr
+
+    arm = seed_arm()
+    t = tr.Tracer.__new__(tr.Tracer)  # what lattice_near reads, without a family
+    t.arm, t.grid, t.tol = arm, arm.lattice, tolerance_mm
+    t.tip = np.array([True] * 5 + [False])
+    t.radii = tr._box_radii(5, 20)
+    base_deg = np.array([10.03, -60.02, -40.07, 20.01, -70.04, 0.0])
+    n, b = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
+    out = t.lattice_near(np.radians(base_deg), n, b, np.round(base_deg * 10).astype(np.int64))
+    # the independent linearization: finite differences of the fingertip per tick
+    h = 1e-4
+    tip0 = independent.points(base_deg[None])[0, -1]
+    J = np.stack(
+        [
+            (independent.points((base_deg + h * np.eye(6)[j])[None])[0, -1] - tip0) / h
+            for j in range(5)
+        ],
+        axis=1,
+    )  # mm per deg
+    A = (np.stack([n, b]) @ J).T * 0.1  # mm per tick, in the normal plane
+    radius = t.radii[0]
+    box = np.stack(np.meshgrid(*[np.arange(-radius, radius + 1)] * 5, indexing="ij"), -1)
+    box = box.reshape(-1, 5)
+    exact = base_deg[:5] * 10
+    gap = np.linalg.norm((np.round(exact) + box - exact) @ A, axis=1)
+    inside = box[gap <= tolerance_mm / 2 - 1e-6]
+    maybe = box[gap <= tolerance_mm / 2 + 1e-6]
+    got = out[:, :5] - np.round(exact).astype(np.int64)
+    assert np.all(out[:, 5] == 0)
+    as_set = {tuple(r) for r in got}
+    assert as_set <= {tuple(r) for r in maybe}  # never a state outside the disc
+    if tolerance_mm < 1:
+        assert 16 <= len(as_set) < tr._MAX_CANDIDATES
+        assert {tuple(r) for r in inside} <= as_set  # every state inside it
+    else:
+        assert box.shape[0] == 9**5 and inside.shape[0] > 25 * tr._MAX_CANDIDATES
+        assert len(as_set) == tr._MAX_CANDIDATES
+        # spread through the box, not bunched at the target: corners of the box among them
+        assert np.abs(got).max(axis=0).min() == radius
