@@ -45,8 +45,10 @@ _MIN_CANDIDATES = 16
 #: Most lattice states near the target that one search around a configuration checks (of more,
 #: as many evenly through the box). The seed crack finds at most 150 with its tolerance of
 #: 0.1 mm and the UR5 cell's seam 37; a tolerance of 1 mm finds about 10,500 on the crack and
-#: 10 mm every state of the box (59,049), which made tracing it take 2 min rather than 37 s
-#: (1 mm: 38 s rather than 17 s, 139 commands rather than 138).
+#: 10 mm nearly every state of the box (57,503 of 59,049 at one configuration), which made
+#: tracing it take 2 min rather than 38 s with this cap (15 s once the target also stays near
+#: the seam: :data:`MAX_SURFACE_OFFSET_MM`); 1 mm: 38 s rather than 17 s, 139 commands rather
+#: than 138.
 _MAX_CANDIDATES = 2_000
 #: Most offsets of a grown box (+-6 ticks for five joints, +-4 for six; 16 bytes each).
 _MAX_BOX_OFFSETS = 600_000
