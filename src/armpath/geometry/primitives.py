@@ -550,6 +550,16 @@ class WallThickness(StrEnum):
 
 
 @dataclass(frozen=True, eq=False)
+class Opening:
+    """A disc through which a hollow solid's inside is entered: its ``center``, unit
+    ``normal`` (pointing out of the solid) and ``radius`` (length unit), at the inner wall."""
+
+    center: FloatArray
+    normal: FloatArray
+    radius: float
+
+
+@dataclass(frozen=True, eq=False)
 class HollowFrustum(SolidOfRevolution):
     """A hollow truncated cone (open or closed ends); built by :func:`hollow_frustum`."""
 
@@ -608,6 +618,17 @@ class HollowFrustum(SolidOfRevolution):
                 f"spans radii {lo:.3f} to {hi:.3f} mm"
             )
         return (float(x), float(y), float(self.origin[2] + z))
+
+    def openings(self) -> tuple[Opening, ...]:
+        """The discs through which the inside is entered: the rim of an open top, the rim of
+        an open bottom (each at the inner wall, its normal pointing out along the axis)."""
+        out = []
+        if self.open_top:
+            top = self.origin + self.height * self.axis
+            out.append(Opening(top, self.axis.copy(), float(self.inner_radius(self.height))))
+        if not self.closed_bottom:
+            out.append(Opening(self.origin.copy(), -self.axis, float(self.inner_radius(0.0))))
+        return tuple(out)
 
     @property
     def horizontal_wall(self) -> float:

@@ -46,7 +46,7 @@ from armpath.geometry.compiled_world import (
     segments_clear,
 )
 from armpath.geometry.kernels import indexed_segment_distances, segments_to_point
-from armpath.geometry.primitives import Obstacle
+from armpath.geometry.primitives import HollowFrustum, Obstacle, Opening
 from armpath.kinematics import (
     compiled_chain,
     displacement_bounds,
@@ -297,6 +297,13 @@ class CollisionWorld:
     @property
     def obstacle_names(self) -> tuple[str, ...]:
         return tuple(o.name for o in self.obstacles)
+
+    def openings(self) -> tuple[Opening, ...]:
+        """The discs through which the hollow obstacles' insides are entered
+        (:meth:`HollowFrustum.openings`)."""
+        return tuple(
+            hole for o in self.obstacles if isinstance(o, HollowFrustum) for hole in o.openings()
+        )
 
     @staticmethod
     def _checked_links(arm: SerialArm) -> list[Link]:

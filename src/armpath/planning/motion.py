@@ -378,6 +378,7 @@ def plan_motion(
     on_progress: Callable[[str], None] | None = None,
     turn_copies: bool = False,
     certified_merge: bool = True,
+    waypoints: Callable[[], IntArray] | None = None,
 ) -> MotionPlan:
     """Plan a clear command sequence from ``start_ticks`` to one of ``goal_ticks`` ``(G, n)``.
 
@@ -385,7 +386,11 @@ def plan_motion(
     whole-turn copies (:func:`with_turn_copies`) are goals too. ``certified_merge``: with the
     commands objective, the plan kept is merged further where certified straight motions need
     fewer commands (:func:`merged_certified`; a planner that makes many motions and keeps few,
-    a tour, leaves it to the ones it keeps).
+    a tour, leaves it to the ones it keeps). ``waypoints`` (lattice states, with the commands
+    objective): where no direct motion is clear, two straight motions through one of them
+    (:func:`via_waypoint`; :func:`~armpath.planning.passages.passage_waypoints` gives those in
+    the openings of hollow obstacles; a function that gives them, asked only then) compete
+    with the search.
 
     Raises :class:`PlanningError` when neither a direct motion nor the search finds a motion
     that keeps the clearance rule (the message says what was tried).
@@ -442,8 +447,10 @@ def plan_motion(
                 best = plan
             if opts.objective is Objective.COMMANDS:
                 break
+    if best is None and waypoints is not None and opts.objective is Objective.COMMANDS:
+        best = via_waypoint(arm, world, start, goals, waypoints(), weights)
     if best is not None and (
-        opts.objective is not Objective.COMMANDS or best.direct_commands <= direct_counts.min()
+        opts.objective is not Objective.COMMANDS or best.sequence.n_commands <= direct_counts.min()
     ):
         return best
     # a direct motion to a farther goal (a whole-turn copy, say) is kept only if the search
@@ -611,6 +618,69 @@ def plan_motion(
             kept = merged_certified(arm, world, kept, weights)
         return kept
     raise PlanningError("no collision-free motion found: " + "; ".join(failures))
+
+
+#: Motions through a waypoint (the fewest commands first) that :func:`via_waypoint` screens
+#: at :data:`_VIA_SAMPLES` instants of each part, and most of those it then certifies.
+_VIA_SCREENED = 2_000
+_VIA_SAMPLES = 24
+VIA_CHECKS = 16
+#: Waypoints whose commands from the start and to the goals are counted at once.
+_VIA_CHUNK = 8192
+
+
+def via_waypoint(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start: IntArray,
+    goals: IntArray,
+    waypoints: IntArray,
+    weights: FloatArray | None = None,
+) -> MotionPlan | None:
+    """The fewest-command motion of two straight parts, from ``start`` through one of
+    ``waypoints`` to one of ``goals`` (lattice states), certified clear: the waypoints taken in
+    order of the commands through them (each to its nearest goal), at most :data:`VIA_CHECKS`
+    whole motions checked; None when none of those is clear. Each part needs as many commands
+    as its largest joint change, so through the right waypoint the motion needs no more than
+    the straight one that a link's collision blocks. At most :data:`_VIA_SCREENED` motions are
+    screened at sampled instants and :data:`VIA_CHECKS` certified: it ends by design."""
+    grid = arm.lattice
+    waypoints = np.asarray(waypoints, dtype=np.int64)
+    if waypoints.shape[0] == 0:
+        return None
+    to_way = grid.commands_needed_many(waypoints - start)
+    onward = np.empty(waypoints.shape[0], dtype=np.int64)
+    goal_of = np.empty(waypoints.shape[0], dtype=np.int64)
+    for k in range(0, waypoints.shape[0], _VIA_CHUNK):
+        check_time("planning a motion through a waypoint")
+        part = grid.commands_needed_many(goals[None, :, :] - waypoints[k : k + _VIA_CHUNK, None])
+        goal_of[k : k + _VIA_CHUNK] = np.argmin(part, axis=1)
+        onward[k : k + _VIA_CHUNK] = part.min(axis=1)
+    # the motions with the fewest commands first, screened at sampled instants, then certified
+    order = np.argsort(to_way + onward, kind="stable")[:_VIA_SCREENED]
+    t = np.linspace(0.0, 1.0, _VIA_SAMPLES)[1:-1, None]
+    s_rad, w_rad = grid.to_joint(start), grid.to_joint(waypoints[order])
+    g_rad = grid.to_joint(goals[goal_of[order]])
+    instants = np.concatenate(
+        [
+            s_rad + t * (w_rad - s_rad)[:, None],
+            w_rad[:, None],
+            w_rad[:, None] + t * (g_rad - w_rad)[:, None],
+        ],
+        axis=1,
+    )
+    screened = order[world.satisfied(arm, instants).all(axis=1)]
+    for w in screened[:VIA_CHECKS]:
+        check_time("planning a motion through a waypoint")
+        first = CommandSequence.straight(start, waypoints[w], lattice=grid)
+        gi = int(goal_of[w])
+        seq = first.then(CommandSequence.straight(waypoints[w], goals[gi], lattice=grid))
+        mc = motion_clearance(arm, world, seq)
+        if mc.certified_ok:
+            direct = int(grid.commands_needed(goals[gi] - start))
+            metrics = plan_metrics(arm, seq, weights)
+            return MotionPlan(seq, gi, mc, metrics, direct, "direct through a waypoint", 0)
+    return None
 
 
 #: Most goal states one motion search takes: the given ones and their whole-turn copies.

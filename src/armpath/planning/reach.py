@@ -57,6 +57,7 @@ from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
+from armpath.planning.passages import passage_source
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -696,7 +697,13 @@ def plan_reach(
             p, fam, opts.tolerance_mm, GOAL_COUNT, GOAL_BODY_BUFFER_MM, GOAL_SPREAD_DEG
         )
         plan = plan_motion(
-            arm, world, p.start_ticks, goals, MotionOptions(seed=seed), turn_copies=True
+            arm,
+            world,
+            p.start_ticks,
+            goals,
+            MotionOptions(seed=seed),
+            turn_copies=True,
+            waypoints=passage_source(arm, world, p.start_ticks),
         )
         rejected = (*failures, "planned around the obstacles instead")
         return result(plan.sequence, plan.clearance, rejected, plan.method)
@@ -844,7 +851,14 @@ def plan_to_point(
         arm, world, start_ticks, target_mm, tolerance_mm, orientation=orientation
     )
     return plan_motion(
-        arm, world, start_ticks, goals, options, on_progress=on_progress, turn_copies=True
+        arm,
+        world,
+        start_ticks,
+        goals,
+        options,
+        on_progress=on_progress,
+        turn_copies=True,
+        waypoints=passage_source(arm, world, np.asarray(start_ticks, dtype=np.int64)),
     )
 
 
