@@ -512,7 +512,9 @@ def plan(
 
     Obstacles and the clearance rule come from the scene file. The direct motion is used when
     it is clear; otherwise RRT-Connect with shortcuts finds a path, which is put on the command
-    lattice and certified along its whole continuous motion.
+    lattice and certified along its whole continuous motion. To a tool point, two straight
+    motions through a waypoint in the openings of hollow obstacles compete too (the fewer
+    commands win): the way into a hollow workpiece.
     """
     from armpath.export import output_folder, plan_result_dict
     from armpath.planning.motion import MotionOptions, plan_motion

@@ -837,8 +837,10 @@ def plan_to_point(
     ``tolerance_mm`` of ``target_mm`` (and keeps ``orientation``, a rule of the tool's
     rotation): the target's goal states (:func:`goal_states`), then
     :func:`~armpath.planning.motion.plan_motion` to the nearest it reaches (their whole-turn
-    copies too). What ``armpath plan --to-xyz`` and :func:`armpath.plan` do; unlike
-    :func:`plan_reach`, the objective of ``options`` is minimised and no bound is proven.
+    copies too; waypoints in the openings of hollow obstacles where no direct motion is
+    clear: :mod:`~armpath.planning.passages`). What ``armpath plan --to-xyz`` and
+    :func:`armpath.plan` do; unlike :func:`plan_reach`, the objective of ``options`` is
+    minimised and no bound is proven.
     """
     if not (np.isfinite(tolerance_mm) and MIN_TOLERANCE_MM <= tolerance_mm <= MAX_TOLERANCE_MM):
         raise InvalidInputError(
