@@ -630,7 +630,8 @@ _VIA_CHUNK = 8192
 #: The descent from the screened waypoints: rounds, waypoints kept, children of each per
 #: round, and the largest moves of a child per joint (fractions of a command's largest step).
 #: Into the seed workpiece (plan --to-xyz 190 -125 81.98): 67 commands through the sampled
-#: waypoints, 65 after one round, 64 after three (the direct motion, blocked, needs 58).
+#: waypoints, 65 after one round, 64 after three (the direct motion to its goal state, blocked,
+#: needs 58 or 59 by the goal state taken).
 _DESCENT_ROUNDS = 4
 _DESCENT_KEPT = 100
 _DESCENT_CHILDREN = 40
