@@ -664,10 +664,12 @@ def via_waypoint(
         return None
     cost, goal_of = _via_costs(grid, start, goals, waypoints)
     order = np.argsort(cost, kind="stable")[:_VIA_SCREENED]
-    kept = waypoints[order][_via_screen(arm, world, start, goals[goal_of[order]], waypoints[order])]
-    if kept.shape[0] == 0:
+    order = order[_via_screen(arm, world, start, goals[goal_of[order]], waypoints[order])]
+    if order.size == 0:
         return None
-    kept = kept[:_DESCENT_KEPT]
+    # the screened waypoints, fewest commands first, with their commands and goals
+    order = order[:_DESCENT_KEPT]
+    kept, kept_cost, kept_goal = waypoints[order], cost[order], goal_of[order]
     rng = np.random.default_rng(seed)
     for _ in range(_DESCENT_ROUNDS):
         for move in _DESCENT_MOVES:
@@ -680,14 +682,15 @@ def via_waypoint(
             )
             children = children[arm.within_limits(grid.to_joint(children))]
             c_cost, c_goal = _via_costs(grid, start, goals, children)
-            better = c_cost < _via_costs(grid, start, goals, kept)[0].max()
-            children, c_goal = children[better], c_goal[better]
-            children = children[_via_screen(arm, world, start, goals[c_goal], children)]
-            pool = np.concatenate([kept, children])
-            kept = pool[np.argsort(_via_costs(grid, start, goals, pool)[0], kind="stable")]
-            kept = kept[:_DESCENT_KEPT]
-    _, goal_of = _via_costs(grid, start, goals, kept)
-    for w, gi in zip(kept[:VIA_CHECKS], goal_of[:VIA_CHECKS], strict=True):
+            better = c_cost < kept_cost.max()
+            children, c_cost, c_goal = children[better], c_cost[better], c_goal[better]
+            clear = _via_screen(arm, world, start, goals[c_goal], children)
+            pool = np.concatenate([kept, children[clear]])
+            pool_cost = np.concatenate([kept_cost, c_cost[clear]])
+            pool_goal = np.concatenate([kept_goal, c_goal[clear]])
+            best = np.argsort(pool_cost, kind="stable")[:_DESCENT_KEPT]
+            kept, kept_cost, kept_goal = pool[best], pool_cost[best], pool_goal[best]
+    for w, gi in zip(kept[:VIA_CHECKS], kept_goal[:VIA_CHECKS], strict=True):
         check_time("planning a motion through a waypoint")
         first = CommandSequence.straight(start, w, lattice=grid)
         seq = first.then(CommandSequence.straight(w, goals[gi], lattice=grid))

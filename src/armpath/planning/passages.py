@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
+from armpath.geometry.primitives import orthonormal_frame
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.solve import complete_solver
@@ -42,20 +43,12 @@ ROTATIONS = 200
 MAX_WAYPOINTS = 100_000
 
 
-def _disc_basis(normal: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Two unit vectors spanning the plane normal to ``normal``."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(normal, helper)
-    u /= np.linalg.norm(u)
-    return u, np.cross(normal, u)
-
-
 def passage_points(world: CollisionWorld) -> FloatArray:
     """Tool points ``(P, 3)`` (length unit) in and about every opening of ``world``: a square
     grid over each opening's disc (:data:`SPACING`) at each of :data:`LEVELS`."""
     out = []
     for hole in world.openings():
-        u, v = _disc_basis(hole.normal)
+        u, v = orthonormal_frame(hole.normal)
         r = hole.radius
         ticks = np.arange(-r, r + 1e-9, SPACING * r)
         a, b = np.meshgrid(ticks, ticks)
