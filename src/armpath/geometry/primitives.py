@@ -619,6 +619,20 @@ class HollowFrustum(SolidOfRevolution):
             )
         return (float(x), float(y), float(self.origin[2] + z))
 
+    def hull_side(self, points: ArrayLike, margin: float) -> NDArray[np.int8]:
+        """Per point ``(..., 3)``: 1 where every point within ``margin`` of it lies in the
+        *hull* (the solid with its inside filled: the outer face and the end planes), -1
+        where none does, 0 otherwise. Conservative both ways: the hull's radius is linear in
+        the height, so over the heights within ``margin`` it is at least (at most) its value
+        at one of their ends."""
+        r, z = self.to_profile_coords(points)
+        m = float(margin)
+        below, above = np.clip(z - m, 0.0, self.height), np.clip(z + m, 0.0, self.height)
+        ends = np.stack([self.outer_radius(below), self.outer_radius(above)])
+        inside = (z - m >= 0.0) & (z + m <= self.height) & (r + m <= ends.min(axis=0))
+        outside = (z + m < 0.0) | (z - m > self.height) | (r - m > ends.max(axis=0))
+        return np.where(inside, 1, np.where(outside, -1, 0)).astype(np.int8)
+
     def openings(self) -> tuple[Opening, ...]:
         """The discs through which the inside is entered: the rim of an open top, the rim of
         an open bottom (each at the inner wall, its normal pointing out along the axis)."""

@@ -64,6 +64,16 @@ class Layer:
         shortest path through the samples themselves."""
         return Layer(self.u, np.zeros_like(self.err), self.q, self.dirs, self.direction, self.clear)
 
+    @staticmethod
+    def joined(layers: list[Layer]) -> Layer:
+        """The samples of ``layers`` (at least one) as one layer."""
+        return Layer(
+            *(
+                np.concatenate([getattr(lay, name) for lay in layers])
+                for name in ("u", "err", "q", "dirs", "direction", "clear")
+            )
+        )
+
     def subset(self, keep: BoolArray | IntArray) -> Layer:
         """The samples ``keep`` (a mask or indices)."""
         assert self.direction is not None and self.clear is not None

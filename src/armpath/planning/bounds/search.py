@@ -37,7 +37,7 @@ dropped ones included, is cheaper than the bound).
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import InvalidInputError
+from armpath.planning.bounds.passage import PassageSamples
 from armpath.planning.bounds.sampling import (
     MAX_LAYER_DIRECTIONS,
     MIN_SPACING,
@@ -362,6 +363,7 @@ class CellSearch:
         with_errors: bool = True,
         levels: int = 0,
         max_samples: int | None = None,
+        passages: Sequence[PassageSamples] = (),
     ) -> None:
         self.sampler = sampler
         self.max_samples = check_max_samples(max_samples)
@@ -373,6 +375,10 @@ class CellSearch:
         self.q_start = q_start
         self.with_errors = with_errors
         self.sites = [self._site(p, a, levels) for p, a in zip(points, allowed, strict=True)]
+        #: the passages a leg from the start takes, each with the sites it takes them to
+        sites = np.array(points).reshape(-1, 3)
+        entered = [p.passage.entered(sites, sampler.tol) for p in passages]
+        self.passages = [(p, e) for p, e in zip(passages, entered, strict=True) if np.any(e)]
 
     def _site(
         self, point: FloatArray, allowed: Callable[[FloatArray], BoolArray] | None, levels: int
@@ -402,9 +408,19 @@ class CellSearch:
             self._set(site, self.sampler._filtered(site.acc))
         return added
 
-    def _approach(self, layers: list[Layer]) -> list[FloatArray]:
+    def _approach(self, layers: list[Layer], exact: bool = False) -> list[FloatArray]:
+        """The least commands from the start to each sample of each site's layer: directly,
+        or through a passage the leg must take where that is more (``exact``: through the
+        passage's samples that are clear themselves, taken as exact)."""
         whole = self.relaxation.whole
-        return [self.sampler.distance_from(self.q_start, lay, whole) for lay in layers]
+        out = []
+        for k, lay in enumerate(layers):
+            cost = self.sampler.distance_from(self.q_start, lay, whole)
+            for p, entered in self.passages:
+                if entered[k]:
+                    cost = np.maximum(cost, p.to(self.sampler, lay, whole, exact))
+            out.append(cost)
+        return out
 
     def run(
         self,
@@ -429,7 +445,7 @@ class CellSearch:
             if not np.isfinite(found.total):
                 break
             exact = [lay.subset(np.asarray(lay.clear)).without_errors() for lay in live]
-            clear = self.relaxation.solve(self.sampler, exact, self._approach(exact))
+            clear = self.relaxation.solve(self.sampler, exact, self._approach(exact, True))
             if clear.total < clear_total:
                 clear_total = clear.total
                 clear_q = np.array([lay.q[i] for lay, i in zip(exact, clear.samples, strict=True)])

@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
+from armpath.planning.bounds.passage import PassageSamples, passages
 from armpath.planning.bounds.sampling import FamilySampler
 from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Orders
 from armpath.planning.bounds.value import CommandBound
@@ -36,6 +37,7 @@ def tour_bound(
     clear_levels: int = TOUR_CLEAR_LEVELS,
     max_samples: int | None = None,
     with_errors: bool = True,
+    through_openings: bool = True,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
     units) within ``tolerance_mm``: over ``orders``, a shortest path through the family at each
@@ -47,19 +49,29 @@ def tour_bound(
     and each order's bound (:attr:`CellSearch.per_order`). ``with_errors=False`` (a
     diagnostic, not a bound): the samples' sampling errors are left out, which gives the
     shortest path through the samples themselves, what the bound tends to as the sampling gets
-    finer."""
+    finer. ``through_openings``: a leg from the start to a target inside a hollow obstacle
+    takes at least its way through one of the obstacle's openings
+    (:mod:`~armpath.planning.bounds.passage`); False: the direct leg only."""
     say = on_progress or (lambda _m: None)
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
+    points = np.asarray(targets, dtype=np.float64)
+    found_ways = (
+        passages(fam.arm, fam.world, q_start, points, sampler.tol) if through_openings else []
+    )
+    if found_ways:
+        say("sampling the family in the openings the tool point must pass")
+    ways = [PassageSamples.sampled(sampler, p, q_start, with_errors) for p in found_ways]
     search = CellSearch(
         sampler,
         Orders(orders, back),
-        list(np.asarray(targets, dtype=np.float64)),
+        list(points),
         [None] * targets.shape[0],
         q_start,
         levels=clear_levels,
         max_samples=max_samples,
         with_errors=with_errors,
+        passages=ways,
     )
     found = search.run(rounds, say)
     if found is None:
@@ -76,6 +88,13 @@ def tour_bound(
             "sampling errors, and searched by branch and bound: cells that cannot hold a path "
             "shorter than one through clear members dropped, the others split where their "
             "error or clearance is unsure), each leg rounded up to whole commands"
+            + (
+                "; a leg from the start into a hollow obstacle at least its way through the "
+                "obstacle's opening (the family sampled over the opening's disc, the members "
+                f"that may be clear: {', '.join(w.obstacle.name for w in found_ways)})"
+                if ways
+                else ""
+            )
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         sampling={
@@ -85,7 +104,8 @@ def tour_bound(
             "directions": float(found.directions),
             "largest_error_on_path_commands": found.largest_error,
         }
-        | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {}),
+        | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {})
+        | ({"opening_samples": float(sum(p.layer.size for p in ways))} if ways else {}),
         guide_q=found.bound_q[list(found.order)],
     )
     return bound, search.per_order
@@ -99,10 +119,13 @@ def tour_bound_any_order(
     back: bool = False,
     on_progress: Callable[[str], None] | None = None,
     clear_levels: int = TOUR_CLEAR_LEVELS,
+    through_openings: bool = True,
 ) -> CommandBound:
     """A cheaper bound of the best order for many targets: every target is entered once, from
     the start or from another target, so the commands are at least the sum over the targets of
-    the shortest such leg (whole commands each), plus the shortest way back with ``back``."""
+    the shortest such leg (whole commands each), plus the shortest way back with ``back``; a
+    leg from the start into a hollow obstacle at least its way through an opening
+    (``through_openings``, as :func:`tour_bound`)."""
     say = on_progress or (lambda _m: None)
     say(f"bounding the tour's commands ({targets.shape[0]} targets, any order)")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
@@ -112,7 +135,18 @@ def tour_bound_any_order(
         layers.append(sampler.layer(p, sampler.base, levels=clear_levels))
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no family member within the joint limits")
-    from_start = [float(sampler.distance_from(q_start, lay, whole=True).min()) for lay in layers]
+    points = np.asarray(targets, dtype=np.float64)
+    found_ways = (
+        passages(fam.arm, fam.world, q_start, points, sampler.tol) if through_openings else []
+    )
+    ways = [PassageSamples.sampled(sampler, p, q_start) for p in found_ways]
+    from_start = []
+    for t, lay in enumerate(layers):
+        cost = sampler.distance_from(q_start, lay, whole=True)
+        for way in ways:
+            if way.passage.entered(points[t], sampler.tol)[0]:
+                cost = np.maximum(cost, way.to(sampler, lay, whole=True))
+        from_start.append(float(cost.min()))
     total = 0.0
     for t, lay in enumerate(layers):
         best = from_start[t]
@@ -135,6 +169,12 @@ def tour_bound_any_order(
             "ranges; from the start or another target, "
             "whole commands, each distance less the samples' sampling errors)"
             + ("; plus the shortest way back" if back else "")
+            + (
+                "; a leg from the start into a hollow obstacle at least its way through an "
+                f"opening ({', '.join(w.obstacle.name for w in found_ways)})"
+                if found_ways
+                else ""
+            )
         ),
         sampling={
             "targets": float(targets.shape[0]),

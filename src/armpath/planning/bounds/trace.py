@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.errors import PlanningError
+from armpath.planning.bounds.passage import PassageSamples, passages
 from armpath.planning.bounds.sampling import FamilySampler, _allowed_at
 from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Chain, Join
 from armpath.planning.bounds.value import CommandBound
@@ -153,6 +154,13 @@ def trace_bound(
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
     placements = [("evenly spaced", _layer_positions(spans_mm, layers_per_span))]
+    # the openings a leg from the start to a point of the spans must pass, sampled once
+    every = np.linspace(0.0, 1.0, 64)
+    near = np.array([fam.frame(a + (b - a) * f)[0] for a, b in spans_mm for f in every])
+    ways = [
+        PassageSamples.sampled(sampler, p, q_start, with_errors)
+        for p in passages(fam.arm, fam.world, q_start, near, sampler.tol)
+    ]
     if path_mm is not None and path_q is not None:
         path_u = np.asarray(path_q, dtype=np.float64)[:, sampler.tip] / sampler.step
         turning = turning_layers(spans_mm, np.asarray(path_mm, dtype=np.float64), path_u)
@@ -165,14 +173,16 @@ def trace_bound(
             if i:
                 joins.append(Join.FREE)
             joins += [Join.LOOP if loop else Join.MOVE] * (s.size - 1)
+        points = np.array([fam.frame(float(s))[0] for s in s_all])
         search = CellSearch(
             sampler,
             Chain(joins),
-            [fam.frame(float(s))[0] for s in s_all],
+            list(points),
             [_allowed_at(fam, float(s)) for s in s_all],
             q_start,
             with_errors=with_errors,
             max_samples=max_samples,
+            passages=ways,
         )
         first = search.run(1, on_progress, upper=upper_commands)
         if first is None:

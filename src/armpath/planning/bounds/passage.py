@@ -1,0 +1,170 @@
+"""Where the tool point must pass on its way to a site: into a hollow obstacle through one of
+its openings (see the package).
+
+The tool point may touch an obstacle but never enter it (its bare tip keeps a clearance of
+zero or more), so a motion from outside a hollow obstacle's *hull* (the solid with its inside
+filled) to a point inside it brings the tool point across the hull's boundary, and the only
+part of that boundary it can cross is an opening: the disc inside the rim of an open end
+(:meth:`HollowFrustum.openings`). At that instant the arm is a member of the family at a point
+of the disc, and it keeps the clearance rule. A leg from the start to such a site therefore
+takes at least the least distance from the start to a clear member at the disc plus from that
+member to the site's member: a second relaxation, never below the direct one, that the bound
+takes wherever it is larger.
+
+The disc is covered by a square grid: every point of it lies within half a cell's diagonal
+of a grid point, so sampling the family at the grid points with that as the tolerance covers
+every member at the disc, as far as the package's sampling errors hold.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.geometry.primitives import HollowFrustum, Opening, orthonormal_frame
+from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import tool_position
+from armpath.model.serial_arm import SerialArm
+from armpath.planning.bounds.sampling import FamilySampler, Layer
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: Spacing of the square grid over an opening (mm): every point of the disc lies within half
+#: a cell's diagonal (11.3 mm) of a grid point. Seed Task 3: 109 grid points, its bound 103 ->
+#: 108 commands (8 mm: 421 points, four times the samples, the same bound).
+PASSAGE_SPACING_MM = 16.0
+#: Tool directions sampled at each grid point (about 6.4 deg apart).
+PASSAGE_DIRECTIONS = 1000
+#: Most grid points of all the openings of a scene together (a finer grid is coarsened).
+MAX_PASSAGE_POINTS = 400
+
+
+@dataclass(frozen=True)
+class Passage:
+    """A hollow ``obstacle``'s openings as the grid ``points`` ``(G, 3)`` (model units) over
+    their discs, every point of a disc within ``radius`` (model units) of one; the start's tool
+    point lies outside the obstacle's hull."""
+
+    obstacle: HollowFrustum
+    points: FloatArray
+    radius: float
+
+    def entered(self, sites: FloatArray, tolerance: float) -> BoolArray:
+        """Per site ``(K, 3)`` (model units): whether a leg from the start to a point within
+        ``tolerance`` of it takes this passage (every such point inside the hull)."""
+        return np.asarray(self.obstacle.hull_side(sites, tolerance) == 1, dtype=bool)
+
+
+def disc_grid(opening: Opening, spacing: float) -> FloatArray:
+    """Centres ``(G, 3)`` of the square cells of side ``spacing`` (in the disc's plane) that
+    meet the disc: every point of the disc lies within ``spacing / sqrt(2)`` of one."""
+    u, v = orthonormal_frame(opening.normal)
+    k = int(np.ceil(opening.radius / spacing)) + 1
+    i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1), indexing="ij")
+    x, y = i.ravel() * spacing, j.ravel() * spacing
+    # the nearest point of each cell to the disc's centre
+    half = spacing / 2.0
+    gap = np.hypot(np.maximum(np.abs(x) - half, 0.0), np.maximum(np.abs(y) - half, 0.0))
+    keep = gap <= opening.radius
+    return np.asarray(opening.center + x[keep, None] * u + y[keep, None] * v, dtype=np.float64)
+
+
+def _tool_point_checked(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> bool:
+    """Whether the tool point is the end of a part the world checks against its obstacles
+    (so it never enters one)."""
+    if not world.parts(arm):
+        return False
+    _, ends = world.part_segments(arm, q)
+    tool = tool_position(arm, q)
+    return bool(np.linalg.norm(ends[-1] - tool) <= 1e-9 * max(1.0, float(np.abs(tool).max())))
+
+
+def passages(
+    arm: SerialArm,
+    world: CollisionWorld,
+    q_start: FloatArray,
+    sites: FloatArray,
+    tolerance: float,
+    spacing_mm: float = PASSAGE_SPACING_MM,
+) -> list[Passage]:
+    """The passages of ``world``'s hollow obstacles that a leg from ``q_start`` (rad) to one
+    of ``sites`` ``(K, 3)`` (model units, each within ``tolerance`` model units) must take;
+    none when the tool point is not checked against the obstacles. The grids have
+    ``spacing_mm``, coarser where all of them together would pass :data:`MAX_PASSAGE_POINTS`."""
+    q_start = np.asarray(q_start, dtype=np.float64)
+    if not _tool_point_checked(arm, world, q_start):
+        return []
+    start_point = tool_position(arm, q_start)
+    sites = np.asarray(sites, dtype=np.float64).reshape(-1, 3)
+    hollow = [
+        o
+        for o in world.obstacles
+        if isinstance(o, HollowFrustum)
+        and o.openings()
+        and o.hull_side(start_point, 0.0) == -1
+        and np.any(o.hull_side(sites, tolerance) == 1)
+    ]
+    spacing = spacing_mm / arm.mm_per_unit
+    count = sum(disc_grid(h, spacing).shape[0] for o in hollow for h in o.openings())
+    spacing *= max(1.0, float(np.sqrt(count / MAX_PASSAGE_POINTS)))
+    return [
+        Passage(o, np.vstack([disc_grid(h, spacing) for h in o.openings()]), spacing / np.sqrt(2))
+        for o in hollow
+    ]
+
+
+@dataclass(frozen=True)
+class PassageSamples:
+    """A passage as the bounds use it: the family sampled at its grid points
+    (:data:`PASSAGE_DIRECTIONS` tool directions, its radius the tolerance; the members that
+    may be clear) with the least distance from the start to each sample (commands), and the
+    same for the samples that are clear themselves, taken as exact."""
+
+    passage: Passage
+    layer: Layer
+    start: FloatArray
+    exact: Layer
+    exact_start: FloatArray
+
+    @staticmethod
+    def sampled(
+        sampler: FamilySampler, passage: Passage, q_start: FloatArray, with_errors: bool = True
+    ) -> PassageSamples:
+        """The samples of ``passage`` in ``sampler``'s metric (``with_errors=False``: taken as
+        exact, a diagnostic)."""
+        fam = sampler.fam
+        at = FamilySampler(
+            fam, passage.radius * fam.arm.mm_per_unit, PASSAGE_DIRECTIONS, q_start=q_start
+        )
+        layers = []
+        for point in passage.points:
+            check_time("bounding the commands")
+            layers.append(at.layer(point, at.base, levels=0))
+        layer = Layer.joined(layers)
+        if not with_errors:
+            layer = layer.without_errors()
+        exact = layer.subset(np.asarray(layer.clear)).without_errors()
+        return PassageSamples(
+            passage,
+            layer,
+            sampler.distance_from(q_start, layer),
+            exact,
+            sampler.distance_from(q_start, exact),
+        )
+
+    def to(
+        self, sampler: FamilySampler, layer: Layer, whole: bool, exact: bool = False
+    ) -> FloatArray:
+        """Least commands from the start through the passage to each sample of ``layer``
+        (rounded up to whole commands when ``whole``; ``exact``: through the samples that are
+        clear themselves)."""
+        if layer.size == 0:
+            return np.zeros(0)
+        check_time("bounding the commands")
+        through, start = (self.exact, self.exact_start) if exact else (self.layer, self.start)
+        via = sampler.advance(through, start, layer)[0]
+        return np.asarray(np.ceil(via - 1e-9) if whole else via, dtype=np.float64)
