@@ -94,6 +94,18 @@ def test_a_motion_into_the_workpiece_goes_through_a_waypoint():
         result.doc, truth=ir.Truth(start_deg=HOME_DEG, target=INSIDE_MM, tolerance=0.05)
     )
     assert rep.ok, rep.problems
+    # what the tour bound's passage assumes (tests/test_opening_bound.py): the fingertip, from
+    # outside the workpiece, enters it across the disc inside its rim
+    tip = independent.motion_points(HOME_DEG, result.commands, 20)[:, -1]
+    wp = independent.Workpiece()
+    radial = np.hypot(tip[:, 0] - 210.0, tip[:, 1])
+    assert tip[0, 2] > wp.h or radial[0] > wp.r_out(tip[0, 2])
+    down = np.flatnonzero((tip[:-1, 2] > wp.h) & (tip[1:, 2] <= wp.h))
+    assert down.size >= 1
+    i = down[-1]
+    f = (tip[i, 2] - wp.h) / (tip[i, 2] - tip[i + 1, 2])
+    crossing = tip[i] + f * (tip[i + 1] - tip[i])
+    assert np.hypot(crossing[0] - 210.0, crossing[1]) <= wp.r_in(wp.h) + 1e-6
     # two straight motions: the states lie on two joint-space segments
     states = independent.replay(HOME_DEG, result.commands)
     k = int(np.argmax(_bends(states))) + 1  # the waypoint

@@ -140,11 +140,12 @@ def tour_bound_any_order(
         passages(fam.arm, fam.world, q_start, points, sampler.tol) if through_openings else []
     )
     ways = [PassageSamples.sampled(sampler, p, q_start) for p in found_ways]
+    entered = [p.entered(points, sampler.tol) for p in found_ways]
     from_start = []
     for t, lay in enumerate(layers):
         cost = sampler.distance_from(q_start, lay, whole=True)
-        for way in ways:
-            if way.passage.entered(points[t], sampler.tol)[0]:
+        for way, into in zip(ways, entered, strict=True):
+            if into[t]:
                 cost = np.maximum(cost, way.to(sampler, lay, whole=True))
         from_start.append(float(cost.min()))
     total = 0.0
