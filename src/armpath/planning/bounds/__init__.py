@@ -14,6 +14,11 @@ shortest path from the start through the family at a few *sites* (curve points; 
 the Chebyshev metric, through the members that may be clear; the moves between sites ignore
 the obstacles (a relaxation, so the bound holds whatever the scene).
 
+A leg from the start to a site inside a hollow obstacle also carries the tool point across
+one of the obstacle's openings, where the arm is clear (:mod:`~armpath.planning.bounds.passage`):
+its cost is at least the shortest way through the family sampled over the opening's disc, and
+the bound takes that where it is more than the direct distance.
+
 The family is sampled over tool directions (:mod:`~armpath.planning.bounds.sampling`); each
 sample stands for the members of the directions around it and carries a per-joint *sampling
 error*: the largest difference to the nearest member of each neighbouring direction (Delaunay

@@ -77,8 +77,9 @@ STALL_ROUNDS = 2
 #: Live samples of all sites together past which the search splits no more: each round's
 #: dynamic programmes take time about in proportion to the square of a site's samples. A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
-#: tighter bound: the seed's Task 3 103 -> 106 commands with 150,000 (its bound 10 s -> 44 s),
-#: the UR5 cell's seam 75 -> 78 with 200,000 (the whole trace 23 s -> 53 s).
+#: tighter bound: the seed's Task 3 108 -> 111 commands with 200,000 (its bound 48 s -> 226 s on
+#: a machine where the whole trace below takes 2.3 times as long), the UR5 cell's seam 75 -> 78
+#: with 200,000 (the whole trace 23 s -> 53 s).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000
