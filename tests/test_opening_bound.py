@@ -27,7 +27,12 @@ from armpath.geometry.primitives import hollow_frustum
 from armpath.model.seed_arm import seed_arm
 from armpath.planning import bounds
 from armpath.planning.bounds import metric
-from armpath.planning.bounds.passage import PASSAGE_SPACING_MM, disc_grid, passages
+from armpath.planning.bounds.passage import (
+    MAX_PASSAGE_POINTS,
+    PASSAGE_SPACING_MM,
+    disc_grid,
+    passages,
+)
 from armpath.planning.tour import _targets_family
 from armpath.planning.trace.family import fibonacci_directions
 from armpath.scenes import load_scene
@@ -88,6 +93,13 @@ def test_the_disc_grid_covers_the_opening():
     assert len(passages(arm, world, home, np.array([[210.0, 0.0, 60.0]]), 0.05)) == 1
     assert passages(arm, world, home, np.array([[500.0, 0.0, 60.0]]), 0.05) == []
     assert passages(arm, CollisionWorld(()), home, np.array([[210.0, 0.0, 60.0]]), 0.05) == []
+    # a vat 4 m across: its grid coarsened to MAX_PASSAGE_POINTS, still covering its disc
+    vat = hollow_frustum("vat", [3000.0, 0.0, 0.0], 500.0, 2000.0, 2000.0, 10.0)
+    (way,) = passages(arm, CollisionWorld((vat,)), home, np.array([[3000.0, 0.0, 100.0]]), 0.05)
+    assert MAX_PASSAGE_POINTS / 2 <= way.points.shape[0] <= MAX_PASSAGE_POINTS
+    (rim,) = vat.openings()
+    spacing = way.radius * np.sqrt(2)
+    np.testing.assert_allclose(way.points, disc_grid(rim, spacing))
 
 
 def _clear_members(arm, world, fam, point, dirs):
