@@ -109,8 +109,18 @@ def passages(
         and np.any(o.hull_side(sites, tolerance) == 1)
     ]
     spacing = spacing_mm / arm.mm_per_unit
-    count = sum(disc_grid(h, spacing).shape[0] for o in hollow for h in o.openings())
-    spacing *= max(1.0, float(np.sqrt(count / MAX_PASSAGE_POINTS)))
+
+    def count(spacing: float) -> int:
+        return sum(disc_grid(h, spacing).shape[0] for o in hollow for h in o.openings())
+
+    if count(spacing) > MAX_PASSAGE_POINTS:
+        # the cells go as the square of the spacing, a few more where they meet the rims:
+        # widen until they fit (each step 5 % wider, so a few steps), or until one cell spans
+        # the widest opening (many obstacles: a cell or a few each)
+        widest = max(h.radius for o in hollow for h in o.openings())
+        spacing *= float(np.sqrt(count(spacing) / MAX_PASSAGE_POINTS))
+        while count(spacing) > MAX_PASSAGE_POINTS and spacing < 2.0 * widest:
+            spacing *= 1.05
     return [
         Passage(o, np.vstack([disc_grid(h, spacing) for h in o.openings()]), spacing / np.sqrt(2))
         for o in hollow
