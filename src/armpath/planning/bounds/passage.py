@@ -94,7 +94,8 @@ def passages(
     """The passages of ``world``'s hollow obstacles that a leg from ``q_start`` (rad) to one
     of ``sites`` ``(K, 3)`` (model units, each within ``tolerance`` model units) must take;
     none when the tool point is not checked against the obstacles. The grids have
-    ``spacing_mm``, coarser where all of them together would pass :data:`MAX_PASSAGE_POINTS`."""
+    ``spacing_mm``, coarser where all of them together would pass :data:`MAX_PASSAGE_POINTS`
+    (and with a great many obstacles, only the first ones' passages up to that many points)."""
     q_start = np.asarray(q_start, dtype=np.float64)
     if not _tool_point_checked(arm, world, q_start):
         return []
@@ -121,10 +122,15 @@ def passages(
         spacing *= float(np.sqrt(count(spacing) / MAX_PASSAGE_POINTS))
         while count(spacing) > MAX_PASSAGE_POINTS and spacing < 2.0 * widest:
             spacing *= 1.05
-    return [
-        Passage(o, np.vstack([disc_grid(h, spacing) for h in o.openings()]), spacing / np.sqrt(2))
-        for o in hollow
-    ]
+    out: list[Passage] = []
+    held = 0
+    for o in hollow:
+        grid = np.vstack([disc_grid(h, spacing) for h in o.openings()])
+        held += grid.shape[0]
+        if out and held > MAX_PASSAGE_POINTS:
+            break  # the rest are left out: a weaker bound, still a bound
+        out.append(Passage(o, grid, spacing / np.sqrt(2)))
+    return out
 
 
 @dataclass(frozen=True)
