@@ -73,6 +73,15 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
 
 #: What a trace's or tour's lower bound ranges over, in words.
 BOUND_SCOPE = "every configuration that may be clear, obstacles ignored between the sampled points"
+#: What such a bound adds where a leg goes into a hollow obstacle.
+BOUND_OPENING = "legs from the start into a hollow obstacle through its opening"
+
+
+def bound_scope(bound: dict[str, Any]) -> str:
+    """:data:`BOUND_SCOPE` of a result's ``lower_bound``, with :data:`BOUND_OPENING` where the
+    bound sampled an opening."""
+    opening = "opening_samples" in (bound.get("sampling") or {})
+    return f"{BOUND_SCOPE}; {BOUND_OPENING}" if opening else BOUND_SCOPE
 
 
 #: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).
@@ -99,7 +108,7 @@ def _bound_words(doc: dict[str, Any]) -> str:
     if b is None:
         return "no lower bound computed"
     words = (
-        f"lower bound {b['commands']} commands over {BOUND_SCOPE} "
+        f"lower bound {b['commands']} commands over {bound_scope(b)} "
         f"(plan {b['gap_commands']} above it)"
     )
     return words if proven(doc) else f"{words}; {UNPROVEN}"

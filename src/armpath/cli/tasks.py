@@ -570,7 +570,7 @@ def plan(
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
-    from armpath.report import BOUND_SCOPE, UNPROVEN
+    from armpath.report import UNPROVEN, bound_scope
 
     if bound is None:
         return missing
@@ -581,7 +581,7 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
             f"plan {bound['gap_commands']} above it ({gap})"
         )
     return (
-        f">= {bound['commands']} commands ({scope}, {BOUND_SCOPE}); "
+        f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
         f"plan {bound['gap_commands']} above it ({gap})"
     )
 
