@@ -11,7 +11,8 @@ against independent truth.
   exactly clear members of an independent sampling (the fingertip in the disc on a finer grid,
   the attaining members checked with the independent forward kinematics and workpiece), and
   close to it (the opening's sampling errors); the bound of every order of Task 3 rises with
-  the passage and stays below its plan, the cheaper any-order bound below it.
+  the passage and stays below its plan, the cheaper any-order bound below it; a trace along
+  the workpiece's floor is approached through the opening too.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import pytest
 
 import independent
 from armpath.geometry import CollisionWorld
+from armpath.geometry.curves import Polyline
 from armpath.geometry.primitives import hollow_frustum
 from armpath.model.seed_arm import seed_arm
 from armpath.planning import bounds
@@ -34,7 +36,7 @@ from armpath.planning.bounds.passage import (
     passages,
 )
 from armpath.planning.tour import _targets_family
-from armpath.planning.trace.family import fibonacci_directions
+from armpath.planning.trace.family import curve_family, fibonacci_directions
 from armpath.scenes import load_scene
 
 STEP = np.radians(2.0)
@@ -177,3 +179,18 @@ def test_every_order_of_task_3_is_bounded_below_its_plan_through_the_opening():
     assert "opening" in any_order.method
     # the plan of Task 3 (126 commands, tests/test_spotweld.py replays it) is never below
     assert b.commands <= 126 and min(per.values()) == b.commands
+
+
+def test_a_trace_inside_the_workpiece_is_approached_through_its_opening():
+    """A line along the workpiece's floor (inside its hull by far more than the tolerance): the
+    trace bound's approach goes through the opening, as the tour's legs do (same samples)."""
+    arm = seed_arm()
+    world = load_scene(None).world
+    start = np.radians([0, -90, 0, 0, -90, 0])
+    line = Polyline("floor", np.array([[300.0, -90.0, 25.0], [300.0, -60.0, 25.0]]))
+    fam = curve_family(arm, world, line)
+    direct = bounds.trace_bound(fam, start, [(0.0, 30.0)], 0.05, rounds=2, through_openings=False)
+    b = bounds.trace_bound(fam, start, [(0.0, 30.0)], 0.05, rounds=2)
+    assert b.parts["approach"] >= direct.parts["approach"] + 4.0  # 45.2 -> 51.5 commands
+    assert b.sampling["opening_samples"] > 10_000 and "opening" in b.method
+    assert "opening_samples" not in direct.sampling

@@ -131,6 +131,7 @@ def trace_bound(
     path_mm: FloatArray | None = None,
     path_q: FloatArray | None = None,
     max_samples: int | None = None,
+    through_openings: bool = True,
 ) -> CommandBound:
     """Fewest commands of any plan that passes the tool point along each span of the curve
     (arc lengths mm, ``a < b``) within ``tolerance_mm`` from ``q_start`` (rad).
@@ -150,16 +151,19 @@ def trace_bound(
     drops the cells that cannot hold a path cheaper than it).
     ``with_errors=False`` (a diagnostic, not a bound): the samples' sampling errors are left
     out, which gives the shortest path through the samples themselves, what the bound tends to
-    as the sampling gets finer.
+    as the sampling gets finer. ``through_openings``: the approach to a point inside a hollow
+    obstacle takes at least its way through one of the obstacle's openings
+    (:mod:`~armpath.planning.bounds.passage`); False: the direct approach only.
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
     placements = [("evenly spaced", _layer_positions(spans_mm, layers_per_span))]
     # the openings a leg from the start to a point of the spans must pass, sampled once
     every = np.linspace(0.0, 1.0, 64)
     near = np.array([fam.frame(a + (b - a) * f)[0] for a, b in spans_mm for f in every])
+    found_ways = passages(fam.arm, fam.world, q_start, near, sampler.tol)
     ways = [
         PassageSamples.sampled(sampler, p, q_start, with_errors)
-        for p in passages(fam.arm, fam.world, q_start, near, sampler.tol)
+        for p in (found_ways if through_openings else [])
     ]
     if path_mm is not None and path_q is not None:
         path_u = np.asarray(path_q, dtype=np.float64)[:, sampler.tip] / sampler.step
@@ -215,6 +219,13 @@ def trace_bound(
             "or than one through clear members dropped, the others split); one pass per span, "
             "either direction"
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
+            + (
+                "; the approach into a hollow obstacle at least its way through the obstacle's "
+                "opening (the family sampled over the opening's disc, the members that may be "
+                f"clear: {', '.join(p.passage.obstacle.name for p, _ in search.passages)})"
+                if search.passages
+                else ""
+            )
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         parts={"along": found.value - found.approach, "approach": found.approach},
@@ -225,7 +236,12 @@ def trace_bound(
             "directions": float(found.directions),
             "largest_error_on_path_commands": found.largest_error,
         }
-        | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {}),
+        | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {})
+        | (
+            {"opening_samples": float(sum(p.layer.size for p, _ in search.passages))}
+            if search.passages
+            else {}
+        ),
         guide_q=found.clear_q if found.clear_q is not None else found.bound_q,
         guide_s_mm=s_all,
     )
