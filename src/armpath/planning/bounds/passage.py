@@ -74,13 +74,18 @@ def disc_grid(opening: Opening, spacing: float) -> FloatArray:
 
 
 def _tool_point_checked(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> bool:
-    """Whether the tool point is the end of a part the world checks against its obstacles
-    (so it never enters one)."""
-    if not world.parts(arm):
+    """Whether the tool point is the end of a part the world keeps out of every obstacle (a
+    clearance of zero or more), so that it never enters one."""
+    parts = world.parts(arm)
+    if not parts:
         return False
     _, ends = world.part_segments(arm, q)
     tool = tool_position(arm, q)
-    return bool(np.linalg.norm(ends[-1] - tool) <= 1e-9 * max(1.0, float(np.abs(tool).max())))
+    if np.linalg.norm(ends[-1] - tool) > 1e-9 * max(1.0, float(np.abs(tool).max())):
+        return False
+    last = parts[-1].name
+    kept = [p.required for p in world.pairs(arm) if not p.is_self and p.part == last]
+    return len(kept) == len(world.obstacles) and min(kept, default=0.0) >= 0.0
 
 
 def passages(
