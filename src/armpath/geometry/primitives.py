@@ -558,6 +558,17 @@ class Opening:
     normal: FloatArray
     radius: float
 
+    def square_grid(self, spacing: float) -> tuple[FloatArray, FloatArray]:
+        """A square grid of ``spacing`` in the disc's plane, centred on it and reaching one
+        cell beyond its rim: the offsets ``(N, 2)`` of its points from the centre (along the
+        plane's axes :func:`orthonormal_frame` of the normal) and the points ``(N, 3)``."""
+        u, v = orthonormal_frame(self.normal)
+        k = int(np.ceil(self.radius / spacing)) + 1
+        i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1), indexing="ij")
+        xy = np.column_stack([i.ravel(), j.ravel()]) * spacing
+        points = self.center + xy[:, :1] * u + xy[:, 1:] * v
+        return np.asarray(xy, dtype=np.float64), np.asarray(points, dtype=np.float64)
+
 
 @dataclass(frozen=True, eq=False)
 class HollowFrustum(SolidOfRevolution):

@@ -20,7 +20,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.geometry.primitives import orthonormal_frame
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.solve import complete_solver
@@ -48,12 +47,9 @@ def passage_points(world: CollisionWorld) -> FloatArray:
     grid over each opening's disc (:data:`SPACING`) at each of :data:`LEVELS`."""
     out = []
     for hole in world.openings():
-        u, v = orthonormal_frame(hole.normal)
         r = hole.radius
-        ticks = np.arange(-r, r + 1e-9, SPACING * r)
-        a, b = np.meshgrid(ticks, ticks)
-        inside = a**2 + b**2 <= (0.95 * r) ** 2
-        disc = hole.center + a[inside][:, None] * u + b[inside][:, None] * v
+        xy, points = hole.square_grid(SPACING * r)
+        disc = points[np.hypot(xy[:, 0], xy[:, 1]) <= 0.95 * r]
         for level in LEVELS:
             out.append(disc + level * r * hole.normal)
     return np.vstack(out) if out else np.zeros((0, 3))

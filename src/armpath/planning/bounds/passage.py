@@ -18,13 +18,14 @@ every member at the disc, as far as the package's sampling errors hold.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.geometry.primitives import HollowFrustum, Opening, orthonormal_frame
+from armpath.geometry.primitives import HollowFrustum, Opening
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
@@ -62,25 +63,21 @@ class Passage:
 def disc_grid(opening: Opening, spacing: float) -> FloatArray:
     """Centres ``(G, 3)`` of the square cells of side ``spacing`` (in the disc's plane) that
     meet the disc: every point of the disc lies within ``spacing / sqrt(2)`` of one."""
-    u, v = orthonormal_frame(opening.normal)
-    k = int(np.ceil(opening.radius / spacing)) + 1
-    i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1), indexing="ij")
-    x, y = i.ravel() * spacing, j.ravel() * spacing
+    xy, points = opening.square_grid(spacing)
     # the nearest point of each cell to the disc's centre
-    half = spacing / 2.0
-    gap = np.hypot(np.maximum(np.abs(x) - half, 0.0), np.maximum(np.abs(y) - half, 0.0))
-    keep = gap <= opening.radius
-    return np.asarray(opening.center + x[keep, None] * u + y[keep, None] * v, dtype=np.float64)
+    gap = np.hypot(*np.maximum(np.abs(xy) - spacing / 2.0, 0.0).T)
+    return np.asarray(points[gap <= opening.radius], dtype=np.float64)
 
 
-def _tool_point_checked(arm: SerialArm, world: CollisionWorld, q: FloatArray) -> bool:
-    """Whether the tool point is the end of a part the world keeps out of every obstacle (a
-    clearance of zero or more), so that it never enters one."""
+def _tool_point_checked(
+    arm: SerialArm, world: CollisionWorld, q: FloatArray, tool: FloatArray
+) -> bool:
+    """Whether the tool point (``tool`` at ``q``) is the end of a part the world keeps out of
+    every obstacle (a clearance of zero or more), so that it never enters one."""
     parts = world.parts(arm)
     if not parts:
         return False
     _, ends = world.part_segments(arm, q)
-    tool = tool_position(arm, q)
     if np.linalg.norm(ends[-1] - tool) > 1e-9 * max(1.0, float(np.abs(tool).max())):
         return False
     last = parts[-1].name
@@ -102,17 +99,15 @@ def passages(
     ``spacing_mm``, coarser where all of them together would pass :data:`MAX_PASSAGE_POINTS`
     (and with a great many obstacles, only the first ones' passages up to that many points)."""
     q_start = np.asarray(q_start, dtype=np.float64)
-    if not _tool_point_checked(arm, world, q_start):
-        return []
+    hollow = [o for o in world.obstacles if isinstance(o, HollowFrustum) and o.openings()]
     start_point = tool_position(arm, q_start)
+    if not hollow or not _tool_point_checked(arm, world, q_start, start_point):
+        return []
     sites = np.asarray(sites, dtype=np.float64).reshape(-1, 3)
     hollow = [
         o
-        for o in world.obstacles
-        if isinstance(o, HollowFrustum)
-        and o.openings()
-        and o.hull_side(start_point, 0.0) == -1
-        and np.any(o.hull_side(sites, tolerance) == 1)
+        for o in hollow
+        if o.hull_side(start_point, 0.0) == -1 and np.any(o.hull_side(sites, tolerance) == 1)
     ]
     spacing = spacing_mm / arm.mm_per_unit
 
@@ -189,3 +184,41 @@ class PassageSamples:
         through, start = (self.exact, self.exact_start) if exact else (self.layer, self.start)
         via = sampler.advance(through, start, layer)[0]
         return np.asarray(np.ceil(via - 1e-9) if whole else via, dtype=np.float64)
+
+
+def sampled_passages(
+    sampler: FamilySampler,
+    q_start: FloatArray,
+    sites: FloatArray,
+    with_errors: bool = True,
+    through_openings: bool = True,
+    say: Callable[[str], None] | None = None,
+) -> list[PassageSamples]:
+    """The passages a leg from ``q_start`` (rad) to ``sites`` ``(K, 3)`` (model units, within
+    ``sampler``'s tolerance) must take (:func:`passages`), each sampled
+    (:meth:`PassageSamples.sampled`; ``say`` told before, where there are any); none without
+    ``through_openings``."""
+    if not through_openings:
+        return []
+    fam = sampler.fam
+    found = passages(fam.arm, fam.world, q_start, sites, sampler.tol)
+    if found and say is not None:
+        say("sampling the family in the openings the tool point must pass")
+    return [PassageSamples.sampled(sampler, p, q_start, with_errors) for p in found]
+
+
+def passage_method(samples: Sequence[PassageSamples], leg: str) -> str:
+    """What a bound's method adds for the passages it charged ``leg`` ("a leg from the start",
+    say) with: empty without any."""
+    if not samples:
+        return ""
+    names = ", ".join(s.passage.obstacle.name for s in samples)
+    return (
+        f"; {leg} into a hollow obstacle at least its way through the obstacle's opening (the "
+        f"family sampled over the opening's disc, the members that may be clear: {names})"
+    )
+
+
+def passage_sampling(samples: Sequence[PassageSamples]) -> dict[str, float]:
+    """What a bound's sampling adds for its passages: their samples (none without any)."""
+    return {"opening_samples": float(sum(s.layer.size for s in samples))} if samples else {}

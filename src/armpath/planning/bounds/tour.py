@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
-from armpath.planning.bounds.passage import PassageSamples, passages
+from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
 from armpath.planning.bounds.sampling import FamilySampler
 from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Orders
 from armpath.planning.bounds.value import CommandBound
@@ -57,12 +57,7 @@ def tour_bound(
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     points = np.asarray(targets, dtype=np.float64)
-    found_ways = (
-        passages(fam.arm, fam.world, q_start, points, sampler.tol) if through_openings else []
-    )
-    if found_ways:
-        say("sampling the family in the openings the tool point must pass")
-    ways = [PassageSamples.sampled(sampler, p, q_start, with_errors) for p in found_ways]
+    ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
     search = CellSearch(
         sampler,
         Orders(orders, back),
@@ -89,13 +84,7 @@ def tour_bound(
             "sampling errors, and searched by branch and bound: cells that cannot hold a path "
             "shorter than one through clear members dropped, the others split where their "
             "error or clearance is unsure), each leg rounded up to whole commands"
-            + (
-                "; a leg from the start into a hollow obstacle at least its way through the "
-                "obstacle's opening (the family sampled over the opening's disc, the members "
-                f"that may be clear: {', '.join(w.obstacle.name for w in found_ways)})"
-                if ways
-                else ""
-            )
+            + passage_method(ways, "a leg from the start")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         sampling={
@@ -106,7 +95,7 @@ def tour_bound(
             "largest_error_on_path_commands": found.largest_error,
         }
         | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {})
-        | ({"opening_samples": float(sum(p.layer.size for p in ways))} if ways else {}),
+        | passage_sampling(ways),
         guide_q=found.bound_q[list(found.order)],
     )
     return bound, search.per_order
@@ -137,11 +126,8 @@ def tour_bound_any_order(
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no family member within the joint limits")
     points = np.asarray(targets, dtype=np.float64)
-    found_ways = (
-        passages(fam.arm, fam.world, q_start, points, sampler.tol) if through_openings else []
-    )
-    ways = [PassageSamples.sampled(sampler, p, q_start) for p in found_ways]
-    entered = [p.entered(points, sampler.tol) for p in found_ways]
+    ways = sampled_passages(sampler, q_start, points, through_openings=through_openings)
+    entered = [w.passage.entered(points, sampler.tol) for w in ways]
     from_start = []
     for t, lay in enumerate(layers):
         cost = sampler.distance_from(q_start, lay, whole=True)
@@ -171,15 +157,11 @@ def tour_bound_any_order(
             "ranges; from the start or another target, "
             "whole commands, each distance less the samples' sampling errors)"
             + ("; plus the shortest way back" if back else "")
-            + (
-                "; a leg from the start into a hollow obstacle at least its way through an "
-                f"opening ({', '.join(w.obstacle.name for w in found_ways)})"
-                if found_ways
-                else ""
-            )
+            + passage_method(ways, "a leg from the start")
         ),
         sampling={
             "targets": float(targets.shape[0]),
             "samples": float(sum(lay.size for lay in layers)),
-        },
+        }
+        | passage_sampling(ways),
     )

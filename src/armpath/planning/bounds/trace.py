@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.errors import PlanningError
-from armpath.planning.bounds.passage import PassageSamples, passages
+from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
 from armpath.planning.bounds.sampling import FamilySampler, _allowed_at
 from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Chain, Join
 from armpath.planning.bounds.value import CommandBound
@@ -160,11 +160,7 @@ def trace_bound(
     # the openings a leg from the start to a point of the spans must pass, sampled once
     every = np.linspace(0.0, 1.0, 64)
     near = np.array([fam.frame(a + (b - a) * f)[0] for a, b in spans_mm for f in every])
-    found_ways = passages(fam.arm, fam.world, q_start, near, sampler.tol)
-    ways = [
-        PassageSamples.sampled(sampler, p, q_start, with_errors)
-        for p in (found_ways if through_openings else [])
-    ]
+    ways = sampled_passages(sampler, q_start, near, with_errors, through_openings)
     if path_mm is not None and path_q is not None:
         path_u = np.asarray(path_q, dtype=np.float64)[:, sampler.tip] / sampler.step
         turning = turning_layers(spans_mm, np.asarray(path_mm, dtype=np.float64), path_u)
@@ -219,13 +215,7 @@ def trace_bound(
             "or than one through clear members dropped, the others split); one pass per span, "
             "either direction"
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
-            + (
-                "; the approach into a hollow obstacle at least its way through the obstacle's "
-                "opening (the family sampled over the opening's disc, the members that may be "
-                f"clear: {', '.join(p.passage.obstacle.name for p, _ in search.passages)})"
-                if search.passages
-                else ""
-            )
+            + passage_method([p for p, _ in search.passages], "the approach")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         parts={"along": found.value - found.approach, "approach": found.approach},
@@ -237,11 +227,7 @@ def trace_bound(
             "largest_error_on_path_commands": found.largest_error,
         }
         | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {})
-        | (
-            {"opening_samples": float(sum(p.layer.size for p, _ in search.passages))}
-            if search.passages
-            else {}
-        ),
+        | passage_sampling([p for p, _ in search.passages]),
         guide_q=found.clear_q if found.clear_q is not None else found.bound_q,
         guide_s_mm=s_all,
     )
