@@ -90,18 +90,23 @@ def test_order_is_the_best_planned_and_every_order_ranked(task3):
     assert 0 < doc["lower_bound_commands"] <= doc["goal_states_bound_commands"] <= doc["n_commands"]
     assert doc["lower_bound"]["gap_commands"] == doc["n_commands"] - doc["lower_bound_commands"]
     assert all(o["family_bound_commands"] >= doc["lower_bound_commands"] for o in orders)
-    # every order whose bound is below the plan was planned (the few beyond the best two)
+    # every order whose bound is below the plan was planned (the few beyond the best two; the
+    # plan through the pools of goal states is below every other order's goal-state bound)
     below = [o for o in orders if o["lower_bound_commands"] < doc["n_commands"]]
-    assert below and all(o["planned_commands"] is not None for o in below)
+    assert all(o["planned_commands"] is not None for o in below)
     chosen = next(o for o in orders if o["order"] == doc["order"])
     assert chosen["planned_commands"] == doc["n_commands"]
+    # the chosen order's bound counts the goal states its legs reach
+    assert chosen["lower_bound_commands"] <= doc["n_commands"]
     # the README's Task 3 (goal states chosen together): 133 commands on the machine where it
     # was measured, 135 (legs 73 + 15 + 31 + 16 against 73 + 14 + 31 + 15) with the same code
     # and package versions on another (see tests/test_ur5_cell.py's spot welds); through the
     # lattice goal states nearest the guide's members (each tried alone first): 127 (70 + 19 +
     # 23 + 15) on the second; the kept legs merged where certified straight motions need fewer
-    # commands: 126 (69 + 19 + 23 + 15); the limit leaves the first machine room
-    assert doc["n_commands"] <= 130
+    # commands: 126 (69 + 19 + 23 + 15); through pools of goal states whose legs are planned
+    # when a lazy shortest path over them needs them (armpath.planning.tour_pool): 122 (order
+    # 2-4-1-3, 69 + 13 + 25 + 15); the limit leaves another machine room
+    assert doc["n_commands"] <= 125
     # the legs add up and each needs at least its direct-motion count
     assert sum(leg["commands"] for leg in doc["legs"]) == doc["n_commands"]
     assert all(leg["commands"] >= leg["direct_commands"] for leg in doc["legs"])

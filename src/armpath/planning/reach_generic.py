@@ -41,6 +41,7 @@ from armpath.planning.motion_check import check_state_clear, motion_clearance
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 #: Largest number of integer offsets searched around one family member.
 BOX_BUDGET = 60_000
@@ -535,6 +536,34 @@ def reach_any_arm(
     )
 
 
+def goal_links_clear(
+    arm: SerialArm,
+    world: CollisionWorld,
+    position: FloatArray,
+    q: FloatArray,
+    tip_tolerance: float,
+    body_buffer: float,
+) -> BoolArray:
+    """Which configurations ``q (M, n)`` rad with the tool point at ``position`` may be goal
+    states: their links keep the margin plus ``body_buffer`` and the tool point is no deeper
+    than ``tip_tolerance`` in an obstacle. The tool's own link against the surface its point
+    touches meets it head-on from a retracted pre-goal (see plan_motion): it needs the margin
+    only, not the buffer."""
+    pairs = world.pairs(arm)
+    is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
+    required = world.required(arm)
+    touched = {o.name for o in world.obstacles if abs(float(o.signed_distance(position))) <= 1e-6}
+    tool_link = pairs[int(np.flatnonzero(is_tip)[0])].part.removesuffix(" tip") if any(
+        is_tip
+    ) else None  # fmt: skip
+    buffer = np.array(
+        [0.0 if (c.part == tool_link and c.other in touched) else body_buffer for c in pairs]
+    )
+    values, _ = world.pair_clearances(arm, q)
+    ok = np.where(is_tip, values >= -tip_tolerance, values - required >= buffer)
+    return np.asarray(np.all(ok, axis=-1), dtype=bool)
+
+
 def generic_goal_states(
     arm: SerialArm,
     world: CollisionWorld,
@@ -575,24 +604,9 @@ def generic_goal_states(
             f"every configuration reaching ({where}) {arm.length_unit} lies beyond a joint's "
             "self-collision range from the start"
         )
-    pairs = world.pairs(arm)
-    is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
-    required = world.required(arm)
-    # the tool's own link against the surface its point touches meets it head-on from a
-    # retracted pre-goal (see plan_motion): it needs the margin only, not the search's buffer
-    touched = {
-        o.name for o in world.obstacles if abs(float(o.signed_distance(target.position))) <= 1e-6
-    }
-    tool_link = pairs[int(np.flatnonzero(is_tip)[0])].part.removesuffix(" tip") if any(
-        is_tip
-    ) else None  # fmt: skip
-    buffer = np.array(
-        [0.0 if (c.part == tool_link and c.other in touched) else body_buffer for c in pairs]
-    )
-    values, _ = world.pair_clearances(arm, samples)
     # a member's tool point is on the target, which may lie on a surface: rounding puts it a
     # hair inside; the lattice states near it are held to the rule exactly below
-    body_ok = np.all(np.where(is_tip, values >= -tolerance, values - required >= buffer), axis=-1)
+    body_ok = goal_links_clear(arm, world, target.position, samples, tolerance, body_buffer)
     if not np.any(body_ok):
         raise PlanningError(
             f"no configuration reaching ({where}) {arm.length_unit} keeps the links "
@@ -609,8 +623,7 @@ def generic_goal_states(
         within += cand.shape[0]
         if cand.shape[0] == 0:
             continue
-        vals, _ = world.pair_clearances(arm, grid.to_joint(cand))
-        ok = np.all(np.where(is_tip, vals >= 0, vals - required >= buffer), axis=-1)
+        ok = goal_links_clear(arm, world, target.position, grid.to_joint(cand), 0.0, body_buffer)
         if not np.any(ok):
             continue
         idx = np.flatnonzero(ok)
@@ -677,6 +690,7 @@ __all__ = [
     "command_metric",
     "generic_bound",
     "generic_goal_states",
+    "goal_links_clear",
     "lattice_candidates",
     "nearest_reachable",
     "reach_any_arm",

@@ -54,6 +54,7 @@ from armpath.planning.reach import (
     goal_states,
 )
 from armpath.planning.tour_guide import TourGuide
+from armpath.planning.tour_pool import pool_guide, pooled_tour
 from armpath.planning.trace.family import CurveFamily, curve_family
 
 FloatArray = NDArray[np.float64]
@@ -179,6 +180,7 @@ def plan_tour(
     orientations: Sequence[Orientation | None] | None = None,
     bound: bool = True,
     bound_samples: int | None = None,
+    pools: bool = True,
 ) -> TourResult:
     """Plan a clear tour from ``start_ticks`` through every target (mm), optionally back.
 
@@ -199,7 +201,12 @@ def plan_tour(
     only). ``bound``: prove the lower bound over every order and goal configuration
     (:func:`~armpath.planning.bounds.tour_bound`, its search holding up to ``bound_samples``
     live samples: more, a tighter bound, later; False: the result's ``lower_bound`` is None,
-    the orders' bounds for their goal states are kept).
+    the orders' bounds for their goal states are kept). ``pools``: without orientation rules,
+    the orders whose shortest paths through clear members are shortest are planned once more
+    through pools of goal states, each leg planned when a lazy shortest path over the pools
+    needs it (:func:`~armpath.planning.tour_pool.pooled_tour`; at most
+    :data:`~armpath.planning.tour_pool.POOL_LEG_PLANS` leg plans), and the plan counts when it
+    needs fewer commands.
     """
     try:
         order = VisitOrder(order)
@@ -439,6 +446,27 @@ def plan_tour(
                     if best is None or total < best[0]:
                         best = (total, legs, o)
                         count_guided(o, guided)
+    # many goal states per target kept open until the legs between them are planned
+    # (:mod:`~armpath.planning.tour_pool`): the seed's Task 3 127 -> 122 commands
+    if pools and guide_all is not None and fam is not None and len(orders) <= MAX_GUIDED_ORDERS:
+        say("sampling the goal states' pools at every target")
+        pooled = pooled_tour(
+            pool_guide(fam, pts, tolerance_mm, q0),
+            start,
+            orders,
+            return_to_start,
+            opts,
+            ceiling=np.inf if best is None else best[0],
+            say=say,
+        )
+        if pooled.order is not None and pooled.legs is not None:
+            total = _commands(pooled.legs)
+            planned[pooled.order] = min(planned.get(pooled.order, total), total)
+            not_planned.pop(pooled.order, None)
+            if best is None or total < best[0]:
+                best = (total, pooled.legs, pooled.order)
+                reached = pooled.legs[: len(pooled.order)]
+                count_guided(pooled.order, [leg.sequence.final_ticks[None, :] for leg in reached])
     for o in ranking[tried : tried + LISTED_ORDERS]:
         if o in planned:  # planned through the goal states chosen together
             continue

@@ -63,9 +63,12 @@ class TourGuide:
         tolerance_mm: float,
         body_buffer_mm: float = GOAL_BODY_BUFFER_MM,
         q_start: FloatArray | None = None,
+        levels: int = 0,
     ) -> TourGuide:
         """Sample the family at every target and keep the members whose links keep the margin
-        plus ``body_buffer_mm`` (the tool tip: outside every obstacle)."""
+        plus ``body_buffer_mm`` (the tool tip: outside every obstacle); ``levels``: times the
+        tool directions about members that may be clear are split (finer next to the
+        obstacles: :meth:`FamilySampler.layer`)."""
         arm, world = fam.arm, fam.world
         sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS, q_start)
         pairs = world.pairs(arm)
@@ -74,7 +77,7 @@ class TourGuide:
         layers, rooms = [], []
         for p in targets:
             check_time("choosing the tour's goal states")
-            lay = sampler.layer(p, sampler.base, levels=0)
+            lay = sampler.layer(p, sampler.base, levels=levels)
             values, _ = world.pair_clearances(arm, lay.q)
             if lay.size:
                 room = np.min(values[:, ~is_tip] - required[~is_tip], axis=-1, initial=np.inf)
@@ -90,11 +93,11 @@ class TourGuide:
     def with_buffer(self, body_buffer_mm: float) -> TourGuide:
         """This guide with only the members whose links keep the margin plus
         ``body_buffer_mm`` (at least the buffer it was built with)."""
-        keep = [room >= body_buffer_mm for room in self.room]
-        layers = [
-            Layer(lay.u[k], lay.err[k], lay.q[k], lay.dirs[k])
-            for lay, k in zip(self.layers, keep, strict=True)
-        ]
+        return self.subset([room >= body_buffer_mm for room in self.room])
+
+    def subset(self, keep: list[NDArray[np.bool_]]) -> TourGuide:
+        """This guide with only the members ``keep`` (a mask per target)."""
+        layers = [lay.subset(k) for lay, k in zip(self.layers, keep, strict=True)]
         rooms = tuple(room[k] for room, k in zip(self.room, keep, strict=True))
         return replace(self, layers=layers, room=rooms)
 
@@ -126,7 +129,7 @@ class TourGuide:
         picks.reverse()
         members, prev = [], q_start
         for lay, k in zip(layers, picks, strict=True):
-            q = self._with_start(lay.q[k][None], q_start)
+            q = self.with_start(lay.q[k][None], q_start)
             q = self.sampler.within_windows(shift_into_limits(self.arm, q, prev))[0]
             members.append(q)
             prev = q
@@ -149,7 +152,7 @@ class TourGuide:
             check_time("choosing the tour's goal states")
             lay = self.layers[t]
             near = np.argsort(self.sampler.distance_from(q, lay), kind="stable")[:NEAREST_MEMBERS]
-            samples = shift_into_limits(self.arm, self._with_start(lay.q[near], q_start), q)
+            samples = shift_into_limits(self.arm, self.with_start(lay.q[near], q_start), q)
             try:
                 states = generic_goal_states(
                     self.arm,
@@ -166,7 +169,7 @@ class TourGuide:
             out.append(states)
         return out
 
-    def _with_start(self, q: FloatArray, q_start: FloatArray) -> FloatArray:
+    def with_start(self, q: FloatArray, q_start: FloatArray) -> FloatArray:
         """``q`` with the joints that do not move the tool point at their start values."""
         out = np.array(q, dtype=np.float64, copy=True)
         still = ~self.sampler.tip
