@@ -428,7 +428,6 @@ def pooled_tour(
     """The fewest-commands tour found through pools of goal states (see the module) among
     ``orders`` with fewer commands than ``ceiling``; its legs keep the clearance rule (each
     certified by :func:`plan_motion`) and chain: each starts where the one before ends."""
-    tell = say or (lambda _msg: None)
     arm, world = guide.arm, guide.world
     pooled, pools = member_pools(guide, start, orders, back, ceiling)
     waypoints = passage_source(arm, world, start)
@@ -445,22 +444,40 @@ def pooled_tour(
     turns = _Turns(arm)
     cache = _LegCache(plan_leg, turns)
     graphs = [_OrderGraph.build(start, o, pools, back, turns) for o in pooled]
-    steps = len(pooled[0]) + (1 if back else 0) if pooled else 0
+    found = lazy_search(
+        graphs, cache, lambda pool, i: pool.rounded(guide, start, i, turns), ceiling, say
+    )
+    order, legs = (None, None) if found is None else found
+    return PooledTour(order, legs, cache.planned, tuple(pooled))
 
-    # one lazy search over every pooled order: the cheapest estimate is planned first, so an
-    # order whose first legs turn out dear (into a hollow workpiece) drops behind the others
+
+def lazy_search(
+    graphs: list[_OrderGraph],
+    cache: _LegCache,
+    round_member: Callable[[_Pool, int], bool],
+    ceiling: float = np.inf,
+    say: Callable[[str], None] | None = None,
+) -> tuple[tuple[int, ...], list[MotionPlan]] | None:
+    """One lazy shortest-path search over the orders' graphs (see the module): the cheapest
+    path's members are rounded onto the lattice (``round_member``), then its legs planned from
+    where the one before ends, until the cheapest path is planned whole (its order and legs),
+    its estimate reaches ``ceiling``, or the cache has planned :data:`POOL_LEG_PLANS` legs (then
+    the cheapest path planned whole, if any). Without the surcharge (each unplanned leg at its
+    direct commands, which no leg beats) the path found is the cheapest of all."""
+    tell = say or (lambda _msg: None)
+    steps = len(graphs[0].layers) - 1 if graphs else 0
     best: tuple[int, tuple[int, ...], list[MotionPlan]] | None = None
-    # each pass rounds a member or plans a leg, or ends the search
-    rounds = sum(p.ticks.shape[0] for p in pools)
-    for _ in range(rounds + POOL_LEG_PLANS):
+    pools = {id(lay): lay for g in graphs for lay in g.layers if isinstance(lay, _Pool)}
+    # the cheapest estimate is planned first, so an order whose first legs turn out dear (into
+    # a hollow workpiece) drops behind the others; each pass rounds a member or plans a leg,
+    # or ends the search
+    for _ in range(sum(p.ticks.shape[0] for p in pools.values()) + POOL_LEG_PLANS):
         if not graphs or cache.planned >= POOL_LEG_PLANS:
             break
         check_time("planning the tour through pools of goal states")
         found = [(g.cheapest(cache), g) for g in graphs]
         (estimate, path), g = min(found, key=lambda f: (f[0][0], f[1].order))
-        if not np.isfinite(estimate) or estimate >= min(
-            ceiling, np.inf if best is None else best[0]
-        ):
+        if not np.isfinite(estimate) or estimate >= ceiling:
             break
         # the path's members onto the lattice first: their direct motions change a little
         fresh = [
@@ -470,7 +487,7 @@ def pooled_tour(
         ]
         if fresh:
             for lay, i in fresh:
-                lay.rounded(guide, start, i, turns)
+                round_member(lay, i)
                 for other in graphs:
                     other.refresh(lay.target, i)
             continue
@@ -479,8 +496,7 @@ def pooled_tour(
             # every leg planned (the estimate counts each planned pair at the most it needed,
             # so this is no dearer than the estimate and no other path is estimated cheaper)
             if len(legs) == steps:
-                total = sum(leg.sequence.n_commands for leg in legs)
-                best = (total, g.order, legs) if best is None or total < best[0] else best
+                best = (sum(leg.sequence.n_commands for leg in legs), g.order, legs)
             break
         k, here, goal, direct = missing
         name = "-".join(str(t + 1) for t in g.order)
@@ -501,6 +517,4 @@ def pooled_tour(
                 and total < min(ceiling, np.inf if best is None else best[0])
             ):
                 best = (total, g.order, legs)
-    if best is None:
-        return PooledTour(None, None, cache.planned, tuple(pooled))
-    return PooledTour(best[1], best[2], cache.planned, tuple(pooled))
+    return None if best is None else (best[1], best[2])
