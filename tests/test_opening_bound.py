@@ -178,7 +178,7 @@ def test_every_order_of_task_3_is_bounded_below_its_plan_through_the_opening():
     assert any_order.commands <= b.commands
     assert "opening" in any_order.method
     # the plan of Task 3 (122 commands, tests/test_spotweld.py replays it) is never below
-    assert b.commands <= 126 and min(per.values()) == b.commands
+    assert b.commands <= 122 and min(per.values()) == b.commands
 
 
 def test_a_trace_inside_the_workpiece_is_approached_through_its_opening():

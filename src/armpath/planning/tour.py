@@ -12,8 +12,11 @@ chosen together (:mod:`~armpath.planning.tour_guide`: the shortest path through 
 of the family at every target), the shorter plan counting; the order whose such path is
 shortest is planned too, and for each room the members keep beyond the margin
 (:data:`GUIDE_BUFFERS_MM`: less room lets them lie nearer each other, at the price of tighter
-legs) the :data:`GUIDED_ORDERS` orders whose guided paths are shortest. The tour's bound over
-every order and every goal configuration comes from :func:`~armpath.planning.bounds.tour_bound`.
+legs) the :data:`GUIDED_ORDERS` orders whose guided paths are shortest. Last, the orders whose
+shortest paths through clear members are shortest are planned through pools of goal states
+kept open until the legs between them are known (:mod:`~armpath.planning.tour_pool`). The
+tour's bound over every order and every goal configuration comes from
+:func:`~armpath.planning.bounds.tour_bound`.
 """
 
 from __future__ import annotations

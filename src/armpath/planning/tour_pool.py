@@ -7,26 +7,33 @@ many goal states per target stay open until the legs between them are known:
 
 1. The family at every target is sampled finer next to the obstacles (the triangles of tool
    directions about members that may be clear split :data:`POOL_LEVELS` times); the members
-   whose links keep the margin are kept.
+   that may be goal states are kept (links keep the margin plus
+   :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`pool_guide`).
 2. For each visiting order, the shortest path from the start through one member per target
-   (whole commands per leg, obstacles between the targets ignored) is found forwards and
-   backwards; the :data:`POOL_ORDERS` orders whose paths are shortest are pooled, and at each
-   target the members on some path within :data:`POOL_SLACK` commands of its order's shortest
-   (at most :data:`POOL_MEMBERS` per order and target, the shortest paths first).
-3. Lattice goal states next to those members (the clear state nearest each member, at most
-   :data:`POOL_GOALS` per target: :func:`~armpath.planning.reach_generic.generic_goal_states`).
-4. For each pooled order, the shortest path from the start through one goal state per target in
-   which a planned leg costs its planned commands and an unplanned one its direct-motion
-   commands plus the median of what the planned legs between the same two targets needed beyond
-   theirs (once :data:`EXCESS_AFTER` are planned): the unplanned legs of the cheapest path are
-   planned (:func:`~armpath.planning.motion.plan_motion`, through the openings' waypoints where
-   no direct motion is clear) and the path found again, until the cheapest path is planned
-   whole, its estimate reaches the best plan so far, or :data:`POOL_LEG_PLANS` legs are planned
-   in all.
+   (whole commands per leg, obstacles between the targets ignored) is found forwards (by prefix,
+   shared between orders) and backwards; the :data:`POOL_ORDERS` orders whose paths are
+   shortest are pooled, and at each target the members on some path within
+   :data:`POOL_SLACK` commands of its order's shortest (at most :data:`POOL_MEMBERS` per order
+   and target, the shortest paths first).
+3. One lazy search over the pooled orders (:func:`lazy_search`): the cheapest path from the
+   start through one member per target, in which a planned leg costs its planned commands and
+   an unplanned one its direct-motion commands plus the median of what the planned legs between
+   the same two targets needed beyond theirs (once :data:`EXCESS_AFTER` are planned; a leg
+   that failed counts as endless). The path's members are first turned into lattice goal
+   states (the clear state nearest each, which keeps the buffer:
+   :func:`~armpath.planning.reach_generic.generic_goal_states`; a member without one, or with
+   another member's, drops out), then its legs are planned in turn from where the one before
+   ends (:func:`~armpath.planning.motion.plan_motion` through the openings' waypoints where no
+   direct motion is clear; a joint whose limits span more than a turn may end at a whole-turn
+   copy of its goal, so legs are counted between states up to whole turns), and the path is
+   found again, until the cheapest path is planned whole, its estimate reaches the plan to beat,
+   or :data:`POOL_LEG_PLANS` legs are planned in all.
 
 Without the median every leg into a hollow workpiece would look a few commands cheaper than it
-is and each would be planned in turn (hundreds of plans); with it, the seed's Task 3 needs a few
-dozen. The median is an estimate, not a bound: this chooses what to plan, the tour's bound
+is and each would be planned in turn (a search for 122 commands of the seed's Task 3 took 200
+leg plans); with it, ten. Without it the search would be exact (no leg needs fewer than its
+direct commands, so the first path planned whole is the cheapest through the pools); the
+median makes it an estimate that chooses what to plan, and the tour's bound
 (:func:`~armpath.planning.bounds.tour_bound`) is what proves how close the plan is.
 """
 
