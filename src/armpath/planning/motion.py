@@ -745,6 +745,17 @@ MAX_SEARCH_GOALS = 64
 FAR_GOAL_TURNS = 0.5
 
 
+def whole_turn_ticks(arm: SerialArm) -> IntArray:
+    """Ticks in a whole turn of each revolute joint whose (finite) limits span more than a turn
+    and whose turn is a whole number of ticks (its whole-turn copies are goals too:
+    :func:`with_turn_copies`); 0 for the other joints."""
+    grid = arm.lattice
+    turn = 2.0 * np.pi / grid.tick
+    wide = np.isfinite(arm.lower) & np.isfinite(arm.upper) & (arm.upper - arm.lower > 2 * np.pi)
+    exact = (~grid.prismatic) & wide & (np.abs(turn - np.round(turn)) < 1e-6)
+    return np.asarray(np.round(np.where(exact, turn, 0.0)), dtype=np.int64)
+
+
 def with_turn_copies(arm: SerialArm, goals: IntArray, start: IntArray) -> IntArray:
     """``goals`` followed by their whole-turn copies: each goal with one revolute joint, whose
     (finite) limits span more than a turn, a whole turn up or down (inside the limits, on the
@@ -753,12 +764,10 @@ def with_turn_copies(arm: SerialArm, goals: IntArray, start: IntArray) -> IntArr
     also at -137.2 deg, and only one of them may be reachable without folding the arm through
     itself. Copies nearest ``start`` in commands first, up to :data:`MAX_SEARCH_GOALS` goals."""
     grid = arm.lattice
-    turn = 2.0 * np.pi / grid.tick
-    wide = np.isfinite(arm.lower) & np.isfinite(arm.upper) & (arm.upper - arm.lower > 2 * np.pi)
-    exact = (~grid.prismatic) & wide & (np.abs(turn - np.round(turn)) < 1e-6)
+    turn_ticks = whole_turn_ticks(arm)
+    exact = turn_ticks > 0
     if not np.any(exact) or goals.shape[0] >= MAX_SEARCH_GOALS:
         return goals
-    turn_ticks = np.round(np.where(exact, turn, 0.0)).astype(np.int64)
     seen = {g.tobytes() for g in goals}
     copies: list[IntArray] = []
     for g in goals:

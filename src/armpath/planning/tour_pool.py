@@ -52,7 +52,7 @@ from armpath.geometry.world import into_windows
 from armpath.ik.family import shift_into_limits
 from armpath.ik.target import ToolTarget
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion
+from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion, whole_turn_ticks
 from armpath.planning.passages import passage_source
 from armpath.planning.reach import GOAL_BODY_BUFFER_MM
 from armpath.planning.reach_generic import generic_goal_states, goal_links_clear
@@ -247,17 +247,12 @@ def member_pools(
 
 
 class _Turns:
-    """The joints whose limits span more than a whole turn of lattice ticks (their whole-turn
-    copies are goals too: :func:`~armpath.planning.motion.with_turn_copies`): ticks per turn,
-    0 for the others."""
+    """The joints whose whole-turn copies are goals too
+    (:func:`~armpath.planning.motion.whole_turn_ticks`): ticks per turn, 0 for the others."""
 
     def __init__(self, arm: SerialArm) -> None:
-        grid = arm.lattice
-        turn = 2.0 * np.pi / grid.tick
-        wide = np.isfinite(arm.lower) & np.isfinite(arm.upper) & (arm.upper - arm.lower > 2 * np.pi)
-        exact = (~grid.prismatic) & wide & (np.abs(turn - np.round(turn)) < 1e-6)
-        self.ticks = np.where(exact, np.round(turn), 0.0)
-        self.max_ticks = np.asarray(grid.max_ticks, dtype=np.float64)
+        self.ticks = whole_turn_ticks(arm).astype(np.float64)
+        self.max_ticks = np.asarray(arm.lattice.max_ticks, dtype=np.float64)
 
     def key(self, state: IntArray) -> bytes:
         """``state`` up to whole turns of those joints."""
