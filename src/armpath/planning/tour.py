@@ -453,16 +453,19 @@ def plan_tour(
     # (:mod:`~armpath.planning.tour_pool`): the seed's Task 3 127 -> 122 commands
     if pools and guide_all is not None and fam is not None and len(orders) <= MAX_GUIDED_ORDERS:
         say("sampling the goal states' pools at every target")
-        pooled = pooled_tour(
-            pool_guide(fam, pts, tolerance_mm, q0),
-            start,
-            orders,
-            return_to_start,
-            opts,
-            ceiling=np.inf if best is None else best[0],
-            say=say,
-        )
-        if pooled.order is not None and pooled.legs is not None:
+        try:
+            pooled = pooled_tour(
+                pool_guide(fam, pts, tolerance_mm, q0),
+                start,
+                orders,
+                return_to_start,
+                opts,
+                ceiling=np.inf if best is None else best[0],
+                say=say,
+            )
+        except PlanningError:  # no member at some target: the plans above stand
+            pooled = None
+        if pooled is not None and pooled.order is not None and pooled.legs is not None:
             total = _commands(pooled.legs)
             planned[pooled.order] = min(planned.get(pooled.order, total), total)
             not_planned.pop(pooled.order, None)

@@ -8,7 +8,8 @@ many goal states per target stay open until the legs between them are known:
 1. The family at every target is sampled finer next to the obstacles (the triangles of tool
    directions about members that may be clear split :data:`POOL_LEVELS` times); the members
    that may be goal states are kept (links keep the margin plus
-   :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`pool_guide`).
+   :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`pool_guide`; at most
+   :data:`MAX_POOL_LAYER` per target).
 2. For each visiting order, the shortest path from the start through one member per target
    (whole commands per leg, obstacles between the targets ignored) is found forwards (by prefix,
    shared between orders) and backwards; the :data:`POOL_ORDERS` orders whose paths are
@@ -65,6 +66,9 @@ BoolArray = NDArray[np.bool_]
 
 #: Times the tool directions about members that may be clear are split at each target.
 POOL_LEVELS = 2
+#: Most members kept at a target for the paths through them (evenly over those that may be goal
+#: states; the seed's Task 3 has 3,800-19,000).
+MAX_POOL_LAYER = 25_000
 #: Orders pooled: those whose shortest paths through clear members are shortest.
 POOL_ORDERS = 5
 #: Members kept at a target: on a path within this many commands of its order's shortest.
@@ -105,8 +109,9 @@ def pool_guide(
     plus :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`goal_links_clear`),
     sampled finer next to the obstacles (:data:`POOL_LEVELS`)."""
     guide = TourGuide.build(fam, targets, tolerance_mm, 0.0, q_start, levels=POOL_LEVELS)
-    keep = [
-        goal_links_clear(
+    keep = []
+    for p, lay in zip(targets, guide.layers, strict=True):
+        ok = goal_links_clear(
             guide.arm,
             guide.world,
             p,
@@ -114,8 +119,12 @@ def pool_guide(
             tolerance_mm,
             GOAL_BODY_BUFFER_MM,
         )
-        for p, lay in zip(targets, guide.layers, strict=True)
-    ]
+        index = np.flatnonzero(ok)
+        if index.size > MAX_POOL_LAYER:  # evenly over them: the paths' time and memory bounded
+            index = index[np.linspace(0, index.size - 1, MAX_POOL_LAYER).round().astype(np.int64)]
+        mask = np.zeros(lay.size, dtype=bool)
+        mask[index] = True
+        keep.append(mask)
     return guide.subset(keep)
 
 
