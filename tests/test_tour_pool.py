@@ -192,13 +192,30 @@ def test_lazy_search_finds_the_cheapest_tour_of_hidden_leg_costs(monkeypatch, wh
     del rng
 
 
-def test_pool_members_keep_the_goal_states_rule():
+@pytest.fixture(scope="module")
+def seed_pools():
     scene = seed_scene()
     arm = seed_arm()
     pts = scene.spotweld_targets_mm()
     fam = tour._targets_family(arm, scene.world, pts)
     q0 = np.radians([0, -90, 0, 0, -90, 0])
-    guide = tour_pool.pool_guide(fam, pts, 0.05, q0)
+    return fam, pts, q0, tour_pool.pool_guide(fam, pts, 0.05, q0)
+
+
+def test_pool_members_are_capped_evenly(seed_pools, monkeypatch):
+    fam, pts, q0, guide = seed_pools
+    monkeypatch.setattr(tour_pool, "MAX_POOL_LAYER", 500)
+    capped = tour_pool.pool_guide(fam, pts, 0.05, q0)
+    for full, few in zip(guide.layers, capped.layers, strict=True):
+        assert few.size == min(full.size, 500)
+        # the capped members are members of the full pool, first and last among them
+        rows = {tuple(np.round(q, 12)) for q in full.q}
+        assert all(tuple(np.round(q, 12)) in rows for q in few.q)
+        np.testing.assert_allclose(few.q[[0, -1]], full.q[[0, -1]])
+
+
+def test_pool_members_keep_the_goal_states_rule(seed_pools):
+    _, pts, _, guide = seed_pools
     wp = independent.Workpiece("normal")
     for t, lay in enumerate(guide.layers):
         assert lay.size > 1000  # split next to the wall: thousands of members
