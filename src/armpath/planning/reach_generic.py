@@ -22,6 +22,7 @@ tolerance of the target (and its orientation rule) has ``max_i |q_i - s_i| / ste
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -536,19 +537,15 @@ def reach_any_arm(
     )
 
 
-def goal_links_clear(
-    arm: SerialArm,
-    world: CollisionWorld,
-    position: FloatArray,
-    q: FloatArray,
-    tip_tolerance: float,
-    body_buffer: float,
-) -> BoolArray:
-    """Which configurations ``q (M, n)`` rad with the tool point at ``position`` may be goal
-    states: their links keep the margin plus ``body_buffer`` and the tool point is no deeper
-    than ``tip_tolerance`` in an obstacle. The tool's own link against the surface its point
-    touches meets it head-on from a retracted pre-goal (see plan_motion): it needs the margin
-    only, not the buffer."""
+def goal_links_rule(
+    arm: SerialArm, world: CollisionWorld, position: FloatArray, body_buffer: float
+) -> Callable[[FloatArray, float], BoolArray]:
+    """The goal states' clearance rule at a tool point ``position``: a function of
+    configurations ``q (M, n)`` rad and a ``tip_tolerance`` telling which may be goal states,
+    their links keeping the margin plus ``body_buffer`` and the tool point no deeper than
+    ``tip_tolerance`` in an obstacle. The tool's own link against the surface its point touches
+    meets it head-on from a retracted pre-goal (see plan_motion): it needs the margin only, not
+    the buffer."""
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
     required = world.required(arm)
@@ -559,9 +556,13 @@ def goal_links_clear(
     buffer = np.array(
         [0.0 if (c.part == tool_link and c.other in touched) else body_buffer for c in pairs]
     )
-    values, _ = world.pair_clearances(arm, q)
-    ok = np.where(is_tip, values >= -tip_tolerance, values - required >= buffer)
-    return np.asarray(np.all(ok, axis=-1), dtype=bool)
+
+    def clear(q: FloatArray, tip_tolerance: float) -> BoolArray:
+        values, _ = world.pair_clearances(arm, q)
+        ok = np.where(is_tip, values >= -tip_tolerance, values - required >= buffer)
+        return np.asarray(np.all(ok, axis=-1), dtype=bool)
+
+    return clear
 
 
 def generic_goal_states(
@@ -606,7 +607,8 @@ def generic_goal_states(
         )
     # a member's tool point is on the target, which may lie on a surface: rounding puts it a
     # hair inside; the lattice states near it are held to the rule exactly below
-    body_ok = goal_links_clear(arm, world, target.position, samples, tolerance, body_buffer)
+    goal_clear = goal_links_rule(arm, world, target.position, body_buffer)
+    body_ok = goal_clear(samples, tolerance)
     if not np.any(body_ok):
         raise PlanningError(
             f"no configuration reaching ({where}) {arm.length_unit} keeps the links "
@@ -623,7 +625,7 @@ def generic_goal_states(
         within += cand.shape[0]
         if cand.shape[0] == 0:
             continue
-        ok = goal_links_clear(arm, world, target.position, grid.to_joint(cand), 0.0, body_buffer)
+        ok = goal_clear(grid.to_joint(cand), 0.0)
         if not np.any(ok):
             continue
         idx = np.flatnonzero(ok)
@@ -690,7 +692,7 @@ __all__ = [
     "command_metric",
     "generic_bound",
     "generic_goal_states",
-    "goal_links_clear",
+    "goal_links_rule",
     "lattice_candidates",
     "nearest_reachable",
     "reach_any_arm",

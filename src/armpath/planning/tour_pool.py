@@ -56,7 +56,7 @@ from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion, whole_turn_ticks
 from armpath.planning.passages import passage_source
 from armpath.planning.reach import GOAL_BODY_BUFFER_MM
-from armpath.planning.reach_generic import generic_goal_states, goal_links_clear
+from armpath.planning.reach_generic import generic_goal_states, goal_links_rule
 from armpath.planning.tour_guide import TourGuide
 from armpath.planning.trace.family import CurveFamily
 
@@ -97,28 +97,18 @@ class PooledTour:
     leg_plans: int
     orders_pooled: tuple[tuple[int, ...], ...]
 
-    @property
-    def commands(self) -> int | None:
-        return None if self.legs is None else sum(leg.sequence.n_commands for leg in self.legs)
-
 
 def pool_guide(
     fam: CurveFamily, targets: FloatArray, tolerance_mm: float, q_start: FloatArray
 ) -> TourGuide:
     """The members of the family at each target that may be goal states (links keep the margin
-    plus :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`goal_links_clear`),
+    plus :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`goal_links_rule`),
     sampled finer next to the obstacles (:data:`POOL_LEVELS`)."""
     guide = TourGuide.build(fam, targets, tolerance_mm, 0.0, q_start, levels=POOL_LEVELS)
     keep = []
     for p, lay in zip(targets, guide.layers, strict=True):
-        ok = goal_links_clear(
-            guide.arm,
-            guide.world,
-            p,
-            guide.with_start(lay.q, q_start),
-            tolerance_mm,
-            GOAL_BODY_BUFFER_MM,
-        )
+        goal_clear = goal_links_rule(guide.arm, guide.world, p, GOAL_BODY_BUFFER_MM)
+        ok = goal_clear(guide.with_start(lay.q, q_start), tolerance_mm)
         index = np.flatnonzero(ok)
         if index.size > MAX_POOL_LAYER:  # evenly over them: the paths' time and memory bounded
             index = index[np.linspace(0, index.size - 1, MAX_POOL_LAYER).round().astype(np.int64)]
@@ -296,14 +286,17 @@ class _LegCache:
         self.excess: dict[tuple[int, int], list[float]] = {}
         self.planned = 0
 
+    def _key(self, a: IntArray, b: IntArray) -> tuple[bytes, bytes]:
+        return np.asarray(a, dtype=np.int64).tobytes(), self.turns.key(b)
+
     def get(self, a: IntArray, b: IntArray) -> tuple[bool, MotionPlan | None]:
-        key = (np.asarray(a, dtype=np.int64).tobytes(), self.turns.key(b))
+        key = self._key(a, b)
         return key in self.legs, self.legs.get(key)
 
     def plan(self, a: IntArray, b: IntArray, pair: tuple[int, int], direct: float) -> None:
         # back to the start means the start itself, not a copy of it
         leg = self.plan_leg(a, b, pair[1] != _START)
-        self.legs[(np.asarray(a, dtype=np.int64).tobytes(), self.turns.key(b))] = leg
+        self.legs[self._key(a, b)] = leg
         self.planned += 1
         commands = np.inf if leg is None else float(leg.sequence.n_commands)
         key = (self.turns.key(a), self.turns.key(b))
