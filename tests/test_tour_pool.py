@@ -233,3 +233,29 @@ def test_pool_members_keep_the_goal_states_rule(seed_pools):
         assert to_wp[body & ~de[None, :]].min() >= 2.5 - 1e-6
         assert to_wp[body & de[None, :]].min() >= 1.0 - 1e-6
         assert min(to_wp[is_tip].min(), to_floor[is_tip].min()) >= -1e-9
+
+
+def test_the_pools_switch_leaves_them_out_and_they_never_lengthen_a_tour():
+    """``pools=False`` plans without the pooling step (no pool is sampled), ``pools=True`` runs
+    it; both tours, replayed independently in integer ticks with the seed's forward kinematics,
+    put the fingertip within 0.05 mm of every weld, and the pooled one needs no more commands
+    (its plan counts only when shorter)."""
+    from armpath.api import arm_and_scene
+    from armpath.tasks import spotweld_task
+
+    arm, scene = arm_and_scene("seed", "none")
+    welds = np.array([[300.0, 100.0, 200.0], [250.0, -100.0, 250.0], [320.0, 0.0, 150.0]])
+    commands = {}
+    for pools in (True, False):
+        said: list[str] = []
+        res = spotweld_task(
+            scene, arm, targets_mm=welds, bound=False, pools=pools, on_progress=said.append
+        )
+        assert any("pools" in m for m in said) == pools
+        seq = res.sequence
+        states = independent.replay(seq.start_ticks / 10.0, seq.commands)
+        tips = independent.points(states)[:, -1]
+        for w in welds:
+            assert np.linalg.norm(tips - w, axis=1).min() <= 0.05 + 1e-9
+        commands[pools] = seq.n_commands
+    assert commands[True] <= commands[False]

@@ -312,7 +312,7 @@ def trace(
     scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it, every reachable part, in
     the fewest passes and commands; the document lists the arcs not traced and why.
     ``bound``: also prove a lower bound on the commands of any plan (the document's
-    ``lower_bound``, with the plan's gap to it; a few seconds more, the seed's Task 2 4 s of 17);
+    ``lower_bound``, with the plan's gap to it; the seed's Task 2: about a third of its time);
     False: ``None`` there. ``bound_samples``: the live samples the bound's search may hold
     (1,000 to 2,000,000; None: 50,000): more give a tighter bound, later."""
     from armpath.export import trace_result_dict
@@ -359,16 +359,19 @@ def spotweld(
     seed: int = 0,
     bound: bool = True,
     bound_samples: int | None = None,
+    pools: bool = True,
     time_limit_s: float | None = None,
 ) -> Result:
     """Visit the spot welds ``welds_mm (K, 3)`` (default: the scene's ``[tasks.spotweld]``)
     in the best order (``order="auto"``: every order ranked by its lower bound, the best
     planned; ``"given"``: as listed), optionally back to the start. ``bound``: also prove a
     lower bound on the commands of any tour, over every order and goal configuration (the
-    document's ``lower_bound``; the seed's Task 3 10 s of 22); False: ``None`` there.
-    ``bound_samples``: the live samples the bound's search may hold (1,000 to 2,000,000; None:
-    50,000): more give a tighter bound, later (Task 3: 106 rather than 103 with 150,000, 44 s
-    of bounding rather than 10 s)."""
+    document's ``lower_bound``; the seed's Task 3: about a third of its time); False: ``None``
+    there. ``bound_samples``: the live samples the bound's search may hold (1,000 to 2,000,000;
+    None: 50,000): more give a tighter bound, later (Task 3: 111 rather than 108 with 200,000,
+    163 s of bounding rather than 35 s). ``pools``: plan the cheapest orders once more through
+    pools of goal states (Task 3: 122 commands rather than 127, in about twice the time
+    without the bound); False: the guided orders' goal states only."""
     from armpath.export import tour_result_dict
     from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions
@@ -397,6 +400,7 @@ def spotweld(
             targets_mm=targets,
             bound=bound,
             bound_samples=bound_samples,
+            pools=pools,
         )
         doc = tour_result_dict(found, the_arm, the_scene, options.objective.value)
     return _result(doc, the_arm, the_scene, found.sequence)

@@ -115,9 +115,9 @@ BoundSamplesOption = Annotated[
         "--bound-samples",
         metavar="N",
         help="Live samples the lower bound's search may hold (1,000 to 2,000,000; default "
-        "50,000): more give a tighter bound, later (the seed's Task 3: 106 rather than 103 with "
-        "150,000, 58 s rather than 22 s in all; the UR5 cell's seam: 78 rather than 75 with "
-        "200,000, 53 s rather than 23 s).",
+        "50,000): more give a tighter bound, later (with 200,000 the seed's Task 3: 111 rather "
+        "than 108, its bound 163 s rather than 35 s; the UR5 cell's seam: 78 rather than 75, 72 "
+        "s rather than 14 s; benchmarks/results/bounds.md).",
         show_default=False,
     ),
 ]

@@ -67,12 +67,15 @@ def spotweld_task(
     targets_mm: FloatArray | None = None,
     bound: bool = True,
     bound_samples: int | None = None,
+    pools: bool = True,
 ) -> TourResult:
     """Task 3: from the arm's initial pose (or ``start_ticks``) through every spot weld of the
     scene (or the points ``targets_mm (K, 3)``), best order. ``tool_axis``: the torch within a
     cone about the surface's inward normal at each weld (a rule with ``normal``) or about a
     fixed direction. ``bound``: prove the tour's lower bound (False: the plan only), its search
-    holding up to ``bound_samples`` live samples."""
+    holding up to ``bound_samples`` live samples. ``pools``: plan the cheapest orders through
+    pools of goal states as well (:mod:`~armpath.planning.tour_pool`; False: the guided
+    orders' goal states only, sooner)."""
     model = arm or seed_arm()
     start = _start(model, start_ticks)
     targets = scene.spotweld_targets_mm() if targets_mm is None else targets_mm
@@ -106,6 +109,7 @@ def spotweld_task(
         orientations=rules,
         bound=bound,
         bound_samples=bound_samples,
+        pools=pools,
     )
 
 
