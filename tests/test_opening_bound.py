@@ -18,6 +18,7 @@ against independent truth.
 from __future__ import annotations
 
 import itertools
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -32,6 +33,7 @@ from armpath.planning.bounds import metric
 from armpath.planning.bounds.passage import (
     MAX_PASSAGE_POINTS,
     PASSAGE_SPACING_MM,
+    PassageSamples,
     disc_grid,
     passages,
 )
@@ -194,3 +196,59 @@ def test_a_trace_inside_the_workpiece_is_approached_through_its_opening():
     assert b.parts["approach"] >= direct.parts["approach"] + 4.0  # 45.2 -> 51.5 commands
     assert b.sampling["opening_samples"] > 10_000 and "opening" in b.method
     assert "opening_samples" not in direct.sampling
+
+
+def test_the_way_through_a_passage_is_remembered_exactly():
+    """:meth:`PassageSamples.to` remembers each sample's way through the passage: asked again
+    about a layer with some samples new, some with changed errors and some as before, it
+    computes only the new and changed ones, and every answer equals a brute force over every
+    sample of the passage (start cost plus the largest-joint distance less both errors, whole
+    turns of joint 0 the shorter way round)."""
+    rng = np.random.default_rng(3)
+    n_joints = 4
+    period = np.array([180.0, 0.0, 0.0, 0.0])  # joint 0 turns whole every 180 commands
+    through = bounds.Layer(
+        rng.uniform(-100, 100, (300, n_joints)),
+        rng.uniform(0, 2, (300, n_joints)),
+        np.zeros((300, n_joints)),
+        np.zeros((300, 3)),
+    )
+    start = rng.uniform(0, 50, 300)
+    asked: list[int] = []
+
+    def advance(prev, cost, nxt, whole=False):
+        asked.append(nxt.size)
+        return metric.advance(prev.u, prev.err, cost, nxt.u, nxt.err, period, whole)
+
+    sampler = SimpleNamespace(advance=advance)
+    way = PassageSamples(None, through, start, through, start)  # type: ignore[arg-type]
+
+    def brute(layer):
+        d = layer.u[:, None, :] - through.u[None, :, :]
+        d = np.where(period > 0, d - period * np.round(d / np.where(period > 0, period, 1)), d)
+        gap = np.maximum(np.abs(d) - layer.err[:, None, :] - through.err[None, :, :], 0.0)
+        return (start[None, :] + gap.max(axis=-1)).min(axis=1)
+
+    first = bounds.Layer(
+        rng.uniform(-120, 120, (200, n_joints)),
+        rng.uniform(0, 2, (200, n_joints)),
+        np.zeros((200, n_joints)),
+        np.zeros((200, 3)),
+    )
+    got = way.to(sampler, first, whole=False)
+    assert asked == [200]
+    np.testing.assert_allclose(got, brute(first), atol=1e-9)
+    # half the samples kept, a quarter with smaller errors (a neighbour split), 50 new
+    err = first.err.copy()
+    err[100:150] *= 0.5
+    new_u = rng.uniform(-120, 120, (50, n_joints))
+    second = bounds.Layer(
+        np.vstack([first.u[:150], new_u]),
+        np.vstack([err[:150], rng.uniform(0, 2, (50, n_joints))]),
+        np.zeros((200, n_joints)),
+        np.zeros((200, 3)),
+    )
+    got = way.to(sampler, second, whole=True)
+    assert asked == [200, 100]
+    np.testing.assert_allclose(got, np.ceil(brute(second) - 1e-9), atol=1e-9)
+    assert np.all(got[100:150] >= np.ceil(brute(first)[100:150] - 1e-9))

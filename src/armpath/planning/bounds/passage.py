@@ -19,7 +19,7 @@ every member at the disc, as far as the package's sampling errors hold.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,6 +38,9 @@ BoolArray = NDArray[np.bool_]
 #: a cell's diagonal (11.3 mm) of a grid point. Seed Task 3: 109 grid points, 254,032 samples
 #: that may be clear, its bound 103 -> 108 commands.
 PASSAGE_SPACING_MM = 16.0
+#: Samples whose way through a passage :meth:`PassageSamples.to` remembers at most (a few
+#: hundred bytes each); past it, it forgets them all and starts again.
+PASSAGE_MEMO_LIMIT = 400_000
 #: Tool directions sampled at each grid point (about 6.4 deg apart).
 PASSAGE_DIRECTIONS = 1000
 #: Most grid points of all the openings of a scene together (a finer grid is coarsened).
@@ -138,13 +141,19 @@ class PassageSamples:
     """A passage as the bounds use it: the family sampled at its grid points
     (:data:`PASSAGE_DIRECTIONS` tool directions, its radius the tolerance; the members that
     may be clear) with the least distance from the start to each sample (commands), and the
-    same for the samples that are clear themselves, taken as exact."""
+    same for the samples that are clear themselves, taken as exact. :meth:`to` remembers the
+    way to each sample it was asked about (by its command units and errors: the way depends on
+    nothing else), so a search's next round computes only its new samples and those whose
+    errors changed."""
 
     passage: Passage
     layer: Layer
     start: FloatArray
     exact: Layer
     exact_start: FloatArray
+    _memo: dict[tuple[int, bool], dict[bytes, float]] = field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     @staticmethod
     def sampled(
@@ -182,7 +191,16 @@ class PassageSamples:
             return np.zeros(0)
         check_time("bounding the commands")
         through, start = (self.exact, self.exact_start) if exact else (self.layer, self.start)
-        via = sampler.advance(through, start, layer)[0]
+        memo = self._memo.setdefault((id(sampler), exact), {})
+        rows = np.ascontiguousarray(np.hstack([layer.u, layer.err]), dtype=np.float64)
+        keys = [row.tobytes() for row in rows]
+        via = np.array([memo.get(k, np.nan) for k in keys], dtype=np.float64)
+        todo = np.flatnonzero(np.isnan(via))
+        if todo.size:
+            via[todo] = sampler.advance(through, start, layer.subset(todo))[0]
+            if len(memo) + todo.size > PASSAGE_MEMO_LIMIT:
+                memo.clear()
+            memo.update(zip((keys[i] for i in todo), via[todo].tolist(), strict=True))
         return np.asarray(np.ceil(via - 1e-9) if whole else via, dtype=np.float64)
 
 
