@@ -151,7 +151,7 @@ class PassageSamples:
     start: FloatArray
     exact: Layer
     exact_start: FloatArray
-    _memo: dict[tuple[int, bool], dict[bytes, float]] = field(
+    _memo: dict[tuple[FamilySampler, bool], dict[bytes, float]] = field(
         default_factory=dict, compare=False, repr=False
     )
 
@@ -191,7 +191,7 @@ class PassageSamples:
             return np.zeros(0)
         check_time("bounding the commands")
         through, start = (self.exact, self.exact_start) if exact else (self.layer, self.start)
-        memo = self._memo.setdefault((id(sampler), exact), {})
+        memo = self._memo.setdefault((sampler, exact), {})  # the sampler kept: its metric
         rows = np.ascontiguousarray(np.hstack([layer.u, layer.err]), dtype=np.float64)
         keys = [row.tobytes() for row in rows]
         via = np.array([memo.get(k, np.nan) for k in keys], dtype=np.float64)
