@@ -369,7 +369,7 @@ def spotweld(
     document's ``lower_bound``; the seed's Task 3: about a third of its time); False: ``None``
     there. ``bound_samples``: the live samples the bound's search may hold (1,000 to 2,000,000;
     None: 50,000): more give a tighter bound, later (Task 3: 111 rather than 108 with 200,000,
-    163 s of bounding rather than 35 s). ``pools``: plan the cheapest orders once more through
+    205 s of bounding rather than 37 s). ``pools``: plan the cheapest orders once more through
     pools of goal states (Task 3: 122 commands rather than 127, in about twice the time
     without the bound); False: the guided orders' goal states only."""
     from armpath.export import tour_result_dict

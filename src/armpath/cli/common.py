@@ -116,7 +116,7 @@ BoundSamplesOption = Annotated[
         metavar="N",
         help="Live samples the lower bound's search may hold (1,000 to 2,000,000; default "
         "50,000): more give a tighter bound, later (with 200,000 the seed's Task 3: 111 rather "
-        "than 108, its bound 163 s rather than 35 s; the UR5 cell's seam: 78 rather than 75, 72 "
+        "than 108, its bound 205 s rather than 37 s; the UR5 cell's seam: 78 rather than 75, 80 "
         "s rather than 14 s; benchmarks/results/bounds.md).",
         show_default=False,
     ),
