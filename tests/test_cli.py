@@ -178,14 +178,14 @@ def test_run_writes_every_task_and_a_summary(seed_run):
 
 def test_spotweld_horizontal_wall_given_order(tmp_path):
     r = run(
-        "spotweld", "--wall", "horizontal", "--order", "given", "--no-bound", "--json",
-        "--out", str(tmp_path),
+        "spotweld", "--wall", "horizontal", "--order", "given", "--no-bound", "--no-pools",
+        "--json", "--out", str(tmp_path),
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     doc = json.loads(r.stdout)
     assert json.loads((tmp_path / "spotweld.json").read_text()) == doc
     assert doc["wall_thickness"] == "horizontal" and doc["order"] == [1, 2, 3, 4]
-    # --no-bound: the plan and its goal states' bound only
+    # --no-bound: the plan and its goal states' bound only (--no-pools: the guided plan, sooner)
     assert doc["lower_bound"] is None and doc["lower_bound_commands"] is None
     assert 0 < doc["goal_states_bound_commands"] <= doc["n_commands"]
     targets = np.array(doc["targets"])
