@@ -40,8 +40,8 @@ from armpath.scenes.arm import scene_arm
 from test_ur5_cell import CELL, ur5_landmarks
 
 
-@pytest.fixture(scope="module")
-def cell():
+def ur5_cell_guide():
+    """The UR5 cell's scene, arm, welds and the guide through them (tolerance 0.05 mm)."""
     scene = load_scene(CELL)
     arm = scene_arm(scene)
     pts = scene.spotweld_targets_mm()
@@ -49,21 +49,28 @@ def cell():
     return scene, arm, pts, TourGuide.build(fam, pts, 0.05)
 
 
+@pytest.fixture(scope="module")
+def cell():
+    return ur5_cell_guide()
+
+
+def whole_command_legs(arm, a, b, tip):
+    """Whole commands of every leg between members ``a`` (A, n) and ``b`` (B, n) rad: the
+    largest change of the joints ``tip`` in steps, rounded up, a joint whose limits span a
+    whole turn the shorter way round (written here from the arm's limits)."""
+    step = (arm.lattice.tick * arm.lattice.max_ticks)[tip]
+    turn = 2 * np.pi / step
+    wraps = (arm.upper - arm.lower)[tip] >= 2 * np.pi
+    d = (b[None, :, tip] - a[:, None, tip]) / step
+    d = np.where(wraps, d - turn * np.round(d / turn), d)
+    return np.ceil(np.abs(d).max(axis=-1) - 1e-9)
+
+
 def _brute_total(arm, q0, layers, tip):
     """Every combination of one member per layer: the least sum of whole-command legs."""
-    step = (arm.lattice.tick * arm.lattice.max_ticks)[tip]
-    wraps = (arm.upper - arm.lower)[tip] >= 2 * np.pi
-    turn = 2 * np.pi / step
-
-    def legs(a, b):  # (A, J), (B, J) command units -> (A, B)
-        d = b[None, :, :] - a[:, None, :]
-        d = np.where(wraps, d - turn * np.round(d / turn), d)
-        return np.ceil(np.abs(d).max(axis=-1) - 1e-9)
-
-    u = [q[:, tip] / step for q in layers]
-    total = legs((q0[tip] / step)[None], u[0])[0]
-    for a, b in itertools.pairwise(u):
-        total = (total[:, None] + legs(a, b)).min(axis=0)
+    total = whole_command_legs(arm, q0[None], layers[0], tip)[0]
+    for a, b in itertools.pairwise(layers):
+        total = (total[:, None] + whole_command_legs(arm, a, b, tip)).min(axis=0)
     return float(total.min())
 
 

@@ -28,29 +28,15 @@ import pytest
 import independent
 from armpath.model.seed_arm import seed_arm
 from armpath.planning import tour, tour_pool
-from armpath.planning.tour_guide import TourGuide
 from armpath.scenes import load_scene, seed_scene
 from armpath.scenes.arm import scene_arm
+from test_tour_guide import ur5_cell_guide, whole_command_legs
 from test_ur5_cell import CELL
-
-
-def _legs(arm, a, b, tip):
-    """Whole commands of every leg between members ``a`` (A, n) and ``b`` (B, n) rad."""
-    step = (arm.lattice.tick * arm.lattice.max_ticks)[tip]
-    turn = 2 * np.pi / step
-    wraps = (arm.upper - arm.lower)[tip] >= 2 * np.pi
-    d = (b[None, :, tip] - a[:, None, tip]) / step
-    d = np.where(wraps, d - turn * np.round(d / turn), d)
-    return np.ceil(np.abs(d).max(axis=-1) - 1e-9)
 
 
 @pytest.fixture(scope="module")
 def cell_guide():
-    scene = load_scene(CELL)
-    arm = scene_arm(scene)
-    pts = scene.spotweld_targets_mm()
-    fam = tour._targets_family(arm, scene.world, pts)
-    guide = TourGuide.build(fam, pts, 0.05)
+    _, arm, _, guide = ur5_cell_guide()
     rng = np.random.default_rng(11)
     keep = []
     for lay in guide.layers:
@@ -69,12 +55,12 @@ def test_member_paths_match_a_brute_force(cell_guide, back):
     for order in [(0, 1, 2, 3), (2, 0, 3, 1), (3, 1, 0, 2)]:
         q = [guide.layers[t].q for t in order]
         # every combination at once: an array with one axis per target
-        total = _legs(arm, q0[None], q[0], tip)[0].reshape(-1, 1, 1, 1)
-        total = total + _legs(arm, q[0], q[1], tip)[:, :, None, None]
-        total = total + _legs(arm, q[1], q[2], tip)[None, :, :, None]
-        total = total + _legs(arm, q[2], q[3], tip)[None, None, :, :]
+        total = whole_command_legs(arm, q0[None], q[0], tip)[0].reshape(-1, 1, 1, 1)
+        total = total + whole_command_legs(arm, q[0], q[1], tip)[:, :, None, None]
+        total = total + whole_command_legs(arm, q[1], q[2], tip)[None, :, :, None]
+        total = total + whole_command_legs(arm, q[2], q[3], tip)[None, None, :, :]
         if back:
-            total = total + _legs(arm, q[3], q0[None], tip)[:, 0][None, None, None, :]
+            total = total + whole_command_legs(arm, q[3], q0[None], tip)[:, 0][None, None, None, :]
         assert paths.length(order) == pytest.approx(total.min())
         for axis, through in enumerate(paths.through(order)):
             others = tuple(a for a in range(4) if a != axis)
