@@ -250,12 +250,13 @@ class _Turns:
     (:func:`~armpath.planning.motion.whole_turn_ticks`): ticks per turn, 0 for the others."""
 
     def __init__(self, arm: SerialArm) -> None:
-        self.ticks = whole_turn_ticks(arm).astype(np.float64)
+        self.turn_ticks = whole_turn_ticks(arm)
+        self.ticks = self.turn_ticks.astype(np.float64)
         self.max_ticks = np.asarray(arm.lattice.max_ticks, dtype=np.float64)
 
     def key(self, state: IntArray) -> bytes:
         """``state`` up to whole turns of those joints."""
-        t = self.ticks.astype(np.int64)
+        t = self.turn_ticks
         s = np.asarray(state, dtype=np.int64)
         return np.asarray(np.where(t > 0, np.mod(s, np.maximum(t, 1)), s), dtype=np.int64).tobytes()
 
