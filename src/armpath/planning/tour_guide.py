@@ -70,7 +70,7 @@ class TourGuide:
         tool directions about members that may be clear are split (finer next to the
         obstacles: :meth:`FamilySampler.layer`)."""
         arm, world = fam.arm, fam.world
-        sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS, q_start)
+        sampler = FamilySampler(fam, tolerance_mm, GUIDE_DIRECTIONS, q_start, blow_ups=False)
         pairs = world.pairs(arm)
         is_tip = np.array([p.is_tip for p in pairs], dtype=bool)
         required = world.required(arm)

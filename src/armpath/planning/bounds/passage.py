@@ -162,8 +162,14 @@ class PassageSamples:
         """The samples of ``passage`` in ``sampler``'s metric (``with_errors=False``: taken as
         exact, a diagnostic)."""
         fam = sampler.fam
+        # one coarse sampling at many points: its singular cells are only loose, and finding
+        # them at every point would cost more than the passage's whole sampling
         at = FamilySampler(
-            fam, passage.radius * fam.arm.mm_per_unit, PASSAGE_DIRECTIONS, q_start=q_start
+            fam,
+            passage.radius * fam.arm.mm_per_unit,
+            PASSAGE_DIRECTIONS,
+            q_start=q_start,
+            blow_ups=False,
         )
         layers = []
         for point in passage.points:

@@ -13,6 +13,16 @@ from armpath.geometry.world import into_windows
 from armpath.jit import njit
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
 from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.bounds.chart import (
+    BlowUp,
+    caps_about,
+    outside_holes,
+    ring,
+    ring_of,
+    singular_directions,
+    snapped,
+    to_real,
+)
 from armpath.planning.bounds.metric import _wrapped, advance
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
 
@@ -29,6 +39,9 @@ CLEAR_MARGIN = 1e-6
 MIN_SPACING = float(np.radians(0.05))
 #: Most directions of one layer (refinement stops before it would pass this).
 MAX_LAYER_DIRECTIONS = 200_000
+#: Directions a layer's singular directions are searched from (about 8 deg apart), whatever
+#: its own sampling.
+_DETECT_DIRECTIONS = fibonacci_directions(600)
 #: Sampling error standing for "no neighbour has a member" (commands).
 _MISSING = 1e6
 
@@ -87,12 +100,19 @@ class Layer:
         )
 
 
-def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray, IntArray]:
-    """Neighbours of each direction in the spherical Delaunay triangulation (the convex hull of
-    the unit vectors), as CSR ``(pointer, index)``, and the triangles ``(T, 3)``."""
+def _delaunay_neighbours(
+    dirs: FloatArray, caps: tuple[BlowUp, ...] = ()
+) -> tuple[IntArray, IntArray, IntArray]:
+    """Neighbours of each (virtual) direction in the spherical Delaunay triangulation (the
+    convex hull of the unit vectors), as CSR ``(pointer, index)``, and the triangles
+    ``(T, 3)``; without the triangles across a blown-up direction's hole (all three corners on
+    its circle: the chart has no directions there)."""
     from scipy.spatial import ConvexHull
 
     tri = ConvexHull(dirs).simplices
+    if caps:
+        on = ring_of(dirs, caps)[tri]
+        tri = tri[~((on[:, 0] >= 0) & (on[:, 0] == on[:, 1]) & (on[:, 0] == on[:, 2]))]
     a = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2], tri[:, 1], tri[:, 2], tri[:, 0]])
     b = np.concatenate([tri[:, 1], tri[:, 2], tri[:, 0], tri[:, 0], tri[:, 1], tri[:, 2]])
     a, b = a.astype(np.int64), b.astype(np.int64)  # n * n overflows qhull's int32
@@ -105,9 +125,10 @@ def _delaunay_neighbours(dirs: FloatArray) -> tuple[IntArray, IntArray, IntArray
 @dataclass(frozen=True)
 class _Samples:
     """A layer's samples before the clearance filter: every direction tried ``dirs (D, 3)``
-    and, per member, its configuration, direction index, command units, the arm's points,
-    the tolerance's joint change (commands) and its slack (model units; 0 where it is
-    not negative, the only values the filter needs)."""
+    (virtual: in the chart with the blow-ups ``caps``, :mod:`.chart`) and, per member, its
+    configuration, direction index, command units, the arm's points, the tolerance's joint
+    change (commands) and its slack (model units; 0 where it is not negative, the only values
+    the filter needs)."""
 
     dirs: FloatArray
     q: FloatArray
@@ -116,9 +137,10 @@ class _Samples:
     points: FloatArray
     tol_err: FloatArray
     slack: FloatArray
+    caps: tuple[BlowUp, ...] = ()
 
     @staticmethod
-    def empty(arm: SerialArm, n_tip: int) -> _Samples:
+    def empty(arm: SerialArm, n_tip: int, caps: tuple[BlowUp, ...] = ()) -> _Samples:
         none = np.zeros((0, arm.n_joints))
         return _Samples(
             dirs=np.zeros((0, 3)),
@@ -128,17 +150,22 @@ class _Samples:
             points=landmark_positions(arm, none),
             tol_err=np.zeros((0, n_tip)),
             slack=np.zeros(0),
+            caps=caps,
         )
 
 
-def _midpoints(dirs: FloatArray, triangles: IntArray, refine: BoolArray) -> FloatArray:
+def _midpoints(
+    dirs: FloatArray, triangles: IntArray, refine: BoolArray, caps: tuple[BlowUp, ...] = ()
+) -> FloatArray:
     """The midpoints (on the sphere) of the edges of every triangle with a vertex to
-    ``refine``: each such triangle is split in four, which halves its directions' cells."""
+    ``refine``: each such triangle is split in four, which halves its directions' cells. A
+    midpoint in a blown-up direction's hole (of two points of its circle) is moved out onto
+    the circle."""
     tri = triangles[np.any(refine[triangles], axis=1)]
     edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     edges = np.unique(np.sort(edges, axis=1), axis=0)
     mid = dirs[edges[:, 0]] + dirs[edges[:, 1]]
-    return np.asarray(mid / np.linalg.norm(mid, axis=-1, keepdims=True), dtype=np.float64)
+    return snapped(mid / np.linalg.norm(mid, axis=-1, keepdims=True), caps)
 
 
 def _distinct(new: FloatArray, old: FloatArray) -> FloatArray:
@@ -217,8 +244,11 @@ class FamilySampler:
         tolerance_mm: float,
         directions: int | None = None,
         q_start: FloatArray | None = None,
+        blow_ups: bool = True,
     ) -> None:
         arm = fam.arm
+        #: whether the family's singular directions are blown up (:mod:`.chart`)
+        self.blow_ups = blow_ups
         self.fam = fam
         self.tip = np.asarray(fam.tip_joints, dtype=bool)
         grid = arm.lattice
@@ -309,6 +339,11 @@ class FamilySampler:
         """What :meth:`layer` samples: every member (:class:`_Samples`) and what
         :meth:`_filtered` makes of them."""
         acc = self._grown(_Samples.empty(self.fam.arm, int(self.tip.sum())), E, dirs, allowed)
+        caps = self._blow_ups(E, allowed)
+        if caps:
+            virtual = np.vstack([dirs[outside_holes(dirs, caps)], *(ring(c) for c in caps)])
+            empty = _Samples.empty(self.fam.arm, acc.u.shape[1], caps)
+            acc = self._grown(empty, E, virtual, allowed)
         for level in range(levels + 1):
             check_time("bounding the commands")
             filtered = self._filtered(acc)
@@ -317,11 +352,32 @@ class FamilySampler:
             refine[unsure] = spacing[unsure] / 2.0 >= MIN_SPACING
             if level == levels or not np.any(refine):
                 break
-            new = _distinct(_midpoints(acc.dirs, triangles, refine), acc.dirs)
+            new = _distinct(_midpoints(acc.dirs, triangles, refine, acc.caps), acc.dirs)
             if acc.dirs.shape[0] + new.shape[0] > MAX_LAYER_DIRECTIONS:
                 break
             acc = self._grown(acc, E, new, allowed)
         return acc, filtered
+
+    def _blow_ups(
+        self, E: FloatArray, allowed: Callable[[FloatArray], BoolArray] | None
+    ) -> tuple[BlowUp, ...]:
+        """The blow-ups of the family's singular directions at ``E`` among those allowed
+        (:mod:`.chart`, found from :data:`_DETECT_DIRECTIONS`; none when :attr:`blow_ups` is
+        off or the family is not two-dimensional: several turns sampled about each
+        direction)."""
+        if not self.blow_ups or self.turns != 1:
+            return ()
+        found = singular_directions(
+            self.fam.arm,
+            self.tip,
+            lambda d: self.fam.members(E, d),
+            _DETECT_DIRECTIONS,
+            float(np.sqrt(4.0 * np.pi / _DETECT_DIRECTIONS.shape[0])),
+        )
+        centers = [c for c, _ in found]
+        if allowed is not None and centers:
+            centers = [c for c, ok in zip(centers, allowed(np.array(centers)), strict=True) if ok]
+        return caps_about(centers)
 
     def split(
         self,
@@ -333,7 +389,7 @@ class FamilySampler:
     ) -> _Samples:
         """``acc`` with the members along the new directions of the triangles about ``refine``
         split in four (``acc`` itself when there are none)."""
-        new = _distinct(_midpoints(acc.dirs, triangles, refine), acc.dirs)
+        new = _distinct(_midpoints(acc.dirs, triangles, refine, acc.caps), acc.dirs)
         return acc if new.shape[0] == 0 else self._grown(acc, E, new, allowed)
 
     def _grown(
@@ -345,8 +401,9 @@ class FamilySampler:
     ) -> _Samples:
         """``acc`` with the members along ``dirs`` added (configurations, command units, the
         arm's points, the tolerance's joint change, the slack)."""
-        pick = np.flatnonzero(allowed(dirs)) if allowed is not None else np.arange(dirs.shape[0])
-        q, index = self.fam.members(E, dirs[pick])
+        real = to_real(dirs, acc.caps)
+        pick = np.flatnonzero(allowed(real)) if allowed is not None else np.arange(dirs.shape[0])
+        q, index = self.fam.members(E, real[pick])
         index = pick[index] + acc.dirs.shape[0]
         tol_err = np.zeros((q.shape[0], acc.u.shape[1]))
         slack = np.zeros(q.shape[0])
@@ -367,6 +424,7 @@ class FamilySampler:
             points=np.concatenate([acc.points, landmark_positions(self.fam.arm, q)]),
             tol_err=np.vstack([acc.tol_err, tol_err]),
             slack=np.concatenate([acc.slack, slack]),
+            caps=acc.caps,
         )
 
     def _filtered(self, acc: _Samples) -> tuple[Layer, IntArray, FloatArray, IntArray]:
@@ -380,7 +438,7 @@ class FamilySampler:
         order = np.argsort(acc.index, kind="stable")
         q, index, u = acc.q[order], acc.index[order], acc.u[order]
         n_dirs = acc.dirs.shape[0]
-        nb_ptr, nb, triangles = _delaunay_neighbours(acc.dirs)
+        nb_ptr, nb, triangles = _delaunay_neighbours(acc.dirs, acc.caps)
         src = np.repeat(np.arange(n_dirs), np.diff(nb_ptr))
         cosines = np.einsum("ij,ij->i", acc.dirs[src], acc.dirs[nb])
         spacing = np.zeros(n_dirs)
@@ -402,7 +460,8 @@ class FamilySampler:
         keep = (slack >= -allowance) & ~self.outside_windows(u, err)
         unsure = np.unique(index[keep & (slack < 0.0)])
         clear = (slack >= 0.0) & ~self.outside_windows(u, np.zeros_like(err))
-        layer = Layer(u[keep], err[keep], q[keep], acc.dirs[index[keep]], index[keep], clear[keep])
+        real = to_real(acc.dirs[index[keep]], acc.caps)
+        layer = Layer(u[keep], err[keep], q[keep], real, index[keep], clear[keep])
         return layer, unsure, spacing, triangles
 
     def distance_from(self, q_start: FloatArray, layer: Layer, whole: bool = False) -> FloatArray:

@@ -118,7 +118,9 @@ def tour_bound_any_order(
     (``through_openings``, as :func:`tour_bound`)."""
     say = on_progress or (lambda _m: None)
     say(f"bounding the tour's commands ({targets.shape[0]} targets, any order)")
-    sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
+    # many targets, each sampled once: finding each one's singular directions would cost more
+    # (a second or two a target) than its layer
+    sampler = FamilySampler(fam, tolerance_mm, q_start=q_start, blow_ups=False)
     layers = []
     for p in targets:
         check_time("bounding the commands")
