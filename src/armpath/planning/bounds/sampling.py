@@ -338,12 +338,11 @@ class FamilySampler:
     ) -> tuple[_Samples, tuple[Layer, IntArray, FloatArray, IntArray]]:
         """What :meth:`layer` samples: every member (:class:`_Samples`) and what
         :meth:`_filtered` makes of them."""
-        acc = self._grown(_Samples.empty(self.fam.arm, int(self.tip.sum())), E, dirs, allowed)
         caps = self._blow_ups(E, allowed)
-        if caps:
-            virtual = np.vstack([dirs[outside_holes(dirs, caps)], *(ring(c) for c in caps)])
-            empty = _Samples.empty(self.fam.arm, acc.u.shape[1], caps)
-            acc = self._grown(empty, E, virtual, allowed)
+        if caps:  # the directions in the chart: none in the holes, the circles instead
+            dirs = np.vstack([dirs[outside_holes(dirs, caps)], *(ring(c) for c in caps)])
+        empty = _Samples.empty(self.fam.arm, int(self.tip.sum()), caps)
+        acc = self._grown(empty, E, dirs, allowed)
         for level in range(levels + 1):
             check_time("bounding the commands")
             filtered = self._filtered(acc)
