@@ -22,9 +22,10 @@ within the azimuths' boxes as the radius goes to zero).
 
 The singular directions are found where the family's differential loses rank
 (:func:`singular_directions`): the smallest singular value of the tool point's and the tool
-direction's joint Jacobian, minimised from the samples where it is least, and kept where the
-members about the minimum turn a long way within a tiny circle (a blow-down: a curve of
-members at one direction), not where two branches merely meet.
+direction's joint Jacobian, minimised on a shrinking grid of directions from the members of
+600 coarse directions where it is least among their branch's neighbours (one start per
+spacing), and kept where the members about the minimum turn a long way within a tiny circle
+(a blow-down: a curve of members at one direction), not where two branches merely meet.
 """
 
 from __future__ import annotations
