@@ -36,8 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.angles import wrap_to_pi
 from armpath.geometry.primitives import orthonormal_frame
-from armpath.kinematics import displacement_bounds, geometric_jacobian, tool_pose
+from armpath.kinematics import displacement_bounds, forward_frames, jacobian_from_frames
 from armpath.model.serial_arm import SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -156,8 +157,9 @@ def snapped(v: FloatArray, caps: tuple[BlowUp, ...]) -> FloatArray:
 def _sigma_min(arm: SerialArm, q: FloatArray, tip: BoolArray, lever: float) -> FloatArray:
     """Smallest singular value of the joint Jacobian of the tool point (divided by ``lever``)
     and of the tool direction across itself, over the ``tip`` joints, per configuration."""
-    J = geometric_jacobian(arm, q)[:, :, tip]
-    a = tool_pose(arm, q)[:, :3, :3] @ np.asarray(arm.approach_axis)
+    frames = forward_frames(arm, q)  # the last is the tool's
+    J = jacobian_from_frames(arm, frames)[:, :, tip]
+    a = frames[:, -1, :3, :3] @ np.asarray(arm.approach_axis)
     e1, e2 = orthonormal_frame(a)
     da = np.cross(np.swapaxes(J[:, 3:, :], 1, 2), a[:, None, :])  # (M, J, 3)
     M = np.concatenate(
@@ -177,11 +179,11 @@ def singular_directions(
     members: Callable[[FloatArray], tuple[FloatArray, IntArray]],
     dirs: FloatArray,
     spacing: float,
-) -> list[tuple[FloatArray, FloatArray]]:
+) -> list[FloatArray]:
     """The blown-down directions of a family whose tip joints are five (the tool point and its
     direction fix them up to finitely many: the family is two-dimensional, a chart of
     directions can cover it), found from the directions ``dirs (D, 3)`` about ``spacing`` rad
-    apart: each a unit direction and the singular member there. ``members(d (K, 3))`` gives
+    apart: each a unit direction. ``members(d (K, 3))`` gives
     the members ``(m, n)`` at directions ``d`` and the index into ``d`` of each."""
     if int(tip.sum()) != 5 or dirs.shape[0] == 0:
         return []
@@ -228,14 +230,14 @@ def singular_directions(
             centers, ref = centers[keep], ref[keep]
         h /= _SHRINK
     value, ref = _tracked(arm, tip, lever, members, centers, ref)
-    found: list[tuple[FloatArray, FloatArray]] = []
+    found: list[FloatArray] = []
     for k in np.argsort(value):
         if value[k] > _SINGULAR_SIGMA:
             break
-        if any(float(centers[k] @ c) > np.cos(_SAME_CENTER) for c, _ in found):
+        if any(float(centers[k] @ c) > np.cos(_SAME_CENTER) for c in found):
             continue
         if _blown_down(tip, members, centers[k], ref[k]):
-            found.append((centers[k], ref[k]))
+            found.append(centers[k])
     return found
 
 
@@ -263,7 +265,7 @@ def _neighbour_members(
 
 def _apart(x: FloatArray, y: FloatArray, tip: BoolArray) -> FloatArray:
     """Largest difference (rad, whole turns aside) of the tip joints of ``x`` and ``y``."""
-    return np.asarray(np.abs(np.angle(np.exp(1j * (x[..., tip] - y[..., tip])))).max(axis=-1))
+    return np.asarray(np.abs(wrap_to_pi(x[..., tip] - y[..., tip])).max(axis=-1))
 
 
 def _tracked(

@@ -42,6 +42,7 @@ MAX_LAYER_DIRECTIONS = 200_000
 #: Directions a layer's singular directions are searched from (about 8 deg apart), whatever
 #: its own sampling.
 _DETECT_DIRECTIONS = fibonacci_directions(600)
+_DETECT_SPACING = float(np.sqrt(4.0 * np.pi / _DETECT_DIRECTIONS.shape[0]))
 #: Sampling error standing for "no neighbour has a member" (commands).
 _MISSING = 1e6
 
@@ -366,14 +367,13 @@ class FamilySampler:
         direction)."""
         if not self.blow_ups or self.turns != 1:
             return ()
-        found = singular_directions(
+        centers = singular_directions(
             self.fam.arm,
             self.tip,
             lambda d: self.fam.members(E, d),
             _DETECT_DIRECTIONS,
-            float(np.sqrt(4.0 * np.pi / _DETECT_DIRECTIONS.shape[0])),
+            _DETECT_SPACING,
         )
-        centers = [c for c, _ in found]
         if allowed is not None and centers:
             centers = [c for c, ok in zip(centers, allowed(np.array(centers)), strict=True) if ok]
         return caps_about(centers)
