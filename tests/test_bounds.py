@@ -372,8 +372,8 @@ def _box_distance(a, ea, b, eb, period):
 
 def _brute_chain(layers, joins, app, period):
     """Every choice of one sample per layer and every place the approach may be charged (the
-    first layer, the last, either side of a LOOP or FREE join, whose move is then dropped):
-    the least total and, per layer and sample, the least total through it."""
+    first layer, the last, either side of a FREE join): the least total and, per layer and
+    sample, the least total through it."""
     import itertools
 
     from armpath.planning.bounds.search import Join
@@ -406,12 +406,12 @@ def _brute_chain(layers, joins, app, period):
 
 @pytest.mark.parametrize(
     "joins",
-    [["move"] * 3, ["loop"] * 4, ["move", "free", "move"], ["loop", "loop", "free", "loop"]],
+    [["move"] * 3, ["move", "free", "move"], ["free", "move", "free", "move"]],
 )
 def test_the_chain_relaxation_equals_brute_force(joins):
-    """The trace bound's dynamic programme over samples and an approach flag (one pass, a
-    closed curve begun anywhere, several spans in any order) against every choice of samples
-    and of where the approach is charged."""
+    """The trace bound's dynamic programme over samples and an approach flag (one pass, several
+    spans in any order) against every choice of samples and of where the approach is
+    charged."""
     from armpath.planning.bounds.search import Chain, Join
 
     rng = np.random.default_rng(len(joins) * 7 + joins.count("free"))
@@ -428,6 +428,54 @@ def test_the_chain_relaxation_equals_brute_force(joins):
             np.testing.assert_allclose(got, want, atol=1e-9)
         # the path given attains the total, its approach charged where it says
         assert found.approach <= found.total + 1e-9 and len(found.samples) == len(layers)
+
+
+def test_the_loop_relaxation_equals_brute_force():
+    """A closed curve traced whole in one pass begun anywhere: against every choice of one
+    sample per site, every place the pass begins (between two neighbours round the curve,
+    the last site and the first included) and either way round, the approach charged at the
+    first site it visits and every move round the curve counted but the one where it begins.
+    Also: a loop narrowed to the rotations that can beat a total keeps one attaining it."""
+    import itertools
+
+    from armpath.planning.bounds.search import Loop
+
+    rng = np.random.default_rng(5)
+    period = np.array([90.0, 0.0, 0.0, 90.0])
+    metric = _Metric(period)
+    for sizes in ([3], [2, 3], [3, 2, 2], [2, 3, 1, 2], [2, 2, 2, 2, 2]):
+        layers = _random_layers(rng, sizes)
+        app = [rng.uniform(0, 30, lay.size) for lay in layers]
+        K = len(layers)
+        best = np.inf
+        through = [np.full(lay.size, np.inf) for lay in layers]
+        for pick in itertools.product(*[range(lay.size) for lay in layers]):
+
+            def move(a, b, pick=pick, layers=layers):
+                la, lb = layers[a], layers[b]
+                i, j = pick[a], pick[b]
+                return _box_distance(la.u[i], la.err[i], lb.u[j], lb.err[j], period)
+
+            for first in range(K):
+                for way in (1, -1):
+                    visits = [(first + way * n) % K for n in range(K)]
+                    total = app[first][pick[first]] + sum(
+                        move(a, b) for a, b in itertools.pairwise(visits)
+                    )
+                    best = min(best, total)
+                    for t in range(K):
+                        through[t][pick[t]] = min(through[t][pick[t]], total)
+        found = Loop().solve(metric, layers, app)
+        assert found.total == pytest.approx(best, abs=1e-9)
+        for got, want in zip(found.through, through, strict=True):
+            np.testing.assert_allclose(got, want, atol=1e-9)
+        # the path given visits every site; its approach is one of the first site's
+        assert sorted(found.order) == list(range(K)) and min(found.samples) >= 0
+        assert found.approach <= found.total + 1e-9
+        # each rotation's least total is kept, the least of them the total
+        assert min(found.per_start.values()) == pytest.approx(best, abs=1e-9)
+        narrowed = Loop().narrowed(found, best)
+        assert narrowed.solve(metric, layers, app).total == pytest.approx(best, abs=1e-9)
 
 
 def test_the_orders_relaxation_equals_brute_force():
@@ -583,6 +631,18 @@ def test_a_closed_curve_pass_is_unwrapped_from_where_it_begins():
         true = begin + 0.4 + steps * np.arange(80)  # crosses the curve's start point
         raw = np.mod(true, length)
         np.testing.assert_allclose(unwrapped_along(raw, length, begin), true, atol=1e-9)
+
+
+def test_a_loops_points_are_taken_once_round_the_curve():
+    """A pass once round a closed curve begins and ends at one point of it: the points placed
+    along it are brought onto the curve, and those closer than the least layer gap to one
+    kept before dropped (the pass's last point, on its first)."""
+    from armpath.planning.bounds import trace as bt
+
+    length = 572.0
+    along = np.array([24.0, 167.0, 310.0, 453.0, 595.5])  # the last is 23.5 on the curve
+    np.testing.assert_allclose(bt._once_round(along, length), [24.0, 167.0, 310.0, 453.0])
+    np.testing.assert_allclose(bt._once_round(np.array([500.0, 700.0]), length), [128.0, 500.0])
 
 
 def test_a_redundant_arms_bound_is_reported_as_an_estimate():

@@ -6,11 +6,14 @@ the sites. Two kinds:
 
 * a *chain* (:class:`Chain`, a trace): the sites in one sequence; between two, a *join* says
   what a plan does there: :attr:`Join.MOVE` moves from a member of one to a member of the
-  next (the distance); :attr:`Join.LOOP` the same, or the pass begins there on a closed curve
-  (the move dropped: the approach from the start is charged at the member on either side
-  instead); :attr:`Join.FREE` counts nothing (between the spans of a trace, traced in any
-  order), and the approach may be charged there too. The approach is charged exactly once:
-  at the first site, at the last (the chain traced backward) or at a LOOP or FREE join.
+  next (the distance); :attr:`Join.FREE` counts nothing (between the spans of a trace, traced
+  in any order), and the approach may be charged there. The approach is charged exactly once:
+  at the first site, at the last (the chain traced backward) or at a FREE join.
+* a *loop* (:class:`Loop`, a closed curve traced whole in one pass that may begin anywhere):
+  the sites in their order round the curve, a move between each two neighbours, the last and
+  the first included; the pass begins between two neighbours (that move dropped), visits
+  every site once round the curve either way, and the approach is charged at the first it
+  visits.
 * *orders* (:class:`Orders`, a tour): the sites in any of several orders from the start, each
   leg a whole number of commands, back to the start or not.
 
@@ -98,7 +101,6 @@ class Join(enum.Enum):
     """What happens between two consecutive sites of a chain (see the module)."""
 
     MOVE = "move"
-    LOOP = "loop"
     FREE = "free"
 
 
@@ -116,6 +118,8 @@ class Solution:
     approach: float
     order: tuple[int, ...]
     per_order: dict[tuple[int, ...], int] = field(default_factory=dict)
+    #: a loop's least total of each site the pass may visit first (see :class:`Loop`)
+    per_start: dict[int, float] = field(default_factory=dict)
 
 
 def _flip(
@@ -169,7 +173,7 @@ class Chain:
                 else:
                     c, a = sampler.advance(prev, fwd[-1][:, f], cur)
                     cost[:, f], arg[:, f] = c, np.where(a >= 0, 2 * a + f, -1)
-            if join is not Join.MOVE:
+            if join is Join.FREE:
                 c, a = _flip(fwd[-1][:, 0], app[k - 1], app[k])
                 better = c < cost[:, 1]
                 cost[better, 1], arg[better, 1] = c[better], 2 * a[better]
@@ -185,7 +189,7 @@ class Chain:
                     cost[:, f] = float(np.min(bwd[0][:, f], initial=np.inf))
                 else:
                     cost[:, f] = sampler.advance(nxt, bwd[0][:, f], cur)[0]
-            if join is not Join.MOVE:
+            if join is Join.FREE:
                 cost[:, 0] = np.minimum(cost[:, 0], _flip(bwd[0][:, 1], app[k + 1], app[k])[0])
             bwd.insert(0, cost)
         through = [
@@ -215,6 +219,50 @@ class Chain:
         if f == 1:  # charged at the first site
             approach = float(app[0][i])
         return Solution(total, through, samples[::-1], approach, order)
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A closed curve's relaxation: the sites in their order round the curve, traced whole in
+    one pass that may begin between any two neighbours (see the module). ``starts``: the sites
+    the chains of its rotations begin at (None: every site)."""
+
+    starts: tuple[int, ...] | None = None
+    #: moves in fractional commands (the pass runs on between the points)
+    whole = False
+
+    def narrowed(self, found: Solution, incumbent: float) -> Loop:
+        """Without the rotations whose every path costs more than ``incumbent`` (by ``found``,
+        solved on these samples), which hold no optimal pass: each round then solves fewer."""
+        keep = tuple(k for k, c in found.per_start.items() if c <= incumbent + 1e-9)
+        return Loop(keep or self.starts)
+
+    def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
+        """The chain of each rotation of the sites, from each of :attr:`starts` round the
+        curve (the pass begun just before that site and traced forward, the approach charged
+        there, or begun just after the site before it and traced backward, the approach charged
+        there): the least total over them, per site the least cost through each sample, each
+        rotation's least total (``per_start``), and the path attaining the total, its ``order``
+        the sites in the order its chain lists them."""
+        K = len(layers)
+        chain = Chain([Join.MOVE] * (K - 1))
+        through = [np.full(lay.size, np.inf) for lay in layers]
+        best: Solution | None = None
+        per_start = {}
+        for k in range(K) if self.starts is None else self.starts:
+            check_time("bounding the commands")
+            rot = [(k + i) % K for i in range(K)]
+            found = chain.solve(sampler, [layers[i] for i in rot], [app[i] for i in rot])
+            per_start[k] = found.total
+            for site, cost in zip(rot, found.through, strict=True):
+                through[site] = np.minimum(through[site], cost)
+            if best is None or found.total < best.total:
+                samples = [-1] * K
+                for site, i in zip(rot, found.samples, strict=False):
+                    samples[site] = i
+                best = Solution(found.total, through, samples, found.approach, tuple(rot))
+        assert best is not None
+        return replace(best, through=through, per_start=per_start)
 
 
 @dataclass(frozen=True)
@@ -359,7 +407,7 @@ class CellSearch:
     def __init__(
         self,
         sampler: FamilySampler,
-        relaxation: Chain | Orders,
+        relaxation: Chain | Loop | Orders,
         points: list[FloatArray],
         allowed: list[Callable[[FloatArray], BoolArray] | None],
         q_start: FloatArray,

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from armpath.errors import PlanningError
 from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
 from armpath.planning.bounds.sampling import FamilySampler, _allowed_at
-from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Chain, Join
+from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Chain, Join, Loop
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -116,6 +116,20 @@ def _longest_polylines(
     return out
 
 
+def _once_round(s_mm: FloatArray, length_mm: float) -> FloatArray:
+    """Arc lengths ``s_mm`` (mm, ascending, along a pass once round a closed curve of
+    ``length_mm``, perhaps a little more) brought onto the curve and sorted, without those
+    closer than :data:`_LAYER_GAP_SHARE` of the curve to one kept before (the pass's first and
+    last points are one point of the curve)."""
+    gap = _LAYER_GAP_SHARE * length_mm
+    kept: list[float] = []
+    for s in np.mod(s_mm, length_mm):
+        apart = [min(abs(s - k), length_mm - abs(s - k)) for k in kept]
+        if all(d >= gap for d in apart):
+            kept.append(float(s))
+    return np.sort(np.array(kept))
+
+
 def trace_bound(
     fam: CurveFamily,
     q_start: FloatArray,
@@ -142,10 +156,11 @@ def trace_bound(
     ``layers_per_span`` evenly spaced; given a joint path along the spans (a plan's states
     ``path_q (P, n)`` rad with their tool point's arc lengths ``path_mm (P,)``), also where that
     path turns (:func:`turning_layers`), and the placement whose first round of the search
-    bounds higher is searched on. ``loop``: one span that
-    is the whole closed curve, which a pass may begin anywhere on. The family is sampled along
-    ``directions`` tool directions at first and searched by branch and bound for ``rounds``
-    rounds at most and until it holds ``max_samples`` live samples
+    bounds higher is searched on. ``loop``: one span that is the whole closed curve, which a
+    pass may begin anywhere on (the points taken once round the curve, the move from the last
+    to the first counted too: :class:`~armpath.planning.bounds.search.Loop`). The family is
+    sampled along ``directions`` tool directions at first and searched by branch and bound
+    for ``rounds`` rounds at most and until it holds ``max_samples`` live samples
     (:class:`~armpath.planning.bounds.search.CellSearch`).
     ``upper_commands``: the commands of a plan that traces the spans, if known (the search
     drops the cells that cannot hold a path cheaper than it).
@@ -156,7 +171,12 @@ def trace_bound(
     (:mod:`~armpath.planning.bounds.passage`); False: the direct approach only.
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
-    placements = [("evenly spaced", _layer_positions(spans_mm, layers_per_span))]
+    if loop:
+        a, length = spans_mm[0][0], fam.curve.length
+        even = [a + length * np.arange(max(layers_per_span, 2)) / max(layers_per_span, 2)]
+    else:
+        even = _layer_positions(spans_mm, layers_per_span)
+    placements = [("evenly spaced", even)]
     # the openings a leg from the start to a point of the spans must pass, sampled once
     every = np.linspace(0.0, 1.0, 64)
     near = np.array([fam.frame(a + (b - a) * f)[0] for a, b in spans_mm for f in every])
@@ -167,16 +187,22 @@ def trace_bound(
         placements.append(("where the plan's joint path turns", turning))
     started = []
     for placed, s_layers in placements:
-        s_all = np.concatenate(s_layers)
-        joins: list[Join] = []
-        for i, s in enumerate(s_layers):
-            if i:
-                joins.append(Join.FREE)
-            joins += [Join.LOOP if loop else Join.MOVE] * (s.size - 1)
+        relaxation: Chain | Loop
+        if loop:  # the points once round the curve, in order; the pass may begin between any
+            s_all = _once_round(np.concatenate(s_layers), fam.curve.length)
+            relaxation = Loop()
+        else:
+            s_all = np.concatenate(s_layers)
+            joins: list[Join] = []
+            for i, s in enumerate(s_layers):
+                if i:
+                    joins.append(Join.FREE)
+                joins += [Join.MOVE] * (s.size - 1)
+            relaxation = Chain(joins)
         points = np.array([fam.frame(float(s))[0] for s in s_all])
         search = CellSearch(
             sampler,
-            Chain(joins),
+            relaxation,
             list(points),
             [_allowed_at(fam, float(s)) for s in s_all],
             q_start,

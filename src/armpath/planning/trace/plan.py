@@ -255,8 +255,9 @@ def trace_plan_bound(
     with_errors: bool = True,
 ) -> CommandBound | None:
     """The lower bound of the commands of any plan that traces what ``result``'s passes cover
-    (what :func:`plan_trace` reports): one pass per span (overlapping spans merged; a closed
-    curve reachable all round in one pass that may begin anywhere), the family's points placed
+    (what :func:`plan_trace` reports): one pass per span (overlapping spans merged; on a closed
+    curve reachable all round each pass's own span, and a pass once round it may begin
+    anywhere and comes back to where it began), the family's points placed
     where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
     searched ``rounds`` rounds at most and until it holds ``max_samples`` live samples. None
     where the family has no member within the limits on a span. ``with_errors=False``: the
@@ -265,10 +266,12 @@ def trace_plan_bound(
     around = _all_round(result.curve, result.reachability.reachable)
     spans: list[list[float]] = []
     for p in sorted(result.passes, key=lambda p: p.start_mm):
-        if spans and p.start_mm <= spans[-1][1]:
+        if spans and p.start_mm <= spans[-1][1] and not around:
             spans[-1][1] = max(spans[-1][1], p.end_mm)
         else:
             spans.append([p.start_mm, p.end_mm])
+    # one pass round a closed curve: it visits every point once round, the move where it ends
+    # and begins again counted (passes round it are bounded each on its own span instead)
     loop = around and len(spans) == 1
     sequence = result.sequence
     q_all = sequence.states_joint()
