@@ -84,8 +84,8 @@ STALL_ROUNDS = 2
 #: dynamic programmes take time about in proportion to the square of a site's samples. A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
 #: tighter bound: the seed's Task 3 108 -> 111 commands with 200,000 (its bound 48 s -> 226 s on
-#: a machine where the whole trace below takes 2.3 times as long), the UR5 cell's seam 75 -> 78
-#: with 200,000 (the whole trace 23 s -> 53 s).
+#: a machine where the whole trace below takes 2.3 times as long), the UR5 cell's welds 87 ->
+#: 94 (82 s -> 251 s); the UR5 cell's seam stays at 92 (its search ends at its rounds first).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000

@@ -215,8 +215,8 @@ def trace_bound(
             raise PlanningError("a traced span has no family member within the joint limits")
         started.append((first, search, placed, s_all))
     # the placement whose first round bounds higher is searched on (the seed crack: 124.4
-    # against 121.9 evenly, 129.3 against 126.1 searched; the UR5 cell's seam 56.5 evenly
-    # against 56.4, 74.3 against 68.8)
+    # against 121.9 evenly, 129.3 against 126.1 searched; the UR5 cell's seam, a loop, 68.5
+    # evenly against 62.9, then 92.0)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
     if rounds > 1:
         more = search.run(rounds - 1, on_progress, upper=upper_commands)
