@@ -53,6 +53,29 @@ def circle_trace():
     return plan_trace(arm, scene.world, start, circle, TraceOptions(tolerance_mm=0.1))
 
 
+def test_only_a_pass_once_round_is_bounded_as_a_loop(circle_trace, monkeypatch):
+    """A closed curve's bound charges the move from the pass's last point back to its first
+    (the pass comes round to where it began): only when the one pass covers the whole curve.
+    One that stops short is bounded on its arc alone, passes round it each on their own."""
+    import dataclasses
+
+    from armpath.planning.trace import plan as trace_plan
+
+    seen = []
+    monkeypatch.setattr(trace_plan, "trace_bound", lambda *a, **k: seen.append((a[2], k["loop"])))
+    r = circle_trace
+    (whole,) = r.passes
+    short = dataclasses.replace(whole, end_mm=whole.start_mm + 100.0)
+    second = dataclasses.replace(whole, start_mm=whole.start_mm + 100.0)
+    for passes, loop, spans in (
+        ((whole,), True, 1),
+        ((short,), False, 1),
+        ((short, second), False, 2),
+    ):
+        trace_plan.trace_plan_bound(dataclasses.replace(r, passes=passes))
+        assert seen[-1][1] is loop and len(seen[-1][0]) == spans
+
+
 def test_a_free_circle_is_traced_in_one_closed_pass(circle_trace):
     r = circle_trace
     assert r.curve.closed and not r.reachability.unreachable

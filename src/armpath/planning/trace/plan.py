@@ -256,8 +256,8 @@ def trace_plan_bound(
 ) -> CommandBound | None:
     """The lower bound of the commands of any plan that traces what ``result``'s passes cover
     (what :func:`plan_trace` reports): one pass per span (overlapping spans merged; on a closed
-    curve reachable all round each pass's own span, and a pass once round it may begin
-    anywhere and comes back to where it began), the family's points placed
+    curve reachable all round each pass's own span, and a pass once round the whole of it may
+    begin anywhere and comes back to where it began), the family's points placed
     where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
     searched ``rounds`` rounds at most and until it holds ``max_samples`` live samples. None
     where the family has no member within the limits on a span. ``with_errors=False``: the
@@ -270,9 +270,10 @@ def trace_plan_bound(
             spans[-1][1] = max(spans[-1][1], p.end_mm)
         else:
             spans.append([p.start_mm, p.end_mm])
-    # one pass round a closed curve: it visits every point once round, the move where it ends
-    # and begins again counted (passes round it are bounded each on its own span instead)
-    loop = around and len(spans) == 1
+    # one pass once round a closed curve: it visits every point in order and comes back to
+    # where it began, the move from its last point to its first counted too (passes round it
+    # are bounded each on its own span; a pass that stops short, on its arc alone)
+    loop = around and len(spans) == 1 and spans[0][1] - spans[0][0] >= result.curve.length
     sequence = result.sequence
     q_all = sequence.states_joint()
     path_mm, path_q = [], []
