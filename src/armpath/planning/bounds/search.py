@@ -247,7 +247,7 @@ class Loop:
         K = len(layers)
         chain = Chain([Join.MOVE] * (K - 1))
         through = [np.full(lay.size, np.inf) for lay in layers]
-        best: Solution | None = None
+        best: tuple[Solution, list[int]] | None = None
         per_start = {}
         for k in range(K) if self.starts is None else self.starts:
             check_time("bounding the commands")
@@ -256,13 +256,14 @@ class Loop:
             per_start[k] = found.total
             for site, cost in zip(rot, found.through, strict=True):
                 through[site] = np.minimum(through[site], cost)
-            if best is None or found.total < best.total:
-                samples = [-1] * K
-                for site, i in zip(rot, found.samples, strict=False):
-                    samples[site] = i
-                best = Solution(found.total, through, samples, found.approach, tuple(rot))
+            if best is None or found.total < best[0].total:
+                best = found, rot
         assert best is not None
-        return replace(best, through=through, per_start=per_start)
+        found, rot = best
+        samples = [-1] * K  # by site (none when no path reaches the end)
+        for site, i in zip(rot, found.samples, strict=False):
+            samples[site] = i
+        return Solution(found.total, through, samples, found.approach, tuple(rot), {}, per_start)
 
 
 @dataclass(frozen=True)

@@ -171,9 +171,9 @@ def trace_bound(
     (:mod:`~armpath.planning.bounds.passage`); False: the direct approach only.
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
-    if loop:
-        a, length = spans_mm[0][0], fam.curve.length
-        even = [a + length * np.arange(max(layers_per_span, 2)) / max(layers_per_span, 2)]
+    if loop:  # evenly over one turn of the curve from where the pass begins
+        count = max(layers_per_span, 2)
+        even = [spans_mm[0][0] + fam.curve.length * np.arange(count) / count]
     else:
         even = _layer_positions(spans_mm, layers_per_span)
     placements = [("evenly spaced", even)]
