@@ -9,7 +9,8 @@ obstacles ignored between them):
 * the first sampling alone (one round of the search: the tool directions sampled once, each
   distance less the samples' sampling errors): a bound;
 * the branch and bound (the default, what ``armpath trace`` and ``spotweld`` report): a bound;
-* the same allowed four times the live samples (``--bound-samples 200000``): a bound, later;
+* the same allowed four times the live samples and rounds (``--bound-samples 200000``): a
+  bound, later;
 * the same search with the samples taken as exact (``with_errors=False``): the shortest path
   through the samples themselves, an estimate of the relaxation's optimum (neither a bound nor
   a path the relaxation surely allows: samples kept because a member near them may be clear
@@ -38,7 +39,7 @@ from report import table
 
 from armpath.model.seed_arm import seed_arm
 from armpath.planning.bounds import CommandBound, tour_bound
-from armpath.planning.bounds.search import MAX_SAMPLES, SEARCH_ROUNDS
+from armpath.planning.bounds.search import MAX_SAMPLES, SEARCH_ROUNDS, search_rounds
 from armpath.planning.tour import _targets_family
 from armpath.planning.trace.plan import TraceOptions, trace_plan_bound
 from armpath.scenes import load_scene, seed_scene
@@ -61,7 +62,7 @@ def _trace_case(name: str, scene, arm) -> list[str]:
     res = trace_task(scene, arm, TraceOptions(bound=False))
     plan_s = time.perf_counter() - t
 
-    def bound(rounds: int = SEARCH_ROUNDS, max_samples: int | None = None) -> CommandBound:
+    def bound(rounds: int | None = None, max_samples: int | None = None) -> CommandBound:
         # what the trace reports with its bound
         found = trace_plan_bound(res, rounds=rounds, max_samples=max_samples)
         assert found is not None
@@ -159,8 +160,9 @@ def main() -> int:
         "samples' sampling errors). The branch and bound drops the direction cells that cannot "
         "hold a path cheaper than the incumbent (the plan's commands, or a path through clear "
         "samples if cheaper) and splits the others where the bound runs, until it stalls or "
-        f"its budget is spent (by default {MAX_SAMPLES:,} live samples; the next column "
-        f"allows {MORE_SAMPLES:,}, `--bound-samples {MORE_SAMPLES}`). The estimate is the same "
+        f"its budget is spent (by default {MAX_SAMPLES:,} live samples and {SEARCH_ROUNDS} "
+        f"rounds; the next column allows {MORE_SAMPLES:,} and {search_rounds(MORE_SAMPLES)}, "
+        f"`--bound-samples {MORE_SAMPLES}`). The estimate is the same "
         "search with the samples taken as exact, no sampling error subtracted: the shortest path "
         "through the samples themselves, an estimate of the relaxation's optimum (neither a "
         "bound nor surely a path the relaxation allows: samples kept because a member near "

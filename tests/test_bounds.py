@@ -188,6 +188,10 @@ def test_a_larger_sample_budget_searches_on_and_stays_below_slsqp():
     assert small.value <= large.value <= path + 1e-9
     with pytest.raises(InvalidInputError, match="between 1,000 and 2,000,000"):
         bounds.trace_bound(fam, start, [(700.0, 761.0)], 0.1, max_samples=10)
+    # the rounds a search may run grow with its budget, so a larger one is not cut short by them
+    search = bounds.search
+    assert search.search_rounds(None) == search.search_rounds(1_000) == search.SEARCH_ROUNDS
+    assert search.search_rounds(4 * search.MAX_SAMPLES) == 4 * search.SEARCH_ROUNDS
 
 
 def test_a_family_with_turns_about_the_tool_axis_stays_below_slsqp():

@@ -28,13 +28,13 @@ its direction is dropped from the search (*pruned*); the cells whose least cost 
 :data:`SPLIT_WINDOW` of the bound and whose sampling error or clearance is unsure are split
 (the triangles of directions about them split in four), cheapest first. Rounds repeat until the
 bound is within :data:`GAP_GOAL` of the incumbent, nothing is left to split, the bound has not
-risen for :data:`STALL_ROUNDS` rounds, or a budget is spent (:data:`SEARCH_ROUNDS`, the live
-samples: :data:`MAX_SAMPLES` unless the caller gives more, :data:`TOTAL_DIRECTIONS`). Every round's
-value bounds the relaxation (as far as the sampling errors hold, see the package); the largest
-is kept. A dropped cell holds no path cheaper than the incumbent it was dropped against, as far
-as that round's errors hold, and is not looked at again (its error can still change as its
-neighbours split: the test checks instead that no exact path through the sampled members,
-dropped ones included, is cheaper than the bound).
+risen for :data:`STALL_ROUNDS` rounds, or a budget is spent (the live samples:
+:data:`MAX_SAMPLES` unless the caller gives more; the rounds: :func:`search_rounds` of that;
+:data:`TOTAL_DIRECTIONS`). Every round's value bounds the relaxation (as far as the sampling
+errors hold, see the package); the largest is kept. A dropped cell holds no path cheaper than
+the incumbent it was dropped against, as far as that round's errors hold, and is not looked at
+again (its error can still change as its neighbours split: the test checks instead that no
+exact path through the sampled members, dropped ones included, is cheaper than the bound).
 """
 
 from __future__ import annotations
@@ -61,7 +61,8 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
-#: Rounds of the search at most (each samples, bounds, prunes and splits once).
+#: Rounds of the search at most with the default budget of live samples (each round samples,
+#: bounds, prunes and splits once); a larger budget allows more (:func:`search_rounds`).
 SEARCH_ROUNDS = 16
 #: The search stops once its bound is this close to the incumbent (commands).
 GAP_GOAL = 0.25
@@ -85,7 +86,8 @@ STALL_ROUNDS = 2
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
 #: tighter bound: the seed's Task 3 108 -> 111 commands with 200,000 (its bound 48 s -> 226 s on
 #: a machine where the whole trace below takes 2.3 times as long), the UR5 cell's welds 87 ->
-#: 94 (82 s -> 251 s); the UR5 cell's seam stays at 92 (its search ends at its rounds first).
+#: 94 (82 s -> 251 s; 16 rounds); the UR5 cell's seam stayed at 92 while 16 rounds ended its
+#: search at any budget (:func:`search_rounds`).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000
@@ -397,6 +399,15 @@ def check_max_samples(samples: int | None) -> int:
     return int(samples)
 
 
+def search_rounds(max_samples: int | None = None) -> int:
+    """Rounds a search may run with a budget of ``max_samples`` live samples (None: the
+    default, :data:`MAX_SAMPLES`; see :func:`check_max_samples`): :data:`SEARCH_ROUNDS` at the
+    default budget and in proportion to a larger one, so that a larger budget is spent rather
+    than cut short by the rounds (each round splits only the cells near the bound's paths: the
+    UR5 cell's seam holds 45,324 samples after its 16 rounds and its bound still rises)."""
+    return SEARCH_ROUNDS * max(1, check_max_samples(max_samples) // MAX_SAMPLES)
+
+
 class CellSearch:
     """Branch and bound over the direction cells of a relaxation's sites (see the module).
 
@@ -477,14 +488,15 @@ class CellSearch:
 
     def run(
         self,
-        rounds: int = SEARCH_ROUNDS,
+        rounds: int | None = None,
         say: Callable[[str], None] | None = None,
         upper: float = np.inf,
     ) -> SearchResult | None:
-        """Search ``rounds`` rounds at most, from the incumbent ``upper`` (commands; a plan's)
-        if lower than any found; None when no path reaches the end (a site without a sample
-        in the first round)."""
+        """Search ``rounds`` rounds at most (None: :func:`search_rounds` of the budget), from
+        the incumbent ``upper`` (commands; a plan's) if lower than any found; None when no
+        path reaches the end (a site without a sample in the first round)."""
         say = say or (lambda _m: None)
+        rounds = search_rounds(self.max_samples) if rounds is None else rounds
         best: SearchResult | None = None
         clear_total, clear_q = np.inf, None
         pruned_against = np.inf

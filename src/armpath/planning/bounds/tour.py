@@ -11,7 +11,7 @@ from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
 from armpath.planning.bounds.sampling import FamilySampler
-from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Orders
+from armpath.planning.bounds.search import CellSearch, Orders
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -33,7 +33,7 @@ def tour_bound(
     tolerance_mm: float,
     orders: list[tuple[int, ...]],
     back: bool = False,
-    rounds: int = SEARCH_ROUNDS,
+    rounds: int | None = None,
     on_progress: Callable[[str], None] | None = None,
     clear_levels: int = TOUR_CLEAR_LEVELS,
     max_samples: int | None = None,
@@ -45,7 +45,9 @@ def tour_bound(
     target (every goal configuration that may be clear, its cells split ``clear_levels`` times
     where unsure; obstacles ignored between targets), each leg a whole number of commands;
     ``back`` returns to the start. The family is searched by branch and bound for ``rounds``
-    rounds at most and until it holds ``max_samples`` live samples
+    rounds at most (None: as many as the budget allows,
+    :func:`~armpath.planning.bounds.search.search_rounds`) and until it holds ``max_samples``
+    live samples
     (:class:`~armpath.planning.bounds.search.CellSearch`). Returns the least over the orders
     and each order's bound (:attr:`CellSearch.per_order`). ``with_errors=False`` (a
     diagnostic, not a bound): the samples' sampling errors are left out, which gives the

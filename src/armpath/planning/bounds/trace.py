@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from armpath.errors import PlanningError
 from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
 from armpath.planning.bounds.sampling import FamilySampler, _allowed_at
-from armpath.planning.bounds.search import SEARCH_ROUNDS, CellSearch, Chain, Join, Loop
+from armpath.planning.bounds.search import CellSearch, Chain, Join, Loop, search_rounds
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -137,7 +137,7 @@ def trace_bound(
     tolerance_mm: float,
     loop: bool = False,
     layers_per_span: int = LAYERS_PER_SPAN,
-    rounds: int = SEARCH_ROUNDS,
+    rounds: int | None = None,
     on_progress: Callable[[str], None] | None = None,
     directions: int = SEARCH_DIRECTIONS,
     with_errors: bool = True,
@@ -160,8 +160,9 @@ def trace_bound(
     pass may begin anywhere on (the points taken once round the curve, the move from the last
     to the first counted too: :class:`~armpath.planning.bounds.search.Loop`). The family is
     sampled along ``directions`` tool directions at first and searched by branch and bound
-    for ``rounds`` rounds at most and until it holds ``max_samples`` live samples
-    (:class:`~armpath.planning.bounds.search.CellSearch`).
+    for ``rounds`` rounds at most (None: as many as the budget allows,
+    :func:`~armpath.planning.bounds.search.search_rounds`) and until it holds ``max_samples``
+    live samples (:class:`~armpath.planning.bounds.search.CellSearch`).
     ``upper_commands``: the commands of a plan that traces the spans, if known (the search
     drops the cells that cannot hold a path cheaper than it).
     ``with_errors=False`` (a diagnostic, not a bound): the samples' sampling errors are left
@@ -171,6 +172,7 @@ def trace_bound(
     (:mod:`~armpath.planning.bounds.passage`); False: the direct approach only.
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
+    rounds = search_rounds(max_samples) if rounds is None else rounds
     if loop:  # evenly over one turn of the curve from where the pass begins
         count = max(layers_per_span, 2)
         even = [spans_mm[0][0] + fam.curve.length * np.arange(count) / count]

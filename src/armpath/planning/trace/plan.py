@@ -33,7 +33,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
-from armpath.planning.bounds.search import SEARCH_ROUNDS, check_max_samples
+from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
@@ -249,7 +249,7 @@ def _all_round(curve: Curve, arcs: Sequence[CurveArc]) -> bool:
 
 def trace_plan_bound(
     result: TraceResult,
-    rounds: int = SEARCH_ROUNDS,
+    rounds: int | None = None,
     on_progress: Callable[[str], None] | None = None,
     max_samples: int | None = None,
     with_errors: bool = True,
@@ -259,8 +259,9 @@ def trace_plan_bound(
     curve reachable all round each pass's own span, and a pass once round the whole of it may
     begin anywhere and comes back to where it began), the family's points placed
     where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
-    searched ``rounds`` rounds at most and until it holds ``max_samples`` live samples. None
-    where the family has no member within the limits on a span. ``with_errors=False``: the
+    searched ``rounds`` rounds at most (None: as many as the budget allows) and until it holds
+    ``max_samples`` live samples. None where the family has no member within the limits on a
+    span. ``with_errors=False``: the
     estimate without the samples' sampling errors (not a bound; see the search)."""
     fam = result.reachability.family
     around = _all_round(result.curve, result.reachability.reachable)
