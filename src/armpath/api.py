@@ -314,7 +314,8 @@ def trace(
     ``bound``: also prove a lower bound on the commands of any plan (the document's
     ``lower_bound``, with the plan's gap to it; the seed's Task 2: about a third of its time);
     False: ``None`` there. ``bound_samples``: the live samples the bound's search may hold
-    (1,000 to 2,000,000; None: 50,000): more give a tighter bound, later."""
+    (1,000 to 2,000,000; None: 50,000; the search's rounds grow in proportion): more
+    give a tighter bound, later."""
     from armpath.export import trace_result_dict
     from armpath.geometry.curves import Curve, Polyline
     from armpath.planning.motion import MotionOptions
@@ -368,7 +369,8 @@ def spotweld(
     lower bound on the commands of any tour, over every order and goal configuration (the
     document's ``lower_bound``; the seed's Task 3: about a third of its time); False: ``None``
     there. ``bound_samples``: the live samples the bound's search may hold (1,000 to 2,000,000;
-    None: 50,000): more give a tighter bound, later (Task 3: 111 rather than 108 with 200,000,
+    None: 50,000; the search's rounds grow in proportion): more give a tighter bound, later
+    (Task 3: 111 rather than 108 with 200,000,
     205 s of bounding rather than 37 s). ``pools``: plan the cheapest orders once more through
     pools of goal states (Task 3: 122 commands rather than 127, in about twice the time
     without the bound); False: the guided orders' goal states only."""

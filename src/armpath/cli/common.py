@@ -115,9 +115,9 @@ BoundSamplesOption = Annotated[
         "--bound-samples",
         metavar="N",
         help="Live samples the lower bound's search may hold (1,000 to 2,000,000; default "
-        "50,000): more give a tighter bound, later (with 200,000 the seed's Task 3: 111 rather "
-        "than 108, its bound 205 s rather than 37 s; the UR5 cell's seam: 78 rather than 75, 80 "
-        "s rather than 14 s; benchmarks/results/bounds.md).",
+        "50,000; its rounds grow in proportion, 16 at the default): more give a tighter bound, "
+        "later (with 200,000 the UR5 cell's seam: 99 rather than 92, its bound 545 s rather "
+        "than 62 s; benchmarks/results/bounds.md).",
         show_default=False,
     ),
 ]
