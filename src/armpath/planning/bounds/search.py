@@ -86,8 +86,8 @@ STALL_ROUNDS = 2
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
 #: tighter bound: the seed's Task 3 108 -> 111 commands with 200,000 (its bound 48 s -> 226 s on
 #: a machine where the whole trace below takes 2.3 times as long), the UR5 cell's welds 87 ->
-#: 94 (82 s -> 251 s; 16 rounds); the UR5 cell's seam stayed at 92 while 16 rounds ended its
-#: search at any budget (:func:`search_rounds`).
+#: 95 (83 s -> 735 s, 18 rounds) and its seam 92 -> 98.3 (62 s -> 545 s, 23 rounds; while 16
+#: rounds ended every search, it stayed at 92 whatever the budget: :func:`search_rounds`).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000
