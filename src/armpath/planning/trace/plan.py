@@ -261,8 +261,8 @@ def trace_plan_bound(
     where the plan's joint path turns or evenly (:func:`~armpath.planning.bounds.trace_bound`),
     searched ``rounds`` rounds at most (None: as many as the budget allows) and until it holds
     ``max_samples`` live samples. None where the family has no member within the limits on a
-    span. ``with_errors=False``: the
-    estimate without the samples' sampling errors (not a bound; see the search)."""
+    span. ``with_errors=False``: the estimate without the samples' sampling errors (not a
+    bound; see the search)."""
     fam = result.reachability.family
     around = _all_round(result.curve, result.reachability.reachable)
     spans: list[list[float]] = []
