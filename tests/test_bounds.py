@@ -577,6 +577,57 @@ def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
     assert found.value <= paths.total + 1e-9 <= found.clear_path + 1e-9
 
 
+def test_a_search_in_two_calls_goes_on_where_the_first_stopped():
+    """A search run one round and then three more ends where one run of four rounds does (the
+    same bound, rounds, samples and clear path) without solving the first round again; and a
+    relaxation solved for its path alone (as the clear path is) has the same total and path as
+    one solved in full, the full one's least cost through each sample never below its total."""
+    from armpath.planning.bounds.sampling import _allowed_at
+    from armpath.planning.bounds.search import CellSearch, Chain, Join, Loop
+
+    arm = resolve_model("ur5")
+    start = arm.lattice.to_joint(arm.lattice.from_display([0, -90, 90, 0, 90, 0], "start"))
+    curve = Polyline("t", np.array([[300.0, 150.0, 350.0], [400.0, -100.0, 200.0]]))
+    fam = curve_family(arm, CollisionWorld(()), curve)
+    s = np.linspace(0.5, curve.length - 0.5, 3)
+
+    def search(relaxation):
+        sampler = bounds.FamilySampler(fam, 0.1, 500, start)
+        return CellSearch(
+            sampler, relaxation, [fam.frame(float(x))[0] for x in s],
+            [_allowed_at(fam, float(x)) for x in s], start,
+        )  # fmt: skip
+
+    solved = []
+
+    class Counted(Chain):
+        def solve(self, *args, **kwargs):
+            solved.append(1)
+            return super().solve(*args, **kwargs)
+
+    chain = Chain([Join.MOVE] * 2)
+    once = search(chain).run(rounds=4)
+    split = search(Counted(chain.joins))
+    first = split.run(rounds=1)
+    assert first is not None and first.rounds == 1 and len(solved) == 2  # bound, clear path
+    more = split.run(rounds=3)
+    assert once is not None and more is not None
+    assert len(solved) == 2 * more.rounds  # the first round was not solved again
+    assert (more.value, more.rounds, more.samples, more.clear_path) == (
+        once.value, once.rounds, once.samples, once.clear_path,
+    )  # fmt: skip
+    assert more.value >= first.value
+    for relaxation in (chain, Loop()):
+        found = search(relaxation)
+        live = [site.live() for site in found.sites]
+        app = found._approach(live)
+        full = relaxation.solve(found.sampler, live, app)
+        alone = relaxation.solve(found.sampler, live, app, find_through=False)
+        assert alone.total == full.total and alone.samples == full.samples
+        assert all(np.all(np.isinf(t)) for t in alone.through)
+        assert min(float(t.min()) for t in full.through) >= full.total - 1e-9
+
+
 def _brute_polyline(s, u, k, gap):
     """Every choice of k points with the first and last, consecutive ones ``gap`` apart: the
     longest largest-joint polyline (-inf when none)."""

@@ -156,9 +156,17 @@ class Chain:
         """The same chain (only a tour's orders can be dropped)."""
         return self
 
-    def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
+    def solve(
+        self,
+        sampler: FamilySampler,
+        layers: list[Layer],
+        app: list[FloatArray],
+        find_through: bool = True,
+    ) -> Solution:
         """Both programmes over each sample and a flag (0: the approach not charged yet, 1:
-        charged), and the path attaining the least total."""
+        charged), and the path attaining the least total; ``find_through=False``: the forward
+        programme alone (the total and its path; the least cost through each sample left
+        infinite, as for a sample no path reaches)."""
         K = len(layers)
         fwd = [np.stack([np.zeros(layers[0].size), app[0]], axis=1)]
         ptr = [np.full((layers[0].size, 2), -1, dtype=np.int64)]  # predecessor * 2 + its flag
@@ -182,7 +190,7 @@ class Chain:
             fwd.append(cost)
             ptr.append(arg)
         bwd = [np.stack([app[-1], np.zeros(layers[-1].size)], axis=1)]
-        for k in range(K - 2, -1, -1):
+        for k in range(K - 2, -1, -1) if find_through else ():
             check_time("bounding the commands")
             nxt, cur, join = layers[k + 1], layers[k], self.joins[k]
             cost = np.full((cur.size, 2), np.inf)
@@ -194,9 +202,9 @@ class Chain:
             if join is Join.FREE:
                 cost[:, 0] = np.minimum(cost[:, 0], _flip(bwd[0][:, 1], app[k + 1], app[k])[0])
             bwd.insert(0, cost)
-        through = [
-            np.asarray((f + b).min(axis=1), dtype=np.float64) for f, b in zip(fwd, bwd, strict=True)
-        ]
+        through = [np.full(lay.size, np.inf) for lay in layers]
+        if find_through:
+            through = [np.asarray((f + b).min(axis=1)) for f, b in zip(fwd, bwd, strict=True)]
         charged = fwd[-1][:, 1]
         uncharged = fwd[-1][:, 0] + app[-1]
         total = float(min(np.min(charged, initial=np.inf), np.min(uncharged, initial=np.inf)))
@@ -239,13 +247,20 @@ class Loop:
         keep = tuple(k for k, c in found.per_start.items() if c <= incumbent + 1e-9)
         return Loop(keep or self.starts)
 
-    def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
+    def solve(
+        self,
+        sampler: FamilySampler,
+        layers: list[Layer],
+        app: list[FloatArray],
+        find_through: bool = True,
+    ) -> Solution:
         """The chain of each rotation of the sites, from each of :attr:`starts` round the
         curve (the pass begun just before that site and traced forward, the approach charged
         there, or begun just after the site before it and traced backward, the approach charged
-        there): the least total over them, per site the least cost through each sample, each
-        rotation's least total (``per_start``), and the path attaining the total, its ``order``
-        the sites in the order its chain lists them."""
+        there): the least total over them, per site the least cost through each sample
+        (``find_through=False``: left infinite, see :meth:`Chain.solve`), each rotation's least
+        total (``per_start``), and the path attaining the total, its ``order`` the sites in the
+        order its chain lists them."""
         K = len(layers)
         chain = Chain([Join.MOVE] * (K - 1))
         through = [np.full(lay.size, np.inf) for lay in layers]
@@ -254,7 +269,9 @@ class Loop:
         for k in range(K) if self.starts is None else self.starts:
             check_time("bounding the commands")
             rot = [(k + i) % K for i in range(K)]
-            found = chain.solve(sampler, [layers[i] for i in rot], [app[i] for i in rot])
+            found = chain.solve(
+                sampler, [layers[i] for i in rot], [app[i] for i in rot], find_through
+            )
             per_start[k] = found.total
             for site, cost in zip(rot, found.through, strict=True):
                 through[site] = np.minimum(through[site], cost)
@@ -285,7 +302,17 @@ class Orders:
         keep = [o for o in self.orders if found.per_order.get(o, 0) <= incumbent + 1e-9]
         return Orders(keep or self.orders, self.back)
 
-    def solve(self, sampler: FamilySampler, layers: list[Layer], app: list[FloatArray]) -> Solution:
+    def solve(
+        self,
+        sampler: FamilySampler,
+        layers: list[Layer],
+        app: list[FloatArray],
+        find_through: bool = True,
+    ) -> Solution:
+        """Every order's prefixes forward and suffixes backward: the least total, each order's
+        (rounded up), per site the least cost through each sample (``find_through=False``:
+        the suffixes not followed, these left infinite; see :meth:`Chain.solve`), and the path
+        of the best order."""
         K = len(layers)
         prefix: dict[tuple[int, ...], tuple[FloatArray, IntArray | None]] = {}
         suffix: dict[tuple[int, ...], FloatArray] = {}
@@ -320,7 +347,7 @@ class Orders:
                 per_order[o] = int(np.ceil(value - 1e-9))
             if value < best:
                 best, best_order = value, o
-            for i in range(len(o)):
+            for i in range(len(o)) if find_through else ():
                 t = o[i]
                 through[t] = np.minimum(through[t], forward(o[: i + 1]) + backward(o[i:]))
         if not np.isfinite(best):
@@ -383,6 +410,19 @@ class SearchResult:
     largest_error: float
 
 
+@dataclass(frozen=True)
+class _Resume:
+    """Where a call of :meth:`CellSearch.run` that ended on its rounds stopped: its last
+    round's live samples and solution, the incumbent, the best result so far (with the last
+    round's samples and directions and the clear path) and the rounds it has not risen for."""
+
+    live: list[Layer]
+    found: Solution
+    incumbent: float
+    best: SearchResult
+    stalled: int
+
+
 def check_max_samples(samples: int | None) -> int:
     """``samples`` as the search's budget of live samples (None: :data:`MAX_SAMPLES`), or
     :class:`InvalidInputError` naming the range (:data:`MIN_SAMPLES_LIMIT` ..
@@ -443,6 +483,13 @@ class CellSearch:
         sites = np.array(points).reshape(-1, 3)
         entered = [p.passage.entered(sites, sampler.tol) for p in passages]
         self.passages = [(p, e) for p, e in zip(passages, entered, strict=True) if np.any(e)]
+        #: rounds run so far, over every call of :meth:`run`
+        self.rounds_run = 0
+        #: where a call of :meth:`run` that ended on its rounds alone stopped: the next call
+        #: goes on from it (see :class:`_Resume`); None when the search may not go on (it
+        #: ended otherwise) or has not run
+        self._resume: _Resume | None = None
+        self._ended = False
 
     def _site(
         self, point: FloatArray, allowed: Callable[[FloatArray], BoolArray] | None, levels: int
@@ -492,25 +539,48 @@ class CellSearch:
         say: Callable[[str], None] | None = None,
         upper: float = np.inf,
     ) -> SearchResult | None:
-        """Search ``rounds`` rounds at most (None: :func:`search_rounds` of the budget), from
-        the incumbent ``upper`` (commands; a plan's) if lower than any found; None when no
-        path reaches the end (a site without a sample in the first round)."""
+        """Search ``rounds`` more rounds at most (None: :func:`search_rounds` of the budget),
+        from the incumbent ``upper`` (commands; a plan's) if lower than any found; None when
+        no path reaches the end (a site without a sample in the first round) or an earlier
+        call ended the search. A call after one that ended on its rounds alone goes on from
+        where that one stopped (its last round's cells pruned and split, not solved again):
+        its result is the best of every call's rounds, and counts them all
+        (:attr:`SearchResult.rounds`)."""
         say = say or (lambda _m: None)
         rounds = search_rounds(self.max_samples) if rounds is None else rounds
         best: SearchResult | None = None
         clear_total, clear_q = np.inf, None
         pruned_against = np.inf
         stalled = 0
-        for r in range(1, rounds + 1):
+        if self._ended:
+            return None
+        if self._resume is not None:
+            was, self._resume = self._resume, None
+            best, stalled = was.best, was.stalled
+            clear_total, clear_q = was.best.clear_path, was.best.clear_q
+            pruned_against = incumbent = min(float(upper), was.incumbent)
+            self.relaxation = self.relaxation.narrowed(was.found, incumbent)
+            if not self._prune_and_split(
+                was.live, was.found, incumbent, was.best.directions, was.best.samples
+            ):
+                self._ended = True
+                return best
+        first = self.rounds_run + 1
+        for r in range(first, first + rounds):
+            self.rounds_run = r
             live = [site.live() for site in self.sites]
             found = self.relaxation.solve(self.sampler, live, self._approach(live))
             cap = np.ceil(pruned_against - 1e-9) if np.isfinite(pruned_against) else np.inf
             for o, c in found.per_order.items():
                 self.per_order[o] = max(self.per_order.get(o, 0), int(min(c, cap)))
             if not np.isfinite(found.total):
+                self._ended = True
                 break
             exact = [lay.subset(np.asarray(lay.clear)).without_errors() for lay in live]
-            clear = self.relaxation.solve(self.sampler, exact, self._approach(exact, True))
+            # its path and total only: no cell is pruned or split by it
+            clear = self.relaxation.solve(
+                self.sampler, exact, self._approach(exact, True), find_through=False
+            )
             if clear.total < clear_total:
                 clear_total = clear.total
                 clear_q = np.array([lay.q[i] for lay, i in zip(exact, clear.samples, strict=True)])
@@ -535,15 +605,19 @@ class CellSearch:
                 f"{clear_total:.2f}, {samples} samples of {directions} directions"
             )
             if (
-                r == rounds
-                or incumbent - best.value <= GAP_GOAL
+                incumbent - best.value <= GAP_GOAL
                 or samples > self.max_samples
                 or stalled >= STALL_ROUNDS
             ):
+                self._ended = True
+                break
+            if r == first + rounds - 1:
+                self._resume = _Resume(live, found, incumbent, best, stalled)
                 break
             pruned_against = incumbent
             self.relaxation = self.relaxation.narrowed(found, incumbent)
             if not self._prune_and_split(live, found, incumbent, directions, samples):
+                self._ended = True
                 break
         return best
 

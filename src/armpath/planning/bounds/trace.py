@@ -4,7 +4,6 @@ along each traced span, searched by branch and bound (:mod:`armpath.planning.bou
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -221,9 +220,10 @@ def trace_bound(
     # evenly against 62.9, then 92.0)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
     if rounds > 1:
+        # on from the first round's cells (pruned and split, not solved again)
         more = search.run(rounds - 1, on_progress, upper=upper_commands)
         if more is not None and more.value >= found.value:
-            found = replace(more, rounds=more.rounds + 1)
+            found = more
     if len(placements) > 1:
         placed += (
             ": of the points evenly spaced and where the plan's joint path turns, those whose "
