@@ -84,10 +84,10 @@ STALL_ROUNDS = 2
 #: Live samples of all sites together past which the search splits no more: each round's
 #: dynamic programmes take time about in proportion to the square of a site's samples. A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
-#: tighter bound: the seed's Task 3 108 -> 111 commands with 200,000 (its bound 48 s -> 226 s on
-#: a machine where the whole trace below takes 2.3 times as long), the UR5 cell's welds 87 ->
-#: 95 (83 s -> 735 s, 18 rounds) and its seam 92 -> 98.3 (62 s -> 545 s, 23 rounds; while 16
-#: rounds ended every search, it stayed at 92 whatever the budget: :func:`search_rounds`).
+#: tighter bound (``benchmarks/results/bounds.md``, a 2-core machine): the seed's Task 3 108 ->
+#: 110 commands with 200,000 (its bound 44 s -> 177 s), the UR5 cell's welds 87 -> 95 (75 s ->
+#: 690 s, 18 rounds) and its seam 93 -> 98.3 (68 s -> 523 s, 22 rounds; while 16 rounds ended
+#: every search, it stayed where 16 rounds took it whatever the budget: :func:`search_rounds`).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000

@@ -217,7 +217,7 @@ def trace_bound(
         started.append((first, search, placed, s_all))
     # the placement whose first round bounds higher is searched on (the seed crack: 124.4
     # against 121.9 evenly, 129.3 against 126.1 searched; the UR5 cell's seam, a loop, 68.5
-    # evenly against 62.9, then 92.0)
+    # evenly against 62.9, then 93.0)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
     if rounds > 1:
         # on from the first round's cells (pruned and split, not solved again)
