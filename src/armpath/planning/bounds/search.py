@@ -483,8 +483,6 @@ class CellSearch:
         sites = np.array(points).reshape(-1, 3)
         entered = [p.passage.entered(sites, sampler.tol) for p in passages]
         self.passages = [(p, e) for p, e in zip(passages, entered, strict=True) if np.any(e)]
-        #: rounds run so far, over every call of :meth:`run`
-        self.rounds_run = 0
         #: where a call of :meth:`run` that ended on its rounds alone stopped: the next call
         #: goes on from it (see :class:`_Resume`); None when the search may not go on (it
         #: ended otherwise) or has not run
@@ -554,20 +552,15 @@ class CellSearch:
         stalled = 0
         if self._ended:
             return None
+        first = 1
         if self._resume is not None:
             was, self._resume = self._resume, None
-            best, stalled = was.best, was.stalled
+            best, stalled, first = was.best, was.stalled, was.best.rounds + 1
             clear_total, clear_q = was.best.clear_path, was.best.clear_q
-            pruned_against = incumbent = min(float(upper), was.incumbent)
-            self.relaxation = self.relaxation.narrowed(was.found, incumbent)
-            if not self._prune_and_split(
-                was.live, was.found, incumbent, was.best.directions, was.best.samples
-            ):
-                self._ended = True
+            pruned_against = min(float(upper), was.incumbent)
+            if not self._go_on(was.live, was.found, pruned_against, best.directions, best.samples):
                 return best
-        first = self.rounds_run + 1
         for r in range(first, first + rounds):
-            self.rounds_run = r
             live = [site.live() for site in self.sites]
             found = self.relaxation.solve(self.sampler, live, self._approach(live))
             cap = np.ceil(pruned_against - 1e-9) if np.isfinite(pruned_against) else np.inf
@@ -615,11 +608,21 @@ class CellSearch:
                 self._resume = _Resume(live, found, incumbent, best, stalled)
                 break
             pruned_against = incumbent
-            self.relaxation = self.relaxation.narrowed(found, incumbent)
-            if not self._prune_and_split(live, found, incumbent, directions, samples):
-                self._ended = True
+            if not self._go_on(live, found, incumbent, directions, samples):
                 break
         return best
+
+    def _go_on(
+        self, live: list[Layer], found: Solution, incumbent: float, directions: int, samples: int
+    ) -> bool:
+        """After a round (its ``live`` samples and ``found`` solution): narrow the relaxation
+        and prune and split the cells against ``incumbent``; False, and the search ended, when
+        nothing was split."""
+        self.relaxation = self.relaxation.narrowed(found, incumbent)
+        if self._prune_and_split(live, found, incumbent, directions, samples):
+            return True
+        self._ended = True
+        return False
 
     def _prune_and_split(
         self, live: list[Layer], found: Solution, incumbent: float, directions: int, samples: int

@@ -220,10 +220,9 @@ def trace_bound(
     # evenly against 62.9, then 93.0)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
     if rounds > 1:
-        # on from the first round's cells (pruned and split, not solved again)
-        more = search.run(rounds - 1, on_progress, upper=upper_commands)
-        if more is not None and more.value >= found.value:
-            found = more
+        # on from the first round's cells (pruned and split, not solved again); its result is
+        # the best of every round, the first's included
+        found = search.run(rounds - 1, on_progress, upper=upper_commands) or found
     if len(placements) > 1:
         placed += (
             ": of the points evenly spaced and where the plan's joint path turns, those whose "
