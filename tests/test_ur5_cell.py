@@ -259,10 +259,13 @@ def test_spot_welds_on_the_outer_face(tmp_path):
 
 
 def test_a_certified_merge_shortens_a_leg_between_two_welds():
-    """A searched motion from one weld to the next backs off the surface, searches and comes
-    back down in three parts merged apart; merged across them where a straight motion's
-    continuous motion is certified, it needs fewer commands: same ends, every command legal,
-    and the independent replay accepts its clearance."""
+    """A searched motion from one weld to another backs off the surface, searches and comes
+    back down in parts merged apart; merged across them where a straight motion's continuous
+    motion is certified, it needs fewer commands: same ends, every command legal, and the
+    independent replay accepts its clearance. Which searched legs the merge shortens depends on
+    the search's path, and that on the machine's arithmetic (4 -> 1 on one machine, 3 -> 4 and
+    1 -> 4 on an AVX-512 one), so three searched legs are planned and at least one must
+    shorten; none may lengthen."""
     from armpath.export import plan_result_dict
     from armpath.planning.motion import MotionOptions, plan_motion
     from armpath.planning.reach import goal_states
@@ -273,18 +276,24 @@ def test_a_certified_merge_shortens_a_leg_between_two_welds():
     arm = scene_arm(scene)
     home = arm.lattice.from_display(HOME_DEG, "home")
     welds = scene.spotweld_targets_mm()
-    at_weld_4 = goal_states(arm, scene.world, home, welds[3], 0.05)[0][1]
-    to_weld_1, _ = goal_states(arm, scene.world, home, welds[0], 0.05)
-    apart = plan_motion(
-        arm, scene.world, at_weld_4, to_weld_1, MotionOptions(), turn_copies=True,
-        certified_merge=False,
-    )  # fmt: skip
-    merged = plan_motion(arm, scene.world, at_weld_4, to_weld_1, MotionOptions(), turn_copies=True)
-    assert "certified merge" in merged.method and "certified merge" not in apart.method
-    assert merged.direct_commands <= merged.sequence.n_commands < apart.sequence.n_commands
-    np.testing.assert_array_equal(merged.sequence.start_ticks, apart.sequence.start_ticks)
-    np.testing.assert_array_equal(merged.sequence.final_ticks, apart.sequence.final_ticks)
-    assert np.abs(merged.sequence.commands).max() <= 20
-    doc = plan_result_dict(merged, arm, scene, "commands", None, None)
-    start_deg = arm.lattice.display(at_weld_4)
-    _accepted(doc, ir.Truth(start_deg=start_deg))
+    shortened = 0
+    for weld_from, weld_to in [(3, 0), (2, 3), (0, 3)]:
+        at_weld = goal_states(arm, scene.world, home, welds[weld_from], 0.05)[0][1]
+        to_weld, _ = goal_states(arm, scene.world, home, welds[weld_to], 0.05)
+        apart = plan_motion(
+            arm, scene.world, at_weld, to_weld, MotionOptions(), turn_copies=True,
+            certified_merge=False,
+        )  # fmt: skip
+        merged = plan_motion(arm, scene.world, at_weld, to_weld, MotionOptions(), turn_copies=True)
+        assert "certified merge" not in apart.method
+        assert merged.direct_commands <= merged.sequence.n_commands <= apart.sequence.n_commands
+        np.testing.assert_array_equal(merged.sequence.start_ticks, apart.sequence.start_ticks)
+        np.testing.assert_array_equal(merged.sequence.final_ticks, apart.sequence.final_ticks)
+        if "certified merge" not in merged.method:
+            continue
+        assert merged.sequence.n_commands < apart.sequence.n_commands
+        assert np.abs(merged.sequence.commands).max() <= 20
+        doc = plan_result_dict(merged, arm, scene, "commands", None, None)
+        _accepted(doc, ir.Truth(start_deg=arm.lattice.display(at_weld)))
+        shortened += 1
+    assert shortened >= 1
