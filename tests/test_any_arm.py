@@ -154,7 +154,8 @@ CASES = [
 
 
 @pytest.mark.parametrize(("name", "start_deg", "target"), CASES)
-@pytest.mark.parametrize("cone", [False, True])
+# the point goal alone searches every goal state: a long run, the cone case stays in the quick run
+@pytest.mark.parametrize("cone", [pytest.param(False, marks=pytest.mark.slow), True])
 def test_reach_of_any_arm_within_one_command_of_the_independent_bound(
     name, start_deg, target, cone
 ):
@@ -189,7 +190,7 @@ def test_reach_of_any_arm_within_one_command_of_the_independent_bound(
         assert r.lower_bound.commands <= int(np.ceil(bound - 1e-9))
 
 
-@pytest.mark.slow  # also shown by test_ur5_cell's circle, replayed on its own UR5 model
+@pytest.mark.extra  # also shown by test_ur5_cell's circle, replayed on its own UR5 model
 def test_a_free_circle_traced_by_ur5_replays_on_the_textbook_product():
     centre, radius = np.array([400.0, 100.0, 150.0]), 60.0
     scene = scene_from_dict(

@@ -28,6 +28,7 @@ def seed_reach():
     return armpath.reach("seed", [300.0, 100.0, 200.0])
 
 
+@pytest.mark.slow
 def test_docs_api_examples_run(tmp_path, monkeypatch):
     """Every ```python block of docs/api.md, in order, in one namespace, in a scratch folder."""
     text = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")

@@ -42,6 +42,7 @@ def plane():
     return arm_plane_map(seed_arm(), 5.0, 1_500_000, seed=3)
 
 
+@pytest.mark.slow
 def test_central_blind_zone_is_unreachable_and_its_surroundings_reachable(plane):
     """Pixels deep inside the blind zone are at least a few mm from every fingertip position an
     independent optimizer finds; reachable pixels deep inside the reach have a fingertip within

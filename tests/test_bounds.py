@@ -137,6 +137,7 @@ def _pair_distance_slsqp(c_a, c_b, starts, lo, hi):
     return best
 
 
+@pytest.mark.slow
 def test_a_two_point_trace_bound_agrees_with_slsqp_over_the_exact_family():
     arm = seed_arm()
     scene = load_scene(None)
@@ -253,6 +254,7 @@ def test_delaunay_neighbours_of_many_directions():
 
 
 @pytest.mark.parametrize(("weld", "free_bound"), [(1, 61), (3, 49)])
+@pytest.mark.slow
 def test_a_weld_bound_sees_the_workpiece(weld, free_bound):
     """Task 3's welds 2 and 4 lie inside the hollow workpiece: from the start, the clear goal
     configurations are farther than those that ignore the workpiece. The bound over the members
@@ -577,6 +579,7 @@ def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
     assert found.value <= paths.total + 1e-9 <= found.clear_path + 1e-9
 
 
+@pytest.mark.slow
 def test_a_search_in_two_calls_goes_on_where_the_first_stopped():
     """A search run one round and then three more ends where one run of four rounds does (the
     same bound, rounds, samples and clear path) without solving the first round again; and a
@@ -726,6 +729,7 @@ def test_a_redundant_arms_bound_is_reported_as_an_estimate():
     assert not b.proven and b.describe()["proven"] is False
 
 
+@pytest.mark.slow
 def test_a_tour_estimate_without_sampling_errors_is_its_own_paths_cost():
     """``with_errors=False`` (the benchmark's estimate of what the bound tends to) is no bound:
     reported unproven, at least the bound and at most the clear path it reports (a path

@@ -142,6 +142,7 @@ def test_a_second_run_into_the_same_folder_leaves_no_stale_files(tmp_path):
     assert doc["final_deg"] == [20.0, -80.0, 10.0, 0.0, -80.0, 0.0]
 
 
+@pytest.mark.slow
 def test_reach_json_on_stdout_from_another_start():
     r = run("reach", "300", "250", "300", "--from", "90", "-40", "60", "30", "-45", "10", "--json")
     assert r.returncode == 0, r.stderr
@@ -176,6 +177,7 @@ def test_run_writes_every_task_and_a_summary(seed_run):
     assert rows[0] == "face,height_mm,circumference_mm,unreachable_mm" and len(rows) == 7
 
 
+@pytest.mark.slow
 def test_spotweld_horizontal_wall_given_order(tmp_path):
     r = run(
         "spotweld", "--wall", "horizontal", "--order", "given", "--no-bound", "--no-pools",

@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "armpath"
 
@@ -69,6 +71,24 @@ def test_ruff_clean():
     assert r.returncode == 0, r.stdout + r.stderr
 
 
+@pytest.mark.slow
 def test_mypy_clean():
     r = subprocess.run([_tool("mypy")], cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_ci_runs_the_readmes_test_command_and_it_runs_the_slow_tests():
+    """`.ci/run` ends in exactly the README's test command, and that command selects the
+    `slow` tests (the proofs plain `pytest` leaves out) but not the `extra` ones."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    commands = [
+        line
+        for line in readme.splitlines()
+        if "pip install '.[test]'" in line and "python -m pytest" in line
+    ]
+    assert len(commands) == 1, commands
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").strip().splitlines()
+    assert ci[-1] == commands[0]
+    assert commands[0].endswith("-m pytest -m 'not extra'")
+    config = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+    assert "-m 'not slow and not extra'" in config  # plain pytest: the quick run

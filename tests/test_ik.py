@@ -207,6 +207,7 @@ def test_general_6r_recovers_the_generating_solution_in_random_arms():
     assert 2.0 < np.mean(counts) < 8.0
 
 
+@pytest.mark.slow
 def test_general_6r_finds_what_brute_force_finds():
     """Multi-start least squares (scipy, 150 starts) finds no solution the elimination lacks."""
     rng = np.random.default_rng(7)

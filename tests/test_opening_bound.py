@@ -111,6 +111,7 @@ def _clear_members(arm, world, fam, point, dirs):
     return q[(values - world.required(arm)).min(axis=-1) >= 0.0]
 
 
+@pytest.mark.slow
 def test_a_weld_inside_the_workpiece_is_bounded_through_its_opening():
     arm = seed_arm()
     scene = load_scene(None)
@@ -164,6 +165,7 @@ def test_a_weld_inside_the_workpiece_is_bounded_through_its_opening():
     assert b.commands >= attained - 8
 
 
+@pytest.mark.slow
 def test_every_order_of_task_3_is_bounded_below_its_plan_through_the_opening():
     arm = seed_arm()
     scene = load_scene(None)
@@ -182,6 +184,7 @@ def test_every_order_of_task_3_is_bounded_below_its_plan_through_the_opening():
     assert b.commands <= 122 and min(per.values()) == b.commands
 
 
+@pytest.mark.slow
 def test_a_trace_inside_the_workpiece_is_approached_through_its_opening():
     """A line along the workpiece's floor (inside its hull by far more than the tolerance): the
     trace bound's approach goes through the opening, as the tour's legs do (same samples)."""

@@ -76,6 +76,7 @@ def test_waypoints_put_the_fingertip_in_the_opening_and_keep_clear():
     assert np.all(samples[..., 2] >= need - 1e-6)  # the table z = 0
 
 
+@pytest.mark.slow
 def test_a_motion_into_the_workpiece_goes_through_a_waypoint():
     arm, world = seed_arm(), seed_scene().world
     start = deg_to_ticks(HOME_DEG)

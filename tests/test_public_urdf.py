@@ -150,6 +150,7 @@ def test_reach_with_a_tool_axis_cone_for_the_panda_file(tmp_path):
     assert np.degrees(np.arccos(np.clip(-T[2, 2], -1.0, 1.0))) <= 10.0 + 1e-6
 
 
+@pytest.mark.slow
 def test_trace_with_the_ur5_file_replayed_on_pinocchio(tmp_path):
     """A 60 mm circle above a table, the arm from the UR5 file standing on a base transform:
     every commanded motion, sampled finely, stays within 0.1 mm of the circle on Pinocchio's

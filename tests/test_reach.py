@@ -101,6 +101,7 @@ def test_task1_replayed_independently(task1):
     assert doc["min_clearance_mm"] <= clearance.min() + 1e-9
 
 
+@pytest.mark.slow
 def test_task1_lower_bound_matches_an_independent_optimum(task1):
     result, _ = task1
     lb = result.lower_bound
@@ -121,6 +122,7 @@ def test_task1_lower_bound_matches_an_independent_optimum(task1):
         ((-200.0, -300.0, 400.0), [90, -40, 60, 30, -45, 10]),
     ],
 )
+@pytest.mark.slow
 def test_other_targets_reach_the_independent_optimum(target, start):
     target = np.array(target)
     result = plan_reach(ARM, SCENE.world, deg_to_ticks(start), target)
@@ -133,6 +135,7 @@ def test_other_targets_reach_the_independent_optimum(target, start):
     assert result.clearance.certified_ok
 
 
+@pytest.mark.slow
 def test_lattice_can_need_one_more_command_than_the_continuous_bound():
     # 2 commands suffice in continuous joint space, but no lattice state within 2 commands is
     # within 0.05 mm (decided exhaustively by the independent model); the planner must say so
@@ -184,6 +187,7 @@ def test_target_inside_the_wall_is_refused():
         plan_reach(ARM, SCENE.world, deg_to_ticks(HOME), inside_wall)
 
 
+@pytest.mark.slow
 def test_blocked_direct_motion_is_reported_or_planned_around():
     # a point on the far side of the workpiece, low down: every direct motion hits the wall
     target = [300, -170, 15]

@@ -118,6 +118,7 @@ def ring_trace():
         )
 
 
+@pytest.mark.slow
 def test_ring_on_the_outer_cone_is_traced_and_replays(ring_trace):
     r = ring_trace
     assert r.passes and r.reachability.unreachable
@@ -163,6 +164,7 @@ def test_ring_on_the_outer_cone_is_traced_and_replays(ring_trace):
         assert covered, arc
 
 
+@pytest.mark.slow
 def test_ring_unreachable_arc_is_explained_and_true(ring_trace):
     """The unreachable arc has a reason, and the independent search of the solution family
     agrees: no configuration reaches its middle, every one of the reported reachable arcs'
@@ -273,6 +275,7 @@ def test_plane_sections_of_inner_faces_lie_on_the_inner_wall():
 
 
 # -- 3. spotweld --return ------------------------------------------------------------------------
+@pytest.mark.slow
 def test_spot_welds_and_back_home_replay_independently():
     """The defect: the way back always failed (the search could not leave the wall). Two welds
     in the given order, then back to the start."""

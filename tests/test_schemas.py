@@ -36,6 +36,7 @@ def test_committed_schemas_are_what_armpath_schema_prints(kind):
     assert json.loads(printed.stdout) == committed == result_schema(kind)
 
 
+@pytest.mark.slow
 def test_api_results_of_any_arm_validate(tmp_path):
     import armpath
 

@@ -431,6 +431,7 @@ def _no_failures(records):
     )
 
 
+@pytest.mark.slow
 def test_fixed_sample_kinematics_and_planning(stress):
     seed, kinds, indices = KINEMATICS
     records = _run(stress, seed, indices, kinds)
@@ -451,7 +452,7 @@ def test_fixed_sample_scene_files(stress):
     _no_failures(_run(stress, seed, indices, kinds))
 
 
-@pytest.mark.slow
+@pytest.mark.extra
 def test_bigger_sample_has_no_failures(stress):
     records: list[dict] = []
     stress.run_pool(3, list(range(120)), list(stress.WEIGHTS), 20.0, 0.05, 2, records.append)

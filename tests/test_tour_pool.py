@@ -200,6 +200,7 @@ def test_pool_members_are_capped_evenly(seed_pools, monkeypatch):
         np.testing.assert_allclose(few.q[[0, -1]], full.q[[0, -1]])
 
 
+@pytest.mark.slow
 def test_pool_members_keep_the_goal_states_rule(seed_pools):
     _, pts, _, guide = seed_pools
     wp = independent.Workpiece("normal")
@@ -221,6 +222,7 @@ def test_pool_members_keep_the_goal_states_rule(seed_pools):
         assert min(to_wp[is_tip].min(), to_floor[is_tip].min()) >= -1e-9
 
 
+@pytest.mark.slow
 def test_the_pools_switch_leaves_them_out_and_they_never_lengthen_a_tour():
     """``pools=False`` plans without the pooling step (no pool is sampled), ``pools=True`` runs
     it; both tours, replayed independently in integer ticks with the seed's forward kinematics,

@@ -53,6 +53,7 @@ def circle_trace():
     return plan_trace(arm, scene.world, start, circle, TraceOptions(tolerance_mm=0.1))
 
 
+@pytest.mark.slow
 def test_only_a_pass_once_round_is_bounded_as_a_loop(circle_trace, monkeypatch):
     """A closed curve's bound charges the move from the pass's last point back to its first
     (the pass comes round to where it began): only when the one pass covers the whole curve.
@@ -76,6 +77,7 @@ def test_only_a_pass_once_round_is_bounded_as_a_loop(circle_trace, monkeypatch):
         assert seen[-1][1] is loop and len(seen[-1][0]) == spans
 
 
+@pytest.mark.slow
 def test_a_free_circle_is_traced_in_one_closed_pass(circle_trace):
     r = circle_trace
     assert r.curve.closed and not r.reachability.unreachable
@@ -188,6 +190,7 @@ def test_run_reports_task_2(seed_run):
     assert "joint limits" in bad["reason"]
 
 
+@pytest.mark.slow
 def test_a_clamp_on_the_crack_forces_a_second_pass_with_a_planned_lift_off():
     """A 25 mm sphere 2 mm off the crack: every point stays reachable (the tool slips under it
     from one side or the other) but the tracer cannot follow the family continuously past it (a
@@ -317,6 +320,7 @@ def test_reference_dp_layer_equals_brute_force():
         np.testing.assert_allclose(chosen[rows], want[rows], rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeypatch):
     """The reference DP's path zigzags between its coarse samples of the family; straightened,
     then shortened in the largest joint changes, every layer still puts the fingertip on its
@@ -356,6 +360,7 @@ def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeyp
     assert worth(short.ref) < 0.96 * worth(straight.ref)
 
 
+@pytest.mark.slow
 def test_a_line_whose_end_is_nearer_is_traced_from_its_end(monkeypatch):
     """The reference DP costs the approach too, either way along the arc: a line whose end
     (not its start) lies nearer the arm is traced from its end (independent forward
@@ -431,6 +436,7 @@ def test_an_arc_without_a_reference_is_reported_not_traced(monkeypatch):
     )
 
 
+@pytest.mark.slow
 def test_an_arm_with_a_prismatic_joint_follows_the_curve_in_few_passes(tmp_path):
     """welder003 (joint 3 prismatic, 2 mm a command) along a tilted circle: the reference DP
     and the tracer measure joint moves in commands, whatever the joint's kind. They read a

@@ -235,7 +235,7 @@ def _inside(s, item, length):
     return (s - item["start_mm"]) % length <= item["end_mm"] - item["start_mm"]
 
 
-@pytest.mark.slow
+@pytest.mark.extra
 def test_independent_scan_finds_the_same_unreachable_arcs(trace, crack):
     """A full scan of the crack every ~2 mm: its unreachable runs are the reported arcs."""
     s, _ = crack.sample(2.0)

@@ -516,6 +516,7 @@ def test_cli_trajectory_bounded_and_retimed(tmp_path):
     assert float(rows["toppra"][1]) < float(rows["scaled"][1])
 
 
+@pytest.mark.slow
 def test_cli_rcm_writes_the_rotation_and_its_commands(tmp_path):
     import subprocess
     import sys

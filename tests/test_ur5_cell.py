@@ -169,6 +169,7 @@ def test_plan_to_a_point_low_beside_the_workpiece(tmp_path):
     assert np.abs(states[:, 2]).max() < 163.6
 
 
+@pytest.mark.slow
 def test_seam_around_the_workpiece(tmp_path):
     """The scene's seam (a tilted plane cutting the cone's outer face): every pass within
     0.1 mm of the closed-form section, links >= 1 mm clear, and the passes with the arcs
@@ -195,6 +196,7 @@ def test_seam_around_the_workpiece(tmp_path):
     assert traced + skipped == pytest.approx(length, abs=1.0)
 
 
+@pytest.mark.slow
 def test_circle_in_free_space(tmp_path):
     """A 40 mm circle above the table beside the workpiece, as a parametric curve: traced
     whole, within 0.1 mm, clear (without the bound: --no-bound leaves it out)."""
@@ -226,6 +228,7 @@ def test_circle_in_free_space(tmp_path):
     assert doc["n_commands"] <= 105
 
 
+@pytest.mark.slow
 def test_spot_welds_on_the_outer_face(tmp_path):
     """The four welds, given as xy and lifted onto the cone's outer face (here: the outer
     radius falls linearly from r_bottom to r_top over the height), each visited within
@@ -258,6 +261,7 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     assert doc["lower_bound_commands"] <= doc["n_commands"] <= 124
 
 
+@pytest.mark.slow
 def test_a_certified_merge_shortens_a_leg_between_two_welds():
     """A searched motion from one weld to another backs off the surface, searches and comes
     back down in parts merged apart; merged across them where a straight motion's continuous

@@ -253,6 +253,7 @@ def small_reach(tmp_path_factory):
     return out / "reach.json"
 
 
+@pytest.mark.slow
 def test_cli_view_serves_and_exports_empty_and_far_scenes(small_reach, tmp_path):
     import urllib.request
 
@@ -305,6 +306,7 @@ def test_cli_view_serves_and_exports_empty_and_far_scenes(small_reach, tmp_path)
             assert warnings == []
 
 
+@pytest.mark.slow
 def test_cli_view_refuses_bad_addresses_at_once(tmp_path):
     import socket
 
