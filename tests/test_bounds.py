@@ -679,6 +679,11 @@ def test_layers_where_a_path_turns_hold_its_longest_polyline(seed):
     # too few of the path's points on a span: evenly spaced layers
     (even,) = bt.turning_layers([(100.0, 200.0)], s, u)
     np.testing.assert_allclose(even, np.linspace(100.5, 199.5, bt.LAYERS_PER_SPAN))
+    # a span shorter than its insets: the path's points there clip to its middle, none apart,
+    # so it gets the middle point (a 1 mm line's bound once had no point at all and crashed)
+    short = (50.0, 51.0)
+    (middle,) = bt.turning_layers([short], np.linspace(50.0, 51.0, 6), u[:6])
+    np.testing.assert_allclose(middle, [50.5])
 
 
 def test_a_closed_curve_pass_is_unwrapped_from_where_it_begins():

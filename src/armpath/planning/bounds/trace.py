@@ -77,6 +77,9 @@ def turning_layers(
         s, u = np.clip(path_mm[order], lo, hi), path_u[order]
         polylines = _longest_polylines(s, u, max(max_layers, 2), _LAYER_GAP_SHARE * (b - a))
         picks, length = polylines[2]
+        if not picks:  # no two of the path's points far enough apart: a very short span
+            out.append(even)
+            continue
         for more, longer in polylines[3:]:
             if not more or longer < length + gain:
                 break
