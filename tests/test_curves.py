@@ -42,11 +42,19 @@ def test_expressions_match_numpy(text, expected):
         ("2 +", "not valid arithmetic"),
         ("t if t > 0 else 0", "IfExp"),
         ("", "non-empty"),
+        ("300+" + "-" * 1990 + "t", "nests deeper than 400"),  # was a RecursionError
+        ("+".join(["t"] * 500), "nests deeper than 400"),
     ],
 )
 def test_expressions_refuse_everything_else(text, message):
     with pytest.raises(InvalidInputError, match=message):
         parse_expression(text)
+
+
+def test_an_expression_nested_up_to_the_limit_evaluates():
+    """400 levels (the limit) parse and evaluate: a sum of 401 terms and 400 unary minuses."""
+    np.testing.assert_allclose(parse_expression("+".join(["t"] * 401))([0.5, 2.0]), [200.5, 802])
+    np.testing.assert_allclose(parse_expression("-" * 400 + "t")([3.0]), [3.0])
 
 
 def test_seed_crack_lies_on_the_outer_wall_and_the_plane():

@@ -49,6 +49,9 @@ _BINARY: dict[type, Callable[[FloatArray, FloatArray], FloatArray]] = {
     ast.Pow: np.power,
 }
 _MAX_LENGTH = 2000
+#: Deepest nesting of operations and calls (``-(-(-t))`` is 3 deep; a sum of n terms n - 1):
+#: checking and evaluating recurse once per level, within Python's recursion limit.
+_MAX_DEPTH = 400
 
 
 @dataclass(frozen=True)
@@ -81,11 +84,15 @@ def parse_expression(text: str, variable: str = "t") -> Expression:
         tree = ast.parse(text.strip(), mode="eval").body
     except SyntaxError as exc:
         raise InvalidInputError(f"expression {text!r} is not valid arithmetic: {exc.msg}") from None
+    except (RecursionError, MemoryError):
+        raise InvalidInputError(f"expression nests deeper than {_MAX_DEPTH} levels") from None
     _check(tree, text, variable)
     return Expression(text, variable, tree)
 
 
-def _check(node: ast.AST, text: str, variable: str) -> None:
+def _check(node: ast.AST, text: str, variable: str, depth: int = 0) -> None:
+    if depth > _MAX_DEPTH:
+        raise InvalidInputError(f"expression nests deeper than {_MAX_DEPTH} levels")
     allowed = ", ".join(sorted(FUNCTIONS))
     if isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, int | float):
@@ -99,11 +106,11 @@ def _check(node: ast.AST, text: str, variable: str) -> None:
             )
         return
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-        _check(node.left, text, variable)
-        _check(node.right, text, variable)
+        _check(node.left, text, variable, depth + 1)
+        _check(node.right, text, variable, depth + 1)
         return
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-        _check(node.operand, text, variable)
+        _check(node.operand, text, variable, depth + 1)
         return
     if isinstance(node, ast.Call):
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
@@ -117,7 +124,7 @@ def _check(node: ast.AST, text: str, variable: str) -> None:
                 f"{_ARITY.get(node.func.id, 1)} positional argument(s)"
             )
         for arg in node.args:
-            _check(arg, text, variable)
+            _check(arg, text, variable, depth + 1)
         return
     raise InvalidInputError(
         f"expression {text!r}: {type(node).__name__} is not allowed "
