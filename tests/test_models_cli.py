@@ -151,3 +151,23 @@ def test_cli_convert_to_mdh_loads_back_with_model(tmp_path):
     a = json.loads(_cli("fk", *q, "--model", "puma560", "--json").stdout)
     b = json.loads(_cli("fk", *q, "--model", str(out), "--json").stdout)
     np.testing.assert_allclose(a["pose"], b["pose"], atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["seed", "iiwa14", "welder003"])
+def test_cli_show_gives_home_and_limits_in_display_units(name, tmp_path):
+    """The home pose and limits shown are the model document's (rad, mm) in deg and mm: the
+    home was once shown as ticks (the seed's -90 deg as -0.15708)."""
+    from cli_in_process import run_in_process
+
+    doc = json.loads(run_in_process(["model", "show", name, "--json"], tmp_path).stdout)
+    kinds = [j["kind"] for j in doc["joints"]]
+    home = [
+        v if k == "prismatic" else np.degrees(v) for v, k in zip(doc["home"], kinds, strict=True)
+    ]
+    shown = run_in_process(["model", "show", name], tmp_path).stdout
+    line = next(t for t in shown.splitlines() if "; home " in t)
+    values = [float(v) for v in line.split("; home ")[1].split(" (")[0].split()]
+    np.testing.assert_allclose(values, home, atol=1e-4)
+    if name == "seed":  # the seed arm's home, from its statement
+        assert values == [0, -90, 0, 0, -90, 0]
+        assert "-125 … 125 deg" in shown and "-138 … 138 deg" in shown

@@ -363,14 +363,11 @@ def _joint_units(arm: SerialArm) -> list[str]:
 
 
 def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
-    """Joint values for output: deg for revolute joints, mm for prismatic ones."""
-    from armpath.model.serial_arm import JointKind
-
-    out = np.array(q, dtype=float, copy=True)
-    for i, j in enumerate(arm.joints):
-        if j.kind is JointKind.REVOLUTE:
-            out[..., i] = np.degrees(out[..., i])
-    return out
+    """Joint values (rad / the model's length unit) for output: deg for revolute joints, mm for
+    prismatic ones."""
+    lattice = arm.lattice
+    q = np.asarray(q, dtype=float)
+    return np.where(lattice.prismatic, q * lattice.mm_per_unit, np.degrees(q))
 
 
 def _from_display(arm: SerialArm, values: list[float]) -> np.ndarray:

@@ -81,7 +81,7 @@ def show(
         base = np.asarray(arm.T_world_base)
         out_console.print(
             f"base at {' '.join(f'{v:g}' for v in base[:3, 3])} {arm.length_unit}; home "
-            f"{' '.join(f'{v:g}' for v in arm.lattice.display(arm.home))} ({', '.join(units)})",
+            f"{' '.join(f'{v:g}' for v in _to_display(arm, arm.home))} ({', '.join(units)})",
             markup=False,
         )
 
