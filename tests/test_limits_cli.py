@@ -11,6 +11,7 @@ ends long runs with the time-limit message and writes nothing, is checked on rea
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -250,6 +251,9 @@ def test_rcm_counts_commands_and_names_the_command_limit(tmp_path):
         (["--voxel", "1e-300"], ("voxels", "--voxel")),
         (["--voxel", "nan"], ("--voxel",)),
         (["--voxel", "-2"], ("--voxel",)),
+        (["--voxel", "1e9"], ("larger than the arm's reach (715 mm)", "--voxel")),
+        (["--voxel", "1e103"], ("larger than the arm's reach", "--voxel")),  # was a traceback
+        (["--voxel", "3.9"], ("at least 3.91", "50,243,409", "--voxel")),
         (["--samples", "1000000000"], ("joint samples", "--samples", "200,000,000")),
         (["--samples", "0"], ("--samples",)),
         (["--chunk", "100000000"], ("--chunk", "4,000,000")),
@@ -283,6 +287,7 @@ def test_workspace_time_limit(tmp_path):
         (["--pixel", "0.001"], ("pixels", "--pixel", "50,000,000")),
         (["--pixel", "0"], ("--pixel",)),
         (["--pixel", "inf"], ("--pixel",)),
+        (["--pixel", "1e103"], ("larger than the map (1150 x 1150 mm)", "--pixel")),
         (["--samples", "100000000"], ("joint samples", "--samples", "200,000,000")),
         (["--samples", "0"], ("--samples",)),
         (["--bands", "100000"], ("circles", "--bands", "1,000")),
@@ -319,6 +324,7 @@ def test_blindzones_time_limit(tmp_path):
         (["--pixel", "nan"], ("--pixel",)),
         (["--total", "nan"], ("--total",)),
         (["--total", "1e300"], ("pixels", "--total")),
+        (["--pixel", "1e160"], ("larger than the map", "--pixel")),  # was a traceback
         (["--top", "0"], ("--top",)),
         (["--seed", "-1"], ("--seed",)),
     ],
@@ -428,3 +434,35 @@ def test_target_coordinates_beyond_the_limit_are_refused(tmp_path, args):
 def test_a_bound_sample_budget_outside_its_range_is_refused(tmp_path, task, samples):
     """--bound-samples outside 1,000..2,000,000 is refused with the range before any work."""
     _refused(tmp_path, [task, "--bound-samples", samples], "bound samples must be between", "got")
+
+
+# --- results read back ----------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def reach_document():
+    import armpath
+
+    return armpath.reach("seed", [300.0, 100.0, 200.0]).doc
+
+
+@pytest.mark.parametrize(
+    ("model", "needle"),
+    [
+        ("nosuch", 'the result\'s "model" must be an object'),  # was an AttributeError
+        ({"name": "ur5"}, "model 'ur5' carries no definition"),
+        ({}, "model None carries no definition"),
+    ],
+)
+@pytest.mark.parametrize("command", ["export", "animate"])
+def test_a_result_whose_model_cannot_be_rebuilt_is_refused(
+    tmp_path, reach_document, command, model, needle
+):
+    doc = dict(reach_document, model=model)
+    source = tmp_path / "result.json"
+    source.write_text(json.dumps(doc), encoding="utf-8")
+    out_name = "out.csv" if command == "export" else "out.gif"
+    proc = _run([command, str(source), "--out", str(tmp_path / out_name)], tmp_path)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert needle in _error_line(proc)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]

@@ -120,7 +120,7 @@ def check_size(count: float, limit: float, what: str, option: str) -> None:
     ``count`` may be a float (an estimate that could overflow an integer)."""
     if not math.isfinite(count) or count > limit:
         if not math.isfinite(count):
-            shown = "an unbounded number of"
+            shown = "an unbounded number"
         elif count < 1e15 and float(count).is_integer():
             shown = f"{count:,.0f}"  # every digit of a whole count: 1,000,001
         else:

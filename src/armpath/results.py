@@ -182,14 +182,20 @@ class Result:
         )
 
 
-def _arm(model: dict[str, Any]) -> SerialArm:
+def _arm(model: Any) -> SerialArm:
+    if not isinstance(model, dict):
+        raise InvalidInputError(
+            'the result\'s "model" must be an object (the model armpath wrote beside the '
+            f"commands), got {type(model).__name__}"
+        )
     definition = model.get("definition")
     if isinstance(definition, dict):
         return arm_from_dict(definition, "the result's model")
     if model.get("name") != "seed":
         raise InvalidInputError(
-            f"result documents of model {model.get('name')!r} cannot be replayed; only the seed "
-            "arm's"
+            f"the result's model {model.get('name')!r} carries no definition, so it cannot be "
+            "replayed (armpath writes every model's definition; only the seed arm is known by "
+            "its parameters alone)"
         )
     p = model.get("parameters", {})
     limits = model.get("joint_limits_deg") or [None] * 6
@@ -207,6 +213,10 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     if scene is not None:
         return load_scene(scene)
     described = doc.get("scene", {})
+    if not isinstance(described, dict):
+        raise InvalidInputError(
+            f'the result\'s "scene" must be an object, got {type(described).__name__}'
+        )
     source = described.get("source", "")
     wall = doc.get("wall_thickness") or described.get("wall_thickness")
     definition = described.get("definition")

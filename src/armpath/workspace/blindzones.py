@@ -130,6 +130,11 @@ def _grid(
     (naming ``option``) above ``MAX_GRID_CELLS`` pixels."""
     if not (np.isfinite(pixel) and pixel > 0):
         raise InvalidInputError(f"pixel size must be a positive length, got {pixel}")
+    if pixel > max(extent_u[1] - extent_u[0], extent_v[1] - extent_v[0]):
+        raise InvalidInputError(
+            f"pixel size {pixel:g} mm is larger than the map ({extent_u[1] - extent_u[0]:.0f} x "
+            f"{extent_v[1] - extent_v[0]:.0f} mm); change {option}"
+        )
     lo = np.array([extent_u[0], extent_v[0]]) - pixel
     n = np.ceil((np.array([extent_u[1], extent_v[1]]) + pixel - lo) / pixel)  # floats
     cells = float(n[0]) * float(n[1])  # Python floats: inf rather than an overflow warning

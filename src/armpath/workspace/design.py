@@ -247,7 +247,7 @@ def sweep(
             raise InvalidInputError("--scheduler needs Dask: pip install 'armpath[dask]'") from None
         try:
             client = Client(scheduler, timeout="5s")  # type: ignore[no-untyped-call]
-        except OSError as exc:
+        except (OSError, ValueError) as exc:  # ValueError: not an address ("bogus")
             raise InvalidInputError(
                 f"cannot reach the Dask scheduler at {scheduler}: {exc}"
             ) from None

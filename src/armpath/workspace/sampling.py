@@ -13,6 +13,7 @@ every chunk (and every batch of a chunk checked against the obstacles).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -225,14 +226,23 @@ class GridSpec:
         it would have more than ``MAX_VOXELS`` voxels."""
         if not (np.isfinite(voxel) and voxel > 0):
             raise InvalidInputError(f"voxel size must be a positive length, got {voxel}")
-        reach = reach_bound(arm) + voxel
+        arm_reach = reach_bound(arm)
+        if voxel > arm_reach:
+            raise InvalidInputError(
+                f"voxel size {voxel:g} is larger than the arm's reach ({arm_reach:.0f} "
+                f"{arm.length_unit}); "
+                f"change {option}"
+            )
+        reach = arm_reach + voxel
         centre = z_axis_chain(arm)[0, :3, 3]
         edge = float(np.ceil(2.0 * reach / voxel))  # may be beyond any integer, or inf
+        per_edge = math.floor(MAX_VOXELS ** (1 / 3))
+        least = math.ceil(200.0 * arm_reach / (per_edge - 2)) / 100.0  # edge <= per_edge
         check_size(
             edge * edge * edge,  # Python floats: inf rather than an overflow warning
             MAX_VOXELS,
-            f"voxels of a {voxel:g} grid over the reach ({reach:.0f}; use a voxel of at least "
-            f"{2.0 * reach / MAX_VOXELS ** (1 / 3):.3g})",
+            f"voxels of a {voxel:g} grid over the reach ({reach:.0f} {arm.length_unit}; use a "
+            f"voxel of at least {least:g})",
             option,
         )
         n = int(edge)
