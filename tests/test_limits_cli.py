@@ -466,3 +466,28 @@ def test_a_result_whose_model_cannot_be_rebuilt_is_refused(
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
     assert needle in _error_line(proc)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]
+
+
+def test_energy_weights_beyond_the_limit_are_refused(tmp_path):
+    """Weights of 1e308 made the weighted travel overflow to inf (a warning, then a result
+    saying 'joint travel inf deg'); only their ratios matter, so they are capped."""
+    _refused(
+        tmp_path,
+        ["plan", "--to-xyz", "300", "0", "200", "--objective", "energy", "--weights",
+         "1e308,1,1,1,1,1"],
+        "energy weights must be in [0, 1e+06]",
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-200, 1.0, 1e200, 1e308])
+def test_a_tool_axis_of_any_magnitude_is_its_direction(scale):
+    """Directions are scaled by their largest component before they are normalised: 1e308
+    overflowed to a zero vector and 1e-200 underflowed to one (both refused as zero)."""
+    from armpath.cli.tasks import axis_rule
+    from armpath.ik.target import AxisCone
+
+    v = np.array([0.6, 0.0, -0.8]) * scale
+    cone = AxisCone(v, 0.1)
+    np.testing.assert_allclose(cone.direction, [0.6, 0.0, -0.8], atol=1e-15)
+    rule = axis_rule(" ".join(repr(float(x)) for x in v), 5.0)
+    np.testing.assert_allclose(rule.direction, [0.6, 0.0, -0.8], atol=1e-15)

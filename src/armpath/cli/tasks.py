@@ -230,10 +230,10 @@ def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | No
     if tool_axis.strip() == "normal":
         return AxisRule(tol_rad)
     d = _direction(tool_axis, "--tool-axis")
-    norm = float(np.linalg.norm(d))
-    if norm < 1e-12:
+    if not np.any(d):
         raise InvalidInputError("--tool-axis must be a non-zero direction")
-    return AxisRule(tol_rad, normal=False, direction=d / norm)
+    d = d / np.abs(d).max()  # any magnitude, without under- or overflow
+    return AxisRule(tol_rad, normal=False, direction=d / np.linalg.norm(d))
 
 
 AxisToleranceOption = Annotated[

@@ -28,10 +28,10 @@ FloatArray = NDArray[np.float64]
 
 def _unit(v: ArrayLike, what: str) -> FloatArray:
     a = np.asarray(v, dtype=np.float64).reshape(-1)
-    n = float(np.linalg.norm(a)) if a.shape == (3,) else 0.0
-    if a.shape != (3,) or not np.isfinite(n) or n < 1e-12:
-        raise InvalidInputError(f"{what} must be a non-zero 3-vector, got {a.tolist()}")
-    out = a / n
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.any(a):
+        raise InvalidInputError(f"{what} must be a finite non-zero 3-vector, got {a.tolist()}")
+    scaled = a / np.abs(a).max()  # any magnitude, 1e-300 or 1e300, without under- or overflow
+    out = scaled / np.linalg.norm(scaled)
     out.setflags(write=False)
     return out
 

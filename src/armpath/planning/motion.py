@@ -67,6 +67,11 @@ class PlanMetrics:
     joint_travel_deg: tuple[float, ...]
 
 
+#: Largest energy weight of a joint (only the weights' ratios matter; a larger one makes the
+#: weighted travel overflow).
+MAX_ENERGY_WEIGHT = 1e6
+
+
 @dataclass(frozen=True)
 class MotionOptions:
     """Settings of :func:`plan_motion` (lengths mm, angles deg).
@@ -130,9 +135,12 @@ class MotionOptions:
                 f"shortcut rounds must be in [0, 100000], got {self.shortcut_rounds}"
             )
         if self.energy_weights is not None and any(
-            not (np.isfinite(w) and w >= 0) for w in self.energy_weights
+            not (np.isfinite(w) and 0 <= w <= MAX_ENERGY_WEIGHT) for w in self.energy_weights
         ):
-            raise InvalidInputError(f"energy weights must be >= 0, got {self.energy_weights}")
+            raise InvalidInputError(
+                f"energy weights must be in [0, {MAX_ENERGY_WEIGHT:g}] (only their ratios "
+                f"matter), got {self.energy_weights}"
+            )
 
 
 @dataclass(frozen=True, eq=False)
