@@ -31,7 +31,7 @@ def _unit(v: ArrayLike, what: str) -> FloatArray:
     if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.any(a):
         raise InvalidInputError(f"{what} must be a finite non-zero 3-vector, got {a.tolist()}")
     scaled = a / np.abs(a).max()  # any magnitude, 1e-300 or 1e300, without under- or overflow
-    out = scaled / np.linalg.norm(scaled)
+    out = np.asarray(scaled / np.linalg.norm(scaled), dtype=np.float64)
     out.setflags(write=False)
     return out
 
