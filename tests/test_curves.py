@@ -109,3 +109,30 @@ def test_polyline():
     )
     with pytest.raises(InvalidInputError, match="repeated"):
         Polyline("bad", [[0, 0, 0], [0, 0, 0], [1, 0, 0]])
+
+
+def test_a_curve_shorter_than_the_least_length_is_refused():
+    """0.1 mm is traced; 0.01 mm found no lattice state near it and failed with a message
+    repeated for every scan point."""
+    assert Polyline("ok", [[300, 0, 260], [300, 0.1, 260]]).length == pytest.approx(0.1)
+    with pytest.raises(InvalidInputError, match=r"0\.01 mm long; a curve must be at least 0\.1"):
+        _ = Polyline("tiny", [[300, 0, 260], [300, 0.01, 260]]).length
+
+
+def test_the_tangent_of_a_curve_that_barely_moves_is_still_a_unit_vector():
+    """x = 300 + t**1e6 stands still until the last table sample, where it moves 1 mm along x:
+    the tangent, by differences 1e-3 mm apart, was 0/0 (a warning, then a failed trace with an
+    empty reason); the step now widens until the curve moves."""
+    import warnings
+
+    from armpath.model.seed_arm import seed_arm
+    from armpath.planning.trace.family import curve_family
+
+    curve = ParametricCurve("plateau", "300 + t**1e6", "0", "260", 0.0, 1.0)
+    assert curve.length == pytest.approx(1.0)
+    fam = curve_family(seed_arm(), seed_scene().world, curve)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for s in (0.0, 0.5, 1.0):
+            _, t, _ = fam.frame(s)
+            np.testing.assert_allclose(t, [1.0, 0.0, 0.0], atol=1e-9)

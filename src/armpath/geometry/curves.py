@@ -36,6 +36,9 @@ FloatArray = NDArray[np.float64]
 
 #: Samples of the dense table behind arc length and closest points.
 TABLE_SAMPLES = 20_001
+#: Shortest curve (mm): a shorter one is a point to the tracer (0.01 mm found no lattice state
+#: near it where 0.1 mm is traced).
+MIN_CURVE_LENGTH_MM = 0.1
 
 
 class Curve(ABC):
@@ -74,6 +77,11 @@ class Curve(ABC):
         s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=-1))]
         if not s[-1] > 0:
             raise InvalidInputError(f"curve {self.name!r} has zero length (a single point)")
+        if s[-1] < MIN_CURVE_LENGTH_MM:
+            raise InvalidInputError(
+                f"curve {self.name!r} is {s[-1]:.3g} mm long; a curve must be at least "
+                f"{MIN_CURVE_LENGTH_MM:g} mm"
+            )
         return u, p, s
 
     @cached_property

@@ -230,9 +230,16 @@ class CurveFamily:
         """Point, unit tangent and outward normal (zero without a surface) at arc length ``s``
         (mm; brought onto the curve by :meth:`Curve.wrap`)."""
         h = 1e-3
-        c, before, after = self.curve.at_arc_length(np.array([s, s - h, s + h]))
-        t = after - before
-        t = t / np.linalg.norm(t)
+        while True:  # wider where the curve barely moves (a parameter's plateau)
+            c, before, after = self.curve.at_arc_length(np.array([s, s - h, s + h]))
+            t = after - before
+            norm = float(np.linalg.norm(t))
+            if norm > 1e-9 or h >= self.curve.length:
+                break
+            h *= 10.0
+        if not norm > 0:
+            raise InvalidInputError(f"curve {self.curve.name!r} has no direction at {s:.3f} mm")
+        t = t / norm
         if self.surface is None:
             return c, t, np.zeros(3)
         n = self.surface.outward_normal(c)

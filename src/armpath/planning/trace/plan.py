@@ -211,10 +211,13 @@ def plan_trace(
     prof_s, prof_d = run.profile_s, run.profile_d
     not_traced += _gaps_between_passes(arcs, passes, not_traced)
     if not passes:
-        raise PlanningError(
-            f"no reachable part of curve {curve.name!r} could be traced: "
-            + "; ".join(f"{a.start_mm:.1f}..{a.end_mm:.1f} mm: {why}" for a, why in not_traced)
-        )
+        if not_traced:
+            why = "; ".join(f"{a.start_mm:.1f}..{a.end_mm:.1f} mm: {why}" for a, why in not_traced)
+        else:
+            why = "no pass stayed within the tolerance along the reachable arcs " + ", ".join(
+                f"{a.start_mm:.1f}..{a.end_mm:.1f} mm" for a in arcs
+            )
+        raise PlanningError(f"no reachable part of curve {curve.name!r} could be traced: {why}")
     all_states = np.array(states)
     sequence = CommandSequence.from_states(all_states, arm.lattice)
     say("certifying the clearance of the whole motion")
