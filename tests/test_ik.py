@@ -620,3 +620,34 @@ def test_solution_sets_agree_with_eaik():
             equal += ours.count == len(theirs)
     assert compared == 480 and peer_misses <= 24, peer_misses
     assert equal >= 0.97 * (compared - peer_misses), (equal, compared, peer_misses)
+
+
+def _distinct_pairwise(q, prismatic, within):
+    """The rule as written once: each row, in order, dropped when a kept one is within
+    ``within`` in every joint, revolute differences taken modulo a turn."""
+    kept = []
+    for k in range(q.shape[0]):
+        d = q[kept] - q[k]
+        d[:, ~prismatic] = (d[:, ~prismatic] + np.pi) % (2 * np.pi) - np.pi
+        if not np.any(np.all(np.abs(d) <= within, axis=1)):
+            kept.append(k)
+    return kept
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_numerical_solutions_are_deduplicated_as_pairwise(seed):
+    """The k-d tree's distinct solutions equal the pairwise rule's, with near-copies, copies a
+    whole turn away and copies across the +-pi seam among them."""
+    from armpath.ik.numerical import _distinct
+
+    rng = np.random.default_rng(seed)
+    prismatic = np.array([False, False, True, False, False, False])
+    base = rng.uniform(-np.pi, np.pi, (300, 6))
+    base[:40, rng.integers(0, 6)] = np.pi - rng.uniform(0, 2e-6, 40)  # at the seam
+    copies = base[rng.integers(0, 300, 600)] + rng.uniform(-1.5e-6, 1.5e-6, (600, 6))
+    turns = rng.integers(-2, 3, (600, 6)) * 2 * np.pi
+    copies[:, ~prismatic] += turns[:, ~prismatic]
+    q = np.vstack([base, copies])[rng.permutation(900)]
+    kept = _distinct(q, prismatic, 1e-6)
+    assert kept.tolist() == _distinct_pairwise(q, prismatic, 1e-6)
+    assert 300 <= kept.size < 900  # some copies kept (beyond 1e-6), most dropped

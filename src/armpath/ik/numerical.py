@@ -18,6 +18,7 @@ from armpath.kinematics import forward_frames, jacobian_from_frames
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 def _errors_and_jacobians(
@@ -138,20 +139,43 @@ def solve_numerical(
             f"from the target (tolerances {position_tolerance_mm:g} mm, "
             f"{rotation_tolerance_rad:g} rad)",
         )
-    sols: list[FloatArray] = []
-    res_p: list[float] = []
-    res_r: list[float] = []
-    for k in np.flatnonzero(ok):
-        cand = q[k].copy()
-        if any(np.all(np.abs(_angle_diff(cand - s, prismatic)) < 1e-6) for s in sols):
+    kept = _distinct(q[ok], prismatic, SAME_SOLUTION)
+    sols = q[ok][kept]
+    order = np.lexsort(sols.T[::-1])
+    false = np.zeros(kept.size, dtype=bool)
+    return IKResult(
+        sols[order], pos_err[ok][kept][order], rot_err[ok][kept][order], false, false.copy(), method
+    )
+
+
+#: Two solutions closer than this in every joint (rad, or length unit; angles compared modulo
+#: a turn) are one.
+SAME_SOLUTION = 1e-6
+
+
+def _distinct(q: FloatArray, prismatic: NDArray[np.bool_], within: float) -> IntArray:
+    """Indices of the rows of ``q`` kept when each row, in order, is dropped if a kept one lies
+    within ``within`` of it in every joint (revolute joints modulo a turn). A k-d tree finds the
+    neighbours, so a position-only solve of 100,000 starts, each converging to its own member of
+    the family, is not compared pairwise (it took minutes)."""
+    from scipy.spatial import cKDTree
+
+    wrapped = np.where(prismatic, q, (q + np.pi) % (2.0 * np.pi) - np.pi)  # in [-pi, pi)
+    tree = cKDTree(wrapped)
+    near_seam = np.abs(np.abs(wrapped) - np.pi) < within  # a neighbour may lie a turn away
+    dropped = np.zeros(q.shape[0], dtype=bool)
+    kept: list[int] = []
+    for k in range(q.shape[0]):
+        if dropped[k]:
             continue
-        sols.append(cand)
-        res_p.append(float(pos_err[k]))
-        res_r.append(float(rot_err[k]))
-    order = np.lexsort(np.array(sols).T[::-1])
-    S = np.array(sols)[order]
-    false = np.zeros(len(sols), dtype=bool)
-    return IKResult(S, np.array(res_p)[order], np.array(res_r)[order], false, false.copy(), method)
+        kept.append(k)
+        points = [wrapped[k]]
+        for j in np.flatnonzero(near_seam[k] & ~prismatic):
+            points += [p + np.where(np.arange(q.shape[1]) == j, -2.0 * np.pi * np.sign(p[j]), 0.0)
+                       for p in points]  # fmt: skip
+        for p in points:
+            dropped[tree.query_ball_point(p, within, p=np.inf, eps=0.0)] = True
+    return np.array(kept, dtype=np.int64)
 
 
 def _descend(
