@@ -79,3 +79,27 @@ def test_reach_seeds_give_replayable_results():
         rep = ir.replay_result(doc, truth=ir.Truth(target=[20, -200, 120], tolerance=0.05))
         assert rep.ok, rep.problems
         assert doc["n_commands"] == doc["lower_bound_commands"] == 63
+
+
+def test_a_stage_begun_before_the_progress_delay_is_shown_when_it_passes(capsys, monkeypatch):
+    """Progress lines start after PROGRESS_DELAY_S when stderr is not a terminal; a stage that
+    began before then and runs on is printed at the delay (a long curve's scan, begun at
+    0.4 s, printed nothing for minutes), and a command done before the delay prints nothing."""
+    import time
+
+    from armpath.cli import common
+
+    monkeypatch.setattr(common, "PROGRESS_DELAY_S", 0.3)
+    with common.progress("working") as say:
+        say("quick")
+    time.sleep(0.5)
+    assert capsys.readouterr().err == ""
+    with common.progress("working") as say:
+        say("scanning")
+        time.sleep(0.6)  # the stage runs on past the delay, no new message
+        err = capsys.readouterr().err
+        say("scanning")  # the same message again is not repeated
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("armpath: [") and lines[0].endswith("scanning")
+    assert 0.3 <= float(lines[0].split("[")[1].split(" s]")[0]) < 0.6
+    assert capsys.readouterr().err == ""

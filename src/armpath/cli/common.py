@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -184,17 +185,28 @@ def progress(title: str) -> Iterator[Callable[[str], None]]:
     started = time.monotonic()
     last = [title, ""]  # latest message, last printed
     delay = 0.0 if verbose else PROGRESS_DELAY_S
+    lock = threading.Lock()
 
     def say(msg: str) -> None:
-        last[0] = msg
-        elapsed = time.monotonic() - started
-        if elapsed >= delay and msg != last[1]:
-            last[1] = msg
-            err_console.print(f"armpath: [{elapsed:6.1f} s] {msg}", markup=False, soft_wrap=True)
+        with lock:
+            last[0] = msg
+            elapsed = time.monotonic() - started
+            if elapsed >= delay and msg != last[1]:
+                last[1] = msg
+                err_console.print(
+                    f"armpath: [{elapsed:6.1f} s] {msg}", markup=False, soft_wrap=True
+                )
 
     if verbose:
         say(title)
-    yield say
+    # a stage begun before the delay and still running at it is shown then, not at its end
+    timer = threading.Timer(delay, lambda: say(last[0]))
+    timer.daemon = True
+    timer.start()
+    try:
+        yield say
+    finally:
+        timer.cancel()
 
 
 T = TypeVar("T")

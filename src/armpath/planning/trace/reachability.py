@@ -31,6 +31,8 @@ FloatArray = NDArray[np.float64]
 
 #: Most scan points of one reachability analysis (a 400 m curve at the default 4 mm step).
 MAX_SCAN_POINTS = 100_000
+#: Scan points between the scan's progress messages.
+SCAN_PROGRESS_EVERY = 1000
 
 
 @dataclass(frozen=True)
@@ -111,6 +113,8 @@ def curve_reachability(
     scores = np.empty(s_scan.size)
     for i, s in enumerate(s_scan):
         check_time("scanning the curve for reachable points")
+        if i and i % SCAN_PROGRESS_EVERY == 0:
+            say(f"reachability: scanned {i} of {s_scan.size} points of {curve.name!r}")
         scores[i] = fam.best(float(s)).score
     ok = scores >= 0.0
     # a coarse "no" might be a fine "yes": re-check the scan points next to a change
