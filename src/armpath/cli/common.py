@@ -64,7 +64,11 @@ LinkRadiusOption = Annotated[
 ]
 SceneOption = Annotated[
     Path | None,
-    typer.Option("--scene", help="Scene file (TOML or YAML). Default: the seed scene."),
+    typer.Option(
+        "--scene",
+        help="Scene file (TOML or YAML). Default: the seed scene; with another --model, no "
+        "scene (the arm alone: give --scene for trace and spotweld).",
+    ),
 ]
 ObjectiveOption = Annotated[
     Objective,
