@@ -240,3 +240,38 @@ def test_help_texts_state_units():
     assert r.returncode == 0 and "deg" in r.stdout and "mm" in r.stdout
     r = run("reach", "--help")
     assert "--from" in r.stdout and "--tolerance" in r.stdout
+
+
+def test_plan_to_an_unreachable_point_names_the_nearest_for_any_arm():
+    """Another arm's plan --to-xyz named no nearest point (reach did); the point it names lies
+    at the stated distance, and that distance is the least found by an independent search."""
+    from armpath.kinematics import tool_position
+    from armpath.model.catalog import resolve_model
+
+    r = run("plan", "--model", "painter004", "--to-xyz", "300", "0", "300")
+    (line,) = error_lines(r.stderr)
+    assert r.returncode == 1 and "out of reach within the joint limits" in line
+    found = re.search(r"nearest reachable point \(([^)]*)\) mm is ([0-9.]+) mm away", line)
+    assert found is not None, line
+    point = np.array([float(v) for v in found.group(1).split(",")])
+    assert np.linalg.norm(point - [300.0, 0.0, 300.0]) == pytest.approx(
+        float(found.group(2)), abs=0.01
+    )
+    # independently: the least distance over the joint limits from 40 random starts (scipy)
+    from scipy.optimize import minimize
+
+    arm = resolve_model("painter004")
+    lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+    hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    target = np.array([300.0, 0.0, 300.0])
+    rng = np.random.default_rng(0)
+    best = min(
+        minimize(
+            lambda q: float(np.linalg.norm(tool_position(arm, q) - target)),
+            rng.uniform(lo, hi),
+            bounds=list(zip(lo, hi, strict=True)),
+            method="L-BFGS-B",
+        ).fun
+        for _ in range(40)
+    )
+    assert float(found.group(2)) == pytest.approx(best, abs=0.01)
