@@ -36,7 +36,7 @@ _LAYER_GAP_SHARE = 0.02
 #: Tool directions the family is first sampled along at each layer (about 4.5 deg apart).
 SEARCH_DIRECTIONS = 2000
 #: Layers are placed this far inside each span's ends (mm).
-_INSET_MM = 0.5
+LAYER_INSET_MM = 0.5
 
 
 def _layer_positions(spans_mm: list[tuple[float, float]], per_span: int) -> list[FloatArray]:
@@ -44,10 +44,10 @@ def _layer_positions(spans_mm: list[tuple[float, float]], per_span: int) -> list
     just inside its end (one in the middle of a span shorter than the insets)."""
     out = []
     for a, b in spans_mm:
-        if b - a <= 2 * _INSET_MM:
+        if b - a <= 2 * LAYER_INSET_MM:
             out.append(np.array([0.5 * (a + b)]))
         else:
-            out.append(np.linspace(a + _INSET_MM, b - _INSET_MM, max(per_span, 2)))
+            out.append(np.linspace(a + LAYER_INSET_MM, b - LAYER_INSET_MM, max(per_span, 2)))
     return out
 
 
@@ -68,7 +68,7 @@ def turning_layers(
     keep the corners of the path the plan takes, which evenly spaced layers cut."""
     out = []
     for (a, b), even in zip(spans_mm, _layer_positions(spans_mm, LAYERS_PER_SPAN), strict=True):
-        lo, hi = a + min(_INSET_MM, 0.5 * (b - a)), b - min(_INSET_MM, 0.5 * (b - a))
+        lo, hi = a + min(LAYER_INSET_MM, 0.5 * (b - a)), b - min(LAYER_INSET_MM, 0.5 * (b - a))
         inside = np.flatnonzero((path_mm >= a - 1e-9) & (path_mm <= b + 1e-9))
         if inside.size < 2:
             out.append(even)

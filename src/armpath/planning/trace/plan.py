@@ -34,6 +34,7 @@ from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
 from armpath.planning.bounds.search import check_max_samples
+from armpath.planning.bounds.trace import LAYER_INSET_MM
 from armpath.planning.motion import (
     MotionOptions,
     MotionPlan,
@@ -267,13 +268,26 @@ def trace_plan_bound(
     span. ``with_errors=False``: the estimate without the samples' sampling errors (not a
     bound; see the search)."""
     fam = result.reachability.family
-    around = _all_round(result.curve, result.reachability.reachable)
+    reachable = result.reachability.reachable
+    around = _all_round(result.curve, reachable)
     spans: list[list[float]] = []
     for p in sorted(result.passes, key=lambda p: p.start_mm):
         if spans and p.start_mm <= spans[-1][1] and not around:
             spans[-1][1] = max(spans[-1][1], p.end_mm)
         else:
             spans.append([p.start_mm, p.end_mm])
+    if not around:
+        # what a pass covers beyond the reachable arcs (its tool point within the tolerance
+        # of a point no configuration reaches) is left out: the bound holds for any plan that
+        # covers the rest, and the family has no member there
+        spans = [
+            [max(a, arc.start_mm), min(b, arc.end_mm)]
+            for a, b in spans
+            for arc in reachable
+            if min(b, arc.end_mm) > max(a, arc.start_mm)
+        ]
+        if not spans:
+            return None
     # one pass once round a closed curve: it visits every point in order and comes back to
     # where it began, the move from its last point to its first counted too (passes round it
     # are bounded each on its own span; a pass that stops short, on its arc alone)
@@ -285,23 +299,33 @@ def trace_plan_bound(
         q = q_all[p.first : p.last + 1]
         path_mm.append(_pass_arc_lengths(fam, q, p))
         path_q.append(q)
-    try:
-        return trace_bound(
-            fam,
-            sequence.grid.to_joint(sequence.start_ticks),
-            [(a, b) for a, b in spans],
-            result.tolerance_mm,
-            loop=loop,
-            rounds=rounds,
-            on_progress=on_progress,
-            upper_commands=float(sequence.n_commands),
-            path_mm=np.concatenate(path_mm),
-            path_q=np.vstack(path_q),
-            max_samples=max_samples,
-            with_errors=with_errors,
-        )
-    except PlanningError:
-        return None
+    # a span of a fraction of a mm at the edge of the reach (a pass's last command there) is
+    # bounded at its middle (a span shorter than twice LAYER_INSET_MM), where the family's
+    # sampled tool directions may all miss the few that reach: bounded without it (a bound
+    # over fewer spans is still a bound) if it has no member
+    short = [(a, b) for a, b in spans if b - a < 2 * LAYER_INSET_MM]
+    tries = [[(a, b) for a, b in spans]]
+    if short and len(short) < len(spans):
+        tries.append([(a, b) for a, b in spans if b - a >= 2 * LAYER_INSET_MM])
+    for these in tries:
+        try:
+            return trace_bound(
+                fam,
+                sequence.grid.to_joint(sequence.start_ticks),
+                these,
+                result.tolerance_mm,
+                loop=loop,
+                rounds=rounds,
+                on_progress=on_progress,
+                upper_commands=float(sequence.n_commands),
+                path_mm=np.concatenate(path_mm),
+                path_q=np.vstack(path_q),
+                max_samples=max_samples,
+                with_errors=with_errors,
+            )
+        except PlanningError:
+            continue
+    return None
 
 
 def _pass_arc_lengths(fam: CurveFamily, q: FloatArray, p: TracePass) -> FloatArray:
