@@ -491,3 +491,16 @@ def test_a_tool_axis_of_any_magnitude_is_its_direction(scale):
     np.testing.assert_allclose(cone.direction, [0.6, 0.0, -0.8], atol=1e-15)
     rule = axis_rule(" ".join(repr(float(x)) for x in v), 5.0)
     np.testing.assert_allclose(rule.direction, [0.6, 0.0, -0.8], atol=1e-15)
+
+
+def test_too_many_welds_for_every_order_are_counted_in_a_short_number(tmp_path):
+    """501 welds have 501! orders: the refusal printed all 1,136 digits of it."""
+    points = ", ".join(f"[{300 + i % 20}, {i // 20}, 300]" for i in range(501))
+    scene = tmp_path / "welds.toml"
+    scene.write_text(f'name = "many"\n[tasks.spotweld]\npoints_mm = [{points}]\n', "utf-8")
+    line = _refused(tmp_path, ["spotweld", "--scene", str(scene), "--order", "auto"], "--order")
+    assert "501 targets have 6.11e1136 visiting orders" in line and len(line) < 200
+    nine = ", ".join(f"[{300 + i}, 0, 300]" for i in range(9))
+    scene.write_text(f'name = "nine"\n[tasks.spotweld]\npoints_mm = [{nine}]\n', "utf-8")
+    line = _refused(tmp_path, ["spotweld", "--scene", str(scene), "--order", "auto"], "--order")
+    assert "9 targets have 362,880 visiting orders" in line  # 9!, every digit
