@@ -170,7 +170,7 @@ def resolve_model(spec: str, tip_link: str | None = None) -> SerialArm:
         if tip_link is not None:
             raise InvalidInputError(f"--tip-link names a link of a URDF; {spec!r} is built in")
         return BUILTIN_MODELS[spec]()
-    if Path(spec).suffix.lower() in (".json", ".urdf") or Path(spec).exists():
+    if spec.strip() and (Path(spec).suffix.lower() in (".json", ".urdf") or Path(spec).is_file()):
         return load_robot_file(spec, tip_link)
     raise InvalidInputError(
         f"unknown model {spec!r}: use one of {sorted(BUILTIN_MODELS)} or a .json / .urdf file"
