@@ -502,6 +502,7 @@ def test_cli_ik_errors(args, message):
     assert proc.returncode == 1
     assert message in proc.stderr
     assert proc.stderr.count("\n") == 1
+    assert proc.stdout == ""  # no empty table of solutions before the error
 
 
 # ------------------------------------------------------------------------------------------

@@ -210,7 +210,7 @@ def ik(
         }
         if json_out:
             typer.echo(json.dumps(doc))
-        else:
+        elif result.count:  # no solution: the error line alone
             unit_note = ", ".join(f"q{i + 1} {u}" for i, u in enumerate(units) if u != "deg")
             if result.family_dimension:
                 found = (
