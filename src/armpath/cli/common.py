@@ -380,10 +380,8 @@ def _joint_units(arm: SerialArm) -> list[str]:
 
 def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
     """Joint values (rad / the model's length unit) for output: deg for revolute joints, mm for
-    prismatic ones."""
-    lattice = arm.lattice
-    q = np.asarray(q, dtype=float)
-    return np.where(lattice.prismatic, q * lattice.mm_per_unit, np.degrees(q))
+    prismatic ones (:meth:`~armpath.model.lattice.Lattice.joint_display`)."""
+    return arm.lattice.joint_display(q)
 
 
 def _from_display(arm: SerialArm, values: list[float]) -> np.ndarray:

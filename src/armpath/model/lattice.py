@@ -199,14 +199,18 @@ class Lattice:
             )
         return r.astype(np.int64)
 
+    def joint_display(self, q: ArrayLike) -> FloatArray:
+        """Joint values ``(..., n)`` (rad / length unit) in display units: deg for revolute
+        joints, mm for prismatic ones."""
+        v = np.asarray(q, dtype=np.float64)
+        return np.asarray(
+            np.where(self.prismatic, v * self.mm_per_unit, np.degrees(v)), dtype=np.float64
+        )
+
     def display(self, ticks: ArrayLike) -> FloatArray:
         """Tick states in display units: deg for revolute joints, mm for prismatic ones (exact
         decimal rounding at 1e-10)."""
-        q = self.to_joint(ticks)
-        scale = self.mm_per_unit
-        return np.asarray(
-            np.round(np.where(self.prismatic, q * scale, np.degrees(q)), 10), dtype=np.float64
-        )
+        return np.asarray(np.round(self.joint_display(self.to_joint(ticks)), 10), dtype=np.float64)
 
     def from_display(self, values: ArrayLike, what: str = "joint state") -> IntArray:
         """Tick state of joint values in display units (deg / mm) that lie on the lattice."""
