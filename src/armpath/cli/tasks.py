@@ -218,6 +218,7 @@ def _direction(text: str, option: str) -> np.ndarray:
 
 def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | None:
     """The tool-axis rule of ``--tool-axis normal|X Y Z --axis-tolerance DEG`` on a surface."""
+    from armpath.ik.target import unit_vector
     from armpath.planning.trace import AxisRule
 
     if tool_axis is None:
@@ -229,11 +230,8 @@ def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | No
     tol_rad = float(np.radians(axis_tolerance_deg))
     if tool_axis.strip() == "normal":
         return AxisRule(tol_rad)
-    d = _direction(tool_axis, "--tool-axis")
-    if not np.any(d):
-        raise InvalidInputError("--tool-axis must be a non-zero direction")
-    d = d / np.abs(d).max()  # any magnitude, without under- or overflow
-    return AxisRule(tol_rad, normal=False, direction=d / np.linalg.norm(d))
+    direction = unit_vector(_direction(tool_axis, "--tool-axis"), "--tool-axis")
+    return AxisRule(tol_rad, normal=False, direction=direction)
 
 
 AxisToleranceOption = Annotated[

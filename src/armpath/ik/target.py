@@ -26,7 +26,9 @@ from armpath.errors import InvalidInputError
 FloatArray = NDArray[np.float64]
 
 
-def _unit(v: ArrayLike, what: str) -> FloatArray:
+def unit_vector(v: ArrayLike, what: str) -> FloatArray:
+    """``v`` (a finite non-zero 3-vector of any magnitude) scaled to length 1, read-only;
+    :class:`InvalidInputError` naming ``what`` otherwise."""
     a = np.asarray(v, dtype=np.float64).reshape(-1)
     if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.any(a):
         raise InvalidInputError(f"{what} must be a finite non-zero 3-vector, got {a.tolist()}")
@@ -52,8 +54,8 @@ class AxisCone:
     axis_tool: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "direction", _unit(self.direction, "cone direction"))
-        object.__setattr__(self, "axis_tool", _unit(self.axis_tool, "tool approach axis"))
+        object.__setattr__(self, "direction", unit_vector(self.direction, "cone direction"))
+        object.__setattr__(self, "axis_tool", unit_vector(self.axis_tool, "tool approach axis"))
         object.__setattr__(
             self, "tolerance_rad", _check_tolerance(self.tolerance_rad, "axis tolerance")
         )
@@ -225,4 +227,4 @@ def _taking(a: FloatArray, b: FloatArray) -> FloatArray:
     return _rodrigues(v / s, float(np.arctan2(s, c)))
 
 
-__all__ = ["AxisCone", "Orientation", "PoseOrientation", "ToolTarget"]
+__all__ = ["AxisCone", "Orientation", "PoseOrientation", "ToolTarget", "unit_vector"]
