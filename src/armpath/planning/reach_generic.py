@@ -121,6 +121,14 @@ def _out_of_reach(
     )
 
 
+def _limit_bounds(arm: SerialArm) -> list[tuple[float | None, float | None]]:
+    """The joint limits as scipy's bounds (None where a joint is unlimited)."""
+    return [
+        (float(a) if np.isfinite(a) else None, float(b) if np.isfinite(b) else None)
+        for a, b in zip(arm.lower, arm.upper, strict=True)
+    ]
+
+
 def nearest_reachable(
     arm: SerialArm, target: ToolTarget, rng: np.random.Generator
 ) -> tuple[float, FloatArray]:
@@ -134,8 +142,7 @@ def nearest_reachable(
     d = np.linalg.norm(tip - target.position, axis=1)
     # the nearest few polished on the squared distance within the limits (the descent's ends
     # can lie millimetres short of the least: painter004's 134.4 mm against 131.2)
-    bounds = [(float(a) if np.isfinite(a) else None, float(b) if np.isfinite(b) else None)
-              for a, b in zip(arm.lower, arm.upper, strict=True)]  # fmt: skip
+    bounds = _limit_bounds(arm)
 
     def squared(x: FloatArray) -> tuple[float, FloatArray]:
         F = pose_frames(arm, x)
@@ -170,9 +177,7 @@ def _refine_bound(
     step = arm.lattice.max_step
     n = arm.n_joints
     size = arm_size(arm)
-    lo, hi = arm.lower, arm.upper
-    bounds = [(None if not np.isfinite(a) else float(a), None if not np.isfinite(b) else float(b))
-              for a, b in zip(lo, hi, strict=True)] + [(0.0, None)]  # fmt: skip
+    bounds = [*_limit_bounds(arm), (0.0, None)]
     o = target.orientation
 
     last: list[tuple[bytes, FloatArray]] = []  # the frames of the last point (SLSQP asks a
