@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
+import sys
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -114,17 +115,23 @@ def check_time(doing: str = "") -> None:
     )
 
 
+def count_text(count: float) -> str:
+    """A count for a message: every digit of a whole count below 10**15 (1,000,001), else three
+    significant digits; a whole number beyond any float (501! = 6.11e1136) from its digits."""
+    if isinstance(count, int) and count > sys.float_info.max:
+        digits = str(count)
+        return f"{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
+    if count < 1e15 and float(count).is_integer():
+        return f"{count:,.0f}"
+    return f"{count:.3g}"
+
+
 def check_size(count: float, limit: float, what: str, option: str) -> None:
     """Refuse work of ``count`` units (``what``) above ``limit``, naming ``option`` to change.
 
     ``count`` may be a float (an estimate that could overflow an integer)."""
     if not math.isfinite(count) or count > limit:
-        if not math.isfinite(count):
-            shown = "an unbounded number"
-        elif count < 1e15 and float(count).is_integer():
-            shown = f"{count:,.0f}"  # every digit of a whole count: 1,000,001
-        else:
-            shown = f"{count:.3g}"
+        shown = count_text(count) if math.isfinite(count) else "an unbounded number"
         raise InvalidInputError(
             f"{what}: this would need {shown} (the limit is {limit:,.0f}); change {option}"
         )

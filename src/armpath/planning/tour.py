@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import check_time
+from armpath.budget import check_time, count_text
 from armpath.commands import CommandSequence
 from armpath.errors import ArmpathError, InvalidInputError, PlanningError
 from armpath.geometry.curves import Polyline
@@ -168,15 +168,6 @@ def _order_bounds(
     return out
 
 
-def _count_text(n: int) -> str:
-    """A whole count for a message: every digit up to 10**15, else three significant digits
-    (501 welds have a 1,136-digit number of orders)."""
-    if n < 10**15:
-        return f"{n:,}"
-    digits = str(n)
-    return f"{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
-
-
 def plan_tour(
     arm: SerialArm,
     world: CollisionWorld,
@@ -234,7 +225,7 @@ def plan_tour(
         )
     if order == "auto" and pts.shape[0] > MAX_AUTO_ORDER_TARGETS:
         raise InvalidInputError(
-            f"{pts.shape[0]} targets have {_count_text(math.factorial(pts.shape[0]))} visiting "
+            f"{pts.shape[0]} targets have {count_text(math.factorial(pts.shape[0]))} visiting "
             "orders; "
             f"order 'auto' ranks them all for at most {MAX_AUTO_ORDER_TARGETS} targets: use "
             "order 'given' (--order given) for more"
