@@ -638,7 +638,15 @@ def _family_bounds(
     try:
         if len(orders) == 1 or pts.shape[0] <= EXACT_ORDER_TARGETS:
             return tour_bound(
-                fam, q0, pts, tolerance_mm, orders, back, on_progress=say, max_samples=max_samples
+                fam,
+                q0,
+                pts,
+                tolerance_mm,
+                orders,
+                back,
+                on_progress=say,
+                max_samples=max_samples,
+                lattice=True,
             )
         return tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say), {}
     except PlanningError:

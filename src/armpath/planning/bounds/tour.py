@@ -3,14 +3,22 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
-from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
-from armpath.planning.bounds.sampling import FamilySampler
+from armpath.kinematics import landmark_positions
+from armpath.planning.bounds.lattice_goals import lattice_goal_states
+from armpath.planning.bounds.passage import (
+    PassageSamples,
+    passage_method,
+    passage_sampling,
+    sampled_passages,
+)
+from armpath.planning.bounds.sampling import FamilySampler, Layer
 from armpath.planning.bounds.search import CellSearch, Orders
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
@@ -39,6 +47,7 @@ def tour_bound(
     max_samples: int | None = None,
     with_errors: bool = True,
     through_openings: bool = True,
+    lattice: bool = False,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
     units) within ``tolerance_mm``: over ``orders``, a shortest path through the family at each
@@ -54,12 +63,18 @@ def tour_bound(
     shortest path through the samples themselves, what the bound tends to as the sampling gets
     finer. ``through_openings``: a leg from the start to a target inside a hollow obstacle
     takes at least its way through one of the obstacle's openings
-    (:mod:`~armpath.planning.bounds.passage`); False: the direct leg only."""
+    (:mod:`~armpath.planning.bounds.passage`); False: the direct leg only. ``lattice``: first
+    the exact relaxation over the targets' lattice goal states (:func:`lattice_tour_bound`),
+    never below the sampled one; the family is sampled only where those cannot be listed."""
     say = on_progress or (lambda _m: None)
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
+    if lattice and with_errors:
+        exact = lattice_tour_bound(sampler, q_start, points, orders, back, ways, say)
+        if exact is not None:
+            return exact
     search = CellSearch(
         sampler,
         Orders(orders, back),
@@ -168,4 +183,140 @@ def tour_bound_any_order(
             "samples": float(sum(lay.size for lay in layers)),
         }
         | passage_sampling(ways),
+    )
+
+
+#: Lattice states of all the targets together past which :func:`lattice_tour_bound` gives way
+#: to the family's sampled members (its legs cost their product in time).
+MAX_LATTICE_GOALS = 200_000
+#: Targets whose lattice states are listed at once (threads; the listing's kernel releases the
+#: GIL).
+GOAL_THREADS = 2
+
+
+def _goal_layers(
+    sampler: FamilySampler, q_start: FloatArray, points: FloatArray, say: Callable[[str], None]
+) -> list[Layer] | None:
+    """Per target, the lattice goal states that keep the clearance rule, as a layer taken
+    exact (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`); None where
+    they cannot be listed completely: a joint that does not move the tool point but moves the
+    arm (whose states are not listed), an unlimited joint whose turn is not a whole number of
+    ticks or that slides, or a budget spent."""
+    fam = sampler.fam
+    arm, world, grid = fam.arm, fam.world, fam.arm.lattice
+    tip = sampler.tip
+    tick = np.asarray(grid.tick, dtype=np.float64)
+    probe = np.array([q_start, q_start + np.where(tip, 0.0, 1.0)])
+    moved = landmark_positions(arm, probe)
+    if not np.allclose(moved[0], moved[1], atol=1e-9):
+        return None
+    turn = 2.0 * np.pi / tick
+    unlimited = ~(np.isfinite(arm.lower) & np.isfinite(arm.upper))
+    if np.any(unlimited & tip & ((np.abs(turn - np.round(turn)) > 1e-6) | ~fam.unlimited)):
+        return None
+    half = np.round(turn / 2.0).astype(np.int64)
+    lower = np.where(unlimited, -half, np.ceil(np.where(unlimited, 0.0, arm.lower) / tick - 1e-9))
+    upper = np.where(
+        unlimited, half - 1, np.floor(np.where(unlimited, 0.0, arm.upper) / tick + 1e-9)
+    )
+    start = grid.nearest_ticks(q_start)
+
+    def listed(k: int) -> Layer | None:
+        say(f"listing the lattice states within the tolerance of target {k + 1}")
+        found = lattice_goal_states(
+            arm,
+            points[k],
+            sampler.tol,
+            tip,
+            start,
+            lower[tip].astype(np.int64),
+            upper[tip].astype(np.int64),
+            slack=lambda q: world.slack(arm, q, ceiling=0.0),
+        )
+        if not found.complete:
+            return None
+        q = grid.to_joint(found.ticks)
+        q = q[world.satisfied(arm, q)] if q.shape[0] else q
+        u = sampler.units(q)
+        clear = np.ones(q.shape[0], dtype=bool)
+        return Layer(u, np.zeros_like(u), q, np.zeros((q.shape[0], 3)), clear=clear)
+
+    check_time("bounding the tour's commands")
+    # the enumeration's kernel releases the GIL: the targets are listed two at a time
+    with ThreadPoolExecutor(max_workers=GOAL_THREADS) as pool:
+        found = list(pool.map(listed, range(points.shape[0])))
+    layers = [lay for lay in found if lay is not None]
+    if len(layers) < len(found) or sum(lay.size for lay in layers) > MAX_LATTICE_GOALS:
+        return None
+    return layers
+
+
+def lattice_tour_bound(
+    sampler: FamilySampler,
+    q_start: FloatArray,
+    points: FloatArray,
+    orders: list[tuple[int, ...]],
+    back: bool,
+    ways: list[PassageSamples],
+    say: Callable[[str], None],
+) -> tuple[CommandBound, dict[tuple[int, ...], int]] | None:
+    """The tour's relaxation over its lattice goal states: a plan ends each visit at a lattice
+    state within the tolerance of the target that keeps the clearance rule, and each leg
+    between two lattice states takes at least their largest joint change in whole commands
+    (obstacles ignored between the targets; a leg from the start into a hollow obstacle at
+    least its way through an opening, as the sampled bound). The states are listed completely
+    (:func:`_goal_layers`), so the least over ``orders`` is exact for this relaxation: no
+    sampling error. None where they cannot be listed; the caller then samples the family."""
+    layers = _goal_layers(sampler, q_start, points, say)
+    if layers is None:
+        return None
+    if any(lay.size == 0 for lay in layers):
+        raise PlanningError("a target has no lattice state within the tolerance that is clear")
+    say("bounding the tour's commands over its lattice goal states")
+    entered = [w.passage.entered(points, sampler.tol) for w in ways]
+    from_start = []
+    for k, lay in enumerate(layers):
+        cost = sampler.distance_from(q_start, lay, whole=True)
+        for way, into in zip(ways, entered, strict=True):
+            if into[k]:
+                cost = np.maximum(cost, way.to(sampler, lay, whole=True))
+        from_start.append(cost)
+    per_order: dict[tuple[int, ...], int] = {}
+    done: dict[tuple[int, ...], FloatArray] = {}
+    for order in orders:
+        check_time("bounding the tour's commands")
+        for n in range(1, len(order) + 1):  # each prefix once, shared between the orders
+            prefix = order[:n]
+            if prefix not in done:
+                done[prefix] = (
+                    from_start[prefix[0]]
+                    if n == 1
+                    else sampler.advance(
+                        layers[prefix[-2]], done[prefix[:-1]], layers[prefix[-1]], whole=True
+                    )[0]
+                )
+        cost = done[order]
+        if back:
+            cost = cost + sampler.distance_from(q_start, layers[order[-1]], whole=True)
+        per_order[order] = int(np.ceil(float(cost.min()) - 1e-9))
+    best = min(per_order.values())
+    return (
+        CommandBound(
+            proven=True,
+            commands=best,
+            value=float(best),
+            method=(
+                "least over every visiting order of a shortest path from the start through "
+                "the lattice states within the tolerance of each target that keep the "
+                "clearance rule (all of them, listed by branch and bound over boxes of ticks; "
+                "obstacles ignored between the targets), each leg at least its largest joint "
+                "change in whole commands" + passage_method(ways, "a leg from the start")
+            ),
+            sampling={
+                "orders": float(len(orders)),
+                "lattice_goal_states": float(sum(lay.size for lay in layers)),
+            }
+            | passage_sampling(ways),
+        ),
+        per_order,
     )

@@ -1,0 +1,293 @@
+"""Every lattice state that puts the tool point within a tolerance of a point: a complete,
+exact enumeration by branch and bound over boxes of ticks.
+
+A plan reaches a target at a *lattice state* (whole ticks of every joint) whose tool point lies
+within the tolerance of it. Those states are finite and, unlike the family's continuous members
+(:mod:`.sampling`), carry no sampling error: a tour's relaxation over them (:mod:`.tour`) is
+exact, and each leg between two of them takes at least their largest joint change in whole
+commands.
+
+The search keeps boxes of ticks of the joints that move the tool point (the others stay at the
+start's values: they move no link the tool point depends on). A box is dropped when no
+configuration in it can bring the tool point within the tolerance of the target. For its centre
+``c`` (tool point ``p``, position Jacobian ``J``) and half-widths ``r`` (rad), every
+configuration ``c + d`` of the box has its tool point at ``p + J d + e`` with
+``|e| <= 1/2 sum_ij M_ij r_i r_j``, where ``M_ij`` bounds the second derivative of the tool
+point in joints ``i`` and ``j``: for revolute joints the distance from the later joint's axis
+to the tool point, at most :func:`~armpath.kinematics.displacement_bounds` of it; so for every
+unit vector ``u``, ``|u . (target - p)| <= sum_k |u . J_k| r_k + |e| + tolerance`` holds if
+the box holds such a state. The test takes ``u`` toward the target and along the normals of
+the linearised image's faces (``J_i x J_j``), which bound it exactly; a box that fails one is
+dropped, another is halved along the joint that moves the tool point most across it. Single
+states are checked by their exact tool point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.jit import njit
+from armpath.kinematics import _chain_into, compiled_chain, displacement_bounds, landmark_scratch
+from armpath.model.serial_arm import SerialArm
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Boxes one enumeration may look at (about a microsecond each): past it the enumeration gives
+#: up, and a caller falls back on the family's sampled members.
+MAX_GOAL_BOXES = 60_000_000
+#: Lattice states one enumeration may return (48 bytes each for six joints).
+MAX_GOAL_STATES = 2_000_000
+#: Depth of the search's stack: each halving adds one box, and a box of ``2**k`` ticks is halved
+#: at most ``k`` times along that joint.
+_STACK = 4096
+#: Width (ticks) of the boxes whose clearance is looked at before they are searched on.
+COARSE_TICKS = 8
+
+
+@dataclass(frozen=True)
+class GoalStates:
+    """The lattice states (ticks ``(K, n)``) within the tolerance of a target, the boxes looked
+    at, and whether the enumeration is complete (False: a budget ran out)."""
+
+    ticks: IntArray
+    boxes: int
+    complete: bool
+
+
+def second_derivative_bounds(arm: SerialArm) -> FloatArray:
+    """``(n, n)`` bounds on the tool point's second derivatives (model units per rad^2, or
+    per unit of a prismatic joint): that of joints ``i`` and ``j`` is at most the later joint's
+    :func:`~armpath.kinematics.displacement_bounds` (a revolute joint's distance to the tool
+    point; 1 for a prismatic one, whose mixed derivatives are unit vectors or zero)."""
+    reach = displacement_bounds(arm)
+    n = reach.size
+    index = np.maximum.outer(np.arange(n), np.arange(n))
+    return np.asarray(np.maximum(reach[index], 1.0), dtype=np.float64)
+
+
+def lattice_goal_states(
+    arm: SerialArm,
+    target: FloatArray,
+    tolerance: float,
+    tip: NDArray[np.bool_],
+    fixed_ticks: IntArray,
+    lower_ticks: IntArray,
+    upper_ticks: IntArray,
+    slack: Callable[[FloatArray], FloatArray] | None = None,
+    max_boxes: int = MAX_GOAL_BOXES,
+    max_states: int = MAX_GOAL_STATES,
+) -> GoalStates:
+    """Every lattice state with the tool point within ``tolerance`` (model units) of
+    ``target`` (model units) whose joints in ``tip`` lie within ``lower_ticks`` ..
+    ``upper_ticks`` (inclusive, one per tip joint) and whose other joints are ``fixed_ticks``
+    (ticks ``(n,)``; the tip joints' entries are ignored). Complete unless a budget ran out.
+
+    ``slack`` (configurations ``(N, n)`` rad -> the clearance rule's smallest slack of each,
+    model units): the states that break the rule are not wanted, so the search first keeps
+    boxes :data:`COARSE_TICKS` wide and drops those whose centre's slack is below minus twice
+    the farthest any point of the arm moves within the box (two parts of the arm may move
+    toward each other); every state of such a box breaks the rule."""
+    grid = arm.lattice
+    tick = np.asarray(grid.tick, dtype=np.float64)
+    tip_index = np.flatnonzero(tip).astype(np.int64)
+    q_fixed = np.asarray(fixed_ticks, dtype=np.float64) * tick
+    M = second_derivative_bounds(arm)[np.ix_(tip_index, tip_index)]
+    reach_bound = np.ascontiguousarray(displacement_bounds(arm)[tip_index], dtype=np.float64)
+    chain = compiled_chain(arm)[:5]
+    fixed = (tick, tip_index, q_fixed, np.asarray(target, dtype=np.float64), float(tolerance))
+
+    def run(lo: IntArray, hi: IntArray, coarse: int, boxes_left: int):  # type: ignore[no-untyped-def]
+        return _enumerate(
+            np.ascontiguousarray(lo, dtype=np.int64),
+            np.ascontiguousarray(hi, dtype=np.int64),
+            *fixed,
+            np.ascontiguousarray(M),
+            reach_bound,
+            *chain,
+            int(boxes_left),
+            int(max_states),
+            int(coarse),
+        )
+
+    lo = np.asarray(lower_ticks, dtype=np.int64).reshape(1, -1)
+    hi = np.asarray(upper_ticks, dtype=np.int64).reshape(1, -1)
+    boxes = 0
+    if slack is not None:
+        lo, hi, count, boxes, complete = run(lo, hi, COARSE_TICKS, max_boxes)
+        lo, hi = lo[:count], hi[:count]
+        if not complete:
+            return GoalStates(np.zeros((0, tip.size), dtype=np.int64), boxes, False)
+        if count:
+            centre = np.broadcast_to(q_fixed, (count, tip.size)).copy()
+            centre[:, tip_index] = 0.5 * (lo + hi) * tick[tip_index]
+            moved = (0.5 * (hi - lo) * tick[tip_index]) @ displacement_bounds(arm)[tip_index]
+            keep = slack(centre) >= -2.0 * moved
+            lo, hi = lo[keep], hi[keep]
+    out, _, count, more, complete = run(lo, hi, 0, max_boxes - boxes)
+    ticks = np.broadcast_to(np.asarray(fixed_ticks, dtype=np.int64), (count, tip.size)).copy()
+    ticks[:, tip_index] = out[:count]
+    return GoalStates(ticks, int(boxes + more), bool(complete))
+
+
+@njit(cache=True, nogil=True)
+def _enumerate(
+    lower: np.ndarray,
+    upper: np.ndarray,
+    tick: np.ndarray,
+    tip_index: np.ndarray,
+    q_fixed: np.ndarray,
+    target: np.ndarray,
+    tolerance: float,
+    M: np.ndarray,
+    reach_bound: np.ndarray,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+    max_boxes: int,
+    max_states: int,
+    coarse: int,
+) -> tuple[np.ndarray, np.ndarray, int, int, bool]:  # pragma: no cover - compiled
+    """The branch and bound of :func:`lattice_goal_states` (see the module): the states
+    found (``lo`` of ``(count, m)`` boxes of one state), or with ``coarse`` > 1 the boxes kept
+    whose widest joint spans at most ``coarse`` ticks (their ``lo`` and ``hi``), not split."""
+    m = tip_index.shape[0]
+    n_j = q_fixed.shape[0]
+    lo = np.empty((_STACK, m), dtype=np.int64)
+    hi = np.empty((_STACK, m), dtype=np.int64)
+    out = np.empty((1024, m), dtype=np.int64)
+    out_hi = np.empty((1024, m), dtype=np.int64)
+    count = 0
+    boxes = 0
+    q = q_fixed.copy()
+    scratch = landmark_scratch(n_j)
+    J = np.zeros((3, m))
+    r = np.zeros(m)
+    for start in range(lower.shape[0]):
+        empty = False
+        for k in range(m):
+            empty = empty or lower[start, k] > upper[start, k]
+            lo[0, k] = lower[start, k]
+            hi[0, k] = upper[start, k]
+        top = 0 if empty else 1
+        while top > 0:
+            top -= 1
+            boxes += 1
+            if boxes > max_boxes:
+                return out, out_hi, count, boxes, False
+            single = True
+            for k in range(m):
+                j = tip_index[k]
+                c = 0.5 * (lo[top, k] + hi[top, k])
+                q[j] = c * tick[j]
+                r[k] = 0.5 * (hi[top, k] - lo[top, k]) * tick[j]
+                if hi[top, k] > lo[top, k]:
+                    single = False
+            pos = _chain_into(
+                q, T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch
+            )
+            px, py, pz = pos[n_j + 1, 0, 3], pos[n_j + 1, 1, 3], pos[n_j + 1, 2, 3]
+            vx, vy, vz = target[0] - px, target[1] - py, target[2] - pz
+            dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+            if single and dist > tolerance:
+                continue
+            if not single and coarse > 1:
+                widest = 0
+                for k in range(m):
+                    widest = max(widest, hi[top, k] - lo[top, k] + 1)
+                emit = widest <= coarse
+            else:
+                emit = single
+            for k in range(m):
+                j = tip_index[k]
+                F = pos[j + 1]
+                z0 = F[0, 0] * axes[j, 0] + F[0, 1] * axes[j, 1] + F[0, 2] * axes[j, 2]
+                z1 = F[1, 0] * axes[j, 0] + F[1, 1] * axes[j, 1] + F[1, 2] * axes[j, 2]
+                z2 = F[2, 0] * axes[j, 0] + F[2, 1] * axes[j, 1] + F[2, 2] * axes[j, 2]
+                if prismatic[j]:
+                    J[0, k], J[1, k], J[2, k] = z0, z1, z2
+                else:
+                    r0, r1, r2 = px - F[0, 3], py - F[1, 3], pz - F[2, 3]
+                    J[0, k] = z1 * r2 - z2 * r1
+                    J[1, k] = z2 * r0 - z0 * r2
+                    J[2, k] = z0 * r1 - z1 * r0
+            second = 0.0
+            lipschitz = 0.0
+            for a in range(m):
+                lipschitz += reach_bound[a] * r[a]
+                for b in range(m):
+                    second += 0.5 * M[a, b] * r[a] * r[b]
+            # anywhere in the box the tool point lies within lipschitz of the centre's
+            if dist > lipschitz + tolerance:
+                continue
+            slack = tolerance + second
+            # the linearisation's tests (useless where its remainder exceeds lipschitz)
+            dropped = False
+            if second < lipschitz and dist > 0.0:
+                # toward the target
+                reach = 0.0
+                for k in range(m):
+                    reach += abs(J[0, k] * vx + J[1, k] * vy + J[2, k] * vz) * r[k]
+                dropped = dist > reach / dist + slack
+            # along the normals of the linearised image's faces
+            a = 0
+            while second < lipschitz and not dropped and a < m:
+                b = a + 1
+                while not dropped and b < m:
+                    ux = J[1, a] * J[2, b] - J[2, a] * J[1, b]
+                    uy = J[2, a] * J[0, b] - J[0, a] * J[2, b]
+                    uz = J[0, a] * J[1, b] - J[1, a] * J[0, b]
+                    norm = np.sqrt(ux * ux + uy * uy + uz * uz)
+                    if norm > 1e-12:
+                        ux, uy, uz = ux / norm, uy / norm, uz / norm
+                        reach = 0.0
+                        for k in range(m):
+                            reach += abs(J[0, k] * ux + J[1, k] * uy + J[2, k] * uz) * r[k]
+                        dropped = abs(ux * vx + uy * vy + uz * vz) > reach + slack
+                    b += 1
+                a += 1
+            if dropped:
+                continue
+            if emit:
+                if count == out.shape[0]:
+                    if count >= max_states:
+                        return out, out_hi, count, boxes, False
+                    bigger = np.empty((2 * count, m), dtype=np.int64)
+                    bigger_hi = np.empty((2 * count, m), dtype=np.int64)
+                    for i in range(count):
+                        for k in range(m):
+                            bigger[i, k] = out[i, k]
+                            bigger_hi[i, k] = out_hi[i, k]
+                    out, out_hi = bigger, bigger_hi
+                for k in range(m):
+                    out[count, k] = lo[top, k]
+                    out_hi[count, k] = hi[top, k]
+                count += 1
+                continue
+            # halve along the joint that may move the tool point most across the box: its
+            # linear and second-order share, or its Lipschitz share where that is less
+            best, best_k = -1.0, 0
+            for k in range(m):
+                if hi[top, k] > lo[top, k]:
+                    moves = np.sqrt(J[0, k] ** 2 + J[1, k] ** 2 + J[2, k] ** 2) * r[k]
+                    for b in range(m):
+                        moves += M[k, b] * r[k] * r[b]
+                    moves = min(moves, reach_bound[k] * r[k])
+                    if moves > best:
+                        best, best_k = moves, k
+            if top + 2 > _STACK:
+                return out, out_hi, count, boxes, False
+            mid = (lo[top, best_k] + hi[top, best_k]) // 2
+            for k in range(m):
+                lo[top + 1, k] = lo[top, k]
+                hi[top + 1, k] = hi[top, k]
+            hi[top, best_k] = mid
+            lo[top + 1, best_k] = mid + 1
+            top += 2
+    return out, out_hi, count, boxes, True

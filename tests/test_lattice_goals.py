@@ -1,0 +1,137 @@
+"""The lattice goal states of a target and the tour's relaxation over them, against brute force.
+
+:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states` must list every lattice
+state whose tool point lies within the tolerance (every state of a box checked one by one), and
+its clearance pruning must drop no state that keeps the rule. The tour's relaxation over given
+layers of states must equal the least over every order and every choice of one state per
+target, each leg its largest joint change in whole commands, measured here independently.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from armpath.api import load_arm, load_scene
+from armpath.kinematics import tool_position
+from armpath.planning.bounds import tour as tour_bounds
+from armpath.planning.bounds.lattice_goals import lattice_goal_states
+from armpath.planning.bounds.sampling import FamilySampler, Layer
+from armpath.planning.tour import _targets_family
+
+
+def _box_states(centre: np.ndarray, tip: np.ndarray, radius: int) -> np.ndarray:
+    """Every state of the box of +-radius ticks about ``centre`` in the ``tip`` joints."""
+    axes = [np.arange(-radius, radius + 1)] * int(tip.sum())
+    box = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, int(tip.sum()))
+    states = np.repeat(centre[None], box.shape[0], axis=0)
+    states[:, tip] += box
+    return states
+
+
+@pytest.mark.parametrize(
+    ("name", "deg", "radius", "tolerance"),
+    [("seed", [10, -30, 40, 20, 30, 0], 7, 0.05), ("ur5", [20, -70, 80, -100, -80, 0], 5, 0.4)],
+)
+def test_every_state_within_the_tolerance_of_a_box_is_listed(name, deg, radius, tolerance):
+    """The seed arm and the UR5 (whose tick moves the tool point farther: a wider tolerance
+    holds as many states)."""
+    arm = load_arm(name)
+    grid = arm.lattice
+    tip = np.array([True] * 5 + [False])
+    centre = grid.nearest_ticks(np.radians(deg))
+    rng = np.random.default_rng(3)
+    target = tool_position(arm, grid.to_joint(centre)) + rng.normal(size=3) * 0.02
+    found = lattice_goal_states(
+        arm, target, tolerance, tip, centre, centre[tip] - radius, centre[tip] + radius
+    )
+    states = _box_states(centre, tip, radius)
+    dist = np.linalg.norm(tool_position(arm, grid.to_joint(states)) - target, axis=1)
+    truth = {tuple(s) for s in states[dist <= tolerance]}
+    assert found.complete
+    assert len(truth) >= 3
+    assert {tuple(s) for s in found.ticks} == truth
+
+
+def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
+    """Near a weld inside the seed's workpiece many states collide; those that keep the rule
+    are all listed with the pruning on."""
+    arm = load_arm("seed")
+    grid = arm.lattice
+    world = load_scene(None).world
+    tip = np.array([True] * 5 + [False])
+    weld = np.array([120.0, 106.0, 50.82])
+    fam = _targets_family(arm, world, weld[None])
+    sampler = FamilySampler(fam, 0.05)
+    members = sampler.layer(weld, sampler.base, levels=0)
+    clear = members.q[world.satisfied(arm, members.q)]
+    centre = grid.nearest_ticks(clear[0])
+    radius = 6
+    found = lattice_goal_states(
+        arm,
+        weld,
+        0.05,
+        tip,
+        centre,
+        centre[tip] - radius,
+        centre[tip] + radius,
+        slack=lambda q: world.slack(arm, q, ceiling=0.0),
+    )
+    states = _box_states(centre, tip, radius)
+    q = grid.to_joint(states)
+    near = np.linalg.norm(tool_position(arm, q) - weld, axis=1) <= 0.05
+    truth = {tuple(s) for s in states[near & world.satisfied(arm, q)]}
+    listed = found.ticks[world.satisfied(arm, grid.to_joint(found.ticks))]
+    assert found.complete
+    assert truth
+    assert {tuple(s) for s in listed} == truth
+
+
+def _chebyshev_commands(a: np.ndarray, b: np.ndarray, period: np.ndarray) -> int:
+    """Whole commands of a leg between configurations in command units, joints with a
+    ``period`` measured the shorter way round (an independent spelling of the metric)."""
+    gaps = []
+    for x, y, p in zip(a, b, period, strict=True):
+        d = abs(x - y)
+        if p > 0:
+            d = min(d % p, p - d % p)
+        gaps.append(d)
+    return int(np.ceil(max(gaps) - 1e-9))
+
+
+def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
+    arm = load_arm("seed")
+    world = load_scene(None).world
+    welds = np.array([[120.0, 106.0, 50.82], [255.0, 88.0, 151.36], [190.0, -125.0, 81.98]])
+    fam = _targets_family(arm, world, welds)
+    start = np.radians([0.0, -90.0, 90.0, 0.0, 45.0, 0.0])
+    sampler = FamilySampler(fam, 0.05, q_start=start)
+    rng = np.random.default_rng(5)
+    layers = []
+    for w in welds:
+        members = sampler.layer(w, sampler.base, levels=0)
+        pick = rng.choice(members.size, size=6, replace=False)
+        q = arm.lattice.to_joint(arm.lattice.nearest_ticks(members.q[pick]))
+        u = sampler.units(q)
+        layers.append(Layer(u, np.zeros_like(u), q, np.zeros((6, 3))))
+    monkeypatch.setattr(tour_bounds, "_goal_layers", lambda *_a: layers)
+    orders = list(itertools.permutations(range(3)))
+    for back in (False, True):
+        found, per_order = tour_bounds.lattice_tour_bound(
+            sampler, start, welds, orders, back, [], lambda _m: None
+        )
+        u0 = sampler.units(start)
+        for order in orders:
+            best = np.inf
+            for pick in itertools.product(range(6), repeat=3):
+                path = [u0] + [layers[t].u[pick[k]] for k, t in enumerate(order)]
+                if back:
+                    path.append(u0)
+                cost = sum(
+                    _chebyshev_commands(a, b, sampler.period) for a, b in itertools.pairwise(path)
+                )
+                best = min(best, cost)
+            assert per_order[order] == best
+        assert found.commands == min(per_order.values())
