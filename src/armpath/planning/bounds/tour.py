@@ -221,7 +221,11 @@ def _goal_layers(
     )
     start = grid.nearest_ticks(q_start)
 
+    failed: list[int] = []
+
     def listed(k: int) -> Layer | None:
+        if failed:  # one target's states could not all be listed: the bound samples instead
+            return None
         say(f"listing the lattice states within the tolerance of target {k + 1}")
         found = lattice_goal_states(
             arm,
@@ -234,6 +238,8 @@ def _goal_layers(
             slack=lambda q: world.slack(arm, q, ceiling=0.0),
         )
         if not found.complete:
+            failed.append(k)
+            say(f"the lattice states of target {k + 1} are too many to list: sampling instead")
             return None
         q = grid.to_joint(found.ticks)
         q = q[world.satisfied(arm, q)] if q.shape[0] else q
