@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.kinematics import landmark_positions
+from armpath.model.serial_arm import JointKind
 from armpath.planning.bounds.lattice_goals import lattice_goal_states
 from armpath.planning.bounds.passage import (
     PassageSamples,
@@ -200,8 +201,8 @@ def _goal_layers(
     """Per target, the lattice goal states that keep the clearance rule, as a layer taken
     exact (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`); None where
     they cannot be listed completely: a joint that does not move the tool point but moves the
-    arm (whose states are not listed), an unlimited joint whose turn is not a whole number of
-    ticks or that slides, or a budget spent."""
+    arm (whose states are not listed), a joint that turns whole turns where a turn is not a
+    whole number of ticks, an unlimited sliding joint, or a budget spent."""
     fam = sampler.fam
     arm, world, grid = fam.arm, fam.world, fam.arm.lattice
     tip = sampler.tip
@@ -210,14 +211,23 @@ def _goal_layers(
     moved = landmark_positions(arm, probe)
     if not np.allclose(moved[0], moved[1], atol=1e-9):
         return None
+    # a revolute joint that can turn whole turns is listed over one turn from its lower limit:
+    # the metric measures it the shorter way round, or on the start's side of its
+    # self-collision range, whichever copy a plan takes (the copies are states of the lattice
+    # when a turn is a whole number of ticks)
     turn = 2.0 * np.pi / tick
-    unlimited = ~(np.isfinite(arm.lower) & np.isfinite(arm.upper))
-    if np.any(unlimited & tip & ((np.abs(turn - np.round(turn)) > 1e-6) | ~fam.unlimited)):
+    revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])
+    turns = revolute & (arm.upper - arm.lower >= 2.0 * np.pi)
+    if np.any(tip & turns & (np.abs(turn - np.round(turn)) > 1e-6)):
         return None
-    half = np.round(turn / 2.0).astype(np.int64)
-    lower = np.where(unlimited, -half, np.ceil(np.where(unlimited, 0.0, arm.lower) / tick - 1e-9))
+    if np.any(tip & ~turns & ~(np.isfinite(arm.lower) & np.isfinite(arm.upper))):
+        return None  # an unlimited sliding joint
+    whole = np.round(turn).astype(np.int64)
+    finite_lower = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+    finite_upper = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    lower = np.ceil(finite_lower / tick - 1e-9).astype(np.int64)
     upper = np.where(
-        unlimited, half - 1, np.floor(np.where(unlimited, 0.0, arm.upper) / tick + 1e-9)
+        turns, lower + whole - 1, np.floor(finite_upper / tick + 1e-9).astype(np.int64)
     )
     start = grid.nearest_ticks(q_start)
 
@@ -233,8 +243,8 @@ def _goal_layers(
             sampler.tol,
             tip,
             start,
-            lower[tip].astype(np.int64),
-            upper[tip].astype(np.int64),
+            lower[tip],
+            upper[tip],
             slack=lambda q: world.slack(arm, q, ceiling=0.0),
         )
         if not found.complete:
