@@ -55,8 +55,7 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
             clearance = f"{clearance} (tool tip) / {_mm(body)} (links)"
             order = " → ".join(str(i) for i in doc["order"])
             first = (
-                "the first bound holds for every order and goal configuration that may be clear "
-                "at the welds (obstacles ignored between them)"
+                f"the first bound holds for every order and {bound_scope(doc['lower_bound'])}"
                 if doc.get("lower_bound") is not None
                 else "no bound over every order was computed (-)"
             )
@@ -77,11 +76,19 @@ BOUND_SCOPE = "every configuration that may be clear, obstacles ignored between 
 BOUND_OPENING = "legs from the start into a hollow obstacle through its opening"
 
 
+#: The same for a tour bounded over its lattice goal states (all of them listed).
+LATTICE_SCOPE = (
+    "every lattice goal state within the tolerance that keeps the clearance rule, all listed, "
+    "obstacles ignored between the targets"
+)
+
+
 def bound_scope(bound: dict[str, Any]) -> str:
-    """:data:`BOUND_SCOPE` of a result's ``lower_bound``, with :data:`BOUND_OPENING` where the
-    bound sampled an opening."""
-    opening = "opening_samples" in (bound.get("sampling") or {})
-    return f"{BOUND_SCOPE}; {BOUND_OPENING}" if opening else BOUND_SCOPE
+    """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`) of a result's ``lower_bound``, with
+    :data:`BOUND_OPENING` where the bound sampled an opening."""
+    sampling = bound.get("sampling") or {}
+    scope = LATTICE_SCOPE if "lattice_goal_states" in sampling else BOUND_SCOPE
+    return f"{scope}; {BOUND_OPENING}" if "opening_samples" in sampling else scope
 
 
 #: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).

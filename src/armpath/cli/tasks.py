@@ -1072,7 +1072,7 @@ def _print_run(
     heading: str,
 ) -> None:
     """The run's table of results on stdout and the files it wrote."""
-    from armpath.report import bound_cell, passes_text
+    from armpath.report import bound_cell, bound_scope, passes_text
 
     written = folder.written
     wall = scene.wall_thickness
@@ -1124,10 +1124,16 @@ def _print_run(
             soft_wrap=True,
         )
     if trace_doc is not None or tour_doc is not None:
+        tour_bound = None if tour_doc is None else tour_doc.get("lower_bound")
         out_console.print(
             "* Tasks 2 and 3: bound over every configuration of the arm that may be clear at the "
             "curve's points or the welds, obstacles ignored between them (trace: one pass per "
-            "traced arc; tour: every order)."
+            "traced arc; tour: every order)"
+            + (
+                f"; Task 3 over every order and {bound_scope(tour_bound)}."
+                if tour_bound is not None and "lattice_goal_states" in tour_bound["sampling"]
+                else "."
+            )
             + (
                 " ** Task 3: direct motions between the chosen goal states of this order."
                 if tour_doc is not None
