@@ -147,14 +147,7 @@ def tour_bound_any_order(
         raise PlanningError("a target has no family member within the joint limits")
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, through_openings=through_openings)
-    entered = [w.passage.entered(points, sampler.tol) for w in ways]
-    from_start = []
-    for t, lay in enumerate(layers):
-        cost = sampler.distance_from(q_start, lay, whole=True)
-        for way, into in zip(ways, entered, strict=True):
-            if into[t]:
-                cost = np.maximum(cost, way.to(sampler, lay, whole=True))
-        from_start.append(float(cost.min()))
+    from_start = [float(c.min()) for c in _from_start(sampler, q_start, points, layers, ways)]
     total = 0.0
     for t, lay in enumerate(layers):
         best = from_start[t]
@@ -185,6 +178,26 @@ def tour_bound_any_order(
         }
         | passage_sampling(ways),
     )
+
+
+def _from_start(
+    sampler: FamilySampler,
+    q_start: FloatArray,
+    points: FloatArray,
+    layers: list[Layer],
+    ways: list[PassageSamples],
+) -> list[FloatArray]:
+    """Per target, the whole commands from ``q_start`` to each sample of its layer: the direct
+    distance, or into a hollow obstacle at least the way through one of its openings."""
+    entered = [w.passage.entered(points, sampler.tol) for w in ways]
+    out = []
+    for k, lay in enumerate(layers):
+        cost = sampler.distance_from(q_start, lay, whole=True)
+        for way, into in zip(ways, entered, strict=True):
+            if into[k]:
+                cost = np.maximum(cost, way.to(sampler, lay, whole=True))
+        out.append(cost)
+    return out
 
 
 #: Lattice states of all the targets together past which :func:`lattice_tour_bound` gives way
@@ -289,14 +302,7 @@ def lattice_tour_bound(
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no lattice state within the tolerance that is clear")
     say("bounding the tour's commands over its lattice goal states")
-    entered = [w.passage.entered(points, sampler.tol) for w in ways]
-    from_start = []
-    for k, lay in enumerate(layers):
-        cost = sampler.distance_from(q_start, lay, whole=True)
-        for way, into in zip(ways, entered, strict=True):
-            if into[k]:
-                cost = np.maximum(cost, way.to(sampler, lay, whole=True))
-        from_start.append(cost)
+    from_start = _from_start(sampler, q_start, points, layers, ways)
     per_order: dict[tuple[int, ...], int] = {}
     done: dict[tuple[int, ...], FloatArray] = {}
     for order in orders:
