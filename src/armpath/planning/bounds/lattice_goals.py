@@ -8,18 +8,21 @@ exact, and each leg between two of them takes at least their largest joint chang
 commands.
 
 The search keeps boxes of ticks of the joints that move the tool point (the others stay at the
-start's values: they move no link the tool point depends on). A box is dropped when no
-configuration in it can bring the tool point within the tolerance of the target. For its centre
-``c`` (tool point ``p``, position Jacobian ``J``) and half-widths ``r`` (rad), every
-configuration ``c + d`` of the box has its tool point at ``p + J d + e`` with
+start's values: the caller makes sure they move no part of the arm). A box is dropped when no
+configuration in it can bring the tool point within the tolerance of the target. Anywhere in
+the box the tool point lies within ``sum_k B_k r_k`` of the centre's (``B`` the joints'
+:func:`~armpath.kinematics.displacement_bounds`, ``r`` the box's half-widths, rad): the test
+of wide boxes. For a narrower one with centre ``c`` (tool point ``p``, position Jacobian
+``J``), every configuration ``c + d`` of the box has its tool point at ``p + J d + e`` with
 ``|e| <= 1/2 sum_ij M_ij r_i r_j``, where ``M_ij`` bounds the second derivative of the tool
 point in joints ``i`` and ``j``: for revolute joints the distance from the later joint's axis
-to the tool point, at most :func:`~armpath.kinematics.displacement_bounds` of it; so for every
-unit vector ``u``, ``|u . (target - p)| <= sum_k |u . J_k| r_k + |e| + tolerance`` holds if
-the box holds such a state. The test takes ``u`` toward the target and along the normals of
-the linearised image's faces (``J_i x J_j``), which bound it exactly; a box that fails one is
-dropped, another is halved along the joint that moves the tool point most across it. Single
-states are checked by their exact tool point.
+to the tool point, at most ``B`` of that joint; so for every unit vector ``u``,
+``|u . (target - p)| <= sum_k |u . J_k| r_k + |e| + tolerance`` holds if the box holds such a
+state. The test takes ``u`` toward the target and along the normals of the linearised image's
+faces (``J_i x J_j``), which bound it exactly; a box that fails one is dropped, another is
+halved along the joint that may move the tool point most across it. Single states are checked
+by their exact tool point. States that break the clearance rule can be left out on the way
+(see :func:`lattice_goal_states`).
 """
 
 from __future__ import annotations
