@@ -135,3 +135,10 @@ def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
                 best = min(best, cost)
             assert per_order[order] == best
         assert found.commands == min(per_order.values())
+    # more pairs of states than the legs may measure (12 prefixes of two or three targets, each
+    # 6 x 6 pairs): the caller samples the family instead
+    monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36 - 1)
+    args = (sampler, start, welds, orders, False, [], lambda _m: None)
+    assert tour_bounds.lattice_tour_bound(*args) is None
+    monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36)
+    assert tour_bounds.lattice_tour_bound(*args) is not None
