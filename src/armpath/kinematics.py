@@ -402,19 +402,29 @@ def _jacobian_kernel(
     for c in range(n_cfg):
         px, py, pz = frames[c, n_j + 1, 0, 3], frames[c, n_j + 1, 1, 3], frames[c, n_j + 1, 2, 3]
         for i in range(n_j):
-            F = frames[c, i + 1]
-            z0 = F[0, 0] * axes[i, 0] + F[0, 1] * axes[i, 1] + F[0, 2] * axes[i, 2]
-            z1 = F[1, 0] * axes[i, 0] + F[1, 1] * axes[i, 1] + F[1, 2] * axes[i, 2]
-            z2 = F[2, 0] * axes[i, 0] + F[2, 1] * axes[i, 1] + F[2, 2] * axes[i, 2]
-            if prismatic[i]:
-                out[c, 0, i], out[c, 1, i], out[c, 2, i] = z0, z1, z2
-            else:
-                r0, r1, r2 = px - F[0, 3], py - F[1, 3], pz - F[2, 3]
-                out[c, 0, i] = z1 * r2 - z2 * r1
-                out[c, 1, i] = z2 * r0 - z0 * r2
-                out[c, 2, i] = z0 * r1 - z1 * r0
+            z0, z1, z2, v0, v1, v2 = jacobian_column(
+                frames[c, i + 1], axes[i], prismatic[i], px, py, pz
+            )
+            out[c, 0, i], out[c, 1, i], out[c, 2, i] = v0, v1, v2
+            if not prismatic[i]:
                 out[c, 3, i], out[c, 4, i], out[c, 5, i] = z0, z1, z2
     return out
+
+
+@njit(cache=True)
+def jacobian_column(
+    F: np.ndarray, axis: np.ndarray, prismatic: bool, px: float, py: float, pz: float
+) -> tuple[float, float, float, float, float, float]:  # pragma: no cover - compiled
+    """A joint's axis in the world and the tool point's velocity per unit of it, from its
+    frame ``F`` (rows 0-2: rotation | origin) and its own ``axis``, the tool point at
+    ``px, py, pz``: ``z x (p - origin)`` for a revolute joint, ``z`` for a prismatic one."""
+    z0 = F[0, 0] * axis[0] + F[0, 1] * axis[1] + F[0, 2] * axis[2]
+    z1 = F[1, 0] * axis[0] + F[1, 1] * axis[1] + F[1, 2] * axis[2]
+    z2 = F[2, 0] * axis[0] + F[2, 1] * axis[1] + F[2, 2] * axis[2]
+    if prismatic:
+        return z0, z1, z2, z0, z1, z2
+    r0, r1, r2 = px - F[0, 3], py - F[1, 3], pz - F[2, 3]
+    return z0, z1, z2, z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0
 
 
 def _rotation_taking_z_to(axis: FloatArray) -> FloatArray:

@@ -83,12 +83,17 @@ LATTICE_SCOPE = (
 )
 
 
+def over_lattice(bound: dict[str, Any]) -> bool:
+    """Whether a result's ``lower_bound`` is a tour's over its listed lattice goal states."""
+    return "lattice_goal_states" in (bound.get("sampling") or {})
+
+
 def bound_scope(bound: dict[str, Any]) -> str:
     """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`) of a result's ``lower_bound``, with
     :data:`BOUND_OPENING` where the bound sampled an opening."""
-    sampling = bound.get("sampling") or {}
-    scope = LATTICE_SCOPE if "lattice_goal_states" in sampling else BOUND_SCOPE
-    return f"{scope}; {BOUND_OPENING}" if "opening_samples" in sampling else scope
+    scope = LATTICE_SCOPE if over_lattice(bound) else BOUND_SCOPE
+    opening = "opening_samples" in (bound.get("sampling") or {})
+    return f"{scope}; {BOUND_OPENING}" if opening else scope
 
 
 #: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).

@@ -1072,7 +1072,7 @@ def _print_run(
     heading: str,
 ) -> None:
     """The run's table of results on stdout and the files it wrote."""
-    from armpath.report import bound_cell, bound_scope, passes_text
+    from armpath.report import bound_cell, bound_scope, over_lattice, passes_text
 
     written = folder.written
     wall = scene.wall_thickness
@@ -1131,7 +1131,7 @@ def _print_run(
             "traced arc; tour: every order)"
             + (
                 f"; Task 3 over every order and {bound_scope(tour_bound)}."
-                if tour_bound is not None and "lattice_goal_states" in tour_bound["sampling"]
+                if tour_bound is not None and over_lattice(tour_bound)
                 else "."
             )
             + (

@@ -34,7 +34,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.jit import njit
-from armpath.kinematics import _chain_into, compiled_chain, displacement_bounds, landmark_scratch
+from armpath.kinematics import (
+    _chain_into,
+    compiled_chain,
+    displacement_bounds,
+    jacobian_column,
+    landmark_scratch,
+)
 from armpath.model.serial_arm import SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -104,7 +110,9 @@ def lattice_goal_states(
     chain = compiled_chain(arm)[:5]
     fixed = (tick, tip_index, q_fixed, np.asarray(target, dtype=np.float64), float(tolerance))
 
-    def run(lo: IntArray, hi: IntArray, coarse: int, boxes_left: int):  # type: ignore[no-untyped-def]
+    def run(
+        lo: IntArray, hi: IntArray, coarse: int, boxes_left: int
+    ) -> tuple[IntArray, IntArray, int, int, bool]:
         return _enumerate(
             np.ascontiguousarray(lo, dtype=np.int64),
             np.ascontiguousarray(hi, dtype=np.int64),
@@ -128,7 +136,7 @@ def lattice_goal_states(
         if count:
             centre = np.broadcast_to(q_fixed, (count, tip.size)).copy()
             centre[:, tip_index] = 0.5 * (lo + hi) * tick[tip_index]
-            moved = (0.5 * (hi - lo) * tick[tip_index]) @ displacement_bounds(arm)[tip_index]
+            moved = (0.5 * (hi - lo) * tick[tip_index]) @ reach_bound
             keep = slack(centre) >= -2.0 * moved
             lo, hi = lo[keep], hi[keep]
     out, _, count, more, complete = run(lo, hi, 0, max_boxes - boxes)
@@ -158,7 +166,7 @@ def _enumerate(
     coarse: int,
 ) -> tuple[np.ndarray, np.ndarray, int, int, bool]:  # pragma: no cover - compiled
     """The branch and bound of :func:`lattice_goal_states` (see the module): the states
-    found (``lo`` of ``(count, m)`` boxes of one state), or with ``coarse`` > 1 the boxes kept
+    found (``lo`` of ``(count, m)`` boxes of one state) and, with ``coarse`` > 1, the boxes kept
     whose widest joint spans at most ``coarse`` ticks (their ``lo`` and ``hi``), not split."""
     m = tip_index.shape[0]
     n_j = q_fixed.shape[0]
@@ -198,28 +206,17 @@ def _enumerate(
             px, py, pz = pos[n_j + 1, 0, 3], pos[n_j + 1, 1, 3], pos[n_j + 1, 2, 3]
             vx, vy, vz = target[0] - px, target[1] - py, target[2] - pz
             dist = np.sqrt(vx * vx + vy * vy + vz * vz)
-            if single and dist > tolerance:
+            if single:  # a state: its exact tool point decides
+                if dist <= tolerance:
+                    if count == out.shape[0] and count >= max_states:
+                        return out, out_hi, count, boxes, False
+                    out, out_hi, count = _kept(out, out_hi, count, lo[top], hi[top])
                 continue
-            if not single and coarse > 1:
-                widest = 0
-                for k in range(m):
-                    widest = max(widest, hi[top, k] - lo[top, k] + 1)
-                emit = widest <= coarse
-            else:
-                emit = single
             for k in range(m):
                 j = tip_index[k]
-                F = pos[j + 1]
-                z0 = F[0, 0] * axes[j, 0] + F[0, 1] * axes[j, 1] + F[0, 2] * axes[j, 2]
-                z1 = F[1, 0] * axes[j, 0] + F[1, 1] * axes[j, 1] + F[1, 2] * axes[j, 2]
-                z2 = F[2, 0] * axes[j, 0] + F[2, 1] * axes[j, 1] + F[2, 2] * axes[j, 2]
-                if prismatic[j]:
-                    J[0, k], J[1, k], J[2, k] = z0, z1, z2
-                else:
-                    r0, r1, r2 = px - F[0, 3], py - F[1, 3], pz - F[2, 3]
-                    J[0, k] = z1 * r2 - z2 * r1
-                    J[1, k] = z2 * r0 - z0 * r2
-                    J[2, k] = z0 * r1 - z1 * r0
+                _, _, _, J[0, k], J[1, k], J[2, k] = jacobian_column(
+                    pos[j + 1], axes[j], prismatic[j], px, py, pz
+                )
             second = 0.0
             lipschitz = 0.0
             for a in range(m):
@@ -257,21 +254,13 @@ def _enumerate(
                 a += 1
             if dropped:
                 continue
-            if emit:
-                if count == out.shape[0]:
-                    if count >= max_states:
-                        return out, out_hi, count, boxes, False
-                    bigger = np.empty((2 * count, m), dtype=np.int64)
-                    bigger_hi = np.empty((2 * count, m), dtype=np.int64)
-                    for i in range(count):
-                        for k in range(m):
-                            bigger[i, k] = out[i, k]
-                            bigger_hi[i, k] = out_hi[i, k]
-                    out, out_hi = bigger, bigger_hi
-                for k in range(m):
-                    out[count, k] = lo[top, k]
-                    out_hi[count, k] = hi[top, k]
-                count += 1
+            widest = 0
+            for k in range(m):
+                widest = max(widest, hi[top, k] - lo[top, k] + 1)
+            if widest <= coarse:  # kept whole for the caller's clearance test
+                if count == out.shape[0] and count >= max_states:
+                    return out, out_hi, count, boxes, False
+                out, out_hi, count = _kept(out, out_hi, count, lo[top], hi[top])
                 continue
             # halve along the joint that may move the tool point most across the box: its
             # linear and second-order share, or its Lipschitz share where that is less
@@ -294,3 +283,24 @@ def _enumerate(
             lo[top + 1, best_k] = mid + 1
             top += 2
     return out, out_hi, count, boxes, True
+
+
+@njit(cache=True, nogil=True)
+def _kept(
+    out: np.ndarray, out_hi: np.ndarray, count: int, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, int]:  # pragma: no cover - compiled
+    """``out`` and ``out_hi`` with the box ``lo`` .. ``hi`` added as row ``count`` (both
+    doubled when full), and the new count. The caller checks its budget of rows before."""
+    m = lo.shape[0]
+    if count == out.shape[0]:
+        bigger = np.empty((2 * count, m), dtype=np.int64)
+        bigger_hi = np.empty((2 * count, m), dtype=np.int64)
+        for i in range(count):
+            for k in range(m):
+                bigger[i, k] = out[i, k]
+                bigger_hi[i, k] = out_hi[i, k]
+        out, out_hi = bigger, bigger_hi
+    for k in range(m):
+        out[count, k] = lo[k]
+        out_hi[count, k] = hi[k]
+    return out, out_hi, count + 1

@@ -260,6 +260,8 @@ class FamilySampler:
         span = (arm.upper - arm.lower)[self.tip]
         revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])[self.tip]
         turns = revolute & ~(span < 2.0 * np.pi)
+        #: the tip joints that can turn whole turns (a revolute joint whose range spans one)
+        self.whole_turns = turns
         self.period = np.where(turns, 2.0 * np.pi / step, 0.0)
         #: the tip joints that a self-collision range they cannot cross confines
         #: (:meth:`CollisionWorld.joint_windows` from ``q_start``): rad, by joint index; such a

@@ -11,7 +11,6 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.kinematics import landmark_positions
-from armpath.model.serial_arm import JointKind
 from armpath.planning.bounds.lattice_goals import lattice_goal_states
 from armpath.planning.bounds.passage import (
     PassageSamples,
@@ -223,7 +222,6 @@ def _goal_layers(
     fam = sampler.fam
     arm, world, grid = fam.arm, fam.world, fam.arm.lattice
     tip = sampler.tip
-    tick = np.asarray(grid.tick, dtype=np.float64)
     probe = np.array([q_start, q_start + np.where(tip, 0.0, 1.0)])
     moved = landmark_positions(arm, probe)
     if not np.allclose(moved[0], moved[1], atol=1e-9):
@@ -232,19 +230,20 @@ def _goal_layers(
     # the metric measures it the shorter way round, or on the start's side of its
     # self-collision range, whichever copy a plan takes (the copies are states of the lattice
     # when a turn is a whole number of ticks)
+    tick = np.asarray(grid.tick, dtype=np.float64)[tip]
+    turns = sampler.whole_turns
     turn = 2.0 * np.pi / tick
-    revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])
-    turns = revolute & (arm.upper - arm.lower >= 2.0 * np.pi)
-    if np.any(tip & turns & (np.abs(turn - np.round(turn)) > 1e-6)):
+    if np.any(turns & (np.abs(turn - np.round(turn)) > 1e-6)):
         return None
-    if np.any(tip & ~turns & ~(np.isfinite(arm.lower) & np.isfinite(arm.upper))):
+    lower_limit, upper_limit = arm.lower[tip], arm.upper[tip]
+    if np.any(~turns & ~(np.isfinite(lower_limit) & np.isfinite(upper_limit))):
         return None  # an unlimited sliding joint
-    whole = np.round(turn).astype(np.int64)
-    finite_lower = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
-    finite_upper = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
-    lower = np.ceil(finite_lower / tick - 1e-9).astype(np.int64)
+    lower = np.ceil(np.where(np.isfinite(lower_limit), lower_limit, -np.pi) / tick - 1e-9)
+    lower = lower.astype(np.int64)
     upper = np.where(
-        turns, lower + whole - 1, np.floor(finite_upper / tick + 1e-9).astype(np.int64)
+        turns,
+        lower + np.round(turn).astype(np.int64) - 1,
+        np.floor(np.where(turns, 0.0, upper_limit) / tick + 1e-9).astype(np.int64),
     )
     start = grid.nearest_ticks(q_start)
 
@@ -260,8 +259,8 @@ def _goal_layers(
             sampler.tol,
             tip,
             start,
-            lower[tip],
-            upper[tip],
+            lower,
+            upper,
             slack=lambda q: world.slack(arm, q, ceiling=0.0),
         )
         if not found.complete:
