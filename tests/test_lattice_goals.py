@@ -10,11 +10,12 @@ target, each leg its largest joint change in whole commands, measured here indep
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from armpath.api import load_arm, load_scene
+from armpath.api import arm_and_scene, load_arm, load_scene
 from armpath.kinematics import tool_position
 from armpath.planning.bounds import tour as tour_bounds
 from armpath.planning.bounds.lattice_goals import lattice_goal_states
@@ -68,7 +69,7 @@ def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
     members = sampler.layer(weld, sampler.base, levels=0)
     clear = members.q[world.satisfied(arm, members.q)]
     centre = grid.nearest_ticks(clear[0])
-    radius = 6
+    radius = 10  # 21 ticks wide: pruned at 16 and at 8 ticks
     found = lattice_goal_states(
         arm,
         weld,
@@ -77,16 +78,37 @@ def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
         centre,
         centre[tip] - radius,
         centre[tip] + radius,
-        slack=lambda q: world.slack(arm, q, ceiling=0.0),
+        may_be_clear=lambda q, moved: world.may_be_clear_within(arm, q, moved),
     )
     states = _box_states(centre, tip, radius)
-    q = grid.to_joint(states)
-    near = np.linalg.norm(tool_position(arm, q) - weld, axis=1) <= 0.05
-    truth = {tuple(s) for s in states[near & world.satisfied(arm, q)]}
+    near = states[np.linalg.norm(tool_position(arm, grid.to_joint(states)) - weld, axis=1) <= 0.05]
+    truth = {tuple(s) for s in near[world.satisfied(arm, grid.to_joint(near))]}
     listed = found.ticks[world.satisfied(arm, grid.to_joint(found.ticks))]
     assert found.complete
     assert truth
     assert {tuple(s) for s in listed} == truth
+
+
+def test_may_be_clear_within_allows_one_motion_to_obstacles_and_two_between_links():
+    """The pruning's predicate against every pair's clearance measured: the UR5 of its cell at
+    random configurations (some folded onto themselves), each with its own allowance."""
+    arm, scene = arm_and_scene(None, Path(__file__).parents[1] / "examples" / "ur5_cell.toml")
+    world = scene.world
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-np.pi, np.pi, size=(600, 6))
+    moved = rng.uniform(0.0, 60.0, size=600)
+    values, _ = world.pair_clearances(arm, q)
+    slack = values - world.required(arm)
+    is_self = np.array([p.is_self for p in world.pairs(arm)])
+    truth = (slack[:, ~is_self].min(axis=1) >= -moved) & (
+        slack[:, is_self].min(axis=1) >= -2.0 * moved
+    )
+    found = world.may_be_clear_within(arm, q, moved)
+    assert np.array_equal(found, truth)
+    # both kinds decide some: links folded onto each other, parts in the table or the floor
+    assert (slack[:, is_self].min(axis=1) < -2.0 * moved).any()
+    assert (slack[:, ~is_self].min(axis=1) < -moved).any()
+    assert 0 < truth.sum() < truth.size
 
 
 def _chebyshev_commands(a: np.ndarray, b: np.ndarray, period: np.ndarray) -> int:

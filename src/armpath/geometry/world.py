@@ -57,6 +57,7 @@ from armpath.model.serial_arm import JointKind, Link, SerialArm
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+BoolArray = NDArray[np.bool_]
 
 
 @dataclass(frozen=True)
@@ -877,6 +878,28 @@ class CollisionWorld:
         every = np.ones(len(self._bound(arm).pairs), dtype=bool)
         (lowest,) = self.smallest_slacks(arm, flat, [(every, ceiling)])
         return lowest.reshape(q.shape[:-1])
+
+    def may_be_clear_within(self, arm: SerialArm, q: ArrayLike, moved: ArrayLike) -> BoolArray:
+        """Per configuration of ``q (M, n)``, whether a configuration that moves no point of
+        the arm farther than ``moved`` (length unit, scalar or ``(M,)``) from it may keep the
+        clearance rule: False where a part's slack to an obstacle is below ``-moved`` or a
+        link pair's below ``-2 moved`` (both links of a pair move), as :meth:`slack` measures
+        them. A pair is measured only as far as that decides (its ceiling and floor are those
+        values: :meth:`smallest_slacks`)."""
+        q = np.asarray(q, dtype=np.float64)
+        reach = np.broadcast_to(np.asarray(moved, dtype=np.float64), (q.shape[0],))
+        is_self = np.array([p.is_self for p in self._bound(arm).pairs], dtype=bool)
+        # each group's measuring stops once a pair is below its allowance (the floor just
+        # under it); a value left at the ceiling says no pair is below
+        groups = [
+            SlackGroup(mask, allowed, np.nextafter(allowed, -np.inf))
+            for mask, allowed in ((~is_self, -reach), (is_self, -2.0 * reach))
+            if mask.any()
+        ]
+        keep = np.ones(q.shape[0], dtype=bool)
+        for group, lowest in zip(groups, self.smallest_slacks(arm, q, groups), strict=True):
+            keep &= lowest >= group.ceiling
+        return keep
 
     def describe(self) -> dict[str, object]:
         return {

@@ -261,7 +261,7 @@ def _goal_layers(
             start,
             lower,
             upper,
-            slack=lambda q: world.slack(arm, q, ceiling=0.0),
+            may_be_clear=lambda q, moved: world.may_be_clear_within(arm, q, moved),
         )
         if not found.complete:
             failed.append(k)
