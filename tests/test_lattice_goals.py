@@ -10,13 +10,17 @@ target, each leg its largest joint change in whole commands, measured here indep
 from __future__ import annotations
 
 import itertools
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from armpath.api import arm_and_scene, load_arm, load_scene
+from armpath.budget import time_limit
+from armpath.errors import TimeLimitError
 from armpath.kinematics import tool_position
+from armpath.planning.bounds import lattice_goals
 from armpath.planning.bounds import tour as tour_bounds
 from armpath.planning.bounds.lattice_goals import lattice_goal_states
 from armpath.planning.bounds.sampling import FamilySampler, Layer
@@ -56,19 +60,25 @@ def test_every_state_within_the_tolerance_of_a_box_is_listed(name, deg, radius, 
     assert {tuple(s) for s in found.ticks} == truth
 
 
-def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
-    """Near a weld inside the seed's workpiece many states collide; those that keep the rule
-    are all listed with the pruning on."""
+def _clear_state_near_a_weld() -> tuple:
+    """The seed arm, its scene's world, a weld inside the workpiece and the lattice state
+    nearest a clear family member there."""
     arm = load_arm("seed")
-    grid = arm.lattice
     world = load_scene(None).world
-    tip = np.array([True] * 5 + [False])
     weld = np.array([120.0, 106.0, 50.82])
     fam = _targets_family(arm, world, weld[None])
     sampler = FamilySampler(fam, 0.05)
     members = sampler.layer(weld, sampler.base, levels=0)
     clear = members.q[world.satisfied(arm, members.q)]
-    centre = grid.nearest_ticks(clear[0])
+    return arm, world, weld, arm.lattice.nearest_ticks(clear[0])
+
+
+def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
+    """Near a weld inside the seed's workpiece many states collide; those that keep the rule
+    are all listed with the pruning on."""
+    arm, world, weld, centre = _clear_state_near_a_weld()
+    grid = arm.lattice
+    tip = np.array([True] * 5 + [False])
     radius = 10  # 21 ticks wide: pruned at 16 and at 8 ticks
     found = lattice_goal_states(
         arm,
@@ -87,6 +97,50 @@ def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
     assert found.complete
     assert truth
     assert {tuple(s) for s in listed} == truth
+
+
+def test_the_listing_resumed_chunk_by_chunk_finds_the_same_states(monkeypatch):
+    """The kernel runs a chunk of boxes at a time and resumes from those it has not looked at:
+    chunks of 7 boxes (the stack and the starts not begun handed back each time) list the
+    same states, with the clearance pruning too, as one chunk; a budget of boxes smaller than
+    the listing needs ends it incomplete."""
+    arm, world, weld, centre = _clear_state_near_a_weld()
+    grid = arm.lattice
+    tip = np.array([True] * 5 + [False])
+    target = tool_position(arm, grid.to_joint(centre))
+    lo, hi = centre[tip] - 9, centre[tip] + 9
+    pruned = {"may_be_clear": lambda q, moved: world.may_be_clear_within(arm, q, moved)}
+    for point, kwargs in ((target, {}), (weld, pruned)):
+        whole = lattice_goal_states(arm, point, 0.05, tip, centre, lo, hi, **kwargs)
+        monkeypatch.setattr(lattice_goals, "CHUNK_BOXES", 7)
+        chunked = lattice_goal_states(arm, point, 0.05, tip, centre, lo, hi, **kwargs)
+        monkeypatch.setattr(lattice_goals, "CHUNK_BOXES", 1_000_000)
+        assert whole.complete and chunked.complete
+        assert chunked.boxes == whole.boxes
+        assert {tuple(s) for s in chunked.ticks} == {tuple(s) for s in whole.ticks}
+        assert len(whole.ticks) > 0 and whole.boxes > 100
+    short = lattice_goal_states(arm, target, 0.05, tip, centre, lo, hi, max_boxes=100)
+    assert not short.complete and short.boxes == 100
+
+
+def test_the_listing_hears_a_time_limit():
+    """Between chunks the listing looks at the clock: a limit already spent stops it with a
+    TimeLimitError."""
+    arm = load_arm("seed")
+    grid = arm.lattice
+    tip = np.array([True] * 5 + [False])
+    centre = grid.nearest_ticks(np.radians([40.0, -20.0, 60.0, 0.0, 30.0, 0.0]))
+    with time_limit(1e-6), pytest.raises(TimeLimitError):
+        time.sleep(0.01)
+        lattice_goal_states(
+            arm,
+            np.array([300.0, 0.0, 100.0]),
+            0.05,
+            tip,
+            centre,
+            centre[tip] - 50,
+            centre[tip] + 50,
+        )
 
 
 def test_may_be_clear_within_allows_one_motion_to_obstacles_and_two_between_links():

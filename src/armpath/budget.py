@@ -4,8 +4,9 @@ Every search loop in armpath ends by design (a progress measure that provably de
 explicit iteration budget). On top of that a caller may set a **time limit**: inside
 ``with time_limit(seconds):`` long loops call :func:`check_time`, which raises
 :class:`~armpath.errors.TimeLimitError` once the limit has run out. The limit is held in a
-context variable, so nested calls and threads started inside see it; without one,
-:func:`check_time` costs one lookup.
+context variable, so nested calls see it, and so do threads that run their work in a copy of
+the caller's context (``contextvars.copy_context().run``, as armpath's own do; a thread pool's
+workers do not otherwise); without one, :func:`check_time` costs one lookup.
 
 **Size limits** refuse inputs that would need more memory or work than the machine has before
 any work starts: :func:`check_size` compares a count (samples, voxels, periods, ...) with its

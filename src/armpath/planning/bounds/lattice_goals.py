@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.budget import check_time
 from armpath.jit import njit
 from armpath.kinematics import (
     _chain_into,
@@ -51,6 +52,11 @@ IntArray = NDArray[np.int64]
 MAX_GOAL_BOXES = 60_000_000
 #: Lattice states one enumeration may return (48 bytes each for six joints).
 MAX_GOAL_STATES = 2_000_000
+#: Boxes the kernel looks at between two looks at the clock (about a second).
+CHUNK_BOXES = 1_000_000
+#: How a run of the kernel ended: every box looked at; its chunk of boxes spent (the boxes not
+#: looked at yet returned, to resume from); a budget of states or the stack's depth spent.
+_DONE, _CHUNK_SPENT, _GAVE_UP = 0, 1, 2
 #: Depth of the search's stack: each halving adds one box, and a box of ``2**k`` ticks is halved
 #: at most ``k`` times along that joint.
 _STACK = 4096
@@ -120,18 +126,39 @@ def lattice_goal_states(
 
     def run(
         lo: IntArray, hi: IntArray, coarse: int, boxes_left: int
-    ) -> tuple[IntArray, IntArray, int, int, bool]:
-        return _enumerate(
-            np.ascontiguousarray(lo, dtype=np.int64),
-            np.ascontiguousarray(hi, dtype=np.int64),
-            *fixed,
-            np.ascontiguousarray(M),
-            reach_bound,
-            *chain,
-            int(boxes_left),
-            int(max_states),
-            int(coarse),
-        )
+    ) -> tuple[IntArray, IntArray, int, bool]:
+        """The boxes kept (``coarse`` > 1) or the states found from the boxes ``lo`` ..
+        ``hi``, the boxes looked at, and whether complete: the kernel runs
+        :data:`CHUNK_BOXES` boxes at a time, resumed from the boxes it has not looked at
+        yet, so that a time limit is heard between chunks."""
+        found_lo: list[IntArray] = []
+        found_hi: list[IntArray] = []
+        kept = looked = 0
+        while True:
+            check_time("listing the lattice goal states")
+            chunk = min(CHUNK_BOXES, boxes_left - looked)
+            out, out_hi, count, used, status, lo, hi = _enumerate(
+                np.ascontiguousarray(lo, dtype=np.int64),
+                np.ascontiguousarray(hi, dtype=np.int64),
+                *fixed,
+                np.ascontiguousarray(M),
+                reach_bound,
+                *chain,
+                int(max(chunk, 0)),
+                int(max_states - kept),
+                int(coarse),
+            )
+            found_lo.append(out[:count])
+            found_hi.append(out_hi[:count])
+            kept += count
+            looked += used
+            if status != _CHUNK_SPENT or looked >= boxes_left or kept >= max_states:
+                return (
+                    np.concatenate(found_lo),
+                    np.concatenate(found_hi),
+                    looked,
+                    status == _DONE,
+                )
 
     lo = np.asarray(lower_ticks, dtype=np.int64).reshape(1, -1)
     hi = np.asarray(upper_ticks, dtype=np.int64).reshape(1, -1)
@@ -142,9 +169,9 @@ def lattice_goal_states(
         assert may_be_clear is not None
         if dropped_share < MIN_DROPPED_SHARE and level < len(looks) - 1:
             continue
-        lo, hi, count, more, complete = run(lo, hi, coarse, max_boxes - boxes)
+        lo, hi, more, complete = run(lo, hi, coarse, max_boxes - boxes)
         boxes += more
-        lo, hi = lo[:count], hi[:count]
+        count = lo.shape[0]
         if not complete:
             return GoalStates(np.zeros((0, tip.size), dtype=np.int64), boxes, False)
         if count:
@@ -153,9 +180,10 @@ def lattice_goal_states(
             keep = may_be_clear(centre, (0.5 * (hi - lo) * tick[tip_index]) @ reach_bound)
             lo, hi = lo[keep], hi[keep]
             dropped_share = 1.0 - lo.shape[0] / count
-    out, _, count, more, complete = run(lo, hi, 0, max_boxes - boxes)
-    ticks = np.broadcast_to(np.asarray(fixed_ticks, dtype=np.int64), (count, tip.size)).copy()
-    ticks[:, tip_index] = out[:count]
+    out, _, more, complete = run(lo, hi, 0, max_boxes - boxes)
+    ticks = np.broadcast_to(np.asarray(fixed_ticks, dtype=np.int64), (out.shape[0], tip.size))
+    ticks = ticks.copy()
+    ticks[:, tip_index] = out
     return GoalStates(ticks, int(boxes + more), bool(complete))
 
 
@@ -178,10 +206,15 @@ def _enumerate(
     max_boxes: int,
     max_states: int,
     coarse: int,
-) -> tuple[np.ndarray, np.ndarray, int, int, bool]:  # pragma: no cover - compiled
-    """The branch and bound of :func:`lattice_goal_states` (see the module): the states
-    found (``lo`` of ``(count, m)`` boxes of one state) and, with ``coarse`` > 1, the boxes kept
-    whose widest joint spans at most ``coarse`` ticks (their ``lo`` and ``hi``), not split."""
+) -> tuple[
+    np.ndarray, np.ndarray, int, int, int, np.ndarray, np.ndarray
+]:  # pragma: no cover - compiled
+    """The branch and bound of :func:`lattice_goal_states` (see the module) over the boxes
+    ``lower`` .. ``upper``, at most ``max_boxes`` of them: the states found (``lo`` of
+    ``(count, m)`` boxes of one state) and, with ``coarse`` > 1, the boxes kept whose widest
+    joint spans at most ``coarse`` ticks (their ``lo`` and ``hi``), not split; the boxes looked
+    at; how it ended (:data:`_DONE`, :data:`_CHUNK_SPENT`, :data:`_GAVE_UP`); and the boxes not
+    looked at yet, to resume from (none unless the chunk was spent)."""
     m = tip_index.shape[0]
     n_j = q_fixed.shape[0]
     lo = np.empty((_STACK, m), dtype=np.int64)
@@ -194,6 +227,7 @@ def _enumerate(
     scratch = landmark_scratch(n_j)
     J = np.zeros((3, m))
     r = np.zeros(m)
+    none = np.empty((0, m), dtype=np.int64)
     for start in range(lower.shape[0]):
         empty = False
         for k in range(m):
@@ -202,10 +236,20 @@ def _enumerate(
             hi[0, k] = upper[start, k]
         top = 0 if empty else 1
         while top > 0:
+            if boxes == max_boxes:  # the stack and the starts not begun, to resume from
+                rest = top + lower.shape[0] - start - 1
+                rest_lo = np.empty((rest, m), dtype=np.int64)
+                rest_hi = np.empty((rest, m), dtype=np.int64)
+                for i in range(rest):
+                    for k in range(m):
+                        if i < top:
+                            rest_lo[i, k], rest_hi[i, k] = lo[i, k], hi[i, k]
+                        else:
+                            at = start + 1 + i - top
+                            rest_lo[i, k], rest_hi[i, k] = lower[at, k], upper[at, k]
+                return out, out_hi, count, boxes, _CHUNK_SPENT, rest_lo, rest_hi
             top -= 1
             boxes += 1
-            if boxes > max_boxes:
-                return out, out_hi, count, boxes, False
             single = True
             for k in range(m):
                 j = tip_index[k]
@@ -223,7 +267,7 @@ def _enumerate(
             if single:  # a state: its exact tool point decides
                 if dist <= tolerance:
                     if count == out.shape[0] and count >= max_states:
-                        return out, out_hi, count, boxes, False
+                        return out, out_hi, count, boxes, _GAVE_UP, none, none
                     out, out_hi, count = _kept(out, out_hi, count, lo[top], hi[top])
                 continue
             for k in range(m):
@@ -273,7 +317,7 @@ def _enumerate(
                 widest = max(widest, hi[top, k] - lo[top, k] + 1)
             if widest <= coarse:  # kept whole for the caller's clearance test
                 if count == out.shape[0] and count >= max_states:
-                    return out, out_hi, count, boxes, False
+                    return out, out_hi, count, boxes, _GAVE_UP, none, none
                 out, out_hi, count = _kept(out, out_hi, count, lo[top], hi[top])
                 continue
             # halve along the joint that may move the tool point most across the box: its
@@ -288,7 +332,7 @@ def _enumerate(
                     if moves > best:
                         best, best_k = moves, k
             if top + 2 > _STACK:
-                return out, out_hi, count, boxes, False
+                return out, out_hi, count, boxes, _GAVE_UP, none, none
             mid = (lo[top, best_k] + hi[top, best_k]) // 2
             for k in range(m):
                 lo[top + 1, k] = lo[top, k]
@@ -296,7 +340,7 @@ def _enumerate(
             hi[top, best_k] = mid
             lo[top + 1, best_k] = mid + 1
             top += 2
-    return out, out_hi, count, boxes, True
+    return out, out_hi, count, boxes, _DONE, none, none
 
 
 @njit(cache=True, nogil=True)

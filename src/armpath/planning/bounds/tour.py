@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextvars
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
@@ -275,8 +276,12 @@ def _goal_layers(
 
     check_time("bounding the tour's commands")
     # the enumeration's kernel releases the GIL: the targets are listed two at a time
+    # (each in a copy of this context, so that the listing hears the caller's time limit)
     with ThreadPoolExecutor(max_workers=GOAL_THREADS) as pool:
-        found = list(pool.map(listed, range(points.shape[0])))
+        tasks = [
+            pool.submit(contextvars.copy_context().run, listed, k) for k in range(points.shape[0])
+        ]
+        found = [task.result() for task in tasks]
     layers = [lay for lay in found if lay is not None]
     if len(layers) < len(found) or sum(lay.size for lay in layers) > MAX_LATTICE_GOALS:
         return None
