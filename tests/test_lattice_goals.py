@@ -218,3 +218,18 @@ def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
     assert tour_bounds.lattice_tour_bound(*args) is None
     monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36)
     assert tour_bounds.lattice_tour_bound(*args) is not None
+
+
+@pytest.mark.slow
+def test_two_welds_in_free_space_are_bounded_over_their_lattice_states():
+    """Nothing prunes the seed arm's states in an empty scene: about 257,000 states at the two
+    welds, all listed (within MAX_LATTICE_GOALS), and the tour planned in as many commands as
+    they bound, so the plan is proven fewest."""
+    import armpath
+
+    doc = armpath.spotweld(
+        "seed", [[300.0, 100.0, 200.0], [250.0, -100.0, 250.0]], scene="none"
+    ).doc
+    assert "lattice states within the tolerance" in doc["lower_bound"]["method"]
+    assert doc["lower_bound"]["sampling"]["lattice_goal_states"] > 200_000
+    assert doc["lower_bound_commands"] == doc["n_commands"]
