@@ -44,6 +44,8 @@ MAX_JOBS = 256
 MAX_COORDINATE_MM = 1e9
 #: Largest time limit accepted (s): one week.
 MAX_TIME_LIMIT_S = 7 * 24 * 3600.0
+#: Longest controller period accepted (s): a minute (controllers command every few ms).
+MAX_PERIOD_S = 60.0
 
 
 @dataclass(frozen=True)

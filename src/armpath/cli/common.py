@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from rich.console import Console
 from rich.markup import escape
 
-from armpath.budget import check_time_limit_value, time_limit
+from armpath.budget import MAX_PERIOD_S, check_time_limit_value, time_limit
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.geometry import WallThickness
 from armpath.model.catalog import BUILTIN_MODELS
@@ -369,7 +369,10 @@ ModelOption = Annotated[
 ]
 
 
-PeriodOption = Annotated[float, typer.Option(help="Controller period, s (one command each).")]
+PeriodOption = Annotated[
+    float,
+    typer.Option(help=f"Controller period, s (one command each; at most {MAX_PERIOD_S:g} s)."),
+]
 
 
 def _joint_units(arm: SerialArm) -> list[str]:

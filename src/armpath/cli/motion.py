@@ -28,6 +28,7 @@ from rich.table import Table
 from armpath.budget import (
     MAX_COMMANDS,
     MAX_JOINTS,
+    MAX_PERIOD_S,
     MAX_PERIODS,
     MAX_WAYPOINTS,
     check_size,
@@ -201,6 +202,15 @@ def _check_seconds(value: float, option: str) -> None:
         raise InvalidInputError(f"{option} must be a positive number of seconds, got {value}")
 
 
+def _check_period(value: float) -> None:
+    """Refuse a controller period that is not a positive number of seconds up to
+    :data:`~armpath.budget.MAX_PERIOD_S`."""
+    if not (math.isfinite(value) and 0 < value <= MAX_PERIOD_S):
+        raise InvalidInputError(
+            f"--period must be a number of seconds in (0, {MAX_PERIOD_S:g}], got {value}"
+        )
+
+
 def _check_periods(duration_s: float, period_s: float, options: str) -> None:
     """Refuse a trajectory of ``duration_s`` with more controller periods than
     ``MAX_PERIODS``, or more than ``MAX_COMMANDS`` commands at one a period."""
@@ -367,7 +377,7 @@ def trajectory(
         _check_rate(max_acceleration, "--max-acceleration", MAX_ACCELERATION_DEG_S2, "deg/s^2")
         if max_jerk is not None:
             _check_rate(max_jerk, "--max-jerk", MAX_JERK_DEG_S3, "deg/s^3")
-        _check_seconds(period, "--period")
+        _check_period(period)
         W_deg, times = _read_waypoints(waypoints)
         W = np.radians(W_deg)
         allocated = times is None
@@ -554,12 +564,18 @@ def rcm(
 
     with _cli_errors(time_limit):
         _check_choice(kind, ORDERS, "--kind")
-        _check_seconds(period, "--period")
+        _check_period(period)
         _check_seconds(duration, "--duration")
         check_count(points, "--points", MAX_WAYPOINTS - 1, "points on the circle", least=3)
         if not (0.0 < cone <= 90.0):
             raise InvalidInputError(f"--cone must be in (0, 90] deg, got {cone}")
         options = "--period or --duration"
+        if duration < points * period:
+            raise InvalidInputError(
+                f"--duration {duration:g} s gives each of the {points} segments round the circle "
+                f"less than one controller period (--period {period:g} s): at least "
+                f"{points * period:g} s"
+            )
         _check_periods(duration, period, options)
         if not segment_durations_ok([duration / points], ORDERS[kind]):
             raise InvalidInputError(
