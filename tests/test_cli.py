@@ -215,6 +215,16 @@ def test_choices_are_listed_and_a_wrong_one_is_a_usage_error(tmp_path):
     assert "X Y Z" in h.stdout and "float,float" not in h.stdout
 
 
+@pytest.mark.parametrize("empty", [["--out", ""], ["--out="], ["--scene", ""]])
+def test_an_empty_option_value_is_a_usage_error_and_writes_nothing(tmp_path, empty):
+    """``--out ""`` would be the current folder: refused before any work, nothing written."""
+    r = run("reach", "20", "-200", "120", *empty, cwd=tmp_path)
+    assert r.returncode == 2
+    (line,) = error_lines(r.stderr)
+    assert line == f"error: {empty[0].rstrip('=')} was given an empty value (see: armpath --help)"
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_plan_and_spotweld_errors():
     r = run("spotweld", "--order", "random")  # a usage error: the parser's status 2
     assert r.returncode == 2 and "'random' is not one of 'auto', 'given'" in r.stderr

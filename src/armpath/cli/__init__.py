@@ -130,9 +130,25 @@ def join_number_lists(args: list[str], options: tuple[str, ...] = JOINT_LIST_OPT
     return out
 
 
+def empty_option(args: list[str]) -> str | None:
+    """The first option of ``args`` given an empty value (``--out ""`` or ``--out=``), which
+    the parser would take as the current folder for a path; None if there is none."""
+    for i, arg in enumerate(args):
+        if not arg.startswith("--"):
+            continue
+        name, equals, value = arg.partition("=")
+        if (equals and not value) or (not equals and i + 1 < len(args) and args[i + 1] == ""):
+            return name
+    return None
+
+
 def main() -> None:
-    """Console entry point: a usage error (unknown option, missing or malformed value) is one
-    ``error:`` line naming the command's --help, exit status 2."""
+    """Console entry point: a usage error (unknown option, missing, empty or malformed value)
+    is one ``error:`` line naming the command's --help, exit status 2."""
+    empty = empty_option(sys.argv[1:])
+    if empty is not None:
+        err_console.print(f"error: {empty} was given an empty value (see: armpath --help)")
+        sys.exit(2)
     try:
         rc = cli_command()(
             args=join_number_lists(sys.argv[1:]), prog_name="armpath", standalone_mode=False
@@ -154,4 +170,4 @@ def main() -> None:
         sys.exit(rc)
 
 
-__all__ = ["app", "cli_command", "join_number_lists", "main"]
+__all__ = ["app", "cli_command", "empty_option", "join_number_lists", "main"]
