@@ -884,8 +884,8 @@ class CollisionWorld:
         the arm farther than ``moved`` (length unit, scalar or ``(M,)``) from it may keep the
         clearance rule: False where a part's slack to an obstacle is below ``-moved`` or a
         link pair's below ``-2 moved`` (both links of a pair move), as :meth:`slack` measures
-        them. A pair is measured only as far as that decides (its ceiling and floor are those
-        values: :meth:`smallest_slacks`)."""
+        them. Pairs are measured only as far as that decides (:meth:`smallest_slacks` with
+        those allowances as ceilings and floors just under them)."""
         q = np.asarray(q, dtype=np.float64)
         reach = np.broadcast_to(np.asarray(moved, dtype=np.float64), (q.shape[0],))
         is_self = np.array([p.is_self for p in self._bound(arm).pairs], dtype=bool)

@@ -63,10 +63,10 @@ _STACK = 4096
 #: Widths (ticks), widest first, at which the search stops to look at the clearance of the boxes
 #: it keeps, before it searches on inside those that may hold a state keeping the rule. A width
 #: but the last is skipped when the look before it dropped less than :data:`MIN_DROPPED_SHARE`
-#: of its boxes (a look costs about six times a box). One thread, the UR5 cell's four welds:
-#: 134 s at 8 ticks alone, 74 s at 32, 16 and 8 (32 drops about 70 %, 16 a quarter, 8 a
-#: sixth); the seed's Task 3: 38 s at 8 alone (72 % dropped), 53 s at all three (32 and 16 drop
-#: 7 %), 43 s skipping 16.
+#: of its boxes (a look costs about six times a box). One thread
+#: (``benchmarks/bench_lattice_goals.py``), the UR5 cell's four welds: 137 s at 8 ticks alone,
+#: 76 s at 32, 16 and 8 (32 drops about 70 %, 16 a quarter, 8 a sixth); the seed's Task 3: 39 s
+#: at 8 alone (72 % dropped), 43 s skipping 16 (53 s looking at all three: 32 and 16 drop 7 %).
 COARSE_TICKS = (32, 16, 8)
 MIN_DROPPED_SHARE = 0.25
 

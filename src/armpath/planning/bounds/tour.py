@@ -214,16 +214,17 @@ MAX_LATTICE_PAIRS = 40_000_000_000
 GOAL_THREADS = 2
 
 
-def _goal_layers(
-    sampler: FamilySampler, q_start: FloatArray, points: FloatArray, say: Callable[[str], None]
-) -> list[Layer] | None:
-    """Per target, the lattice goal states that keep the clearance rule, as a layer taken
-    exact (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`); None where
-    they cannot be listed completely: a joint that does not move the tool point but moves the
-    arm (whose states are not listed), a joint that turns whole turns where a turn is not a
-    whole number of ticks, an unlimited sliding joint, or a budget spent."""
+def listing_ranges(
+    sampler: FamilySampler, q_start: FloatArray
+) -> tuple[IntArray, IntArray, IntArray] | None:
+    """The ranges :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states` lists a
+    target's states over: the start's lattice state (the joints that do not move the tool point
+    stay there) and the lowest and highest ticks of each joint in ``sampler.tip``. None where
+    the states cannot be listed completely: a joint that does not move the tool point but moves
+    the arm, a joint that turns whole turns where a turn is not a whole number of ticks, or an
+    unlimited sliding joint."""
     fam = sampler.fam
-    arm, world, grid = fam.arm, fam.world, fam.arm.lattice
+    arm, grid = fam.arm, fam.arm.lattice
     tip = sampler.tip
     probe = np.array([q_start, q_start + np.where(tip, 0.0, 1.0)])
     moved = landmark_positions(arm, probe)
@@ -248,7 +249,22 @@ def _goal_layers(
         lower + np.round(turn).astype(np.int64) - 1,
         np.floor(np.where(turns, 0.0, upper_limit) / tick + 1e-9).astype(np.int64),
     )
-    start = grid.nearest_ticks(q_start)
+    return grid.nearest_ticks(q_start), lower, upper
+
+
+def _goal_layers(
+    sampler: FamilySampler, q_start: FloatArray, points: FloatArray, say: Callable[[str], None]
+) -> list[Layer] | None:
+    """Per target, the lattice goal states that keep the clearance rule, as a layer taken
+    exact (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`); None where
+    they cannot be listed completely (:func:`listing_ranges`) or a budget is spent."""
+    ranges = listing_ranges(sampler, q_start)
+    if ranges is None:
+        return None
+    start, lower, upper = ranges
+    fam = sampler.fam
+    arm, world, grid = fam.arm, fam.world, fam.arm.lattice
+    tip = sampler.tip
 
     failed: list[int] = []
 
