@@ -207,7 +207,7 @@ def _box_gap(
     return gap
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def configurations_slacks(
     q: np.ndarray,
     columns: np.ndarray,
