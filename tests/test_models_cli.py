@@ -173,10 +173,12 @@ def test_cli_show_gives_home_and_limits_in_display_units(name, tmp_path):
         assert "-125 … 125 deg" in shown and "-138 … 138 deg" in shown
 
 
-@pytest.mark.parametrize("spec", ["", "."])
-def test_an_empty_model_or_a_folder_is_an_unknown_model(spec, tmp_path):
-    """--model "" was read as the robot file '.' that "does not exist"."""
+def test_an_empty_model_is_a_usage_error_and_a_folder_an_unknown_model(tmp_path):
+    """--model "" was read as the robot file '.' that "does not exist": now every option given
+    an empty value is a usage error; the folder '.' is no model."""
     from cli_in_process import run_in_process
 
-    r = run_in_process(["fk", "0", "0", "0", "0", "0", "0", "--model", spec], tmp_path)
-    assert r.returncode == 1 and r.stderr.startswith(f"error: unknown model {spec!r}: use one of")
+    r = run_in_process(["fk", "0", "0", "0", "0", "0", "0", "--model", ""], tmp_path)
+    assert r.returncode == 2 and r.stderr.startswith("error: --model was given an empty value")
+    r = run_in_process(["fk", "0", "0", "0", "0", "0", "0", "--model", "."], tmp_path)
+    assert r.returncode == 1 and r.stderr.startswith("error: unknown model '.': use one of")
