@@ -212,3 +212,45 @@ def test_a_searched_motion_does_not_turn_a_joint_round_to_a_copy_of_its_goal():
     assert np.abs(np.diff(states, axis=0)).max() <= arm.lattice.max_ticks.max()
     assert np.abs(states - start).max() < 1800  # ticks: no joint turned by half a turn
     assert plan.sequence.n_commands <= 30
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_fewest_through_states_is_the_shortest_path_over_the_states(seed):
+    """Against brute force over every choice of corners among a sequence's states: straight
+    motions between them in as many commands as their largest joint change, allowed where a
+    made-up edge test passes them (consecutive states always); with every pair askable, the
+    programme finds the optimum, and its motions go through the chosen states only."""
+    import itertools
+
+    from armpath.commands import CommandSequence
+    from armpath.planning.motion import fewest_through_states
+
+    grid = seed_arm().lattice
+    rng = np.random.default_rng(seed)
+    steps = rng.integers(-20, 21, size=(11, 6))
+    states = np.vstack([np.zeros(6, dtype=np.int64), np.cumsum(steps, axis=0)])
+    seq = CommandSequence.from_states(states, grid)
+    n = states.shape[0]
+    allowed = rng.random((n, n)) < 0.35
+    asked = []
+
+    def edges_clear(a, b):
+        i = int(np.flatnonzero((grid.nearest_ticks(a[0]) == states).all(axis=1))[0])
+        j = int(np.flatnonzero((grid.nearest_ticks(b[0]) == states).all(axis=1))[0])
+        asked.append((i, j))
+        return np.array([j == i + 1 or bool(allowed[i, j])])
+
+    best = np.inf
+    for inner in itertools.product([False, True], repeat=n - 2):
+        corners = [0, *[k + 1 for k, on in enumerate(inner) if on], n - 1]
+        pairs = list(itertools.pairwise(corners))
+        if all(j == i + 1 or allowed[i, j] for i, j in pairs):
+            best = min(best, sum(grid.commands_needed(states[j] - states[i]) for i, j in pairs))
+    found = fewest_through_states(seq, edges_clear, max_checks=10_000)
+    assert found.n_commands == best <= seq.n_commands
+    np.testing.assert_array_equal(found.states()[[0, -1]], states[[0, -1]])
+    kept = {tuple(s) for s in states}
+    corners = [s for s in found.states() if tuple(s) in kept]
+    assert len(corners) >= 2
+    # no straight motion is asked twice
+    assert len(asked) == len(set(asked))
