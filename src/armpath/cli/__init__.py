@@ -147,7 +147,8 @@ def main() -> None:
     is one ``error:`` line naming the command's --help, exit status 2."""
     empty = empty_option(sys.argv[1:])
     if empty is not None:
-        err_console.print(f"error: {empty} was given an empty value (see: armpath --help)")
+        message = f"error: {empty} was given an empty value (see: armpath --help)"
+        err_console.print(message, markup=False)
         sys.exit(2)
     try:
         rc = cli_command()(

@@ -190,7 +190,7 @@ def _check_choice(value: str, choices: Any, option: str) -> None:
 
 
 def _check_rate(value: float, option: str, largest: float, unit: str) -> None:
-    """A motion limit must be a finite number in ``(0, largest]``."""
+    """A motion limit (or the controller period) must be a finite number in ``(0, largest]``."""
     if not (math.isfinite(value) and 0 < value <= largest):
         raise InvalidInputError(
             f"{option} must be a number in (0, {largest:g}] {unit}, got {value}"
@@ -200,15 +200,6 @@ def _check_rate(value: float, option: str, largest: float, unit: str) -> None:
 def _check_seconds(value: float, option: str) -> None:
     if not (math.isfinite(value) and value > 0):
         raise InvalidInputError(f"{option} must be a positive number of seconds, got {value}")
-
-
-def _check_period(value: float) -> None:
-    """Refuse a controller period that is not a positive number of seconds up to
-    :data:`~armpath.budget.MAX_PERIOD_S`."""
-    if not (math.isfinite(value) and 0 < value <= MAX_PERIOD_S):
-        raise InvalidInputError(
-            f"--period must be a number of seconds in (0, {MAX_PERIOD_S:g}], got {value}"
-        )
 
 
 def _check_periods(duration_s: float, period_s: float, options: str) -> None:
@@ -377,7 +368,7 @@ def trajectory(
         _check_rate(max_acceleration, "--max-acceleration", MAX_ACCELERATION_DEG_S2, "deg/s^2")
         if max_jerk is not None:
             _check_rate(max_jerk, "--max-jerk", MAX_JERK_DEG_S3, "deg/s^3")
-        _check_period(period)
+        _check_rate(period, "--period", MAX_PERIOD_S, "s")
         W_deg, times = _read_waypoints(waypoints)
         W = np.radians(W_deg)
         allocated = times is None
@@ -564,7 +555,7 @@ def rcm(
 
     with _cli_errors(time_limit):
         _check_choice(kind, ORDERS, "--kind")
-        _check_period(period)
+        _check_rate(period, "--period", MAX_PERIOD_S, "s")
         _check_seconds(duration, "--duration")
         check_count(points, "--points", MAX_WAYPOINTS - 1, "points on the circle", least=3)
         if not (0.0 < cone <= 90.0):

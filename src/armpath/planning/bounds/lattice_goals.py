@@ -122,7 +122,16 @@ def lattice_goal_states(
     M = second_derivative_bounds(arm)[np.ix_(tip_index, tip_index)]
     reach_bound = np.ascontiguousarray(displacement_bounds(arm)[tip_index], dtype=np.float64)
     chain = compiled_chain(arm)[:5]
-    fixed = (tick, tip_index, q_fixed, np.asarray(target, dtype=np.float64), float(tolerance))
+    fixed = (
+        tick,
+        tip_index,
+        q_fixed,
+        np.asarray(target, dtype=np.float64),
+        float(tolerance),
+        np.ascontiguousarray(M),
+        reach_bound,
+        *chain,
+    )
 
     def run(
         lo: IntArray, hi: IntArray, coarse: int, boxes_left: int
@@ -141,9 +150,6 @@ def lattice_goal_states(
                 np.ascontiguousarray(lo, dtype=np.int64),
                 np.ascontiguousarray(hi, dtype=np.int64),
                 *fixed,
-                np.ascontiguousarray(M),
-                reach_bound,
-                *chain,
                 int(max(chunk, 0)),
                 int(max_states - kept),
                 int(coarse),
