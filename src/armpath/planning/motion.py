@@ -47,6 +47,7 @@ from armpath.model.serial_arm import SerialArm
 from armpath.planning.choices import Objective, objective_of
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.rrt import EdgeChecker, RrtOptions, rrt_connect, shortcut
+from armpath.planning.tighten import tightened
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -406,8 +407,11 @@ def merged_certified(
     each held off the surfaces by the search's edge test, so commands across them can often
     go. Costs about 5 ms a check (at most :data:`CERTIFIED_MERGE_CHECKS`): the UR5 cell's
     welds 118 -> 115 commands, the seed's Task 3 127 -> 126 (its first leg 70 -> 69, a direct
-    motion's count). ``energy_weights``: what the merged plan's energy is weighted by (as the
-    plan's own)."""
+    motion's count). Then the fewest commands through the merged states
+    (:func:`fewest_through_states`), and last the states themselves moved where fewer
+    commands between the same ends are certified (:func:`~armpath.planning.tighten.tightened`,
+    a few seconds at most: the UR5 cell's welds 115 -> 112). ``energy_weights``: what the
+    merged plan's energy is weighted by (as the plan's own)."""
     seq = plan.sequence
     if seq.n_commands < 2:
         return plan
@@ -415,6 +419,12 @@ def merged_certified(
     certified = certified_edges(arm, world, grid)
     merged = merge_commands(seq, certified, CERTIFIED_MERGE_CHECKS, CERTIFIED_MERGE_BATCH)
     merged = fewest_through_states(merged, certified, CERTIFIED_FEWEST_CHECKS)
+    method = plan.method + " + certified merge"
+    if merged.n_commands >= seq.n_commands:
+        merged, method = seq, plan.method
+    placed = tightened(arm, world, merged)
+    if placed.n_commands < merged.n_commands:
+        merged, method = placed, method + " + states placed"
     if merged.n_commands >= seq.n_commands:
         return plan
     mc = motion_clearance(arm, world, merged)
@@ -425,7 +435,7 @@ def merged_certified(
         sequence=merged,
         clearance=mc,
         metrics=plan_metrics(arm, merged, energy_weights),
-        method=plan.method + " + certified merge",
+        method=method,
     )
 
 
