@@ -257,8 +257,10 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     # (77 + 14 + 18 + 10); through the lattice goal states nearest the guide's members as
     # well as the most accurate ones (tour.GUIDED_NEAREST): 118 (77 + 16 + 16 + 9); the kept
     # legs merged where certified straight motions need fewer commands: 115 (77 + 15 + 15 + 8);
-    # the limit leaves the first machine room
-    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 124
+    # the legs' states placed for fewer commands (armpath.planning.tighten): 112 (75 + 9 + 20
+    # + 8), 4.7 % above the bound of 107; the limit leaves a machine whose arithmetic picks
+    # other goal states some room
+    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 118
     # issue 21: every weld's lattice goal states listed (clearance looked at in boxes 32, 16
     # and 8 ticks wide), the bound over them 107 (87 from the family's samples, where the
     # listing ran out of its budget)
