@@ -14,8 +14,8 @@ to ``K`` commands, penalises every pair's slack below :data:`BUFFER` (length uni
 under its largest step with a weight raised in :data:`STEP_WEIGHTS`, the joints kept within
 their limits. The states are then rounded to the lattice and the motion is kept only if its
 continuous motion is certified (:func:`~armpath.planning.motion_check.motion_clearance`),
-like every other. The counts tried are ``N - 1`` first, then a bisection between the
-direct count and the fewest found, at most :data:`MAX_TRIES` counts in all.
+like every other. The counts tried are ``N - 1`` first, then the direct count, then a
+bisection between the two, at most :data:`MAX_TRIES` counts in all.
 
 On the UR5 cell's spot welds the three searched legs between the welds go from 10, 21 and 9
 commands to 9, 20 and 8.
@@ -45,9 +45,9 @@ SAMPLES_PER_COMMAND = 7
 STEP_WEIGHTS = (0.1, 1.0, 10.0, 100.0, 1000.0)
 #: Iterations of each solve (L-BFGS-B).
 ITERATIONS = 100
-#: Counts tried for one motion (one fewer than its own, then a bisection down to its direct
-#: count).
-MAX_TRIES = 4
+#: Counts tried for one motion (one fewer than its own, its direct count, then a bisection
+#: between).
+MAX_TRIES = 5
 #: Longest motion (commands) whose states are placed: the solve's unknowns grow with it.
 MAX_COMMANDS = 60
 #: How far under its largest step (ticks) a joint's change is aimed, so rounding to the lattice
@@ -162,7 +162,7 @@ def tightened(arm: SerialArm, world: CollisionWorld, sequence: CommandSequence) 
     found (see the module's description), else ``sequence`` itself.
 
     Tries at most :data:`MAX_TRIES` counts between the direct count and the sequence's own
-    (one fewer first, then halving), for
+    (one fewer first, then the direct count, then halving), for
     sequences of at most :data:`MAX_COMMANDS` commands; each try is bounded (its solves'
     iterations, one certification) and hears the time limit."""
     n_commands = sequence.n_commands
@@ -183,8 +183,8 @@ def tightened(arm: SerialArm, world: CollisionWorld, sequence: CommandSequence) 
     for attempt in range(MAX_TRIES):
         if low >= high:
             break
-        # one fewer first (the likeliest), then halving what is left
-        k = high - 1 if attempt == 0 else (low + high) // 2
+        # one fewer first (the likeliest), then the direct count, then halving what is left
+        k = high - 1 if attempt == 0 else low if attempt == 1 else (low + high) // 2
         found = _try_count(arm, world, best.states().astype(np.float64), k, bounds)
         if found is None:
             low = k + 1
