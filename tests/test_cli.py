@@ -285,3 +285,21 @@ def test_plan_to_an_unreachable_point_names_the_nearest_for_any_arm():
         for _ in range(40)
     )
     assert float(found.group(2)) == pytest.approx(best, abs=0.01)
+
+
+def test_a_proven_bound_the_plan_meets_is_reported_as_the_fewest():
+    """Summary and report say a plan that meets its proven bound has the fewest commands, and
+    give the gap otherwise; an estimate is never called the fewest."""
+    from armpath.cli.tasks import _bound_text
+    from armpath.report import _bound_words
+
+    met = {"commands": 107, "gap_commands": 0, "gap_percent": 0.0, "proven": True,
+           "sampling": {"lattice_goal_states": 9238.0}}  # fmt: skip
+    above = {**met, "gap_commands": 5, "gap_percent": 4.67}
+    guess = {**met, "proven": False}
+    assert "the plan meets it: the fewest commands" in _bound_text(met, "every order")
+    assert "plan 5 above it (4.7 %)" in _bound_text(above, "every order")
+    assert "fewest" not in _bound_text(guess, "every order")
+    assert "the fewest commands" in _bound_words({"lower_bound": met})
+    assert "plan 5 above it" in _bound_words({"lower_bound": above})
+    assert "fewest" not in _bound_words({"lower_bound": guess})

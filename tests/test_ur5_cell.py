@@ -258,9 +258,10 @@ def test_spot_welds_on_the_outer_face(tmp_path):
     # well as the most accurate ones (tour.GUIDED_NEAREST): 118 (77 + 16 + 16 + 9); the kept
     # legs merged where certified straight motions need fewer commands: 115 (77 + 15 + 15 + 8);
     # the legs' states placed for fewer commands (armpath.planning.tighten): 112 (75 + 9 + 20
-    # + 8), 4.7 % above the bound of 107; the limit leaves a machine whose arithmetic picks
-    # other goal states some room
-    assert doc["lower_bound_commands"] <= doc["n_commands"] <= 118
+    # + 8); the legs through pools of goal states placed so too: 107 (order 1-2-3-4, legs 76 +
+    # 13 + 12 + 6, each its direct count), the bound itself. Issue 21 asks for 5 %
+    assert doc["lower_bound_commands"] <= doc["n_commands"]
+    assert doc["n_commands"] <= 1.05 * doc["lower_bound_commands"]
     # issue 21: every weld's lattice goal states listed (clearance looked at in boxes 32, 16
     # and 8 ticks wide), the bound over them 107 (87 from the family's samples, where the
     # listing ran out of its budget)

@@ -119,9 +119,11 @@ def _bound_words(doc: dict[str, Any]) -> str:
     b = doc.get("lower_bound")
     if b is None:
         return "no lower bound computed"
-    words = (
-        f"lower bound {b['commands']} commands over {bound_scope(b)} "
-        f"(plan {b['gap_commands']} above it)"
+    meets = b["gap_commands"] == 0 and proven(doc)
+    words = f"lower bound {b['commands']} commands over {bound_scope(b)} " + (
+        "(the plan meets it: the fewest commands)"
+        if meets
+        else f"(plan {b['gap_commands']} above it)"
     )
     return words if proven(doc) else f"{words}; {UNPROVEN}"
 

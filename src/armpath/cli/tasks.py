@@ -578,6 +578,11 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
             f"~{bound['commands']} commands ({UNPROVEN}; {scope}); "
             f"plan {bound['gap_commands']} above it ({gap})"
         )
+    if bound["gap_commands"] == 0:  # a proven bound the plan meets: no plan has fewer
+        return (
+            f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
+            "the plan meets it: the fewest commands"
+        )
     return (
         f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
         f"plan {bound['gap_commands']} above it ({gap})"
