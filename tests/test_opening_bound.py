@@ -180,8 +180,8 @@ def test_every_order_of_task_3_is_bounded_below_its_plan_through_the_opening():
     any_order = bounds.tour_bound_any_order(fam, start, welds, 0.05)
     assert any_order.commands <= b.commands
     assert "opening" in any_order.method
-    # the plan of Task 3 (122 commands, tests/test_spotweld.py replays it) is never below
-    assert b.commands <= 122 and min(per.values()) == b.commands
+    # the plan of Task 3 (121 commands, tests/test_spotweld.py replays it) is never below
+    assert b.commands <= 121 and min(per.values()) == b.commands
 
 
 @pytest.mark.slow

@@ -11,9 +11,10 @@
   than there are; with the median surcharge it finds a tour no cheaper than that, whose legs
   chain;
 * the pools' members at the seed's welds keep the goal states' rule: independent forward
-  kinematics puts the fingertip on the weld, independent distances keep every link 1 mm + 1.5
-  mm from the workpiece and the floor (the tool's own link 1 mm from the wall it touches);
-* (tests/test_spotweld.py) the seed's Task 3 through them: at most 125 commands (122 measured),
+  kinematics puts the fingertip on the weld, independent distances keep every link 1 mm + 0.5
+  mm (the pools' room, ``POOL_BODY_BUFFER_MM``) from the workpiece and the floor (the tool's
+  own link 1 mm from the wall it touches);
+* (tests/test_spotweld.py) the seed's Task 3 through them: at most 125 commands (121 measured),
   replayed independently.
 """
 
@@ -214,10 +215,11 @@ def test_pool_members_keep_the_goal_states_rule(seed_pools):
         de = np.zeros(samples.shape[1], dtype=bool)
         de[-(int(np.ceil(independent.DE)) + 1) :] = True  # DE's samples come last (1 mm apart)
         body = ~is_tip
-        # every link 1 mm + 1.5 mm from the floor; from the workpiece too, but the tool (DE),
+        # every link 1 mm + 0.5 mm from the floor; from the workpiece too, but the tool (DE),
         # which touches the wall at its tip, 1 mm; the tip itself outside both
-        assert to_floor[body].min() >= 2.5 - 1e-6
-        assert to_wp[body & ~de[None, :]].min() >= 2.5 - 1e-6
+        assert tour_pool.POOL_BODY_BUFFER_MM == 0.5
+        assert to_floor[body].min() >= 1.5 - 1e-6
+        assert to_wp[body & ~de[None, :]].min() >= 1.5 - 1e-6
         assert to_wp[body & de[None, :]].min() >= 1.0 - 1e-6
         assert min(to_wp[is_tip].min(), to_floor[is_tip].min()) >= -1e-9
 

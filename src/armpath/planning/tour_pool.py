@@ -8,7 +8,7 @@ many goal states per target stay open until the legs between them are known:
 1. The family at every target is sampled finer next to the obstacles (the triangles of tool
    directions about members that may be clear split :data:`POOL_LEVELS` times); the members
    that may be goal states are kept (links keep the margin plus
-   :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`pool_guide`; at most
+   :data:`POOL_BODY_BUFFER_MM`: :func:`pool_guide`; at most
    :data:`MAX_POOL_LAYER` per target).
 2. For each visiting order, the shortest path from the start through one member per target
    (whole commands per leg, obstacles between the targets ignored) is found forwards (by prefix,
@@ -63,7 +63,6 @@ from armpath.ik.target import ToolTarget
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion, whole_turn_ticks
 from armpath.planning.passages import passage_source
-from armpath.planning.reach import GOAL_BODY_BUFFER_MM
 from armpath.planning.reach_generic import generic_goal_states, goal_links_rule
 from armpath.planning.tour_guide import TourGuide
 from armpath.planning.trace.family import CurveFamily
@@ -74,6 +73,12 @@ BoolArray = NDArray[np.bool_]
 
 #: Times the tool directions about members that may be clear are split at each target.
 POOL_LEVELS = 2
+#: Room (length unit) the links of a pool's members and goal states keep beyond the margin.
+#: Less than a single goal's (:data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`, 1.5): the
+#: searched legs between them have their states placed (:mod:`~armpath.planning.tighten`), so
+#: goal states nearer the obstacles, and nearer each other, pay. The seed's Task 3: 122
+#: commands with 1.5, 121 with 0.5 or 0.2; the UR5 cell's welds 107 with either.
+POOL_BODY_BUFFER_MM = 0.5
 #: Most members kept at a target for the paths through them (evenly over those that may be goal
 #: states; the seed's Task 3 has 3,800-19,000).
 MAX_POOL_LAYER = 25_000
@@ -110,12 +115,12 @@ def pool_guide(
     fam: CurveFamily, targets: FloatArray, tolerance_mm: float, q_start: FloatArray
 ) -> TourGuide:
     """The members of the family at each target that may be goal states (links keep the margin
-    plus :data:`~armpath.planning.reach.GOAL_BODY_BUFFER_MM`: :func:`goal_links_rule`),
+    plus :data:`POOL_BODY_BUFFER_MM`: :func:`goal_links_rule`),
     sampled finer next to the obstacles (:data:`POOL_LEVELS`)."""
     guide = TourGuide.build(fam, targets, tolerance_mm, 0.0, q_start, levels=POOL_LEVELS)
     keep = []
     for p, lay in zip(targets, guide.layers, strict=True):
-        goal_clear = goal_links_rule(guide.arm, guide.world, p, GOAL_BODY_BUFFER_MM)
+        goal_clear = goal_links_rule(guide.arm, guide.world, p, POOL_BODY_BUFFER_MM)
         ok = goal_clear(guide.with_start(lay.q, q_start), tolerance_mm)
         index = np.flatnonzero(ok)
         if index.size > MAX_POOL_LAYER:  # evenly over them: the paths' time and memory bounded
@@ -199,7 +204,7 @@ class _Pool:
                     ToolTarget(guide.targets[self.target], None),
                     guide.tolerance_mm,
                     1,
-                    body_buffer=GOAL_BODY_BUFFER_MM,
+                    body_buffer=POOL_BODY_BUFFER_MM,
                     samples=self.q[i][None, :],
                     nearest_member=True,
                 )[0]
