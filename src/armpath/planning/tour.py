@@ -474,20 +474,6 @@ def plan_tour(
                 best = (total, pooled.legs, pooled.order)
                 reached = pooled.legs[: len(pooled.order)]
                 count_guided(pooled.order, [leg.sequence.final_ticks[None, :] for leg in reached])
-    for o in ranking[tried : tried + LISTED_ORDERS]:
-        if o in planned:  # planned through the goal states chosen together
-            continue
-        why = (
-            f"not planned: the {orders_to_plan} best-ranked order(s) and the one whose "
-            "guided path is shortest are planned, then those "
-            f"whose bound is below the best plan (at most {EXTRA_ORDERS} more) and the "
-            f"{GUIDED_ORDERS} whose guided paths are shortest at each room kept"
-        )
-        if best is not None and bounds[o] >= best[0]:
-            why += f"; its bound {bounds[o]} cannot beat the {best[0]} commands planned"
-        elif best is not None:
-            why += f"; its bound {bounds[o]} is below the {best[0]} commands planned"
-        not_planned[o] = why
     if best is None:
         raise PlanningError("no order could be planned: " + "; ".join(failures))
     if best[0] > SECOND_LOOK_RATIO * bounds[best[2]] and opts.searches < SECOND_LOOK_SEARCHES:
@@ -504,10 +490,27 @@ def plan_tour(
                 count_guided(o, through)
     _, legs, chosen = best
     if opts.objective is Objective.COMMANDS:
-        # the kept legs only: each certified merge costs about a quarter second
+        # the kept legs only: a certified merge costs about a quarter second, placing a
+        # leg's states up to a few seconds
         say("merging the legs' commands where a certified straight motion needs fewer")
         legs = [merged_certified(arm, world, leg, opts.energy_weights) for leg in legs]
         planned[chosen] = _commands(legs)
+    # the orders not planned, each with why (against the tour kept, its legs merged)
+    final = _commands(legs)
+    for o in ranking[tried : tried + LISTED_ORDERS]:
+        if o in planned:  # planned through the goal states chosen together
+            continue
+        why = (
+            f"not planned: the {orders_to_plan} best-ranked order(s) and the one whose "
+            "guided path is shortest are planned, then those "
+            f"whose bound is below the best plan (at most {EXTRA_ORDERS} more) and the "
+            f"{GUIDED_ORDERS} whose guided paths are shortest at each room kept"
+        )
+        if bounds[o] >= final:
+            why += f"; its bound {bounds[o]} cannot beat the {final} commands planned"
+        else:
+            why += f"; its bound {bounds[o]} is below the {final} commands planned"
+        not_planned[o] = why
     commands = np.vstack([leg.sequence.commands for leg in legs])
     sequence = CommandSequence(start, commands, arm.lattice)
     visits = []
