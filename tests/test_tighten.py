@@ -96,3 +96,15 @@ def test_what_is_not_tried_is_given_back_unchanged():
     long = _through(wander)
     assert long.n_commands > MAX_COMMANDS
     assert tightened(ARM, world, long) is long
+
+
+def test_the_work_budget_ends_the_placement(monkeypatch):
+    """With room for one evaluation of the objective only, the free-space detour above comes
+    back as given: the budget, not the optimiser, ends the call."""
+    import armpath.planning.tighten as tighten
+
+    world = CollisionWorld(())
+    seq = _through([[10, -60, 20, 0, -80, 0], [18, -55, 30, 0, -80, 0], [26, -50, 10, 5, -70, 0]])
+    per_evaluation = (seq.n_commands - 1) * tighten.SAMPLES_PER_COMMAND * (ARM.n_joints + 1)
+    monkeypatch.setattr(tighten, "MAX_CONFIGURATIONS", per_evaluation + 1)
+    assert tightened(ARM, world, seq) is seq

@@ -50,6 +50,12 @@ ITERATIONS = 100
 MAX_TRIES = 5
 #: Longest motion (commands) whose states are placed: the solve's unknowns grow with it.
 MAX_COMMANDS = 60
+#: Configurations whose pair clearances one call may measure, all tries together (each
+#: evaluation of the objective measures 7 per instant: the instant and one step per joint).
+#: The UR5 cell's 10-command leg between welds takes about 540,000 for its three tries (6 s);
+#: a 60-command leg of a UR5 would take about 3,000 an evaluation, so this stops it after
+#: about 15 s.
+MAX_CONFIGURATIONS = 2_000_000
 #: How far under its largest step (ticks) a joint's change is aimed, so rounding to the lattice
 #: keeps it within the step.
 _STEP_MARGIN_TICKS = 0.75
@@ -57,13 +63,35 @@ _STEP_MARGIN_TICKS = 0.75
 _GRADIENT_TICKS = 0.5
 
 
+class _OutOfWorkError(Exception):
+    """The call's :data:`MAX_CONFIGURATIONS` are measured."""
+
+
+class _Work:
+    """Configurations left to measure in one call of :func:`tightened`."""
+
+    def __init__(self) -> None:
+        self.left = MAX_CONFIGURATIONS
+
+    def spend(self, configurations: int) -> None:
+        if configurations > self.left:
+            raise _OutOfWorkError
+        self.left -= configurations
+
+
 class _Placement:
     """The smooth problem of placing ``k - 1`` states between fixed ends ``a`` and ``b``."""
 
     def __init__(
-        self, arm: SerialArm, world: CollisionWorld, a: FloatArray, b: FloatArray, k: int
+        self,
+        arm: SerialArm,
+        world: CollisionWorld,
+        a: FloatArray,
+        b: FloatArray,
+        k: int,
+        work: _Work,
     ) -> None:
-        self.arm, self.world = arm, world
+        self.arm, self.world, self.work = arm, world, work
         self.grid = arm.lattice
         self.a, self.b, self.k = a, b, k
         self.required = world.required(arm)
@@ -85,6 +113,7 @@ class _Placement:
         n = self.a.size
         t = self.t[None, :, None]
         inst = (x[:-1, None, :] * (1.0 - t) + x[1:, None, :] * t).reshape(-1, n)
+        self.work.spend(inst.shape[0] * (n + 1))
         base = self._penalty(inst)
         value = float(base.sum())
         grad_inst = np.empty_like(inst)
@@ -135,8 +164,9 @@ def _try_count(
     states: FloatArray,
     k: int,
     bounds: list[tuple[float | None, float | None]],
+    work: _Work,
 ) -> CommandSequence | None:
-    problem = _Placement(arm, world, states[0], states[-1], k)
+    problem = _Placement(arm, world, states[0], states[-1], k, work)
     z = _resampled(states, k)[1:-1].ravel()
     start = np.round(states[0]).astype(np.int64)
     for weight in STEP_WEIGHTS:
@@ -162,9 +192,10 @@ def tightened(arm: SerialArm, world: CollisionWorld, sequence: CommandSequence) 
     found (see the module's description), else ``sequence`` itself.
 
     Tries at most :data:`MAX_TRIES` counts between the direct count and the sequence's own
-    (one fewer first, then the direct count, then halving), for
-    sequences of at most :data:`MAX_COMMANDS` commands; each try is bounded (its solves'
-    iterations, one certification) and hears the time limit."""
+    (one fewer first, then the direct count, then halving), for sequences of at most
+    :data:`MAX_COMMANDS` commands, measuring at most :data:`MAX_CONFIGURATIONS` configurations
+    in all (the fewest found by then is kept); each try is bounded (its solves' iterations,
+    one certification) and hears the time limit."""
     n_commands = sequence.n_commands
     grid = sequence.grid
     floor = int(grid.commands_needed(sequence.final_ticks - sequence.start_ticks))
@@ -180,12 +211,16 @@ def tightened(arm: SerialArm, world: CollisionWorld, sequence: CommandSequence) 
     ]
     best = sequence
     low, high = floor, n_commands  # high: the fewest known to work
+    work = _Work()
     for attempt in range(MAX_TRIES):
         if low >= high:
             break
         # one fewer first (the likeliest), then the direct count, then halving what is left
         k = high - 1 if attempt == 0 else low if attempt == 1 else (low + high) // 2
-        found = _try_count(arm, world, best.states().astype(np.float64), k, bounds)
+        try:
+            found = _try_count(arm, world, best.states().astype(np.float64), k, bounds, work)
+        except _OutOfWorkError:
+            break
         if found is None:
             low = k + 1
         else:
