@@ -198,3 +198,28 @@ def test_unique_states_equals_numpy_unique_rows(rows, cols, low, high):
     np.testing.assert_array_equal(unique_states(a), want[0])
     np.testing.assert_array_equal(unique_states(a, return_inverse=True)[1], want[2].reshape(-1))
     assert np.array_equal(want[0][want[2].reshape(-1)], a)
+
+
+def test_joint_limits_in_whole_ticks():
+    """The seed arm's limits (deg, from the spec) and the UR5's +-360 deg in ticks of 0.1 deg;
+    unlimited joints stay infinite. A joint whose limit lies a hair inside a tick keeps that
+    tick (the limit read in a unit whose division by the tick is not exact)."""
+    from armpath.api import load_arm
+
+    low, high = load_arm("seed").limits_in_ticks()
+    np.testing.assert_array_equal(high, [np.inf, 1250, 1380, np.inf, 1335, np.inf])
+    np.testing.assert_array_equal(low, -high)
+    low, high = load_arm("ur5").limits_in_ticks()
+    np.testing.assert_array_equal(low, np.full(6, -3600.0))
+    np.testing.assert_array_equal(high, np.full(6, 3600.0))
+    # a limit 1e-12 rad inside 130 deg still reaches tick 1300; one a tenth of a tick inside
+    # does not
+    from dataclasses import replace
+
+    tick = float(load_arm("seed").lattice.tick[1])
+    for inside, ticks in ((1e-12, 1300.0), (0.1 * tick, 1299.0)):
+        seed = load_arm("seed")
+        joints = list(seed.joints)
+        joints[1] = replace(joints[1], limits=(-(1300 * tick - inside), 1300 * tick - inside))
+        low, high = replace(seed, joints=tuple(joints)).limits_in_ticks()
+        assert (low[1], high[1]) == (-ticks, ticks)

@@ -98,6 +98,8 @@ def bound_scope(bound: dict[str, Any]) -> str:
 
 #: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).
 UNPROVEN = "estimate, not proven: the arm's self-motion is not sampled"
+#: What a plan that meets its proven bound is said to have.
+MEETS_BOUND = "the plan meets it: the fewest commands"
 
 
 def proven(doc: dict[str, Any]) -> bool:
@@ -121,9 +123,7 @@ def _bound_words(doc: dict[str, Any]) -> str:
         return "no lower bound computed"
     meets = b["gap_commands"] == 0 and proven(doc)
     words = f"lower bound {b['commands']} commands over {bound_scope(b)} " + (
-        "(the plan meets it: the fewest commands)"
-        if meets
-        else f"(plan {b['gap_commands']} above it)"
+        f"({MEETS_BOUND})" if meets else f"(plan {b['gap_commands']} above it)"
     )
     return words if proven(doc) else f"{words}; {UNPROVEN}"
 

@@ -568,7 +568,7 @@ def plan(
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
-    from armpath.report import UNPROVEN, bound_scope
+    from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope
 
     if bound is None:
         return missing
@@ -579,10 +579,7 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
             f"plan {bound['gap_commands']} above it ({gap})"
         )
     if bound["gap_commands"] == 0:  # a proven bound the plan meets: no plan has fewer
-        return (
-            f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
-            "the plan meets it: the fewest commands"
-        )
+        return f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); {MEETS_BOUND}"
     return (
         f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
         f"plan {bound['gap_commands']} above it ({gap})"

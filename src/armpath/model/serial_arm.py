@@ -440,6 +440,16 @@ class SerialArm:
         """Upper joint limits (rad / length unit), ``inf`` where unlimited."""
         return np.array([j.limits[1] for j in self.joints])
 
+    def limits_in_ticks(self) -> tuple[FloatArray, FloatArray]:
+        """Per joint, the lowest and highest lattice value within its limits (ticks, whole
+        numbers; ``-inf`` / ``inf`` on an unlimited side). A limit within 1e-9 of a tick is
+        that tick."""
+        tick = np.asarray(self.lattice.tick, dtype=np.float64)
+        lower, upper = self.lower, self.upper
+        low = np.where(np.isfinite(lower), np.ceil(lower / tick - 1e-9), -np.inf)
+        high = np.where(np.isfinite(upper), np.floor(upper / tick + 1e-9), np.inf)
+        return low, high
+
     @property
     def landmark_names(self) -> tuple[str, ...]:
         return tuple(lm.name for lm in self.landmarks)

@@ -142,19 +142,16 @@ def _resampled(states: FloatArray, k: int) -> FloatArray:
     return np.column_stack([np.interp(want, at, col) for col in states.T])
 
 
-def _lattice_motion(
-    arm: SerialArm, world: CollisionWorld, x: FloatArray, start: IntArray
-) -> CommandSequence | None:
-    """The states ``x`` rounded to the lattice, as a sequence, if every command is within its
-    step and the continuous motion is certified (the joint limits hold: ``x`` is within them
-    and they are whole ticks)."""
+def _lattice_motion(arm: SerialArm, world: CollisionWorld, x: FloatArray) -> CommandSequence | None:
+    """The states ``x`` (its ends lattice states) rounded to the lattice, as a sequence, if
+    every command is within its step and the continuous motion is certified (the joint limits
+    hold: ``x`` is within them and they are whole ticks)."""
     grid = arm.lattice
     ticks = np.round(x).astype(np.int64)
-    ticks[0] = start
     steps = np.diff(ticks, axis=0)
     if np.any(np.abs(steps) > grid.max_ticks):
         return None
-    seq = CommandSequence(start, steps, grid)
+    seq = CommandSequence(ticks[0], steps, grid)
     return seq if motion_clearance(arm, world, seq).certified_ok else None
 
 
@@ -168,7 +165,6 @@ def _try_count(
 ) -> CommandSequence | None:
     problem = _Placement(arm, world, states[0], states[-1], k, work)
     z = _resampled(states, k)[1:-1].ravel()
-    start = np.round(states[0]).astype(np.int64)
     for weight in STEP_WEIGHTS:
         res = minimize(
             problem.value_and_gradient,
@@ -181,7 +177,7 @@ def _try_count(
         )
         z = res.x
         if weight >= 10.0:
-            seq = _lattice_motion(arm, world, problem.states(z), start)
+            seq = _lattice_motion(arm, world, problem.states(z))
             if seq is not None:
                 return seq
     return None
@@ -201,10 +197,7 @@ def tightened(arm: SerialArm, world: CollisionWorld, sequence: CommandSequence) 
     floor = int(grid.commands_needed(sequence.final_ticks - sequence.start_ticks))
     if n_commands <= floor or n_commands > MAX_COMMANDS:
         return sequence
-    lo_rad = np.array([j.limits[0] for j in arm.joints])
-    hi_rad = np.array([j.limits[1] for j in arm.joints])
-    lo_t = np.where(np.isfinite(lo_rad), np.ceil(grid.to_ticks_float(lo_rad)), -np.inf)
-    hi_t = np.where(np.isfinite(hi_rad), np.floor(grid.to_ticks_float(hi_rad)), np.inf)
+    lo_t, hi_t = arm.limits_in_ticks()
     bounds = [
         (None if not np.isfinite(lo) else float(lo), None if not np.isfinite(hi) else float(hi))
         for lo, hi in zip(lo_t, hi_t, strict=True)

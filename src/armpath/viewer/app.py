@@ -230,14 +230,14 @@ class ArmViewer:
         grid = self.arm.lattice
         units = list(grid.units)
         steps = self._steps
+        limits = self.arm.limits_in_ticks()
         shown = ", ".join(sorted({f"{t:.10g} {u}" for t, u in zip(steps, units, strict=True)}))
         with gui.add_folder(f"Joints (steps of one tick: {shown})"):
             self.sliders = []
             for i, joint in enumerate(self.arm.joints):
                 prismatic = joint.kind is JointKind.PRISMATIC
                 if joint.is_limited:
-                    lo_t = np.ceil(joint.limits[0] / grid.tick[i] - 1e-9)
-                    hi_t = np.floor(joint.limits[1] / grid.tick[i] + 1e-9)
+                    lo_t, hi_t = limits[0][i], limits[1][i]
                 else:
                     span = 1000.0 if prismatic else 180.0
                     lo_t, hi_t = np.ceil(-span / steps[i]), np.floor(span / steps[i])
