@@ -14,6 +14,7 @@ from scipy.optimize import minimize
 import independent_dh as idh
 from armpath.geometry import CollisionWorld
 from armpath.ik.target import AxisCone
+from armpath.kinematics import tool_position
 from armpath.model.catalog import resolve_model
 from armpath.planning.reach import ReachOptions, plan_reach
 from armpath.planning.trace import TraceOptions, plan_trace
@@ -252,6 +253,35 @@ def test_the_tool_approach_axis_belongs_to_the_tool():
     T = pose("ur5", arm.lattice.to_joint(r.sequence.final_ticks))
     assert np.linalg.norm(T[:3, 3] - target) <= 0.05
     assert np.degrees(np.arccos(np.clip(T[:3, 0] @ [0, 0, -1], -1, 1))) <= 5.0 + 1e-6
+
+
+def test_naming_the_scenes_own_model_keeps_its_whole_arm():
+    """``--model ur5`` on a scene whose ``[arm]`` is a UR5 keeps that arm's tool, home, radii
+    and lattice; another model keeps only where the scene stands it. The tool point is checked
+    on the textbook D-H product: the flange 120 mm further along its z axis."""
+    from armpath.scenes.arm import scene_arm
+
+    spec = {
+        "model": "ur5",
+        "base": {"position_mm": [-150, 0, 250], "rotation_deg": [0, 0, 0]},
+        "tool": {"position_mm": [0, 0, 120], "radius_mm": 3},
+        "home_deg": [0, -90, 90, -90, -90, 0],
+        "tick": 0.05,
+    }
+    scene = scene_from_dict({"name": "cell", "arm": spec})
+    own, named = scene_arm(scene), scene_arm(scene, "ur5")
+    q = np.radians([10.0, -80.0, 70.0, -60.0, -90.0, 30.0])
+    flange = pose("ur5", q)
+    want = flange[:3, 3] + 120.0 * flange[:3, 2] + [-150.0, 0.0, 250.0]
+    for arm in (own, named):
+        assert np.abs(tool_position(arm, q) - want).max() <= 1e-9
+        assert np.allclose(np.degrees(arm.home), spec["home_deg"])
+        assert np.allclose(np.degrees(arm.lattice.tick), 0.05)
+    other = scene_arm(scene, "puma560")  # another model: only the base is kept
+    assert np.allclose(np.degrees(other.lattice.tick), 0.1)
+    assert not np.allclose(
+        tool_position(other, np.zeros(6)), tool_position(resolve_model("puma560"), np.zeros(6))
+    )
 
 
 def test_a_wrist_centre_tool_point_names_the_error_the_lattice_allows():

@@ -5,6 +5,7 @@ arm stands in the cell (``base``), the tool centre point (``tool``, a transform 
 flange), the home pose, link radii and the command lattice. Without ``[arm]`` the seed arm works
 in the scene. A model chosen on the command line (``--model``) replaces the scene's model and
 keeps only where the scene puts it (``base``): the rest of ``[arm]`` belongs to its own model.
+Naming the scene's own model keeps the whole ``[arm]``.
 """
 
 from __future__ import annotations
@@ -84,9 +85,12 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
 
 def scene_arm(scene: Scene, model: str | None = None, tip_link: str | None = None) -> SerialArm:
     """The arm that works in ``scene``: its ``[arm]``, or the seed arm if it has none; ``model``
-    (a built-in name or robot file) replaces the scene's model and keeps only its ``base``;
-    ``tip_link`` chooses a URDF's tool link."""
+    (a built-in name or robot file) replaces the scene's model and keeps only its ``base``,
+    unless it names the scene's own model, which keeps the whole ``[arm]`` (its tool, home,
+    radii and lattice); ``tip_link`` chooses a URDF's tool link."""
     spec = scene.arm_spec
+    if spec is not None and model == spec.model:
+        model = None  # the scene's own arm, written out: keep all of [arm]
     try:
         if model is None:
             base = spec or ArmSpec()
