@@ -484,6 +484,28 @@ def test_the_loop_relaxation_equals_brute_force():
         assert narrowed.solve(metric, layers, app).total == pytest.approx(best, abs=1e-9)
 
 
+def _brute_tours(layers, app, back, period):
+    """Every order and every choice of one sample per site: the least total, each order's
+    least, and per site and sample the least total through it (legs whole commands)."""
+    import itertools
+
+    best, per_order = np.inf, {}
+    through = [np.full(lay.size, np.inf) for lay in layers]
+    for o in itertools.permutations(range(len(layers))):
+        for pick in itertools.product(*[range(layers[t].size) for t in o]):
+            total = app[o[0]][pick[0]]
+            for (s, i), (t, j) in itertools.pairwise(zip(o, pick, strict=True)):
+                a, b = layers[s], layers[t]
+                total += np.ceil(_box_distance(a.u[i], a.err[i], b.u[j], b.err[j], period) - 1e-9)
+            if back:
+                total += app[o[-1]][pick[-1]]
+            best = min(best, total)
+            per_order[o] = min(per_order.get(o, np.inf), total)
+            for t, i in zip(o, pick, strict=True):
+                through[t][i] = min(through[t][i], total)
+    return best, per_order, through
+
+
 def test_the_orders_relaxation_equals_brute_force():
     """The tour bound's programme over orders (legs whole commands, back to the start or not)
     against every order and every choice of samples."""
@@ -501,22 +523,7 @@ def test_the_orders_relaxation_equals_brute_force():
         layers = _random_layers(rng, [3, 2, 4, 3])
         app = [np.ceil(rng.uniform(0, 30, lay.size)) for lay in layers]
         found = Orders(all_orders(4), back).solve(metric, layers, app)
-        best, per_order = np.inf, {}
-        through = [np.full(lay.size, np.inf) for lay in layers]
-        for o in all_orders(4):
-            for pick in itertools.product(*[range(layers[t].size) for t in o]):
-                total = app[o[0]][pick[0]]
-                for (s, i), (t, j) in itertools.pairwise(zip(o, pick, strict=True)):
-                    a, b = layers[s], layers[t]
-                    total += np.ceil(
-                        _box_distance(a.u[i], a.err[i], b.u[j], b.err[j], period) - 1e-9
-                    )
-                if back:
-                    total += app[o[-1]][pick[-1]]
-                best = min(best, total)
-                per_order[o] = min(per_order.get(o, np.inf), total)
-                for t, i in zip(o, pick, strict=True):
-                    through[t][i] = min(through[t][i], total)
+        best, per_order, through = _brute_tours(layers, app, back, period)
         assert found.total == pytest.approx(best)
         assert found.per_order == {o: int(v) for o, v in per_order.items()}
         for got, want in zip(found.through, through, strict=True):
@@ -526,6 +533,82 @@ def test_the_orders_relaxation_equals_brute_force():
         kept = Orders(all_orders(4), back).narrowed(found, best + 2.0).orders
         assert set(kept) == {o for o, v in per_order.items() if v <= best + 2.0}
         assert found.order in kept
+
+
+@pytest.mark.parametrize("back", [False, True])
+def test_the_subsets_relaxation_equals_brute_force(back):
+    """Every order at once (the programme over the sets of sites visited) against every order
+    and every choice of samples: the least total, the least total through each sample, and a
+    path that attains it. With an incumbent no optimal path exceeds, the same total, and the
+    same cost through each sample that a path within the incumbent reaches."""
+    import itertools
+
+    from armpath.planning.bounds.search import Subsets
+
+    rng = np.random.default_rng(23 + back)
+    period = np.array([90.0, 0.0, 0.0, 0.0])
+    metric = _Metric(period)
+    for sizes in ([2], [3, 2], [2, 3, 1, 2], [3, 2, 2, 3, 2]):
+        layers = _random_layers(rng, sizes)
+        app = [np.ceil(rng.uniform(0, 30, lay.size)) for lay in layers]
+        best, per_order, through = _brute_tours(layers, app, back, period)
+        found = Subsets(back).solve(metric, layers, app)
+        assert found.total == pytest.approx(best)
+        for got, want in zip(found.through, through, strict=True):
+            np.testing.assert_allclose(got, want)
+        assert sorted(found.order) == list(range(len(layers)))
+        assert per_order[found.order] == best
+        # the path given: its samples, legs measured here, add up to the total
+        o, pick = found.order, [found.samples[t] for t in found.order]
+        total = app[o[0]][pick[0]] + (app[o[-1]][pick[-1]] if back else 0.0)
+        for (s, i), (t, j) in itertools.pairwise(zip(o, pick, strict=True)):
+            a, b = layers[s], layers[t]
+            total += np.ceil(_box_distance(a.u[i], a.err[i], b.u[j], b.err[j], period) - 1e-9)
+        assert total == pytest.approx(best)
+        assert found.approach == app[o[0]][pick[0]]
+        # an incumbent above the optimum: the same total; costs through samples within it kept
+        upper = best + 3.0
+        pruned = Subsets(back).solve(metric, layers, app, upper=upper)
+        assert pruned.total == pytest.approx(best)
+        for got, want in zip(pruned.through, through, strict=True):
+            np.testing.assert_allclose(got[want <= upper], want[want <= upper])
+            assert np.all((got == want) | (want > upper))
+        # the clear path's programme alone (no cost through the samples)
+        alone = Subsets(back).solve(metric, layers, app, find_through=False)
+        assert alone.total == pytest.approx(best)
+        assert all(np.all(np.isinf(t)) for t in alone.through)
+
+
+def test_the_every_target_entered_once_bound_is_never_above_the_best_order():
+    """The cheaper bound for many targets (the first target entered from the start, every
+    other from another target) is never above the best tour of brute force, and is its value
+    written out by hand: the least over the first of its leg from the start less its cheapest
+    leg in, plus every target's cheapest leg in from another."""
+    from armpath.planning.bounds.tour import _entered_once
+
+    rng = np.random.default_rng(31)
+    period = np.zeros(4)
+    metric = _Metric(period)
+    for back in (False, True):
+        for sizes in ([2, 3], [3, 2, 2], [2, 3, 1, 2]):
+            layers = _random_layers(rng, sizes)
+            app = [np.ceil(rng.uniform(0, 30, lay.size)) for lay in layers]
+            best, _, _ = _brute_tours(layers, app, back, period)
+            got = _entered_once(metric, layers, app, app if back else None)
+            assert got <= best + 1e-9
+
+            def leg(s, t, layers=layers):
+                a, b = layers[s], layers[t]
+                return min(
+                    np.ceil(_box_distance(a.u[i], a.err[i], b.u[j], b.err[j], period) - 1e-9)
+                    for i in range(a.size)
+                    for j in range(b.size)
+                )
+
+            K = len(layers)
+            into = [min(leg(s, t) for s in range(K) if s != t) for t in range(K)]
+            want = sum(into) + min(app[t].min() - into[t] for t in range(K))
+            assert got == pytest.approx(want + (min(a.min() for a in app) if back else 0.0))
 
 
 def test_the_cells_the_search_drops_never_hold_a_cheaper_path():

@@ -191,8 +191,9 @@ def plan_tour(
     planned, then up to :data:`EXTRA_ORDERS` more while their bound is below the best plan; at
     most :data:`MAX_AUTO_ORDER_TARGETS` targets) or ``"given"`` (the targets' order,
     at most :data:`MAX_TOUR_TARGETS`). Without orientation rules, each planned order is also
-    planned through goal states chosen together (:class:`TourGuide`; up to
-    :data:`MAX_GUIDED_ORDERS` orders, the one whose guided path is shortest planned too, and at
+    planned through goal states chosen together (:class:`TourGuide`; compared over every order
+    up to :data:`MAX_GUIDED_ORDERS`, of more over the bound's best order and the best ranked:
+    :func:`_guided_orders`; the one whose guided path is shortest planned too, and at
     each of :data:`GUIDE_BUFFERS_MM` the :data:`GUIDED_ORDERS` whose guided paths are shortest
     and no longer than the best plan, through the lattice goal states nearest the guide's members
     and through the most accurate ones: :data:`GUIDED_NEAREST`) and the shorter plan counts; such
@@ -269,12 +270,13 @@ def plan_tour(
         fam if bound else None, start, pts, ranking, return_to_start, tolerance_mm, say,
         bound_samples,
     )  # fmt: skip
+    guided_orders = _guided_orders(orders, ranking, family_bound)
     q0 = arm.lattice.to_joint(start)
     guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say, arm.lattice.to_joint(start))
     guide = None if guide_all is None else guide_all.with_buffer(GUIDE_BUFFERS_MM[0])
     guide_paths: dict[tuple[int, ...], tuple[float, list[FloatArray]]] = {}
-    if guide is not None and len(orders) <= MAX_GUIDED_ORDERS:
-        for o in ranking:
+    if guide is not None:
+        for o in guided_orders:
             found = guide.path(q0, o, return_to_start)
             if found is not None:
                 guide_paths[o] = found
@@ -412,7 +414,7 @@ def plan_tour(
             best = (total, legs, o)
     # goal states chosen together at every buffer: members nearer the obstacles can lie nearer
     # each other (the seed's Task 3: 141 commands with 1.5 mm, 133 with 0.5 mm)
-    if guide_all is not None and len(orders) <= MAX_GUIDED_ORDERS:
+    if guide_all is not None:
         for buffer in GUIDE_BUFFERS_MM:
             first = buffer == GUIDE_BUFFERS_MM[0]
             if first and guide is not None:  # the guide above: its paths are found already
@@ -420,7 +422,7 @@ def plan_tour(
             else:
                 buffered = guide_all.with_buffer(buffer)
                 paths = {}
-                for o in orders:
+                for o in guided_orders:
                     found = buffered.path(q0, o, return_to_start)
                     if found is not None:
                         paths[o] = found
@@ -452,13 +454,13 @@ def plan_tour(
                         count_guided(o, guided)
     # many goal states per target kept open until the legs between them are planned
     # (:mod:`~armpath.planning.tour_pool`): the seed's Task 3 127 -> 122 commands
-    if pools and guide_all is not None and fam is not None and len(orders) <= MAX_GUIDED_ORDERS:
+    if pools and guide_all is not None and fam is not None:
         say("sampling the goal states' pools at every target")
         try:
             pooled = pooled_tour(
                 pool_guide(fam, pts, tolerance_mm, q0),
                 start,
-                orders,
+                guided_orders,
                 return_to_start,
                 opts,
                 ceiling=np.inf if best is None else best[0],
@@ -548,6 +550,11 @@ def plan_tour(
 #: Most targets whose every order gets its own bound over the whole family (4! = 24 orders);
 #: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`.
 EXACT_ORDER_TARGETS = 4
+#: Targets up to which the bound searches every order at once (a programme over the sets of
+#: targets visited, :class:`~armpath.planning.bounds.search.Subsets`); more take the cheaper
+#: bound. Six welds of the seed arm in free space: 65 commands in 11 s from the first
+#: sampling (the cheaper bound: 17), and seven 68 in 32 s (each round).
+SUBSET_TARGETS = 7
 #: Most targets of a tour whose bound over the family is computed.
 MAX_BOUND_TARGETS = 24
 
@@ -563,7 +570,8 @@ def _targets_family(arm: SerialArm, world: CollisionWorld, pts: FloatArray) -> C
     return curve_family(arm, world, Polyline("targets", np.array(vertices)))
 
 
-#: Most visiting orders whose guided paths are all compared (4! = 24).
+#: Most visiting orders whose guided paths and pools are compared (4! = 24): of more (five
+#: targets or more), those of :func:`_guided_orders`.
 MAX_GUIDED_ORDERS = 24
 #: The room (mm) beyond the margin that the members of a guided path keep: the first for the
 #: planned orders' second plan, each for the :data:`GUIDED_ORDERS` orders whose guided paths
@@ -603,6 +611,22 @@ def _tour_guide(
         return None
 
 
+def _guided_orders(
+    orders: list[tuple[int, ...]],
+    ranking: list[tuple[int, ...]],
+    family_bound: CommandBound | None,
+) -> list[tuple[int, ...]]:
+    """The orders the guide and the pools compare: every order up to
+    :data:`MAX_GUIDED_ORDERS`; of more, the order of the family bound's path (the relaxation's
+    best, where the bound found one) and the best ranked after it, that many in all."""
+    if len(orders) <= MAX_GUIDED_ORDERS:
+        return orders
+    first = None if family_bound is None else family_bound.guide_order
+    chosen = [] if first is None else [first]
+    chosen += [o for o in ranking if o != first][: MAX_GUIDED_ORDERS - len(chosen)]
+    return chosen
+
+
 def _guided_goals(
     guide: TourGuide | None,
     q0: FloatArray,
@@ -631,7 +655,8 @@ def _family_bounds(
     max_samples: int | None = None,
 ) -> tuple[CommandBound | None, dict[tuple[int, ...], int]]:
     """The bound over every goal configuration: per order for a given order or up to
-    :data:`EXACT_ORDER_TARGETS` targets, else the any-order bound; None without a family
+    :data:`EXACT_ORDER_TARGETS` targets, every order at once up to :data:`SUBSET_TARGETS`,
+    else the any-order bound; None without a family
     (beyond :data:`MAX_BOUND_TARGETS` targets) or where a target has no member within the
     limits."""
     if fam is None:
@@ -650,6 +675,10 @@ def _family_bounds(
                 on_progress=say,
                 max_samples=max_samples,
                 lattice=True,
+            )
+        if pts.shape[0] <= SUBSET_TARGETS:
+            return tour_bound(
+                fam, q0, pts, tolerance_mm, None, back, on_progress=say, max_samples=max_samples
             )
         return tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say), {}
     except PlanningError:

@@ -15,7 +15,8 @@ the sites. Two kinds:
   every site once round the curve either way, and the approach is charged at the first it
   visits.
 * *orders* (:class:`Orders`, a tour): the sites in any of several orders from the start, each
-  leg a whole number of commands, back to the start or not.
+  leg a whole number of commands, back to the start or not; or in every order at once
+  (:class:`Subsets`, for more sites than their orders one by one allow).
 
 A forward dynamic programme gives every sample the least cost of reaching it, a backward one
 the least cost from it to the end; their sum is the least cost of any path through the
@@ -40,6 +41,7 @@ exact path through the sampled members, dropped ones included, is cheaper than t
 from __future__ import annotations
 
 import enum
+import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -162,11 +164,13 @@ class Chain:
         layers: list[Layer],
         app: list[FloatArray],
         find_through: bool = True,
+        upper: float = np.inf,
     ) -> Solution:
         """Both programmes over each sample and a flag (0: the approach not charged yet, 1:
         charged), and the path attaining the least total; ``find_through=False``: the forward
         programme alone (the total and its path; the least cost through each sample left
-        infinite, as for a sample no path reaches)."""
+        infinite, as for a sample no path reaches). ``upper`` (the incumbent) is not used
+        here: the relaxations solved site by site keep every cost."""
         K = len(layers)
         fwd = [np.stack([np.zeros(layers[0].size), app[0]], axis=1)]
         ptr = [np.full((layers[0].size, 2), -1, dtype=np.int64)]  # predecessor * 2 + its flag
@@ -253,6 +257,7 @@ class Loop:
         layers: list[Layer],
         app: list[FloatArray],
         find_through: bool = True,
+        upper: float = np.inf,
     ) -> Solution:
         """The chain of each rotation of the sites, from each of :attr:`starts` round the
         curve (the pass begun just before that site and traced forward, the approach charged
@@ -308,6 +313,7 @@ class Orders:
         layers: list[Layer],
         app: list[FloatArray],
         find_through: bool = True,
+        upper: float = np.inf,
     ) -> Solution:
         """Every order's prefixes forward and suffixes backward: the least total, each order's
         (rounded up), per site the least cost through each sample (``find_through=False``:
@@ -366,6 +372,102 @@ class Orders:
         for t, p in zip(o, picks, strict=True):
             samples[t] = p
         return Solution(best, through, samples, float(app[o[0]][picks[0]]), o, per_order)
+
+
+@dataclass(frozen=True)
+class Subsets:
+    """A tour's relaxation over every visiting order at once: Held and Karp's dynamic
+    programme over the sets of sites visited, forward from the start and backward from the
+    end (``back``: to the start), each leg a whole number of commands. ``n 2**(n-1)`` legs each
+    way, each measured from the samples of every site that may come before (or after) together;
+    no order's own total (``per_order`` stays empty)."""
+
+    back: bool
+    whole = True
+
+    def narrowed(self, found: Solution, incumbent: float) -> Subsets:
+        """The same relaxation (no order is dropped: they are not solved one by one)."""
+        return self
+
+    def _programme(
+        self,
+        sampler: FamilySampler,
+        layers: list[Layer],
+        first: list[FloatArray],
+        upper: float = np.inf,
+    ) -> tuple[dict[tuple[int, int], FloatArray], dict[tuple[int, int], tuple[IntArray, IntArray]]]:
+        """For each set of sites (a bit mask) and its last one: the least cost at each sample
+        of the last one's layer of a path through every site of the set, beginning with
+        ``first`` at its first site, and where each came from (site, sample). Costs above
+        ``upper`` are left infinite (a path that dear is no better than one known), and the
+        samples so left are not measured from."""
+        n = len(layers)
+        cost = {(1 << j, j): np.where(first[j] <= upper, first[j], np.inf) for j in range(n)}
+        came: dict[tuple[int, int], tuple[IntArray, IntArray]] = {}
+        for size in range(2, n + 1):
+            for combo in itertools.combinations(range(n), size):
+                mask = sum(1 << i for i in combo)
+                for j in combo:
+                    check_time("bounding the tour's commands")
+                    rest = mask & ~(1 << j)
+                    live = {i: np.flatnonzero(np.isfinite(cost[rest, i])) for i in combo if i != j}
+                    before = [i for i in live if live[i].size]
+                    if not before or layers[j].size == 0:
+                        cost[mask, j] = np.full(layers[j].size, np.inf)
+                        continue
+                    c, arg = sampler.advance(
+                        Layer.joined([layers[i].subset(live[i]) for i in before]),
+                        np.concatenate([cost[rest, i][live[i]] for i in before]),
+                        layers[j],
+                        self.whole,
+                    )
+                    owner = np.repeat(before, [live[i].size for i in before])
+                    local = np.concatenate([live[i] for i in before])
+                    cost[mask, j] = np.where(c <= upper, c, np.inf)
+                    came[mask, j] = (owner[arg], local[arg])  # -1 only where c is inf
+        return cost, came
+
+    def solve(
+        self,
+        sampler: FamilySampler,
+        layers: list[Layer],
+        app: list[FloatArray],
+        find_through: bool = True,
+        upper: float = np.inf,
+    ) -> Solution:
+        """The least total over every order, per site the least cost through each sample
+        (``find_through=False``: left infinite) and the best path, as :meth:`Orders.solve`.
+        ``upper``: a cost no optimal path exceeds (the incumbent): partial paths dearer than it
+        are left out, and so are the costs through the samples they reach."""
+        n = len(layers)
+        full = (1 << n) - 1
+        ends = [np.asarray(app[j]) if self.back else np.zeros(layers[j].size) for j in range(n)]
+        forward, came = self._programme(sampler, layers, app, upper)
+        totals = [forward[full, j] + ends[j] for j in range(n)]
+        through = [np.full(lay.size, np.inf) for lay in layers]
+        best = min((float(np.min(t, initial=np.inf)) for t in totals), default=np.inf)
+        if not np.isfinite(best):
+            return Solution(best, through, [], np.nan, tuple(range(n)))
+        if find_through:
+            # a path through a sample of site j: the sites of some set before it (forward)
+            # and the others after it (backward from the end)
+            backward, _ = self._programme(sampler, layers, ends, upper)
+            for (mask, j), reach in forward.items():
+                after = (full & ~mask) | (1 << j)
+                through[j] = np.minimum(through[j], reach + backward[after, j])
+        last = int(np.argmin([float(np.min(t, initial=np.inf)) for t in totals]))
+        picks, order, mask = [int(np.argmin(totals[last]))], [last], full
+        while mask != 1 << order[-1]:
+            owner, local = came[mask, order[-1]]
+            mask &= ~(1 << order[-1])
+            order.append(int(owner[picks[-1]]))
+            picks.append(int(local[picks[-1]]))
+        samples = [-1] * n
+        for t, i in zip(order, picks, strict=True):
+            samples[t] = i
+        return Solution(
+            best, through, samples, float(app[order[-1]][picks[-1]]), tuple(reversed(order))
+        )
 
 
 @dataclass
@@ -459,7 +561,7 @@ class CellSearch:
     def __init__(
         self,
         sampler: FamilySampler,
-        relaxation: Chain | Loop | Orders,
+        relaxation: Chain | Loop | Orders | Subsets,
         points: list[FloatArray],
         allowed: list[Callable[[FloatArray], BoolArray] | None],
         q_start: FloatArray,
@@ -562,15 +664,10 @@ class CellSearch:
                 return best
         for r in range(first, first + rounds):
             live = [site.live() for site in self.sites]
-            found = self.relaxation.solve(self.sampler, live, self._approach(live))
-            cap = np.ceil(pruned_against - 1e-9) if np.isfinite(pruned_against) else np.inf
-            for o, c in found.per_order.items():
-                self.per_order[o] = max(self.per_order.get(o, 0), int(min(c, cap)))
-            if not np.isfinite(found.total):
-                self._ended = True
-                break
             exact = [lay.subset(np.asarray(lay.clear)).without_errors() for lay in live]
-            # its path and total only: no cell is pruned or split by it
+            # the path through the clear samples first, its path and total only (no cell is
+            # pruned or split by it): no optimal path costs more, so the relaxation's
+            # programme may leave costlier partial paths out
             clear = self.relaxation.solve(
                 self.sampler, exact, self._approach(exact, True), find_through=False
             )
@@ -578,6 +675,15 @@ class CellSearch:
                 clear_total = clear.total
                 clear_q = np.array([lay.q[i] for lay, i in zip(exact, clear.samples, strict=True)])
             incumbent = min(float(upper), clear_total)
+            found = self.relaxation.solve(
+                self.sampler, live, self._approach(live), upper=incumbent + 1e-9
+            )
+            cap = np.ceil(pruned_against - 1e-9) if np.isfinite(pruned_against) else np.inf
+            for o, c in found.per_order.items():
+                self.per_order[o] = max(self.per_order.get(o, 0), int(min(c, cap)))
+            if not np.isfinite(found.total):
+                self._ended = True
+                break
             samples = sum(lay.size for lay in live)
             directions = sum(site.acc.dirs.shape[0] for site in self.sites)
             stalled = 0 if best is None or found.total > best.value + 1e-9 else stalled + 1

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextvars
+import math
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
@@ -20,7 +21,7 @@ from armpath.planning.bounds.passage import (
     sampled_passages,
 )
 from armpath.planning.bounds.sampling import FamilySampler, Layer
-from armpath.planning.bounds.search import CellSearch, Orders
+from armpath.planning.bounds.search import CellSearch, Orders, Subsets
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -40,7 +41,7 @@ def tour_bound(
     q_start: FloatArray,
     targets: FloatArray,
     tolerance_mm: float,
-    orders: list[tuple[int, ...]],
+    orders: list[tuple[int, ...]] | None,
     back: bool = False,
     rounds: int | None = None,
     on_progress: Callable[[str], None] | None = None,
@@ -51,7 +52,10 @@ def tour_bound(
     lattice: bool = False,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]]:
     """Fewest commands of a tour from ``q_start`` (rad) through ``targets`` ``(K, 3)`` (model
-    units) within ``tolerance_mm``: over ``orders``, a shortest path through the family at each
+    units) within ``tolerance_mm``: over ``orders`` (None: every order, solved at once by a
+    programme over the sets of targets visited,
+    :class:`~armpath.planning.bounds.search.Subsets`; no order's own bound then, and the
+    bound's ``guide_order`` is its best order), a shortest path through the family at each
     target (every goal configuration that may be clear, its cells split ``clear_levels`` times
     where unsure; obstacles ignored between targets), each leg a whole number of commands;
     ``back`` returns to the start. The family is searched by branch and bound for ``rounds``
@@ -72,13 +76,13 @@ def tour_bound(
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
-    if lattice and with_errors:
+    if lattice and with_errors and orders is not None:
         exact = lattice_tour_bound(sampler, q_start, points, orders, back, ways, say)
         if exact is not None:
             return exact
     search = CellSearch(
         sampler,
-        Orders(orders, back),
+        Subsets(back) if orders is None else Orders(orders, back),
         list(points),
         [None] * targets.shape[0],
         q_start,
@@ -95,7 +99,9 @@ def tour_bound(
         commands=int(np.ceil(found.value - 1e-9)),
         value=found.value,
         method=(
-            "least over every visiting order of a shortest path from the start through the "
+            "least over every visiting order"
+            + (" (a dynamic programme over the sets of targets visited)" if orders is None else "")
+            + " of a shortest path from the start through the "
             "solution family at each target (every goal configuration within the tolerance "
             "that may be clear; obstacles ignored between the targets, but not a joint's own "
             "self-collision ranges; tool directions sampled, each distance less the samples' "
@@ -106,7 +112,7 @@ def tour_bound(
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
         ),
         sampling={
-            "orders": float(len(orders)),
+            "orders": float(math.factorial(targets.shape[0]) if orders is None else len(orders)),
             "rounds": float(found.rounds),
             "samples": float(found.samples),
             "directions": float(found.directions),
@@ -115,6 +121,7 @@ def tour_bound(
         | ({"clear_path_commands": found.clear_path} if np.isfinite(found.clear_path) else {})
         | passage_sampling(ways),
         guide_q=found.bound_q[list(found.order)],
+        guide_order=tuple(found.order) if orders is None else None,
     )
     return bound, search.per_order
 
@@ -129,10 +136,12 @@ def tour_bound_any_order(
     clear_levels: int = TOUR_CLEAR_LEVELS,
     through_openings: bool = True,
 ) -> CommandBound:
-    """A cheaper bound of the best order for many targets: every target is entered once, from
-    the start or from another target, so the commands are at least the sum over the targets of
-    the shortest such leg (whole commands each), plus the shortest way back with ``back``; a
-    leg from the start into a hollow obstacle at least its way through an opening
+    """A cheaper bound of the best order for many targets: every target is entered once, the
+    first from the start and each other from another target, so the commands are at least
+    the least over the first target of its leg from the start plus, for every other target,
+    the shortest leg into it from another target (each family sampled once, each distance
+    less the samples' sampling errors, whole commands each), plus the shortest way back with
+    ``back``; a leg from the start into a hollow obstacle at least its way through an opening
     (``through_openings``, as :func:`tour_bound`)."""
     say = on_progress or (lambda _m: None)
     say(f"bounding the tour's commands ({targets.shape[0]} targets, any order)")
@@ -147,28 +156,21 @@ def tour_bound_any_order(
         raise PlanningError("a target has no family member within the joint limits")
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, through_openings=through_openings)
-    from_start = [float(c.min()) for c in _from_start(sampler, q_start, points, layers, ways)]
-    total = 0.0
-    for t, lay in enumerate(layers):
-        best = from_start[t]
-        for s, other in enumerate(layers):
-            if s != t:
-                check_time("bounding the tour's commands")
-                cost, _ = sampler.advance(other, np.zeros(other.size), lay, whole=True)
-                best = min(best, float(cost.min()))
-        total += best
-    if back:
-        total += min(from_start)
+    from_start = _from_start(sampler, q_start, points, layers, ways)
+    back_costs = (
+        [sampler.distance_from(q_start, lay, whole=True) for lay in layers] if back else None
+    )
+    total = _entered_once(sampler, layers, from_start, back_costs)
     return CommandBound(
         proven=sampler.covers_family,
         commands=int(np.ceil(total - 1e-9)),
         value=total,
         method=(
-            "every target entered once: the sum over the targets of the shortest leg into its "
-            "solution family (every goal configuration within the tolerance that may be "
+            "every target entered once: the least over the first target of its leg from the "
+            "start plus, for every other target, the shortest leg into its solution family "
+            "from another target (every goal configuration within the tolerance that may be "
             "clear; obstacles ignored between the targets, but not a joint's own self-collision "
-            "ranges; from the start or another target, "
-            "whole commands, each distance less the samples' sampling errors)"
+            "ranges; whole commands, each distance less the samples' sampling errors)"
             + ("; plus the shortest way back" if back else "")
             + passage_method(ways, "a leg from the start")
         ),
@@ -178,6 +180,31 @@ def tour_bound_any_order(
         }
         | passage_sampling(ways),
     )
+
+
+def _entered_once(
+    sampler: FamilySampler,
+    layers: list[Layer],
+    from_start: list[FloatArray],
+    back: list[FloatArray] | None,
+) -> float:
+    """At least the least over the first target of its leg from the start plus, for every other
+    target, the shortest leg into it from another target (plus the shortest way back with
+    ``back``): every target is entered once, only the first from the start."""
+    into = []
+    for t, lay in enumerate(layers):
+        best = np.inf
+        for s, other in enumerate(layers):
+            if s != t:
+                check_time("bounding the tour's commands")
+                cost, _ = sampler.advance(other, np.zeros(other.size), lay, whole=True)
+                best = min(best, float(cost.min()))
+        into.append(best)
+    first = min(float(from_start[t].min()) - into[t] for t in range(len(layers)))
+    total = sum(into) + first
+    if back is not None:
+        total += min(float(c.min()) for c in back)
+    return total
 
 
 def _from_start(

@@ -15,7 +15,8 @@ class CommandBound:
     """A lower bound on commands: ``commands`` (the value rounded up), the ``value`` in
     fractional commands, its parts (a trace's ``approach`` and ``along``), how it was
     computed, and the joint path that attains it (the *guide*: configurations rad, one per
-    layer, with the arc length of each layer for a trace). ``proven``: False where the samples
+    layer, with the arc length of each layer for a trace; for a tour whose orders are bounded
+    together, ``guide_order`` the order of its targets). ``proven``: False where the samples
     do not cover the family (an arm with more joints than the tool point and its direction
     need: one member of its self-motion per tool frame); the value is then an estimate."""
 
@@ -26,6 +27,7 @@ class CommandBound:
     sampling: dict[str, float] = field(default_factory=dict)
     guide_q: FloatArray | None = None
     guide_s_mm: FloatArray | None = None
+    guide_order: tuple[int, ...] | None = None
     proven: bool = True
 
     def describe(self) -> dict[str, object]:
