@@ -395,14 +395,22 @@ class Subsets:
         layers: list[Layer],
         first: list[FloatArray],
         upper: float = np.inf,
+        to_go: dict[tuple[int, int], FloatArray] | None = None,
     ) -> tuple[dict[tuple[int, int], FloatArray], dict[tuple[int, int], tuple[IntArray, IntArray]]]:
         """For each set of sites (a bit mask) and its last one: the least cost at each sample
         of the last one's layer of a path through every site of the set, beginning with
         ``first`` at its first site, and where each came from (site, sample). Costs above
-        ``upper`` are left infinite (a path that dear is no better than one known), and the
-        samples so left are not measured from."""
+        ``upper`` are left infinite (a path that dear is no better than one known), and so
+        are those whose least cost still to go (``to_go``, by the set of sites not yet visited
+        and the last one) takes them above it; the samples so left are not measured from."""
         n = len(layers)
-        cost = {(1 << j, j): np.where(first[j] <= upper, first[j], np.inf) for j in range(n)}
+        full = (1 << n) - 1
+
+        def kept(mask: int, j: int, c: FloatArray) -> FloatArray:
+            total = c if to_go is None else c + to_go[(full & ~mask) | (1 << j), j]
+            return np.where(total <= upper, c, np.inf)
+
+        cost = {(1 << j, j): kept(1 << j, j, first[j]) for j in range(n)}
         came: dict[tuple[int, int], tuple[IntArray, IntArray]] = {}
         for size in range(2, n + 1):
             for combo in itertools.combinations(range(n), size):
@@ -423,7 +431,7 @@ class Subsets:
                     )
                     owner = np.repeat(before, [live[i].size for i in before])
                     local = np.concatenate([live[i] for i in before])
-                    cost[mask, j] = np.where(c <= upper, c, np.inf)
+                    cost[mask, j] = kept(mask, j, c)
                     came[mask, j] = (owner[arg], local[arg])  # -1 only where c is inf
         return cost, came
 
@@ -442,16 +450,18 @@ class Subsets:
         n = len(layers)
         full = (1 << n) - 1
         ends = [np.asarray(app[j]) if self.back else np.zeros(layers[j].size) for j in range(n)]
-        forward, came = self._programme(sampler, layers, app, upper)
+        # backward from the end first: the forward programme then keeps only partial paths
+        # whose least cost still to go leaves them within the incumbent
+        backward = self._programme(sampler, layers, ends, upper)[0] if find_through else None
+        forward, came = self._programme(sampler, layers, app, upper, backward)
         totals = [forward[full, j] + ends[j] for j in range(n)]
         through = [np.full(lay.size, np.inf) for lay in layers]
         best = min((float(np.min(t, initial=np.inf)) for t in totals), default=np.inf)
         if not np.isfinite(best):
             return Solution(best, through, [], np.nan, tuple(range(n)))
-        if find_through:
+        if backward is not None:
             # a path through a sample of site j: the sites of some set before it (forward)
             # and the others after it (backward from the end)
-            backward, _ = self._programme(sampler, layers, ends, upper)
             for (mask, j), reach in forward.items():
                 after = (full & ~mask) | (1 << j)
                 through[j] = np.minimum(through[j], reach + backward[after, j])
