@@ -213,3 +213,21 @@ def test_six_welds_are_bounded_over_every_order():
     for v in visits:
         tip = independent.points(states[v["after_command"]])[4]
         assert np.linalg.norm(tip - np.array(v["target"])) <= 0.05
+
+
+def test_more_than_24_orders_are_compared_from_the_bounds_order_and_the_best_ranked():
+    """With more orders than the guide and the pools compare, they take the bound's best order
+    first, then the best ranked after it, 24 in all; up to 24, every order as given."""
+    from armpath.planning.bounds import CommandBound
+    from armpath.planning.tour import MAX_GUIDED_ORDERS, _guided_orders
+
+    few = list(itertools.permutations(range(4)))
+    assert _guided_orders(few, few[::-1], None) is few
+    orders = list(itertools.permutations(range(6)))
+    ranking = orders[::-1]
+    bound = CommandBound(65, 65.0, "every order at once", guide_order=(3, 5, 0, 2, 4, 1))
+    chosen = _guided_orders(orders, ranking, bound)
+    assert len(chosen) == MAX_GUIDED_ORDERS == 24
+    assert chosen[0] == (3, 5, 0, 2, 4, 1)
+    assert chosen[1:] == [o for o in ranking if o != chosen[0]][:23]
+    assert _guided_orders(orders, ranking, None) == ranking[:24]

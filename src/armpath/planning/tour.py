@@ -547,13 +547,13 @@ def plan_tour(
     )
 
 
-#: Most targets whose every order gets its own bound over the whole family (4! = 24 orders);
-#: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`.
+#: Most targets whose every order gets its own bound over the whole family (4! = 24 orders).
 EXACT_ORDER_TARGETS = 4
 #: Targets up to which the bound searches every order at once (a programme over the sets of
-#: targets visited, :class:`~armpath.planning.bounds.search.Subsets`); more take the cheaper
-#: bound. Six welds of the seed arm in free space: 65 commands in 11 s from the first
-#: sampling (the cheaper bound: 17), and seven 68 in 32 s (each round).
+#: targets visited, :class:`~armpath.planning.bounds.search.Subsets`, no order's own bound);
+#: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`. Six
+#: welds of the seed arm in free space: 65 commands from the first round of the search, where
+#: the cheaper bound says 17; the programmes over seven welds' first samples took 32 s.
 SUBSET_TARGETS = 7
 #: Most targets of a tour whose bound over the family is computed.
 MAX_BOUND_TARGETS = 24
@@ -656,7 +656,7 @@ def _family_bounds(
 ) -> tuple[CommandBound | None, dict[tuple[int, ...], int]]:
     """The bound over every goal configuration: per order for a given order or up to
     :data:`EXACT_ORDER_TARGETS` targets, every order at once up to :data:`SUBSET_TARGETS`,
-    else the any-order bound; None without a family
+    else the cheaper bound; None without a family
     (beyond :data:`MAX_BOUND_TARGETS` targets) or where a target has no member within the
     limits."""
     if fam is None:
