@@ -573,7 +573,11 @@ def test_the_subsets_relaxation_equals_brute_force(back):
         for got, want in zip(pruned.through, through, strict=True):
             np.testing.assert_allclose(got[want <= upper], want[want <= upper])
             assert np.all((got == want) | (want > upper))
-        # the clear path's programme alone (no cost through the samples)
+        # the clear path's programme alone (no cost through the samples), cut by the total of
+        # one greedy order: an order's total, so never below the least
+        ends = app if back else [np.zeros(lay.size) for lay in layers]
+        greedy = Subsets(back)._greedy(metric, layers, app, ends)
+        assert greedy in {v for v in per_order.values()} and greedy >= best
         alone = Subsets(back).solve(metric, layers, app, find_through=False)
         assert alone.total == pytest.approx(best)
         assert all(np.all(np.isinf(t)) for t in alone.through)

@@ -435,6 +435,32 @@ class Subsets:
                     came[mask, j] = (owner[arg], local[arg])  # -1 only where c is inf
         return cost, came
 
+    def _greedy(
+        self,
+        sampler: FamilySampler,
+        layers: list[Layer],
+        app: list[FloatArray],
+        ends: list[FloatArray],
+    ) -> float:
+        """The total of one order (a path the relaxation allows, so no optimal path costs
+        more): from the start to the site nearest it, then each time to the site still to go
+        whose samples the path reaches soonest; inf where a site has no sample."""
+        if any(lay.size == 0 for lay in layers):
+            return np.inf
+        ahead = set(range(len(layers)))
+        last = min(ahead, key=lambda t: float(app[t].min()))
+        cost = app[last]
+        ahead.remove(last)
+        while ahead:
+            check_time("bounding the tour's commands")
+            reached = {
+                t: sampler.advance(layers[last], cost, layers[t], self.whole)[0] for t in ahead
+            }
+            last = min(reached, key=lambda t: (float(reached[t].min()), t))
+            cost = reached[last]
+            ahead.remove(last)
+        return float((cost + ends[last]).min())
+
     def solve(
         self,
         sampler: FamilySampler,
@@ -445,11 +471,17 @@ class Subsets:
     ) -> Solution:
         """The least total over every order, per site the least cost through each sample
         (``find_through=False``: left infinite) and the best path, as :meth:`Orders.solve`.
-        ``upper``: a cost no optimal path exceeds (the incumbent): partial paths dearer than it
-        are left out, and so are the costs through the samples they reach."""
+        ``upper``: a cost no optimal path exceeds (the incumbent; for the total alone also the
+        total of one greedy order, :meth:`_greedy`): partial paths dearer than it are left out,
+        and so are the costs through the samples they reach."""
         n = len(layers)
         full = (1 << n) - 1
         ends = [np.asarray(app[j]) if self.back else np.zeros(layers[j].size) for j in range(n)]
+        if not find_through:
+            # the total alone: one greedy order's total bounds it (the costs through the
+            # samples are not cut by it: cells are dropped only against a path the
+            # relaxation allows, which the greedy order on samples with errors is not)
+            upper = min(upper, self._greedy(sampler, layers, app, ends))
         # backward from the end first: the forward programme then keeps only partial paths
         # whose least cost still to go leaves them within the incumbent
         backward = self._programme(sampler, layers, ends, upper)[0] if find_through else None
