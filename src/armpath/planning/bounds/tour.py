@@ -157,10 +157,9 @@ def tour_bound_any_order(
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, through_openings=through_openings)
     from_start = _from_start(sampler, q_start, points, layers, ways)
-    back_costs = (
-        [sampler.distance_from(q_start, lay, whole=True) for lay in layers] if back else None
-    )
-    total = _entered_once(sampler, layers, from_start, back_costs)
+    # the way back is a leg between the start and a target too (through an opening if it
+    # must be)
+    total = _entered_once(sampler, layers, from_start, from_start if back else None)
     return CommandBound(
         proven=sampler.covers_family,
         commands=int(np.ceil(total - 1e-9)),
