@@ -442,8 +442,8 @@ class Subsets:
         app: list[FloatArray],
         ends: list[FloatArray],
     ) -> float:
-        """The total of one order (a path the relaxation allows, so no optimal path costs
-        more): from the start to the site nearest it, then each time to the site still to go
+        """The least total of one order on these samples, so the least over every order is no
+        more: from the start to the site nearest it, then each time to the site still to go
         whose samples the path reaches soonest; inf where a site has no sample."""
         if any(lay.size == 0 for lay in layers):
             return np.inf
