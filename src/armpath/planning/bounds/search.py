@@ -487,8 +487,9 @@ class Subsets:
         backward = self._programme(sampler, layers, ends, upper)[0] if find_through else None
         forward, came = self._programme(sampler, layers, app, upper, backward)
         totals = [forward[full, j] + ends[j] for j in range(n)]
+        least = [float(np.min(t, initial=np.inf)) for t in totals]
         through = [np.full(lay.size, np.inf) for lay in layers]
-        best = min((float(np.min(t, initial=np.inf)) for t in totals), default=np.inf)
+        best = min(least, default=np.inf)
         if not np.isfinite(best):
             return Solution(best, through, [], np.nan, tuple(range(n)))
         if backward is not None:
@@ -497,7 +498,7 @@ class Subsets:
             for (mask, j), reach in forward.items():
                 after = (full & ~mask) | (1 << j)
                 through[j] = np.minimum(through[j], reach + backward[after, j])
-        last = int(np.argmin([float(np.min(t, initial=np.inf)) for t in totals]))
+        last = int(np.argmin(least))
         picks, order, mask = [int(np.argmin(totals[last]))], [last], full
         while mask != 1 << order[-1]:
             owner, local = came[mask, order[-1]]

@@ -192,15 +192,18 @@ def _entered_once(
     ``back``): every target is entered once, only the first from the start."""
     into = []
     for t, lay in enumerate(layers):
-        best = np.inf
-        for s, other in enumerate(layers):
-            if s != t:
-                check_time("bounding the tour's commands")
-                cost, _ = sampler.advance(other, np.zeros(other.size), lay, whole=True)
-                best = min(best, float(cost.min()))
-        into.append(best)
-    first = min(float(from_start[t].min()) - into[t] for t in range(len(layers)))
-    total = sum(into) + first
+        others = [other for s, other in enumerate(layers) if s != t]
+        if not others:
+            into.append(np.inf)  # a lone target is entered from the start only
+            continue
+        check_time("bounding the tour's commands")
+        joined = Layer.joined(others)
+        cost, _ = sampler.advance(joined, np.zeros(joined.size), lay, whole=True)
+        into.append(float(cost.min()))
+    total = min(
+        float(from_start[t].min()) + sum(c for s, c in enumerate(into) if s != t)
+        for t in range(len(layers))
+    )
     if back is not None:
         total += min(float(c.min()) for c in back)
     return total
