@@ -40,6 +40,7 @@ from armpath.planning.motion import (
     MotionPlan,
     PlanMetrics,
     active_joints,
+    merged_certified,
     plan_metrics,
     plan_motion,
     search_clearance_extra,
@@ -398,14 +399,22 @@ def _gaps_between_passes(
 
 
 def _lift_off(
-    arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, opts: TraceOptions
+    arm: SerialArm,
+    world: CollisionWorld,
+    q_ticks: IntArray,
+    opts: TraceOptions,
+    toward: IntArray | None = None,
 ) -> CommandSequence:
     """Commands that take the arm from the end of a pass (tool on the surface, links possibly in
     a tight spot) to a state with the room the motion planner's search needs.
 
     Greedy escape: from each state, random full-size commands (seeded) are scored by their end
     state's smallest slack against the search's clearance needs, and the best one whose continuous
-    motion is certified clear is taken; at most 12 commands.
+    motion is certified clear is taken; at most 12 commands. ``toward`` (a lattice state the
+    lift-off will be run backward from, see :func:`_enter_backward`): the commands that bring
+    the arm a whole command nearer it (every joint within one command fewer of it) are tried
+    first, and the best certified one is taken where it gains slack, so the transit through
+    the lift-off needs no more commands than the straight motion (the seed crack: 70 -> 69).
     """
     need = world.required(arm) + search_clearance_extra(
         arm, world, opts.motion.buffer_mm, opts.motion.sample_spacing_mm
@@ -413,32 +422,52 @@ def _lift_off(
     active = active_joints(arm)
     grid = arm.lattice
     rng = np.random.default_rng([opts.motion.seed, 7])
+    rng_nearer = np.random.default_rng([opts.motion.seed, 8])
     states = [np.asarray(q_ticks, dtype=np.int64)]
 
     def slack(q: IntArray) -> FloatArray:
         values, _ = world.pair_clearances(arm, arm.lattice.to_joint(q))
         return np.asarray((values - need).min(axis=-1), dtype=np.float64)
 
+    def best_certified(here: IntArray, cand: IntArray, floor: float) -> IntArray | None:
+        """Of ``cand`` (within the limits), the one of most slack above ``floor`` among the 16
+        of most slack whose straight motion from ``here`` is certified clear."""
+        cand = cand[arm.within_limits(arm.lattice.to_joint(cand))]
+        if cand.shape[0] == 0:
+            return None
+        sc = slack(cand)
+        for k in np.argsort(-sc)[:16]:
+            if sc[k] <= floor:
+                break
+            seq = CommandSequence.straight(here, cand[k], lattice=grid)
+            if motion_clearance(arm, world, seq).certified_ok:
+                return np.asarray(cand[k], dtype=np.int64)
+        return None
+
     for _ in range(12):
         check_time("lifting off the curve")
         here = states[-1]
-        if float(slack(here[None])[0]) >= 0.0:
+        here_slack = float(slack(here[None])[0])
+        if here_slack >= 0.0:
             break
-        # random commands of every size up to each joint's largest (in twentieths of it)
-        size = rng.uniform(1.0, 20.0, (4000, 1)) / 20.0 * grid.max_ticks
-        steps = np.round(rng.uniform(-1.0, 1.0, (4000, here.size)) * size).astype(np.int64)
-        cand = here + steps * active
-        cand = cand[arm.within_limits(arm.lattice.to_joint(cand))]
-        if cand.shape[0] == 0:
+        found = None
+        if toward is not None and np.any(toward != here):
+            # each joint ends within one command fewer of ``toward`` (and moves one at most)
+            gap = np.asarray(toward, dtype=np.int64) - here
+            fewer = int(grid.commands_needed(gap)) - 1
+            lo = np.maximum(-grid.max_ticks, gap - fewer * grid.max_ticks) * active
+            hi = np.minimum(grid.max_ticks, gap + fewer * grid.max_ticks) * active
+            if np.all(lo <= hi):
+                nearer = here + rng_nearer.integers(lo, hi + 1, (4000, here.size))
+                found = best_certified(here, nearer, here_slack)
+        if found is None:
+            # random commands of every size up to each joint's largest (in twentieths of it)
+            size = rng.uniform(1.0, 20.0, (4000, 1)) / 20.0 * grid.max_ticks
+            steps = np.round(rng.uniform(-1.0, 1.0, (4000, here.size)) * size).astype(np.int64)
+            found = best_certified(here, here + steps * active, -np.inf)
+        if found is None:
             break
-        sc = slack(cand)
-        for k in np.argsort(-sc)[:16]:
-            seq = CommandSequence.straight(here, cand[k], lattice=grid)
-            if motion_clearance(arm, world, seq).certified_ok:
-                states.append(cand[k])
-                break
-        else:
-            break
+        states.append(found)
     return CommandSequence.from_states(np.array(states, dtype=np.int64), grid)
 
 
@@ -515,13 +544,14 @@ def _trace_arcs(
                 # this piece is reachable but cannot be entered from here: report it, go on
                 not_traced.append((piece.arc, str(exc)))
                 continue
-            states.extend(list(motion.sequence.states()[1:]))
-            transits.append(Transit(here, len(states) - 1, motion.method))
-            first = len(states) - 1
             pass_states = [q_entry]
             sign, begin, finish = piece.sign, piece.begin_mm, piece.finish_mm
             if sign * (s_entry - begin) > GOAL_REACHED_MM:  # back to where the piece begins first
                 pass_states, s_entry = tracer.run(q_entry, s_entry, begin)
+            motion, pass_states = _entry_merged(arm, world, motion, pass_states)
+            states.extend(list(motion.sequence.states()[1:]))
+            transits.append(Transit(here, len(states) - 1, motion.method))
+            first = len(states) - 1
             goal = finish + sign * (run_on if last_piece else 0.0)
             ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
             pass_states += ahead[1:]
@@ -559,6 +589,24 @@ def _trace_arcs(
                     queue.insert(0, (rest, run_on))
                 break
     return _Tracing(states, passes, transits, not_traced, prof_s, prof_d)
+
+
+def _entry_merged(
+    arm: SerialArm, world: CollisionWorld, motion: MotionPlan, back: list[IntArray]
+) -> tuple[MotionPlan, list[IntArray]]:
+    """The transit onto a pass (``motion``) and the commands that run the pass back from where
+    it was entered to where it begins (``back``: its states, the entry first), merged where
+    certified straight motions need fewer commands (:func:`merged_certified`); with the states
+    the pass then begins from. The run back covers nothing the pass does not cover again on its
+    way on, so the transit may end where it ends (the seed crack entered 0.06 mm past its end:
+    a whole command back, merged into the transit's last one)."""
+    if motion.sequence.n_commands + len(back) - 1 < 2:
+        return motion, back
+    joined = motion.sequence.then(CommandSequence.from_states(np.array(back), arm.lattice))
+    merged = merged_certified(arm, world, replace(motion, sequence=joined))
+    if merged.sequence is joined:  # nothing fewer: the transit and the run back as they were
+        return motion, back
+    return merged, [back[-1]]
 
 
 def _nearest_loop_start(
@@ -607,7 +655,7 @@ def _enter_backward(
     motion is the same path either way, so its clearance holds backward too). The whole transit
     is certified again."""
     arm, world = tracer.arm, tracer.world
-    lift = _lift_off(arm, world, q_start, opts).states()
+    lift = _lift_off(arm, world, q_start, opts, toward=q_from).states()
     if lift.shape[0] < 2:
         raise PlanningError("no lift-off from there gives the search room")
     search = plan_motion(arm, world, q_from, lift[-1][None, :], opts.motion)
@@ -664,6 +712,13 @@ def _enter(
         except PlanningError as exc:
             failures.append(f"{s_try:.1f} mm: {exc}")
             continue
+        if i == 0 and tracer.piece.sign * (s - tracer.piece.begin_mm) > GOAL_REACHED_MM:
+            # entered a little past where the piece begins: the transit goes on to where the
+            # tracer gets back to it, which the pass is then traced from (the seed crack: its
+            # one command back, 0.06 mm)
+            back, s_back = tracer.run(q, s, tracer.piece.begin_mm)
+            if tracer.piece.sign * (s_back - tracer.piece.begin_mm) <= GOAL_REACHED_MM:
+                q, s = back[-1], s_back
         say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm")
         if i == 0:  # the tight start of the arc: a straight motion, else a lift-off reversed
             seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
