@@ -763,6 +763,15 @@ def test_layers_where_a_path_turns_hold_its_longest_polyline(seed):
         k += 1
     assert layers.size == k
     assert layers[0] == s[0] and layers[-1] == s[-1]
+    # a path that runs a little past the span's ends (less than the inset): those points are
+    # its ends, inset, and the same layers come out as for the path shifted onto them
+    inset = bt.LAYER_INSET_MM
+    tight = (float(s[0]) + 0.3, float(s[-1]) - 0.3)
+    (past,) = bt.turning_layers([tight], s, u)
+    shifted = np.clip(s, tight[0] + inset, tight[1] - inset)
+    (onto,) = bt.turning_layers([tight], shifted, u)
+    np.testing.assert_allclose(past, onto)
+    assert past[0] == tight[0] + inset and past[-1] == tight[1] - inset
     # too few of the path's points on a span: evenly spaced layers
     (even,) = bt.turning_layers([(100.0, 200.0)], s, u)
     np.testing.assert_allclose(even, np.linspace(100.5, 199.5, bt.LAYERS_PER_SPAN))

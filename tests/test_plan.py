@@ -254,3 +254,43 @@ def test_fewest_through_states_is_the_shortest_path_over_the_states(seed):
     assert len(corners) >= 2
     # no straight motion is asked twice
     assert len(asked) == len(set(asked))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_waypoints_drawn_on_fewest_command_ways(seed):
+    """Every waypoint ``fewest_command_waypoints`` draws lies within the seed arm's limits and
+    splits the straight motion's commands, counted here as ``ceil(largest change / 20 ticks)``,
+    into two parts that need no more together; the draws reach across the whole of that set
+    (each joint's extremes near its ends) and keep joint 6, which moves no point of the arm,
+    on the straight line."""
+    from armpath.planning.motion import fewest_command_waypoints
+
+    rng = np.random.default_rng(seed)
+    start = deg_to_ticks(HOME)
+    goal = start + rng.integers(-900, 901, 6)
+    room = (LIMITS * 10 - 50)[[1, 2, 4]]
+    goal[[1, 2, 4]] = np.clip(goal[[1, 2, 4]], -room, room)
+
+    def commands(d):
+        return np.ceil(np.abs(d).max(axis=-1) / 20.0).astype(int)
+
+    n = int(commands(goal - start))
+    w = fewest_command_waypoints(ARM, start, goal, 4000, np.random.default_rng(seed))
+    assert 3000 <= w.shape[0] <= 4000  # a few beyond the limits at most are left out
+    assert np.all(np.abs(w[:, [1, 2, 4]] / 10.0) <= LIMITS[[1, 2, 4]])
+    two = commands(w - start) + commands(goal - w)
+    assert np.all(two == n)  # never more, and no two straight motions need fewer
+    # at k commands along, joint j lies within k steps of the start and n - k of the goal;
+    # the draws come near both ends of that for the middle k
+    k = n // 2
+    mid = (commands(w - start) == k) & (commands(goal - w) == n - k)
+    lo = np.maximum(start - 20 * k, goal - 20 * (n - k))
+    hi = np.minimum(start + 20 * k, goal + 20 * (n - k))
+    assert mid.sum() >= 20
+    for j in (0, 3):  # joints without limits
+        assert w[mid, j].min() <= lo[j] + 0.2 * (hi[j] - lo[j])
+        assert w[mid, j].max() >= hi[j] - 0.2 * (hi[j] - lo[j])
+    on_line = np.round(start[5] + np.arange(1, n) / n * (goal[5] - start[5]))
+    assert np.isin(w[:, 5], on_line).all()
+    # one command's way has no waypoint
+    assert fewest_command_waypoints(ARM, start, start + 20, 10, rng).shape == (0, 6)

@@ -207,6 +207,18 @@ def test_run_reports_task_2(seed_run):
     assert "lower bound" in (out / "summary.md").read_text()
     (bad,) = doc["unreachable"]
     assert "joint limits" in bad["reason"]
+    # onto the crack in as few commands as the straight motion to the pass's first state
+    # needs (counted here: the largest joint change over 20 ticks, rounded up), though that
+    # motion is blocked (the tool would dip into the table halfway); and no fewer than the
+    # bound's approach
+    (transit,) = doc["transits"]
+    ticks = np.rint(np.array(doc["initial_deg"]) * 10).astype(int)
+    states = np.vstack([ticks, ticks + np.cumsum(doc["commands"], axis=0)])
+    first = transit["states"][1]
+    assert doc["passes"][0][0] == first
+    straight = int(np.ceil(np.abs(states[first] - states[0]).max() / 20))
+    assert transit["commands"] == first == straight == 69
+    assert bound["parts_commands"]["approach"] <= straight
 
 
 @pytest.mark.slow

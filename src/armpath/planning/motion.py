@@ -5,7 +5,9 @@ Pipeline (:func:`plan_motion`):
 1. **Direct**: the straight motion to each goal (fewest commands: ``ceil(largest change / 2 deg)``)
    is certified by :func:`~armpath.planning.motion_check.motion_clearance`; the first clear one
    wins, unless a nearer goal (one needing fewer direct commands) is blocked: then the search
-   runs too and the shorter of the two is kept.
+   runs too and the shorter of the two is kept. Where none is clear, two straight motions
+   through a waypoint (given ones, and ones drawn where the two need no more commands than the
+   straight one: :func:`fewest_command_waypoints`) compete with the search.
 2. **Search**: RRT-Connect in joint space (:mod:`armpath.planning.rrt`) with an edge test that
    samples each straight segment so densely that no arm point moves more than
    ``sample_spacing_mm`` between samples and demands the margin plus ``buffer_mm`` plus half that
@@ -456,11 +458,12 @@ def plan_motion(
     whole-turn copies (:func:`with_turn_copies`) are goals too. ``certified_merge``: with the
     commands objective, the plan kept is merged further where certified straight motions need
     fewer commands (:func:`merged_certified`; a planner that makes many motions and keeps few,
-    a tour, leaves it to the ones it keeps). ``waypoints`` (lattice states, with the commands
-    objective): where no direct motion is clear, two straight motions through one of them
-    (:func:`via_waypoint`; :func:`~armpath.planning.passages.passage_waypoints` gives those in
-    the openings of hollow obstacles; a function that gives them, asked only then) compete
-    with the search.
+    a tour, leaves it to the ones it keeps). With the commands objective, where no direct
+    motion is clear, two straight motions through a waypoint compete with the search
+    (:func:`via_waypoint`): through waypoints drawn on fewest-command ways to the nearest goal
+    (:func:`fewest_command_waypoints`) and through the given ``waypoints`` (lattice states;
+    :func:`~armpath.planning.passages.passage_waypoints` gives those in the openings of hollow
+    obstacles; a function that gives them, asked only then).
 
     Raises :class:`PlanningError` when neither a direct motion nor the search finds a motion
     that keeps the clearance rule (the message says what was tried).
@@ -524,10 +527,9 @@ def plan_motion(
         rng = np.random.default_rng([opts.seed, 11])
         drawn = fewest_command_waypoints(arm, start, goals[near], _DRAWN_WAYPOINTS, rng)
         given = waypoints() if waypoints is not None else np.zeros((0, n), np.int64)
-        found_via = via_waypoint(
+        best = via_waypoint(
             arm, world, start, goals, np.concatenate([given, drawn]), weights, opts.seed
         )
-        best = found_via
     if best is not None and (
         opts.objective is not Objective.COMMANDS or best.sequence.n_commands <= direct_counts.min()
     ):

@@ -60,7 +60,8 @@ def turning_layers(
 ) -> list[FloatArray]:
     """Layer positions (arc lengths, mm) on each span where a joint path along the curve turns:
     of the path's points in the span (arc lengths ``path_mm (P,)`` of its tool point, joint
-    values ``path_u (P, J)`` in command units), the layers whose polyline through the path's
+    values ``path_u (P, J)`` in command units; those up to :data:`LAYER_INSET_MM` past an end
+    taken at it), the layers whose polyline through the path's
     values is longest in the largest-joint metric, the span's first and last points among
     them, no two closer than a share of the span; a further layer (up to ``max_layers``) while
     it lengthens the polyline by ``gain`` commands or more. A span with fewer than two of the
@@ -69,7 +70,10 @@ def turning_layers(
     out = []
     for (a, b), even in zip(spans_mm, _layer_positions(spans_mm, LAYERS_PER_SPAN), strict=True):
         lo, hi = a + min(LAYER_INSET_MM, 0.5 * (b - a)), b - min(LAYER_INSET_MM, 0.5 * (b - a))
-        inside = np.flatnonzero((path_mm >= a - 1e-9) & (path_mm <= b + 1e-9))
+        # the path's points a little past the span's ends count as at its ends (a pass that
+        # runs on past the end of a reachable arc: the seed crack's first state 0.03 mm on)
+        near = (path_mm >= a - LAYER_INSET_MM) & (path_mm <= b + LAYER_INSET_MM)
+        inside = np.flatnonzero(near)
         if inside.size < 2:
             out.append(even)
             continue
