@@ -643,7 +643,16 @@ def test_the_cells_the_search_drops_never_hold_a_cheaper_path():
     incumbent = first.total + 1.0
     samples = sum(lay.size for lay in live)
     directions = sum(site.acc.dirs.shape[0] for site in search.sites)
-    search._prune_and_split(live, first, incumbent, directions, samples)
+    from armpath.planning.bounds.search import _kept_samples
+
+    kept = sum(_kept_samples(lay, t, incumbent) for lay, t in zip(live, first.through, strict=True))
+    search._prune_and_split(live, first, incumbent, directions, samples, kept)
+    # what the search counts as kept is what the pruning leaves alive of those samples
+    assert 0 < kept < samples
+    assert kept == sum(
+        int(np.count_nonzero(site.alive[lay.direction]))
+        for site, lay in zip(search.sites, live, strict=True)
+    )
     for site, lay, through, before in zip(
         search.sites, live, first.through, alive_before, strict=True
     ):
@@ -861,3 +870,26 @@ def test_a_tour_estimate_without_sampling_errors_is_its_own_paths_cost():
         cost += np.ceil((d / step).max() - 1e-9)
         q = nxt
     assert est.value == pytest.approx(cost, abs=1e-9)
+
+
+def test_the_samples_a_search_keeps_are_those_of_the_directions_it_keeps():
+    """Over its budget, the search goes on only if what pruning leaves fits: the samples of
+    every direction that keeps a sample whose path cost is within the incumbent, counted here
+    direction by direction."""
+    from armpath.planning.bounds.sampling import Layer
+    from armpath.planning.bounds.search import _kept_samples
+
+    rng = np.random.default_rng(3)
+    m = 200
+    direction = rng.integers(0, 40, m)
+    through = rng.uniform(50.0, 80.0, m)
+    layer = Layer(np.zeros((m, 5)), np.zeros((m, 5)), np.zeros((m, 6)), np.zeros((m, 3)),
+                  direction, np.ones(m, dtype=bool))  # fmt: skip
+    for incumbent in (49.0, 60.0, 70.0, 81.0):
+        expected = 0
+        for d in range(40):
+            mine = direction == d
+            if np.any(through[mine] <= incumbent):
+                expected += int(mine.sum())
+        assert _kept_samples(layer, through, incumbent) == expected
+    assert _kept_samples(layer, through, 81.0) == m and _kept_samples(layer, through, 49.0) == 0

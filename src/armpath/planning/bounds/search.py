@@ -90,6 +90,9 @@ STALL_ROUNDS = 2
 #: 110 commands with 200,000 (its bound 44 s -> 177 s), the UR5 cell's welds 87 -> 95 (75 s ->
 #: 690 s, 18 rounds) and its seam 93 -> 98.3 (68 s -> 523 s, 22 rounds; while 16 rounds ended
 #: every search, it stayed where 16 rounds took it whatever the budget: :func:`search_rounds`).
+#: What counts is what a round leaves alive: a round over the budget goes on if the samples of
+#: the cells that may hold a path cheaper than the incumbent fit (six welds in free space,
+#: whose first sampling holds 52,944: 65 after that round alone, 68 after three, 38 -> 60 s).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000
@@ -593,13 +596,22 @@ def search_rounds(max_samples: int | None = None) -> int:
     return SEARCH_ROUNDS * max(1, check_max_samples(max_samples) // MAX_SAMPLES)
 
 
+def _kept_samples(layer: Layer, through: FloatArray, incumbent: float) -> int:
+    """The samples of ``layer`` whose direction keeps a sample that may lie on a path no
+    costlier than ``incumbent`` (``through``: each sample's least cost of a path through it):
+    those :meth:`CellSearch._prune_and_split` leaves alive."""
+    assert layer.direction is not None
+    held = np.unique(layer.direction[through <= incumbent + _PRUNE_SLACK])
+    return int(np.count_nonzero(np.isin(layer.direction, held)))
+
+
 class CellSearch:
     """Branch and bound over the direction cells of a relaxation's sites (see the module).
 
     ``levels``: before the search, the cells kept only for what their neighbours allow are
     split that many times at every site, as :meth:`FamilySampler.layer` does.
-    ``max_samples``: the live samples past which the search splits no more
-    (:data:`MAX_SAMPLES`; see :func:`check_max_samples`)."""
+    ``max_samples``: the live samples past which the search splits no more, counted after a
+    round's pruning (:data:`MAX_SAMPLES`; see :func:`check_max_samples`)."""
 
     def __init__(
         self,
@@ -746,9 +758,15 @@ class CellSearch:
                 f"bounding the commands: round {r}: at least {best.value:.2f}, a clear path "
                 f"{clear_total:.2f}, {samples} samples of {directions} directions"
             )
+            # over the budget, the search goes on only if the samples of the cells that may
+            # hold a path cheaper than the incumbent fit in it (the others are dropped next)
+            kept = sum(
+                _kept_samples(lay, through, incumbent)
+                for lay, through in zip(live, found.through, strict=True)
+            )
             if (
                 incumbent - best.value <= GAP_GOAL
-                or samples > self.max_samples
+                or kept > self.max_samples
                 or stalled >= STALL_ROUNDS
             ):
                 self._ended = True
@@ -757,24 +775,38 @@ class CellSearch:
                 self._resume = _Resume(live, found, incumbent, best, stalled)
                 break
             pruned_against = incumbent
-            if not self._go_on(live, found, incumbent, directions, samples):
+            if not self._go_on(live, found, incumbent, directions, samples, kept):
                 break
         return best
 
     def _go_on(
-        self, live: list[Layer], found: Solution, incumbent: float, directions: int, samples: int
+        self,
+        live: list[Layer],
+        found: Solution,
+        incumbent: float,
+        directions: int,
+        samples: int,
+        kept: int | None = None,
     ) -> bool:
         """After a round (its ``live`` samples and ``found`` solution): narrow the relaxation
-        and prune and split the cells against ``incumbent``; False, and the search ended, when
+        and prune and split the cells against ``incumbent`` (``kept``: the samples left after
+        pruning, if known; else ``samples``, all of them); False, and the search ended, when
         nothing was split."""
         self.relaxation = self.relaxation.narrowed(found, incumbent)
-        if self._prune_and_split(live, found, incumbent, directions, samples):
+        left = samples if kept is None else kept
+        if self._prune_and_split(live, found, incumbent, directions, samples, left):
             return True
         self._ended = True
         return False
 
     def _prune_and_split(
-        self, live: list[Layer], found: Solution, incumbent: float, directions: int, samples: int
+        self,
+        live: list[Layer],
+        found: Solution,
+        incumbent: float,
+        directions: int,
+        samples: int,
+        kept: int,
     ) -> bool:
         """Drop the directions whose every live sample costs more than the incumbent; split,
         cheapest first, the cells within :data:`SPLIT_WINDOW` of the bound whose error or
@@ -783,7 +815,7 @@ class CellSearch:
         split_any = False
         window = found.total + SPLIT_WINDOW
         per_direction = samples / max(directions, 1)
-        share = (self.max_samples - samples) / (6.0 * max(per_direction, 1.0) * len(self.sites))
+        share = (self.max_samples - kept) / (6.0 * max(per_direction, 1.0) * len(self.sites))
         cap = int(max(min(SPLITS_PER_ROUND, share), 0))
         for site, lay, through in zip(self.sites, live, found.through, strict=True):
             assert lay.direction is not None
