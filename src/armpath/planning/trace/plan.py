@@ -598,8 +598,9 @@ def _entry_merged(
     it was entered to where it begins (``back``: its states, the entry first), merged where
     certified straight motions need fewer commands (:func:`merged_certified`); with the states
     the pass then begins from. The run back covers nothing the pass does not cover again on its
-    way on, so the transit may end where it ends (the seed crack entered 0.06 mm past its end:
-    a whole command back, merged into the transit's last one)."""
+    way on, so the transit may end where it ends (an entry where there is room, traced back to
+    the end of the arc; the seed crack, before :func:`_enter` moved its tight entry on to where
+    the run back ends, saved its one command back this way: 145 -> 144)."""
     if motion.sequence.n_commands + len(back) - 1 < 2:
         return motion, back
     joined = motion.sequence.then(CommandSequence.from_states(np.array(back), arm.lattice))
