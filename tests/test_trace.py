@@ -122,20 +122,32 @@ def test_the_reachable_part_of_a_line_ends_at_full_stretch():
 @pytest.mark.slow
 def test_a_line_traced_to_the_edge_of_the_reach_is_bounded():
     """A line from (300, 0, 200) to (900, 0, 200) runs out of reach at full stretch
-    (sqrt(575**2 - 60**2) = 571.86 mm from B, by hand). One pass of the plan covers only
-    the last hundredths of a mm there; its middle has no sampled member, which left the whole
-    trace without a bound. The bound now leaves that span out: it exists, lies below the plan,
-    and its points lie on the reachable arc."""
+    (sqrt(575**2 - 60**2) = 571.86 mm from B, by hand). The tracer stops short of that end;
+    what it leaves is reported, up to the end of the reachable arc. A pass covering only the
+    last hundredths of a mm there (a plan once made one: a command back from a state just past
+    the end) has no sampled member at its middle, which left the whole trace without a bound.
+    The bound leaves that span out: it exists, lies below the plan, and its points lie on the
+    reachable arc."""
+    import dataclasses
+
+    from armpath.planning.trace import plan as trace_plan
+
     line = Polyline("line", np.array([[300.0, 0.0, 200.0], [900.0, 0.0, 200.0]]))
     res = plan_trace(seed_arm(), scene_from_dict(TABLE_ONLY).world,
                      deg_to_ticks([0, -90, 0, 0, -90, 0]), line)  # fmt: skip
     (arc,) = res.reachability.reachable
     assert arc.end_mm == pytest.approx(np.sqrt(575.0**2 - 60.0**2) - 300.0, abs=0.1)
-    assert any(p.end_mm - p.start_mm < 1.0 for p in res.passes)  # the pass at the edge
-    bound = res.lower_bound
-    assert bound is not None and bound.proven
-    assert 0 < bound.commands <= res.n_commands
-    assert np.all(np.asarray(bound.guide_s_mm) <= arc.end_mm)
+    covered = [(p.start_mm, p.end_mm) for p in res.passes]
+    covered += [(a.start_mm, a.end_mm) for a, _ in res.not_traced]
+    assert min(a for a, _ in covered) <= arc.start_mm + 1e-6
+    assert max(b for _, b in covered) >= arc.end_mm - 0.05  # the stretch left is reported
+    (whole,) = [p for p in res.passes if p.end_mm - p.start_mm > 1.0]
+    edge = dataclasses.replace(whole, start_mm=arc.end_mm - 0.03, end_mm=arc.end_mm + 0.01)
+    for passes in ((whole,), (whole, edge)):
+        bound = trace_plan.trace_plan_bound(dataclasses.replace(res, passes=passes))
+        assert bound is not None and bound.proven
+        assert 0 < bound.commands <= res.n_commands
+        assert np.all(np.asarray(bound.guide_s_mm) <= arc.end_mm)
 
 
 def test_curves_from_scene_files():
