@@ -557,6 +557,9 @@ def _trace_arcs(
             pass_states += ahead[1:]
             states.extend(pass_states[1:])
             if len(pass_states) == 1:  # entered but no command along the curve: not a pass
+                # nor is the way there kept: the next try starts from where this one did
+                del states[here + 1 :]
+                transits.pop()
                 rest = _rest_of_arc(arc, piece, s_reached, made_pass=False)
                 if rest is not None:
                     queue.insert(0, (rest, run_on))
