@@ -521,9 +521,9 @@ def plan_motion(
             if opts.objective is Objective.COMMANDS:
                 break
     if best is None and opts.objective is Objective.COMMANDS:
-        # two straight motions through a waypoint: the given ones, and ones drawn where both
-        # motions together need no more commands than the straight one to the nearest goal
-        # motions through the drawn ones need the fewest commands there are: tried first
+        # two straight motions through a waypoint: first through ones drawn where both need
+        # no more commands together than the straight one to the nearest goal (the fewest
+        # there are), then through the given ones
         near = int(np.argmin(direct_counts))
         rng = np.random.default_rng([opts.seed, 11])
         drawn = fewest_command_waypoints(arm, start, goals[near], _DRAWN_WAYPOINTS, rng)
@@ -799,7 +799,7 @@ def fewest_command_waypoints(
     straight one, ``N``: each ``k`` commands of the way along (``k`` drawn evenly from 1 to
     ``N - 1``), every joint drawn evenly from the ticks within ``k`` commands of the start and
     ``N - k`` of the goal (a joint that moves nothing else, see :func:`active_joints`, on the
-    straight line). None when ``N < 2``."""
+    straight line). None (an empty array) when ``N < 2``."""
     grid = arm.lattice
     start = np.asarray(start, dtype=np.int64)
     goal = np.asarray(goal, dtype=np.int64)

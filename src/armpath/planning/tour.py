@@ -552,8 +552,8 @@ EXACT_ORDER_TARGETS = 4
 #: Targets up to which the bound searches every order at once (a programme over the sets of
 #: targets visited, :class:`~armpath.planning.bounds.search.Subsets`, no order's own bound);
 #: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`. Six
-#: welds of the seed arm in free space: 65 commands from the first round of the search, where
-#: the cheaper bound says 17 (the tour, planned and bounded, 37 s); seven: 68 (74 s); eight
+#: welds of the seed arm in free space: 68 commands after three rounds of the search, where
+#: the cheaper bound says 17 (the tour, planned and bounded, 60 s); seven: 68 (79 s); eight
 #: would take 178 s and 0.6 GB for 74 (plan 88), where the cheaper bound says 57 in 38 s (plan
 #: 92, the guide and pools then comparing the 24 best ranked orders).
 SUBSET_TARGETS = 7

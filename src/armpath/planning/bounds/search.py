@@ -596,12 +596,20 @@ def search_rounds(max_samples: int | None = None) -> int:
     return SEARCH_ROUNDS * max(1, check_max_samples(max_samples) // MAX_SAMPLES)
 
 
-def _kept_samples(layer: Layer, through: FloatArray, incumbent: float) -> int:
-    """The samples of ``layer`` whose direction keeps a sample that may lie on a path no
-    costlier than ``incumbent`` (``through``: each sample's least cost of a path through it):
-    those :meth:`CellSearch._prune_and_split` leaves alive."""
+def _held(layer: Layer, through: FloatArray, incumbent: float) -> tuple[BoolArray, IntArray]:
+    """The pruning rule: the samples of ``layer`` that may lie on a path no costlier than
+    ``incumbent`` (``through``: each sample's least cost of a path through it), and the
+    directions that keep one (the cells :meth:`CellSearch._prune_and_split` keeps alive)."""
     assert layer.direction is not None
-    held = np.unique(layer.direction[through <= incumbent + _PRUNE_SLACK])
+    keep = through <= incumbent + _PRUNE_SLACK
+    return keep, np.unique(layer.direction[keep])
+
+
+def _kept_samples(layer: Layer, through: FloatArray, incumbent: float) -> int:
+    """The samples of ``layer`` that pruning against ``incumbent`` leaves alive: those of the
+    directions that keep one (:func:`_held`)."""
+    assert layer.direction is not None
+    _, held = _held(layer, through, incumbent)
     return int(np.count_nonzero(np.isin(layer.direction, held)))
 
 
@@ -715,7 +723,10 @@ class CellSearch:
             best, stalled, first = was.best, was.stalled, was.best.rounds + 1
             clear_total, clear_q = was.best.clear_path, was.best.clear_q
             pruned_against = min(float(upper), was.incumbent)
-            if not self._go_on(was.live, was.found, pruned_against, best.directions, best.samples):
+            # the resumed round's samples all counted as left (its pruning was not measured)
+            if not self._go_on(
+                was.live, was.found, pruned_against, best.directions, best.samples, best.samples
+            ):
                 return best
         for r in range(first, first + rounds):
             live = [site.live() for site in self.sites]
@@ -786,15 +797,14 @@ class CellSearch:
         incumbent: float,
         directions: int,
         samples: int,
-        kept: int | None = None,
+        kept: int,
     ) -> bool:
         """After a round (its ``live`` samples and ``found`` solution): narrow the relaxation
-        and prune and split the cells against ``incumbent`` (``kept``: the samples left after
-        pruning, if known; else ``samples``, all of them); False, and the search ended, when
-        nothing was split."""
+        and prune and split the cells against ``incumbent`` (``kept``: the samples the split
+        budget counts as left after pruning); False, and the search ended, when nothing was
+        split."""
         self.relaxation = self.relaxation.narrowed(found, incumbent)
-        left = samples if kept is None else kept
-        if self._prune_and_split(live, found, incumbent, directions, samples, left):
+        if self._prune_and_split(live, found, incumbent, directions, samples, kept):
             return True
         self._ended = True
         return False
@@ -819,11 +829,11 @@ class CellSearch:
         cap = int(max(min(SPLITS_PER_ROUND, share), 0))
         for site, lay, through in zip(self.sites, live, found.through, strict=True):
             assert lay.direction is not None
-            keep = through <= incumbent + _PRUNE_SLACK
+            keep, held = _held(lay, through, incumbent)
             sampled = np.zeros(site.alive.shape[0], dtype=bool)
             sampled[lay.direction] = True
             hold = np.zeros(site.alive.shape[0], dtype=bool)
-            hold[lay.direction[keep]] = True
+            hold[held] = True
             site.alive &= hold | ~sampled
             wants = keep & (through <= window)
             wants &= (lay.err.max(axis=1) > SEARCH_ERROR_GOAL) | site.unsure[lay.direction]
