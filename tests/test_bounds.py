@@ -581,6 +581,30 @@ def test_the_subsets_relaxation_equals_brute_force(back):
         alone = Subsets(back).solve(metric, layers, app, find_through=False)
         assert alone.total == pytest.approx(best)
         assert all(np.all(np.isinf(t)) for t in alone.through)
+        # the clear path's programme on some of the samples (or all) taken exact, pruned by the
+        # costs still to go of the solution on all of them (the search's order; with their
+        # errors, and without, where on all samples a clear path's costs still to go are
+        # those exactly): the least total of brute force on those samples where it is within
+        # the incumbent, none above it
+        some = [
+            np.sort(rng.choice(lay.size, rng.integers(1, lay.size + 1), False)) for lay in layers
+        ]
+        every = [np.arange(lay.size) for lay in layers]
+        for picks in (some, every):
+            exact = [lay.subset(k).without_errors() for lay, k in zip(layers, picks, strict=True)]
+            app_exact = [a[k] for a, k in zip(app, picks, strict=True)]
+            clear_best, _, _ = _brute_tours(exact, app_exact, back, period)
+            assert clear_best >= best
+            for source in (layers, [lay.without_errors() for lay in layers]):
+                for incumbent in (clear_best, clear_best - 1.0, clear_best + 2.0):
+                    solved = Subsets(back).solve(metric, source, app, upper=incumbent + 1e-9)
+                    assert solved.to_go is not None
+                    to_go = {key: c[picks[key[1]]] for key, c in solved.to_go.items()}
+                    clear = Subsets(back).solve(
+                        metric, exact, app_exact, False, incumbent + 1e-9, to_go
+                    )
+                    want = clear_best if clear_best <= incumbent else np.inf
+                    assert clear.total == pytest.approx(want)
 
 
 def test_the_every_target_entered_once_bound_is_never_above_the_best_order():
