@@ -553,8 +553,8 @@ EXACT_ORDER_TARGETS = 4
 #: targets visited, :class:`~armpath.planning.bounds.search.Subsets`, no order's own bound);
 #: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`. Six
 #: welds of the seed arm in free space: 68 commands after three rounds of the search, where
-#: the cheaper bound says 17 (the tour, planned and bounded, 60 s); seven: 68 (79 s); eight
-#: would take 178 s and 0.6 GB for 74 (plan 88), where the cheaper bound says 57 in 38 s (plan
+#: the cheaper bound says 17 (the tour, planned and bounded, 43 s); seven: 68 (64 s); eight
+#: would take 162 s and 0.75 GB for 74 (plan 88), where the cheaper bound says 57 in 38 s (plan
 #: 92, the guide and pools then comparing the 24 best ranked orders).
 SUBSET_TARGETS = 7
 #: Most targets of a tour whose bound over the family is computed.

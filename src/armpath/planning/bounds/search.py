@@ -92,7 +92,7 @@ STALL_ROUNDS = 2
 #: every search, it stayed where 16 rounds took it whatever the budget: :func:`search_rounds`).
 #: What counts is what a round leaves alive: a round over the budget goes on if the samples of
 #: the cells that may hold a path cheaper than the incumbent fit (six welds in free space,
-#: whose first sampling holds 52,944: 65 after that round alone, 68 after three, 38 -> 60 s).
+#: whose first sampling holds 52,944: 65 after that round alone, 68 after three in 43 s).
 MAX_SAMPLES = 50_000
 #: Range of the samples a caller may give the search (memory: a few hundred bytes each).
 MIN_SAMPLES_LIMIT = 1_000
