@@ -14,6 +14,9 @@
 * a guide built with a smaller buffer and then narrowed to a larger one holds exactly the
   members of a guide built with the larger one, each keeping its room (independent forward
   kinematics: the members still reach their welds);
+* the lattice goal states within a command of each member of a path are all listed (a brute
+  force over the lattice within 9 ticks of each member, independent forward kinematics), and
+  the first of each weld's make a cheapest combination (every combination of them);
 * (tests/test_ur5_cell.py) on the UR5 cell, the tour planned through them needs far fewer
   commands than through goal states each picked nearest the start (393 before).
 """
@@ -242,3 +245,49 @@ def test_the_goal_state_next_to_a_member_is_the_nearest_clear_one():
     )  # fmt: skip
     assert np.linalg.norm(ir.SeedArm.points(state / 10.0)[4] - inside) <= 0.05
     assert ir.config_slack(ir.SeedArm(), world, (state / 10.0)[None], 0.5)[0] >= -1e-6
+
+
+@pytest.mark.slow
+def test_the_lattice_states_near_a_path_are_all_listed_and_the_cheapest_come_first():
+    """Three welds in free space: the lattice goal states within a command of each member of a
+    guided path. Within 9 ticks of each member's nearest state, a brute force over the lattice
+    (independent forward kinematics) finds exactly the listed ones that lie there; every
+    listed state reaches its weld within the tolerance; the first state of each weld is a
+    cheapest combination (whole commands of 20 ticks per leg from the start), against every
+    combination of the listed states."""
+    from armpath.scenes import scene_from_dict
+
+    arm = seed_arm()
+    world = scene_from_dict({"name": "none"}).world
+    pts = np.array([[300.0, 100.0, 200.0], [250.0, -100.0, 250.0], [320.0, 0.0, 150.0]])
+    fam = tour._targets_family(arm, world, pts)
+    start = np.array([0, -900, 0, 0, -900, 0])
+    q0 = arm.lattice.to_joint(start)
+    guide = TourGuide.build(fam, pts, 0.05, 0.5, q0)
+    order = (1, 0, 2)
+    _, members = guide.path(q0, order, back=False)
+    near = guide.states_near(start, order, members, back=False)
+    assert near is not None and [s.shape[1] for s in near] == [6, 6, 6]
+    box = np.stack(np.meshgrid(*[np.arange(-9, 10)] * 5, indexing="ij"), -1).reshape(-1, 5)
+    for t, q, states in zip(order, members, near, strict=True):
+        assert np.all(states[:, 5] == 0)  # joint 6 (turns the tool about its point) stays
+        tips = ir.SeedArm.points(states / 10.0)[:, 4]
+        assert np.all(np.linalg.norm(tips - pts[t], axis=-1) <= 0.05)
+        centre = np.round(np.degrees(q) * 10.0).astype(np.int64)
+        centre[5] = 0
+        every = np.repeat(centre[None], box.shape[0], axis=0)
+        every[:, :5] += box
+        hit = np.linalg.norm(ir.SeedArm.points(every / 10.0)[:, 4] - pts[t], axis=-1) <= 0.05
+        inside = np.all(np.abs(states[:, :5] - centre[:5]) <= 9, axis=1)
+        assert {tuple(s) for s in every[hit]} == {tuple(s) for s in states[inside]}
+    assert all(s.shape[0] >= 1 for s in near)
+
+    def commands(a, b):
+        return int(np.max(-(-np.abs(b - a) // 20)))
+
+    def total(picks):
+        path = [start, *picks]
+        return sum(commands(a, b) for a, b in itertools.pairwise(path))
+
+    best = min(total(c) for c in itertools.product(*near))
+    assert total([s[0] for s in near]) == best

@@ -452,6 +452,29 @@ def plan_tour(
                     if best is None or total < best[0]:
                         best = (total, legs, o)
                         count_guided(o, guided)
+    # the path through clear members that the bound's search found, where it is cheaper than
+    # the best plan: through every lattice goal state within a command of its members, the
+    # cheapest combination first (six welds in free space: its path 73, the plans above 74;
+    # the lattice states next to its members that the guide's listing finds, 75 at best)
+    path = _bound_clear_path(family_bound)
+    if guide_all is not None and path is not None and (best is None or path[0] < best[0]):
+        _, o, members = path
+        name = "-".join(str(i + 1) for i in o)
+        say(f"planning order {name} through the bound's path through clear members")
+        near = guide_all.states_near(start, o, members, return_to_start)
+        along: list[MotionPlan] = []
+        if near is not None:
+            try:
+                along = legs_of(o, name, near, ceiling=None if best is None else best[0])
+            except (_AbandonedError, PlanningError):
+                along = []
+        if along and near is not None:
+            total = _commands(along)
+            planned[o] = min(planned.get(o, total), total)
+            not_planned.pop(o, None)
+            if best is None or total < best[0]:
+                best = (total, along, o)
+                count_guided(o, near)
     # many goal states per target kept open until the legs between them are planned
     # (:mod:`~armpath.planning.tour_pool`): the seed's Task 3 127 -> 122 commands
     if pools and guide_all is not None and fam is not None:
@@ -644,6 +667,18 @@ def _guided_goals(
     if found is None:
         return None
     return guide.goal_states(q0, order, found[1])
+
+
+def _bound_clear_path(
+    bound: CommandBound | None,
+) -> tuple[float, tuple[int, ...], list[FloatArray]] | None:
+    """The cheapest path through clear members that a tour bound's search found: its
+    commands, its order and its members (rad, one per target in that order); None without
+    one."""
+    if bound is None or bound.clear_path_q is None or bound.clear_path_order is None:
+        return None
+    commands = bound.sampling.get("clear_path_commands", np.inf)
+    return commands, bound.clear_path_order, list(bound.clear_path_q)
 
 
 def _family_bounds(

@@ -9,7 +9,9 @@ kept, and for a visiting order the shortest path from the start through one memb
 is found (largest joint change per leg, whole commands, obstacles between the targets
 ignored). Each member on that path is then turned into lattice goal states next to it
 (:func:`~armpath.planning.reach_generic.generic_goal_states` on the members nearest it), and the
-tour is planned leg by leg to those.
+tour is planned leg by leg to those. For a path a tour's lower bound found through clear members,
+every lattice goal state within a command of each member is listed
+(:meth:`TourGuide.states_near`), the cheapest combination first.
 """
 
 from __future__ import annotations
@@ -25,8 +27,11 @@ from armpath.errors import ArmpathError
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import shift_into_limits
 from armpath.ik.target import ToolTarget
+from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import FamilySampler, Layer
+from armpath.planning.bounds.lattice_goals import lattice_goal_states
+from armpath.planning.bounds.tour import listing_ranges
 from armpath.planning.reach import GOAL_BODY_BUFFER_MM
 from armpath.planning.reach_generic import generic_goal_states
 from armpath.planning.trace.family import CurveFamily
@@ -169,9 +174,87 @@ class TourGuide:
             out.append(states)
         return out
 
+    def states_near(
+        self,
+        start_ticks: IntArray,
+        order: tuple[int, ...],
+        members: list[FloatArray],
+        back: bool,
+    ) -> list[IntArray] | None:
+        """Every clear lattice goal state within one command of each path member (a complete
+        listing, :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`, over the
+        box of ticks one command wide each way about the member: its joints that turn whole
+        turns taken on the turn nearest the member before, the start's for the first; the
+        joints that do not move the tool point at the start's ticks), the states of the
+        cheapest path through them by direct motions first (one per target, whole commands per
+        leg, obstacles ignored; ``back``: and back to the start), one array per target of
+        ``order``. None where the states cannot be listed completely
+        (:func:`~armpath.planning.bounds.tour.listing_ranges`) or a member has none."""
+        grid = self.arm.lattice
+        tip = self.sampler.tip
+        ranges = listing_ranges(self.sampler, grid.to_joint(start_ticks))
+        if ranges is None:
+            return None
+        fixed, lower, upper = ranges
+        turns = self.sampler.whole_turns
+        step = np.asarray(grid.max_ticks, dtype=np.int64)[tip]
+        sets = []
+        before = grid.to_joint(start_ticks)
+        for t, q in zip(order, members, strict=True):
+            check_time("choosing the tour's goal states")
+            q = np.array(q, dtype=np.float64, copy=True)
+            whole = np.flatnonzero(tip)[turns]
+            q[whole] = before[whole] + np.angle(np.exp(1j * (q[whole] - before[whole])))
+            centre = grid.nearest_ticks(q)[tip]
+            lo = np.where(turns, centre - step, np.maximum(centre - step, lower))
+            hi = np.where(turns, centre + step, np.minimum(centre + step, upper))
+            if np.any(lo > hi):
+                return None
+            found = lattice_goal_states(
+                self.arm,
+                self.targets[t] / self.arm.mm_per_unit,
+                self.tolerance_mm / self.arm.mm_per_unit,
+                tip,
+                fixed,
+                lo,
+                hi,
+                may_be_clear=lambda x, moved: self.world.may_be_clear_within(self.arm, x, moved),
+            )
+            states = found.ticks
+            if states.shape[0]:
+                states = states[self.world.satisfied(self.arm, grid.to_joint(states))]
+            if not found.complete or states.shape[0] == 0:
+                return None
+            sets.append(states)
+            before = q
+        return _cheapest_first(np.asarray(start_ticks, dtype=np.int64), sets, back, grid)
+
     def with_start(self, q: FloatArray, q_start: FloatArray) -> FloatArray:
         """``q`` with the joints that do not move the tool point at their start values."""
         out = np.array(q, dtype=np.float64, copy=True)
         still = ~self.sampler.tip
         out[:, still] = q_start[still]
         return out
+
+
+def _cheapest_first(
+    start: IntArray, sets: list[IntArray], back: bool, grid: Lattice
+) -> list[IntArray]:
+    """``sets`` of lattice states (one array per target, in order) with the states of the
+    cheapest path from ``start`` through one of each first (direct motions, whole commands;
+    ``back``: and back to the start)."""
+    cost = grid.commands_needed_many(sets[0] - start[None, :]).astype(np.float64)
+    came = []
+    for a, b in itertools.pairwise(sets):
+        step = cost[:, None] + grid.commands_needed_many(b[None, :, :] - a[:, None, :])
+        came.append(np.argmin(step, axis=0))
+        cost = step[came[-1], np.arange(b.shape[0])]
+    if back:
+        cost = cost + grid.commands_needed_many(start[None, :] - sets[-1])
+    picks = [int(np.argmin(cost))]
+    for arg in reversed(came):
+        picks.append(int(arg[picks[-1]]))
+    picks.reverse()
+    return [
+        np.vstack([s[k : k + 1], np.delete(s, k, axis=0)]) for s, k in zip(sets, picks, strict=True)
+    ]

@@ -570,15 +570,17 @@ class SearchResult:
     """What the search found: the bound (``value``, commands) and the approach's part of its
     path, the order its path visits the sites in; the least cost of a path through clear
     samples (``clear_path``: an upper bound of the relaxation's optimum; inf when none was
-    found) and its configurations (one per site in site order, rad; None without one); the bound's
-    path's configurations; the rounds run, the samples and directions of the last, and the
-    largest sampling error on the bound's path (commands)."""
+    found), its configurations (one per site in site order, rad; None without one) and the
+    order it visits the sites in; the bound's path's configurations; the rounds run, the
+    samples and directions of the last, and the largest sampling error on the bound's path
+    (commands)."""
 
     value: float
     approach: float
     order: tuple[int, ...]
     clear_path: float
     clear_q: FloatArray | None
+    clear_order: tuple[int, ...]
     bound_q: FloatArray
     rounds: int
     samples: int
@@ -740,7 +742,7 @@ class CellSearch:
         say = say or (lambda _m: None)
         rounds = search_rounds(self.max_samples) if rounds is None else rounds
         best: SearchResult | None = None
-        clear_total, clear_q = np.inf, None
+        clear_total, clear_q, clear_order = np.inf, None, tuple(range(len(self.sites)))
         pruned_against = np.inf
         stalled = 0
         if self._ended:
@@ -750,6 +752,7 @@ class CellSearch:
             was, self._resume = self._resume, None
             best, stalled, first = was.best, was.stalled, was.best.rounds + 1
             clear_total, clear_q = was.best.clear_path, was.best.clear_q
+            clear_order = was.best.clear_order
             pruned_against = min(float(upper), was.incumbent)
             # the resumed round's samples all counted as left (its pruning was not measured)
             if not self._go_on(
@@ -789,6 +792,7 @@ class CellSearch:
             if clear.total < clear_total:
                 clear_total = clear.total
                 clear_q = np.array([lay.q[i] for lay, i in zip(exact, clear.samples, strict=True)])
+                clear_order = clear.order
             incumbent = min(float(upper), clear_total)
             if found is None:
                 found = self.relaxation.solve(
@@ -806,13 +810,14 @@ class CellSearch:
             if best is None or found.total > best.value:
                 on_path = [(lay, i) for lay, i in zip(live, found.samples, strict=True) if i >= 0]
                 best = SearchResult(
-                    found.total, found.approach, found.order, clear_total, clear_q,
+                    found.total, found.approach, found.order, clear_total, clear_q, clear_order,
                     np.array([lay.q[i] for lay, i in on_path]), r, samples, directions,
                     max(float(lay.err[i].max()) for lay, i in on_path),
                 )  # fmt: skip
             else:
                 best = replace(
-                    best, clear_path=clear_total, clear_q=clear_q, rounds=r, samples=samples,
+                    best, clear_path=clear_total, clear_q=clear_q, clear_order=clear_order,
+                    rounds=r, samples=samples,
                     directions=directions,
                 )  # fmt: skip
             say(

@@ -122,6 +122,8 @@ def tour_bound(
         | passage_sampling(ways),
         guide_q=found.bound_q[list(found.order)],
         guide_order=tuple(found.order) if orders is None else None,
+        clear_path_q=None if found.clear_q is None else found.clear_q[list(found.clear_order)],
+        clear_path_order=None if found.clear_q is None else tuple(found.clear_order),
     )
     return bound, search.per_order
 

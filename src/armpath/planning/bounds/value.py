@@ -16,7 +16,10 @@ class CommandBound:
     fractional commands, its parts (a trace's ``approach`` and ``along``), how it was
     computed, and the joint path that attains it (the *guide*: configurations rad, one per
     layer, with the arc length of each layer for a trace; for a tour whose orders are bounded
-    together, ``guide_order`` the order of its targets). ``proven``: False where the samples
+    together, ``guide_order`` the order of its targets). A tour's ``clear_path_q``: the
+    cheapest path the search found through members that are clear themselves (configurations
+    rad, one per target in its order ``clear_path_order``; None without one), which a plan may
+    follow. ``proven``: False where the samples
     do not cover the family (an arm with more joints than the tool point and its direction
     need: one member of its self-motion per tool frame); the value is then an estimate."""
 
@@ -28,6 +31,8 @@ class CommandBound:
     guide_q: FloatArray | None = None
     guide_s_mm: FloatArray | None = None
     guide_order: tuple[int, ...] | None = None
+    clear_path_q: FloatArray | None = None
+    clear_path_order: tuple[int, ...] | None = None
     proven: bool = True
 
     def describe(self) -> dict[str, object]:
