@@ -45,6 +45,11 @@ GUIDE_DIRECTIONS = 2000
 NEAREST_MEMBERS = 48
 #: Lattice goal states kept next to each path member.
 GUIDE_GOALS = 4
+#: Boxes of ticks the listing of the lattice goal states within a command of one member may
+#: look at (about a microsecond each; past it the listing gives up, and the plan does without
+#: it): a UR5 whose tool point lies off joint 6's axis (every joint moves it), about 35,000 a
+#: weld.
+NEAR_BOXES = 5_000_000
 
 
 @dataclass(frozen=True)
@@ -219,6 +224,7 @@ class TourGuide:
                 lo,
                 hi,
                 may_be_clear=lambda x, moved: self.world.may_be_clear_within(self.arm, x, moved),
+                max_boxes=NEAR_BOXES,
             )
             states = found.ticks
             if states.shape[0]:
