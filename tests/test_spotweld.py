@@ -198,8 +198,9 @@ def test_six_welds_are_bounded_over_every_order():
     cheaper bound (every weld entered once, from the start or another weld) said 17; the plan,
     replayed with the independent kinematics, reaches every weld within the tolerance and is
     within 5 % of the bound that 120,000 live samples prove (73 against 71; the default
-    50,000: 68; the plan follows the bound's path through clear members, 73). Its first sampling holds more samples than that budget; the search goes on
-    past it where the cells that may hold a cheaper path than the incumbent fit in it."""
+    50,000: 68; the plan follows the bound's path through clear members, 73). Its first
+    sampling holds more samples than that budget; the search goes on past it where the cells
+    that may hold a cheaper path than the incumbent fit in it."""
     import armpath
 
     doc = armpath.spotweld("seed", WELDS_FREE, scene="none", bound_samples=120_000).doc
