@@ -60,6 +60,7 @@ class TourGuide:
     world: CollisionWorld
     sampler: FamilySampler
     layers: list[Layer]
+    #: the targets ``(K, 3)``, in the model's length unit (as the tour's)
     targets: FloatArray
     tolerance_mm: float
     #: each member's room (mm): the least clearance of its links beyond the margin, per layer
@@ -217,7 +218,7 @@ class TourGuide:
                 return None
             found = lattice_goal_states(
                 self.arm,
-                self.targets[t] / self.arm.mm_per_unit,
+                self.targets[t],
                 self.tolerance_mm / self.arm.mm_per_unit,
                 tip,
                 fixed,
