@@ -773,8 +773,8 @@ class CellSearch:
             # the incumbent is of use (with whole legs: at least one command cheaper than one
             # found before), and the relaxation's least costs still to go bound a clear path's
             # from below (a tour over every order prunes with them: six welds in free space,
-            # 150,000 samples, the last round's clear path 47 -> 0.2 s; with the programmes'
-            # order above the bound 205 -> 98 s, 71 commands either way)
+            # 150,000 samples, the last round's clear path 47 -> 0.2 s; the whole tour, with
+            # the order of :meth:`Subsets.solve`'s programmes, 205 -> 98 s, 71 either way)
             found = None
             if np.isfinite(incumbent):
                 found = self.relaxation.solve(
