@@ -383,6 +383,24 @@ def plan_tour(
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
     planned: dict[tuple[int, ...], int] = {}
     not_planned: dict[tuple[int, ...], str] = {}
+
+    def kept(
+        o: tuple[int, ...],
+        legs: list[MotionPlan],
+        through: list[IntArray],
+        best: tuple[int, list[MotionPlan], tuple[int, ...]] | None,
+    ) -> tuple[int, list[MotionPlan], tuple[int, ...]] | None:
+        """Order ``o`` planned in ``legs`` through the goal states ``through`` (one array
+        per target in order) counted: the best plan, ``best`` or this one if it needs fewer
+        commands (its order's bound then counts those goal states)."""
+        total = _commands(legs)
+        planned[o] = min(planned.get(o, total), total)
+        not_planned.pop(o, None)
+        if best is not None and total >= best[0]:
+            return best
+        count_guided(o, through)
+        return total, legs, o
+
     failures: list[str] = []
     # the best-ranked orders, then every next one whose bound is below the best plan so far
     # (at most EXTRA_ORDERS more): the ranking is by bound, so the first that is not ends it
@@ -446,12 +464,7 @@ def plan_tour(
                         continue
                     except PlanningError:
                         continue
-                    total = _commands(legs)
-                    planned[o] = min(planned.get(o, total), total)
-                    not_planned.pop(o, None)
-                    if best is None or total < best[0]:
-                        best = (total, legs, o)
-                        count_guided(o, guided)
+                    best = kept(o, legs, guided, best)
     # the path through clear members that the bound's search found, where it is cheaper than
     # the best plan: through every lattice goal state within a command of its members, the
     # cheapest combination first (six welds in free space: its path 73, the plans above 74;
@@ -469,12 +482,7 @@ def plan_tour(
             except (_AbandonedError, PlanningError):
                 along = []
         if along and near is not None:
-            total = _commands(along)
-            planned[o] = min(planned.get(o, total), total)
-            not_planned.pop(o, None)
-            if best is None or total < best[0]:
-                best = (total, along, o)
-                count_guided(o, near)
+            best = kept(o, along, near, best)
     # many goal states per target kept open until the legs between them are planned
     # (:mod:`~armpath.planning.tour_pool`): the seed's Task 3 127 -> 122 commands
     if pools and guide_all is not None and fam is not None:
@@ -492,13 +500,9 @@ def plan_tour(
         except PlanningError:  # no member at some target: the plans above stand
             pooled = None
         if pooled is not None and pooled.order is not None and pooled.legs is not None:
-            total = _commands(pooled.legs)
-            planned[pooled.order] = min(planned.get(pooled.order, total), total)
-            not_planned.pop(pooled.order, None)
-            if best is None or total < best[0]:
-                best = (total, pooled.legs, pooled.order)
-                reached = pooled.legs[: len(pooled.order)]
-                count_guided(pooled.order, [leg.sequence.final_ticks[None, :] for leg in reached])
+            reached = pooled.legs[: len(pooled.order)]
+            through = [leg.sequence.final_ticks[None, :] for leg in reached]
+            best = kept(pooled.order, pooled.legs, through, best)
     if best is None:
         raise PlanningError("no order could be planned: " + "; ".join(failures))
     if best[0] > SECOND_LOOK_RATIO * bounds[best[2]] and opts.searches < SECOND_LOOK_SEARCHES:
