@@ -370,7 +370,7 @@ def spotweld(
     document's ``lower_bound``; the seed's Task 3: about a third of its time); False: ``None``
     there. ``bound_samples``: the live samples the bound's search may hold (1,000 to 2,000,000;
     None: 50,000; the search's rounds grow in proportion): more give a tighter bound, later
-    (Task 3: 110 rather than 108 with 200,000, 177 s of bounding rather than 44 s on a 2-core
+    (Task 3: 110 rather than 108 with 200,000, 81 s of bounding rather than 22 s on a 2-core
     machine). ``pools``: plan the cheapest orders once more through pools of goal states
     (Task 3: 122 commands rather than 127, in about twice the time without the bound); False:
     the guided orders' goal states only."""

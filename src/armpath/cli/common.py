@@ -121,8 +121,8 @@ BoundSamplesOption = Annotated[
         metavar="N",
         help="Live samples the lower bound's search may hold (1,000 to 2,000,000; default "
         "50,000; its rounds grow in proportion, 16 at the default): more give a tighter bound, "
-        "later (with 200,000 the UR5 cell's seam: 99 rather than 93, its bound 523 s rather "
-        "than 68 s; benchmarks/results/bounds.md).",
+        "later (with 200,000 the UR5 cell's seam: 99 rather than 93, its bound 266 s rather "
+        "than 38 s; benchmarks/results/bounds.md).",
         show_default=False,
     ),
 ]
