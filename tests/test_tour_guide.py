@@ -253,8 +253,8 @@ def test_the_lattice_states_near_a_path_are_all_listed_and_the_cheapest_come_fir
     guided path. Within 9 ticks of each member's nearest state, a brute force over the lattice
     (independent forward kinematics) finds exactly the listed ones that lie there; every
     listed state reaches its weld within the tolerance; the first state of each weld is a
-    cheapest combination (whole commands of 20 ticks per leg from the start), against every
-    combination of the listed states."""
+    cheapest combination (whole commands of 20 ticks per leg from the start, and back to it
+    or not), against every combination of the listed states."""
     from armpath.scenes import scene_from_dict
 
     arm = seed_arm()
@@ -285,9 +285,13 @@ def test_the_lattice_states_near_a_path_are_all_listed_and_the_cheapest_come_fir
     def commands(a, b):
         return int(np.max(-(-np.abs(b - a) // 20)))
 
-    def total(picks):
-        path = [start, *picks]
+    def total(picks, back):
+        path = [start, *picks, *([start] if back else [])]
         return sum(commands(a, b) for a, b in itertools.pairwise(path))
 
-    best = min(total(c) for c in itertools.product(*near))
-    assert total([s[0] for s in near]) == best
+    for back in (False, True):
+        first = guide.states_near(start, order, members, back=back)
+        assert first is not None
+        assert [{tuple(x) for x in s} for s in first] == [{tuple(x) for x in s} for s in near]
+        best = min(total(c, back) for c in itertools.product(*near))
+        assert total([s[0] for s in first], back) == best
