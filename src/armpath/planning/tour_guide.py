@@ -46,10 +46,14 @@ NEAREST_MEMBERS = 48
 #: Lattice goal states kept next to each path member.
 GUIDE_GOALS = 4
 #: Boxes of ticks the listing of the lattice goal states within a command of one member may
-#: look at (about a microsecond each; past it the listing gives up, and the plan does without
-#: it): a UR5 whose tool point lies off joint 6's axis (every joint moves it), about 35,000 a
-#: weld.
+#: look at (about a microsecond each; past it the listing stops): a UR5 whose tool point lies
+#: off joint 6's axis (every joint moves it), about 35,000 a weld at 0.05 mm.
 NEAR_BOXES = 5_000_000
+#: Lattice goal states the listing within a command of one member may hold (past it, those
+#: listed so far), and those nearest the member that the cheapest combination is chosen from
+#: (the programme holds a pair of targets' states at once: a wide tolerance lists many).
+NEAR_LISTED = 200_000
+NEAR_STATES = 1_000
 
 
 @dataclass(frozen=True)
@@ -194,8 +198,10 @@ class TourGuide:
         joints that do not move the tool point at the start's ticks), the states of the
         cheapest path through them by direct motions first (one per target, whole commands per
         leg, obstacles ignored; ``back``: and back to the start), one array per target of
-        ``order``. None where the states cannot be listed completely
-        (:func:`~armpath.planning.bounds.tour.listing_ranges`) or a member has none."""
+        ``order`` (at most :data:`NEAR_STATES` each, those nearest the member; past
+        :data:`NEAR_BOXES` boxes or :data:`NEAR_LISTED` states, of those listed so far). None
+        where the states cannot be listed (:func:`~armpath.planning.bounds.tour.listing_ranges`)
+        or a member has none."""
         grid = self.arm.lattice
         tip = self.sampler.tip
         ranges = listing_ranges(self.sampler, grid.to_joint(start_ticks))
@@ -203,13 +209,13 @@ class TourGuide:
             return None
         fixed, lower, upper = ranges
         turns = self.sampler.whole_turns
+        whole = np.flatnonzero(tip)[turns]
         step = np.asarray(grid.max_ticks, dtype=np.int64)[tip]
         sets = []
         before = grid.to_joint(start_ticks)
         for t, q in zip(order, members, strict=True):
             check_time("choosing the tour's goal states")
             q = np.array(q, dtype=np.float64, copy=True)
-            whole = np.flatnonzero(tip)[turns]
             q[whole] = before[whole] + np.angle(np.exp(1j * (q[whole] - before[whole])))
             centre = grid.nearest_ticks(q)[tip]
             lo = np.where(turns, centre - step, np.maximum(centre - step, lower))
@@ -226,13 +232,15 @@ class TourGuide:
                 hi,
                 may_be_clear=lambda x, moved: self.world.may_be_clear_within(self.arm, x, moved),
                 max_boxes=NEAR_BOXES,
+                max_states=NEAR_LISTED,
             )
             states = found.ticks
             if states.shape[0]:
                 states = states[self.world.satisfied(self.arm, grid.to_joint(states))]
-            if not found.complete or states.shape[0] == 0:
+            if states.shape[0] == 0:
                 return None
-            sets.append(states)
+            away = np.max(np.abs(states[:, tip] - centre) / step, axis=1)
+            sets.append(states[np.argsort(away, kind="stable")[:NEAR_STATES]])
             before = q
         return _cheapest_first(np.asarray(start_ticks, dtype=np.int64), sets, back, grid)
 
