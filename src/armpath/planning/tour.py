@@ -475,14 +475,12 @@ def plan_tour(
         name = "-".join(str(i + 1) for i in o)
         say(f"planning order {name} through the bound's path through clear members")
         near = guide_all.states_near(start, o, members, return_to_start)
-        along: list[MotionPlan] = []
         if near is not None:
             try:
                 along = legs_of(o, name, near, ceiling=None if best is None else best[0])
+                best = kept(o, along, near, best)
             except (_AbandonedError, PlanningError):
-                along = []
-        if along and near is not None:
-            best = kept(o, along, near, best)
+                pass  # the plans above stand
     # many goal states per target kept open until the legs between them are planned
     # (:mod:`~armpath.planning.tour_pool`): the seed's Task 3 127 -> 122 commands
     if pools and guide_all is not None and fam is not None:
