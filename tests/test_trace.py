@@ -105,6 +105,48 @@ def test_a_free_circle_is_traced_in_one_closed_pass(circle_trace):
     assert r.clearance.certified_ok
 
 
+@pytest.mark.slow
+def test_a_pass_whose_certificate_exceeds_the_tolerance_is_traced_again_nearer(monkeypatch):
+    """With the tracer's checked instants allowed the whole tolerance, the continuous path of
+    the free circle's pass rises above it between them (its certified bound over 0.1 mm): the
+    pass is traced again from the same entry with the fallback share, and what is kept stays
+    within the tolerance when replayed by the independent FK (closed-form distance)."""
+    from armpath.planning.trace import plan as trace_plan
+
+    bounds = []
+    certify = trace_plan.certified_deviation
+
+    def spy(*args, **kwargs):
+        found = certify(*args, **kwargs)
+        bounds.append(found[1])
+        return found
+
+    monkeypatch.setattr(trace_plan, "BAND_SHARE", 1.0)
+    monkeypatch.setattr(trace_plan, "certified_deviation", spy)
+    scene = scene_from_dict(TABLE_ONLY)
+    circle = ParametricCurve(
+        "circle",
+        f"{CENTER[0]} + {RADIUS}*cos(t)",
+        f"{CENTER[1]} + {RADIUS}*sin(t)",
+        f"{CENTER[2]}",
+        0.0,
+        2 * np.pi,
+    )
+    start = deg_to_ticks([0, -90, 0, 0, -90, 0])
+    options = TraceOptions(tolerance_mm=0.1, bound=False)
+    r = plan_trace(seed_arm(), scene.world, start, circle, options)
+    assert len(bounds) == 2 and bounds[0] > 0.1 >= bounds[1]
+    (p,) = r.passes
+    assert p.max_deviation_bound_mm == bounds[1]
+    states = r.sequence.states()
+    cmds = np.diff(states, axis=0)[p.first : p.last]
+    t = np.linspace(0.0, 1.0, 201)
+    q = states[p.first : p.last, None, :] + t[None, :, None] * cmds[:, None, :]
+    dev = circle_distance(independent.points(q.reshape(-1, 6) / 10.0)[:, -1, :])
+    assert dev.max() <= 0.1
+    assert r.covered_mm >= r.curve.length - 1e-3
+
+
 def test_the_reachable_part_of_a_line_ends_at_full_stretch():
     scene = scene_from_dict(TABLE_ONLY)
     line = Polyline("line", np.array([[300.0, 0.0, 300.0], [800.0, 0.0, 300.0]]))

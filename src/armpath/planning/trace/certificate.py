@@ -17,8 +17,20 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+#: The deviation certificate's precision (mm): its bound exceeds the sampled largest deviation by
+#: at most this much, or by 2 % of the tolerance where that is less
+#: (:func:`certificate_precision`).
+PRECISION_MM = 0.002
+_PRECISION_SHARE = 0.02
+
+
+def certificate_precision(tolerance_mm: float) -> float:
+    """The precision (mm) a pass traced within ``tolerance_mm`` is certified to."""
+    return min(PRECISION_MM, _PRECISION_SHARE * tolerance_mm)
+
+
 def certified_deviation(
-    arm: SerialArm, curve: Curve, states: IntArray, s_near: float, precision: float = 0.002
+    arm: SerialArm, curve: Curve, states: IntArray, s_near: float, precision: float = PRECISION_MM
 ) -> tuple[float, float, FloatArray, FloatArray]:
     """Largest distance (mm) of the continuous tip path through lattice ``states`` (ticks) from
     ``curve``, a proven upper bound (branch and bound: the tip moves at most ``rate * dt`` between

@@ -46,7 +46,11 @@ from armpath.planning.motion import (
     search_clearance_extra,
 )
 from armpath.planning.motion_check import MotionClearance, motion_clearance
-from armpath.planning.trace.certificate import certified_axis_angle, certified_deviation
+from armpath.planning.trace.certificate import (
+    certificate_precision,
+    certified_axis_angle,
+    certified_deviation,
+)
 from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
 from armpath.planning.trace.reference import (
@@ -55,7 +59,13 @@ from armpath.planning.trace.reference import (
     _joint_change,
     reference_pieces,
 )
-from armpath.planning.trace.tracer import _BODY_BUFFER_MM, GOAL_REACHED_MM, Tracer
+from armpath.planning.trace.tracer import (
+    _BODY_BUFFER_MM,
+    BAND_SHARE,
+    FALLBACK_BAND_SHARE,
+    GOAL_REACHED_MM,
+    Tracer,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -533,7 +543,7 @@ def _trace_arcs(
                 f"tracing pass {len(passes) + 1}: {piece.arc.start_mm:.1f}.."
                 f"{piece.arc.end_mm:.1f} mm of the curve"
             )
-            tracer = Tracer(fam, piece, opts.tolerance_mm)
+            tracer = Tracer(fam, piece, opts.tolerance_mm, band_share=BAND_SHARE)
             tracer.align(arm.lattice.to_joint(states[-1]))
             here = len(states) - 1
             if passes:  # lift off first, to where the transit's search has room
@@ -544,18 +554,38 @@ def _trace_arcs(
                 # this piece is reachable but cannot be entered from here: report it, go on
                 not_traced.append((piece.arc, str(exc)))
                 continue
-            pass_states = [q_entry]
             sign, begin, finish = piece.sign, piece.begin_mm, piece.finish_mm
-            if sign * (s_entry - begin) > GOAL_REACHED_MM:  # back to where the piece begins first
-                pass_states, s_entry = tracer.run(q_entry, s_entry, begin)
-            motion, pass_states = _entry_merged(arm, world, motion, pass_states)
-            states.extend(list(motion.sequence.states()[1:]))
-            transits.append(Transit(here, len(states) - 1, motion.method))
-            first = len(states) - 1
             goal = finish + sign * (run_on if last_piece else 0.0)
-            ahead, s_reached = tracer.run(pass_states[-1], s_entry, goal)
-            pass_states += ahead[1:]
-            states.extend(pass_states[1:])
+            entered = len(states)
+            for share in (BAND_SHARE, FALLBACK_BAND_SHARE):
+                if share != tracer.band_share:
+                    # the pass's certified deviation exceeded the tolerance: traced again from
+                    # the same entry, its tool point kept nearer the curve
+                    del states[entered:]
+                    transits.pop()
+                    tracer = Tracer(fam, piece, opts.tolerance_mm, band_share=share)
+                    tracer.align(arm.lattice.to_joint(states[here]))
+                pass_states, s_at = [q_entry], s_entry
+                if sign * (s_at - begin) > GOAL_REACHED_MM:  # back to where the piece begins
+                    pass_states, s_at = tracer.run(q_entry, s_at, begin)
+                entry, pass_states = _entry_merged(arm, world, motion, pass_states)
+                states.extend(list(entry.sequence.states()[1:]))
+                transits.append(Transit(here, len(states) - 1, entry.method))
+                first = len(states) - 1
+                ahead, s_reached = tracer.run(pass_states[-1], s_at, goal)
+                pass_states += ahead[1:]
+                states.extend(pass_states[1:])
+                if len(pass_states) == 1:
+                    break
+                dev, dev_bound, ps, pd = certified_deviation(
+                    arm,
+                    curve,
+                    np.array(pass_states),
+                    begin,
+                    certificate_precision(opts.tolerance_mm),
+                )
+                if dev_bound <= opts.tolerance_mm:
+                    break
             if len(pass_states) == 1:  # entered but no command along the curve: not a pass
                 # nor is the way there kept: the next try starts from where this one did
                 del states[here + 1 :]
@@ -564,7 +594,6 @@ def _trace_arcs(
                 if rest is not None:
                     queue.insert(0, (rest, run_on))
                 break
-            dev, dev_bound, ps, pd = certified_deviation(arm, curve, np.array(pass_states), begin)
             prof_s.append(ps)
             prof_d.append(pd)
             angle, angle_bound = None, None
