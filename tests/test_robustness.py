@@ -207,6 +207,22 @@ def test_plan_in_an_empty_scene_prints_its_summary(empty_scene_file):
     assert "no obstacles" in r.stdout and "certified" in r.stdout
 
 
+def test_a_trace_with_links_too_thick_for_any_check_is_planned(tmp_path):
+    """Links of 300 mm radius in a scene without obstacles leave the family no pair to check
+    (it once failed inverting an empty list of pairs): the line is traced whole."""
+    scene = tmp_path / "line.toml"
+    scene.write_text(
+        'name = "line"\n[tasks.trace]\ncurve = { type = "polyline", name = "line", '
+        "points_mm = [[300.0, -100.0, 200.0], [300.0, 100.0, 200.0]] }\n"
+    )
+    out = tmp_path / "out"
+    r = run("trace", "--scene", str(scene), "--no-bound", "--link-radius", "300", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((out / "trace.json").read_text())
+    assert doc["coverage"]["covered_mm"] == pytest.approx(200.0, abs=0.2)
+    assert doc["max_deviation_bound_mm"] <= 0.1
+
+
 def test_huge_coordinates_and_non_utf8_scene_files_are_one_line_errors(tmp_path):
     far = tmp_path / "far.toml"
     far.write_text(

@@ -153,7 +153,8 @@ class CurveFamily:
         pairs = self.world.pairs(self.arm)
         self._required = self.world.required(self.arm)
         touching = np.array(
-            [p.is_tip and self.surface is not None and p.other == self.surface.name for p in pairs]
+            [p.is_tip and self.surface is not None and p.other == self.surface.name for p in pairs],
+            dtype=bool,
         )
         self._touch_cols = touching
         self._labels = [p.label for p in pairs]
