@@ -412,11 +412,15 @@ def plan_tour(
         name = "-".join(str(i + 1) for i in o)
         if best is not None and bounds[o] >= best[0] and o != guided_best:
             not_planned[o] = (
-                f"not planned: its bound {bounds[o]} is no fewer than the {best[0]} commands "
-                f"planned for order {'-'.join(str(i + 1) for i in best[2])}"
+                f"not planned: its bound over its candidate goal states, {bounds[o]}, is no "
+                f"fewer than the {best[0]} commands planned for order "
+                f"{'-'.join(str(i + 1) for i in best[2])}"
             )
             continue
-        say(f"planning order {name} (lower bound {bounds[o]} commands)")
+        say(
+            f"planning order {name} (at least {bounds[o]} commands through its candidate goal "
+            "states)"
+        )
         legs, through, failure = plan_order(o, name)
         if failure is not None:
             failures.append(f"order {name}: {failure}")
