@@ -351,6 +351,31 @@ def test_time_limit_ends_a_long_command_with_one_line_and_no_files(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_terminated_command_ends_with_one_line_and_leaves_no_staged_files(tmp_path):
+    """SIGTERM (what ``timeout`` and process managers send) unwinds the command as Ctrl-C does:
+    one error line, exit status 143, and neither its output folder nor the folder it staged
+    its files in is left (once an empty ``.armpath-*`` folder stayed beside ``--out``)."""
+    import signal
+    import time
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "armpath", "trace", "--out", str(tmp_path / "out")],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+    )
+    waited = 0.0
+    while not list(tmp_path.glob(".armpath-*")) and waited < 120.0 and proc.poll() is None:
+        time.sleep(0.1)
+        waited += 0.1
+    assert list(tmp_path.glob(".armpath-*")), "the command staged nothing to remove"
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 143
+    assert error_lines(stderr) == ["error: terminated"]
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_time_limits_nest_and_are_checked():
     with time_limit(100.0) as outer:
         with time_limit(1000.0) as inner:

@@ -14,8 +14,9 @@ from __future__ import annotations
 import importlib
 import inspect
 import re
+import signal
 import sys
-from typing import Annotated, Any
+from typing import Annotated, Any, NoReturn
 
 import typer
 
@@ -142,9 +143,32 @@ def empty_option(args: list[str]) -> str | None:
     return None
 
 
+#: Set when SIGTERM arrived (the command then unwinds as from Ctrl-C).
+_TERMINATED: list[int] = []
+#: The exit status of a command ended by Ctrl-C (the parser's) and by SIGTERM (128 + 15).
+_INTERRUPTED_STATUS = 130
+_TERMINATED_STATUS = 143
+
+
+def _on_terminate(signum: int, frame: object) -> None:
+    """SIGTERM: raised where the command is as an interrupt, so what it staged is removed."""
+    _TERMINATED.append(signum)
+    raise KeyboardInterrupt
+
+
+def _interrupted() -> NoReturn:
+    """One error line for a command ended by Ctrl-C or SIGTERM, and its exit status."""
+    word = "terminated" if _TERMINATED else "interrupted"
+    err_console.print(f"error: {word}", markup=False)
+    sys.exit(_TERMINATED_STATUS if _TERMINATED else _INTERRUPTED_STATUS)
+
+
 def main() -> None:
     """Console entry point: a usage error (unknown option, missing, empty or malformed value)
-    is one ``error:`` line naming the command's --help, exit status 2."""
+    is one ``error:`` line naming the command's --help, exit status 2. Interrupted (Ctrl-C,
+    exit status 130) or terminated (SIGTERM, 143), a command ends with one ``error:`` line and
+    leaves no staged output behind."""
+    signal.signal(signal.SIGTERM, _on_terminate)
     empty = empty_option(sys.argv[1:])
     if empty is not None:
         message = f"error: {empty} was given an empty value (see: armpath --help)"
@@ -154,9 +178,8 @@ def main() -> None:
         rc = cli_command()(
             args=join_number_lists(sys.argv[1:]), prog_name="armpath", standalone_mode=False
         )
-    except typer.Abort:
-        err_console.print("error: interrupted", markup=False)
-        sys.exit(130)
+    except (typer.Abort, KeyboardInterrupt):
+        _interrupted()
     except typer.TyperException as exc:  # the parser's errors (typer's click)
         message = " ".join(str(getattr(exc, "format_message", exc.__str__)()).split())
         message = message.replace(": Value error, ", ": ")  # the enum converter's prefix
@@ -167,6 +190,8 @@ def main() -> None:
     except ArmpathError as exc:  # pragma: no cover - commands already convert these
         err_console.print(f"error: {exc}", markup=False)
         sys.exit(1)
+    if rc == _INTERRUPTED_STATUS or _TERMINATED:  # the parser ended it without a word
+        _interrupted()
     if isinstance(rc, int) and rc:
         sys.exit(rc)
 
