@@ -372,7 +372,7 @@ def spotweld(
     None: 50,000; the search's rounds grow in proportion): more give a tighter bound, later
     (Task 3: 110 rather than 108 with 200,000, 81 s of bounding rather than 22 s on a 2-core
     machine). ``pools``: plan the cheapest orders once more through pools of goal states
-    (Task 3: 122 commands rather than 127, in about twice the time without the bound); False:
+    (Task 3: 121 commands rather than 126, in about twice the time without the bound); False:
     the guided orders' goal states only."""
     from armpath.export import tour_result_dict
     from armpath.planning.choices import objective_of

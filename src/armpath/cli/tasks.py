@@ -686,7 +686,7 @@ def spotweld(
             help="Plan the orders whose shortest paths through the welds' clear goal "
             "configurations are shortest once more, through pools of goal states at every weld, "
             "each leg planned when a lazy shortest path over the pools needs it (the seed's "
-            "Task 3: 122 commands rather than 127, 58 s rather than 25 s without the bound); "
+            "Task 3: 121 commands rather than 126, 39 s rather than 18 s without the bound); "
             "--no-pools: the guided orders' goal states only.",
         ),
     ] = True,
@@ -933,7 +933,7 @@ def run(
             "--pools/--no-pools",
             help="Plan the tour's cheapest orders once more through pools of goal states, as "
             "armpath spotweld does (--no-pools: the seed tasks without the bound in two thirds "
-            "of the time, Task 3 in 127 commands rather than 122).",
+            "of the time, Task 3 in 126 commands rather than 121).",
         ),
     ] = True,
     time_limit: TimeLimitOption = None,
