@@ -55,6 +55,9 @@ def test_fk_human_output_and_below_table_warning():
         (["reach", "20", "-200", "120", "--from", "-90", "-90", "0", "0", "-90", "0"], "collision"),
         (["reach", "20", "-200", "120", "--from", "0", "-90.05", "0", "0", "-90", "0"], "0.1 deg"),
         (["reach", "20", "-200"], "expected 3 numbers"),
+        (["reach", "20", "-200", "120", "--bogus"], "no such option: --bogus"),
+        (["fk", "1", "2", "3", "-x", "4", "5"], "no such option: -x"),
+        (["reach", "20", "-inf", "120"], "'-inf' is not a finite number"),
         (["reach", "20", "-200", "120", "--tolerance", "0"], "tolerance"),
     ],
 )

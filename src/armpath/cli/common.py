@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -272,7 +273,18 @@ class BackgroundJob(Generic[T]):
             self._process.join()
 
 
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _numbers(values: list[str], count: int, what: str) -> list[float]:
+    unknown = [v for v in values if re.fullmatch(r"--?[A-Za-z].*", v) and not _is_float(v)]
+    if unknown:  # an option the command does not have, taken in with the numbers
+        raise InvalidInputError(f"no such option: {unknown[0]} (see the command's --help)")
     if len(values) != count:
         raise InvalidInputError(f"{what}: expected {count} numbers, got {len(values)}: {values}")
     out = []
