@@ -223,6 +223,23 @@ def test_a_trace_with_links_too_thick_for_any_check_is_planned(tmp_path):
     assert doc["max_deviation_bound_mm"] <= 0.1
 
 
+def test_a_curve_too_long_to_scan_is_refused_up_front_with_the_limit_named(tmp_path):
+    """A 150 m line would take 37,500 scan points at 4 mm (the limit 25,000, some 80 s): one
+    error line naming the limit, before any scanning, and no files."""
+    from armpath.planning.trace.reachability import MAX_SCAN_POINTS
+
+    scene = tmp_path / "long.toml"
+    scene.write_text(
+        'name = "long"\n[tasks.trace]\ncurve = { type = "polyline", name = "line", '
+        "points_mm = [[300.0, 0.0, 200.0], [150300.0, 0.0, 200.0]] }\n"
+    )
+    r = run("trace", "--scene", str(scene), "--no-bound", "--out", str(tmp_path / "out"))
+    assert r.returncode == 1
+    (line,) = error_lines(r.stderr)
+    assert "37,500" in line and f"the limit is {MAX_SCAN_POINTS:,}" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["long.toml"]
+
+
 def test_huge_coordinates_and_non_utf8_scene_files_are_one_line_errors(tmp_path):
     far = tmp_path / "far.toml"
     far.write_text(
