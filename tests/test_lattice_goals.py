@@ -233,3 +233,21 @@ def test_two_welds_in_free_space_are_bounded_over_their_lattice_states():
     assert "lattice states within the tolerance" in doc["lower_bound"]["method"]
     assert doc["lower_bound"]["sampling"]["lattice_goal_states"] > 200_000
     assert doc["lower_bound_commands"] == doc["n_commands"]
+
+
+@pytest.mark.slow
+def test_a_tour_of_more_welds_than_are_listed_is_bounded_over_the_sampled_family(monkeypatch):
+    """Past MAX_LATTICE_TARGETS welds (here set to one) the lattice states are not listed (each
+    weld takes seconds: twelve in a given order once spent 200 s listing): the same two welds
+    are bounded over the family's sampled members, never above the listed bound nor the plan."""
+    import armpath
+
+    welds = [[300.0, 100.0, 200.0], [250.0, -100.0, 250.0]]
+    listed = armpath.spotweld("seed", welds, scene="none", order="given").doc
+    monkeypatch.setattr(tour_bounds, "MAX_LATTICE_TARGETS", 1)
+    sampled = armpath.spotweld("seed", welds, scene="none", order="given").doc
+    assert "lattice states within the tolerance" in listed["lower_bound"]["method"]
+    assert "lattice states within the tolerance" not in sampled["lower_bound"]["method"]
+    assert "lattice_goal_states" not in sampled["lower_bound"]["sampling"]
+    assert 0 < sampled["lower_bound_commands"] <= listed["lower_bound_commands"]
+    assert sampled["lower_bound_commands"] <= sampled["n_commands"]

@@ -70,13 +70,14 @@ def tour_bound(
     takes at least its way through one of the obstacle's openings
     (:mod:`~armpath.planning.bounds.passage`); False: the direct leg only. ``lattice``: first
     the exact relaxation over the targets' lattice goal states (:func:`lattice_tour_bound`),
-    never below the sampled one; the family is sampled only where those cannot be listed."""
+    never below the sampled one, for at most :data:`MAX_LATTICE_TARGETS` targets; the family is
+    sampled where there are more or their states cannot be listed."""
     say = on_progress or (lambda _m: None)
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
-    if lattice and with_errors and orders is not None:
+    if lattice and with_errors and orders is not None and len(points) <= MAX_LATTICE_TARGETS:
         exact = lattice_tour_bound(sampler, q_start, points, orders, back, ways, say)
         if exact is not None:
             return exact
@@ -240,6 +241,10 @@ MAX_LATTICE_GOALS = 600_000
 #: orders (about 2.5e9 a second on two cores): past it, the family's sampled members instead.
 #: Seed Task 3: 9.7e9 pairs, 4 s.
 MAX_LATTICE_PAIRS = 40_000_000_000
+#: Most targets whose lattice states are listed for the bound: each takes seconds (some 12 s
+#: a weld of the seed arm in free space), so twelve welds in a given order spent 200 s listing
+#: and 24 over 5 min; more are bounded over the family's sampled members.
+MAX_LATTICE_TARGETS = 8
 #: Targets whose lattice states are listed at once (threads; the listing's kernel releases the
 #: GIL).
 GOAL_THREADS = 2
