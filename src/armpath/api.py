@@ -313,9 +313,9 @@ def trace(
     the fewest passes and commands; the document lists the arcs not traced and why.
     ``bound``: also prove a lower bound on the commands of any plan (the document's
     ``lower_bound``, with the plan's gap to it; the seed's Task 2: about a third of its time);
-    False: ``None`` there. ``bound_samples``: the live samples the bound's search may hold
-    (1,000 to 2,000,000; None: 50,000; the search's rounds grow in proportion): more
-    give a tighter bound, later."""
+    False: ``None`` there. ``bound_samples``: the live samples past which the bound's search
+    stops splitting (1,000 to 2,000,000; None: 50,000; its first round may hold more; the
+    search's rounds grow in proportion): more give a tighter bound, later."""
     from armpath.export import trace_result_dict
     from armpath.geometry.curves import Curve, Polyline
     from armpath.planning.motion import MotionOptions
@@ -368,8 +368,9 @@ def spotweld(
     planned; ``"given"``: as listed), optionally back to the start. ``bound``: also prove a
     lower bound on the commands of any tour, over every order and goal configuration (the
     document's ``lower_bound``; the seed's Task 3: about a third of its time); False: ``None``
-    there. ``bound_samples``: the live samples the bound's search may hold (1,000 to 2,000,000;
-    None: 50,000; the search's rounds grow in proportion): more give a tighter bound, later
+    there. ``bound_samples``: the live samples past which the bound's search stops splitting
+    (1,000 to 2,000,000; None: 50,000; its first round may hold more; the search's rounds
+    grow in proportion): more give a tighter bound, later
     (Task 3: 110 rather than 108 with 200,000, 81 s of bounding rather than 22 s on a 2-core
     machine). ``pools``: plan the cheapest orders once more through pools of goal states
     (Task 3: 121 commands rather than 126, in about twice the time without the bound); False:

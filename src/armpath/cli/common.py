@@ -120,8 +120,10 @@ BoundSamplesOption = Annotated[
     typer.Option(
         "--bound-samples",
         metavar="N",
-        help="Live samples the lower bound's search may hold (1,000 to 2,000,000; default "
-        "50,000; its rounds grow in proportion, 16 at the default): more give a tighter bound, "
+        help="Live samples past which the lower bound's search stops splitting (1,000 to "
+        "2,000,000; default 50,000; its first round may hold more, and the result reports "
+        "what it held; its rounds grow in proportion, 16 at the default): more give a "
+        "tighter bound, "
         "later (with 200,000 the UR5 cell's seam: 99 rather than 93, its bound 266 s rather "
         "than 38 s; benchmarks/results/bounds.md).",
         show_default=False,
