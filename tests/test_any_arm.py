@@ -308,3 +308,32 @@ def test_a_wrist_centre_tool_point_names_the_error_the_lattice_allows():
     error = np.linalg.norm(idh.dh_pose(a, alpha, d, end)[:3, 3] - target)
     assert error == pytest.approx(reached.doc["error_mm"], abs=1e-6)
     assert 0.05 < error <= allowed
+
+
+@pytest.mark.slow
+def test_a_trace_the_lattice_is_too_coarse_for_says_so():
+    """The PUMA 560 along a line in free space: its three joints that move the flange point
+    move it up to about 0.8 mm a tick, so most of the line has no lattice state within 0.1 mm.
+    The arcs not traced say that (they once said no *clear* state, in a scene with nothing to
+    collide with), and the tick they name is the independent Jacobian's largest column."""
+    import re
+
+    import armpath
+
+    line = [[300.0, -100.0, 200.0], [300.0, 100.0, 200.0]]
+    doc = armpath.trace("puma560", line, scene="none", bound=False).doc
+    reasons = " ".join(arc["reason"] for arc in doc["not_traced"])
+    assert "no lattice state with the tip within 0.1 mm" in reasons
+    assert "no clear lattice state" not in reasons
+    assert "3 joints move the tool point" in reasons
+    named = max(float(x) for x in re.findall(r"up to ([\d.]+) mm a tick", reasons))
+    a, alpha, d = TABLES["puma560"]
+    q = np.radians(np.array(doc["initial_deg"], dtype=np.float64))
+    tip = idh.dh_pose(a, alpha, d, q)[:3, 3]
+    tick = np.radians(0.1)
+    columns = []
+    for j in range(3):  # the joints that move the wrist centre: finite differences
+        dq = np.zeros(6)
+        dq[j] = tick
+        columns.append(np.linalg.norm(idh.dh_pose(a, alpha, d, q + dq)[:3, 3] - tip))
+    assert 0.3 < named < 1.2 and 0.3 < max(columns) < 1.2

@@ -486,6 +486,8 @@ class Tracer:
         clearance rule."""
         extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
         sign, edge = self.piece.sign, self.piece.begin_mm
+        near_found = False  # a state near the curve, whatever its clearance
+        tick_mm = 0.0  # the most a tick of a joint moved the tool point at a base
         for gap in (0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 6.4):
             s0 = s_from + sign * gap
             E, n, b = self.target(s0)
@@ -504,6 +506,9 @@ class Tracer:
                     bases.insert(0, q[pick])
             for base in bases:
                 proj = self.project(base, E)
+                J = position_jacobian(self.arm, proj)[:, self.tip]
+                moved = np.linalg.norm(J, axis=0) * np.asarray(self.grid.tick)[self.tip]
+                tick_mm = max(tick_mm, float(moved.max()))
                 cand = self.lattice_near(proj, n, b, self.grid.nearest_ticks(proj))
                 cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
                 if cand.shape[0] == 0:
@@ -513,13 +518,20 @@ class Tracer:
                 ok = self.in_band(d, sd, 0.1)
                 ok &= sign * (s - edge) >= -self.tol  # not before where the piece begins
                 ok &= self.fam.axis_ok(q_cand, _AXIS_MARGIN_RAD)
+                near_found |= bool(np.any(ok))
                 ok &= self.world.satisfied(self.arm, self.grid.to_joint(cand), extra)
                 if np.any(ok):
                     k = int(np.argmin(np.where(ok, sign * s, np.inf)))
                     return cand[k], float(s[k])
+        if near_found:
+            raise PlanningError(
+                f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
+                f"{s_from:.1f} mm"
+            )
         raise PlanningError(
-            f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
-            f"{s_from:.1f} mm"
+            f"no lattice state with the tip within {self.tol:g} mm of the curve near "
+            f"{s_from:.1f} mm ({int(self.tip.sum())} joints move the tool point, up to "
+            f"{tick_mm:.2g} mm a tick: too coarse for this tolerance)"
         )
 
     def run(self, q_start: IntArray, s_start: float, goal: float) -> tuple[list[IntArray], float]:
