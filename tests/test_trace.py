@@ -37,8 +37,8 @@ def circle_distance(p):
     return np.hypot(rho - RADIUS, d[..., 2])
 
 
-@pytest.fixture(scope="module")
-def circle_trace():
+def trace_the_circle(bound: bool = True):
+    """The seed arm traces the horizontal circle above the table (tolerance 0.1 mm)."""
     scene = scene_from_dict(TABLE_ONLY)
     circle = ParametricCurve(
         "circle",
@@ -48,9 +48,14 @@ def circle_trace():
         0.0,
         2 * np.pi,
     )
-    arm = seed_arm()
     start = deg_to_ticks([0, -90, 0, 0, -90, 0])
-    return plan_trace(arm, scene.world, start, circle, TraceOptions(tolerance_mm=0.1))
+    options = TraceOptions(tolerance_mm=0.1, bound=bound)
+    return plan_trace(seed_arm(), scene.world, start, circle, options)
+
+
+@pytest.fixture(scope="module")
+def circle_trace():
+    return trace_the_circle()
 
 
 @pytest.mark.slow
@@ -123,18 +128,7 @@ def test_a_pass_whose_certificate_exceeds_the_tolerance_is_traced_again_nearer(m
 
     monkeypatch.setattr(trace_plan, "BAND_SHARE", 1.0)
     monkeypatch.setattr(trace_plan, "certified_deviation", spy)
-    scene = scene_from_dict(TABLE_ONLY)
-    circle = ParametricCurve(
-        "circle",
-        f"{CENTER[0]} + {RADIUS}*cos(t)",
-        f"{CENTER[1]} + {RADIUS}*sin(t)",
-        f"{CENTER[2]}",
-        0.0,
-        2 * np.pi,
-    )
-    start = deg_to_ticks([0, -90, 0, 0, -90, 0])
-    options = TraceOptions(tolerance_mm=0.1, bound=False)
-    r = plan_trace(seed_arm(), scene.world, start, circle, options)
+    r = trace_the_circle(bound=False)
     assert len(bounds) == 2 and bounds[0] > 0.1 >= bounds[1]
     (p,) = r.passes
     assert p.max_deviation_bound_mm == bounds[1]

@@ -21,7 +21,7 @@ from typing import Annotated, Any, NoReturn
 import typer
 
 from armpath import __version__
-from armpath.cli.common import VERBOSE, app, err_console, out_console
+from armpath.cli.common import VERBOSE, app, err_console, is_number, out_console
 from armpath.errors import ArmpathError
 
 # Register the commands, in the order --help lists them.
@@ -107,13 +107,6 @@ JOINT_LIST_OPTIONS = ("--from", "--to", "--tool-axis", "--near")
 def join_number_lists(args: list[str], options: tuple[str, ...] = JOINT_LIST_OPTIONS) -> list[str]:
     """``--from 0 -90 0 0 -90 0`` becomes ``--from "0 -90 0 0 -90 0"``: the numbers that
     follow one of ``options`` (up to the next word that is not a number) become its value."""
-
-    def is_number(word: str) -> bool:
-        try:
-            float(word)
-        except ValueError:
-            return False
-        return True
 
     out: list[str] = []
     i = 0

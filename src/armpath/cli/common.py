@@ -275,7 +275,8 @@ class BackgroundJob(Generic[T]):
             self._process.join()
 
 
-def _is_float(text: str) -> bool:
+def is_number(text: str) -> bool:
+    """Whether ``text`` reads as a number (``-inf`` and ``nan`` too: checked as finite later)."""
     try:
         float(text)
     except ValueError:
@@ -284,7 +285,7 @@ def _is_float(text: str) -> bool:
 
 
 def _numbers(values: list[str], count: int, what: str) -> list[float]:
-    unknown = [v for v in values if re.fullmatch(r"--?[A-Za-z].*", v) and not _is_float(v)]
+    unknown = [v for v in values if re.fullmatch(r"--?[A-Za-z].*", v) and not is_number(v)]
     if unknown:  # an option the command does not have, taken in with the numbers
         raise InvalidInputError(f"no such option: {unknown[0]} (see the command's --help)")
     if len(values) != count:

@@ -45,6 +45,7 @@ from armpath.cli.common import (
     _to_display,
     app,
     err_console,
+    is_number,
     out_console,
     progress,
 )
@@ -96,7 +97,7 @@ def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
                     f"{name}: columns of line {number} (a time and up to {MAX_JOINTS} joints)",
                     "--waypoints",
                 )
-                if header is None and not rows and not all(_is_number(c) for c in cells):
+                if header is None and not rows and not all(is_number(c) for c in cells):
                     header = [c.lower() for c in cells]
                     width = len(cells)
                     continue
@@ -174,14 +175,6 @@ def _number(text: str, line: int, column: int, name: str) -> float:
             f"{name}: line {line}, column {column}: {text!r} is not a finite number"
         )
     return x
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def _check_choice(value: str, choices: Any, option: str) -> None:
