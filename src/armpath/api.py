@@ -371,7 +371,7 @@ def spotweld(
     there. ``bound_samples``: the live samples past which the bound's search stops splitting
     (1,000 to 2,000,000; None: 50,000; its first round may hold more; the search's rounds
     grow in proportion): more give a tighter bound, later
-    (Task 3: 110 rather than 108 with 200,000, 81 s of bounding rather than 22 s on a 2-core
+    (Task 3: 110 rather than 108 with 200,000, 75 s of bounding rather than 23 s on a 2-core
     machine). ``pools``: plan the cheapest orders once more through pools of goal states
     (Task 3: 121 commands rather than 126, in about twice the time without the bound); False:
     the guided orders' goal states only."""

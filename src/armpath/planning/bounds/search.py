@@ -87,8 +87,8 @@ STALL_ROUNDS = 2
 #: dynamic programmes take time about in proportion to the square of a site's samples. A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
 #: tighter bound (``benchmarks/results/bounds.md``, a 2-core machine): the seed's Task 3 108 ->
-#: 110 commands with 200,000 (its bound 22 s -> 81 s), the UR5 cell's welds 87 -> 96 (46 s ->
-#: 349 s, 18 rounds) and its seam 93 -> 98.3 (38 s -> 266 s, 22 rounds; while 16 rounds ended
+#: 110 commands with 200,000 (its bound 23 s -> 75 s), the UR5 cell's welds 87 -> 96 (49 s ->
+#: 345 s, 18 rounds) and its seam 93 -> 98.3 (44 s -> 255 s, 22 rounds; while 16 rounds ended
 #: every search, it stayed where 16 rounds took it whatever the budget: :func:`search_rounds`).
 #: What counts is what a round leaves alive: a round over the budget goes on if the samples of
 #: the cells that may hold a path cheaper than the incumbent fit (six welds in free space,
