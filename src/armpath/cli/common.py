@@ -245,6 +245,11 @@ class BackgroundJob(Generic[T]):
             child.close()
 
     def _child(self, conn: Any) -> None:  # pragma: no cover - runs in the child process
+        import signal
+
+        # the parent's cancel() terminates the child: it must end then, not unwind into a
+        # send nobody receives (the CLI's SIGTERM handler, inherited through fork, would)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
         try:
             conn.send((True, self._fn()))
         except BaseException as exc:  # handed to the parent to raise
