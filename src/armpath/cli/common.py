@@ -276,7 +276,7 @@ class BackgroundJob(Generic[T]):
     def cancel(self) -> None:
         """Stop the child (when the caller gives up first)."""
         if self._process is not None and self._process.is_alive():
-            self._process.terminate()
+            self._process.kill()  # SIGKILL: ends it even before it can reset SIGTERM
             self._process.join()
 
 
