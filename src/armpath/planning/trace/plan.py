@@ -557,8 +557,8 @@ def _trace_arcs(
             sign, begin, finish = piece.sign, piece.begin_mm, piece.finish_mm
             goal = finish + sign * (run_on if last_piece else 0.0)
             entered = len(states)
-            for share in (BAND_SHARE, FALLBACK_BAND_SHARE):
-                if share != tracer.band_share:
+            for again, share in enumerate((BAND_SHARE, FALLBACK_BAND_SHARE)):
+                if again:
                     # the pass's certified deviation exceeded the tolerance: traced again from
                     # the same entry, its tool point kept nearer the curve
                     del states[entered:]

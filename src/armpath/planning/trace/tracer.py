@@ -487,7 +487,7 @@ class Tracer:
         extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
         sign, edge = self.piece.sign, self.piece.begin_mm
         near_found = False  # a state near the curve, whatever its clearance
-        tick_mm = 0.0  # the most a tick of a joint moved the tool point at a base
+        proj = self.q_ref(s_from)  # the configuration last searched around
         for gap in (0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 6.4):
             s0 = s_from + sign * gap
             E, n, b = self.target(s0)
@@ -506,9 +506,6 @@ class Tracer:
                     bases.insert(0, q[pick])
             for base in bases:
                 proj = self.project(base, E)
-                J = position_jacobian(self.arm, proj)[:, self.tip]
-                moved = np.linalg.norm(J, axis=0) * np.asarray(self.grid.tick)[self.tip]
-                tick_mm = max(tick_mm, float(moved.max()))
                 cand = self.lattice_near(proj, n, b, self.grid.nearest_ticks(proj))
                 cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
                 if cand.shape[0] == 0:
@@ -528,6 +525,9 @@ class Tracer:
                 f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
                 f"{s_from:.1f} mm"
             )
+        # how far a tick moves the tool point, at the last configuration searched around
+        J = position_jacobian(self.arm, proj)[:, self.tip]
+        tick_mm = float(np.max(np.linalg.norm(J, axis=0) * self.grid.tick[self.tip]))
         raise PlanningError(
             f"no lattice state with the tip within {self.tol:g} mm of the curve near "
             f"{s_from:.1f} mm ({int(self.tip.sum())} joints move the tool point, up to "
