@@ -283,6 +283,59 @@ def test_a_weld_bound_sees_the_workpiece(weld, free_bound):
     assert b.commands >= attained - 1
 
 
+def test_the_cells_the_tool_body_drops_hold_no_clear_member():
+    """Half a millimetre inside the end of the crack's reachable arc (483.1 mm) the samples
+    whose tool lies nearly along the workpiece are not clear (the last link's body within the
+    1 mm margin) and were kept for what their neighbours allow: the wrist end of the link
+    swings 65 mm times the cell's angle. The body's own end (5 mm from the fingertip) swings
+    far less, and the sampler drops the cells where it cannot clear the workpiece
+    (:class:`~armpath.planning.bounds.sampling.ToolBody`). Each dropped cell is checked by
+    brute force with the independent family and clearance (tests/independent_trace.py: the
+    wrist on the sphere about the fingertip, joints 1-3 in closed form, every branch): 160
+    directions within the cell's angle about fingertips within the tolerance of the point,
+    and no member keeps the margin."""
+    import independent_trace as it
+    from armpath.planning.bounds.chart import real_within, to_real
+
+    arm = seed_arm()
+    scene = load_scene(None)
+    fam = curve_family(arm, scene.world, scene.trace_curve())
+    sampler = sampling.FamilySampler(fam, 0.1, directions=2000)
+    s_mm = 483.6
+    E = fam.frame(s_mm)[0]
+    acc, (layer, _, spacing, _) = sampler.sampled(
+        E, sampler.base, lambda d: fam.allowed_mask(s_mm, d), levels=2
+    )
+    assert sampler.body is not None
+    unsure = np.flatnonzero(acc.slack < 0.0)
+    index = acc.index[unsure]
+    real = to_real(acc.dirs[index], acc.caps)
+    dropped = (
+        sampler.body.blocked(scene.world, arm, acc.q[unsure], real, spacing[index], sampler.tol)
+        & real_within(acc.dirs, acc.caps, spacing)[index]
+    )
+    cells = np.unique(index[dropped])
+    assert cells.size >= 20
+    assert not np.isin(layer.direction, cells).any()  # the layer holds none of them
+    rng = np.random.default_rng(21)
+    for cell in rng.choice(cells, size=min(cells.size, 25), replace=False):
+        d = to_real(acc.dirs[cell : cell + 1], acc.caps)[0]
+        e1, e2 = it._tangent_basis(d[None])
+        for _ in range(4):  # fingertips within the tolerance of the point
+            offset = rng.normal(size=3)
+            tip = E + 0.1 * rng.uniform() ** (1 / 3) * offset / np.linalg.norm(offset)
+            # directions within the cell's angle of its sample (uniform over the cap)
+            angle = spacing[cell] * np.sqrt(rng.uniform(size=40))
+            turn = rng.uniform(0.0, 2.0 * np.pi, size=40)
+            dirs = np.cos(angle)[:, None] * d + np.sin(angle)[:, None] * (
+                np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2
+            )
+            family = it._family(tip, -dirs)  # its U points from the fingertip to the wrist
+            rows, cols = np.nonzero(family.valid)
+            assert rows.size > 0
+            assert it._coll_margin(family, rows, cols, "normal").max() < 0.0
+
+
 def test_a_ur5_weld_bound_keeps_the_elbow_on_its_side_of_the_fold(monkeypatch):
     """The UR5 cell's first weld from home: the nearest clear goal configuration the bound may
     use without the elbow's self-collision ranges is a whole turn of the elbow away from one the

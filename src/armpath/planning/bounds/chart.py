@@ -135,6 +135,16 @@ def ring_of(v: FloatArray, caps: tuple[BlowUp, ...]) -> IntArray:
     return out
 
 
+def real_within(v: FloatArray, caps: tuple[BlowUp, ...], angle: FloatArray) -> BoolArray:
+    """Virtual directions ``v (M, 3)`` about which the chart is the identity out to ``angle``
+    ``(M,)`` rad: every direction within that angle of one lies beyond every cap's ``outer``,
+    so its real and virtual angles to ``v`` are one."""
+    ok = np.ones(v.shape[0], dtype=bool)
+    for cap in caps:
+        ok &= _polar(v, cap.center)[0] >= cap.outer + angle
+    return ok
+
+
 def outside_holes(v: FloatArray, caps: tuple[BlowUp, ...]) -> BoolArray:
     """Virtual directions on or outside every circle (the chart's domain)."""
     ok = np.ones(v.shape[0], dtype=bool)

@@ -9,7 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.geometry.world import into_windows
+from armpath.geometry.primitives import Obstacle
+from armpath.geometry.world import CollisionWorld, into_windows
 from armpath.jit import njit
 from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -17,6 +18,7 @@ from armpath.planning.bounds.chart import (
     BlowUp,
     caps_about,
     outside_holes,
+    real_within,
     ring,
     ring_of,
     singular_directions,
@@ -236,6 +238,67 @@ def _sampling_errors(
     return err, moved
 
 
+@dataclass(frozen=True)
+class ToolBody:
+    """Where the body of the arm's last link ends and its bare tip begins (the *cut*, the
+    tip's length from the tool point), with what the body must keep from each obstacle: the
+    facts :meth:`FamilySampler._filtered` drops whole cells of tool directions by.
+
+    With the tool point within ``tol`` of a point ``E`` and the last link along the tool
+    direction, the cut of a member whose direction lies within ``angle`` of a sample's is
+    within ``tol + tip * angle`` of the sample's cut (``tip``: the cut's distance from the tool
+    point). The body's clearance to an obstacle is at most the cut's signed distance less the
+    body's radius, and signed distance is 1-Lipschitz; so where the sample's cut lies closer to
+    an obstacle than the body's radius, its required clearance and that lever together, no
+    member of the cell keeps the clearance rule. The arm's points moving to the neighbouring
+    directions' members (the general rule) allow far more: the wrist end of the last link
+    swings by its whole length times the angle (the seed arm's tool near tangent to the
+    workpiece at the ends of the crack's reachable arc: slack -1.0 mm, kept by a 65 mm lever,
+    dropped by the 5 mm one)."""
+
+    obstacles: tuple[Obstacle, ...]
+    #: clearance the body keeps from each obstacle, its capsule radius added (model units)
+    needs: FloatArray
+    #: index of the body among the world's parts (:meth:`CollisionWorld.parts`)
+    part: int
+
+    @staticmethod
+    def of(world: CollisionWorld, arm: SerialArm) -> ToolBody | None:
+        """The last link's body of ``arm`` in ``world``; None without obstacles or a bare tip."""
+        parts = world.parts(arm)
+        if not world.obstacles or len(parts) < 2 or not parts[-1].is_tip:
+            return None
+        body = parts[-2]
+        kept = {p.other: p.required for p in world.pairs(arm) if p.part == body.name}
+        needs = np.array([body.radius + kept[o.name] for o in world.obstacles])
+        return ToolBody(world.obstacles, needs, len(parts) - 2)
+
+    def blocked(
+        self,
+        world: CollisionWorld,
+        arm: SerialArm,
+        q: FloatArray,
+        dirs: FloatArray,
+        angle: FloatArray,
+        tol: float,
+    ) -> BoolArray:
+        """Which members ``q (M, n)`` rad (tool directions ``dirs (M, 3)``, real) stand for a
+        cell of directions within ``angle (M,)`` rad in which no member with the tool point
+        within ``tol`` of theirs keeps the body's clearance (see the class). Members whose last
+        link does not lie along their tool direction are never blocked here."""
+        if q.shape[0] == 0:
+            return np.zeros(0, dtype=bool)
+        _, ends = world.part_segments(arm, q)
+        cut, point = ends[:, self.part], ends[:, -1]
+        tip = np.linalg.norm(point - cut, axis=-1)
+        along = np.linalg.norm(point - cut - tip[:, None] * dirs, axis=-1) <= 1e-9 * (1.0 + tip)
+        lever = tol + tip * angle
+        out = np.zeros(q.shape[0], dtype=bool)
+        for obstacle, need in zip(self.obstacles, self.needs, strict=True):
+            out |= obstacle.signed_distance(cut) + lever < need
+        return np.asarray(out & along, dtype=bool)
+
+
 class FamilySampler:
     """Samples the family of one arm at points, with sampling errors (see the module)."""
 
@@ -287,6 +350,9 @@ class FamilySampler:
         #: tool frames sampled about each direction (several: the family has a third dimension)
         self.turns = fam.turns_per_direction
         self.required = fam.world.required(arm)
+        #: the last link's body, by which whole cells of directions are dropped (see
+        #: :meth:`_filtered`)
+        self.body = ToolBody.of(fam.world, arm)
         #: whether the samples cover the family: the tip joints beyond the tool point's three
         #: are no more than the sampled tool direction (two) and turn about it (one, where
         #: several turns are sampled); a redundant arm's self-motion is not sampled
@@ -435,7 +501,10 @@ class FamilySampler:
 
         A sample is kept when its slack is no worse than the arm's points move to its
         neighbours (and within the tolerance): a member nearby may then be clear where the
-        sample is not. Links are straight between those points, so none moves farther."""
+        sample is not. Links are straight between those points, so none moves farther. Such a
+        sample is dropped after all when its last link's body is too close to an obstacle for
+        any member of its cell (:class:`ToolBody`: the body's end moves far less than the
+        link's other end)."""
         order = np.argsort(acc.index, kind="stable")
         q, index, u = acc.q[order], acc.index[order], acc.u[order]
         n_dirs = acc.dirs.shape[0]
@@ -459,6 +528,17 @@ class FamilySampler:
         err = err + tol_err
         allowance = moved + (tol_err * self.step) @ self.reach + CLEAR_MARGIN
         keep = (slack >= -allowance) & ~self.outside_windows(u, err)
+        if self.body is not None:
+            # a sample not clear itself whose cell the body cannot keep clear anywhere
+            # (:class:`ToolBody`), where the chart is the identity out to its spacing
+            angle = spacing[index]
+            check = keep & (slack < 0.0)
+            check &= real_within(acc.dirs, acc.caps, spacing)[index]
+            at = np.flatnonzero(check)
+            real = to_real(acc.dirs[index[at]], acc.caps)
+            keep[at] &= ~self.body.blocked(
+                self.fam.world, self.fam.arm, q[at], real, angle[at], self.tol
+            )
         unsure = np.unique(index[keep & (slack < 0.0)])
         clear = (slack >= 0.0) & ~self.outside_windows(u, np.zeros_like(err))
         real = to_real(acc.dirs[index[keep]], acc.caps)
