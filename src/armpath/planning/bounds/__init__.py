@@ -27,18 +27,19 @@ tolerance (pseudo-inverse of the position Jacobian). Distances between samples a
 both samples' errors (:mod:`~armpath.planning.bounds.metric`), so the shortest path through the
 samples is, up to that error estimate, no longer than any path through the family. A sample is
 dropped only when no member of its cell can be clear: its slack is worse than the arm's points
-move to its neighbours, or the end of its last link's body (where the bare tool tip begins)
-lies too close to an obstacle for any direction of its cell, that end moving far less than the
-link's other end (:class:`~armpath.planning.bounds.sampling.ToolBody`: the seed crack's bound
-130 -> 134 commands, its tool near tangent to the workpiece at the ends of the reachable arc). The relaxation is then searched by branch and bound over the direction
-cells (:mod:`~armpath.planning.bounds.search`): a path through samples that are clear
-themselves bounds the relaxation's optimum from above, the cells that cannot hold a cheaper
-path are dropped, and the cells where the bound runs are split where their error or their
-clearance is unsure (a cell kept only for what its neighbours allow may collide whole). The
-error estimate assumes the family varies no faster inside a direction cell than between
-neighbouring samples; the tests check the bounds against differently computed ones (SLSQP over
-the exact family; the exactly clear members of a fine sampling), the relaxations' programmes
-against brute force, and the plans.
+move to its neighbours, or the end of its last link's body (where the bare tool tip begins) lies
+too close to an obstacle for any direction of its cell, that end moving far less than the link's
+other end (:class:`~armpath.planning.bounds.sampling.ToolBody`: the seed crack's bound 130 ->
+134 commands, its tool near tangent to the workpiece at the ends of the reachable arc). The
+relaxation is then searched by branch and bound over the direction cells
+(:mod:`~armpath.planning.bounds.search`): a path through samples that are clear themselves
+bounds the relaxation's optimum from above, the cells that cannot hold a cheaper path are
+dropped, and the cells where the bound runs are split where their error or their clearance is
+unsure (a cell kept only for what its neighbours allow may collide whole). The error estimate
+assumes the family varies no faster inside a direction cell than between neighbouring samples;
+the tests check the bounds against differently computed ones (SLSQP over the exact family; the
+exactly clear members of a fine sampling), the relaxations' programmes against brute force, and
+the plans.
 
 That assumption fails at a singular direction where a whole curve of members shares one tool
 direction (a six-joint arm with its wrist straight): however small, a cell touching it spans
