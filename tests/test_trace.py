@@ -8,6 +8,7 @@
 * curves written in scene files (parametric expressions and polylines), and their errors.
 """
 
+import itertools
 import json
 import subprocess
 import sys
@@ -251,6 +252,7 @@ def test_run_reports_task_2(seed_run):
     assert doc["coverage"]["of_reachable"] > 0.999
     bound = doc["lower_bound"]
     assert 0 < doc["lower_bound_commands"] == bound["commands"] <= doc["n_commands"]
+    assert doc["n_commands"] <= 1.05 * doc["lower_bound_commands"]  # issue 21: within 5 %
     assert bound["parts_commands"]["approach"] > 0 and bound["parts_commands"]["along"] > 0
     assert "lower bound" in (out / "summary.md").read_text()
     (bad,) = doc["unreachable"]
@@ -605,3 +607,50 @@ def test_lattice_states_near_a_target_are_the_disc_and_at_most_the_cap(tolerance
         assert len(as_set) == tr._MAX_CANDIDATES
         # spread through the box, not bunched at the target: corners of the box among them
         assert np.abs(got).max(axis=0).min() == radius
+
+
+@pytest.mark.slow
+def test_a_pass_into_the_tight_end_of_an_arc_finishes_along_a_chain_traced_out_of_it():
+    """The crack's reachable arc ends at 483.10 mm, where joint 3 reaches its limit and the
+    links come within the margin of the table and the workpiece: the family narrows to a point.
+    A pass traced into that end creeps; traced out of it, the tracer goes on at full stride.
+    The end chain (the pass traced from the end back over half its way) is followed by the pass
+    and joined where one command reaches it: here 4 commands fewer than the pass alone. Every
+    state of the chain is one legal command from the next, its first reaches the end, and the
+    joined pass's continuous fingertip path (independent forward kinematics, 40 instants a
+    command) stays within the tolerance of the crack (its independent closed form) and clear of
+    the workpiece."""
+    from dataclasses import replace
+
+    import independent_trace as it
+    from armpath.planning.trace.reference import reference_pieces
+    from armpath.planning.trace.tracer import Tracer
+    from armpath.scenes import seed_scene
+
+    scene = seed_scene()
+    arm = seed_arm()
+    reach = curve_reachability(arm, scene.world, scene.trace_curve())
+    (arc,) = [a for a in reach.reachable if a.start_mm < 500.0 < a.end_mm]
+    goal = arc.start_mm
+    q_from = np.radians([0.0, -90.0, 0.0, 0.0, -90.0, 0.0])
+    (piece,) = reference_pieces(reach.family, replace(arc, end_mm=goal + 120.0), 5.0, q_from)
+    piece = replace(piece, backward=True)  # traced toward the tight end
+    tracer = Tracer(reach.family, piece, 0.1)
+    q0, s0 = tracer.start_state(piece.begin_mm)
+    alone, s_alone = tracer.run(q0, s0, goal)
+    chain = tracer.end_chain(goal, 0.5 * (s0 - goal))
+    tracer.follow(chain)
+    joined, s_joined = tracer.run(q0, s0, goal, chain)
+    assert s_alone - goal <= 1e-3 and s_joined - goal <= 1e-3  # both reach the end
+    assert len(joined) <= len(alone) - 3  # 17 commands rather than 21
+    np.testing.assert_array_equal(joined[-1], chain[0])  # it ends where the chain began
+    assert all(np.abs(b - a).max() <= 20 for a, b in itertools.pairwise(chain))
+    end = independent.points(np.array(chain[0]) / 10.0)[-1]
+    assert np.linalg.norm(end - reach.curve.at_arc_length(np.array([goal]))[0]) <= 0.1
+    states = np.array(joined)
+    assert np.abs(np.diff(states, axis=0)).max() <= 20
+    t = np.linspace(0.0, 1.0, 41)
+    path = states[:-1, None, :] + t[None, :, None] * np.diff(states, axis=0)[:, None, :]
+    tips = independent.points(path.reshape(-1, 6) / 10.0)[:, -1]
+    assert it.distance_to_crack(tips).max() <= 0.1
+    assert independent.Workpiece("normal").distance(tips).min() >= -1e-6

@@ -62,6 +62,7 @@ from armpath.planning.trace.reference import (
 from armpath.planning.trace.tracer import (
     _BODY_BUFFER_MM,
     BAND_SHARE,
+    END_CHAIN_SHARE,
     FALLBACK_BAND_SHARE,
     GOAL_REACHED_MM,
     Tracer,
@@ -572,7 +573,13 @@ def _trace_arcs(
                 states.extend(list(entry.sequence.states()[1:]))
                 transits.append(Transit(here, len(states) - 1, entry.method))
                 first = len(states) - 1
-                ahead, s_reached = tracer.run(pass_states[-1], s_at, goal)
+                # onto an arc's end (not a loop's run on past where it began): also traced
+                # from there back, followed and finished along where that takes fewer commands
+                chain = None
+                if goal == finish:
+                    chain = tracer.end_chain(goal, END_CHAIN_SHARE * abs(finish - s_at))
+                    tracer.follow(chain)
+                ahead, s_reached = tracer.run(pass_states[-1], s_at, goal, chain)
                 pass_states += ahead[1:]
                 states.extend(pass_states[1:])
                 if len(pass_states) == 1:

@@ -11,11 +11,18 @@ pre-filtered by their linearized offset in the curve's normal plane, then checke
 point within the band, the continuous motion sampled within the band and outside the surface,
 the clearance rule with a small buffer. Every accepted command advances the tool point by at
 least :data:`MIN_ADVANCE_MM` toward a fixed end, so every pass ends.
+
+A pass onto the end of an arc is also traced from that end back over half its way (the *end
+chain*, :meth:`Tracer.end_chain`): where the family narrows toward a tight end, a pass traced
+into it creeps while one traced out of it goes on at full stride. The pass follows the chain's
+joint path and finishes along it, reversed, from where one command reaches it, when that takes
+fewer commands (the seed crack: 73 -> 70 commands along it).
 """
 
 from __future__ import annotations
 
 import functools
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -99,6 +106,13 @@ _LOOKAHEAD = 6
 #: back and turns toward the most slack instead, at most :data:`_MAX_BACKTRACKS` times a pass.
 _BACKTRACK_WITHIN_MM = 5.0
 _MAX_BACKTRACKS = 3
+#: Share of a pass that is also traced from its goal back toward where it begins (its *end
+#: chain*, :meth:`Tracer.end_chain`): the pass then follows the chain's joint path and finishes
+#: along it, reversed, from where a command reaches it. Traced into the tight end of its
+#: reachable arc, the seed crack's last 55 mm took 10 commands; traced out of it, 7. Its pass
+#: took 73 commands alone; with a chain over 100 mm 74, 200 mm 71, 300 mm 71, 400 mm 70, 550 mm
+#: 70, 800 mm (all of it) 70.
+END_CHAIN_SHARE = 0.5
 
 
 def _box_radii(joints: int, largest_step: int) -> list[int]:
@@ -534,8 +548,76 @@ class Tracer:
             f"{tick_mm:.2g} mm a tick: too coarse for this tolerance)"
         )
 
-    def run(self, q_start: IntArray, s_start: float, goal: float) -> tuple[list[IntArray], float]:
+    def end_chain(self, goal: float, length_mm: float) -> list[IntArray]:
+        """Lattice states traced from arc length ``goal`` back along the piece for
+        ``length_mm``: first a state that reaches the goal as a pass does (within
+        :data:`GOAL_REACHED_MM` of it, or past it by at most the tolerance), then each one
+        valid command (:meth:`valid_ends`) on from the last; empty when none is found at the
+        goal. A pass that closes in on the tight end of an arc creeps (the family narrows, and
+        the farthest command can end where the next ones cannot go on), one that leaves it goes
+        on at full stride; :meth:`run` finishes along this chain, reversed, where that takes
+        fewer commands."""
+        back = Tracer(
+            self.fam,
+            replace(self.piece, backward=not self.piece.backward),
+            self.tol,
+            self.band_share,
+        )
+        back.layers, back.ref = self.layers, self.ref
+        try:
+            q, s = back.start_state(goal)
+        except PlanningError:
+            return []
+        sign = self.piece.sign
+        if sign * (goal - s) > GOAL_REACHED_MM:  # found a little inside: on onto the goal
+            onto, s = back.run(q, s, goal)
+            if sign * (goal - s) > GOAL_REACHED_MM:
+                return []
+            q = onto[-1]
+        chain, _ = back.run(q, s, goal - self.piece.sign * length_mm)
+        return chain
+
+    def follow(self, chain: list[IntArray]) -> None:
+        """Take the joint path of ``chain`` (:meth:`end_chain`) as the reference where it runs:
+        a pass that follows it can reach one of its states and finish along it."""
+        if len(chain) < 2:
+            return
+        q = self.grid.to_joint(np.array(chain))
+        _, s, _ = self.tip_checks(tool_position(self.arm, q), self.piece.finish_mm)
+        order = np.argsort(s, kind="stable")
+        s, q = s[order], q[order]
+        before, after = self.layers < s[0], self.layers > s[-1]
+        self.layers = np.concatenate([self.layers[before], s, self.layers[after]])
+        self.ref = np.vstack([self.ref[before], q, self.ref[after]])
+        self._found.clear()
+
+    def _joined(self, qk: IntArray, sk: float, goal: float, chain: list[IntArray]) -> int | None:
+        """The least ``i`` whose chain state ``chain[i]`` (see :meth:`end_chain`) one valid
+        command from ``qk`` (tip at arc length ``sk``) reaches, or None."""
+        if not chain:
+            return None
+        ends = np.array(chain)
+        legal = np.flatnonzero(self.grid.legal(ends - qk))
+        if legal.size == 0:
+            return None
+        found, _ = self.valid_ends(qk, sk, ends[legal], goal)
+        if found.shape[0] == 0:
+            return None
+        hit = (ends[legal][:, None, :] == found[None, :, :]).all(axis=-1).any(axis=1)
+        return int(legal[hit].min())
+
+    def run(
+        self,
+        q_start: IntArray,
+        s_start: float,
+        goal: float,
+        chain: list[IntArray] | None = None,
+    ) -> tuple[list[IntArray], float]:
         """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes).
+
+        With an end ``chain`` (:meth:`end_chain`: states from the goal back toward the pass),
+        the pass may finish with a command onto one of its states and the chain reversed; of
+        those finishes and its own, the one of fewest commands is kept.
 
         Where no command continues within :data:`_BACKTRACK_WITHIN_MM` of the goal, the last
         command is taken back and the tip turned toward the family member with the most slack
@@ -553,10 +635,14 @@ class Tracer:
         states, reached = [q_start], [s_start]
         budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
         backtracks = 0
+        joins: list[tuple[int, int]] = []  # (commands in all, states kept before the chain)
         for _ in range((_MAX_BACKTRACKS + 1) * budget):
             qk, sk = states[-1], reached[-1]
             if direction * (goal - sk) <= GOAL_REACHED_MM:
                 break
+            i = self._joined(qk, sk, goal, chain) if chain else None
+            if i is not None:
+                joins.append((len(states) + i, len(states)))
             check_time(f"tracing {self.arc.start_mm:.1f}..{self.arc.end_mm:.1f} mm of the curve")
             nxt = self.step(qk, sk, goal)
             if nxt is None:
@@ -579,4 +665,10 @@ class Tracer:
                 raise AssertionError("tracer made no progress: step rule broken")  # valid_ends
             states.append(q_next)
             reached.append(s_next)
+        own = len(states) - 1 if direction * (goal - reached[-1]) <= GOAL_REACHED_MM else np.inf
+        if chain and joins and min(joins)[0] < own:
+            total, kept = min(joins)
+            states = states[:kept] + list(chain[: total - kept + 1][::-1])
+            end = tool_position(self.arm, self.grid.to_joint(chain[0]))
+            reached = [*reached[:kept], float(self.tip_checks(end[None], goal)[1][0])]
         return states, reached[-1]
