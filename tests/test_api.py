@@ -305,6 +305,43 @@ def test_api_refuses_bad_input_with_clear_errors():
         armpath.reach("seed", [300.0, 100.0, 200.0], start_deg=[0.05, -90, 0, 0, -90, 0])
 
 
+@pytest.mark.parametrize(
+    ("call", "words"),
+    [
+        (lambda a: a.reach("seed", [300, 100, 200], seed="a"), "seed must be a whole number"),
+        (lambda a: a.plan("seed", to_mm=[300, -170, 15], seed=1.5), "seed must be a whole"),
+        (lambda a: a.plan("seed", to_mm=[300, -170, 15], seed=None), "seed must be a whole"),
+        (lambda a: a.reach("seed", "300,100,200"), "target_mm must be three finite numbers"),
+        (lambda a: a.reach("seed", [300 + 1j, 0, 0]), "target_mm must be three finite"),
+        (lambda a: a.reach("seed", [300, 100, 200], tolerance_mm="0.1"), "tolerance_mm must be a"),
+        (lambda a: a.reach("seed", [300, 100, 200], scene={"name": "x"}), "scene must be a Scene"),
+        (lambda a: a.load_arm("ur5", link_radius_mm="3"), "link_radius_mm must be a number"),
+        (lambda a: a.trace("seed", [[300, 0, 99], [320, 0, 99]], closed="no"), "closed must be"),
+        (lambda a: a.spotweld("seed", bound_samples=2.5), "bound_samples must be a whole"),
+        (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be numbers"),
+    ],
+)
+def test_api_refuses_values_of_the_wrong_kind_by_name(call, words):
+    """Keyword values of the wrong kind are refused at the boundary, naming the keyword, before
+    any work (a seed of "a" used to fail inside numpy after 12 s of planning)."""
+    import armpath
+    from armpath.errors import InvalidInputError
+
+    with pytest.raises(InvalidInputError, match=words):
+        call(armpath)
+
+
+def test_float32_joint_values_stay_on_the_lattice():
+    """12.3 as float32 is 12.300000190734863, not a whole number of 0.1 deg ticks: joint values
+    of a lower precision are read by their shortest decimal, so the plan goes to 12.3 deg."""
+    import armpath
+
+    goal = np.array([12.3, -90.1, 0.7, 33.3, -90.9, 0.1], dtype=np.float32)
+    result = armpath.plan("seed", to_deg=goal)
+    last = np.array(result.doc["initial_deg"]) + np.sum(result.doc["commands"], axis=0) / 10.0
+    np.testing.assert_allclose(last, goal.astype(np.float64), atol=1e-6)
+
+
 def test_the_controllers_period_and_steps_come_from_the_scene_arm(tmp_path):
     """A scene's ``[arm]`` names its controller's command period and motor steps per tick:
     exports take them by default, results and model documents carry them, bad values are

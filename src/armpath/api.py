@@ -15,6 +15,7 @@ stands where the scene's ``[arm]`` puts it.
 from __future__ import annotations
 
 import math
+import numbers
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -41,6 +42,44 @@ SceneLike = Scene | str | Path
 ALONE_SCENE = {"name": "none (the arm alone)", "description": "no obstacles: self-collision only"}
 
 
+def _checked(
+    numbers_: dict[str, Any] | None = None,
+    counts: dict[str, Any] | None = None,
+    flags: dict[str, Any] | None = None,
+) -> None:
+    """Refuse, by name, keyword values of the wrong kind before any work: ``numbers_`` must be
+    real numbers (or None), ``counts`` whole numbers >= 0, ``flags`` True or False. The ranges
+    are the options' own to check."""
+    for name, value in (numbers_ or {}).items():
+        if value is not None and (
+            isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real)
+        ):
+            raise InvalidInputError(f"{name} must be a number, got {value!r}")
+    for name, value in (counts or {}).items():
+        if (
+            isinstance(value, bool | np.bool_)
+            or not isinstance(value, numbers.Integral)
+            or value < 0
+        ):
+            raise InvalidInputError(f"{name} must be a whole number >= 0, got {value!r}")
+    for name, value in (flags or {}).items():
+        if not isinstance(value, bool | np.bool_):
+            raise InvalidInputError(f"{name} must be True or False, got {value!r}")
+
+
+def _degrees(values: ArrayLike, what: str) -> NDArray[np.float64]:
+    """Joint values (deg, mm) as float64; float32 ones by their shortest decimal, so that a
+    value written 12.3 stays on the 0.1 deg lattice (as float32 it is 12.300000190...)."""
+    try:
+        a = np.asarray(values)
+        if a.dtype.kind == "f" and a.dtype.itemsize < 8:
+            flat = [float(np.format_float_positional(v, unique=True)) for v in a.ravel()]
+            return np.array(flat, dtype=np.float64).reshape(a.shape)
+        return np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{what} must be numbers, got {values!r}") from None
+
+
 def load_arm(
     model: str | Path = "seed",
     *,
@@ -52,6 +91,7 @@ def load_arm(
     every link that radius (mm) for collision checks."""
     from armpath.model.catalog import resolve_model
 
+    _checked({"link_radius_mm": link_radius_mm})
     arm = resolve_model(str(model), tip_link)
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
@@ -68,6 +108,11 @@ def load_scene(source: SceneLike | None = None) -> Scene:
 
     if isinstance(source, Scene):
         return source
+    if not (source is None or isinstance(source, str | Path)):
+        raise InvalidInputError(
+            f"scene must be a Scene, a scene file's path, 'seed' or 'none', got "
+            f"{type(source).__name__}"
+        )
     if source is None or str(source) == "seed":
         return load_scene_file(None)
     if str(source) == "none":
@@ -107,11 +152,16 @@ def _start_ticks(arm: SerialArm, start_deg: ArrayLike | None) -> NDArray[np.int6
     """The lattice state of ``start_deg`` (deg, mm for a prismatic joint); None: home."""
     if start_deg is None:
         return arm.lattice.to_ticks(arm.home, "the arm's home pose")
-    return arm.lattice.from_display(np.asarray(start_deg, dtype=np.float64), "start_deg")
+    return arm.lattice.from_display(_degrees(start_deg, "start_deg"), "start_deg")
 
 
 def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
-    p = np.asarray(values, dtype=np.float64)
+    try:
+        p = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"{what} must be three finite numbers (mm), got {values!r}"
+        ) from None
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise InvalidInputError(f"{what} must be three finite numbers (mm), got {values!r}")
     return p
@@ -201,6 +251,11 @@ def reach(
     from armpath.export import reach_result_dict
     from armpath.planning.reach import ReachOptions, plan_reach
 
+    _checked(
+        {"tolerance_mm": tolerance_mm, "angle_tolerance_deg": angle_tolerance_deg,
+         "axis_tolerance_deg": axis_tolerance_deg, "time_limit_s": time_limit_s},
+        {"seed": seed},
+    )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         target = _point_mm(target_mm, "target_mm")
@@ -249,6 +304,11 @@ def plan(
 
     if (to_deg is None) == (to_mm is None):
         raise InvalidInputError("give exactly one goal: to_deg or to_mm")
+    _checked(
+        {"tolerance_mm": tolerance_mm, "angle_tolerance_deg": angle_tolerance_deg,
+         "axis_tolerance_deg": axis_tolerance_deg, "time_limit_s": time_limit_s},
+        {"seed": seed},
+    )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         weights = None
@@ -280,7 +340,8 @@ def plan(
         else:
             if pose is not None or tool_axis is not None:
                 raise InvalidInputError("pose and tool_axis go with to_mm")
-            goal = the_arm.lattice.from_display(np.asarray(to_deg, dtype=np.float64), "to_deg")
+            assert to_deg is not None  # one goal given (checked above)
+            goal = the_arm.lattice.from_display(_degrees(to_deg, "to_deg"), "to_deg")
             found = plan_motion(the_arm, world, start, goal[None, :], options)
         doc = plan_result_dict(
             found,
@@ -322,6 +383,11 @@ def trace(
     from armpath.planning.trace import TraceOptions
     from armpath.tasks import trace_task
 
+    _checked(
+        {"tolerance_mm": tolerance_mm, "time_limit_s": time_limit_s},
+        {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
+        {"closed": closed, "bound": bound},
+    )
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         path: Curve | None
@@ -380,6 +446,11 @@ def spotweld(
     from armpath.planning.motion import MotionOptions
     from armpath.tasks import spotweld_task
 
+    _checked(
+        {"tolerance_mm": tolerance_mm, "time_limit_s": time_limit_s},
+        {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
+        {"return_to_start": return_to_start, "bound": bound, "pools": pools},
+    )
     options = MotionOptions(objective=objective_of(objective), seed=seed)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)

@@ -114,7 +114,8 @@ def check_time(doing: str = "") -> None:
     what = f" while {doing}" if doing else ""
     raise TimeLimitError(
         f"the time limit of {d.seconds:g} s ran out{what} (after {d.elapsed:.1f} s); "
-        "raise --time-limit or make the problem smaller"
+        "raise the time limit (--time-limit; time_limit_s= in Python) or make the problem "
+        "smaller"
     )
 
 

@@ -235,7 +235,8 @@ class SerialArm:
 
     def __repr__(self) -> str:
         kinds = "".join("P" if j.kind == JointKind.PRISMATIC else "R" for j in self.joints)
-        return f"SerialArm({self.name!r}, {self.n_joints} joints {kinds}, {self.length_unit})"
+        joints = "1 joint" if self.n_joints == 1 else f"{self.n_joints} joints"
+        return f"SerialArm({self.name!r}, {joints} {kinds}, {self.length_unit})"
 
     def __post_init__(self) -> None:
         n = len(self.joints)

@@ -720,7 +720,7 @@ def _lattice_too_coarse(
             )
             return (
                 f"{why}; the nearest found is {nearest:.3g} {unit} away: allow at least that "
-                f"(--tolerance){hint}"
+                f"(--tolerance; tolerance_mm= in Python){hint}"
             )
     return f"{why}; none within {tol:g} {unit} either"
 

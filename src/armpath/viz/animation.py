@@ -230,6 +230,8 @@ def write_animation(
     out = Path(path)
     if out.suffix not in ANIMATION_FORMATS:
         raise InvalidInputError(f"animation must be one of {ANIMATION_FORMATS}, got {out.name!r}")
+    if not (fps >= 1 and max_frames >= 2):
+        raise InvalidInputError(f"fps must be >= 1 and max_frames >= 2, got {fps} and {max_frames}")
     ffmpeg = shutil.which("ffmpeg")
     if out.suffix == ".mp4" and ffmpeg is None:
         raise InvalidInputError("MP4 needs ffmpeg on the PATH; write a .gif instead")

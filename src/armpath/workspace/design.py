@@ -209,8 +209,8 @@ def _in_batches(
         if isinstance(exc, TimeLimitError):
             raise
         raise TimeLimitError(
-            "the time limit ran out while waiting for the design evaluations; raise "
-            "--time-limit or make the problem smaller"
+            "the time limit ran out while waiting for the design evaluations; raise it "
+            "(--time-limit; time_limit_s= in Python) or make the problem smaller"
         ) from None
     check_time(f"evaluating designs ({len(out)} of {len(candidates)} done)")
     return out
