@@ -662,10 +662,13 @@ def plan_reach(
         examined += cands.shape[0]
         within = errs <= opts.tolerance_mm
         if not np.any(within):
-            best = f"{errs[0]:.4f} mm" if errs.size else "no lattice state near the target"
+            tol_text = f"tolerance {opts.tolerance_mm} mm"
             failures.append(
-                f"{n} commands: smallest fingertip error on the lattice is {best} "
-                f"> tolerance {opts.tolerance_mm} mm"
+                f"{n} commands: smallest fingertip error on the lattice is {errs[0]:.4f} mm > "
+                + tol_text
+                if errs.size
+                else f"{n} commands: the search (about the configurations that put the fingertip "
+                f"on the target) found no lattice state within the {tol_text}"
             )
             continue
         cands, errs = cands[within], errs[within]
