@@ -635,14 +635,16 @@ class Tracer:
         states, reached = [q_start], [s_start]
         budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
         backtracks = 0
-        joins: list[tuple[int, int]] = []  # (commands in all, states kept before the chain)
+        # finishes along the chain: (commands in all, the pass's states up to the join; a
+        # copy, since a take-back may replace the states after it)
+        joins: list[tuple[int, list[IntArray]]] = []
         for _ in range((_MAX_BACKTRACKS + 1) * budget):
             qk, sk = states[-1], reached[-1]
             if direction * (goal - sk) <= GOAL_REACHED_MM:
                 break
             i = self._joined(qk, sk, goal, chain) if chain else None
             if i is not None:
-                joins.append((len(states) + i, len(states)))
+                joins.append((len(states) + i, list(states)))
             check_time(f"tracing {self.arc.start_mm:.1f}..{self.arc.end_mm:.1f} mm of the curve")
             nxt = self.step(qk, sk, goal)
             if nxt is None:
@@ -666,9 +668,10 @@ class Tracer:
             states.append(q_next)
             reached.append(s_next)
         own = len(states) - 1 if direction * (goal - reached[-1]) <= GOAL_REACHED_MM else np.inf
-        if chain and joins and min(joins)[0] < own:
-            total, kept = min(joins)
-            states = states[:kept] + list(chain[: total - kept + 1][::-1])
-            end = tool_position(self.arm, self.grid.to_joint(chain[0]))
-            reached = [*reached[:kept], float(self.tip_checks(end[None], goal)[1][0])]
+        if chain and joins:
+            total, before = min(joins, key=lambda j: j[0])
+            if total < own:
+                states = before + list(chain[: total - len(before) + 1][::-1])
+                end = tool_position(self.arm, self.grid.to_joint(chain[0]))
+                reached = [float(self.tip_checks(end[None], goal)[1][0])]
         return states, reached[-1]
