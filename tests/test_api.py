@@ -305,6 +305,11 @@ def test_api_refuses_bad_input_with_clear_errors():
         armpath.reach("seed", [300.0, 100.0, 200.0], start_deg=[0.05, -90, 0, 0, -90, 0])
 
 
+#: A 4x4 pose whose position is not the target's (the target gives the position).
+_SHIFTED = np.diag([1.0, -1.0, -1.0, 1.0])
+_SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
+
+
 @pytest.mark.parametrize(
     ("call", "words"),
     [
@@ -319,6 +324,7 @@ def test_api_refuses_bad_input_with_clear_errors():
         (lambda a: a.trace("seed", [[300, 0, 99], [320, 0, 99]], closed="no"), "closed must be"),
         (lambda a: a.spotweld("seed", bound_samples=2.5), "bound_samples must be a whole"),
         (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be numbers"),
+        (lambda a: a.reach("ur5", [400, 100, 300], pose=_SHIFTED), "is not the target"),
     ],
 )
 def test_api_refuses_values_of_the_wrong_kind_by_name(call, words):

@@ -180,11 +180,13 @@ def _orientation(
     angle_tolerance_deg: float,
     tool_axis: ArrayLike | None,
     axis_tolerance_deg: float,
+    target_mm: NDArray[np.float64],
 ) -> Orientation | None:
-    """The orientation rule of a whole pose (:func:`armpath.poses.rotation_matrix` forms) or
-    of a tool-axis cone about a fixed direction."""
+    """The orientation rule of a whole pose (:func:`armpath.poses.pose_matrix` forms) or of a
+    tool-axis cone about a fixed direction. A pose with a position (a 4x4 transform) must
+    hold it at ``target_mm`` or at zero (a rotation alone): the target gives the position."""
     from armpath.ik.target import AxisCone, PoseOrientation
-    from armpath.poses import rotation_matrix
+    from armpath.poses import pose_matrix
 
     if pose is not None and tool_axis is not None:
         raise InvalidInputError("give pose or tool_axis, not both")
@@ -195,7 +197,15 @@ def _orientation(
         if not (np.isfinite(v) and 0.0 <= v <= 180.0):
             raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
     if pose is not None:
-        return PoseOrientation(rotation_matrix(pose), math.radians(angle_tolerance_deg))
+        m = pose_matrix(pose)
+        at = m[:3, 3]
+        if np.any(at != 0.0) and np.linalg.norm(at - target_mm) > 1e-6:
+            raise InvalidInputError(
+                f"the pose's position {np.round(at, 6).tolist()} mm is not the target "
+                f"{np.round(target_mm, 6).tolist()} mm: the target gives the position (give "
+                "the pose as a rotation, or as a transform at the target)"
+            )
+        return PoseOrientation(m[:3, :3], math.radians(angle_tolerance_deg))
     if tool_axis is not None:
         return AxisCone(
             _point(tool_axis, "tool_axis"),
@@ -259,7 +269,9 @@ def reach(
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         target = _point_mm(target_mm, "target_mm")
-        rule = _orientation(the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg)
+        rule = _orientation(
+            the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg, target
+        )
         found = plan_reach(
             the_arm,
             the_scene.world,
@@ -327,7 +339,9 @@ def plan(
         target, rule = None, None
         if to_mm is not None:
             target = _point_mm(to_mm, "to_mm")
-            rule = _orientation(the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg)
+            rule = _orientation(
+                the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg, target
+            )
             found = plan_to_point(
                 the_arm,
                 world,

@@ -2,7 +2,8 @@
 
 Accepted forms (the conventions of numpy, ``scipy.spatial.transform`` and spatialmath):
 
-* a ``3x3`` rotation matrix, or a ``4x4`` homogeneous transform (position in mm);
+* a ``3x3`` rotation matrix, or a ``4x4`` homogeneous transform (position in mm: where a
+  target is given too, the transform's position must be the target or zero);
 * a quaternion with its component order spelled out: ``("wxyz", [w, x, y, z])`` (scalar
   first, as ROS's tf2 does not but Eigen and spatialmath do) or ``("xyzw", [x, y, z, w])``
   (scalar last, as scipy and ROS messages do); a bare 4-vector is refused, since either order
