@@ -107,7 +107,7 @@ def test_polyline():
     np.testing.assert_allclose(
         square.at_arc_length([0, 25, 40]), [[0, 0, 0], [5, 10, 0], [0, 0, 0]], atol=1e-9
     )
-    with pytest.raises(InvalidInputError, match="repeated"):
+    with pytest.raises(InvalidInputError, match="are the same point"):
         Polyline("bad", [[0, 0, 0], [0, 0, 0], [1, 0, 0]])
 
 
@@ -136,3 +136,18 @@ def test_the_tangent_of_a_curve_that_barely_moves_is_still_a_unit_vector():
         for s in (0.0, 0.5, 1.0):
             _, t, _ = fam.frame(s)
             np.testing.assert_allclose(t, [1.0, 0.0, 0.0], atol=1e-9)
+
+
+def test_a_closed_polyline_may_repeat_its_first_vertex_and_says_which_vertices_coincide():
+    """Closed by its own last vertex (as a drawing program writes it), a closed polyline is the
+    same curve (the square's 40 mm); vertices that coincide are named; a closed polyline of two
+    vertices (there and back) is refused."""
+    square = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]
+    a = Polyline("a", square, closed=True)
+    b = Polyline("b", [*square, square[0]], closed=True)
+    np.testing.assert_array_equal(a.vertices, b.vertices)
+    assert abs(b.length - 40.0) < 1e-9
+    with pytest.raises(InvalidInputError, match=r"vertices 1 and 2 \(from 0\) are the same point"):
+        Polyline("c", [[0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 0]])
+    with pytest.raises(InvalidInputError, match="3 or more vertices"):
+        Polyline("d", [[0, 0, 0], [1, 0, 0]], closed=True)

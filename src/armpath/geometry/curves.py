@@ -224,9 +224,21 @@ class Polyline(Curve):
         if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < 2 or not np.all(np.isfinite(v)):
             raise InvalidInputError(f"polyline {self.name!r}: need (V >= 2, 3) finite vertices")
         if self.closed:
+            if v.shape[0] > 2 and np.array_equal(v[-1], v[0]):
+                v = v[:-1]  # closed already by its last vertex: the piece back is that one
+            if v.shape[0] < 3:
+                raise InvalidInputError(
+                    f"polyline {self.name!r}: a closed polyline needs 3 or more vertices"
+                )
             v = np.vstack([v, v[:1]])
-        if np.any(np.linalg.norm(np.diff(v, axis=0), axis=-1) == 0):
-            raise InvalidInputError(f"polyline {self.name!r}: repeated consecutive vertices")
+        same = np.flatnonzero(np.linalg.norm(np.diff(v, axis=0), axis=-1) == 0)
+        if same.size:
+            k = int(same[0])
+            nxt = 0 if self.closed and k + 1 == v.shape[0] - 1 else k + 1  # the piece back
+            raise InvalidInputError(
+                f"polyline {self.name!r}: vertices {k} and {nxt} (from 0) are the same point; "
+                "a piece needs two"
+            )
         v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
 
