@@ -406,6 +406,11 @@ def trace(
         the_arm, the_scene = arm_and_scene(arm, scene)
         path: Curve | None
         if curve is None or isinstance(curve, Curve):
+            if closed:
+                raise InvalidInputError(
+                    "closed goes with a curve given as points; a Curve says itself whether it "
+                    "is closed"
+                )
             path = curve
         else:
             vertices = np.asarray(curve, dtype=np.float64) / the_arm.mm_per_unit
