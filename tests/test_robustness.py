@@ -490,3 +490,40 @@ def test_an_animation_written_beside_a_result_keeps_the_result(tmp_path):
     r = run("animate", str(out / "plan.json"), "--out", str(out / "plan.gif"), "--frames", "4")
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in out.iterdir()) == sorted([*before, "plan.gif"])
+
+
+def test_outputs_inputs_and_sizes_a_review_of_the_cli_found_unbounded(tmp_path):
+    """From a review of the command line: ``--out`` on a pipe, a link or a folder replaced it
+    (``/dev/full`` became a regular file); a result file that is not UTF-8 ended in a traceback;
+    a robot file of 5,000 joints held 24 GB before it was killed; a plan 4,500,000 commands
+    long (a lattice of 1e-6 deg ticks) held 15.6 GB. Each is now one ``error:`` line, at once,
+    naming the limit, and the pipe and the link are left as they were."""
+    import os
+
+    done = run("reach", "20", "-200", "120", "--out", str(tmp_path / "r"))
+    assert done.returncode == 0, done.stderr
+    result = tmp_path / "r" / "reach.json"
+    pipe, link, folder = tmp_path / "pipe", tmp_path / "link", tmp_path / "folder"
+    os.mkfifo(pipe)
+    (tmp_path / "target.csv").write_text("kept\n")
+    link.symlink_to(tmp_path / "target.csv")
+    folder.mkdir()
+    for out in (pipe, link, folder):
+        done = run("export", str(result), "--out", str(out))
+        (line,) = error_lines(done.stderr)
+        assert done.returncode == 1 and "is not a regular file" in line
+    assert pipe.is_fifo() and link.is_symlink() and folder.is_dir()
+    assert (tmp_path / "target.csv").read_text() == "kept\n"
+    binary = tmp_path / "binary.json"
+    binary.write_bytes(b"\xff\xfe\x00garbage")
+    done = run("export", str(binary))
+    (line,) = error_lines(done.stderr)
+    assert done.returncode == 1 and "is not UTF-8 text" in line
+    many = tmp_path / "many.json"
+    many.write_text(json.dumps({"links": [{"a": 10.0, "alpha": 0.0, "d": 0.0}] * 65}))
+    done = run("fk", "--model", str(many), *["0"] * 65)
+    (line,) = error_lines(done.stderr)
+    assert done.returncode == 1 and "at most 64 joints, got 65" in line
+    done = run("plan", "--to", "3600000", "-90", "0", "0", "-90", "0")
+    (line,) = error_lines(done.stderr)
+    assert done.returncode == 1 and "would need 1,800,000 (the limit is 1,000,000)" in line

@@ -178,7 +178,7 @@ __all__ = [
 
 #: Largest number of waypoints of one trajectory (rows of a waypoints file, points of a circle).
 MAX_WAYPOINTS = 10_000
-#: Largest number of joints (columns) of a joint-space trajectory.
+#: Largest number of joints of an arm, and of a joint-space trajectory (columns).
 MAX_JOINTS = 64
 #: Largest number of samples (joint vectors, points) held in memory at once: one chunk.
 MAX_CHUNK = 4_000_000

@@ -581,6 +581,13 @@ class OutputFolder:
         try:
             self.path.mkdir(parents=True, exist_ok=True)
             names = sorted(p.name for p in self._staging.iterdir())
+            for name in names:  # a file moved into place replaces what is there: only files
+                there = self.path / name
+                if there.is_symlink() or (there.exists() and not there.is_file()):
+                    raise OutputError(
+                        f"{there} exists and is not a regular file (a link, a device, a pipe "
+                        "or a folder): armpath writes a file by replacing it; give another path"
+                    )
             earlier = self._earlier_files() if self.prune else set()
             for name in names:
                 os.replace(self._staging / name, self.path / name)

@@ -234,15 +234,29 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     return loaded.with_wall_thickness(wall) if wall else loaded
 
 
+#: Most commands a result file may hold, and most bytes (a six-joint command takes about 30;
+#: a trace's deviation profile about 1.7 kB a command): export and animate read it whole.
+MAX_RESULT_COMMANDS = 1_000_000
+MAX_RESULT_BYTES = 100_000_000
+
+
 def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Result:
     """Read a result JSON document; its scene comes from ``scene`` or, if omitted, from the
     scene definition the document carries (older documents: the source it names, the built-in
     seed scene or a scene file that still exists)."""
     p = Path(path)
     try:
+        size = p.stat().st_size
+        if size > MAX_RESULT_BYTES:
+            raise InvalidInputError(
+                f"result file {p} is {size:,} bytes, more than the {MAX_RESULT_BYTES:,} a "
+                f"result may have ({MAX_RESULT_COMMANDS:,} commands)"
+            )
         doc = json.loads(p.read_text(encoding="utf-8"))
     except OSError as exc:
         raise InvalidInputError(f"cannot read result file {p}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise InvalidInputError(f"result file {p} is not UTF-8 text (not a result)") from None
     except json.JSONDecodeError as exc:
         raise InvalidInputError(f"result file {p} is not valid JSON: {exc.msg}") from None
     if not isinstance(doc, dict) or doc.get("task") not in RESULT_TASKS:
@@ -261,6 +275,11 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
         commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, arm.n_joints)
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None
+    if commands.shape[0] > MAX_RESULT_COMMANDS:
+        raise InvalidInputError(
+            f"result file {p}: {commands.shape[0]:,} commands, more than the "
+            f"{MAX_RESULT_COMMANDS:,} a result may have"
+        )
     sequence = CommandSequence(start, commands, arm.lattice)
     if "targets" in doc:
         targets = np.asarray(doc["targets"], dtype=float).reshape(-1, 3)

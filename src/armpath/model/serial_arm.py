@@ -24,6 +24,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import MAX_JOINTS
 from armpath.errors import InvalidInputError, JointLimitError
 from armpath.model.lattice import (
     DEFAULT_COMMAND_PERIOD_S,
@@ -242,6 +243,8 @@ class SerialArm:
         n = len(self.joints)
         if n == 0:
             raise InvalidInputError("a serial arm needs at least one joint")
+        if n > MAX_JOINTS:  # memory and time grow with the joints (300 joints: 2.7 GB a plan)
+            raise InvalidInputError(f"a serial arm may have at most {MAX_JOINTS} joints, got {n}")
         object.__setattr__(self, "T_flange_tool", _frozen(self.T_flange_tool, (4, 4), "tool"))
         object.__setattr__(self, "T_world_base", _frozen(self.T_world_base, (4, 4), "base"))
         object.__setattr__(self, "home", _frozen(self.home, (n,), "home"))

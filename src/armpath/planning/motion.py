@@ -34,7 +34,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import MAX_SEARCHES, check_time
+from armpath.budget import MAX_COMMANDS, MAX_SEARCHES, check_size, check_time
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
@@ -484,6 +484,12 @@ def plan_motion(
     arm.check_limits(grid.to_joint(start), what="start state")
     for g in goals:
         arm.check_limits(grid.to_joint(g), what="goal state")
+    check_size(
+        min(grid.commands_needed(g - start) for g in goals),
+        MAX_COMMANDS,
+        "commands of the motion to the nearest goal",
+        "the goal, or the arm's lattice (its ticks and largest steps)",
+    )
     check_state_clear(arm, world, grid.to_joint(start))
     if goals.shape[0] == 1:
         check_state_clear(arm, world, grid.to_joint(goals[0]), what="goal state")
