@@ -103,3 +103,14 @@ def test_a_stage_begun_before_the_progress_delay_is_shown_when_it_passes(capsys,
     assert len(lines) == 1 and lines[0].startswith("armpath: [") and lines[0].endswith("scanning")
     assert 0.3 <= float(lines[0].split("[")[1].split(" s]")[0]) < 0.6
     assert capsys.readouterr().err == ""
+
+
+def test_the_reports_files_list_only_what_was_written():
+    """A run of a scene with a trace task alone listed spotweld.json, the blind zones' files and
+    'the three motions' among its files (from a review of the command line)."""
+    from armpath.report import summary_markdown
+
+    text = summary_markdown([], files=["trace.json", "trace.csv", "trace.gif", "summary.md"])
+    files = text.split("## Files", 1)[1]
+    assert "`trace.json`" in files and "`*.csv / *.xlsx`" in files and "`*.gif`" in files
+    assert "spotweld.json" not in files and "blindzones" not in files and "reach.json" not in files

@@ -14,10 +14,21 @@ FILES = {
     "reach.json": "Task 1 result (commands, lower bound, clearance)",
     "trace.json": "Task 2 result (passes, coverage, unreachable arcs and why)",
     "spotweld.json": "Task 3 result (order, visits, per-weld error)",
-    "*.csv / *.xlsx": "the commands (ticks of 0.1 deg), joint angles and fingertip after each",
-    "*.gif": "animations of the three motions",
+    "*.csv / *.xlsx": "the commands (ticks of the lattice), joint values and tool point after each",
+    "*.gif": "animations of the motions",
     "blindzones.csv / .npz": "blind parts of the workpiece faces; the arm-plane and meridian maps",
 }
+
+
+def _listed(entry: str, available: set[str]) -> bool:
+    """Whether a :data:`FILES` entry (a name, or patterns ``*.csv / *.xlsx``, ``x.csv / .npz``)
+    names a file that was written (every entry when nothing is known of what was)."""
+    if not available:
+        return True
+    first = entry.split(" / ")[0]
+    if first.startswith("*."):
+        return any(name.endswith(first[1:]) for name in available)
+    return first in available
 
 
 def _mm(value: float | None) -> str:
@@ -173,10 +184,13 @@ def summary_markdown(
                 f"{c['closest_obstacle']}) over the whole continuous motion"
             )
         if doc["task"] == "reach":
+            proven = (doc.get("lower_bound") or {}).get("proven", True)
+            bound = f"lower bound {doc['lower_bound_commands']}" + ("" if proven else " estimated")
             fewest = "provably the fewest" if doc.get("provably_fewest") else "not proven fewest"
+            fewest = f"{fewest}; {bound}"
             out.append(
-                f"- {doc['n_commands']} commands ({fewest}; lower bound "
-                f"{doc['lower_bound_commands']}) to ({', '.join(f'{v:g}' for v in doc['target'])})"
+                f"- {doc['n_commands']} commands ({fewest}) to "
+                f"({', '.join(f'{v:g}' for v in doc['target'])})"
                 f" mm, tool point error {doc['error_mm']:.4f} mm; {clearance}."
             )
             figs = ["reach_motion.png", "reach_joints.png", "reach.gif"]
@@ -217,7 +231,7 @@ def summary_markdown(
         if shown:
             out += ["", shown]
     out += ["", "## Files", ""]
-    out += [f"- `{name}`: {what}" for name, what in FILES.items()]
+    out += [f"- `{name}`: {what}" for name, what in FILES.items() if _listed(name, available)]
     return "\n".join(out) + "\n"
 
 
