@@ -527,3 +527,18 @@ def test_outputs_inputs_and_sizes_a_review_of_the_cli_found_unbounded(tmp_path):
     done = run("plan", "--to", "3600000", "-90", "0", "0", "-90", "0")
     (line,) = error_lines(done.stderr)
     assert done.returncode == 1 and "would need 1,800,000 (the limit is 1,000,000)" in line
+
+
+def test_a_trace_with_an_arm_too_short_to_set_its_tool_says_why(tmp_path):
+    """A planar 3R arm reaches the points of a short line (its own reach), but the tracer
+    searches the tool's direction at each point, which three joints cannot set: the error says
+    so rather than only 'out of reach' (from a review of the Python API)."""
+    import armpath
+    from armpath.errors import PlanningError
+
+    model = tmp_path / "planar3.json"
+    links = [{"a": a, "alpha": 0.0, "d": 0.0} for a in (200.0, 150.0, 100.0)]
+    model.write_text(json.dumps({"links": links}))
+    assert armpath.reach(str(model), [300.0, 100.0, 0.0], tolerance_mm=0.5).doc["error_mm"] < 0.5
+    with pytest.raises(PlanningError, match="an arm of 3 joints cannot set"):
+        armpath.trace(str(model), [[300, 100, 0], [310, 120, 0]], bound=False, tolerance_mm=0.5)
