@@ -970,3 +970,66 @@ def test_the_samples_a_search_keeps_are_those_of_the_directions_it_keeps():
                 expected += int(mine.sum())
         assert _kept_samples(layer, through, incumbent) == expected
     assert _kept_samples(layer, through, 81.0) == m and _kept_samples(layer, through, 49.0) == 0
+
+
+def test_the_cells_the_ur5_tool_body_drops_have_its_end_too_near_the_workpiece():
+    """The same rule on the UR5 cell's seam (its bound 93 -> 102.5): the tool is a capsule of
+    radius 3 mm along the approach axis, bare for its last 10 mm, and must keep 1 mm from the
+    workpiece. For each cell the rule drops at a point of the seam, 200 tool directions within
+    the cell's angle and tool points within the tolerance put the end of the tool's body (10 mm
+    back from the tool point along the direction) closer to the workpiece than 4 mm (its
+    exact signed distance), so no member of the cell is clear; and a member's tool segment
+    lies along its direction (the textbook D-H product of tests/test_any_arm.py, with the
+    cell's base and tool placement)."""
+    from armpath.planning.bounds.chart import real_within, to_real
+    from armpath.scenes.arm import scene_arm
+    from test_any_arm import pose
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml")
+    arm = scene_arm(scene)
+    base = np.array([-150.0, 0.0, 250.0])  # the cell's [arm] base (no rotation)
+    fam = curve_family(arm, scene.world, scene.trace_curve())
+    sampler = sampling.FamilySampler(fam, 0.1, directions=2000)
+    assert sampler.body is not None
+    workpiece = next(o for o in scene.world.obstacles if o.name == "workpiece")
+    rng = np.random.default_rng(21)
+    dropped_cells = 0
+    for s_mm in (23.8, 252.7):
+        E = fam.frame(s_mm)[0]
+        acc, (layer, _, spacing, _) = sampler.sampled(
+            E, sampler.base, lambda d, s=s_mm: fam.allowed_mask(s, d), levels=2
+        )
+        unsure = np.flatnonzero(acc.slack < 0.0)
+        index = acc.index[unsure]
+        real = to_real(acc.dirs[index], acc.caps)
+        dropped = (
+            sampler.body.blocked(scene.world, arm, acc.q[unsure], real, spacing[index], sampler.tol)
+            & real_within(acc.dirs, acc.caps, spacing)[index]
+        )
+        cells = np.unique(index[dropped])
+        assert not np.isin(layer.direction, cells).any()
+        dropped_cells += cells.size
+        for k in np.flatnonzero(dropped)[:1]:  # a member's tool segment: along its direction
+            T = pose("ur5", acc.q[unsure][k])
+            flange, point = base + T[:3, 3], base + (T @ [0.0, 0.0, 120.0, 1.0])[:3]
+            assert np.linalg.norm((point - flange) / 120.0 - real[k]) < 1e-6
+            assert np.linalg.norm(point - E) < 1e-6
+        for cell in rng.choice(cells, size=min(cells.size, 20), replace=False):
+            d = to_real(acc.dirs[cell : cell + 1], acc.caps)[0]
+            e1 = np.cross(d, [0.0, 0.0, 1.0] if abs(d[2]) < 0.9 else [1.0, 0.0, 0.0])
+            e1 /= np.linalg.norm(e1)
+            e2 = np.cross(d, e1)
+            angle = spacing[cell] * np.sqrt(rng.uniform(size=200))
+            turn = rng.uniform(0.0, 2.0 * np.pi, size=200)
+            dirs = np.cos(angle)[:, None] * d + np.sin(angle)[:, None] * (
+                np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2
+            )
+            offset = rng.normal(size=(200, 3))
+            offset *= (
+                0.1
+                * rng.uniform(size=(200, 1)) ** (1 / 3)
+                / np.linalg.norm(offset, axis=1, keepdims=True)
+            )
+            cut = E + offset - 10.0 * dirs
+            assert (workpiece.signed_distance(cut) - 3.0).max() < 1.0
+    assert dropped_cells >= 10
