@@ -124,8 +124,8 @@ BoundSamplesOption = Annotated[
         "2,000,000; default 50,000; its first round may hold more, and the result reports "
         "what it held; its rounds grow in proportion, 16 at the default): more give a "
         "tighter bound, "
-        "later (with 200,000 the UR5 cell's seam: 99 rather than 93, its bound 255 s rather "
-        "than 44 s; benchmarks/results/bounds.md).",
+        "later (with 200,000 the UR5 cell's seam: 104.5 rather than 102.5, its bound 370 s "
+        "rather than 38 s; benchmarks/results/bounds.md).",
         show_default=False,
     ),
 ]

@@ -86,10 +86,11 @@ STALL_ROUNDS = 2
 #: Live samples of all sites together past which the search splits no more: each round's
 #: dynamic programmes take time about in proportion to the square of a site's samples. A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
-#: tighter bound (``benchmarks/results/bounds.md``, a 2-core machine): the seed's Task 3 108 ->
-#: 110 commands with 200,000 (its bound 23 s -> 75 s), the UR5 cell's welds 87 -> 96 (49 s ->
-#: 345 s, 18 rounds) and its seam 93 -> 98.3 (44 s -> 255 s, 22 rounds; while 16 rounds ended
-#: every search, it stayed where 16 rounds took it whatever the budget: :func:`search_rounds`).
+#: tighter bound (``benchmarks/results/bounds.md``, a 2-core machine): the seed's Task 3 110 ->
+#: 111 commands with 200,000 (its bound 38 s -> 233 s), the UR5 cell's welds 102 -> 103 (57 s
+#: -> 86 s, 17 rounds) and its seam 102.5 -> 104.5 (38 s -> 370 s, 15 rounds; while 16 rounds
+#: ended every search, the seam stayed where 16 rounds took it whatever the budget:
+#: :func:`search_rounds`).
 #: What counts is what a round leaves alive: a round over the budget goes on if the samples of
 #: the cells that may hold a path cheaper than the incumbent fit (six welds in free space,
 #: whose first sampling holds 52,944: 65 after that round alone, 68 after three in 43 s).
