@@ -283,6 +283,56 @@ def test_a_weld_bound_sees_the_workpiece(weld, free_bound):
     assert b.commands >= attained - 1
 
 
+def _tool_body_drops(sampler, s_mm):
+    """The family sampled at arc length ``s_mm`` (three levels of splits) and the cells of
+    directions the last link's body drops there (:class:`~armpath.planning.bounds.sampling.
+    ToolBody`), checked absent from the layer: the point, each dropped cell's real direction
+    and angle, and a dropped sample's configuration and direction."""
+    from armpath.planning.bounds.chart import real_within, to_real
+
+    fam = sampler.fam
+    E = fam.frame(s_mm)[0]
+    acc, (layer, _, spacing, _) = sampler.sampled(
+        E, sampler.base, lambda d: fam.allowed_mask(s_mm, d), levels=2
+    )
+    assert sampler.body is not None
+    unsure = np.flatnonzero(acc.slack < 0.0)
+    index = acc.index[unsure]
+    real = to_real(acc.dirs[index], acc.caps)
+    dropped = (
+        sampler.body.blocked(fam.world, fam.arm, acc.q[unsure], real, spacing[index], sampler.tol)
+        & real_within(acc.dirs, acc.caps, spacing)[index]
+    )
+    cells = np.unique(index[dropped])
+    assert not np.isin(layer.direction, cells).any()  # the layer holds none of them
+    cell_dirs = to_real(acc.dirs[cells], acc.caps)
+    first = np.flatnonzero(dropped)[:1]
+    return E, cell_dirs, spacing[cells], acc.q[unsure][first], real[first]
+
+
+def _directions_within(d, angle, count, rng):
+    """``count`` unit vectors uniform over the cap of ``angle`` rad about ``d``."""
+    helper = [0.0, 0.0, 1.0] if abs(d[2]) < 0.9 else [1.0, 0.0, 0.0]
+    e1 = np.cross(d, helper)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    a = angle * np.sqrt(rng.uniform(size=count))
+    t = rng.uniform(0.0, 2.0 * np.pi, size=count)
+    across = np.cos(t)[:, None] * e1 + np.sin(t)[:, None] * e2
+    return np.cos(a)[:, None] * d + np.sin(a)[:, None] * across
+
+
+def _within_tolerance(E, tol, count, rng):
+    """``count`` points uniform in the ball of radius ``tol`` about ``E``."""
+    offset = rng.normal(size=(count, 3))
+    offset *= (
+        tol
+        * rng.uniform(size=(count, 1)) ** (1 / 3)
+        / np.linalg.norm(offset, axis=1, keepdims=True)
+    )
+    return E + offset
+
+
 def test_the_cells_the_tool_body_drops_hold_no_clear_member():
     """Half a millimetre inside the end of the crack's reachable arc (483.1 mm) the samples
     whose tool lies nearly along the workpiece are not clear (the last link's body within the
@@ -295,42 +345,18 @@ def test_the_cells_the_tool_body_drops_hold_no_clear_member():
     directions within the cell's angle about fingertips within the tolerance of the point,
     and no member keeps the margin."""
     import independent_trace as it
-    from armpath.planning.bounds.chart import real_within, to_real
 
     arm = seed_arm()
     scene = load_scene(None)
     fam = curve_family(arm, scene.world, scene.trace_curve())
     sampler = sampling.FamilySampler(fam, 0.1, directions=2000)
-    s_mm = 483.6
-    E = fam.frame(s_mm)[0]
-    acc, (layer, _, spacing, _) = sampler.sampled(
-        E, sampler.base, lambda d: fam.allowed_mask(s_mm, d), levels=2
-    )
-    assert sampler.body is not None
-    unsure = np.flatnonzero(acc.slack < 0.0)
-    index = acc.index[unsure]
-    real = to_real(acc.dirs[index], acc.caps)
-    dropped = (
-        sampler.body.blocked(scene.world, arm, acc.q[unsure], real, spacing[index], sampler.tol)
-        & real_within(acc.dirs, acc.caps, spacing)[index]
-    )
-    cells = np.unique(index[dropped])
-    assert cells.size >= 20
-    assert not np.isin(layer.direction, cells).any()  # the layer holds none of them
+    E, dirs, angles, _, _ = _tool_body_drops(sampler, 483.6)
+    assert dirs.shape[0] >= 20
     rng = np.random.default_rng(21)
-    for cell in rng.choice(cells, size=min(cells.size, 25), replace=False):
-        d = to_real(acc.dirs[cell : cell + 1], acc.caps)[0]
-        e1, e2 = it._tangent_basis(d[None])
-        for _ in range(4):  # fingertips within the tolerance of the point
-            offset = rng.normal(size=3)
-            tip = E + 0.1 * rng.uniform() ** (1 / 3) * offset / np.linalg.norm(offset)
-            # directions within the cell's angle of its sample (uniform over the cap)
-            angle = spacing[cell] * np.sqrt(rng.uniform(size=40))
-            turn = rng.uniform(0.0, 2.0 * np.pi, size=40)
-            dirs = np.cos(angle)[:, None] * d + np.sin(angle)[:, None] * (
-                np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2
-            )
-            family = it._family(tip, -dirs)  # its U points from the fingertip to the wrist
+    for k in rng.choice(dirs.shape[0], size=min(dirs.shape[0], 25), replace=False):
+        for tip in _within_tolerance(E, 0.1, 4, rng):  # fingertips within the tolerance
+            near = _directions_within(dirs[k], angles[k], 40, rng)
+            family = it._family(tip, -near)  # its U points from the fingertip to the wrist
             rows, cols = np.nonzero(family.valid)
             assert rows.size > 0
             assert it._coll_margin(family, rows, cols, "normal").max() < 0.0
@@ -981,7 +1007,6 @@ def test_the_cells_the_ur5_tool_body_drops_have_its_end_too_near_the_workpiece()
     exact signed distance), so no member of the cell is clear; and a member's tool segment
     lies along its direction (the textbook D-H product of tests/test_any_arm.py, with the
     cell's base and tool placement)."""
-    from armpath.planning.bounds.chart import real_within, to_real
     from armpath.scenes.arm import scene_arm
     from test_any_arm import pose
 
@@ -990,46 +1015,19 @@ def test_the_cells_the_ur5_tool_body_drops_have_its_end_too_near_the_workpiece()
     base = np.array([-150.0, 0.0, 250.0])  # the cell's [arm] base (no rotation)
     fam = curve_family(arm, scene.world, scene.trace_curve())
     sampler = sampling.FamilySampler(fam, 0.1, directions=2000)
-    assert sampler.body is not None
     workpiece = next(o for o in scene.world.obstacles if o.name == "workpiece")
     rng = np.random.default_rng(21)
     dropped_cells = 0
     for s_mm in (23.8, 252.7):
-        E = fam.frame(s_mm)[0]
-        acc, (layer, _, spacing, _) = sampler.sampled(
-            E, sampler.base, lambda d, s=s_mm: fam.allowed_mask(s, d), levels=2
-        )
-        unsure = np.flatnonzero(acc.slack < 0.0)
-        index = acc.index[unsure]
-        real = to_real(acc.dirs[index], acc.caps)
-        dropped = (
-            sampler.body.blocked(scene.world, arm, acc.q[unsure], real, spacing[index], sampler.tol)
-            & real_within(acc.dirs, acc.caps, spacing)[index]
-        )
-        cells = np.unique(index[dropped])
-        assert not np.isin(layer.direction, cells).any()
-        dropped_cells += cells.size
-        for k in np.flatnonzero(dropped)[:1]:  # a member's tool segment: along its direction
-            T = pose("ur5", acc.q[unsure][k])
+        E, dirs, angles, q, d = _tool_body_drops(sampler, s_mm)
+        dropped_cells += dirs.shape[0]
+        if q.shape[0]:  # a member's tool segment: along its direction
+            T = pose("ur5", q[0])
             flange, point = base + T[:3, 3], base + (T @ [0.0, 0.0, 120.0, 1.0])[:3]
-            assert np.linalg.norm((point - flange) / 120.0 - real[k]) < 1e-6
+            assert np.linalg.norm((point - flange) / 120.0 - d[0]) < 1e-6
             assert np.linalg.norm(point - E) < 1e-6
-        for cell in rng.choice(cells, size=min(cells.size, 20), replace=False):
-            d = to_real(acc.dirs[cell : cell + 1], acc.caps)[0]
-            e1 = np.cross(d, [0.0, 0.0, 1.0] if abs(d[2]) < 0.9 else [1.0, 0.0, 0.0])
-            e1 /= np.linalg.norm(e1)
-            e2 = np.cross(d, e1)
-            angle = spacing[cell] * np.sqrt(rng.uniform(size=200))
-            turn = rng.uniform(0.0, 2.0 * np.pi, size=200)
-            dirs = np.cos(angle)[:, None] * d + np.sin(angle)[:, None] * (
-                np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2
-            )
-            offset = rng.normal(size=(200, 3))
-            offset *= (
-                0.1
-                * rng.uniform(size=(200, 1)) ** (1 / 3)
-                / np.linalg.norm(offset, axis=1, keepdims=True)
-            )
-            cut = E + offset - 10.0 * dirs
+        for k in rng.choice(dirs.shape[0], size=min(dirs.shape[0], 20), replace=False):
+            near = _directions_within(dirs[k], angles[k], 200, rng)
+            cut = _within_tolerance(E, 0.1, 200, rng) - 10.0 * near
             assert (workpiece.signed_distance(cut) - 3.0).max() < 1.0
     assert dropped_cells >= 10
