@@ -270,7 +270,9 @@ class ToolBody:
             return None
         body = parts[-2]
         kept = {p.other: p.required for p in world.pairs(arm) if p.part == body.name}
-        needs = np.array([body.radius + kept[o.name] for o in world.obstacles])
+        needs = np.array(  # an obstacle the body need not keep clear of blocks nothing
+            [body.radius + kept[o.name] if o.name in kept else -np.inf for o in world.obstacles]
+        )
         return ToolBody(world.obstacles, needs, len(parts) - 2)
 
     def blocked(
