@@ -325,6 +325,10 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.spotweld("seed", bound_samples=2.5), "bound_samples must be a whole"),
         (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be numbers"),
         (lambda a: a.reach("ur5", [400, 100, 300], pose=_SHIFTED), "is not the target"),
+        (
+            lambda a: a.plan("seed", to_deg=[10, -90, 0, 0, -90, 0], energy_weights=[1] * 6),
+            "energy weights go with the energy objective",
+        ),
     ],
 )
 def test_api_refuses_values_of_the_wrong_kind_by_name(call, words):

@@ -306,3 +306,13 @@ def test_a_proven_bound_the_plan_meets_is_reported_as_the_fewest():
     assert "the fewest commands" in _bound_words({"lower_bound": met})
     assert "plan 5 above it" in _bound_words({"lower_bound": above})
     assert "fewest" not in _bound_words({"lower_bound": guess})
+
+
+def test_huge_joint_values_print_in_exponent_form_and_a_zero_tool_axis_is_named():
+    """``fk 1e300 0 0 0 0 0`` printed the angle's 301 digits in its header; a zero tool axis
+    was called a 'cone direction' (from a review of the command line)."""
+    r = run("fk", "1e300", "0", "0", "0", "0", "0")
+    assert r.returncode == 0 and "1.000e+300" in r.stdout
+    assert max(len(line) for line in r.stdout.splitlines()) < 120
+    r = run("plan", "--to-xyz", "300", "0", "200", "--tool-axis", "0", "0", "0")
+    assert r.returncode == 1 and "the tool-axis direction (--tool-axis" in r.stderr

@@ -374,7 +374,13 @@ def joint_state(arm: SerialArm, values: str | None, option: str) -> IntArray:
 
 
 def _fmt(v: Any, digits: int = 4) -> str:
-    return "(" + ", ".join(f"{x:.{digits}f}" for x in np.asarray(v, dtype=float)) + ")"
+    """Numbers to ``digits`` decimals, in parentheses; those of 10**9 or more in exponent form
+    (``fk 1e300 ...`` printed 300 digits)."""
+    return "(" + ", ".join(_number_text(x, digits) for x in np.asarray(v, dtype=float)) + ")"
+
+
+def _number_text(x: float, digits: int) -> str:
+    return f"{x:.{digits}f}" if abs(x) < 1e9 else f"{x:.{max(digits, 3)}e}"
 
 
 #: The built-in models as --help lists them.

@@ -149,7 +149,8 @@ def ik(
     solution carries its forward-kinematics residual. An arm with more joints than the target
     constrains (7 axes and a pose, or any --xyz goal of a 6-axis arm) has a continuous family
     of solutions: the output says so and lists samples of it (--near picks the part of the
-    family nearest a state). Exit status 1 if there is no solution.
+    family nearest a state). Exit status 1 if there is no solution; solutions outside the
+    joint limits are listed, marked off limits, and count as solutions.
     """
     from armpath.ik import solve_ik
     from armpath.ik.numerical import MAX_SEEDS as MAX_IK_SEEDS

@@ -391,7 +391,8 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     table.add_row(
         "objectives",
         f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
-        f"joint travel {m['energy_deg']:.1f} deg (objective: {doc['objective']})",
+        f"energy (joint travel, weighted) {m['energy_deg']:.1f} deg "
+        f"(objective: {doc['objective']})",
     )
     table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} deg")
     table.add_row("min clearance", _clearance_text(doc["clearance"]))

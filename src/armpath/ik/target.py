@@ -54,7 +54,8 @@ class AxisCone:
     axis_tool: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "direction", unit_vector(self.direction, "cone direction"))
+        what = "the tool-axis direction (--tool-axis; tool_axis= in Python)"
+        object.__setattr__(self, "direction", unit_vector(self.direction, what))
         object.__setattr__(self, "axis_tool", unit_vector(self.axis_tool, "tool approach axis"))
         object.__setattr__(
             self, "tolerance_rad", _check_tolerance(self.tolerance_rad, "axis tolerance")

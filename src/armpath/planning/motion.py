@@ -137,6 +137,11 @@ class MotionOptions:
             raise InvalidInputError(
                 f"shortcut rounds must be in [0, 100000], got {self.shortcut_rounds}"
             )
+        if self.energy_weights is not None and self.objective is not Objective.ENERGY:
+            raise InvalidInputError(
+                "energy weights go with the energy objective (--objective energy; "
+                f"objective='energy' in Python), not {self.objective.value!r}"
+            )
         if self.energy_weights is not None and any(
             not (np.isfinite(w) and 0 <= w <= MAX_ENERGY_WEIGHT) for w in self.energy_weights
         ):
