@@ -156,14 +156,13 @@ def _start_ticks(arm: SerialArm, start_deg: ArrayLike | None) -> NDArray[np.int6
 
 
 def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
+    wrong = InvalidInputError(f"{what} must be three finite numbers (mm), got {values!r}")
     try:
         p = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
-        raise InvalidInputError(
-            f"{what} must be three finite numbers (mm), got {values!r}"
-        ) from None
+        raise wrong from None
     if p.shape != (3,) or not np.all(np.isfinite(p)):
-        raise InvalidInputError(f"{what} must be three finite numbers (mm), got {values!r}")
+        raise wrong
     return p
 
 

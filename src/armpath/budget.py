@@ -103,6 +103,12 @@ def current_deadline() -> Deadline | None:
     return _deadline.get()
 
 
+#: What a message of a time limit that ran out advises.
+RAISE_TIME_LIMIT = (
+    "raise the time limit (--time-limit; time_limit_s= in Python) or make the problem smaller"
+)
+
+
 def check_time(doing: str = "") -> None:
     """Raise :class:`TimeLimitError` if the time limit in force has run out.
 
@@ -114,8 +120,7 @@ def check_time(doing: str = "") -> None:
     what = f" while {doing}" if doing else ""
     raise TimeLimitError(
         f"the time limit of {d.seconds:g} s ran out{what} (after {d.elapsed:.1f} s); "
-        "raise the time limit (--time-limit; time_limit_s= in Python) or make the problem "
-        "smaller"
+        + RAISE_TIME_LIMIT
     )
 
 
@@ -164,6 +169,7 @@ __all__ = [
     "MAX_PERIODS",
     "MAX_SAMPLES",
     "MAX_TIME_LIMIT_S",
+    "RAISE_TIME_LIMIT",
     "Deadline",
     "check_point_mm",
     "check_size",

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import MAX_COMMANDS
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
@@ -234,9 +235,9 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     return loaded.with_wall_thickness(wall) if wall else loaded
 
 
-#: Most commands a result file may hold, and most bytes (a six-joint command takes about 30;
-#: a trace's deviation profile about 1.7 kB a command): export and animate read it whole.
-MAX_RESULT_COMMANDS = 1_000_000
+#: Most bytes a result file may have (a six-joint command takes about 30, a trace's deviation
+#: profile about 1.7 kB a command), beside its :data:`~armpath.budget.MAX_COMMANDS` commands:
+#: export and animate read it whole.
 MAX_RESULT_BYTES = 100_000_000
 
 
@@ -250,7 +251,7 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
         if size > MAX_RESULT_BYTES:
             raise InvalidInputError(
                 f"result file {p} is {size:,} bytes, more than the {MAX_RESULT_BYTES:,} a "
-                f"result may have ({MAX_RESULT_COMMANDS:,} commands)"
+                f"result may have ({MAX_COMMANDS:,} commands)"
             )
         doc = json.loads(p.read_text(encoding="utf-8"))
     except OSError as exc:
@@ -275,10 +276,10 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
         commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, arm.n_joints)
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None
-    if commands.shape[0] > MAX_RESULT_COMMANDS:
+    if commands.shape[0] > MAX_COMMANDS:
         raise InvalidInputError(
             f"result file {p}: {commands.shape[0]:,} commands, more than the "
-            f"{MAX_RESULT_COMMANDS:,} a result may have"
+            f"{MAX_COMMANDS:,} a result may have"
         )
     sequence = CommandSequence(start, commands, arm.lattice)
     if "targets" in doc:

@@ -662,14 +662,11 @@ def plan_reach(
         examined += cands.shape[0]
         within = errs <= opts.tolerance_mm
         if not np.any(within):
-            tol_text = f"tolerance {opts.tolerance_mm} mm"
-            failures.append(
-                f"{n} commands: smallest fingertip error on the lattice is {errs[0]:.4f} mm > "
-                + tol_text
-                if errs.size
-                else f"{n} commands: the search (about the configurations that put the fingertip "
-                f"on the target) found no lattice state within the {tol_text}"
-            )
+            if errs.size:
+                why = f"smallest fingertip error on the lattice is {errs[0]:.4f} mm >"
+            else:  # the search looks about the configurations that put the fingertip on it
+                why = "the search found no lattice state near the target within the"
+            failures.append(f"{n} commands: {why} tolerance {opts.tolerance_mm} mm")
             continue
         cands, errs = cands[within], errs[within]
         # cheap filter: the goal state itself must be clear

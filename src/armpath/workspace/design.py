@@ -33,6 +33,7 @@ from armpath.budget import (
     MAX_DESIGNS,
     MAX_JOBS,
     MAX_SAMPLES,
+    RAISE_TIME_LIMIT,
     check_size,
     check_time,
     current_deadline,
@@ -209,8 +210,7 @@ def _in_batches(
         if isinstance(exc, TimeLimitError):
             raise
         raise TimeLimitError(
-            "the time limit ran out while waiting for the design evaluations; raise it "
-            "(--time-limit; time_limit_s= in Python) or make the problem smaller"
+            "the time limit ran out while waiting for the design evaluations; " + RAISE_TIME_LIMIT
         ) from None
     check_time(f"evaluating designs ({len(out)} of {len(candidates)} done)")
     return out
