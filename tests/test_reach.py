@@ -159,6 +159,26 @@ def test_lattice_can_need_one_more_command_than_the_continuous_bound():
     )
 
 
+@pytest.mark.slow
+def test_a_wide_tolerance_is_reached_off_the_target_in_fewer_commands():
+    """With 20 mm to spare, Task 1's target is reached in the fewest commands of any state
+    within the tolerance (the independent optimum over the whole ball, 61), not the 63 that
+    end on the target itself: the lattice is searched off the target too."""
+    target = np.array([20.0, -200.0, 120.0])
+    result = plan_reach(
+        ARM, SCENE.world, deg_to_ticks(HOME), target, ReachOptions(tolerance_mm=20.0)
+    )
+    t_ball = independent_min_largest_change(target, HOME, tol=20.0, starts=40)
+    t_exact = independent_min_largest_change(target, HOME, starts=40)
+    assert int(np.ceil(t_ball / 2 - 1e-9)) == 61 < int(np.ceil(t_exact / 2 - 1e-9)) == 63
+    assert result.n_commands == result.lower_bound.commands == 61
+    states = independent.replay(HOME, result.sequence.commands)
+    error = np.linalg.norm(independent.points(states[-1])[4] - target)
+    assert error == pytest.approx(result.error_mm, abs=1e-9)
+    assert 1.0 < error <= 20.0  # off the target, within the tolerance
+    assert result.clearance.certified_ok
+
+
 def test_tighter_tolerance_is_honoured():
     result = plan_reach(
         ARM, SCENE.world, deg_to_ticks(HOME), [20, -200, 120], ReachOptions(tolerance_mm=0.01)
