@@ -189,6 +189,13 @@ def test_trajectory_byte_order_mark_and_time_column(tmp_path):
     samples = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
     assert samples[:, 0].tolist() == [0.0, 1.0]  # one period, clipped to the 1 s trajectory
     assert "periods split (> 20 ticks: 2 deg)" in proc.stdout
+    # 50 commands at one a 5 s period take 250 s, not the trajectory's 1 s: said, and why
+    took = next(ln for ln in proc.stdout.splitlines() if "commands take" in ln)
+    assert took.split()[2] == "250.000"
+    warning = " ".join(proc.stderr.split())
+    assert "the commands take 250 s at one a period, not the trajectory's 1 s" in warning
+    assert "1 of 1 periods move a joint farther than one command may" in warning
+    assert "the period is longer than the 1 s trajectory" in warning
 
 
 def test_trajectory_time_limit_ends_the_bounded_search(tmp_path):
@@ -242,6 +249,7 @@ def test_rcm_counts_commands_and_names_the_command_limit(tmp_path):
     assert "2 ticks)" not in proc.stdout
     commands = next(ln for ln in proc.stdout.splitlines() if ln.strip().startswith("commands"))
     assert commands.split()[1] == str(round(8.0 / 0.01))
+    assert "warning" not in proc.stderr  # one command a period keeps the trajectory's timing
 
 
 # --- workspace ------------------------------------------------------------------------------

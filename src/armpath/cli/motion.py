@@ -220,6 +220,39 @@ def _check_net_motion(waypoints_deg: np.ndarray, option: str) -> None:
     )
 
 
+def _timing_rows(quantized: Any) -> list[tuple[str, str, str]]:
+    """The table rows of the commands' own timing: one command a period, so they take
+    ``n_commands * period`` s, which is the trajectory's duration only when no period is split
+    (a period whose move needs more than one command) and the period divides it."""
+    period = quantized.period_s
+    taken = quantized.sequence.n_commands * period
+    return [
+        ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
+        ("commands take", f"{taken:.3f}", "s at one a period"),
+    ]
+
+
+def _timing_warning(quantized: Any, duration_s: float, option: str) -> str | None:
+    """Why the commands do not keep the trajectory's timing, or None when they do (within a
+    period)."""
+    period = quantized.period_s
+    taken = quantized.sequence.n_commands * period
+    if taken <= duration_s + period * (1 + 1e-9):
+        return None
+    why = []
+    if quantized.split_periods:
+        why.append(
+            f"{quantized.split_periods} of {quantized.n_periods} periods move a joint farther "
+            "than one command may and are split into several"
+        )
+    if period > duration_s:
+        why.append(f"the period is longer than the {duration_s:.3g} s trajectory")
+    return (
+        f"warning: the commands take {taken:.4g} s at one a period, not the trajectory's "
+        f"{duration_s:.4g} s ({'; '.join(why)}): a shorter {option} keeps its timing"
+    )
+
+
 def _amount(x: float) -> str:
     """A count for a message: every digit up to 1e15 (so 20,000,021 is not shown as 2e+07)."""
     return f"{x:,.0f}" if abs(x) < 1e15 else f"{x:.3g}"
@@ -341,8 +374,10 @@ def trajectory(
 ) -> None:
     """Minimum-snap (or minimum-jerk) joint trajectory through waypoints, rest to rest, and its
     commands on the 0.1 deg / 2 deg lattice (error feedback: within half a tick at every
-    period). At most 5,000,000 controller periods (duration / --period) and 1,000,000
-    commands."""
+    period). A period that moves a joint more than one command may is split into several
+    commands, and then the commands (one a period) take longer than the trajectory: the table
+    says how long and a warning why. At most 5,000,000 controller periods (duration /
+    --period) and 1,000,000 commands."""
     from armpath.export import output_folder
     from armpath.trajectory import (
         ORDERS,
@@ -416,12 +451,15 @@ def trajectory(
                 ("largest joint speed", f"{peaks[0]:.2f}", "deg/s"),
                 ("largest joint acceleration", f"{peaks[1]:.2f}", "deg/s^2"),
                 ("largest joint jerk", f"{peaks[2]:.2f}", "deg/s^3"),
-                ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
+                *_timing_rows(quantized),
                 ("periods split (> 20 ticks: 2 deg)", str(quantized.split_periods), ""),
                 ("largest lattice error", f"{quantized.max_tick_error:.3f}", "ticks of 0.1 deg"),
             ):
                 table.add_row(*row)
             out_console.print(table)
+            warning = _timing_warning(quantized, traj.duration, "--period")
+            if warning:
+                err_console.print(warning, markup=False)
             retimed = []
             if retime:
                 from armpath.trajectory import compare_retimings
@@ -616,11 +654,14 @@ def rcm(
                 ("tip error at the waypoints", f"{plan.waypoint_tip_error:.2e}", "mm"),
                 ("largest tip deviation, smooth trajectory", f"{plan.max_tip_deviation:.3f}", "mm"),
                 ("largest tip deviation, quantized commands", f"{lattice_dev.max():.3f}", "mm"),
-                ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
+                *_timing_rows(quantized),
                 ("periods split (> 20 ticks: 2 deg, 2 mm)", str(quantized.split_periods), ""),
             ):
                 table.add_row(*row)
             out_console.print(table)
+            warning = _timing_warning(quantized, traj.duration, "--period (or a longer --duration)")
+            if warning:
+                err_console.print(warning, markup=False)
             if plan.max_tip_deviation > 0.1 * plan.radius:
                 err_console.print(
                     "the tip leaves the point by more than a tenth of the tool length: the circle "
