@@ -100,6 +100,27 @@ def test_job_counts():
         sweep(design_grid()[:1], samples=100, n_jobs=0)  # joblib's own error was a traceback
 
 
+def test_a_sweep_starts_no_more_processes_than_cores_or_candidates(monkeypatch):
+    """256 jobs asked for 3 candidates start at most min(cores, 3) workers (on a 2-core
+    machine 256 started 259 processes holding 9 GB); the numbers are those of one process."""
+    import joblib
+
+    started = []
+
+    class Recording(joblib.Parallel):
+        def __init__(self, n_jobs=None, **kw):
+            started.append(n_jobs)
+            super().__init__(n_jobs=n_jobs, **kw)
+
+    monkeypatch.setattr(joblib, "Parallel", Recording)
+    candidates = design_grid()[:3]
+    wide = sweep(candidates, pixel_mm=15.0, samples=2_000, seed=1, n_jobs=256)
+    assert started == [min(joblib.cpu_count(), 3)]
+    one = sweep(candidates, pixel_mm=15.0, samples=2_000, seed=1, n_jobs=1)
+    assert [m.reach_volume_mm3 for m in wide] == [m.reach_volume_mm3 for m in one]
+    assert started[-1] == 1
+
+
 def test_sweep_sizes_are_refused_before_any_work():
     """101 x 100 x 1 = 10,100 grid points is more than MAX_DESIGNS (refused before building
     them); a sweep whose samples or maps are too large is refused before any worker starts."""

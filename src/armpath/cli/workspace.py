@@ -418,7 +418,11 @@ def design_sweep(
     ] = 10.0,
     seed: Annotated[int, typer.Option(help="Random seed (every candidate uses it).")] = 0,
     jobs: Annotated[
-        int, typer.Option(help=f"Local worker processes (-1: every core; at most {MAX_JOBS}).")
+        int,
+        typer.Option(
+            help=f"Local worker processes (-1: every core; at most {MAX_JOBS}; no more than "
+            "the machine's cores are started)."
+        ),
     ] = -1,
     scheduler: Annotated[
         str | None,
