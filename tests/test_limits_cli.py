@@ -515,3 +515,16 @@ def test_too_many_welds_for_every_order_are_counted_in_a_short_number(tmp_path):
     scene.write_text(f'name = "nine"\n[tasks.spotweld]\npoints_mm = [{nine}]\n', "utf-8")
     line = _refused(tmp_path, ["spotweld", "--scene", str(scene), "--order", "auto"], "--order")
     assert "9 targets have 362,880 visiting orders" in line  # 9!, every digit
+
+
+# --- ik -------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seeds", ["0", "10001"])
+def test_ik_seeds_beyond_the_solver_limit_are_refused(tmp_path, seeds):
+    """Each numerical seed is a Levenberg-Marquardt run (iiwa14: about 0.8 ms); 100,000 took
+    100 s, so the limit is 10,000."""
+    xyz = ["--xyz", "400", "100", "300", "--model", "iiwa14"]
+    proc = _run(["ik", *xyz, "--seeds", seeds], tmp_path)
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert _error_line(proc) == f"error: --seeds must be in [1, 10000], got {seeds}"

@@ -132,7 +132,7 @@ def ik(
             "(--xyz: auto or numerical)."
         ),
     ] = "auto",
-    seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver.")] = 48,
+    seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver (1 to 10,000).")] = 48,
     near: Annotated[
         str | None,
         typer.Option(

@@ -40,8 +40,9 @@ def _errors_and_jacobians(
     return err, J
 
 
-#: Most random starts of one numerical solve (each runs up to ``max_iterations`` LM steps).
-MAX_SEEDS = 100_000
+#: Most random starts of one numerical solve (each runs up to ``max_iterations`` LM steps:
+#: about 0.8 ms for iiwa14, so 10,000 about 8 s; 100,000 took 100 s).
+MAX_SEEDS = 10_000
 
 #: A converged solution puts the tool within this distance of the target (mm) ...
 POSITION_TOLERANCE_MM = 1e-6
