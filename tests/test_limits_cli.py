@@ -301,7 +301,7 @@ def test_workspace_time_limit(tmp_path):
         (["--pixel", "1e103"], ("larger than the map (1150 x 1150 mm)", "--pixel")),
         (["--samples", "100000000"], ("joint samples", "--samples", "200,000,000")),
         (["--samples", "0"], ("--samples",)),
-        (["--bands", "100000"], ("circles", "--bands", "1,000")),
+        (["--bands", "101"], ("circles", "--bands", "the limit is 100")),
         (["--bands", "-1"], ("--bands",)),
         (["--seed", "-3"], ("--seed",)),
     ],
