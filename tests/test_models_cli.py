@@ -182,3 +182,29 @@ def test_an_empty_model_is_a_usage_error_and_a_folder_an_unknown_model(tmp_path)
     assert r.returncode == 2 and r.stderr.startswith("error: --model was given an empty value")
     r = run_in_process(["fk", "0", "0", "0", "0", "0", "0", "--model", "."], tmp_path)
     assert r.returncode == 1 and r.stderr.startswith("error: unknown model '.': use one of")
+
+
+def test_a_broken_urdf_gets_one_line_saying_what_is_wrong(tmp_path):
+    """A truncated URDF made yourdfpy print its XML parser's complaint, retry with a forgiving
+    parser and fail on the rest ("expected one root link"); an element without its name said
+    "'name'". Each now gets one error line naming what is wrong and where."""
+    from cli_in_process import run_in_process
+
+    good = arm_to_urdf(BUILTIN_MODELS["ur5"]())
+    lines = good.splitlines(keepends=True)
+    cases = {
+        "cut.urdf": ("".join(lines[:40]) + lines[40][:12], "is not well-formed XML: line 41"),
+        "empty.urdf": ("", "is not well-formed XML: line 1, column 1 (no element found)"),
+        "root.urdf": ('<?xml version="1.0"?><robt name="x"/>', "the root element is <robt>"),
+        "noname.urdf": (
+            good.replace('<link name="', '<link x="', 1),
+            "an element lacks its 'name' attribute",
+        ),
+        "notype.urdf": (good.replace(' type="revolute"', "", 1), "has no type"),
+    }
+    for name, (text, needle) in cases.items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+        r = run_in_process(["fk", "0", "0", "0", "0", "0", "0", "--model", name], tmp_path)
+        assert r.returncode == 1 and r.stdout == "", (name, r.stdout)
+        assert r.stderr.count("\n") == 1 and r.stderr.startswith(f"error: URDF {name!r}"), r.stderr
+        assert needle in r.stderr, r.stderr

@@ -21,6 +21,28 @@ from armpath.model.skeleton import link_radii, physical_links
 _M_TO_MM = 1000.0
 
 
+def _check_well_formed(path: Path) -> None:
+    """Refuse a file that is not well-formed XML with a ``<robot>`` root, in one line naming
+    where it breaks (a truncated file): yourdfpy would print its XML parser's complaint and
+    retry with a forgiving parser, then fail on what that made of the rest."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        line, column = exc.position
+        raise InvalidInputError(
+            f"URDF {path.name!r} is not well-formed XML: line {line}, column {column + 1} "
+            f"({str(exc).split(':')[0]})"
+        ) from None
+    except OSError as exc:
+        raise InvalidInputError(f"URDF {path.name!r} cannot be read: {exc.strerror}") from None
+    if root.tag != "robot":
+        raise InvalidInputError(
+            f"URDF {path.name!r}: the root element is <{root.tag}>, not <robot>"
+        )
+
+
 def arm_from_urdf(
     path: str | Path,
     tip_link: str | None = None,
@@ -42,9 +64,14 @@ def arm_from_urdf(
             "reading URDF needs the optional dependency yourdfpy: pip install 'armpath[urdf]'"
         ) from exc
     p = Path(path)
+    _check_well_formed(p)
     try:
         urdf = yourdfpy.URDF.load(str(p), load_meshes=False, build_scene_graph=False)
-    except Exception as exc:  # yourdfpy raises many types for malformed XML
+    except KeyError as exc:  # an element without an attribute yourdfpy reads unguarded
+        raise InvalidInputError(
+            f"URDF {p.name!r} could not be parsed: an element lacks its {exc.args[0]!r} attribute"
+        ) from None
+    except Exception as exc:  # yourdfpy raises many types for malformed URDF
         raise InvalidInputError(f"URDF {p.name!r} could not be parsed: {exc}") from exc
     joints_by_child = {j.child: j for j in urdf.robot.joints}
     children: dict[str, list[str]] = {}
@@ -81,6 +108,8 @@ def arm_from_urdf(
         if uj.type == "fixed":
             carry = carry @ origin
             continue
+        if uj.type is None:
+            raise InvalidInputError(f"URDF {p.name!r}: joint {uj.name!r} has no type")
         if uj.type not in ("revolute", "continuous", "prismatic"):
             raise InvalidInputError(
                 f"URDF {p.name!r}: joint {uj.name!r} of type {uj.type!r} is not supported "
