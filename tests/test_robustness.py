@@ -475,6 +475,30 @@ def test_a_result_replays_from_another_folder_after_its_scene_file_is_gone(tmp_p
         assert len(number.lstrip("-").replace(".", "").lstrip("0").split("e")[0]) <= 12
 
 
+def test_a_result_whose_model_or_commands_were_changed_is_refused(tmp_path):
+    """A result's commands replayed on its model must end at its recorded tip (checked here
+    with the independent seed FK): a model whose upper arm was lengthened by 10 mm, or one
+    command changed by a tick, replayed and exported a different motion without a word."""
+    import independent
+
+    r = run("plan", "--to", "10", "-80", "10", "0", "-80", "0", "--out", "res", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "res" / "plan.json").read_text())
+    np.testing.assert_allclose(independent.points(doc["final_deg"])[-1], doc["tip"], atol=1e-6)
+    longer = json.loads(json.dumps(doc))
+    longer["model"]["definition"]["joints"][1]["T_parent_joint"][2][3] += 10.0
+    moved = json.loads(json.dumps(doc))
+    moved["commands"][0][0] -= 1 if moved["commands"][0][0] > 0 else -1
+    for name, changed in (("longer.json", longer), ("moved.json", moved)):
+        (tmp_path / name).write_text(json.dumps(changed))
+        r = run("export", name, "--format", "joint-trajectory", "--out", "e", cwd=tmp_path)
+        (line,) = error_lines(r.stderr)
+        assert r.returncode == 1 and "not at its recorded tip" in line, line
+        assert "the model or the commands were changed after the run" in line
+        assert not (tmp_path / "e").exists()
+    assert load_result(tmp_path / "res" / "plan.json").sequence.n_commands == doc["n_commands"]
+
+
 def test_wall_convention_of_a_scene_without_workpiece_is_not_none():
     scene = load_scene(None)
     assert scene.describe()["definition"]["obstacles"][1]["wall_thickness"] == "normal"

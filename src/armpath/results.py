@@ -241,6 +241,28 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
 MAX_RESULT_BYTES = 100_000_000
 
 
+def _check_recorded_tip(doc: dict[str, Any], arm: SerialArm, seq: CommandSequence, p: Path) -> None:
+    """The commands replayed on the document's model must end with the tool point where the
+    document says (its ``tip``, written from the same replay): a model or commands changed
+    after the run would otherwise replay, animate and export a different motion unnoticed."""
+    recorded = doc.get("tip")
+    if recorded is None:
+        return
+    try:
+        tip = np.asarray(recorded, dtype=np.float64).reshape(3)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"result file {p}: its tip is not three numbers") from None
+    replayed = tool_position(arm, seq.states_joint()[-1])
+    unit = arm.length_unit
+    if not np.allclose(replayed, tip, rtol=0.0, atol=1e-3 / arm.mm_per_unit):
+        raise InvalidInputError(
+            f"result file {p}: its commands on its model end with the tool point at "
+            f"({', '.join(f'{v:.3f}' for v in replayed)}) {unit}, not at its recorded tip "
+            f"({', '.join(f'{v:.3f}' for v in tip)}) {unit}: the model or the commands were "
+            "changed after the run"
+        )
+
+
 def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Result:
     """Read a result JSON document; its scene comes from ``scene`` or, if omitted, from the
     scene definition the document carries (older documents: the source it names, the built-in
@@ -282,6 +304,7 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
             f"{MAX_COMMANDS:,} a result may have"
         )
     sequence = CommandSequence(start, commands, arm.lattice)
+    _check_recorded_tip(doc, arm, sequence, p)
     if "targets" in doc:
         targets = np.asarray(doc["targets"], dtype=float).reshape(-1, 3)
     elif doc.get("target") is not None:
