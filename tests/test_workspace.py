@@ -311,3 +311,30 @@ def test_orientation_and_dexterity_bounds(monkeypatch):
         dexterous_workspace(arm, 1_000_000, rotations, *box)  # 7.3e8 poses
     with pytest.raises(InvalidInputError, match="points held at once"):
         dexterous_workspace(arm, 5_000_000, rotations[:1], *box)
+
+
+def test_workspace_obstacles_of_another_arm_are_its_own_links_without_a_scene(tmp_path):
+    """`workspace --model ur5 --obstacles` kept the UR5's samples clear of the seed scene's
+    table and workpiece (placed for the seed arm) although every other command stands another
+    arm alone: now the arm alone (its links against each other), as the table says; the seed
+    scene only where asked for."""
+    from armpath.api import default_scene
+    from cli_in_process import run_in_process
+
+    ur5 = BUILTIN_MODELS["ur5"]()
+    args = ["workspace", "--model", "ur5", "--obstacles", "--samples", "20000", "--seed", "3"]
+    alone = sample_workspace(ur5, 20_000, 20.0, seed=3, world=default_scene("ur5").world)
+    in_seed = sample_workspace(ur5, 20_000, 20.0, seed=3, world=seed_scene().world)
+    assert alone.kept != in_seed.kept
+    for extra, grid, scene in (
+        ((), alone, "none (the arm alone)"),
+        (
+            ("--scene", "seed"),
+            in_seed,
+            "seed",
+        ),
+    ):
+        r = run_in_process([*args, *extra], tmp_path)
+        assert r.returncode == 0, r.stderr
+        (row,) = [ln.split() for ln in r.stdout.splitlines() if "kept (clearance rule)" in ln]
+        assert row[3] == str(grid.kept) and " ".join(row[4:]) == f"scene: {scene}"

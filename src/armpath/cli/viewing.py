@@ -132,7 +132,14 @@ def animate(
         Path | None,
         typer.Option("--out", help="GIF or MP4 file to write. Default: the result's name, .gif."),
     ] = None,
-    scene_file: SceneOption = None,
+    scene_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--scene",
+            help="Scene file (TOML or YAML) to show the motion in. Default: the scene the "
+            "result carries.",
+        ),
+    ] = None,
     fps: Annotated[int, typer.Option(help="Frames per second.")] = 15,
     frames: Annotated[int, typer.Option(help="Largest number of frames.")] = 120,
 ) -> None:

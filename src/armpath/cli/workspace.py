@@ -97,7 +97,9 @@ def workspace(
         typer.Option(
             "--obstacles",
             help="Keep only configurations that satisfy the scene's clearance rule "
-            "(obstacles and self-collision; the seed scene unless --scene).",
+            "(obstacles and self-collision; the scene of --scene, else the seed scene for the "
+            "seed arm and no obstacles for another --model: the arm alone, its links against "
+            "each other).",
         ),
     ] = False,
     scene_file: SceneOption = None,
@@ -111,10 +113,10 @@ def workspace(
 ) -> None:
     """Reachable workspace of the tool point by sampling joint space into voxels: volume,
     bounding box and sections."""
+    from armpath.api import default_scene, load_scene
     from armpath.export import output_folder
     from armpath.kinematics import z_axis_chain
     from armpath.model.catalog import resolve_model
-    from armpath.scenes import load_scene
     from armpath.workspace import sample_workspace
     from armpath.workspace.sampling import METHODS, GridSpec, check_count
 
@@ -127,7 +129,9 @@ def workspace(
         _check_length(voxel, "voxel size", "--voxel")
         arm = resolve_model(model, tip_link)
         GridSpec.for_arm(arm, voxel, "--voxel")
-        world = load_scene(scene_file).world if obstacles else None
+        # the scene as every command takes it: the seed scene is placed for the seed arm only
+        the_scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
+        world = the_scene.world if obstacles else None
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
             t0 = time.perf_counter()
@@ -147,7 +151,11 @@ def workspace(
             rows: list[tuple[str, str, str]] = [
                 ("model", arm.name, ""),
                 ("samples", f"{grid.samples}", ""),
-                *([("kept (clearance rule)", f"{grid.kept}", "")] if obstacles else []),
+                *(
+                    [("kept (clearance rule)", f"{grid.kept}", f"scene: {the_scene.name}")]
+                    if obstacles
+                    else []
+                ),
                 ("voxel", f"{grid.voxel:g}", "mm"),
                 ("occupied voxels", f"{grid.n_occupied}", ""),
                 ("volume", f"{grid.volume / 1e9:.4f}", "m^3"),
