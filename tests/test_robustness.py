@@ -499,6 +499,26 @@ def test_a_result_whose_model_or_commands_were_changed_is_refused(tmp_path):
     assert load_result(tmp_path / "res" / "plan.json").sequence.n_commands == doc["n_commands"]
 
 
+def test_a_result_whose_scene_is_not_found_still_exports(tmp_path):
+    """An export needs the commands and the model, not the scene: a result planned in a
+    scene file that is gone (and carries no definition of it) exports; animate, which shows
+    the scene, says how to give it."""
+    r = run("plan", "--to", "10", "-80", "10", "0", "-80", "0", "--out", "res", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "res" / "plan.json").read_text())
+    doc["scene"] = {"source": "gone.toml"}
+    (tmp_path / "gone.json").write_text(json.dumps(doc))
+    r = run("export", "gone.json", "--format", "csv", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    rows = [ln.split(",") for ln in r.stdout.splitlines()[1:]]
+    assert len(rows) == doc["n_commands"] + 1
+    np.testing.assert_allclose([float(v) for v in rows[-1][1:]], doc["final_deg"], atol=1e-9)
+    r = run("animate", "gone.json", "--frames", "2", cwd=tmp_path)
+    (line,) = error_lines(r.stderr)
+    assert r.returncode == 1 and "scene 'gone.toml', which is not found here" in line
+    assert "--scene of animate and view" in line
+
+
 def test_wall_convention_of_a_scene_without_workpiece_is_not_none():
     scene = load_scene(None)
     assert scene.describe()["definition"]["obstacles"][1]["wall_thickness"] == "normal"

@@ -229,8 +229,8 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
         loaded = load_scene(source)
     else:
         raise InvalidInputError(
-            f"the result was planned in scene {source!r}, which is not found here; give the "
-            "scene file (--scene)"
+            f"the result was planned in scene {source!r}, which is not found here; give its "
+            "scene file (--scene of animate and view; scene= of load_result)"
         )
     return loaded.with_wall_thickness(wall) if wall else loaded
 

@@ -53,6 +53,7 @@ def export_result(
 ) -> None:
     """Convert a result's commands into a timed trajectory: the state after command k is
     reached at k times the command period, each command moving the joints linearly."""
+    from armpath.api import load_scene
     from armpath.controller_export import FORMATS
     from armpath.errors import InvalidInputError
     from armpath.export import output_folder
@@ -61,7 +62,9 @@ def export_result(
     with _cli_errors():
         if fmt not in FORMATS:
             raise InvalidInputError(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}")
-        result = load_result(result_file)
+        # the commands and the model are what an export needs: the result's scene is not
+        # looked for (a result planned in a scene file not found here exports all the same)
+        result = load_result(result_file, load_scene("none"))
         steps: list[float] | None = None
         if steps_per_tick is not None:
             words = steps_per_tick.replace(",", " ").split()
