@@ -172,8 +172,12 @@ def test_bad_arm_documents_are_one_clear_error():
     broken = {**doc, "joints": doc["joints"][:1]}
     with pytest.raises(InvalidInputError):
         arm_from_dict(broken)
-    with pytest.raises(InvalidInputError, match="incomplete or malformed"):
+    with pytest.raises(InvalidInputError, match=r"^model: incomplete arm: no 'T_parent_joint'$"):
         arm_from_dict({**doc, "joints": [{"name": "j"}]})
+    # what is wrong, in words rather than an exception's repr
+    bad_kind = {**doc, "joints": [{**doc["joints"][0], "kind": "spherical"}, *doc["joints"][1:]]}
+    with pytest.raises(InvalidInputError, match=r"^model: malformed arm: 'spherical' is not"):
+        arm_from_dict(bad_kind)
 
 
 @pytest.mark.parametrize(

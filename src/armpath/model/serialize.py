@@ -118,8 +118,10 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             approach_axis=tuple(doc.get("approach_axis", (0.0, 0.0, 1.0))),
             command_period_s=float(doc.get("command_period_s", DEFAULT_COMMAND_PERIOD_S)),
         )
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
-        raise InvalidInputError(f"{what}: incomplete or malformed arm ({exc!r})") from None
+    except KeyError as exc:
+        raise InvalidInputError(f"{what}: incomplete arm: no {exc.args[0]!r}") from None
+    except (TypeError, ValueError, IndexError) as exc:  # InvalidInputError is a ValueError
+        raise InvalidInputError(f"{what}: malformed arm: {exc}") from None
 
 
 __all__ = ["ARM_DOCUMENT_VERSION", "arm_from_dict", "arm_to_dict"]
