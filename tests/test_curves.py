@@ -151,3 +151,28 @@ def test_a_closed_polyline_may_repeat_its_first_vertex_and_says_which_vertices_c
         Polyline("c", [[0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 0]])
     with pytest.raises(InvalidInputError, match="3 or more vertices"):
         Polyline("d", [[0, 0, 0], [1, 0, 0]], closed=True)
+
+
+def test_the_table_follows_a_curve_that_turns_fast_or_refuses_it():
+    """The arc-length table doubles its points until the curve measured through the midpoints
+    of its intervals is no longer (to 1e-4): a helix of 1,000 turns gets its length to 1e-4 of
+    the closed form (the first 20,001 points were 0.4 % short); a polyline's table has every
+    vertex, so its length is its pieces' sum exactly; a circle wound 160,000 times over t in
+    [0, 1e6] (its length was 0.5 % of the true one) is refused, naming what to change."""
+    from armpath.geometry.curves import TABLE_SAMPLES
+
+    helix = ParametricCurve(
+        "helix", "300 + 50*cos(t)", "50*sin(t)", "200 + t/10", 0.0, 2000 * np.pi
+    )
+    assert helix.length == pytest.approx(1000 * np.hypot(100 * np.pi, np.pi / 5), rel=1e-4)
+    lifted = helix.points(np.array([0.123456, 0.654321])) + np.array([0.0, 0.0, 0.05])
+    d, _ = helix.closest(lifted)
+    np.testing.assert_allclose(d, 0.05 * np.cos(np.arctan2(0.1, 50.0)), rtol=1e-4)
+    circle = ParametricCurve("circle", "300 + 50*cos(t)", "50*sin(t)", "200", 0.0, 2 * np.pi)
+    assert circle._table[0].size == TABLE_SAMPLES  # a curve the first table follows keeps it
+    walk = np.cumsum(np.random.default_rng(0).normal(size=(3000, 3)), axis=0) * 5.0
+    poly = Polyline("walk", walk)
+    assert poly.length == pytest.approx(np.linalg.norm(np.diff(walk, axis=0), axis=1).sum(), 1e-12)
+    wound = ParametricCurve("wound", "300 + 50*cos(t)", "50*sin(t)", "200", 0.0, 1e6)
+    with pytest.raises(InvalidInputError, match="turns faster than 320,001 points along it"):
+        _ = wound.length
