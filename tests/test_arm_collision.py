@@ -19,7 +19,12 @@ import pytest
 from armpath.errors import InvalidInputError
 from armpath.geometry.primitives import Box, HalfSpace
 from armpath.geometry.world import CollisionWorld, SlackGroup, link_analysis
-from armpath.kinematics import displacement_bounds, forward_frames, landmark_positions
+from armpath.kinematics import (
+    displacement_bounds,
+    forward_frames,
+    landmark_positions,
+    tool_position,
+)
 from armpath.model.catalog import BUILTIN_MODELS, puma560, resolve_model, ur5
 from armpath.model.dh import load_robot_file, robot_from_dict
 from armpath.model.serial_arm import JointKind, Landmark, Link, SerialArm
@@ -549,3 +554,47 @@ def test_the_ur5_elbow_cannot_fold_past_its_band_whatever_the_other_joints():
     assert np.ptp(np.array(slacks), axis=0).max() <= 1e-6
     for name in ("seed", "puma560"):
         assert SELF_ONLY.joint_bands(resolve_model(name)) == {}
+
+
+def test_a_prismatic_leg_that_retracts_to_nothing_joins_its_neighbours():
+    """A SCARA whose quill (joint 3, 0..200 mm) is fully retracted at home: the links on
+    either side of the quill's leg then meet at one point (by the textbook D-H product here),
+    so checking them against each other put home in self-collision (slack -41 mm with 20 mm
+    radii). They now count as neighbours, as links joined by a chain shorter than their radii
+    do; every other pair is still checked, and the arm plans from home."""
+    from armpath.model.dh import DHRow, dh_arm
+    from armpath.planning.motion import MotionOptions, plan_motion
+
+    rows = [
+        DHRow(300.0, 0.0, 400.0, limits=(-2.5, 2.5)),
+        DHRow(250.0, np.pi, 0.0, limits=(-2.5, 2.5)),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
+    ]
+    home = np.array([0.0, np.radians(30.0), 0.0, 0.0])
+    arm = dh_arm(rows, name="scara", link_radii_mm=20.0, home=home)
+
+    def frame_origins(q):  # the textbook standard D-H product, frames 0..4
+        T, out = np.eye(4), [np.zeros(3)]
+        for row, v in zip(rows, q, strict=True):
+            theta, d = (v, row.d) if row.kind is JointKind.REVOLUTE else (row.theta, row.d + v)
+            T = T @ _rz(theta) @ _tz(d) @ _tx(row.a) @ _rx(row.alpha)
+            out.append(T[:3, 3].copy())
+        return np.array(out)
+
+    for q in (home, np.array([0.4, -1.0, 120.0, 2.0])):  # the model is the SCARA's D-H table
+        np.testing.assert_allclose(tool_position(arm, q), frame_origins(q)[-1], atol=1e-9)
+    names = [lk.name for lk in arm.links]
+    quill = next(k for k, lk in enumerate(arm.links) if lk.end == 3)  # its leg ends at frame 3
+    before, after = quill - 1, quill + 1
+    pts = landmark_positions(arm, home[None])[0]
+    gap = np.linalg.norm(pts[arm.links[before].end] - pts[arm.links[after].start])
+    assert gap == pytest.approx(0.0, abs=1e-9)  # the neighbours meet at home
+    pairs = SELF_ONLY.self_pairs(arm)
+    every = {(i, j) for i in range(len(names)) for j in range(i + 2, len(names))}
+    assert every - set(pairs) == {(before, after)}
+    assert SELF_ONLY.satisfied(arm, home[None])[0]
+    goal = arm.lattice.to_ticks(np.array([*np.radians([20.0, 10.0]), 50.0, np.pi / 3]), "goal")
+    start = arm.lattice.to_ticks(home, "home")
+    plan = plan_motion(arm, SELF_ONLY, start, goal[None], MotionOptions())
+    assert plan.clearance.certified_ok and plan.sequence.final_ticks.tolist() == goal.tolist()

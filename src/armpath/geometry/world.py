@@ -21,7 +21,9 @@ analytic in the joints, so what holds on the sample holds at every configuration
   3. they are joined by a chain of links of fixed length whose total is shorter than their radii
      plus ``self_margin``: their end points are then closer than that at every configuration,
      so the pair breaks the rule everywhere and says nothing (a chain of zero-length links, the
-     typical case, is rule 2);
+     typical case, is rule 2); a leg a prismatic joint slides counts at its shortest, so the
+     links either side of one that retracts to nothing (a SCARA's quill) are neighbours, not
+     in collision wherever it is retracted;
   4. they belong to one rigid body (their end points keep their distances at every
      configuration): motion cannot change their clearance.
 
@@ -168,6 +170,14 @@ _ANALYSIS_SEED = 20240517
 def _analysis_configurations(arm: SerialArm) -> FloatArray:
     """Joint vectors spread over the joint limits (a turn for unlimited revolute joints, a
     metre for unlimited prismatic ones); a fixed sample, so the analysis is deterministic."""
+    lo_f, hi_f = np.array(_analysis_bounds(arm)).T
+    u = np.random.default_rng(_ANALYSIS_SEED).uniform(0.0, 1.0, (_ANALYSIS_SAMPLES, arm.n_joints))
+    return np.asarray(lo_f + u * (hi_f - lo_f), dtype=np.float64)
+
+
+def _analysis_bounds(arm: SerialArm) -> list[tuple[float, float]]:
+    """Each joint's range for the analysis: its limits, or a turn (revolute) or two metres
+    (prismatic) where it has none."""
     bounds = []
     for joint in arm.joints:
         lo, hi = joint.limits
@@ -180,9 +190,33 @@ def _analysis_configurations(arm: SerialArm) -> FloatArray:
             bounds.append((hi - span, hi))
         else:
             bounds.append((-span / 2, span / 2))
-    lo_f, hi_f = np.array(bounds).T
-    u = np.random.default_rng(_ANALYSIS_SEED).uniform(0.0, 1.0, (_ANALYSIS_SAMPLES, arm.n_joints))
-    return np.asarray(lo_f + u * (hi_f - lo_f), dtype=np.float64)
+    return bounds
+
+
+def _shortest_lengths(arm: SerialArm, length: FloatArray, tol: float) -> FloatArray:
+    """Each link's shortest length over the joint limits: its fixed ``length``, or for a leg
+    a prismatic joint slides (its length ``|c + q|`` over ``q`` in the joint's range, found from
+    the two ends of the range with the other joints held) the least of that; ``inf`` for any
+    other link of varying length. A leg the joint can shrink to nothing joins the links on
+    either side at one point (a SCARA's quill fully retracted); the chain rule then counts
+    them as neighbours rather than in collision at every such configuration."""
+    out = np.array(length, dtype=np.float64, copy=True)
+    base = _analysis_configurations(arm)[0]
+    links = arm.links
+    for j, (lo, hi) in enumerate(_analysis_bounds(arm)):
+        if arm.joints[j].kind is not JointKind.PRISMATIC:
+            continue
+        ends = np.stack([base, base])
+        ends[0, j], ends[1, j] = lo, hi
+        pts = landmark_positions(arm, ends)  # (2, L, 3)
+        for k, lk in enumerate(links):
+            if np.isfinite(length[k]):
+                continue
+            at_lo, at_hi = np.linalg.norm(pts[:, lk.end] - pts[:, lk.start], axis=-1)
+            if abs(at_hi - at_lo) <= tol:
+                continue  # not this joint's leg
+            out[k] = min(out[k], max(0.0, 0.5 * (at_lo + at_hi - (hi - lo))))
+    return out
 
 
 def link_analysis(arm: SerialArm) -> LinkAnalysis:
@@ -203,11 +237,12 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     degenerate = np.array([point_of[lk.start] == point_of[lk.end] for lk in links], dtype=bool)
     seg = np.array([gap[:, lk.start, lk.end] for lk in links]).reshape(n, -1)
     length = np.where(np.ptp(seg, axis=1) <= tol, seg.mean(axis=1), np.inf)
+    shortest = _shortest_lengths(arm, length, tol)
     chain = np.full((n_lm, n_lm), np.inf)
     np.fill_diagonal(chain, 0.0)
     for k, lk in enumerate(links):
         a, b = point_of[lk.start], point_of[lk.end]
-        chain[a, b] = chain[b, a] = min(chain[a, b], length[k])
+        chain[a, b] = chain[b, a] = min(chain[a, b], shortest[k])
     for m in range(n_lm):  # Floyd-Warshall over the (few) points
         chain = np.minimum(chain, chain[:, m : m + 1] + chain[m : m + 1, :])
     spread = gap.max(axis=0) - gap.min(axis=0)  # how much each landmark distance varies
