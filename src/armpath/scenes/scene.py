@@ -47,7 +47,11 @@ class Scene:
         onto the inner (under the scene's wall convention) or outer face of the named workpiece.
         """
         if self.spotweld is None:
-            raise SceneError(f"scene {self.source} defines no [tasks.spotweld]")
+            raise SceneError(
+                f"scene {self.source} defines no [tasks.spotweld]: give a scene file that "
+                "does (--scene; examples/ur5_cell.toml has one), or the welds to "
+                "armpath.spotweld in Python"
+            )
         spec = self.spotweld
         if spec.points_mm is not None:
             return np.array(spec.points_mm, dtype=np.float64)
@@ -74,7 +78,11 @@ class Scene:
     def trace_curve(self) -> Curve:
         """Task 2's curve, built against the scene's obstacles (mm)."""
         if self.trace is None:
-            raise SceneError(f"scene {self.source} defines no [tasks.trace]")
+            raise SceneError(
+                f"scene {self.source} defines no [tasks.trace]: give a scene file with a "
+                "[tasks.trace.curve] (--scene; examples/ur5_cell.toml has one), or the curve to "
+                "armpath.trace in Python"
+            )
         spec = self.trace.curve
         try:
             if isinstance(spec, PlaneSectionCurveSpec):
