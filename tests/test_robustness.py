@@ -519,6 +519,41 @@ def test_a_result_whose_scene_is_not_found_still_exports(tmp_path):
     assert "--scene of animate and view" in line
 
 
+def test_a_run_whose_task_finds_no_plan_writes_the_others(tmp_path):
+    """`armpath run` on a scene whose spot welds include one out of reach: the reach's result
+    is written (and replays to its target by the independent seed FK), the report says which
+    task found no plan and why, and the run ends with that one error line, exit 1. It wrote
+    nothing at all before. A scene where every task fails still writes nothing."""
+    import independent
+
+    head = (
+        'name = "part"\n[[obstacles]]\ntype = "half_space"\nname = "floor"\n'
+        "point = [0, 0, 0]\nnormal = [0, 0, 1]\n"
+    )
+    (tmp_path / "part.toml").write_text(
+        head
+        + "[tasks.reach]\ntarget_mm = [300, 100, 200]\n"
+        + "[tasks.spotweld]\npoints_mm = [[300, 100, 250], [0, 0, 1500]]\n"
+    )
+    r = run("run", "--scene", "part.toml", "--out", "o", cwd=tmp_path)
+    (line,) = error_lines(r.stderr)
+    assert r.returncode == 1
+    assert line.startswith("error: Task 3: spot welds found no plan: target 2: target (0, 0, 1500)")
+    assert line.endswith("(the other tasks' results are written to o)")
+    out = tmp_path / "o"
+    assert not (out / "spotweld.json").exists()
+    doc = json.loads((out / "reach.json").read_text())
+    tip = independent.points(independent.replay(doc["initial_deg"], doc["commands"])[-1])[-1]
+    assert np.linalg.norm(tip - [300, 100, 200]) <= doc["tolerance_mm"]
+    report = (out / "summary.md").read_text()
+    assert "## Task 3: spot welds: no plan" in report and "is out of reach" in report
+    (tmp_path / "none.toml").write_text(head + "[tasks.spotweld]\npoints_mm = [[0, 0, 1500]]\n")
+    r = run("run", "--scene", "none.toml", "--out", "n", cwd=tmp_path)
+    (line,) = error_lines(r.stderr)
+    assert r.returncode == 1 and "is out of reach" in line and "written" not in line
+    assert not (tmp_path / "n").exists()
+
+
 def test_wall_convention_of_a_scene_without_workpiece_is_not_none():
     scene = load_scene(None)
     assert scene.describe()["definition"]["obstacles"][1]["wall_thickness"] == "normal"

@@ -44,7 +44,12 @@ from armpath.cli.common import (
     progress,
     task_setup,
 )
-from armpath.errors import InvalidInputError
+from armpath.errors import (
+    CollisionError,
+    InvalidInputError,
+    PlanningError,
+    UnreachableError,
+)
 from armpath.planning.choices import Objective, VisitOrder
 
 if TYPE_CHECKING:
@@ -56,6 +61,9 @@ if TYPE_CHECKING:
     from armpath.planning.tour import TourResult
     from armpath.planning.trace import AxisRule, TraceResult
     from armpath.scenes import Scene
+
+#: What a task of ``armpath run`` may end in while the others still run: no plan found.
+TASK_FAILURES = (UnreachableError, PlanningError, CollisionError)
 
 
 def _mm(value: float | None, digits: int = 3) -> str:
@@ -942,7 +950,8 @@ def run(
     """Run a scene's tasks for its arm (default: the seed scene's three tasks: 1, reach the
     tool box; 2, trace the crack; 3, spot welds inside the workpiece; then the seed arm's blind
     zones). Writes each task's result (JSON, CSV, XLSX), figures and animations (GIF), and a
-    one-page report summary.md."""
+    one-page report summary.md. A task that finds no plan is reported there and the others'
+    results are written; the run then ends with its error (exit 1)."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
     from armpath.export import output_folder, reach_result_dict, tour_result_dict, trace_result_dict
     from armpath.planning.bounds.search import check_max_samples
@@ -989,36 +998,56 @@ def run(
             if seed_job
             else None
         )
+        # a task that finds no plan (out of reach, no clear motion) is reported and the others
+        # run on: their results are written, then the run ends with the failure's error line
+        failed: list[tuple[str, str]] = []
         try:
             with output_folder(out) as folder:
                 if has["reach"]:
-                    with progress(f"{titles['reach']} ..."):
-                        result = reach_task(scene, arm, seed=seed)
-                    _write_reach(folder, "reach", result, arm, scene, animate=True)
-                    reach_doc = reach_result_dict(result, arm, scene)
+                    try:
+                        with progress(f"{titles['reach']} ..."):
+                            result = reach_task(scene, arm, seed=seed)
+                        _write_reach(folder, "reach", result, arm, scene, animate=True)
+                        reach_doc = reach_result_dict(result, arm, scene)
+                    except TASK_FAILURES as exc:
+                        failed.append((titles["reach"], str(exc)))
                 if has["trace"]:
-                    with progress(f"{titles['trace']} ...") as say:
-                        options = TraceOptions(
-                            motion=MotionOptions(seed=seed),
-                            bound=bound,
-                            bound_samples=bound_samples,
-                        )
-                        traced = trace_task(scene, arm, options, on_progress=say)
-                    trace_doc = trace_result_dict(traced, arm, scene)
-                    _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
+                    try:
+                        with progress(f"{titles['trace']} ...") as say:
+                            options = TraceOptions(
+                                motion=MotionOptions(seed=seed),
+                                bound=bound,
+                                bound_samples=bound_samples,
+                            )
+                            traced = trace_task(scene, arm, options, on_progress=say)
+                        trace_doc = trace_result_dict(traced, arm, scene)
+                        _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
+                    except TASK_FAILURES as exc:
+                        failed.append((titles["trace"], str(exc)))
                 if has["spotweld"]:
-                    with progress(f"{titles['spotweld']} ...") as say:
-                        tour = spotweld_task(
-                            scene,
-                            arm,
-                            options=MotionOptions(seed=seed),
-                            on_progress=say,
-                            bound=bound,
-                            bound_samples=bound_samples,
-                            pools=pools,
-                        )
-                    tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
-                    _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
+                    try:
+                        with progress(f"{titles['spotweld']} ...") as say:
+                            tour = spotweld_task(
+                                scene,
+                                arm,
+                                options=MotionOptions(seed=seed),
+                                on_progress=say,
+                                bound=bound,
+                                bound_samples=bound_samples,
+                                pools=pools,
+                            )
+                        tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
+                        _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
+                    except TASK_FAILURES as exc:
+                        failed.append((titles["spotweld"], str(exc)))
+                if failed and len(failed) == sum(has.values()):
+                    # no task found a plan: nothing is written (one reason said once)
+                    reasons = list(dict.fromkeys(why for _, why in failed))
+                    raise PlanningError(
+                        reasons[0]
+                        if len(reasons) == 1
+                        else "; ".join(f"{title}: {why}" for title, why in failed)
+                    )
                 if blind_job is not None:
                     with progress("blind zones ...") as say:
                         say("blind zones: arm plane, meridian map and workpiece faces")
@@ -1039,6 +1068,7 @@ def run(
                     blind.summary() if blind is not None else (),
                     [*folder.staged(), "summary.md"],
                     heading=heading,
+                    failed=failed,
                 )
                 folder.write_text("summary.md", report)
                 if html:
@@ -1047,6 +1077,11 @@ def run(
             if blind_job is not None:
                 blind_job.cancel()  # (done by then, unless a task failed)
         _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading)
+        if failed:
+            raise PlanningError(
+                "; ".join(f"{title} found no plan: {why}" for title, why in failed)
+                + f" (the other tasks' results are written to {folder.path})"
+            )
 
 
 def _background_say() -> Callable[[str], None]:
