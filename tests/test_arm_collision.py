@@ -560,8 +560,9 @@ def test_a_prismatic_leg_that_retracts_to_nothing_joins_its_neighbours():
     """A SCARA whose quill (joint 3, 0..200 mm) is fully retracted at home: the links on
     either side of the quill's leg then meet at one point (by the textbook D-H product here),
     so checking them against each other put home in self-collision (slack -41 mm with 20 mm
-    radii). They now count as neighbours, as links joined by a chain shorter than their radii
-    do; every other pair is still checked, and the arm plans from home."""
+    radii). Only the slide moves them apart, so they now count as neighbours, as links joined
+    by a chain shorter than their radii do; every other pair is still checked, and the arm
+    plans from home."""
     from armpath.model.dh import DHRow, dh_arm
     from armpath.planning.motion import MotionOptions, plan_motion
 
@@ -594,6 +595,16 @@ def test_a_prismatic_leg_that_retracts_to_nothing_joins_its_neighbours():
     every = {(i, j) for i in range(len(names)) for j in range(i + 2, len(names))}
     assert every - set(pairs) == {(before, after)}
     assert SELF_ONLY.satisfied(arm, home[None])[0]
+    # welder003's first and last links also meet where its axis (0..700 mm) retracts, but its
+    # wrist moves the last one about whatever the slide: that pair stays checked
+    welder = BUILTIN_MODELS["welder003"]()
+    (pair,) = SELF_ONLY.self_pairs(welder)
+    first, last = (welder.links[k] for k in pair)
+    q = np.tile(welder.home, (50, 1))
+    q[:, [3, 4, 5]] = np.random.default_rng(5).uniform(-np.pi, np.pi, (50, 3))
+    p = landmark_positions(welder, q)
+    apart = np.linalg.norm(p[:, last.end] - p[:, first.start], axis=-1)
+    assert np.ptp(apart) > 10.0  # the slide held, the pair's ends still move apart
     goal = arm.lattice.to_ticks(np.array([*np.radians([20.0, 10.0]), 50.0, np.pi / 3]), "goal")
     start = arm.lattice.to_ticks(home, "home")
     plan = plan_motion(arm, SELF_ONLY, start, goal[None], MotionOptions())

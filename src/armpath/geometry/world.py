@@ -21,9 +21,10 @@ analytic in the joints, so what holds on the sample holds at every configuration
   3. they are joined by a chain of links of fixed length whose total is shorter than their radii
      plus ``self_margin``: their end points are then closer than that at every configuration,
      so the pair breaks the rule everywhere and says nothing (a chain of zero-length links, the
-     typical case, is rule 2); a leg a prismatic joint slides counts at its shortest, so the
-     links either side of one that retracts to nothing (a SCARA's quill) are neighbours, not
-     in collision wherever it is retracted;
+     typical case, is rule 2); so too two links that only a prismatic joint's slide moves
+     apart (one rigid body while it holds still) and that the slide, retracted, brings that
+     close: the links either side of a SCARA's quill, which retracts to nothing, are
+     neighbours rather than in collision wherever it is retracted;
   4. they belong to one rigid body (their end points keep their distances at every
      configuration): motion cannot change their clearance.
 
@@ -149,7 +150,9 @@ class LinkAnalysis:
     one); ``degenerate`` marks zero-length links; ``length`` is each link's length where it is
     the same at every configuration (``inf`` where a prismatic joint changes it); ``chain`` is
     the shortest chain of fixed-length links between two points (``inf`` if none); ``rigid``
-    marks link pairs in one rigid body.
+    marks link pairs in one rigid body. ``slide_chain`` is the shortest chain with each leg a
+    prismatic joint slides at its shortest, and ``rigid_but_slides`` marks link pairs in one
+    rigid body while the prismatic joints hold still (only a slide moves them apart).
     """
 
     point_of: NDArray[np.int64]
@@ -157,6 +160,8 @@ class LinkAnalysis:
     length: FloatArray
     chain: FloatArray
     rigid: NDArray[np.bool_]
+    slide_chain: FloatArray
+    rigid_but_slides: NDArray[np.bool_]
 
     def ends(self, link: Link) -> tuple[int, int]:
         return int(self.point_of[link.start]), int(self.point_of[link.end])
@@ -219,6 +224,34 @@ def _shortest_lengths(arm: SerialArm, length: FloatArray, tol: float) -> FloatAr
     return out
 
 
+def _chains(
+    links: Sequence[Link], point_of: NDArray[np.int64], length: FloatArray, n_points: int
+) -> FloatArray:
+    """The shortest chain of links (each of ``length``, ``inf`` for none) between every two
+    points (Floyd-Warshall over the few points)."""
+    chain = np.full((n_points, n_points), np.inf)
+    np.fill_diagonal(chain, 0.0)
+    for k, lk in enumerate(links):
+        a, b = point_of[lk.start], point_of[lk.end]
+        chain[a, b] = chain[b, a] = min(chain[a, b], length[k])
+    for m in range(n_points):
+        chain = np.minimum(chain, chain[:, m : m + 1] + chain[m : m + 1, :])
+    return chain
+
+
+def _rigid_pairs(links: Sequence[Link], gap: FloatArray, tol: float) -> NDArray[np.bool_]:
+    """Link pairs whose end points keep their distances (``gap`` ``(K, L, L)`` over sampled
+    configurations) to ``tol``."""
+    spread = gap.max(axis=0) - gap.min(axis=0)  # how much each landmark distance varies
+    n = len(links)
+    rigid = np.zeros((n, n), dtype=bool)
+    for i in range(n):
+        for j in range(n):
+            ends = [links[i].start, links[i].end, links[j].start, links[j].end]
+            rigid[i, j] = bool(spread[np.ix_(ends, ends)].max() <= tol)
+    return rigid
+
+
 def link_analysis(arm: SerialArm) -> LinkAnalysis:
     """Points, zero-length links, fixed lengths, chains and rigid pairs of ``arm``'s links
     (computed once per arm and kept on it)."""
@@ -237,21 +270,16 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     degenerate = np.array([point_of[lk.start] == point_of[lk.end] for lk in links], dtype=bool)
     seg = np.array([gap[:, lk.start, lk.end] for lk in links]).reshape(n, -1)
     length = np.where(np.ptp(seg, axis=1) <= tol, seg.mean(axis=1), np.inf)
-    shortest = _shortest_lengths(arm, length, tol)
-    chain = np.full((n_lm, n_lm), np.inf)
-    np.fill_diagonal(chain, 0.0)
-    for k, lk in enumerate(links):
-        a, b = point_of[lk.start], point_of[lk.end]
-        chain[a, b] = chain[b, a] = min(chain[a, b], shortest[k])
-    for m in range(n_lm):  # Floyd-Warshall over the (few) points
-        chain = np.minimum(chain, chain[:, m : m + 1] + chain[m : m + 1, :])
-    spread = gap.max(axis=0) - gap.min(axis=0)  # how much each landmark distance varies
-    rigid = np.zeros((n, n), dtype=bool)
-    for i in range(n):
-        for j in range(n):
-            ends = [links[i].start, links[i].end, links[j].start, links[j].end]
-            rigid[i, j] = bool(spread[np.ix_(ends, ends)].max() <= tol)
-    out = LinkAnalysis(point_of, degenerate, length, chain, rigid)
+    chain = _chains(links, point_of, length, n_lm)
+    slide_chain = _chains(links, point_of, _shortest_lengths(arm, length, tol), n_lm)
+    rigid = _rigid_pairs(links, gap, tol)
+    held = _analysis_configurations(arm)
+    slides = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints], dtype=bool)
+    held[:, slides] = held[0, slides]  # the prismatic joints hold still
+    held_pts = landmark_positions(arm, held)
+    held_gap = np.linalg.norm(held_pts[:, :, None, :] - held_pts[:, None, :, :], axis=-1)
+    rigid_but_slides = _rigid_pairs(links, held_gap, tol)
+    out = LinkAnalysis(point_of, degenerate, length, chain, rigid, slide_chain, rigid_but_slides)
     arm.__dict__["_link_analysis"] = out
     return out
 
@@ -443,9 +471,13 @@ class CollisionWorld:
                 ends_a, ends_b = info.ends(a), info.ends(b)
                 if set(ends_a) & set(ends_b) or info.rigid[i, j]:
                     continue
-                chain = min(info.chain[p, r] for p in ends_a for r in ends_b)
-                if chain < a.radius + b.radius + self.self_margin:
+                near = a.radius + b.radius + self.self_margin
+                if min(info.chain[p, r] for p in ends_a for r in ends_b) < near:
                     continue
+                if info.rigid_but_slides[i, j] and (
+                    min(info.slide_chain[p, r] for p in ends_a for r in ends_b) < near
+                ):
+                    continue  # only a slide parts them, and retracted it joins them
                 out.append((i, j))
         cache[self.self_margin] = tuple(out)
         return cache[self.self_margin]
