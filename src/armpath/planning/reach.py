@@ -523,8 +523,21 @@ def _lattice_candidates(
     if not kept:
         return np.zeros((0, TIP_JOINTS), dtype=np.int64), np.zeros(0)
     cands, index = unique_states(np.concatenate(kept), return_index=True)
-    errs = np.concatenate(kept_err)[index]
-    # polish: exhaustive +-1 tick neighbourhoods of the best states until nothing improves
+    return _polished(p, cands, np.concatenate(kept_err)[index], box_lo, box_hi, polish)
+
+
+def _polished(
+    p: _Problem,
+    cands: IntArray,
+    errs: FloatArray,
+    box_lo: IntArray,
+    box_hi: IntArray,
+    polish: int,
+) -> tuple[IntArray, FloatArray]:
+    """``cands`` (lattice states of joints 1-5, fingertip errors ``errs`` to ``p``'s target)
+    with the exhaustive +-1 tick neighbourhoods of the ``polish`` best added, within the box
+    ``box_lo .. box_hi``, until the best no longer improves (at most 6 rounds); sorted by
+    error."""
     steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
     for _ in range(6):
         check_time("polishing lattice states near the target")
@@ -535,15 +548,38 @@ def _lattice_candidates(
         near_err = p.errors_of_ticks(near)
         cands, index = unique_states(np.concatenate([cands, near]), return_index=True)
         errs = np.r_[errs, near_err][index]
-        if errs.min() >= best_before:
+        if not errs.size or errs.min() >= best_before:
             break
     order = np.argsort(errs, kind="stable")
     return cands[order], errs[order]
 
 
 #: Where the search also looks off the target (see :func:`_with_ball_candidates`): points on
-#: the way from the target to the tool point of the bound's configuration, as shares of it.
-BALL_SHARES = (0.5, 0.7, 0.85, 0.95)
+#: the way from the target through the nearest fingertip the n-command box allows, as shares
+#: of that distance (those within the tolerance), and the most states of theirs kept.
+BALL_SHARES = (1.0, 1.05, 1.1, 1.15, 1.25, 1.4, 1.6)
+BALL_KEPT = 2_000
+
+
+def _nearest_in_box(p: _Problem, q0: FloatArray, n: int) -> FloatArray:
+    """Joints 1-5 (rad) within ``n`` commands of the start and the joint limits that bring the
+    fingertip nearest the target (L-BFGS-B from ``q0``, a configuration in that box)."""
+    from scipy.optimize import minimize  # imported when first needed
+
+    reach_rad = n * MAX_INCREMENT_TICKS * TICK_RAD
+    s = p.start_rad
+    lo = np.maximum(s - reach_rad, ticks_to_rad(p.lo_ticks))
+    hi = np.minimum(s + reach_rad, ticks_to_rad(p.hi_ticks))
+
+    def f(q: FloatArray) -> tuple[float, FloatArray]:
+        e = tool_position(p.arm, p.full(q)) - p.target
+        J = position_jacobian(p.arm, p.full(q))[:, :TIP_JOINTS]
+        return float(e @ e), 2.0 * e @ J
+
+    res = minimize(
+        f, np.clip(q0, lo, hi), jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True))
+    )
+    return np.asarray(np.clip(res.x, lo, hi), dtype=np.float64)
 
 
 def _with_ball_candidates(
@@ -555,27 +591,39 @@ def _with_ball_candidates(
     errs: FloatArray,
 ) -> tuple[IntArray, FloatArray]:
     """``cands`` (lattice states of joints 1-5, sorted by their fingertip errors ``errs``)
-    with the states within ``n`` commands found about points off the target: the bound's
-    configuration ``q_within`` (rad) puts the fingertip up to the tolerance away, toward the
-    start, and a wide tolerance lets the fewest commands end there rather than on the target
-    (the seed's Task 1 with 20 mm: 61 commands, not the 63 onto the target). The families of
-    points between the target and that fingertip (:data:`BALL_SHARES`) are searched as the
-    target's is; every state is judged by its error to the target itself."""
-    off = fingertip(p.geometry, q_within) - p.target
-    if not np.all(np.isfinite(off)) or float(np.linalg.norm(off)) <= 1e-9:
-        return cands, errs
+    with the states within ``n`` commands found off the target: a wide tolerance lets the
+    fewest commands end short of it (the seed's Task 1 with 20 mm: 61 commands, not the 63
+    onto the target). The fingertip nearest the target that ``n`` commands allow (from the
+    bound's configuration ``q_within``, rad) gives the way off it; the families of points on
+    that way (:data:`BALL_SHARES` of it, nearest first, within the tolerance, until the
+    states within it are as many as the motions checked) are searched as the target's is,
+    the states judged by their error to the target itself and polished toward it in the
+    n-command box; the :data:`BALL_KEPT` best are kept."""
+    near = fingertip(p.geometry, _nearest_in_box(p, q_within, n)) - p.target
+    gap = float(np.linalg.norm(near))
+    start = p.start_ticks[:TIP_JOINTS]
+    box_lo = np.maximum(start - MAX_INCREMENT_TICKS * n, p.lo_ticks)
+    box_hi = np.minimum(start + MAX_INCREMENT_TICKS * n, p.hi_ticks)
     kept, kept_err = [cands], [errs]
     for share in BALL_SHARES:
+        if not gap > 1e-9 or share * gap > opts.tolerance_mm:
+            break
+        within = sum(int(np.count_nonzero(e <= opts.tolerance_mm)) for e in kept_err)
+        if within >= opts.max_motion_checks:
+            break  # enough to choose from: the nearer shares gave the smaller errors
         check_time(f"searching the lattice off the target for {n} commands")
-        shifted = replace(p, target=p.target + share * off)
+        shifted = replace(p, target=p.target + share * near)
         fam = _family(shifted, opts.sphere_step_deg)
-        found, _ = _lattice_candidates(shifted, fam, n, opts.tolerance_mm, opts.polish_candidates)
+        # what is within the tolerance less the shift of the shifted point is within the
+        # tolerance of the target; the polish keeps the best beyond
+        inside = max(opts.tolerance_mm - share * gap, 0.0)
+        found, _ = _lattice_candidates(shifted, fam, n, inside, opts.polish_candidates)
         kept.append(found)
         kept_err.append(p.errors_of_ticks(found))
     all_cands, first = unique_states(np.concatenate(kept), return_index=True)
     all_errs = np.concatenate(kept_err)[first]
-    order = np.argsort(all_errs, kind="stable")
-    return all_cands[order], all_errs[order]
+    best = np.argsort(all_errs, kind="stable")[:BALL_KEPT]
+    return _polished(p, all_cands[best], all_errs[best], box_lo, box_hi, opts.polish_candidates)
 
 
 def _diverse(cands: IntArray, order: IntArray, count: int, per_cell: int = 3) -> IntArray:
@@ -705,7 +753,7 @@ def plan_reach(
         check_time(f"searching the lattice for {n} commands")
         cands, errs = _lattice_candidates(p, fam, n, opts.tolerance_mm, opts.polish_candidates)
         within = errs <= opts.tolerance_mm
-        if n < exact_commands or not np.any(within):
+        if n < exact_commands:
             cands, errs = _with_ball_candidates(p, q_within, n, opts, cands, errs)
             within = errs <= opts.tolerance_mm
         examined += cands.shape[0]
