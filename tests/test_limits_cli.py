@@ -198,6 +198,20 @@ def test_trajectory_byte_order_mark_and_time_column(tmp_path):
     assert "the period is longer than the 1 s trajectory" in warning
 
 
+def test_a_period_longer_than_the_trajectory_is_warned_of_alone(tmp_path):
+    """A 1 deg move takes 0.26 s at the default limits; a 60 s period holds it in one
+    command that takes 60 s, no period split: the warning says why all the same."""
+    wp = _waypoints(tmp_path, "0 0\n1 1\n")
+    proc = _run(["trajectory", "--waypoints", wp, "--period", "60"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    split = next(ln for ln in proc.stdout.splitlines() if "periods split" in ln)
+    assert split.split()[-1] == "0"
+    warning = " ".join(proc.stderr.split())
+    assert "the commands take 60 s at one a period" in warning
+    assert "the period is longer than the 0.258 s trajectory" in warning
+    assert "split into several" not in warning
+
+
 def test_trajectory_time_limit_ends_the_bounded_search(tmp_path):
     rng = np.random.default_rng(1)
     rows = "\n".join(",".join(f"{v:.3f}" for v in row) for row in rng.uniform(-90, 90, (600, 6)))

@@ -253,12 +253,12 @@ def _check_recorded_tip(doc: dict[str, Any], arm: SerialArm, seq: CommandSequenc
     except (TypeError, ValueError):
         raise InvalidInputError(f"result file {p}: its tip is not three numbers") from None
     replayed = tool_position(arm, seq.states_joint()[-1])
-    unit = arm.length_unit
     if not np.allclose(replayed, tip, rtol=0.0, atol=1e-3 / arm.mm_per_unit):
+        mm = arm.mm_per_unit  # shown in mm, to the micrometre the check allows
         raise InvalidInputError(
             f"result file {p}: its commands on its model end with the tool point at "
-            f"({', '.join(f'{v:.3f}' for v in replayed)}) {unit}, not at its recorded tip "
-            f"({', '.join(f'{v:.3f}' for v in tip)}) {unit}: the model or the commands were "
+            f"({', '.join(f'{v * mm:.4f}' for v in replayed)}) mm, not at its recorded tip "
+            f"({', '.join(f'{v * mm:.4f}' for v in tip)}) mm: the model or the commands were "
             "changed after the run"
         )
 

@@ -233,20 +233,21 @@ def _timing_rows(quantized: Any) -> list[tuple[str, str, str]]:
 
 
 def _timing_warning(quantized: Any, duration_s: float, option: str) -> str | None:
-    """Why the commands do not keep the trajectory's timing, or None when they do (within a
-    period)."""
+    """Why the commands do not keep the trajectory's timing (a period split into several
+    commands, or a period longer than the whole trajectory), or None when they do (to within
+    the last period, which ends with the trajectory)."""
     period = quantized.period_s
     taken = quantized.sequence.n_commands * period
-    if taken <= duration_s + period * (1 + 1e-9):
-        return None
     why = []
     if quantized.split_periods:
         why.append(
             f"{quantized.split_periods} of {quantized.n_periods} periods move a joint farther "
             "than one command may and are split into several"
         )
-    if period > duration_s:
+    if period > duration_s * (1 + 1e-9):
         why.append(f"the period is longer than the {duration_s:.3g} s trajectory")
+    if not why:
+        return None
     return (
         f"warning: the commands take {taken:.4g} s at one a period, not the trajectory's "
         f"{duration_s:.4g} s ({'; '.join(why)}): a shorter {option} keeps its timing"

@@ -10,7 +10,6 @@ import numpy as np
 import typer
 
 from armpath.cli.common import (
-    SceneOption,
     TipLinkOption,
     _cli_errors,
     app,
@@ -52,7 +51,14 @@ def view(
         ),
     ] = None,
     tip_link: TipLinkOption = None,
-    scene_file: SceneOption = None,
+    scene_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--scene",
+            help="Scene file (TOML or YAML). Default: with --result, the scene the result "
+            "carries; else the seed scene, or with another --model no scene (the arm alone).",
+        ),
+    ] = None,
     result: Annotated[
         Path | None,
         typer.Option(

@@ -173,16 +173,16 @@ _ANALYSIS_SEED = 20240517
 
 
 def _analysis_configurations(arm: SerialArm) -> FloatArray:
-    """Joint vectors spread over the joint limits (a turn for unlimited revolute joints, a
-    metre for unlimited prismatic ones); a fixed sample, so the analysis is deterministic."""
+    """Joint vectors spread over the joint limits (:func:`_analysis_bounds`); a fixed sample,
+    so the analysis is deterministic."""
     lo_f, hi_f = np.array(_analysis_bounds(arm)).T
     u = np.random.default_rng(_ANALYSIS_SEED).uniform(0.0, 1.0, (_ANALYSIS_SAMPLES, arm.n_joints))
     return np.asarray(lo_f + u * (hi_f - lo_f), dtype=np.float64)
 
 
 def _analysis_bounds(arm: SerialArm) -> list[tuple[float, float]]:
-    """Each joint's range for the analysis: its limits, or a turn (revolute) or two metres
-    (prismatic) where it has none."""
+    """Each joint's range for the analysis: its limits, or where it has none a turn
+    (revolute) or 2,000 length units (prismatic: two metres of a model in mm)."""
     bounds = []
     for joint in arm.joints:
         lo, hi = joint.limits

@@ -49,8 +49,8 @@ class Scene:
         if self.spotweld is None:
             raise SceneError(
                 f"scene {self.source} defines no [tasks.spotweld]: give a scene file that "
-                "does (--scene; examples/ur5_cell.toml has one), or the welds to "
-                "armpath.spotweld in Python"
+                "does (--scene; the repository's examples/ur5_cell.toml has one), or the "
+                "welds to armpath.spotweld"
             )
         spec = self.spotweld
         if spec.points_mm is not None:
@@ -80,8 +80,8 @@ class Scene:
         if self.trace is None:
             raise SceneError(
                 f"scene {self.source} defines no [tasks.trace]: give a scene file with a "
-                "[tasks.trace.curve] (--scene; examples/ur5_cell.toml has one), or the curve to "
-                "armpath.trace in Python"
+                "[tasks.trace.curve] (--scene; the repository's examples/ur5_cell.toml has "
+                "one), or the curve to armpath.trace"
             )
         spec = self.trace.curve
         try:
