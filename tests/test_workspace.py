@@ -338,3 +338,16 @@ def test_workspace_obstacles_of_another_arm_are_its_own_links_without_a_scene(tm
         assert r.returncode == 0, r.stderr
         (row,) = [ln.split() for ln in r.stdout.splitlines() if "kept (clearance rule)" in ln]
         assert row[3] == str(grid.kept) and " ".join(row[4:]) == f"scene: {scene}"
+    # a scene's [arm] places the arm (and gives it without --model): the UR5 on its pedestal
+    from pathlib import Path
+
+    from armpath.api import arm_and_scene
+
+    cell_file = Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml"
+    placed, cell = arm_and_scene(None, cell_file)
+    in_cell = sample_workspace(placed, 20_000, 20.0, seed=3, world=cell.world)
+    for model in ([], ["--model", "ur5"]):
+        r = run_in_process([*args[:1], *model, *args[3:], "--scene", str(cell_file)], tmp_path)
+        assert r.returncode == 0, r.stderr
+        (row,) = [ln.split() for ln in r.stdout.splitlines() if "kept (clearance rule)" in ln]
+        assert row[3] == str(in_cell.kept) and in_cell.kept > 0

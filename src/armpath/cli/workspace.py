@@ -30,7 +30,6 @@ from armpath.budget import (
 )
 from armpath.cli.common import (
     LinkRadiusOption,
-    ModelOption,
     SceneOption,
     TimeLimitOption,
     TipLinkOption,
@@ -72,7 +71,16 @@ def _percent_steps(say: Callable[[str], None], what: str) -> Callable[[int, int]
 
 @app.command()
 def workspace(
-    model: ModelOption = "seed",
+    model: Annotated[
+        str | None,
+        typer.Option(
+            "--model",
+            help="Built-in model or a robot file (.json D-H table or .urdf). Default: the "
+            "scene's \\[arm], else the seed arm; a model given stands where the scene's \\[arm] "
+            "places it.",
+            show_default=False,
+        ),
+    ] = None,
     tip_link: TipLinkOption = None,
     samples: Annotated[
         int,
@@ -113,10 +121,9 @@ def workspace(
 ) -> None:
     """Reachable workspace of the tool point by sampling joint space into voxels: volume,
     bounding box and sections."""
-    from armpath.api import default_scene, load_scene
+    from armpath.api import arm_and_scene, default_scene, load_scene
     from armpath.export import output_folder
     from armpath.kinematics import z_axis_chain
-    from armpath.model.catalog import resolve_model
     from armpath.workspace import sample_workspace
     from armpath.workspace.sampling import METHODS, GridSpec, check_count
 
@@ -127,10 +134,11 @@ def workspace(
             raise InvalidInputError(f"--method must be one of {METHODS}, got {method!r}")
         _check_seed(seed)
         _check_length(voxel, "voxel size", "--voxel")
-        arm = resolve_model(model, tip_link)
-        GridSpec.for_arm(arm, voxel, "--voxel")
-        # the scene as every command takes it: the seed scene is placed for the seed arm only
+        # the arm and the scene as every task takes them: the seed scene for the seed arm,
+        # another arm alone; a scene's [arm] places the arm (and gives it, without --model)
         the_scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
+        arm, the_scene = arm_and_scene(model, the_scene, tip_link=tip_link)
+        GridSpec.for_arm(arm, voxel, "--voxel")
         world = the_scene.world if obstacles else None
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
