@@ -176,3 +176,11 @@ def test_the_table_follows_a_curve_that_turns_fast_or_refuses_it():
     wound = ParametricCurve("wound", "300 + 50*cos(t)", "50*sin(t)", "200", 0.0, 1e6)
     with pytest.raises(InvalidInputError, match="turns faster than 320,001 points along it"):
         _ = wound.length
+
+
+def test_a_polyline_of_more_vertices_than_the_limit_is_refused():
+    """Its table holds every vertex: 2,000,000 vertices took 429 MB; the limit is 1,000,000."""
+    many = np.zeros((1_000_001, 3))
+    many[:, 0] = np.arange(1_000_001) * 0.01
+    with pytest.raises(InvalidInputError, match=r"1,000,001 \(the limit is 1,000,000\)"):
+        Polyline("many", many)

@@ -172,11 +172,12 @@ def test_bad_arm_documents_are_one_clear_error():
     broken = {**doc, "joints": doc["joints"][:1]}
     with pytest.raises(InvalidInputError):
         arm_from_dict(broken)
-    with pytest.raises(InvalidInputError, match=r"^model: incomplete arm: no 'T_parent_joint'$"):
+    missing = r"^model: incomplete arm: joint 1 has no 'T_parent_joint'$"
+    with pytest.raises(InvalidInputError, match=missing):
         arm_from_dict({**doc, "joints": [{"name": "j"}]})
     # what is wrong, in words rather than an exception's repr
     bad_kind = {**doc, "joints": [{**doc["joints"][0], "kind": "spherical"}, *doc["joints"][1:]]}
-    with pytest.raises(InvalidInputError, match=r"^model: malformed arm: 'spherical' is not"):
+    with pytest.raises(InvalidInputError, match=r"^model: malformed arm: joint 1: 'spherical'"):
         arm_from_dict(bad_kind)
 
 

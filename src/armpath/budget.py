@@ -195,7 +195,8 @@ MAX_BANDS = 100
 #: Largest number of tool orientations tested at one point (a dexterity grid).
 MAX_ORIENTATIONS = 1_000_000
 
-#: Largest number of points at which one curve is scanned (a circle of a blind-zone survey).
+#: Largest number of points at which one curve is scanned (a circle of a blind-zone survey),
+#: and of vertices of a polyline (its arc-length table holds each: 1,000,000 about 200 MB).
 MAX_CURVE_POINTS = 1_000_000
 
 __all__ += [

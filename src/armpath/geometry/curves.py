@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import MAX_COORDINATE_MM
+from armpath.budget import MAX_COORDINATE_MM, MAX_CURVE_POINTS, check_size
 from armpath.errors import InvalidInputError
 from armpath.geometry.expressions import Expression, parse_expression
 from armpath.geometry.primitives import SolidOfRevolution
@@ -253,6 +253,7 @@ class Polyline(Curve):
         v = np.array(self.vertices, dtype=np.float64)
         if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < 2 or not np.all(np.isfinite(v)):
             raise InvalidInputError(f"polyline {self.name!r}: need (V >= 2, 3) finite vertices")
+        check_size(v.shape[0], MAX_CURVE_POINTS, f"vertices of polyline {self.name!r}", "the curve")
         if self.closed:
             if v.shape[0] > 2 and np.array_equal(v[-1], v[0]):
                 v = v[:-1]  # closed already by its last vertex: the piece back is that one

@@ -76,41 +76,66 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
         raise InvalidInputError(
             f"{what}: document version {version!r}, this armpath reads {ARM_DOCUMENT_VERSION}"
         )
-    try:
-        joints = tuple(
-            Joint(
-                str(j["name"]),
-                np.array(j["T_parent_joint"], dtype=np.float64),
-                np.array(j["axis"], dtype=np.float64),
-                JointKind(j["kind"]),
-                (
-                    -np.inf if j["limits"][0] is None else float(j["limits"][0]),
-                    np.inf if j["limits"][1] is None else float(j["limits"][1]),
-                ),
-                float(j["tick"]),
-                int(j["max_ticks"]),
-                int(j.get("steps_per_tick", 1)),
-            )
-            for j in doc["joints"]
+    where = ["the document"]  # the part being read, for the message
+
+    def each(key: str, part: str) -> list[Any]:
+        items = doc[key]
+        if not isinstance(items, list):
+            raise TypeError(f"{key} must be a list, got {type(items).__name__}")
+        out = []
+        for i, item in enumerate(items):
+            where[0] = f"{part} {i + 1}"
+            if not isinstance(item, dict):
+                raise TypeError(f"expected a table of keys, got {type(item).__name__}")
+            out.append(item)
+        where[0] = "the document"
+        return out
+
+    def joint(j: dict[str, Any]) -> Joint:
+        return Joint(
+            str(j["name"]),
+            np.array(j["T_parent_joint"], dtype=np.float64),
+            np.array(j["axis"], dtype=np.float64),
+            JointKind(j["kind"]),
+            (
+                -np.inf if j["limits"][0] is None else float(j["limits"][0]),
+                np.inf if j["limits"][1] is None else float(j["limits"][1]),
+            ),
+            float(j["tick"]),
+            int(j["max_ticks"]),
+            int(j.get("steps_per_tick", 1)),
         )
+
+    try:
+        joints = []
+        for k, j in enumerate(each("joints", "joint")):
+            where[0] = f"joint {k + 1}"
+            joints.append(joint(j))
+        landmarks = []
+        for k, m in enumerate(each("landmarks", "landmark")):
+            where[0] = f"landmark {k + 1}"
+            landmarks.append(
+                Landmark(str(m["name"]), int(m["frame"]), tuple(m.get("offset", (0, 0, 0))))
+            )
+        links = []
+        for k, lk in enumerate(each("links", "link")):
+            where[0] = f"link {k + 1}"
+            links.append(
+                Link(
+                    str(lk["name"]),
+                    int(lk["start"]),
+                    int(lk["end"]),
+                    float(lk["radius"]),
+                    bool(lk["checked"]),
+                )
+            )
+        where[0] = "the document"
         return SerialArm(
             name=str(doc["name"]),
-            joints=joints,
+            joints=tuple(joints),
             T_flange_tool=np.array(doc["T_flange_tool"], dtype=np.float64),
-            landmarks=tuple(
-                Landmark(str(m["name"]), int(m["frame"]), tuple(m.get("offset", (0, 0, 0))))
-                for m in doc["landmarks"]
-            ),
-            links=tuple(
-                Link(
-                    str(k["name"]),
-                    int(k["start"]),
-                    int(k["end"]),
-                    float(k["radius"]),
-                    bool(k["checked"]),
-                )
-                for k in doc["links"]
-            ),
+            landmarks=tuple(landmarks),
+            links=tuple(links),
             home=np.array(doc["home"], dtype=np.float64),
             length_unit=str(doc["length_unit"]),
             T_world_base=np.array(doc["T_world_base"], dtype=np.float64),
@@ -119,9 +144,11 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             command_period_s=float(doc.get("command_period_s", DEFAULT_COMMAND_PERIOD_S)),
         )
     except KeyError as exc:
-        raise InvalidInputError(f"{what}: incomplete arm: no {exc.args[0]!r}") from None
+        raise InvalidInputError(
+            f"{what}: incomplete arm: {where[0]} has no {exc.args[0]!r}"
+        ) from None
     except (TypeError, ValueError, IndexError) as exc:  # InvalidInputError is a ValueError
-        raise InvalidInputError(f"{what}: malformed arm: {exc}") from None
+        raise InvalidInputError(f"{what}: malformed arm: {where[0]}: {exc}") from None
 
 
 __all__ = ["ARM_DOCUMENT_VERSION", "arm_from_dict", "arm_to_dict"]
