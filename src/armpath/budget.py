@@ -195,6 +195,10 @@ MAX_BANDS = 100
 #: Largest number of tool orientations tested at one point (a dexterity grid).
 MAX_ORIENTATIONS = 1_000_000
 
+#: Most random starts of one numerical IK solve (each runs up to its iteration limit of
+#: Levenberg-Marquardt steps: about 0.8 ms for iiwa14, so 10,000 about 8 s; 100,000 took 100 s).
+MAX_IK_SEEDS = 10_000
+
 #: Largest number of points at which one curve is scanned (a circle of a blind-zone survey),
 #: and of vertices of a polyline (its arc-length table holds each: 1,000,000 about 200 MB).
 MAX_CURVE_POINTS = 1_000_000
@@ -203,6 +207,7 @@ __all__ += [
     "MAX_BANDS",
     "MAX_CHUNK",
     "MAX_CURVE_POINTS",
+    "MAX_IK_SEEDS",
     "MAX_JOINTS",
     "MAX_ORIENTATIONS",
     "MAX_WAYPOINTS",

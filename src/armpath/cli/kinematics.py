@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from armpath.budget import MAX_IK_SEEDS
 from armpath.cli.common import (
     LOOSE,
     JsonOption,
@@ -132,7 +133,9 @@ def ik(
             "(--xyz: auto or numerical)."
         ),
     ] = "auto",
-    seeds: Annotated[int, typer.Option(help="Seeds of the numerical solver (1 to 10,000).")] = 48,
+    seeds: Annotated[
+        int, typer.Option(help=f"Seeds of the numerical solver (1 to {MAX_IK_SEEDS:,}).")
+    ] = 48,
     near: Annotated[
         str | None,
         typer.Option(
@@ -153,7 +156,6 @@ def ik(
     joint limits are listed, marked off limits, and count as solutions.
     """
     from armpath.ik import solve_ik
-    from armpath.ik.numerical import MAX_SEEDS as MAX_IK_SEEDS
     from armpath.ik.solve import METHODS as IK_METHODS
     from armpath.model.catalog import resolve_model
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from armpath.budget import check_time
+from armpath.budget import MAX_IK_SEEDS, check_time
 from armpath.errors import InvalidInputError
 from armpath.ik.result import IKResult
 from armpath.kinematics import forward_frames, jacobian_from_frames
@@ -40,9 +40,8 @@ def _errors_and_jacobians(
     return err, J
 
 
-#: Most random starts of one numerical solve (each runs up to ``max_iterations`` LM steps:
-#: about 0.8 ms for iiwa14, so 10,000 about 8 s; 100,000 took 100 s).
-MAX_SEEDS = 10_000
+#: Most random starts of one numerical solve (:data:`armpath.budget.MAX_IK_SEEDS`).
+MAX_SEEDS = MAX_IK_SEEDS
 
 #: A converged solution puts the tool within this distance of the target (mm) ...
 POSITION_TOLERANCE_MM = 1e-6
