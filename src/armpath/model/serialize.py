@@ -9,13 +9,16 @@ exact: :func:`arm_from_dict` of :func:`arm_to_dict` gives an arm with the same n
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 
 from armpath.errors import InvalidInputError
 from armpath.model.lattice import DEFAULT_COMMAND_PERIOD_S
 from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
+
+T = TypeVar("T")
 
 #: Version of the document layout below.
 ARM_DOCUMENT_VERSION = 1
@@ -78,7 +81,8 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
         )
     where = ["the document"]  # the part being read, for the message
 
-    def each(key: str, part: str) -> list[Any]:
+    def parts(key: str, part: str, build: Callable[[dict[str, Any]], T]) -> tuple[T, ...]:
+        """``build`` of each table of the list ``doc[key]``, ``where`` naming it meanwhile."""
         items = doc[key]
         if not isinstance(items, list):
             raise TypeError(f"{key} must be a list, got {type(items).__name__}")
@@ -87,9 +91,9 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             where[0] = f"{part} {i + 1}"
             if not isinstance(item, dict):
                 raise TypeError(f"expected a table of keys, got {type(item).__name__}")
-            out.append(item)
+            out.append(build(item))
         where[0] = "the document"
-        return out
+        return tuple(out)
 
     def joint(j: dict[str, Any]) -> Joint:
         return Joint(
@@ -106,36 +110,24 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             int(j.get("steps_per_tick", 1)),
         )
 
+    def landmark(m: dict[str, Any]) -> Landmark:
+        return Landmark(str(m["name"]), int(m["frame"]), tuple(m.get("offset", (0, 0, 0))))
+
+    def link(k: dict[str, Any]) -> Link:
+        return Link(
+            str(k["name"]), int(k["start"]), int(k["end"]), float(k["radius"]), bool(k["checked"])
+        )
+
     try:
-        joints = []
-        for k, j in enumerate(each("joints", "joint")):
-            where[0] = f"joint {k + 1}"
-            joints.append(joint(j))
-        landmarks = []
-        for k, m in enumerate(each("landmarks", "landmark")):
-            where[0] = f"landmark {k + 1}"
-            landmarks.append(
-                Landmark(str(m["name"]), int(m["frame"]), tuple(m.get("offset", (0, 0, 0))))
-            )
-        links = []
-        for k, lk in enumerate(each("links", "link")):
-            where[0] = f"link {k + 1}"
-            links.append(
-                Link(
-                    str(lk["name"]),
-                    int(lk["start"]),
-                    int(lk["end"]),
-                    float(lk["radius"]),
-                    bool(lk["checked"]),
-                )
-            )
-        where[0] = "the document"
+        joints = parts("joints", "joint", joint)
+        landmarks = parts("landmarks", "landmark", landmark)
+        links = parts("links", "link", link)
         return SerialArm(
             name=str(doc["name"]),
-            joints=tuple(joints),
+            joints=joints,
             T_flange_tool=np.array(doc["T_flange_tool"], dtype=np.float64),
-            landmarks=tuple(landmarks),
-            links=tuple(links),
+            landmarks=landmarks,
+            links=links,
             home=np.array(doc["home"], dtype=np.float64),
             length_unit=str(doc["length_unit"]),
             T_world_base=np.array(doc["T_world_base"], dtype=np.float64),
