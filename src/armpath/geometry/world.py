@@ -198,15 +198,17 @@ def _analysis_bounds(arm: SerialArm) -> list[tuple[float, float]]:
     return bounds
 
 
-def _shortest_lengths(arm: SerialArm, length: FloatArray, tol: float) -> FloatArray:
+def _shortest_lengths(
+    arm: SerialArm, base: FloatArray, length: FloatArray, tol: float
+) -> FloatArray:
     """Each link's shortest length over the joint limits: its fixed ``length``, or for a leg
     a prismatic joint slides (its length ``|c + q|`` over ``q`` in the joint's range, found from
     the two ends of the range with the other joints held) the least of that; ``inf`` for any
     other link of varying length. A leg the joint can shrink to nothing joins the links on
     either side at one point (a SCARA's quill fully retracted); the chain rule then counts
-    them as neighbours rather than in collision at every such configuration."""
+    them as neighbours rather than in collision at every such configuration. ``base`` is the
+    configuration the other joints hold."""
     out = np.array(length, dtype=np.float64, copy=True)
-    base = _analysis_configurations(arm)[0]
     links = arm.links
     for j, (lo, hi) in enumerate(_analysis_bounds(arm)):
         if arm.joints[j].kind is not JointKind.PRISMATIC:
@@ -258,7 +260,8 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     cached = arm.__dict__.get("_link_analysis")
     if isinstance(cached, LinkAnalysis):
         return cached
-    pts = landmark_positions(arm, _analysis_configurations(arm))  # (K, L, 3)
+    configurations = _analysis_configurations(arm)
+    pts = landmark_positions(arm, configurations)  # (K, L, 3)
     scale = max(1.0, float(np.abs(pts).max()))
     tol = 1e-9 * scale
     n_lm = len(arm.landmarks)
@@ -271,14 +274,18 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     seg = np.array([gap[:, lk.start, lk.end] for lk in links]).reshape(n, -1)
     length = np.where(np.ptp(seg, axis=1) <= tol, seg.mean(axis=1), np.inf)
     chain = _chains(links, point_of, length, n_lm)
-    slide_chain = _chains(links, point_of, _shortest_lengths(arm, length, tol), n_lm)
     rigid = _rigid_pairs(links, gap, tol)
-    held = _analysis_configurations(arm)
     slides = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints], dtype=bool)
-    held[:, slides] = held[0, slides]  # the prismatic joints hold still
-    held_pts = landmark_positions(arm, held)
-    held_gap = np.linalg.norm(held_pts[:, :, None, :] - held_pts[:, None, :, :], axis=-1)
-    rigid_but_slides = _rigid_pairs(links, held_gap, tol)
+    if np.any(slides):
+        shortest = _shortest_lengths(arm, configurations[0], length, tol)
+        slide_chain = _chains(links, point_of, shortest, n_lm)
+        held = configurations.copy()
+        held[:, slides] = held[0, slides]  # the prismatic joints hold still
+        held_pts = landmark_positions(arm, held)
+        held_gap = np.linalg.norm(held_pts[:, :, None, :] - held_pts[:, None, :, :], axis=-1)
+        rigid_but_slides = _rigid_pairs(links, held_gap, tol)
+    else:  # no slide: the chains and rigid bodies are the ones above
+        slide_chain, rigid_but_slides = chain, rigid
     out = LinkAnalysis(point_of, degenerate, length, chain, rigid, slide_chain, rigid_but_slides)
     arm.__dict__["_link_analysis"] = out
     return out
