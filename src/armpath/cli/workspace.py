@@ -40,6 +40,7 @@ from armpath.cli.common import (
     app,
     out_console,
     progress,
+    task_setup,
 )
 from armpath.errors import InvalidInputError
 
@@ -121,7 +122,6 @@ def workspace(
 ) -> None:
     """Reachable workspace of the tool point by sampling joint space into voxels: volume,
     bounding box and sections."""
-    from armpath.api import arm_and_scene, default_scene, load_scene
     from armpath.export import output_folder
     from armpath.kinematics import z_axis_chain
     from armpath.workspace import sample_workspace
@@ -136,8 +136,7 @@ def workspace(
         _check_length(voxel, "voxel size", "--voxel")
         # the arm and the scene as every task takes them: the seed scene for the seed arm,
         # another arm alone; a scene's [arm] places the arm (and gives it, without --model)
-        the_scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
-        arm, the_scene = arm_and_scene(model, the_scene, tip_link=tip_link)
+        arm, the_scene = task_setup(model, scene_file, None, None, tip_link)
         GridSpec.for_arm(arm, voxel, "--voxel")
         world = the_scene.world if obstacles else None
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
