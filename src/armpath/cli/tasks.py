@@ -985,7 +985,6 @@ def run(
                 else "Task 2: trace",
                 "spotweld": "Task 3: spot welds",
             }
-        reach_doc = trace_doc = tour_doc = None
         blind = None
         # the blind zones (the seed arm's and its workpiece's) are independent of the tasks:
         # they are computed on the other core meanwhile
@@ -998,48 +997,58 @@ def run(
             if seed_job
             else None
         )
+
+        def do_reach(folder: OutputFolder) -> dict[str, Any]:
+            with progress(f"{titles['reach']} ..."):
+                result = reach_task(scene, arm, seed=seed)
+            _write_reach(folder, "reach", result, arm, scene, animate=True)
+            return reach_result_dict(result, arm, scene)
+
+        def do_trace(folder: OutputFolder) -> dict[str, Any]:
+            with progress(f"{titles['trace']} ...") as say:
+                options = TraceOptions(
+                    motion=MotionOptions(seed=seed), bound=bound, bound_samples=bound_samples
+                )
+                traced = trace_task(scene, arm, options, on_progress=say)
+            doc = trace_result_dict(traced, arm, scene)
+            _write_trace(folder, traced, doc, arm, scene, animate=True)
+            return doc
+
+        def do_spotweld(folder: OutputFolder) -> dict[str, Any]:
+            with progress(f"{titles['spotweld']} ...") as say:
+                tour = spotweld_task(
+                    scene,
+                    arm,
+                    options=MotionOptions(seed=seed),
+                    on_progress=say,
+                    bound=bound,
+                    bound_samples=bound_samples,
+                    pools=pools,
+                )
+            doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
+            _write_tour(folder, tour, doc, arm, scene, animate=True)
+            return doc
+
         # a task that finds no plan (out of reach, no clear motion) is reported and the others
         # run on: their results are written, then the run ends with the failure's error line
         failed: list[tuple[str, str]] = []
+        docs: dict[str, dict[str, Any]] = {}
         try:
             with output_folder(out) as folder:
-                if has["reach"]:
+                for key, job in (
+                    ("reach", do_reach),
+                    ("trace", do_trace),
+                    ("spotweld", do_spotweld),
+                ):
+                    if not has[key]:
+                        continue
                     try:
-                        with progress(f"{titles['reach']} ..."):
-                            result = reach_task(scene, arm, seed=seed)
-                        _write_reach(folder, "reach", result, arm, scene, animate=True)
-                        reach_doc = reach_result_dict(result, arm, scene)
+                        docs[key] = job(folder)
                     except TASK_FAILURES as exc:
-                        failed.append((titles["reach"], str(exc)))
-                if has["trace"]:
-                    try:
-                        with progress(f"{titles['trace']} ...") as say:
-                            options = TraceOptions(
-                                motion=MotionOptions(seed=seed),
-                                bound=bound,
-                                bound_samples=bound_samples,
-                            )
-                            traced = trace_task(scene, arm, options, on_progress=say)
-                        trace_doc = trace_result_dict(traced, arm, scene)
-                        _write_trace(folder, traced, trace_doc, arm, scene, animate=True)
-                    except TASK_FAILURES as exc:
-                        failed.append((titles["trace"], str(exc)))
-                if has["spotweld"]:
-                    try:
-                        with progress(f"{titles['spotweld']} ...") as say:
-                            tour = spotweld_task(
-                                scene,
-                                arm,
-                                options=MotionOptions(seed=seed),
-                                on_progress=say,
-                                bound=bound,
-                                bound_samples=bound_samples,
-                                pools=pools,
-                            )
-                        tour_doc = tour_result_dict(tour, arm, scene, Objective.COMMANDS.value)
-                        _write_tour(folder, tour, tour_doc, arm, scene, animate=True)
-                    except TASK_FAILURES as exc:
-                        failed.append((titles["spotweld"], str(exc)))
+                        failed.append((titles[key], str(exc)))
+                reach_doc, trace_doc, tour_doc = (
+                    docs.get(key) for key in ("reach", "trace", "spotweld")
+                )
                 if failed and len(failed) == sum(has.values()):
                     # no task found a plan: nothing is written (one reason said once)
                     reasons = list(dict.fromkeys(why for _, why in failed))
