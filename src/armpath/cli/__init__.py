@@ -143,10 +143,38 @@ _INTERRUPTED_STATUS = 130
 _TERMINATED_STATUS = 143
 
 
+#: How soon an interrupt put off while numba compiles is tried again (s).
+_RETRY_INTERRUPT_S = 0.05
+
+
 def _on_terminate(signum: int, frame: object) -> None:
     """SIGTERM: raised where the command is as an interrupt, so what it staged is removed."""
     _TERMINATED.append(signum)
+    _interrupt_when_safe()
+
+
+def _on_interrupt(signum: int, frame: object) -> None:
+    """Ctrl-C (SIGINT): as Python's own handler, but never inside numba's compiler."""
+    _interrupt_when_safe()
+
+
+def _interrupt_when_safe(signum: int | None = None, frame: object = None) -> None:
+    """Raise :class:`KeyboardInterrupt` where the command is, unless numba is compiling a kernel
+    there: an interrupt inside its compiler left it broken ("no compiled object yet for
+    <Library ...>" as a traceback, or the interrupt escaping the command's handler, exit status
+    -2, about one run in twenty with the kernels not yet cached). Then the interrupt is
+    tried again a moment later (SIGALRM), until the compiler is done."""
+    if _compiling():
+        signal.signal(signal.SIGALRM, _interrupt_when_safe)
+        signal.setitimer(signal.ITIMER_REAL, _RETRY_INTERRUPT_S)
+        return
     raise KeyboardInterrupt
+
+
+def _compiling() -> bool:
+    """Whether this thread holds numba's compiler lock (numba is compiling a kernel)."""
+    lock = sys.modules.get("numba.core.compiler_lock")
+    return lock is not None and bool(lock.global_compiler_lock.is_locked())
 
 
 def _interrupted() -> NoReturn:
@@ -162,6 +190,7 @@ def main() -> None:
     exit status 130) or terminated (SIGTERM, 143), a command ends with one ``error:`` line and
     leaves no staged output behind."""
     signal.signal(signal.SIGTERM, _on_terminate)
+    signal.signal(signal.SIGINT, _on_interrupt)
     empty = empty_option(sys.argv[1:])
     if empty is not None:
         message = f"error: {empty} was given an empty value (see: armpath --help)"
