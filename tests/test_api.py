@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import independent
+import independent_dh
 import independent_replay as ir
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -397,3 +398,77 @@ def test_the_controllers_period_and_steps_come_from_the_scene_arm(tmp_path):
         bad.write_text(f'name = "bad"\n[arm]\nmodel = "seed"\n{key} = {value}\n', encoding="utf-8")
         with pytest.raises(InvalidInputError, match=message):
             armpath.reach(None, [300.0, 100.0, 200.0], scene=bad)
+
+
+def _in_metres(doc: dict) -> dict:
+    """An arm document with every length divided by 1000 (the test's own scaling, not
+    armpath's): placements, landmark offsets, radii, a prismatic joint's limits, tick and
+    home value."""
+    doc = json.loads(json.dumps(doc))
+    doc["length_unit"] = "m"
+
+    def moved(T: list) -> None:
+        for row in T[:3]:
+            row[3] /= 1000.0
+
+    for i, joint in enumerate(doc["joints"]):
+        moved(joint["T_parent_joint"])
+        if joint["kind"] == "prismatic":
+            joint["limits"] = [v / 1000.0 for v in joint["limits"]]
+            joint["tick"] /= 1000.0
+            doc["home"][i] /= 1000.0
+    moved(doc["T_flange_tool"])
+    moved(doc["T_world_base"])
+    for mark in doc["landmarks"]:
+        mark["offset"] = [v / 1000.0 for v in mark["offset"]]
+    for link in doc["links"]:
+        link["radius"] /= 1000.0
+    return doc
+
+
+def test_an_arm_in_metres_is_taken_in_millimetres(tmp_path):
+    """A model document in metres plans as the same arm in mm: a target, tolerance and scene
+    given in mm were applied as metres (the UR5's (300, 200, 400) mm 'out of reach ... 537.5 m
+    away'). Checked against the mm arm: the same forward kinematics (x 1000, a prismatic joint
+    too), the same plan from the CLI and from Python."""
+    import armpath
+    from armpath.kinematics import tool_position
+    from armpath.model.serialize import arm_from_dict, arm_to_dict
+
+    for name in ("welder003", "ur5"):
+        arm_mm = armpath.load_arm(name)
+        metres = arm_from_dict(_in_metres(arm_to_dict(arm_mm)))
+        assert metres.length_unit == "m"
+        rng = np.random.default_rng(3)
+        lo, hi = np.maximum(arm_mm.lower, -np.pi), np.minimum(arm_mm.upper, np.pi)
+        q_mm = rng.uniform(lo, hi, (20, arm_mm.n_joints))
+        prismatic = np.array([j.kind.value == "prismatic" for j in arm_mm.joints])
+        q_m = np.where(prismatic, q_mm / 1000.0, q_mm)
+        expected = tool_position(arm_mm, q_mm)
+        np.testing.assert_allclose(tool_position(metres, q_m) * 1000.0, expected, atol=1e-9)
+        back = metres.in_mm()
+        assert back.length_unit == "mm" and back.lattice.tick.tolist() == pytest.approx(
+            arm_mm.lattice.tick.tolist(), rel=1e-12
+        )
+        np.testing.assert_allclose(tool_position(back, q_mm), expected, atol=1e-9)
+        np.testing.assert_allclose(back.home, arm_mm.home, atol=1e-12)
+        assert [lk.radius for lk in back.links] == pytest.approx([lk.radius for lk in arm_mm.links])
+
+    ur5 = armpath.load_arm("ur5")
+    file = tmp_path / "ur5_in_metres.json"
+    file.write_text(json.dumps(_in_metres(arm_to_dict(ur5))), encoding="utf-8")
+    target = [300.0, 200.0, 400.0]
+    plain = armpath.reach(ur5, target, tolerance_mm=1.0)
+    from_file = armpath.reach(armpath.load_arm(file), target, tolerance_mm=1.0)
+    from_python = armpath.reach(arm_from_dict(_in_metres(arm_to_dict(ur5))), target, tolerance_mm=1.0)
+    for other in (from_file, from_python):
+        np.testing.assert_array_equal(other.commands, plain.commands)
+        assert other.arm.length_unit == "mm"
+    d = np.pi / 180  # the UR5's standard D-H table (mm, rad), the textbook product
+    T = independent_dh.dh_pose(
+        [0, -425.0, -392.25, 0, 0, 0],
+        [90 * d, 0, 0, 90 * d, -90 * d, 0],
+        [89.159, 0, 0, 109.15, 94.65, 82.3],
+        np.radians(plain.states_deg[-1]),
+    )
+    assert np.linalg.norm(T[:3, 3] - target) <= 1.0

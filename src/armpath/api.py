@@ -139,12 +139,13 @@ def arm_and_scene(
     """The arm and the scene a task runs with, decided as the CLI decides them: the scene
     given, else the seed scene for the seed arm and an empty one for any other arm; the arm
     given (a model name or file is placed where the scene's ``[arm]`` stands it), else the
-    scene's arm."""
+    scene's arm. An arm in metres is taken in millimetres (:meth:`SerialArm.in_mm`), the unit
+    of every target, tolerance and obstacle."""
     from armpath.scenes.arm import scene_arm
 
     the_scene = default_scene(arm) if scene is None else load_scene(scene)
     if isinstance(arm, SerialArm):
-        return arm, the_scene
+        return arm.in_mm(), the_scene
     return scene_arm(the_scene, None if arm is None else str(arm), tip_link), the_scene
 
 

@@ -305,5 +305,5 @@ def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
     if isinstance(doc, dict) and "joints" in doc and "version" in doc:
         from armpath.model.serialize import arm_from_dict  # armpath's own model document
 
-        return arm_from_dict(doc, f"robot file {p.name!r}")
+        return arm_from_dict(doc, f"robot file {p.name!r}").in_mm()  # like a D-H table's
     return robot_from_dict(doc, name=p.stem)

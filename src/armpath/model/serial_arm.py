@@ -397,6 +397,44 @@ class SerialArm:
         )
         return replace(self, links=links, parameters=parameters)
 
+    def in_mm(self) -> SerialArm:
+        """The same arm with every length in millimetres (the arm itself when it already is):
+        placements, landmark offsets, capsule radii, and a prismatic joint's limits, tick and
+        home value scaled. Where an arm enters a task (a model file, an arm given to
+        :mod:`armpath.api`) it is taken in mm, the unit of every target, tolerance and
+        obstacle."""
+        k = self.mm_per_unit
+        if k == 1.0:
+            return self
+
+        def moved(T: FloatArray) -> FloatArray:
+            out = np.array(T, dtype=np.float64)
+            out[:3, 3] *= k
+            return out
+
+        joints = []
+        for j in self.joints:
+            if j.kind is JointKind.PRISMATIC:
+                j = replace(
+                    j,
+                    limits=(j.limits[0] * k, j.limits[1] * k),
+                    tick=None if j.tick is None else j.tick * k,
+                )
+            joints.append(replace(j, T_parent_joint=moved(j.T_parent_joint)))
+        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in self.joints])
+        return replace(
+            self,
+            joints=tuple(joints),
+            T_flange_tool=moved(self.T_flange_tool),
+            T_world_base=moved(self.T_world_base),
+            landmarks=tuple(
+                replace(lm, offset=tuple(v * k for v in lm.offset)) for lm in self.landmarks
+            ),
+            links=tuple(replace(lk, radius=lk.radius * k) for lk in self.links),
+            home=np.where(prismatic, self.home * k, self.home),
+            length_unit="mm",
+        )
+
     def with_home(self, home: ArrayLike) -> SerialArm:
         """The same arm with another home pose (rad / length unit), checked against the
         limits."""
