@@ -460,7 +460,8 @@ def test_an_arm_in_metres_is_taken_in_millimetres(tmp_path):
     target = [300.0, 200.0, 400.0]
     plain = armpath.reach(ur5, target, tolerance_mm=1.0)
     from_file = armpath.reach(armpath.load_arm(file), target, tolerance_mm=1.0)
-    from_python = armpath.reach(arm_from_dict(_in_metres(arm_to_dict(ur5))), target, tolerance_mm=1.0)
+    in_metres = arm_from_dict(_in_metres(arm_to_dict(ur5)))
+    from_python = armpath.reach(in_metres, target, tolerance_mm=1.0)
     for other in (from_file, from_python):
         np.testing.assert_array_equal(other.commands, plain.commands)
         assert other.arm.length_unit == "mm"

@@ -177,8 +177,35 @@ def test_bad_arm_documents_are_one_clear_error():
         arm_from_dict({**doc, "joints": [{"name": "j"}]})
     # what is wrong, in words rather than an exception's repr
     bad_kind = {**doc, "joints": [{**doc["joints"][0], "kind": "spherical"}, *doc["joints"][1:]]}
-    with pytest.raises(InvalidInputError, match=r"^model: malformed arm: joint 1: 'spherical'"):
+    with pytest.raises(
+        InvalidInputError,
+        match=r"^model: malformed arm: joint 1: kind must be 'revolute' or 'prismatic', got "
+        r"'spherical'$",
+    ):
         arm_from_dict(bad_kind)
+    # each wrong value named by its key, none read as something else
+    for where, key, value, says in (
+        ("joint", "limits", [1.0], r"joint 3: limits must be \[lower, upper\]"),
+        ("joint", "limits", None, r"joint 3: limits must be \[lower, upper\]"),
+        ("joint", "max_ticks", 2.5, r"joint 3: max_ticks must be a whole number, got 2.5"),
+        ("joint", "tick", "x", r"joint 3: tick must be a number, got 'x'"),
+        ("joint", "axis", "z", r"joint 3: axis must be 3 numbers, got 'z'"),
+        ("link", "start", "J1", r"link 3: start must be a whole number, got 'J1'"),
+        ("link", "checked", "yes", r"link 3: checked must be true or false"),
+        ("landmark", "offset", [1, 2], r"landmark 3: offset must be 3 numbers"),
+        (None, "home", "zero", r"the document: home must be 6 numbers"),
+        (None, "name", [1], r"the document: name must be text"),
+        (None, "parameters", [1, 2], r"parameters must be a list of \[name, number\] pairs"),
+        (None, "joints", [], r"joints is empty: a serial arm needs at least one joint"),
+    ):
+        bad = json.loads(json.dumps(doc))
+        (bad if where is None else bad[where + "s"][2])[key] = value
+        with pytest.raises(InvalidInputError, match=r"^model: malformed arm: .*" + says):
+            arm_from_dict(bad)
+    # a null tick is the joint's default tick, as for a joint built without one
+    default = json.loads(json.dumps(doc))
+    default["joints"][2]["tick"] = None
+    assert arm_from_dict(default).lattice.tick[2] == seed_arm().lattice.tick[2]
 
 
 @pytest.mark.parametrize(

@@ -428,7 +428,8 @@ class SerialArm:
             T_flange_tool=moved(self.T_flange_tool),
             T_world_base=moved(self.T_world_base),
             landmarks=tuple(
-                replace(lm, offset=tuple(v * k for v in lm.offset)) for lm in self.landmarks
+                replace(lm, offset=(lm.offset[0] * k, lm.offset[1] * k, lm.offset[2] * k))
+                for lm in self.landmarks
             ),
             links=tuple(replace(lk, radius=lk.radius * k) for lk in self.links),
             home=np.where(prismatic, self.home * k, self.home),

@@ -69,6 +69,53 @@ def arm_to_dict(arm: SerialArm) -> dict[str, Any]:
     }
 
 
+def _text(item: dict[str, Any], key: str) -> str:
+    value = item[key]
+    if not isinstance(value, str):
+        raise ValueError(f"{key} must be text, got {value!r}")
+    return value
+
+
+def _number(item: dict[str, Any], key: str) -> float:
+    value = item[key]
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{key} must be a number, got {value!r}")
+    return float(value)
+
+
+def _whole(item: dict[str, Any], key: str) -> int:
+    value = item[key]
+    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+        raise ValueError(f"{key} must be a whole number, got {value!r}")
+    return int(value)
+
+
+def _numbers(item: dict[str, Any], key: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``item[key]`` as numbers of ``shape`` (a 4x4 transform, a 3-vector), named when not."""
+    value = item[key]
+    size = " x ".join(str(n) for n in shape)
+    wrong = ValueError(f"{key} must be {size} numbers, got {value!r}"[:200])
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise wrong from None
+    if a.shape != shape:
+        raise wrong
+    return a
+
+
+def _limits(j: dict[str, Any]) -> tuple[float, float]:
+    """A joint's ``[lower, upper]``, null for an open side."""
+    value = j["limits"]
+    if not (isinstance(value, list) and len(value) == 2):
+        raise ValueError(f"limits must be [lower, upper] (null for an open side), got {value!r}")
+    lower, upper = value
+    return (
+        -np.inf if lower is None else _number({"limits": lower}, "limits"),
+        np.inf if upper is None else _number({"limits": upper}, "limits"),
+    )
+
+
 def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
     """The arm of an :func:`arm_to_dict` document; :class:`InvalidInputError` names what is
     wrong."""
@@ -96,44 +143,72 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
         return tuple(out)
 
     def joint(j: dict[str, Any]) -> Joint:
+        name = _text(j, "name")
+        T_parent_joint = _numbers(j, "T_parent_joint", (4, 4))
+        axis = _numbers(j, "axis", (3,))
+        kind = j["kind"]
+        if kind not in [k.value for k in JointKind]:
+            raise ValueError(f"kind must be 'revolute' or 'prismatic', got {kind!r}")
         return Joint(
-            str(j["name"]),
-            np.array(j["T_parent_joint"], dtype=np.float64),
-            np.array(j["axis"], dtype=np.float64),
-            JointKind(j["kind"]),
-            (
-                -np.inf if j["limits"][0] is None else float(j["limits"][0]),
-                np.inf if j["limits"][1] is None else float(j["limits"][1]),
-            ),
-            float(j["tick"]),
-            int(j["max_ticks"]),
-            int(j.get("steps_per_tick", 1)),
+            name,
+            T_parent_joint,
+            axis,
+            JointKind(kind),
+            _limits(j),
+            None if j["tick"] is None else _number(j, "tick"),
+            _whole(j, "max_ticks"),
+            _whole(j, "steps_per_tick") if "steps_per_tick" in j else 1,
         )
 
     def landmark(m: dict[str, Any]) -> Landmark:
-        return Landmark(str(m["name"]), int(m["frame"]), tuple(m.get("offset", (0, 0, 0))))
+        offset = _numbers(m, "offset", (3,)) if "offset" in m else np.zeros(3)
+        return Landmark(_text(m, "name"), _whole(m, "frame"), tuple(offset.tolist()))
 
     def link(k: dict[str, Any]) -> Link:
+        checked = k["checked"]
+        if not isinstance(checked, bool):
+            raise ValueError(f"checked must be true or false, got {checked!r}")
         return Link(
-            str(k["name"]), int(k["start"]), int(k["end"]), float(k["radius"]), bool(k["checked"])
+            _text(k, "name"),
+            _whole(k, "start"),
+            _whole(k, "end"),
+            _number(k, "radius"),
+            checked,
         )
 
     try:
         joints = parts("joints", "joint", joint)
+        if not joints:
+            raise ValueError("joints is empty: a serial arm needs at least one joint")
         landmarks = parts("landmarks", "landmark", landmark)
         links = parts("links", "link", link)
+        parameters = doc.get("parameters", [])
+        if not isinstance(parameters, list) or not all(
+            isinstance(p, list) and len(p) == 2 and isinstance(p[0], str) for p in parameters
+        ):
+            raise ValueError(
+                f"parameters must be a list of [name, number] pairs, got {parameters!r}"
+            )
         return SerialArm(
-            name=str(doc["name"]),
+            name=_text(doc, "name"),
             joints=joints,
-            T_flange_tool=np.array(doc["T_flange_tool"], dtype=np.float64),
+            T_flange_tool=_numbers(doc, "T_flange_tool", (4, 4)),
             landmarks=landmarks,
             links=links,
-            home=np.array(doc["home"], dtype=np.float64),
-            length_unit=str(doc["length_unit"]),
-            T_world_base=np.array(doc["T_world_base"], dtype=np.float64),
-            parameters=tuple((str(k), float(v)) for k, v in doc.get("parameters", [])),
-            approach_axis=tuple(doc.get("approach_axis", (0.0, 0.0, 1.0))),
-            command_period_s=float(doc.get("command_period_s", DEFAULT_COMMAND_PERIOD_S)),
+            home=_numbers(doc, "home", (len(joints),)),
+            length_unit=_text(doc, "length_unit"),
+            T_world_base=_numbers(doc, "T_world_base", (4, 4)),
+            parameters=tuple((k, _number({k: v}, k)) for k, v in parameters),
+            approach_axis=tuple(
+                _numbers(doc, "approach_axis", (3,)).tolist()
+                if "approach_axis" in doc
+                else (0.0, 0.0, 1.0)
+            ),
+            command_period_s=(
+                _number(doc, "command_period_s")
+                if "command_period_s" in doc
+                else DEFAULT_COMMAND_PERIOD_S
+            ),
         )
     except KeyError as exc:
         raise InvalidInputError(
