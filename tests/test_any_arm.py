@@ -337,3 +337,59 @@ def test_a_trace_the_lattice_is_too_coarse_for_says_so():
         dq[j] = tick
         columns.append(np.linalg.norm(idh.dh_pose(a, alpha, d, q + dq)[:3, 3] - tip))
     assert 0.3 < named < 1.2 and 0.3 < max(columns) < 1.2
+
+
+def test_a_scara_traces_a_circle_with_its_tool_pointing_down():
+    """A four-joint SCARA (RRPR) cannot set its tool's direction (it points down), which the
+    tracer searched for at each point: every curve was 'not reachable'. Its family is now the
+    point alone, each solution counted for its own direction. The plan replays on the textbook
+    D-H product (the quill a prismatic joint) within the tolerance along the whole continuous
+    motion of the pass, once around the circle. With 0.1 deg ticks the tool moves 0.5-1 mm a
+    tick here, so the tolerance is 1 mm."""
+    from armpath.model.dh import DHRow, dh_arm
+    from armpath.model.serial_arm import JointKind
+
+    rows = [
+        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
+        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
+    ]
+    home = np.array([0.0, np.radians(30.0), 0.0, 0.0])
+    arm = dh_arm(rows, name="scara", link_radii_mm=20.0, home=home)
+    centre, radius = np.array([350.0, 100.0, 250.0]), 60.0
+    scene = scene_from_dict(
+        {
+            "name": "scara cell",
+            "obstacles": [
+                {"type": "half_space", "name": "table", "point": [0, 0, 0], "normal": [0, 0, 1]}
+            ],
+            "tasks": {"trace": {"curve": {
+                "type": "parametric", "name": "circle",
+                "x": f"{centre[0]} + {radius}*cos(t)", "y": f"{centre[1]} + {radius}*sin(t)",
+                "z": f"{centre[2]}", "t": [0, 2 * np.pi]}}},
+        }
+    )  # fmt: skip
+    start = arm.lattice.to_ticks(arm.home)
+    r = plan_trace(arm, scene.world, start, scene.trace_curve(), TraceOptions(tolerance_mm=1.0))
+    assert r.clearance.certified_ok and len(r.passes) >= 1 and not r.not_traced
+    states = r.sequence.states()
+    assert np.array_equal(states[0], start)
+    assert np.all(np.abs(np.diff(states, axis=0)) <= 20)
+    prismatic = np.array([False, False, True, False])
+    a, alpha, d = [row.a for row in rows], [row.alpha for row in rows], [row.d for row in rows]
+
+    def tip(x: np.ndarray) -> np.ndarray:
+        return idh.dh_pose(a, alpha, d, x, prismatic=prismatic)[:3, 3]
+
+    to_value = np.where(prismatic, 0.1, np.pi / 1800)  # a tick: 0.1 mm or 0.1 deg
+    t = np.linspace(0, 1, 41)
+    swept = []
+    for p in r.passes:
+        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 4) * to_value
+        P = np.array([tip(x) for x in q])
+        rho = np.hypot(P[:, 0] - centre[0], P[:, 1] - centre[1])
+        assert np.hypot(rho - radius, P[:, 2] - centre[2]).max() <= 1.0
+        swept.append(np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0])))
+    assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3

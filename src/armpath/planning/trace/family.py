@@ -12,8 +12,10 @@ tool axis (within a cone about the surface normal, or a fixed direction) narrows
 The family is searched over tool directions: :class:`SeedCurveFamily` by the seed arm's closed
 form (the wrist point on a sphere around the point, four geometric branches), polished by a
 batched pattern search over the tool direction; :class:`GenericCurveFamily` for any other arm
-by the all-solutions IK of each tool direction with turns about it (six joints) or
-Levenberg-Marquardt from warm starts (other arms).
+by the all-solutions IK of each tool direction with turns about it (six joints),
+Levenberg-Marquardt from warm starts (five or seven joints and more), or, for an arm of fewer
+joints that cannot set the tool's direction (a SCARA's points down), the point alone, each
+solution counted for the searched direction nearest its own.
 
 A family member's *score* is its smallest slack: a pair's clearance less what it needs (mm) or a
 joint's distance to its limit (deg, counted 1:1 with mm -- only the sign decides).
@@ -580,7 +582,8 @@ class SeedCurveFamily(CurveFamily):
 class GenericCurveFamily(CurveFamily):
     """Any other arm's family: for each tool direction, the tool frames with that approach axis
     and a few turns about it, each solved by the all-solutions IK (six joints) or by
-    Levenberg-Marquardt from the last solutions found (warm starts) and random ones."""
+    Levenberg-Marquardt from the last solutions found (warm starts) and random ones (the point
+    alone for an arm of fewer than five joints)."""
 
     rolls: int = 6
 
@@ -658,14 +661,28 @@ class GenericCurveFamily(CurveFamily):
             last = self._last.get(key)
             if last is not None:
                 starts[i] = last
-        q = fam.refine(starts, iterations=40, rotations=Rs)
-        # the tool axis exactly (the turn about it is free): keep what reaches the point
         a = np.asarray(arm.approach_axis)
-        axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, Rs @ a)
-        good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
+        wanted = Rs @ a  # (M, 3) the tool direction of each frame
+        if arm.n_joints >= 5:
+            q = fam.refine(starts, iterations=40, rotations=Rs)
+            # the tool axis exactly (the turn about it is free): keep what reaches the point
+            axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, wanted)
+            good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
+            frame = np.arange(Rs.shape[0])
+        else:
+            # an arm of fewer joints cannot set the tool's direction (a SCARA's points down):
+            # the point alone, each solution counted for the direction searched nearest to its
+            # own, within about the spacing of the directions searched
+            q = fam.refine(starts, iterations=40)
+            got = tool_pose(arm, q)[:, :3, :3] @ a
+            cosine = got @ wanted.T  # (M, M)
+            frame = np.argmax(cosine, axis=1)
+            spacing = np.sqrt(4.0 * np.pi / max(wanted.shape[0] / self._turns, 1.0))
+            near = cosine[np.arange(q.shape[0]), frame] >= np.cos(spacing)
+            good = near & fam.exact(q)
         for k in np.flatnonzero(good).tolist():
             self._last[keys[k]] = q[k]
-        return np.asarray(q[good], dtype=np.float64), np.flatnonzero(good)
+        return np.asarray(q[good], dtype=np.float64), frame[good]
 
 
 def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = None) -> FloatArray:

@@ -51,7 +51,7 @@ from armpath.planning.trace.certificate import (
     certified_axis_angle,
     certified_deviation,
 )
-from armpath.planning.trace.family import AxisRule, CurveFamily, SeedCurveFamily
+from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
 from armpath.planning.trace.reference import (
     CommandUnits,
@@ -205,16 +205,9 @@ def plan_trace(
         arm, world, curve, scan_step_mm=opts.scan_step_mm, on_progress=say, rule=opts.axis_rule
     )
     if not reach.reachable:
-        few = (
-            f" (the tracer searches the tool's direction at each point, which an arm of "
-            f"{arm.n_joints} joints cannot set: tracing needs 5 joints or more for now)"
-            if arm.n_joints < 5 and not isinstance(reach.family, SeedCurveFamily)
-            else ""
-        )
         raise PlanningError(
             f"no part of curve {curve.name!r} is reachable: "
             + "; ".join(a.reason for a in reach.unreachable)
-            + few
         )
     fam = reach.family
     start = np.asarray(start_ticks, dtype=np.int64)
