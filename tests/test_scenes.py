@@ -52,7 +52,30 @@ def test_user_scene_file(tmp_path):
         (GOOD.replace('type = "half_space"', 'type = "torus"'), "obstacles.0"),
         (GOOD.replace("[0, 0, 1]", "[0, 0]"), "obstacles.0.half_space.normal"),
         (GOOD.replace("[0, 0, 1]", "[0, 0, 0]"), "normal must be non-zero"),
-        (GOOD + "\nspeed = 3\n", "speed: Extra inputs are not permitted"),
+        (
+            "speed = 3\n" + GOOD,
+            "the top level: unknown key 'speed' \\(the top level takes arm, clearance, "
+            "description, name, obstacles, tasks\\)$",
+        ),
+        (  # a key written after a table's header belongs to that table
+            GOOD + "\nspeed = 3\n",
+            "tasks.reach: unknown key 'speed' \\(tasks.reach takes target_mm\\)$",
+        ),
+        (  # a misspelt key is named, not the required key it leaves missing
+            GOOD.replace("point = ", "point_mm = "),
+            "obstacles.0.half_space: unknown key 'point_mm' \\(obstacles.0.half_space takes "
+            "name, normal, point, type\\)$",
+        ),
+        (
+            GOOD.replace("[tasks.reach]\ntarget_mm", "[tasks.spotweld]\nwelds"),
+            "tasks.spotweld: unknown key 'welds' \\(tasks.spotweld takes points_mm, "
+            "points_xy_mm, surface, workpiece\\)$",
+        ),
+        (
+            GOOD + '[arm]\nmodel = "ur5"\n[arm.tool]\npositon_mm = [0, 0, 1]\n',
+            "arm.tool: unknown key 'positon_mm' \\(arm.tool takes approach_axis, position_mm, "
+            "radius_mm, rotation_deg\\)$",
+        ),
         (GOOD.replace("[100, 200, 300]", '[100, "a", 300]'), "tasks.reach.target_mm"),
         (
             'name = "w"\n[[obstacles]]\ntype = "hollow_frustum"\nname = "w"\n'

@@ -5,6 +5,7 @@ from __future__ import annotations
 import tomllib
 from importlib import resources
 from pathlib import Path
+from typing import get_args
 
 from pydantic import ValidationError
 
@@ -25,10 +26,7 @@ def scene_from_dict(
     try:
         spec = SceneFile.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(str(p) for p in first["loc"])
-        msg = str(first["msg"]).removeprefix("Value error, ")
-        raise SceneError(f"scene {source}: {where}: {msg}") from None
+        raise SceneError(f"scene {source}: {_schema_message(exc)}") from None
     try:
         obstacles = tuple(build_obstacle(o, base_dir) for o in spec.obstacles)
         world = CollisionWorld(
@@ -69,6 +67,52 @@ def scene_from_dict(
     if scene.trace is not None:
         scene.trace_curve()  # validates the curve against the obstacles
     return scene
+
+
+def _schema_message(exc: ValidationError) -> str:
+    """The first thing wrong with a scene file, a key it does not know first (a misspelt key
+    also leaves a required one missing: ``center_mm`` for ``center``), with the keys that table
+    takes."""
+    errors = exc.errors()
+    unknown = [e for e in errors if e["type"] == "extra_forbidden"]
+    first = unknown[0] if unknown else errors[0]
+    loc = tuple(first["loc"])
+    if first["type"] != "extra_forbidden":
+        msg = str(first["msg"]).removeprefix("Value error, ")
+        return f"{'.'.join(str(p) for p in loc)}: {msg}"
+    table = ".".join(str(p) for p in loc[:-1]) or "the top level"
+    keys = _keys_at(SceneFile, loc[:-1])
+    takes = f" ({table} takes {', '.join(keys)})" if keys else ""
+    return f"{table}: unknown key {loc[-1]!r}{takes}"
+
+
+def _keys_at(model: object, loc: tuple[object, ...]) -> list[str] | None:
+    """The keys of the table at ``loc`` (a validation error's location: field names, list
+    indices, a tagged union's tag) in the schema ``model``; None when it cannot tell."""
+    from pydantic import BaseModel
+
+    def models_in(kind: object) -> list[type[BaseModel]]:
+        if isinstance(kind, type) and issubclass(kind, BaseModel):
+            return [kind]
+        return [m for arg in get_args(kind) for m in models_in(arg)]
+
+    current: list[object] = [model]
+    for part in loc:
+        if isinstance(part, int):  # a list's item: the item type
+            current = [arg for kind in current for arg in get_args(kind)] or current
+            continue
+        found: list[object] = []
+        for m in (m for kind in current for m in models_in(kind)):
+            if part in m.model_fields:
+                found.append(m.model_fields[part].annotation)
+            tag = m.model_fields.get("type")
+            if tag is not None and part in get_args(tag.annotation):
+                found.append(m)  # the tagged union's member
+        if not found:
+            return None
+        current = found
+    tables = [m for kind in current for m in models_in(kind)]
+    return sorted(tables[0].model_fields) if len(tables) == 1 else None
 
 
 def _one_line(exc: Exception) -> str:
