@@ -172,6 +172,11 @@ def test_run_writes_every_task_and_a_summary(seed_run):
         assert name in names, name
     assert {"reach.gif", "trace.gif", "spotweld.gif"} <= names
     assert "## Task 2: trace the crack" in summary and "unreachable 382.8" in summary
+    # every arc not covered, with its reason, in the summary and on stdout
+    trace = json.loads((out / "trace.json").read_text())
+    for arc in trace["unreachable"] + trace["not_traced"]:
+        span = f"{arc['start_mm']:.2f}..{arc['end_mm']:.2f}"
+        assert span in summary and arc["reason"] in summary and span in stdout
     # the blind-zone summary: the central blind zone and both workpiece faces
     assert {"blind_maps.png", "face_blindness.png", "blindzones.csv"} <= names
     assert "central blind zone" in summary and "inner face" in summary

@@ -36,6 +36,15 @@ def _mm(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
+def arcs_by_reason(arcs: list[dict[str, Any]]) -> list[tuple[str, str]]:
+    """A trace's arcs (``start_mm``, ``end_mm``, ``reason``) with one reason together:
+    ``("0.00..2.50, 69.79..79.40", reason)``, in the order the reasons first come."""
+    spans: dict[str, list[str]] = {}
+    for arc in arcs:
+        spans.setdefault(arc["reason"], []).append(f"{arc['start_mm']:.2f}..{arc['end_mm']:.2f}")
+    return [(", ".join(where), reason) for reason, where in spans.items()]
+
+
 def passes_text(n: int) -> str:
     """'1 pass', '2 passes'."""
     return f"{n} pass" + ("" if n == 1 else "es")
@@ -205,9 +214,10 @@ def summary_markdown(
                 f"deviation {doc['max_deviation_mm']:.4f} mm (bound "
                 f"{doc['max_deviation_bound_mm']:.4f} mm); {_bound_words(doc)}; {clearance}."
             )
-            for u in doc["unreachable"]:
-                out.append(
-                    f"- unreachable {u['start_mm']:.2f}..{u['end_mm']:.2f} mm: {u['reason']}."
+            for what, key in (("unreachable", "unreachable"), ("not traced", "not_traced")):
+                out.extend(
+                    f"- {what} {where} mm: {reason}."
+                    for where, reason in arcs_by_reason(doc.get(key, []))
                 )
             figs = ["trace_3d.png", "trace_deviation.png", "trace.gif"]
         else:

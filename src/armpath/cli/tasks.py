@@ -1119,12 +1119,19 @@ def _print_run(
     heading: str,
 ) -> None:
     """The run's table of results on stdout and the files it wrote."""
-    from armpath.report import bound_cell, bound_scope, over_lattice, passes_text
+    from armpath.report import (
+        arcs_by_reason,
+        bound_cell,
+        bound_scope,
+        over_lattice,
+        passes_text,
+    )
 
     written = folder.written
     wall = scene.wall_thickness
     table = Table(
-        title=f"armpath {__version__}: {heading}, scene {scene.name}"
+        title=f"armpath {__version__}: {heading}"
+        + ("" if f"in scene {scene.name}" in heading else f", scene {scene.name}")
         + (f", wall thickness {wall.value}" if wall else "")
     )
     for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
@@ -1160,12 +1167,20 @@ def _print_run(
     if trace_doc is not None:
         cov = trace_doc["coverage"]
         out_console.print(
-            f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm "
-            "reachable covered; error column = largest deviation of the continuous tool "
-            "path; "
-            + "; ".join(
-                f"unreachable {u['start_mm']:.2f}..{u['end_mm']:.2f} mm ({u['reason']})"
-                for u in trace_doc["unreachable"]
+            "; ".join(
+                [
+                    f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm "
+                    "reachable covered",
+                    "error column = largest deviation of the continuous tool path",
+                    *(
+                        f"{what} {where} mm ({reason})"
+                        for what, key in (
+                            ("unreachable", "unreachable"),
+                            ("not traced", "not_traced"),
+                        )
+                        for where, reason in arcs_by_reason(trace_doc.get(key, []))
+                    ),
+                ]
             ),
             markup=False,
             soft_wrap=True,
