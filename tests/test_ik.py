@@ -370,6 +370,41 @@ def test_numerical_solver_redundant_arm_and_position_only():
     assert far.count == 0 and "closest reached" in far.reason
 
 
+def test_a_joint_that_does_not_move_the_tool_point_is_held():
+    """A SCARA's last joint only turns its tool about the tool point: a position's solutions
+    were 48 random turns of it. It is now held (at home, or at --near's value), leaving the
+    two elbows, which the planar two-link closed form written here gives; the seed arm's joint
+    6 likewise. Each replays on the textbook D-H product."""
+    rows = [
+        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
+        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
+    ]
+    scara = dh_arm(rows, name="scara")
+    goal = np.array([350.0, 100.0, 250.0])
+    for near, held in ((None, 0.0), (np.array([0.1, 0.2, 10.0, 1.25]), 1.25)):
+        result = solve_ik(scara, goal, position_only=True, near=near)
+        assert result.count == 2 and result.family_dimension == 0
+        assert "q4 held" in result.method
+        np.testing.assert_allclose(result.solutions[:, 3], held)
+        # the planar two-link arm: r^2 = a1^2 + a2^2 + 2 a1 a2 cos(q2)
+        r2 = goal[0] ** 2 + goal[1] ** 2
+        elbow = np.arccos((r2 - 300.0**2 - 250.0**2) / (2 * 300.0 * 250.0))
+        assert sorted(result.solutions[:, 1]) == pytest.approx([-elbow, elbow], abs=1e-9)
+        np.testing.assert_allclose(result.solutions[:, 2], 400.0 - 50.0 - goal[2], atol=1e-9)
+        for q in result.solutions:
+            T = dh_pose(
+                [r.a for r in rows], [r.alpha for r in rows], [r.d for r in rows], q,
+                prismatic=[False, False, True, False],
+            )  # fmt: skip
+            assert np.linalg.norm(T[:3, 3] - goal) < 1e-6
+    seed = BUILTIN_MODELS["seed"]()
+    result = solve_ik(seed, np.array([200.0, 100.0, 150.0]), position_only=True)
+    assert result.family_dimension == 2 and "q6 held" in result.method
+    np.testing.assert_allclose(result.solutions[:, 5], seed.home[5])
+
+
 #: KUKA's published D-H table of the LBR iiwa 14 R820 (a, alpha, d in mm), written out here.
 _IIWA_DH = ([0.0] * 7, np.radians([-90, 90, 90, -90, -90, 90, 0]), [360, 0, 420, 0, 400, 0, 126])
 
@@ -429,7 +464,9 @@ def test_near_picks_the_family_member_nearest_a_state():
     assert dist == sorted(dist)
     ur5 = BUILTIN_MODELS["ur5"]()
     pos_only = solve_ik(ur5, np.array([300.0, 200.0, 300.0]), position_only=True, near=ur5.home)
-    assert pos_only.family_dimension == 3
+    # the UR5's tool point lies on joint 6's axis: that joint is held, the family is 2-D
+    assert pos_only.family_dimension == 2 and "q6 held" in pos_only.method
+    np.testing.assert_allclose(pos_only.solutions[:, 5], ur5.home[5], atol=1e-9)
     assert np.allclose(tool_pose(ur5, pos_only.solutions)[:, :3, 3], [300, 200, 300], atol=1e-6)
     pose = " ".join(f"{v:.12g}" for v in target.reshape(-1))
     near_deg = " ".join(f"{v:.6f}" for v in np.degrees(near))
@@ -639,7 +676,7 @@ def _distinct_pairwise(q, prismatic, within):
 def test_numerical_solutions_are_deduplicated_as_pairwise(seed):
     """The k-d tree's distinct solutions equal the pairwise rule's, with near-copies, copies a
     whole turn away and copies across the +-pi seam among them."""
-    from armpath.ik.numerical import _distinct
+    from armpath.ik.numerical import distinct_solutions
 
     rng = np.random.default_rng(seed)
     prismatic = np.array([False, False, True, False, False, False])
@@ -649,6 +686,6 @@ def test_numerical_solutions_are_deduplicated_as_pairwise(seed):
     turns = rng.integers(-2, 3, (600, 6)) * 2 * np.pi
     copies[:, ~prismatic] += turns[:, ~prismatic]
     q = np.vstack([base, copies])[rng.permutation(900)]
-    kept = _distinct(q, prismatic, 1e-6)
+    kept = distinct_solutions(q, prismatic, 1e-6)
     assert kept.tolist() == _distinct_pairwise(q, prismatic, 1e-6)
     assert 300 <= kept.size < 900  # some copies kept (beyond 1e-6), most dropped

@@ -330,6 +330,22 @@ def tool_position(arm: SerialArm, q: ArrayLike) -> FloatArray:
     return tool_pose(arm, q)[..., :3, 3]
 
 
+def tool_point_joints(arm: SerialArm) -> NDArray[np.bool_]:
+    """Joints that move the tool point: False for one whose axis runs through it (a SCARA's
+    last joint, a wrist whose tool sits on the last axis), which only turns the tool about it.
+    Judged at eight configurations drawn inside the limits, each joint moved 0.3 rad (model
+    units if prismatic)."""
+    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (8, arm.n_joints))
+    q = np.clip(q, arm.lower, arm.upper)
+    base = tool_position(arm, q)
+    moves = np.zeros(arm.n_joints, dtype=bool)
+    for i in range(arm.n_joints):
+        dq = np.zeros(arm.n_joints)
+        dq[i] = 0.3
+        moves[i] = np.abs(tool_position(arm, q + dq) - base).max() > 1e-9
+    return moves
+
+
 def position_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """Jacobian of the tool position w.r.t. the joints, shape ``(..., 3, n)``.
 

@@ -139,7 +139,7 @@ def solve_numerical(
             f"from the target (tolerances {position_tolerance_mm:g} mm, "
             f"{rotation_tolerance_rad:g} rad)",
         )
-    kept = _distinct(q[ok], prismatic, SAME_SOLUTION)
+    kept = distinct_solutions(q[ok], prismatic, SAME_SOLUTION)
     sols = q[ok][kept]
     order = np.lexsort(sols.T[::-1])
     false = np.zeros(kept.size, dtype=bool)
@@ -153,7 +153,7 @@ def solve_numerical(
 SAME_SOLUTION = 1e-6
 
 
-def _distinct(q: FloatArray, prismatic: NDArray[np.bool_], within: float) -> IntArray:
+def distinct_solutions(q: FloatArray, prismatic: NDArray[np.bool_], within: float) -> IntArray:
     """Indices of the rows of ``q`` kept when each row, in order, is dropped if a kept one lies
     within ``within`` of it in every joint (revolute joints modulo a turn). A k-d tree finds the
     neighbours, so a position-only solve of 100,000 starts, each converging to its own member of

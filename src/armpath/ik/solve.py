@@ -20,10 +20,11 @@ from numpy.typing import NDArray
 from armpath.errors import InvalidInputError
 from armpath.ik.compiled import CompiledSolver
 from armpath.ik.general6r import General6RSolver
-from armpath.ik.numerical import solve_numerical
+from armpath.ik.numerical import SAME_SOLUTION, distinct_solutions, solve_numerical
 from armpath.ik.result import IKResult
 from armpath.ik.spherical_wrist import SphericalWristSolver, wrist_center
 from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
+from armpath.kinematics import tool_point_joints
 from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
@@ -131,6 +132,10 @@ def solve_ik(
         result = solve_numerical(
             arm, target, position_only=True, seeds=seeds, rng_seed=rng_seed, initial=initial
         )
+        idle = ~tool_point_joints(arm)
+        if idle.any():
+            result = _held(arm, result, idle, arm.home if initial is None else initial)
+            family = max(0, n - int(idle.sum()) - 3)
     else:
         solver = complete_solver(arm, method)
         if solver is None:
@@ -151,6 +156,30 @@ def solve_ik(
     if initial is not None and result.count > 1:
         result = nearest_first(arm, result, initial)
     return result
+
+
+def _held(arm: SerialArm, result: IKResult, idle: BoolArray, value: FloatArray) -> IKResult:
+    """A position's solutions with the joints that do not move the tool point (``idle``) held
+    at ``value`` (home or --near: they only turn the tool about the point), the same ones
+    merged: a SCARA's two elbows rather than samples of the turn of its last joint."""
+    if result.count == 0:
+        return result
+    q = result.solutions.copy()
+    q[:, idle] = np.asarray(value, dtype=np.float64)[idle]
+    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+    kept = distinct_solutions(q, prismatic, SAME_SOLUTION)
+    names = ", ".join(f"q{i + 1}" for i in np.flatnonzero(idle))
+    return replace(
+        result,
+        solutions=q[kept],
+        position_residual=result.position_residual[kept],
+        rotation_residual_rad=result.rotation_residual_rad[kept],
+        near_double=result.near_double[kept],
+        near_singular=result.near_singular[kept],
+        method=f"{result.method}; {names} held: it does not move the tool point"
+        if idle.sum() == 1
+        else f"{result.method}; {names} held: they do not move the tool point",
+    )
 
 
 def _with_nearest_member(

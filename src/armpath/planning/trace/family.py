@@ -37,7 +37,7 @@ from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.seed_position import family_from_wrist
 from armpath.ik.solve import complete_solver
 from armpath.ik.target import ToolTarget
-from armpath.kinematics import landmark_positions, tool_pose
+from armpath.kinematics import landmark_positions, tool_point_joints, tool_pose
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -178,15 +178,7 @@ class CurveFamily:
         """Joints that move the tool point (the others turn the tool about it)."""
         from armpath.planning.motion import active_joints
 
-        q = np.random.default_rng(0).uniform(-np.pi, np.pi, (8, self.arm.n_joints))
-        q = np.clip(q, self.arm.lower, self.arm.upper)
-        base = tool_pose(self.arm, q)[:, :3, 3]
-        moves = np.zeros(self.arm.n_joints, dtype=bool)
-        for i in range(self.arm.n_joints):
-            dq = np.zeros(self.arm.n_joints)
-            dq[i] = 0.3
-            moves[i] = np.abs(tool_pose(self.arm, q + dq)[:, :3, 3] - base).max() > 1e-9
-        return moves & active_joints(self.arm)
+        return tool_point_joints(self.arm) & active_joints(self.arm)
 
     def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
         """Family members ``(M, n)`` with the tool point at ``E`` and the tool pointing along
