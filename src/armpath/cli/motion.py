@@ -225,10 +225,9 @@ def _timing_rows(quantized: Any) -> list[tuple[str, str, str]]:
     ``n_commands * period`` s, which is the trajectory's duration only when no period is split
     (a period whose move needs more than one command) and the period divides it."""
     period = quantized.period_s
-    taken = quantized.sequence.n_commands * period
     return [
         ("commands", str(quantized.sequence.n_commands), f"one per {period:g} s period"),
-        ("commands take", f"{taken:.3f}", "s at one a period"),
+        ("commands take", f"{quantized.commands_take_s:.3f}", "s at one a period"),
     ]
 
 
@@ -237,7 +236,6 @@ def _timing_warning(quantized: Any, duration_s: float, option: str) -> str | Non
     commands, or a period longer than the whole trajectory), or None when they do (to within
     the last period, which ends with the trajectory)."""
     period = quantized.period_s
-    taken = quantized.sequence.n_commands * period
     why = []
     if quantized.split_periods:
         why.append(
@@ -249,7 +247,8 @@ def _timing_warning(quantized: Any, duration_s: float, option: str) -> str | Non
     if not why:
         return None
     return (
-        f"warning: the commands take {taken:.4g} s at one a period, not the trajectory's "
+        f"warning: the commands take {quantized.commands_take_s:.4g} s at one a period, not "
+        f"the trajectory's "
         f"{duration_s:.4g} s ({'; '.join(why)}): a shorter {option} keeps its timing"
     )
 

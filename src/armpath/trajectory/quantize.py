@@ -64,6 +64,12 @@ class QuantizedTrajectory:
     def n_periods(self) -> int:
         return int(self.sample_times.shape[0] - 1)
 
+    @property
+    def commands_take_s(self) -> float:
+        """How long the commands take at one a period (s): the trajectory's duration only when
+        no period is split and the period divides it."""
+        return float(self.sequence.n_commands * self.period_s)
+
     @cached_property
     def sampled_ticks(self) -> IntArray:
         """The lattice state (ticks) at each sample time, ``(n_periods + 1, joints)``."""
