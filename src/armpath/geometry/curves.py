@@ -71,23 +71,25 @@ class Curve(ABC):
 
     @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        count = TABLE_SAMPLES
+        u = self.table_parameters(TABLE_SAMPLES)
+        p = self._finite_points(u)
         while True:
-            u = self.table_parameters(count)
-            p = self._finite_points(u)
             s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=-1))]
-            mid = self._finite_points(0.5 * (u[1:] + u[:-1]))
+            u_mid = 0.5 * (u[1:] + u[:-1])
+            mid = self._finite_points(u_mid)
             halves = np.linalg.norm(mid - p[:-1], axis=-1) + np.linalg.norm(p[1:] - mid, axis=-1)
             finer = float(halves.sum())
             if finer <= s[-1] * (1.0 + TABLE_LENGTH_SHARE) + 1e-12:
                 break
-            if count >= MAX_TABLE_SAMPLES:
+            if u.size >= MAX_TABLE_SAMPLES:
                 raise InvalidInputError(
-                    f"curve {self.name!r} turns faster than {count:,} points along it follow "
+                    f"curve {self.name!r} turns faster than {u.size:,} points along it follow "
                     f"(its length by them {s[-1]:.6g} mm, by twice as many {finer:.6g} mm): give "
                     "a shorter parameter range, or the curve in pieces"
                 )
-            count = 2 * (count - 1) + 1
+            # the next table: these points and the midpoints between them, already computed
+            u = np.insert(u, np.arange(1, u.size), u_mid)
+            p = np.insert(p, np.arange(1, p.shape[0]), mid, axis=0)
         if not s[-1] > 0:
             raise InvalidInputError(f"curve {self.name!r} has zero length (a single point)")
         if s[-1] < MIN_CURVE_LENGTH_MM:
