@@ -83,10 +83,20 @@ def _number(item: dict[str, Any], key: str) -> float:
     return float(value)
 
 
+#: Largest whole number a model document's field may hold (ticks a command, steps a tick,
+#: frame and landmark indices).
+_MAX_WHOLE = 2**31 - 1
+
+
 def _whole(item: dict[str, Any], key: str) -> int:
     value = item[key]
-    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
-        raise ValueError(f"{key} must be a whole number, got {value!r}")
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not -_MAX_WHOLE <= value <= _MAX_WHOLE  # also refuses inf and nan
+        or value != int(value)
+    ):
+        raise ValueError(f"{key} must be a whole number of at most {_MAX_WHOLE:,}, got {value!r}")
     return int(value)
 
 
@@ -96,12 +106,12 @@ def _numbers(item: dict[str, Any], key: str, shape: tuple[int, ...]) -> np.ndarr
     size = " x ".join(str(n) for n in shape)
     wrong = ValueError(f"{key} must be {size} numbers, got {value!r}"[:200])
     try:
-        a = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
+        given = np.asarray(value)
+    except (TypeError, ValueError):  # rows of different lengths
         raise wrong from None
-    if a.shape != shape:
+    if given.shape != shape or given.dtype.kind not in "iuf":  # not text, true or null
         raise wrong
-    return a
+    return np.asarray(given, dtype=np.float64)
 
 
 def _limits(j: dict[str, Any]) -> tuple[float, float]:
