@@ -393,3 +393,61 @@ def test_a_scara_traces_a_circle_with_its_tool_pointing_down():
         assert np.hypot(rho - radius, P[:, 2] - centre[2]).max() <= 1.0
         swept.append(np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0])))
     assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3
+
+
+def test_an_arm_that_cannot_set_its_tools_direction_traces_the_point_alone():
+    """A five-joint arm whose last joint only rolls the tool about the point (four joints move
+    it) traced nothing ('out of reach'); it traces the point alone, replayed on the textbook
+    D-H product within the tolerance. An axis rule the arm cannot meet says so; the point
+    alone is solved once a direction (no turns about it: a three-joint arm solved 14,400 starts
+    a point, 1.8 GB)."""
+    from armpath.errors import PlanningError
+    from armpath.geometry.curves import ParametricCurve
+    from armpath.model.dh import DHRow, dh_arm
+    from armpath.planning.trace.family import AxisRule, curve_family
+
+    d = np.pi / 180
+    rows = [
+        DHRow(0.0, 90 * d, 300.0, limits=(-170 * d, 170 * d)),
+        DHRow(300.0, 0.0, 0.0, limits=(-170 * d, 170 * d)),
+        DHRow(250.0, 0.0, 0.0, limits=(-170 * d, 170 * d)),
+        DHRow(0.0, 90 * d, 0.0, limits=(-170 * d, 170 * d)),
+        DHRow(0.0, 0.0, 60.0, limits=(-170 * d, 170 * d)),
+    ]
+    arm = dh_arm(rows, name="r5", link_radii_mm=20.0, home=np.array([0, 30, -60, 0, 0]) * d)
+    centre, radius = np.array([350.0, 100.0, 250.0]), 60.0
+    world = scene_from_dict(
+        {"name": "t", "obstacles": [
+            {"type": "half_space", "name": "table", "point": [0, 0, 0], "normal": [0, 0, 1]}]}
+    ).world  # fmt: skip
+    circle = ParametricCurve(
+        "circle", f"{centre[0]} + {radius}*cos(t)", f"{centre[1]} + {radius}*sin(t)",
+        f"{centre[2]}", 0.0, 2 * np.pi,
+    )  # fmt: skip
+    fam = curve_family(arm, world, circle)
+    assert fam.tip_joints.tolist() == [True, True, True, True, False]
+    assert fam.turns_per_direction == 1
+    start = arm.lattice.to_ticks(arm.home)
+    r = plan_trace(arm, world, start, circle, TraceOptions(tolerance_mm=1.0, bound=False))
+    assert r.clearance.certified_ok and not r.not_traced and len(r.passes) == 1
+    states = r.sequence.states()
+    p = r.passes[0]
+    t = np.linspace(0, 1, 21)
+    s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+    q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 5) * (np.pi / 1800)
+    a, alpha, dd = [w.a for w in rows], [w.alpha for w in rows], [w.d for w in rows]
+    P = np.array([idh.dh_pose(a, alpha, dd, x)[:3, 3] for x in q])
+    rho = np.hypot(P[:, 0] - centre[0], P[:, 1] - centre[1])
+    assert np.hypot(rho - radius, P[:, 2] - centre[2]).max() <= 1.0
+    swept = np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0]))
+    assert np.ptp(swept) >= 2 * np.pi - 1e-3
+    # its tool points within the arm's vertical plane (azimuth 6-26 deg round this circle):
+    # never within 10 deg of +y
+    sideways = AxisRule(np.radians(10.0), normal=False, direction=np.array([0.0, 1.0, 0.0]))
+    with pytest.raises(
+        PlanningError, match=r"out of reach with the tool axis within 10 deg of \(0, 1, 0\)"
+    ):
+        plan_trace(
+            arm, world, start, circle,
+            TraceOptions(tolerance_mm=1.0, bound=False, axis_rule=sideways),
+        )  # fmt: skip

@@ -13,9 +13,10 @@ The family is searched over tool directions: :class:`SeedCurveFamily` by the see
 form (the wrist point on a sphere around the point, four geometric branches), polished by a
 batched pattern search over the tool direction; :class:`GenericCurveFamily` for any other arm
 by the all-solutions IK of each tool direction with turns about it (six joints),
-Levenberg-Marquardt from warm starts (five or seven joints and more), or, for an arm of fewer
-joints that cannot set the tool's direction (a SCARA's points down), the point alone, each
-solution counted for the searched direction nearest its own.
+Levenberg-Marquardt from warm starts (five or seven joints and more), or, where fewer than
+five joints move the tool point (a SCARA, whose tool points down; a five-joint arm whose last
+joint rolls the tool), the point alone, each solution counted for the searched direction
+nearest its own, if one lies within the scan's spacing of it.
 
 A family member's *score* is its smallest slack: a pair's clearance less what it needs (mm) or a
 joint's distance to its limit (deg, counted 1:1 with mm -- only the sign decides).
@@ -61,6 +62,10 @@ _POLISH_ROUNDS = 120
 _POLISH_GROW = 1.25
 _POLISH_SHRINK = 0.6
 _GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
+#: Farthest a solution's tool direction may lie from a searched one it is counted for, when
+#: the point alone is solved (:attr:`GenericCurveFamily._point_alone`): the spacing of the
+#: scan's 600 directions (rad, about 8.3 deg).
+_POINT_ALONE_SPACING = float(np.sqrt(4.0 * np.pi / 600))
 #: How many scores of a grid :meth:`CurveFamily.best` needs exactly (the polish's starts), and
 #: how many configurations of most joint-limit slack it scores first to find a floor for them.
 _EXACT_TOP = _POLISH_STARTS
@@ -111,6 +116,14 @@ class AxisRule:
     tolerance_rad: float
     normal: bool = True
     direction: FloatArray | None = None
+
+    def words(self) -> str:
+        """The rule in words: 'within 10 deg of the surface normal'."""
+        if self.normal or self.direction is None:
+            about = "the surface normal"
+        else:
+            about = "(" + ", ".join(f"{v:.3g}" for v in self.direction) + ")"
+        return f"within {np.degrees(self.tolerance_rad):g} deg of {about}"
 
     def describe(self) -> dict[str, object]:
         return {
@@ -575,13 +588,14 @@ class GenericCurveFamily(CurveFamily):
     """Any other arm's family: for each tool direction, the tool frames with that approach axis
     and a few turns about it, each solved by the all-solutions IK (six joints) or by
     Levenberg-Marquardt from the last solutions found (warm starts) and random ones (the point
-    alone for an arm of fewer than five joints)."""
+    alone when fewer than five joints move the tool point)."""
 
     rolls: int = 6
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        self._solver = complete_solver(self.arm) if self.arm.n_joints == 6 else None
+        six = self.arm.n_joints == 6 and not self._point_alone
+        self._solver = complete_solver(self.arm) if six else None
         #: the last solution found for each tool frame (numerical family): warm starts
         self._last: dict[tuple[float, ...], FloatArray] = {}
 
@@ -597,8 +611,17 @@ class GenericCurveFamily(CurveFamily):
 
     @cached_property
     def _turns(self) -> int:
-        # the turn about the tool axis moves no link when the tool point is on the last axis
-        return 1 if not self.tip_joints[-1] else self.rolls
+        # the turn about the tool axis moves no link when the tool point is on the last axis;
+        # there is none to sample when the point alone is solved
+        return 1 if not self.tip_joints[-1] or self._point_alone else self.rolls
+
+    @cached_property
+    def _point_alone(self) -> bool:
+        """Whether fewer than five joints move the tool point, too few to set its direction
+        as well (a SCARA; a five-joint arm whose last joint turns the tool about the point):
+        the point alone is solved, each solution counted for the searched direction nearest
+        its own."""
+        return int(self.tip_joints.sum()) < 5
 
     @property
     def turns_per_direction(self) -> int:
@@ -655,22 +678,22 @@ class GenericCurveFamily(CurveFamily):
                 starts[i] = last
         a = np.asarray(arm.approach_axis)
         wanted = Rs @ a  # (M, 3) the tool direction of each frame
-        if arm.n_joints >= 5:
+        if not self._point_alone:
             q = fam.refine(starts, iterations=40, rotations=Rs)
             # the tool axis exactly (the turn about it is free): keep what reaches the point
             axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, wanted)
             good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
             frame = np.arange(Rs.shape[0])
         else:
-            # an arm of fewer joints cannot set the tool's direction (a SCARA's points down):
-            # the point alone, each solution counted for the direction searched nearest to its
-            # own, within about the spacing of the directions searched
+            # too few joints to set the tool's direction (a SCARA's points down): the point
+            # alone, each solution counted for the direction searched nearest its own, if one
+            # lies within the scan's spacing of it (a direction the rule or the surface allows)
+            from scipy.spatial import cKDTree
+
             q = fam.refine(starts, iterations=40)
             got = tool_pose(arm, q)[:, :3, :3] @ a
-            cosine = got @ wanted.T  # (M, M)
-            frame = np.argmax(cosine, axis=1)
-            spacing = np.sqrt(4.0 * np.pi / max(wanted.shape[0] / self._turns, 1.0))
-            near = cosine[np.arange(q.shape[0]), frame] >= np.cos(spacing)
+            apart, frame = cKDTree(wanted).query(got)  # chord between unit vectors
+            near = apart <= 2.0 * np.sin(0.5 * _POINT_ALONE_SPACING)
             good = near & fam.exact(q)
         for k in np.flatnonzero(good).tolist():
             self._last[keys[k]] = q[k]

@@ -252,6 +252,8 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
         v = verdict(s, True, ())
         if v.out_of_reach:
             tag = "out of reach"
+            if fam.rule is not None:  # only the directions the rule allows were searched
+                tag += f" with the tool axis {fam.rule.words()}"
         elif not v.reachable:
             joints = [x.split(" at ")[0] for x in v.limiting if x.startswith("joint")]
             tag = "joint limits" + (f" ({', '.join(joints)})" if joints else "")
