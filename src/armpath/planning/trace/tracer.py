@@ -100,6 +100,9 @@ _ADVANCES_MM = tuple(float(a) for a in np.arange(20.0, 0.25, -0.5))
 #: crept 17 commands over its last 7 mm (89 commands along instead of 93 with this).
 _ENDGAME_MM = 15.0
 _CREEP_MM = 1.0
+#: Mid-pass, a command along the reference that advances less than this (mm) is compared with
+#: the farthest of commands also turned along the family (:meth:`Tracer._along_family`).
+_STALL_MM = 2.0
 #: Commands compared there by how far the command after each gets.
 _LOOKAHEAD = 6
 #: Within this distance of a pass's goal (mm), a pass that finds no command takes its last one
@@ -409,6 +412,10 @@ class Tracer:
                 order = np.argsort(-(sign * s - 0.05 * ref_gap), kind="stable")
                 order = order[: _LOOKAHEAD if endgame else 1]
                 out = [(cand[k], float(s[k])) for k in order]
+                if abs(s[order[0]] - sk) < _STALL_MM and not endgame:
+                    wider = self._along_family(qk, sk, goal)
+                    if wider is not None and sign * (wider[1] - s[order[0]]) > 0:
+                        out.insert(0, wider)
                 if abs(s[order[0]] - sk) < _CREEP_MM and endgame:
                     # creeping near the goal (a tight end): a command onto the goal itself
                     # along the family may get farther
@@ -471,13 +478,25 @@ class Tracer:
                 return cand[k], float(s[k])
         return None
 
-    def _onto_goal(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
-        """The last command of a pass, when neither the reference nor the most slack leads
-        there: the lattice is searched about several members with the tip at the goal, the
-        joints turned from ``qk`` along the family (the null space of the tip's Jacobian) by up
-        to 1 deg either way. Lattice states with the tip in the band about one point are
-        sparse; more of the family holds more of them."""
+    def _along_family(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """Where the command along the reference stalls mid-pass: the lattice searched about
+        targets a few mm on, the joints also turned along the family (the null space of the
+        tip's Jacobian) by up to 1 deg either way; the farthest valid command."""
         qk_rad = self.grid.to_joint(qk)
+        sign = 1.0 if goal >= sk else -1.0
+        turns = self._null_moves(qk_rad)
+        for adv in (8.0, 6.0, 4.0, 3.0, 2.0):
+            s1 = sk + sign * min(adv, abs(goal - sk))
+            drift = self.q_ref(s1) - self.q_ref(sk)
+            cand, s = self._commands_toward(qk, sk, s1, goal, [drift + t for t in turns] + turns)
+            if cand.shape[0]:
+                k = int(np.argmax(sign * s))
+                return cand[k], float(s[k])
+        return None
+
+    def _null_moves(self, qk_rad: FloatArray) -> list[FloatArray]:
+        """Joint moves (rad) along the family from ``qk_rad``: each direction of the null space
+        of the tip's Jacobian, scaled to turn a joint by 0.25, 0.5 and 1 deg either way."""
         J = position_jacobian(self.arm, qk_rad)[:, self.tip]
         _, _, vt = np.linalg.svd(J)
         moves = []
@@ -485,6 +504,15 @@ class Tracer:
             full = np.zeros(qk_rad.size)
             full[self.tip] = v / np.abs(v).max()
             moves += [t * full / self.deg_eq for t in (0.25, -0.25, 0.5, -0.5, 1.0, -1.0)]
+        return moves
+
+    def _onto_goal(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """The last command of a pass, when neither the reference nor the most slack leads
+        there: the lattice is searched about several members with the tip at the goal, the
+        joints turned from ``qk`` along the family (the null space of the tip's Jacobian) by up
+        to 1 deg either way. Lattice states with the tip in the band about one point are
+        sparse; more of the family holds more of them."""
+        moves = self._null_moves(self.grid.to_joint(qk))
         cand, s = self._commands_toward(qk, sk, goal, goal, moves)
         if cand.shape[0] == 0:
             return None
