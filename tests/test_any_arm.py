@@ -451,3 +451,37 @@ def test_an_arm_that_cannot_set_its_tools_direction_traces_the_point_alone():
             arm, world, start, circle,
             TraceOptions(tolerance_mm=1.0, bound=False, axis_rule=sideways),
         )  # fmt: skip
+
+
+def test_a_prismatic_joints_values_are_shown_in_mm(tmp_path):
+    """A plan's table wrote every final joint value and the joint travel in deg, the SCARA's
+    quill (mm) too: the units are now each joint's, as the reach table's were; the values are
+    the JSON's, the quill's the goal's height below the table's 350 mm (D-H, written here)."""
+    import json
+
+    from cli_in_process import run_in_process
+
+    scara = tmp_path / "scara.json"
+    scara.write_text(
+        json.dumps(
+            {
+                "name": "scara", "convention": "standard",
+                "units": {"length": "mm", "angle": "deg"},
+                "links": [
+                    {"a": 300, "alpha": 0, "d": 400, "limits": [-140, 140]},
+                    {"a": 250, "alpha": 180, "d": 0, "limits": [-140, 140]},
+                    {"a": 0, "alpha": 0, "d": 0, "type": "prismatic", "limits": [0, 200]},
+                    {"a": 0, "alpha": 0, "d": 50, "limits": [-170, 170]},
+                ],
+            }
+        )
+    )  # fmt: skip
+    args = ["plan", "--model", str(scara), "--to-xyz", "300", "200", "200", "--tolerance", "0.5"]
+    table = run_in_process(args, tmp_path)
+    doc = json.loads(run_in_process([*args, "--json"], tmp_path).stdout)
+    assert table.returncode == 0, table.stderr
+    assert doc["units"]["joints"] == ["deg", "deg", "mm", "deg"]
+    shown = ", ".join(f"{v:.1f}" for v in doc["final_deg"])
+    assert f"({shown}) (deg, deg, mm, deg)" in " ".join(table.stdout.split())
+    assert "(deg, mm for q3)" in " ".join(table.stdout.split())
+    assert doc["final_deg"][2] == pytest.approx(400.0 - 50.0 - 200.0, abs=0.5)

@@ -152,6 +152,14 @@ def _units_text(units: tuple[str, ...]) -> str:
     return "deg" if set(units) == {"deg"} else "(" + ", ".join(units) + ")"
 
 
+def _travel_unit(doc: dict[str, Any]) -> str:
+    """The unit of a result's joint travel: ``deg``, or ``(deg, mm for q3)`` for an arm with a
+    prismatic joint, whose travel adds its mm."""
+    units = doc["units"]["joints"]
+    slides = [f"q{i + 1}" for i, unit in enumerate(units) if unit == "mm"]
+    return f"(deg, mm for {', '.join(slides)})" if slides else "deg"
+
+
 def _write_reach(
     folder: OutputFolder,
     stem: str,
@@ -399,10 +407,11 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     table.add_row(
         "objectives",
         f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
-        f"energy (joint travel, weighted) {m['energy_deg']:.1f} deg "
+        f"energy (joint travel, weighted) {m['energy_deg']:.1f} {_travel_unit(doc)} "
         f"(objective: {doc['objective']})",
     )
-    table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} deg")
+    units = _units_text(tuple(doc["units"]["joints"]))
+    table.add_row("final joints", f"{_fmt(doc['final_deg'], 1)} {units}")
     table.add_row("min clearance", _clearance_text(doc["clearance"]))
     return table
 
@@ -620,7 +629,7 @@ def _tour_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     table.add_row(
         "objectives",
         f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
-        f"joint travel {m['energy_deg']:.1f} deg",
+        f"joint travel {m['energy_deg']:.1f} {_travel_unit(doc)}",
     )
     table.add_row("scene", _scene_text(doc["scene"]["name"], doc["wall_thickness"]))
     return table
