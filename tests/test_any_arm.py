@@ -485,3 +485,5 @@ def test_a_prismatic_joints_values_are_shown_in_mm(tmp_path):
     assert f"({shown}) (deg, deg, mm, deg)" in " ".join(table.stdout.split())
     assert "(deg, mm for q3)" in " ".join(table.stdout.split())
     assert doc["final_deg"][2] == pytest.approx(400.0 - 50.0 - 200.0, abs=0.5)
+    fk = run_in_process(["fk", "--model", str(scara), "10", "20", "100", "30"], tmp_path)
+    assert "q = (10.0, 20.0, 100.0, 30.0) (deg, deg, mm, deg)" in " ".join(fk.stdout.split())

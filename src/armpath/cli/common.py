@@ -407,6 +407,11 @@ def _joint_units(arm: SerialArm) -> list[str]:
     return ["mm" if j.kind is JointKind.PRISMATIC else "deg" for j in arm.joints]
 
 
+def _units_text(units: tuple[str, ...] | list[str]) -> str:
+    """``deg`` for an arm of revolute joints, else the unit of each joint (``deg, deg, mm``)."""
+    return "deg" if set(units) == {"deg"} else "(" + ", ".join(units) + ")"
+
+
 def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
     """Joint values (rad / the model's length unit) for output: deg for revolute joints, mm for
     prismatic ones (:meth:`~armpath.model.lattice.Lattice.joint_display`)."""

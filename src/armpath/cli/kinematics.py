@@ -25,6 +25,7 @@ from armpath.cli.common import (
     _numbers,
     _point_mm,
     _to_display,
+    _units_text,
     app,
     err_console,
     out_console,
@@ -76,7 +77,7 @@ def fk(
             typer.echo(json_line(doc))
         else:
             shown = _fmt(_to_display(arm, q), 1)
-            table = Table(title=f"{arm.name}, q = {shown} ({', '.join(sorted(set(units)))})")
+            table = Table(title=f"{arm.name}, q = {shown} {_units_text(units)}")
             for col in ("point", "x [mm]", "y [mm]", "z [mm]"):
                 table.add_column(escape(col), justify="right")
             for n, p in zip(names, pts, strict=True):

@@ -37,6 +37,7 @@ from armpath.cli.common import (
     _fmt,
     _numbers,
     _point_mm,
+    _units_text,
     app,
     err_console,
     joint_state,
@@ -145,11 +146,6 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     wall = scene.wall_thickness
     table.add_row("scene", _scene_text(scene.name, wall.value if wall else None))
     return table
-
-
-def _units_text(units: tuple[str, ...]) -> str:
-    """``deg`` for an arm of revolute joints, else the unit of each joint (``deg, deg, mm``)."""
-    return "deg" if set(units) == {"deg"} else "(" + ", ".join(units) + ")"
 
 
 def _travel_unit(doc: dict[str, Any]) -> str:
