@@ -395,6 +395,38 @@ def test_a_scara_traces_a_circle_with_its_tool_pointing_down():
     assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3
 
 
+def test_an_untraced_arc_of_a_scara_says_how_far_a_tick_moves_its_tool():
+    """With 0.1 mm a SCARA leaves arcs of a circle untraced: three joints move its tool point
+    and none is left to take up the error. The reason says how far a tick moves the tool
+    there: joint 1's, the point's distance from the base axis times 0.1 deg (written here)."""
+    from armpath.geometry.curves import ParametricCurve
+    from armpath.model.dh import DHRow, dh_arm
+    from armpath.model.serial_arm import JointKind
+    from armpath.planning.trace.family import curve_family
+    from armpath.planning.trace.plan import _with_lattice_hint
+    from armpath.planning.trace.reachability import CurveArc
+
+    rows = [
+        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
+        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
+    ]
+    arm = dh_arm(rows, name="scara", home=np.array([0.0, np.radians(30.0), 0.0, 0.0]))
+    world = scene_from_dict({"name": "alone"}).world
+    circle = ParametricCurve("circle", "350 + 60*cos(t)", "100 + 60*sin(t)", "250", 0.0, 2 * np.pi)
+    fam = curve_family(arm, world, circle)
+    gap = CurveArc(69.8, 79.4)
+    (hinted,) = _with_lattice_hint(fam, 0.1, [(gap, "no command")])
+    p = circle.at_arc_length(np.array([0.5 * (gap.start_mm + gap.end_mm)]))[0]
+    lever = np.hypot(p[0], p[1]) * np.radians(0.1)  # joint 1 moves it farthest
+    assert hinted[1] == (
+        f"no command (only 3 joints move the tool point, up to {lever:.2g} mm a tick here: "
+        "few lattice states lie within 0.1 mm of the curve)"
+    )
+    assert _with_lattice_hint(fam, 1.0, [(gap, "no command")]) == [(gap, "no command")]
+
+
 def test_an_arm_that_cannot_set_its_tools_direction_traces_the_point_alone():
     """A five-joint arm whose last joint only rolls the tool about the point (four joints move
     it) traced nothing ('out of reach'); it traces the point alone, replayed on the textbook

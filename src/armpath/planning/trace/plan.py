@@ -30,7 +30,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.curves import Curve
 from armpath.geometry.world import CollisionWorld
-from armpath.kinematics import tool_position
+from armpath.kinematics import position_jacobian, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
 from armpath.planning.bounds.search import check_max_samples
@@ -222,7 +222,9 @@ def plan_trace(
     run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
     states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
     prof_s, prof_d = run.profile_s, run.profile_d
-    not_traced += _gaps_between_passes(arcs, passes, not_traced)
+    not_traced += _with_lattice_hint(
+        reach.family, opts.tolerance_mm, _gaps_between_passes(arcs, passes, not_traced)
+    )
     if not passes:
         if not_traced:
             why = "; ".join(f"{a.start_mm:.1f}..{a.end_mm:.1f} mm: {why}" for a, why in not_traced)
@@ -364,6 +366,39 @@ def unwrapped_along(s_mm: FloatArray, length_mm: float, begin_mm: float) -> Floa
 #: A stretch of a reachable arc between two passes longer than this (mm) is reported as not
 #: traced.
 GAP_REPORTED_MM = 0.5
+
+
+def _with_lattice_hint(
+    fam: CurveFamily, tolerance_mm: float, gaps: list[tuple[CurveArc, str]]
+) -> list[tuple[CurveArc, str]]:
+    """The gaps between passes, each with how far one tick moves the tool point there when
+    three joints or fewer move it (a SCARA's two arm joints and its quill): with no joint left
+    to take up the error, few lattice states lie within the tolerance of the curve."""
+    tip = fam.tip_joints
+    if int(tip.sum()) > 3 or not gaps:
+        return gaps
+    tick = fam.arm.lattice.tick[tip]
+    out = []
+    for arc, why in gaps:
+        check_time("describing the untraced arcs")
+        v = fam.best(0.5 * (arc.start_mm + arc.end_mm))
+        if v.out_of_reach:
+            out.append((arc, why))
+            continue
+        J = position_jacobian(fam.arm, v.q)[:, tip]
+        tick_mm = float(np.max(np.linalg.norm(J, axis=0) * tick))
+        if tick_mm <= tolerance_mm:
+            out.append((arc, why))
+            continue
+        out.append(
+            (
+                arc,
+                f"{why} (only {int(tip.sum())} joints move the tool point, up to "
+                f"{tick_mm:.2g} mm a tick here: few lattice states lie within "
+                f"{tolerance_mm:g} mm of the curve)",
+            )
+        )
+    return out
 
 
 def _gaps_between_passes(
