@@ -339,6 +339,20 @@ def test_a_trace_the_lattice_is_too_coarse_for_says_so():
     assert 0.3 < named < 1.2 and 0.3 < max(columns) < 1.2
 
 
+def scara_rows() -> list:
+    """A SCARA's standard D-H table (mm, rad): arms of 300 and 250 mm at 400 mm, a quill
+    sliding 0..200 mm down (prismatic), the tool 50 mm below on the last axis."""
+    from armpath.model.dh import DHRow
+    from armpath.model.serial_arm import JointKind
+
+    return [
+        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
+        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
+    ]
+
+
 def test_a_scara_traces_a_circle_with_its_tool_pointing_down():
     """A four-joint SCARA (RRPR) cannot set its tool's direction (it points down), which the
     tracer searched for at each point: every curve was 'not reachable'. Its family is now the
@@ -346,15 +360,9 @@ def test_a_scara_traces_a_circle_with_its_tool_pointing_down():
     D-H product (the quill a prismatic joint) within the tolerance along the whole continuous
     motion of the pass, once around the circle. With 0.1 deg ticks the tool moves 0.5-1 mm a
     tick here, so the tolerance is 1 mm."""
-    from armpath.model.dh import DHRow, dh_arm
-    from armpath.model.serial_arm import JointKind
+    from armpath.model.dh import dh_arm
 
-    rows = [
-        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
-        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
-        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
-        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
-    ]
+    rows = scara_rows()
     home = np.array([0.0, np.radians(30.0), 0.0, 0.0])
     arm = dh_arm(rows, name="scara", link_radii_mm=20.0, home=home)
     centre, radius = np.array([350.0, 100.0, 250.0]), 60.0
@@ -400,18 +408,12 @@ def test_an_untraced_arc_of_a_scara_says_how_far_a_tick_moves_its_tool():
     and none is left to take up the error. The reason says how far a tick moves the tool
     there: joint 1's, the point's distance from the base axis times 0.1 deg (written here)."""
     from armpath.geometry.curves import ParametricCurve
-    from armpath.model.dh import DHRow, dh_arm
-    from armpath.model.serial_arm import JointKind
+    from armpath.model.dh import dh_arm
     from armpath.planning.trace.family import curve_family
     from armpath.planning.trace.plan import _with_lattice_hint
     from armpath.planning.trace.reachability import CurveArc
 
-    rows = [
-        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
-        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
-        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
-        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
-    ]
+    rows = scara_rows()
     arm = dh_arm(rows, name="scara", home=np.array([0.0, np.radians(30.0), 0.0, 0.0]))
     world = scene_from_dict({"name": "alone"}).world
     circle = ParametricCurve("circle", "350 + 60*cos(t)", "100 + 60*sin(t)", "250", 0.0, 2 * np.pi)
