@@ -7,6 +7,8 @@ configuration is the batch of one.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -330,20 +332,26 @@ def tool_position(arm: SerialArm, q: ArrayLike) -> FloatArray:
     return tool_pose(arm, q)[..., :3, 3]
 
 
-def tool_point_joints(arm: SerialArm) -> NDArray[np.bool_]:
-    """Joints that move the tool point: False for one whose axis runs through it (a SCARA's
-    last joint, a wrist whose tool sits on the last axis), which only turns the tool about it.
-    Judged at eight configurations drawn inside the limits, each joint moved 0.3 rad (model
-    units if prismatic)."""
-    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (8, arm.n_joints))
-    q = np.clip(q, arm.lower, arm.upper)
-    base = tool_position(arm, q)
+def joints_that_move(
+    arm: SerialArm, points: Callable[[SerialArm, FloatArray], FloatArray], q: FloatArray
+) -> NDArray[np.bool_]:
+    """Per joint, whether moving it by 0.3 (rad, or model units if prismatic) from any of the
+    configurations ``q (M, n)`` moves any of ``points(arm, q)`` (tool point, landmarks)."""
+    base = points(arm, q)
     moves = np.zeros(arm.n_joints, dtype=bool)
     for i in range(arm.n_joints):
         dq = np.zeros(arm.n_joints)
         dq[i] = 0.3
-        moves[i] = np.abs(tool_position(arm, q + dq) - base).max() > 1e-9
+        moves[i] = np.abs(points(arm, q + dq) - base).max() > 1e-9
     return moves
+
+
+def tool_point_joints(arm: SerialArm) -> NDArray[np.bool_]:
+    """Joints that move the tool point: False for one whose axis runs through it (a SCARA's
+    last joint, a wrist whose tool sits on the last axis), which only turns the tool about it.
+    Judged at eight configurations drawn inside the limits (:func:`joints_that_move`)."""
+    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (8, arm.n_joints))
+    return joints_that_move(arm, tool_position, np.clip(q, arm.lower, arm.upper))
 
 
 def position_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:

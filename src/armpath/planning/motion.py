@@ -40,6 +40,7 @@ from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import (
     displacement_bounds,
+    joints_that_move,
     landmark_positions,
     position_jacobian,
     tool_position,
@@ -191,15 +192,7 @@ def plan_metrics(
 def active_joints(arm: SerialArm, rng: np.random.Generator | None = None) -> NDArray[np.bool_]:
     """Joints whose motion moves some landmark of the arm (the seed arm's joint 6 does not)."""
     gen = rng or np.random.default_rng(0)
-    q = gen.uniform(-np.pi, np.pi, (8, arm.n_joints))
-    base = landmark_positions(arm, q)
-    active = np.zeros(arm.n_joints, dtype=bool)
-    for i in range(arm.n_joints):
-        dq = np.zeros(arm.n_joints)
-        dq[i] = 0.3
-        moved = np.abs(landmark_positions(arm, q + dq) - base).max()
-        active[i] = moved > 1e-9
-    return active
+    return joints_that_move(arm, landmark_positions, gen.uniform(-np.pi, np.pi, (8, arm.n_joints)))
 
 
 def search_clearance_extra(
