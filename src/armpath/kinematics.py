@@ -354,6 +354,13 @@ def tool_point_joints(arm: SerialArm) -> NDArray[np.bool_]:
     return joints_that_move(arm, tool_position, np.clip(q, arm.lower, arm.upper))
 
 
+def tick_jacobian(arm: SerialArm, q: FloatArray) -> FloatArray:
+    """How far the tool point moves per tick of each joint at ``q (n,)``, ``(3, n)`` (length
+    unit per tick of the arm's lattice, linearised)."""
+    F = forward_frames(arm, np.asarray(q, dtype=np.float64)[None])
+    return np.asarray(jacobian_from_frames(arm, F)[0][:3] * arm.lattice.tick)
+
+
 def position_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """Jacobian of the tool position w.r.t. the joints, shape ``(..., 3, n)``.
 

@@ -34,7 +34,13 @@ from armpath.errors import CollisionError, InvalidInputError, PlanningError, Unr
 from armpath.geometry.world import CollisionWorld, into_windows
 from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
 from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
-from armpath.kinematics import forward_frames, jacobian_from_frames, pose_frames, tool_pose
+from armpath.kinematics import (
+    forward_frames,
+    jacobian_from_frames,
+    pose_frames,
+    tick_jacobian,
+    tool_pose,
+)
 from armpath.model.lattice import unique_states
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
@@ -315,18 +321,11 @@ def generic_bound(
     )
 
 
-def _tick_jacobian(arm: SerialArm, q: FloatArray) -> FloatArray:
-    """How far the tool point moves per tick of each joint at ``q``, ``(3, n)`` (length unit
-    per tick, linearised)."""
-    F = forward_frames(arm, q[None])
-    return np.asarray(jacobian_from_frames(arm, F)[0][:3] * arm.lattice.tick)
-
-
 def _box(arm: SerialArm, q: FloatArray, tol: float) -> tuple[IntArray, FloatArray]:
     """Integer offsets around ``q``'s nearest lattice state (a box, wider for joints that move
     the tool less, at most :data:`BOX_BUDGET` of them) and the tool's linearised move (model
     unit) for each offset from ``q`` itself."""
-    J = _tick_jacobian(arm, q)
+    J = tick_jacobian(arm, q)
     lever = np.linalg.norm(J, axis=0)
     active = lever > 1e-9 * tol
     radius = np.zeros(arm.n_joints, dtype=np.int64)
@@ -697,7 +696,7 @@ def _lattice_too_coarse(
     far one tick moves the tool there, and the smallest error of a lattice state near them
     (searched with the tolerance doubled up to eight times, over the first 16 members)."""
     unit = arm.length_unit
-    lever = np.linalg.norm(_tick_jacobian(arm, members[0]), axis=0)
+    lever = np.linalg.norm(tick_jacobian(arm, members[0]), axis=0)
     moving = np.flatnonzero(lever > 1e-9 * max(float(lever.max()), 1e-300))
     joints = ", ".join(str(j + 1) for j in moving)
     why = (

@@ -30,7 +30,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
 from armpath.geometry.curves import Curve
 from armpath.geometry.world import CollisionWorld
-from armpath.kinematics import position_jacobian, tool_position
+from armpath.kinematics import tick_jacobian, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
 from armpath.planning.bounds.search import check_max_samples
@@ -377,7 +377,6 @@ def _with_lattice_hint(
     tip = fam.tip_joints
     if int(tip.sum()) > 3 or not gaps:
         return gaps
-    tick = fam.arm.lattice.tick[tip]
     out = []
     for arc, why in gaps:
         check_time("describing the untraced arcs")
@@ -385,8 +384,7 @@ def _with_lattice_hint(
         if v.out_of_reach:
             out.append((arc, why))
             continue
-        J = position_jacobian(fam.arm, v.q)[:, tip]
-        tick_mm = float(np.max(np.linalg.norm(J, axis=0) * tick))
+        tick_mm = float(np.linalg.norm(tick_jacobian(fam.arm, v.q), axis=0)[tip].max())
         if tick_mm <= tolerance_mm:
             out.append((arc, why))
             continue

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.jit import njit
-from armpath.kinematics import position_jacobian, tool_position
+from armpath.kinematics import position_jacobian, tick_jacobian, tool_position
 from armpath.model.lattice import unique_states
 from armpath.planning.trace.family import CurveFamily
 from armpath.planning.trace.reference import Piece
@@ -568,8 +568,7 @@ class Tracer:
                 f"{s_from:.1f} mm"
             )
         # how far a tick moves the tool point, at the last configuration searched around
-        J = position_jacobian(self.arm, proj)[:, self.tip]
-        tick_mm = float(np.max(np.linalg.norm(J, axis=0) * self.grid.tick[self.tip]))
+        tick_mm = float(np.linalg.norm(tick_jacobian(self.arm, proj), axis=0)[self.tip].max())
         raise PlanningError(
             f"no lattice state with the tip within {self.tol:g} mm of the curve near "
             f"{s_from:.1f} mm ({int(self.tip.sum())} joints move the tool point, up to "
