@@ -166,8 +166,7 @@ def _held(arm: SerialArm, result: IKResult, idle: BoolArray, value: FloatArray) 
         return result
     q = result.solutions.copy()
     q[:, idle] = np.asarray(value, dtype=np.float64)[idle]
-    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-    kept = distinct_solutions(q, prismatic, SAME_SOLUTION)
+    kept = distinct_solutions(q, arm.lattice.prismatic, SAME_SOLUTION)
     names = ", ".join(f"q{i + 1}" for i in np.flatnonzero(idle))
     return replace(
         result,

@@ -421,7 +421,6 @@ class SerialArm:
                     tick=None if j.tick is None else j.tick * k,
                 )
             joints.append(replace(j, T_parent_joint=moved(j.T_parent_joint)))
-        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in self.joints])
         return replace(
             self,
             joints=tuple(joints),
@@ -432,7 +431,7 @@ class SerialArm:
                 for lm in self.landmarks
             ),
             links=tuple(replace(lk, radius=lk.radius * k) for lk in self.links),
-            home=np.where(prismatic, self.home * k, self.home),
+            home=np.where(self.lattice.prismatic, self.home * k, self.home),
             length_unit="mm",
         )
 

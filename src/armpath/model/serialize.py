@@ -77,9 +77,12 @@ def _text(item: dict[str, Any], key: str) -> str:
 
 
 def _number(item: dict[str, Any], key: str) -> float:
-    value = item[key]
+    return _as_number(item[key], key)
+
+
+def _as_number(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{key} must be a number, got {value!r}")
+        raise ValueError(f"{what} must be a number, got {value!r}")
     return float(value)
 
 
@@ -121,8 +124,8 @@ def _limits(j: dict[str, Any]) -> tuple[float, float]:
         raise ValueError(f"limits must be [lower, upper] (null for an open side), got {value!r}")
     lower, upper = value
     return (
-        -np.inf if lower is None else _number({"limits": lower}, "limits"),
-        np.inf if upper is None else _number({"limits": upper}, "limits"),
+        -np.inf if lower is None else _as_number(lower, "limits"),
+        np.inf if upper is None else _as_number(upper, "limits"),
     )
 
 
@@ -208,7 +211,7 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             home=_numbers(doc, "home", (len(joints),)),
             length_unit=_text(doc, "length_unit"),
             T_world_base=_numbers(doc, "T_world_base", (4, 4)),
-            parameters=tuple((k, _number({k: v}, k)) for k, v in parameters),
+            parameters=tuple((k, _as_number(v, k)) for k, v in parameters),
             approach_axis=tuple(
                 _numbers(doc, "approach_axis", (3,)).tolist()
                 if "approach_axis" in doc
