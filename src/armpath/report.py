@@ -36,13 +36,19 @@ def _mm(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
-def arcs_by_reason(arcs: list[dict[str, Any]]) -> list[tuple[str, str]]:
-    """A trace's arcs (``start_mm``, ``end_mm``, ``reason``) with one reason together:
-    ``("0.00..2.50, 69.79..79.40", reason)``, in the order the reasons first come."""
-    spans: dict[str, list[str]] = {}
-    for arc in arcs:
-        spans.setdefault(arc["reason"], []).append(f"{arc['start_mm']:.2f}..{arc['end_mm']:.2f}")
-    return [(", ".join(where), reason) for reason, where in spans.items()]
+def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:
+    """The arcs a trace result did not cover, ``(what, where, reason)``: its unreachable arcs,
+    then those reachable but not traced, each kind's arcs of one reason together
+    (``("not traced", "0.00..2.50, 69.79..79.40", reason)``), in the order the reasons first
+    come."""
+    out = []
+    for what, key in (("unreachable", "unreachable"), ("not traced", "not_traced")):
+        spans: dict[str, list[str]] = {}
+        for arc in doc.get(key, []):
+            where = f"{arc['start_mm']:.2f}..{arc['end_mm']:.2f}"
+            spans.setdefault(arc["reason"], []).append(where)
+        out += [(what, ", ".join(where), reason) for reason, where in spans.items()]
+    return out
 
 
 def passes_text(n: int) -> str:
@@ -214,11 +220,7 @@ def summary_markdown(
                 f"deviation {doc['max_deviation_mm']:.4f} mm (bound "
                 f"{doc['max_deviation_bound_mm']:.4f} mm); {_bound_words(doc)}; {clearance}."
             )
-            for what, key in (("unreachable", "unreachable"), ("not traced", "not_traced")):
-                out.extend(
-                    f"- {what} {where} mm: {reason}."
-                    for where, reason in arcs_by_reason(doc.get(key, []))
-                )
+            out += [f"- {what} {where} mm: {why}." for what, where, why in uncovered_arcs(doc)]
             figs = ["trace_3d.png", "trace_deviation.png", "trace.gif"]
         else:
             order = " → ".join(str(i) for i in doc["order"])

@@ -1090,7 +1090,7 @@ def run(
         finally:
             if blind_job is not None:
                 blind_job.cancel()  # (done by then, unless a task failed)
-        _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading)
+        _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading, seed_job)
         if failed:
             raise PlanningError(
                 "; ".join(f"{title} found no plan: {why}" for title, why in failed)
@@ -1122,21 +1122,23 @@ def _print_run(
     tour_doc: dict[str, Any] | None,
     blind: Any,
     heading: str,
+    seed_job: bool,
 ) -> None:
-    """The run's table of results on stdout and the files it wrote."""
+    """The run's table of results on stdout and the files it wrote (``seed_job``: the seed
+    scene's tasks, whose heading does not name the scene)."""
     from armpath.report import (
-        arcs_by_reason,
         bound_cell,
         bound_scope,
         over_lattice,
         passes_text,
+        uncovered_arcs,
     )
 
     written = folder.written
     wall = scene.wall_thickness
     table = Table(
         title=f"armpath {__version__}: {heading}"
-        + ("" if f"in scene {scene.name}" in heading else f", scene {scene.name}")
+        + (f", scene {scene.name}" if seed_job else "")  # another run's heading names it
         + (f", wall thickness {wall.value}" if wall else "")
     )
     for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
@@ -1177,14 +1179,7 @@ def _print_run(
                     f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm "
                     "reachable covered",
                     "error column = largest deviation of the continuous tool path",
-                    *(
-                        f"{what} {where} mm ({reason})"
-                        for what, key in (
-                            ("unreachable", "unreachable"),
-                            ("not traced", "not_traced"),
-                        )
-                        for where, reason in arcs_by_reason(trace_doc.get(key, []))
-                    ),
+                    *(f"{what} {at} mm ({why})" for what, at, why in uncovered_arcs(trace_doc)),
                 ]
             ),
             markup=False,
