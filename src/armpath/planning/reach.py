@@ -198,6 +198,15 @@ class _Problem:
     def start_rad(self) -> FloatArray:
         return ticks_to_rad(self.start_ticks[:TIP_JOINTS])
 
+    def box(self, n: int) -> tuple[IntArray, IntArray]:
+        """The lattice states of joints 1-5 that ``n`` commands can reach from the start within
+        the joint limits: ``lo .. hi`` ticks, inclusive."""
+        start = self.start_ticks[:TIP_JOINTS]
+        return (
+            np.maximum(start - MAX_INCREMENT_TICKS * n, self.lo_ticks),
+            np.minimum(start + MAX_INCREMENT_TICKS * n, self.hi_ticks),
+        )
+
     def normalize(self, q: FloatArray) -> FloatArray:
         """Take unlimited joints to the turn nearest the start, others to [-pi, pi)."""
         s = self.start_rad
@@ -454,8 +463,7 @@ def _pair_grid(p: _Problem, fam: _Family, pair: tuple[int, int], n: int) -> IntA
     step between neighbouring samples mark blocks of the ``pair`` lattice; those blocks and their
     neighbours are enumerated completely, so the feasible region is covered whatever its shape.
     """
-    box_lo = np.maximum(p.start_ticks[:TIP_JOINTS] - MAX_INCREMENT_TICKS * n, p.lo_ticks)
-    box_hi = np.minimum(p.start_ticks[:TIP_JOINTS] + MAX_INCREMENT_TICKS * n, p.hi_ticks)
+    box_lo, box_hi = p.box(n)
     idx = list(pair)
     limit = MAX_INCREMENT_TICKS * n * TICK_RAD
     step = fam.step_ticks(limit)
@@ -481,9 +489,7 @@ def _lattice_candidates(
 
     Returns every state found within ``tol`` of the target plus the ``polish`` best ones.
     """
-    start = p.start_ticks[:TIP_JOINTS]
-    box_lo = np.maximum(start - MAX_INCREMENT_TICKS * n, p.lo_ticks)
-    box_hi = np.minimum(start + MAX_INCREMENT_TICKS * n, p.hi_ticks)
+    box_lo, box_hi = p.box(n)
     kept: list[IntArray] = []
     kept_err: list[FloatArray] = []
 
@@ -601,9 +607,7 @@ def _with_ball_candidates(
     n-command box; the :data:`BALL_KEPT` best are kept."""
     near = fingertip(p.geometry, _nearest_in_box(p, q_within, n)) - p.target
     gap = float(np.linalg.norm(near))
-    start = p.start_ticks[:TIP_JOINTS]
-    box_lo = np.maximum(start - MAX_INCREMENT_TICKS * n, p.lo_ticks)
-    box_hi = np.minimum(start + MAX_INCREMENT_TICKS * n, p.hi_ticks)
+    box_lo, box_hi = p.box(n)
     kept, kept_err = [cands], [errs]
     for share in BALL_SHARES:
         if not gap > 1e-9 or share * gap > opts.tolerance_mm:
