@@ -403,6 +403,49 @@ def test_a_scara_traces_a_circle_with_its_tool_pointing_down():
     assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3
 
 
+def test_a_scaras_trace_bound_agrees_with_its_two_link_closed_form():
+    """Three joints move a SCARA's tool point, so each point of a curve has isolated solutions
+    (two elbows) and no other member near them: the bound sampled them in one tool direction
+    with no neighbouring direction to measure a sampling error against, took the error as
+    unknown and proved 0 commands. Now the members are exact. The bound over an arc of the
+    circle must not exceed, and must come within the tolerance's allowance of, the least
+    largest-joint path through the two-link closed form (both elbows, either end first)."""
+    from armpath.geometry.curves import ParametricCurve
+    from armpath.model.dh import dh_arm
+    from armpath.planning.bounds import trace_bound
+    from armpath.planning.trace.family import curve_family
+
+    rows = scara_rows()
+    home = np.array([0.0, np.radians(30.0), 0.0, 0.0])
+    arm = dh_arm(rows, name="scara", home=home)
+    world = scene_from_dict({"name": "alone"}).world
+    circle = ParametricCurve("circle", "350 + 60*cos(t)", "100 + 60*sin(t)", "250", 0.0, 2 * np.pi)
+    span = (20.0, 120.0)
+    bound = trace_bound(curve_family(arm, world, circle), home, [span], 0.1, rounds=1)
+
+    a, alpha, d = [row.a for row in rows], [row.alpha for row in rows], [row.d for row in rows]
+    points = circle.at_arc_length(np.linspace(*span, 2001))
+    r2 = points[:, 0] ** 2 + points[:, 1] ** 2
+    step = np.array([np.radians(2.0), np.radians(2.0), 2.0])  # a command: 2 deg, 2 deg, 2 mm
+    least = np.inf
+    for elbow in (1.0, -1.0):
+        q2 = elbow * np.arccos((r2 - 300.0**2 - 250.0**2) / (2 * 300.0 * 250.0))
+        q1 = np.arctan2(points[:, 1], points[:, 0]) - np.arctan2(
+            250.0 * np.sin(q2), 300.0 + 250.0 * np.cos(q2)
+        )
+        q = np.column_stack([q1, q2, 400.0 - 50.0 - points[:, 2]])  # the quill slides down
+        for k in (0, 1000, 2000):  # the closed form is the textbook D-H product's inverse
+            x = np.append(q[k], 0.0)
+            tip = idh.dh_pose(a, alpha, d, x, prismatic=np.array([False, False, True, False]))
+            assert np.allclose(tip[:3, 3], points[k], atol=1e-9)
+        along = np.abs(np.diff(q, axis=0) / step).max(axis=1).sum()
+        for end in (q[0], q[-1]):
+            least = min(least, np.abs((end - home[:3]) / step).max() + along)
+    assert bound.proven and bound.value <= least + 1e-9
+    assert bound.value >= least - 1.0  # 0.1 mm moves the joints 0.05 commands at most here
+    assert bound.commands == 60 and 49.0 < bound.parts["approach"] <= 50.0
+
+
 def test_an_untraced_arc_of_a_scara_says_how_far_a_tick_moves_its_tool():
     """With 0.1 mm a SCARA leaves arcs of a circle untraced: three joints move its tool point
     and none is left to take up the error. The reason says how far a tick moves the tool

@@ -47,6 +47,9 @@ _DETECT_DIRECTIONS = fibonacci_directions(600)
 _DETECT_SPACING = float(np.sqrt(4.0 * np.pi / _DETECT_DIRECTIONS.shape[0]))
 #: Sampling error standing for "no neighbour has a member" (commands).
 _MISSING = 1e6
+#: Smallest singular value, relative to the largest, of the tip joints' Jacobian of the tool
+#: point at which a member of a family of three tip joints or fewer is taken as isolated.
+_ISOLATED_RANK = 1e-9
 
 
 @dataclass(frozen=True)
@@ -130,8 +133,10 @@ class _Samples:
     """A layer's samples before the clearance filter: every direction tried ``dirs (D, 3)``
     (virtual: in the chart with the blow-ups ``caps``, :mod:`.chart`) and, per member, its
     configuration, direction index, command units, the arm's points, the tolerance's joint
-    change (commands) and its slack (model units; 0 where it is not negative, the only values
-    the filter needs)."""
+    change (commands), its slack (model units; 0 where it is not negative, the only values
+    the filter needs) and whether it is isolated: the tip joints' Jacobian of the tool point
+    has full column rank there (three tip joints or fewer, as a SCARA's), so the members
+    near it are itself alone and it has no sampling error."""
 
     dirs: FloatArray
     q: FloatArray
@@ -140,6 +145,7 @@ class _Samples:
     points: FloatArray
     tol_err: FloatArray
     slack: FloatArray
+    isolated: BoolArray
     caps: tuple[BlowUp, ...] = ()
 
     @staticmethod
@@ -153,6 +159,7 @@ class _Samples:
             points=landmark_positions(arm, none),
             tol_err=np.zeros((0, n_tip)),
             slack=np.zeros(0),
+            isolated=np.zeros(0, dtype=bool),
             caps=caps,
         )
 
@@ -476,12 +483,16 @@ class FamilySampler:
         index = pick[index] + acc.dirs.shape[0]
         tol_err = np.zeros((q.shape[0], acc.u.shape[1]))
         slack = np.zeros(q.shape[0])
+        isolated = np.zeros(q.shape[0], dtype=bool)
         if q.shape[0]:
             J = position_jacobian(self.fam.arm, q)[:, :, self.tip]
             with np.errstate(all="ignore"):
                 pinv = np.linalg.pinv(J, rcond=1e-9)
             tol_err = self.tol * np.abs(pinv).sum(axis=-1) / self.step
             tol_err = np.where(np.isfinite(tol_err), tol_err, _MISSING)
+            if J.shape[-1] <= 3:
+                sv = np.linalg.svd(J, compute_uv=False)
+                isolated = sv[:, -1] > _ISOLATED_RANK * np.maximum(sv[:, 0], 1e-300)
             # only a negative slack matters (see _filtered): the broad phase skips the pairs
             # that cannot be below zero, and every sample at or above it reads 0
             slack = self.fam.world.slack(self.fam.arm, q, ceiling=0.0)
@@ -493,6 +504,7 @@ class FamilySampler:
             points=np.concatenate([acc.points, landmark_positions(self.fam.arm, q)]),
             tol_err=np.vstack([acc.tol_err, tol_err]),
             slack=np.concatenate([acc.slack, slack]),
+            isolated=np.concatenate([acc.isolated, isolated]),
             caps=acc.caps,
         )
 
@@ -520,6 +532,9 @@ class FamilySampler:
             u, acc.points[order], index, dir_ptr, nb_ptr, nb, self.period, _MISSING,
             BRANCH_GAP, self.turns > 1,
         )  # fmt: skip
+        # an isolated member (see _Samples) is the only one near it, wherever the others lie
+        isolated = acc.isolated[order]
+        err[isolated], moved[isolated] = 0.0, 0.0
         alone = err[:, 0] >= _MISSING
         if np.any(alone) and not np.all(alone):
             # no neighbouring direction has a member (a sliver of the family inside the joint
