@@ -156,6 +156,8 @@ def test_reach_json_on_stdout_from_another_start():
 
 
 def test_run_writes_every_task_and_a_summary(seed_run):
+    from armpath.report import arc_ends
+
     out, stdout = seed_run
     names = {p.name for p in out.iterdir()}
     for stem in ("reach", "spotweld"):
@@ -175,7 +177,8 @@ def test_run_writes_every_task_and_a_summary(seed_run):
     # every arc not covered, with its reason, in the summary and on stdout
     trace = json.loads((out / "trace.json").read_text())
     for arc in trace["unreachable"] + trace["not_traced"]:
-        span = f"{arc['start_mm']:.2f}..{arc['end_mm']:.2f}"
+        start, end = arc_ends(arc, trace)  # within the length of a closed curve
+        span = f"{start:.2f}..{end:.2f}"
         assert span in summary and arc["reason"] in summary and span in stdout
     # the blind-zone summary: the central blind zone and both workpiece faces
     assert {"blind_maps.png", "face_blindness.png", "blindzones.csv"} <= names

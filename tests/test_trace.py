@@ -654,3 +654,42 @@ def test_a_pass_into_the_tight_end_of_an_arc_finishes_along_a_chain_traced_out_o
     tips = independent.points(path.reshape(-1, 6) / 10.0)[:, -1]
     assert it.distance_to_crack(tips).max() <= 0.1
     assert independent.Workpiece("normal").distance(tips).min() >= -1e-6
+
+
+def test_an_untraced_stretch_over_a_closed_curves_start_is_one_arc():
+    """On a closed curve reachable all round, the stretch after the last pass and the one
+    before the first are one gap running on past the start (a SCARA's circle listed 375.17..
+    376.99 and 0.00..2.50 mm, each with its own reason); the report counts its ends within
+    the curve's length. On an open stretch the two stay apart, each to its end."""
+    from armpath.planning.trace.plan import TracePass, _gaps_between_passes
+    from armpath.planning.trace.reachability import CurveArc
+    from armpath.report import arc_ends
+
+    def passes(*spans: tuple[float, float]) -> list[TracePass]:
+        return [TracePass(0, 1, a, b, 0.0, 0.0) for a, b in spans]
+
+    def ends(gaps: list) -> list[tuple[float, float]]:
+        return [(round(a.start_mm, 6), round(a.end_mm, 6)) for a, _ in gaps]
+
+    two = passes((2.5, 40.0), (50.0, 97.0))
+    assert ends(_gaps_between_passes([CurveArc(0.0, 100.0)], two, [], 100.0)) == [
+        (40.0, 50.0),
+        (97.0, 102.5),
+    ]
+    assert ends(_gaps_between_passes([CurveArc(0.0, 100.0)], two, [])) == [
+        (0.0, 2.5),
+        (40.0, 50.0),
+        (97.0, 100.0),
+    ]
+    # a loop begun at 30 mm: the gap from its end at 125 round to 132 is 25..32 mm
+    one = passes((32.0, 125.0))
+    assert ends(_gaps_between_passes([CurveArc(30.0, 130.0)], one, [], 100.0)) == [(25.0, 32.0)]
+    # ends that meet within the reported threshold leave no gap
+    assert _gaps_between_passes([CurveArc(0.0, 100.0)], passes((0.01, 99.99)), [], 100.0) == []
+    doc = {"curve": {"closed": True, "length_mm": 100.0}}
+    assert arc_ends({"start_mm": 97.0, "end_mm": 102.5}, doc) == (97.0, 2.5)
+    assert arc_ends({"start_mm": 130.0, "end_mm": 230.0}, doc) == (30.0, 30.0)
+    assert arc_ends({"start_mm": 97.0, "end_mm": 102.5}, {"curve": {"closed": False}}) == (
+        97.0,
+        102.5,
+    )

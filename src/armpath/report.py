@@ -5,6 +5,7 @@ request)."""
 from __future__ import annotations
 
 import html
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -36,6 +37,21 @@ def _mm(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
+def arc_ends(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float]:
+    """Where an arc of a trace result's curve begins and ends (mm) as a reader counts them:
+    on a closed curve each within its length, so an arc that runs on past the curve's start
+    ends before it begins (``375.17..2.50`` on a 376.99 mm circle)."""
+    start, end = float(arc["start_mm"]), float(arc["end_mm"])
+    curve = doc.get("curve", {})
+    length = float(curve.get("length_mm", 0.0))
+    if curve.get("closed") and length > 0.0:
+        turns = math.floor(start / length)
+        start, end = start - turns * length, end - turns * length
+        if end > length + 1e-9:
+            end -= length
+    return start, end
+
+
 def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:
     """The arcs a trace result did not cover, ``(what, where, reason)``: its unreachable arcs,
     then those reachable but not traced, each kind's arcs of one reason together
@@ -45,7 +61,8 @@ def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:
     for what, key in (("unreachable", "unreachable"), ("not traced", "not_traced")):
         spans: dict[str, list[str]] = {}
         for arc in doc.get(key, []):
-            where = f"{arc['start_mm']:.2f}..{arc['end_mm']:.2f}"
+            start, end = arc_ends(arc, doc)
+            where = f"{start:.2f}..{end:.2f}"
             spans.setdefault(arc["reason"], []).append(where)
         out += [(what, ", ".join(where), reason) for reason, where in spans.items()]
     return out

@@ -223,7 +223,9 @@ def plan_trace(
     states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
     prof_s, prof_d = run.profile_s, run.profile_d
     not_traced += _with_lattice_hint(
-        reach.family, opts.tolerance_mm, _gaps_between_passes(arcs, passes, not_traced)
+        reach.family,
+        opts.tolerance_mm,
+        _gaps_between_passes(arcs, passes, not_traced, curve.length if curve.closed else None),
     )
     if not passes:
         if not_traced:
@@ -380,7 +382,7 @@ def _with_lattice_hint(
     out = []
     for arc, why in gaps:
         check_time("describing the untraced arcs")
-        v = fam.best(0.5 * (arc.start_mm + arc.end_mm))
+        v = fam.best(float(fam.curve.wrap(0.5 * (arc.start_mm + arc.end_mm))))
         if v.out_of_reach:
             out.append((arc, why))
             continue
@@ -403,10 +405,17 @@ def _gaps_between_passes(
     arcs: list[CurveArc],
     passes: list[TracePass],
     already: list[tuple[CurveArc, str]],
+    closed_mm: float | None = None,
 ) -> list[tuple[CurveArc, str]]:
     """The stretches of the reachable ``arcs`` that no pass covers and that are not reported
     yet (``already``): where a pass found no command continuing it within the tolerance and
-    the next pass began farther on."""
+    the next pass began farther on. ``closed_mm``: the length of a closed curve, on which an
+    arc all round it has no ends: the stretch after its last pass and the one before its
+    first are one, running on past where the arc begins."""
+    between = (
+        "the tracer found no lattice command continuing the pass within the tolerance here; "
+        "the next pass starts past it"
+    )
     out: list[tuple[CurveArc, str]] = []
     for arc in arcs:
         spans = sorted(
@@ -420,18 +429,22 @@ def _gaps_between_passes(
             if a.end_mm > arc.start_mm and a.start_mm < arc.end_mm
         )
         spans.sort()
+        if not spans:
+            continue
+        all_round = closed_mm is not None and arc.length_mm >= closed_mm - 1e-9
         reached = arc.start_mm
-        for a, b in spans:
-            if a - reached > GAP_REPORTED_MM:
-                out.append(
-                    (
-                        CurveArc(reached, a),
-                        "the tracer found no lattice command continuing the pass within the "
-                        "tolerance here; the next pass starts past it",
-                    )
-                )
+        for k, (a, b) in enumerate(spans):
+            if a - reached > GAP_REPORTED_MM and not (all_round and k == 0):
+                out.append((CurveArc(reached, a), between))
             reached = max(reached, b)
-        if arc.end_mm - reached > GAP_REPORTED_MM and spans:
+        if all_round:
+            assert closed_mm is not None
+            # from the last pass's end round to the first's start
+            head = max(spans[0][0] - arc.start_mm, 0.0)
+            if arc.end_mm - reached + head > GAP_REPORTED_MM:
+                shift = closed_mm if reached >= closed_mm else 0.0
+                out.append((CurveArc(reached - shift, spans[0][0] + closed_mm - shift), between))
+        elif arc.end_mm - reached > GAP_REPORTED_MM:
             out.append(
                 (
                     CurveArc(reached, arc.end_mm),
