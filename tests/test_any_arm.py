@@ -564,3 +564,29 @@ def test_a_prismatic_joints_values_are_shown_in_mm(tmp_path):
     assert doc["final_deg"][2] == pytest.approx(400.0 - 50.0 - 200.0, abs=0.5)
     fk = run_in_process(["fk", "--model", str(scara), "10", "20", "100", "30"], tmp_path)
     assert "q = (10.0, 20.0, 100.0, 30.0) (deg, deg, mm, deg)" in " ".join(fk.stdout.split())
+
+
+def test_a_fine_lattices_reach_estimate_stays_at_or_below_its_plan():
+    """With 1e-4 deg ticks (a command 0.002 deg) the least joint change over the UR5's family,
+    refined by SLSQP with the change counted in commands (about 50,000 against joints of
+    order 1), stopped at 106.28 deg: 'lower bound 53139' beside a plan of 52866. The change is
+    now scaled as the joints are. It must agree with the same target's change on the default
+    lattice (105.711 deg, where 2 deg commands leave SLSQP well scaled), the plan must need
+    no fewer commands than it, and the plan's end replays on the textbook D-H product."""
+    from armpath.scenes.arm import scene_arm
+
+    def reach(tick_deg: float | None):
+        arm_doc = {"model": "ur5"} | ({} if tick_deg is None else {"tick": tick_deg})
+        scene = scene_from_dict({"name": "free", "arm": arm_doc})
+        arm = scene_arm(scene)
+        start = arm.lattice.to_ticks(arm.home)
+        return arm, plan_reach(arm, scene.world, start, [400.0, 100.0, 300.0], ReachOptions())
+
+    _, coarse = reach(None)
+    fine_arm, fine = reach(1e-4)
+    change_deg = [r.lower_bound.max_joint_change_deg for r in (coarse, fine)]
+    assert abs(change_deg[1] - change_deg[0]) <= 0.01
+    assert fine.lower_bound.commands <= fine.n_commands
+    assert fine.n_commands <= np.ceil(change_deg[0] / 0.002) + 3
+    q_end = fine_arm.lattice.to_joint(fine.sequence.final_ticks)
+    assert np.linalg.norm(pose("ur5", q_end)[:3, 3] - [400.0, 100.0, 300.0]) <= 0.05
