@@ -590,3 +590,32 @@ def test_a_fine_lattices_reach_estimate_stays_at_or_below_its_plan():
     assert fine.n_commands <= np.ceil(change_deg[0] / 0.002) + 3
     q_end = fine_arm.lattice.to_joint(fine.sequence.final_ticks)
     assert np.linalg.norm(pose("ur5", q_end)[:3, 3] - [400.0, 100.0, 300.0]) <= 0.05
+
+
+def test_a_sixteen_joint_arm_reaches_and_a_reach_too_long_is_refused():
+    """The lattice box around a family member is sized by a product of radii that overflowed
+    the integers for sixteen joints (25^16), and its offsets were a numpy meshgrid, which
+    takes 32 dimensions at most: a sixteen-joint arm's reach raised 'broadcast dimensions too
+    large', a 33-joint arm's a RuntimeError. Now each reaches, replayed on the textbook D-H
+    product. A reach whose least joint change needs more than a million commands (the UR5 with
+    1e-5 deg ticks, one a command) is refused before any lattice state is built (it filled
+    24 GB), naming the limit."""
+    from armpath.budget import MAX_COMMANDS
+    from armpath.errors import InvalidInputError
+    from armpath.model.dh import DHRow, dh_arm
+    from armpath.scenes.arm import scene_arm
+
+    for n in (16, 33):
+        rows = [DHRow(30.0, np.pi / 2 * (k % 2), 5.0) for k in range(n)]
+        arm = dh_arm(rows, name=f"n{n}")
+        world = scene_from_dict({"name": "free"}).world
+        target = np.array([100.0, 100.0, 100.0])
+        r = plan_reach(arm, world, arm.lattice.to_ticks(arm.home), target, ReachOptions())
+        q = arm.lattice.to_joint(r.sequence.final_ticks)
+        a, alpha, d = [x.a for x in rows], [x.alpha for x in rows], [x.d for x in rows]
+        assert np.linalg.norm(idh.dh_pose(a, alpha, d, q)[:3, 3] - target) <= 0.05
+        assert r.lower_bound.commands <= r.n_commands
+    scene = scene_from_dict({"name": "fine", "arm": {"model": "ur5", "tick": 1e-5, "max_ticks": 1}})
+    arm = scene_arm(scene)
+    with pytest.raises(InvalidInputError, match=f"the limit is {MAX_COMMANDS:,}"):
+        plan_reach(arm, scene.world, arm.lattice.to_ticks(arm.home), [400.0, 100.0, 300.0])

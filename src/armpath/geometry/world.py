@@ -907,7 +907,7 @@ class CollisionWorld:
             q = np.repeat(q0[None, :], count, axis=0)
             q[:, k] = angles
             pts = landmark_positions(arm, q)
-            slack = (self._self_clearances(arm, pts)[:, pairs] - required[pairs]).min(axis=1)
+            slack = (self._self_clearances(arm, pts, pairs) - required[pairs]).min(axis=1)
             axis_origin = forward_frames(arm, q0)[k + 1, :3, 3]
             used = np.unique(ends[pairs])
             rate = float(np.linalg.norm(pts[0, used] - axis_origin, axis=-1).max())
@@ -924,14 +924,20 @@ class CollisionWorld:
                 bands[k] = tuple(ranges)
         return bands
 
-    def _self_clearances(self, arm: SerialArm, pts: FloatArray) -> FloatArray:
-        """Distances between the self-collision link pairs less their radii, ``(..., S)``."""
+    def _self_clearances(
+        self, arm: SerialArm, pts: FloatArray, which: IntArray | None = None
+    ) -> FloatArray:
+        """Distances between the self-collision link pairs (those of index ``which``, all by
+        default) less their radii, ``(..., S)``."""
         bound = self._bound(arm)
+        pick = np.arange(len(bound.self_radii)) if which is None else np.asarray(which)
         flat = np.ascontiguousarray(pts.reshape(-1, *pts.shape[-2:]), dtype=np.float64)
         d = indexed_segment_distances(
-            flat, bound.self_a0, bound.self_a1, bound.self_b0, bound.self_b1
-        ).reshape(*pts.shape[:-2], len(bound.self_radii))
-        return np.asarray(d - bound.self_radii)
+            flat,
+            *(np.ascontiguousarray(e[pick]) for e in (bound.self_a0, bound.self_a1)),
+            *(np.ascontiguousarray(e[pick]) for e in (bound.self_b0, bound.self_b1)),
+        ).reshape(*pts.shape[:-2], pick.size)
+        return np.asarray(d - bound.self_radii[pick])
 
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""

@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from armpath.budget import check_time
+from armpath.budget import MAX_COMMANDS, check_size, check_time
 from armpath.commands import CommandSequence
 from armpath.errors import CollisionError, InvalidInputError, PlanningError, UnreachableError
 from armpath.geometry.world import CollisionWorld, into_windows
@@ -324,6 +324,12 @@ def generic_bound(
     )
 
 
+def _count(radius: IntArray) -> float:
+    """How many offsets a box of these radii holds (in floating point: 25^16 overflows the
+    integers of a sixteen-joint arm's box)."""
+    return float(np.prod(2.0 * radius + 1.0))
+
+
 def _box(arm: SerialArm, q: FloatArray, tol: float) -> tuple[IntArray, FloatArray]:
     """Integer offsets around ``q``'s nearest lattice state (a box, wider for joints that move
     the tool less, at most :data:`BOX_BUDGET` of them) and the tool's linearised move (model
@@ -343,16 +349,31 @@ def _box(arm: SerialArm, q: FloatArray, tol: float) -> tuple[IntArray, FloatArra
         lo_s, hi_s = 0.0, 1e4
         for _ in range(40):
             mid = 0.5 * (lo_s + hi_s)
-            if float(np.prod(2 * box(mid) + 1)) <= BOX_BUDGET:
+            if _count(box(mid)) <= BOX_BUDGET:
                 lo_s = mid
             else:
                 hi_s = mid
         radius = box(lo_s)
-        if float(np.prod(2 * radius + 1)) > BOX_BUDGET:  # even radius 1 everywhere is too many
-            radius = np.where(active, 1, 0).astype(np.int64)
-    axes = [np.arange(-k, k + 1) for k in radius]
-    offsets = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, arm.n_joints)
-    return offsets, J
+        if _count(radius) > BOX_BUDGET:
+            # even one tick either way on every joint is too many (3^11 > the budget): one
+            # tick on the joints that move the tool most, as many as the budget holds
+            fit = int(np.log(BOX_BUDGET) / np.log(3.0))
+            radius = np.zeros(arm.n_joints, dtype=np.int64)
+            radius[np.argsort(-np.where(active, lever, -1.0), kind="stable")[:fit]] = 1
+            radius[~active] = 0
+    return _offsets(radius), J
+
+
+def _offsets(radius: IntArray) -> IntArray:
+    """Every integer offset within ``radius`` of 0 on each coordinate, ``(K, len(radius))``
+    (the coordinates of radius 0 held at 0, so an arm of any number of joints fits numpy's
+    32 dimensions as long as the box does)."""
+    moving = np.flatnonzero(radius)
+    out = np.zeros((int(_count(radius)), radius.size), dtype=np.int64)
+    if moving.size:
+        grid = np.indices(tuple(2 * radius[moving] + 1)).reshape(moving.size, -1).T
+        out[:, moving] = grid - radius[moving]
+    return out
 
 
 def lattice_candidates(
@@ -416,10 +437,15 @@ def _solved_fine(
     coarse = np.setdiff1d(active, fine)
     if coarse.size == 0 or np.linalg.matrix_rank(J[:, fine], tol=1e-9 * lever.max()) < 2:
         return np.zeros((0, n), dtype=np.int64)
-    # the coarse box: equal radii within the budget
+    # the coarse box: equal radii within the budget; where even one tick either way on every
+    # coarse joint is too many (more than nine of them), on those that move the tool most
     radius = max(int(np.floor((COARSE_BUDGET ** (1.0 / coarse.size) - 1) / 2)), 1)
-    axes = [np.arange(-radius, radius + 1)] * coarse.size
-    d_c = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, coarse.size)
+    radii = np.full(coarse.size, radius, dtype=np.int64)
+    if _count(radii) > COARSE_BUDGET:
+        radii[
+            np.argsort(-lever[coarse], kind="stable")[int(np.log(COARSE_BUDGET) / np.log(3)) :]
+        ] = 0
+    d_c = _offsets(radii)
     exact = grid.to_ticks_float(q)
     base = np.round(exact).astype(np.int64)
     r = base - exact
@@ -501,6 +527,12 @@ def reach_any_arm(
             f"(the nearest point found is {dist:.4f} {unit} away)"
         )
     bound = generic_bound(arm, target, start, tolerance, samples)
+    check_size(
+        bound.commands,
+        MAX_COMMANDS,
+        "commands of the reach (the least found over the family)",
+        "the target, the start, or the arm's lattice (its ticks and largest steps)",
+    )
     metric = command_metric(arm, samples, s_q)
     pool = np.vstack([bound.configuration[None], samples])
     pool_metric = np.r_[bound.change_commands, metric]
