@@ -660,3 +660,51 @@ def test_a_planar_arm_traces_a_line_it_cannot_point_its_tool_along(tmp_path):
     assert off.max() <= 0.5
     ends = np.array([along[0], along[-1]])
     assert sorted(ends) == pytest.approx([0.0, 1.0], abs=0.5 / 22.36)  # end to end
+
+
+def test_degenerate_arms_and_absurd_values_are_planned_or_refused_in_one_line(tmp_path):
+    """From a newcomer's review: an arm whose links all have zero length raised a reshape
+    error in the link analysis (reach, plan and view); a start of 1e300 deg on an unlimited
+    joint overflowed the tick cast and was shown as -9.2e17 deg; --link-radius 1e300 printed a
+    300-digit clearance; --retime on waypoints that do not move printed a whole result and
+    then failed. Each is now planned (the zero arm's tool stays at its base: 0 commands to
+    the origin, the origin 1 mm off is out of reach) or refused in one line naming the limit,
+    with nothing written."""
+    zero = tmp_path / "zero.json"
+    zero.write_text(
+        json.dumps(
+            {
+                "name": "zero",
+                "convention": "standard",
+                "units": {"length": "mm", "angle": "deg"},
+                "links": [{"a": 0, "alpha": 0, "d": 0}, {"a": 0, "alpha": 0, "d": 0}],
+            }
+        )
+    )
+    r = run("reach", "0", "0", "0", "--model", str(zero), "--json")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["n_commands"] == 0 and doc["error_mm"] == 0.0
+    r = run("reach", "1", "0", "0", "--model", str(zero))
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: target (1, 0, 0) mm is out of reach within the joint limits: the nearest "
+        "reachable point (0.00, 0.00, 0.00) mm is 1.000 mm away"
+    ]
+    r = run("reach", "300", "100", "200", "--from", "0", "-90", "0", "0", "-90", "1e300")
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: --from: joint 6 is 1e+300 deg, beyond the 4.5e+14 deg (4.5e+15 ticks) a joint "
+        "value may hold"
+    ]
+    r = run("reach", "300", "100", "200", "--link-radius", "1e300")
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: --link-radius must be >= 0 and <= 1e+09 mm, got 1e+300"
+    ]
+    still = tmp_path / "still.csv"
+    still.write_text("0,0\n0,0\n")
+    out = tmp_path / "out"
+    r = run("trajectory", "--waypoints", str(still), "--retime", "--out", str(out))
+    assert r.returncode == 1 and r.stdout == "" and not out.exists()
+    assert error_lines(r.stderr) == [
+        f"error: --retime: the waypoints of {still} do not move (every row the same); there is "
+        "no path to retime"
+    ]

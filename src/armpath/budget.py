@@ -33,6 +33,8 @@ MAX_GRID_CELLS = 50_000_000
 MAX_PERIODS = 5_000_000
 #: Largest number of commands of one command sequence a planner or converter produces.
 MAX_COMMANDS = 1_000_000
+#: Largest joint value, in ticks, that rounds to an exact integer state.
+MAX_STATE_TICKS = 2.0**52
 #: Largest number of candidate designs of a design sweep.
 MAX_DESIGNS = 10_000
 #: Most searches (or failed attempts) of one motion plan (``plan_motion``).

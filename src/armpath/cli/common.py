@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from rich.console import Console
 from rich.markup import escape
 
-from armpath.budget import MAX_PERIOD_S, check_time_limit_value, time_limit
+from armpath.budget import MAX_COORDINATE_MM, MAX_PERIOD_S, check_time_limit_value, time_limit
 from armpath.errors import ArmpathError, InvalidInputError
 from armpath.geometry import WallThickness
 from armpath.model.catalog import BUILTIN_MODELS
@@ -324,9 +324,17 @@ def _scene(scene_file: Path | None, wall: WallThickness | str | None) -> Scene:
 def _arm(link_radius_mm: float) -> SerialArm:
     from armpath.model.seed_arm import SeedArmGeometry, seed_arm
 
-    if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
-        raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
-    return seed_arm(SeedArmGeometry(link_radius_mm=link_radius_mm))
+    return seed_arm(SeedArmGeometry(link_radius_mm=_checked_link_radius(link_radius_mm)))
+
+
+def _checked_link_radius(link_radius_mm: float) -> float:
+    """``--link-radius`` (mm), or :class:`InvalidInputError` unless finite, >= 0 and within the
+    largest size accepted."""
+    if not (math.isfinite(link_radius_mm) and 0 <= link_radius_mm <= MAX_COORDINATE_MM):
+        raise InvalidInputError(
+            f"--link-radius must be >= 0 and <= {MAX_COORDINATE_MM:g} mm, got {link_radius_mm:g}"
+        )
+    return link_radius_mm
 
 
 TipLinkOption = Annotated[
@@ -357,9 +365,7 @@ def task_setup(
         scene = scene.with_wall_thickness(wall)
     arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
     if link_radius_mm is not None:
-        if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
-            raise InvalidInputError(f"--link-radius must be >= 0 mm, got {link_radius_mm}")
-        arm = arm.with_link_radii(link_radius_mm / arm.mm_per_unit)
+        arm = arm.with_link_radii(_checked_link_radius(link_radius_mm) / arm.mm_per_unit)
     return arm, scene
 
 

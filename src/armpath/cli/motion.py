@@ -418,6 +418,11 @@ def trajectory(
             duration = float(times[-1] - times[0])
         _check_periods(duration, period, options)
         _check_net_motion(W_deg, "--waypoints")
+        if retime and not np.any(W_deg != W_deg[0]):
+            raise InvalidInputError(
+                f"--retime: the waypoints of {waypoints} do not move (every row the same); "
+                "there is no path to retime"
+            )
         limits = MotionLimits(
             velocity=np.radians(max_velocity),
             acceleration=np.radians(max_acceleration),

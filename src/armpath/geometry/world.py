@@ -271,7 +271,7 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     links = arm.links
     n = len(links)
     degenerate = np.array([point_of[lk.start] == point_of[lk.end] for lk in links], dtype=bool)
-    seg = np.array([gap[:, lk.start, lk.end] for lk in links]).reshape(n, -1)
+    seg = np.array([gap[:, lk.start, lk.end] for lk in links]).reshape(n, gap.shape[0])
     length = np.where(np.ptp(seg, axis=1) <= tol, seg.mean(axis=1), np.inf)
     chain = _chains(links, point_of, length, n_lm)
     rigid = _rigid_pairs(links, gap, tol)

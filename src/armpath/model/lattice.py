@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import MAX_STATE_TICKS
 from armpath.errors import CommandError, InvalidInputError
 
 FloatArray = NDArray[np.float64]
@@ -189,6 +190,16 @@ class Lattice:
         t = self.to_ticks_float(q)
         if not np.all(np.isfinite(t)):
             raise InvalidInputError(f"{what} must be finite numbers")
+        flat = np.asarray(t).reshape(-1, self.n_joints)
+        far = np.argwhere(np.abs(flat) > MAX_STATE_TICKS)
+        if far.size:
+            i = int(far[0, 1])
+            value = float(flat[far[0, 0], i])
+            raise InvalidInputError(
+                f"{what}: joint {i + 1} is {value * self.tick_display[i]:g} {self.units[i]}, "
+                f"beyond the {MAX_STATE_TICKS * self.tick_display[i]:.3g} {self.units[i]} "
+                f"({MAX_STATE_TICKS:.3g} ticks) a joint value may hold"
+            )
         r = np.round(t)
         off = np.abs(t - r) > ON_LATTICE_TICKS
         if np.any(off):

@@ -26,7 +26,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import MAX_COMMANDS, MAX_PERIODS, check_size, check_time
+from armpath.budget import MAX_COMMANDS, MAX_PERIODS, MAX_STATE_TICKS, check_size, check_time
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
@@ -36,8 +36,6 @@ from armpath.trajectory.minsnap import PiecewisePolynomial
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-#: Largest joint value, in ticks, that rounds to an exact integer state.
-MAX_STATE_TICKS = 2.0**52
 #: Periods of the commanded motion evaluated at once by ``tip_deviation``.
 MOTION_CHUNK = 16_384
 
