@@ -236,3 +236,27 @@ def test_more_than_24_orders_are_compared_from_the_bounds_order_and_the_best_ran
     assert chosen[0] == (3, 5, 0, 2, 4, 1)
     assert chosen[1:] == [o for o in ranking if o != chosen[0]][:23]
     assert _guided_orders(orders, ranking, None) == ranking[:24]
+
+
+def test_a_tour_too_long_to_bound_says_why_it_has_no_bound(tmp_path, monkeypatch):
+    """A tour of more welds than the bound over every goal configuration takes (24; 2 here,
+    to keep the test short) was shown 'lower bound: not computed', --bound being on, with no
+    reason. The table now names the limit and the tour's count; the plan still reaches each
+    weld (its visits within the tolerance of the listed points)."""
+    from cli_in_process import run_in_process
+
+    import armpath.planning.tour as tour
+
+    monkeypatch.setattr(tour, "MAX_BOUND_TARGETS", 2)
+    welds = [[300.0, -50.0, 150.0], [310.0, -50.0, 150.0], [320.0, -50.0, 150.0]]
+    scene = tmp_path / "welds.toml"
+    scene.write_text(f'name = "welds"\n[tasks.spotweld]\npoints_mm = {welds}\n')
+    r = run_in_process(["spotweld", "--scene", str(scene), "--order", "given"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    text = " ".join(r.stdout.replace("│", " ").split())  # the table's cells, unwrapped
+    assert "not computed: the bound over every goal configuration takes at most 2 welds" in text
+    assert "this tour has 3" in text
+    r = run_in_process(["spotweld", "--scene", str(scene), "--order", "given", "--json"], tmp_path)
+    doc = json.loads(r.stdout)
+    assert doc["lower_bound"] is None and len(doc["visits"]) == 3
+    assert all(v["error_mm"] <= 0.05 for v in doc["visits"])
