@@ -243,9 +243,8 @@ def test_a_tour_too_long_to_bound_says_why_it_has_no_bound(tmp_path, monkeypatch
     to keep the test short) was shown 'lower bound: not computed', --bound being on, with no
     reason. The table now names the limit and the tour's count; the plan still reaches each
     weld (its visits within the tolerance of the listed points)."""
-    from cli_in_process import run_in_process
-
     import armpath.planning.tour as tour
+    from cli_in_process import run_in_process
 
     monkeypatch.setattr(tour, "MAX_BOUND_TARGETS", 2)
     welds = [[300.0, -50.0, 150.0], [310.0, -50.0, 150.0], [320.0, -50.0, 150.0]]
