@@ -94,3 +94,26 @@ def test_bad_scene_files_name_the_problem(tmp_path, text, message):
 def test_missing_scene_file(tmp_path):
     with pytest.raises(SceneError, match="cannot read scene file"):
         load_scene(tmp_path / "nope.toml")
+
+
+@pytest.mark.parametrize(
+    ("arm", "message"),
+    [
+        ("tick = -0.1", r"ticks must be finite and > 0 \(deg, mm for a prismatic joint\), got "
+         r"\[-0.1, -0.1, -0.1, -0.1, -0.1, -0.1\]$"),
+        ("max_ticks = 1000000000000", r"max ticks per command must be in \[1, 1,000,000\]"),
+        ("steps_per_tick = 100000000000000", r"steps per tick must be whole numbers in "
+         r"\[1, 1,000,000\]"),
+    ],
+)  # fmt: skip
+def test_an_arms_lattice_is_refused_in_the_units_and_limits_written(tmp_path, arm, message):
+    """A negative tick was shown in rad ([-0.0017453292519943296, ...]); a count of ticks or
+    steps above 1e9 was refused as 'beyond the largest coordinate or size a scene may use
+    (1e+09 mm)', where the lattice's own limit is a million."""
+    from armpath.errors import InvalidInputError
+    from armpath.scenes.arm import scene_arm
+
+    f = tmp_path / "arm.toml"
+    f.write_text(f'name = "a"\n[arm]\nmodel = "ur5"\n{arm}\n')
+    with pytest.raises(InvalidInputError, match=message):
+        scene_arm(load_scene(f))

@@ -100,8 +100,15 @@ class Lattice:
         prismatic = np.broadcast_to(np.asarray(self.prismatic, dtype=bool), (n,)).copy()
         if n == 0:
             raise InvalidInputError("a command lattice needs at least one joint")
+        if self.length_unit not in MM_PER_LENGTH_UNIT:
+            raise InvalidInputError(f"length_unit must be 'mm' or 'm', got {self.length_unit!r}")
+        scale = MM_PER_LENGTH_UNIT[self.length_unit]
+        shown = np.where(prismatic, tick * scale, np.degrees(tick))  # as the user writes them
         if not np.all(np.isfinite(tick) & (tick > 0)):
-            raise InvalidInputError(f"ticks must be finite and > 0, got {tick.tolist()}")
+            raise InvalidInputError(
+                f"ticks must be finite and > 0 (deg, mm for a prismatic joint), got "
+                f"{[float(f'{v:.10g}') for v in shown]}"
+            )
         if max_ticks.dtype.kind not in "iu" and not np.all(max_ticks == np.round(max_ticks)):
             raise InvalidInputError(f"max ticks must be whole numbers, got {max_ticks.tolist()}")
         max_ticks = max_ticks.astype(np.int64)
@@ -110,10 +117,6 @@ class Lattice:
                 f"max ticks per command must be in [1, {MAX_TICKS_PER_COMMAND:,}], got "
                 f"{max_ticks.tolist()}"
             )
-        if self.length_unit not in MM_PER_LENGTH_UNIT:
-            raise InvalidInputError(f"length_unit must be 'mm' or 'm', got {self.length_unit!r}")
-        scale = MM_PER_LENGTH_UNIT[self.length_unit]
-        shown = np.where(prismatic, tick * scale, np.degrees(tick))
         lo = np.where(prismatic, MIN_TICK_MM, MIN_TICK_DEG)
         hi = np.where(prismatic, MAX_TICK_MM, MAX_TICK_DEG)
         if np.any((shown < lo * (1 - 1e-9)) | (shown > hi * (1 + 1e-9))):

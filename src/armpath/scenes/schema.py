@@ -4,10 +4,17 @@ and within :data:`~armpath.budget.MAX_COORDINATE_MM`."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from armpath.budget import MAX_COORDINATE_MM
 from armpath.geometry import WallThickness
@@ -30,9 +37,15 @@ def _check_number(x: float) -> None:
 
 
 class _FiniteVec(_Strict):
+    #: fields that count (ticks, steps) rather than measure: checked with their own limits
+    #: where they are used, not as coordinates or sizes
+    _counts: ClassVar[frozenset[str]] = frozenset()
+
     @field_validator("*", mode="after")
     @classmethod
-    def _finite(cls, v: object) -> object:
+    def _finite(cls, v: object, info: ValidationInfo) -> object:
+        if info.field_name in cls._counts:
+            return v
         values = v if isinstance(v, tuple | list) else (v,)
         for x in values:
             for y in x if isinstance(x, tuple | list) else (x,):
@@ -238,6 +251,8 @@ class ArmSpec(_FiniteVec):
     joint; ``max_ticks``: the most ticks a command, one number or one per joint;
     ``steps_per_tick``: a stepper controller's motor steps per tick; ``command_period_s``: the
     time one command takes)."""
+
+    _counts: ClassVar[frozenset[str]] = frozenset({"max_ticks", "steps_per_tick"})
 
     model: str = "seed"
     tip_link: str | None = None
