@@ -564,6 +564,15 @@ def test_a_prismatic_joints_values_are_shown_in_mm(tmp_path):
     assert doc["final_deg"][2] == pytest.approx(400.0 - 50.0 - 200.0, abs=0.5)
     fk = run_in_process(["fk", "--model", str(scara), "10", "20", "100", "30"], tmp_path)
     assert "q = (10.0, 20.0, 100.0, 30.0) (deg, deg, mm, deg)" in " ".join(fk.stdout.split())
+    # the reach table's largest joint change: one number a unit, naming its joint; joint 4,
+    # which does not move the tool point, held where it starts (it turned 145 deg at random)
+    args = ["reach", "300", "200", "200", "--model", str(scara), "--tolerance", "0.5"]
+    reach = run_in_process([*args, "--json"], tmp_path)
+    moved = np.abs(np.subtract(json.loads(reach.stdout)["final_deg"], [0.0, 0.0, 0.0, 0.0]))
+    assert moved[3] == 0.0
+    k = int(np.argmax(moved[:2]))
+    text = " ".join(run_in_process(args, tmp_path).stdout.replace("│", " ").split())
+    assert f"largest joint change {moved[k]:.2f} deg (q{k + 1}), {moved[2]:.2f} mm (q3)" in text
 
 
 def test_a_fine_lattices_reach_estimate_stays_at_or_below_its_plan():

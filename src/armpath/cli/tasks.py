@@ -136,12 +136,19 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     table.add_row("final joints", f"{_fmt(grid.display(seq.final_ticks), 1)} {units}")
     table.add_row("tool point", f"{_fmt(result.tip_mm, 4)} mm")
     span = np.abs(seq.final_ticks - seq.start_ticks) * grid.tick_display
-    table.add_row(
-        "largest joint change",
-        f"{span.max(initial=0.0):.1f} {units} (least possible {lb.max_joint_change_deg:.3f})"
-        if grid.is_default
-        else f"{span.max(initial=0.0):.2f} {units}",
-    )
+    if grid.is_default:
+        change = (
+            f"{span.max(initial=0.0):.1f} {units} (least possible {lb.max_joint_change_deg:.3f})"
+        )
+    else:  # the largest of each unit's joints (a SCARA's turns in deg, its quill in mm)
+        change = ", ".join(
+            f"{span[k]:.2f} {unit} (q{k + 1})"
+            for unit in dict.fromkeys(grid.units)
+            for k in [
+                max((i for i, u in enumerate(grid.units) if u == unit), key=lambda i: span[i])
+            ]
+        )
+    table.add_row("largest joint change", change)
     table.add_row("min clearance", _clearance_text(clearance_dict(result.clearance), proven=True))
     wall = scene.wall_thickness
     table.add_row("scene", _scene_text(scene.name, wall.value if wall else None))

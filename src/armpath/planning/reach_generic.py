@@ -39,6 +39,7 @@ from armpath.kinematics import (
     jacobian_from_frames,
     pose_frames,
     tick_jacobian,
+    tool_point_joints,
     tool_pose,
 )
 from armpath.model.lattice import unique_states
@@ -510,7 +511,17 @@ def reach_any_arm(
     s_q = grid.to_joint(start)
     rng = np.random.default_rng(seed)
     fam = GenericFamily(arm, target)
-    samples = fam.samples(near=s_q, rng=rng)
+    # a joint that does not move the tool point (a SCARA's last, the UR5's sixth without a
+    # tool) only turns the tool about it: with no orientation rule held where it starts in
+    # every member tried, not turned at random
+    idle = ~tool_point_joints(arm) if target.orientation is None else np.zeros(arm.n_joints, bool)
+
+    def held(q: FloatArray) -> FloatArray:
+        q = np.array(q, dtype=np.float64)
+        q[..., idle] = s_q[idle]
+        return q
+
+    samples = held(fam.samples(near=s_q, rng=rng))
     unit = arm.length_unit
     where = ", ".join(f"{v:g}" for v in target.position)
     if samples.shape[0] == 0:
@@ -546,7 +557,7 @@ def reach_any_arm(
         if members.shape[0] < MEMBERS_PER_COUNT // 2:
             # few samples fit in n commands (n is tight): draw more members of the family
             # inside the n-command box around the bound's configuration
-            extra = _members_in_box(fam, bound.configuration, s_q, n, rng)
+            extra = held(_members_in_box(fam, bound.configuration, s_q, n, rng))
             if extra.shape[0]:
                 em = command_metric(arm, extra, s_q)
                 pool = np.vstack([pool, extra])
