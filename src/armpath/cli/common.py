@@ -150,6 +150,8 @@ def _cli_errors(time_limit_s: float | None = None) -> Iterator[None]:
         check_time_limit_value(time_limit_s, "--time-limit")
         with time_limit(time_limit_s):
             yield
+    except UnknownOptionError as exc:  # a usage error, as the parser's own
+        _error_line(str(exc), status=2)
     except ArmpathError as exc:
         _error_line(str(exc))
     except OSError as exc:  # the machine, not the input: a full disk, a closed pipe, ...
@@ -162,10 +164,15 @@ def _cli_errors(time_limit_s: float | None = None) -> Iterator[None]:
         )
 
 
-def _error_line(message: str) -> NoReturn:
-    """Print ``error: message`` as one line on stderr and exit with status 1."""
+def _error_line(message: str, status: int = 1) -> NoReturn:
+    """Print ``error: message`` as one line on stderr and exit with ``status``."""
     err_console.print(f"error: {' '.join(message.split())}", markup=False, soft_wrap=True)
-    raise typer.Exit(1)
+    raise typer.Exit(status)
+
+
+class UnknownOptionError(InvalidInputError):
+    """An option the command does not have, taken in with its numbers (the commands that let
+    negative numbers through as arguments): a usage error, exit status 2 as the parser's."""
 
 
 #: Seconds before progress lines start when stderr is not a terminal: quick commands (and
@@ -292,7 +299,7 @@ def is_number(text: str) -> bool:
 def _numbers(values: list[str], count: int, what: str) -> list[float]:
     unknown = [v for v in values if re.fullmatch(r"--?[A-Za-z].*", v) and not is_number(v)]
     if unknown:  # an option the command does not have, taken in with the numbers
-        raise InvalidInputError(f"no such option: {unknown[0]} (see the command's --help)")
+        raise UnknownOptionError(f"no such option: {unknown[0]} (see the command's --help)")
     if len(values) != count:
         raise InvalidInputError(f"{what}: expected {count} numbers, got {len(values)}: {values}")
     out = []
