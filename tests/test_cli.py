@@ -59,6 +59,9 @@ def test_fk_human_output_and_below_table_warning():
         (["fk", "1", "2", "3", "-x", "4", "5"], "no such option: -x"),
         (["reach", "20", "-inf", "120"], "'-inf' is not a finite number"),
         (["reach", "20", "-200", "120", "--tolerance", "0"], "tolerance"),
+        # a tolerance without its rule was ignored
+        (["reach", "20", "-200", "120", "--axis-tolerance", "5"], "give --tool-axis too"),
+        (["reach", "20", "-200", "120", "--angle-tolerance", "5"], "give --pose too"),
     ],
 )
 def test_bad_input_gives_one_line_and_nonzero_exit(args, message, tmp_path):

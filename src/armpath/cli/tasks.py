@@ -235,13 +235,23 @@ def _direction(text: str, option: str) -> np.ndarray:
     return np.array(_numbers(text.replace(",", " ").split(), 3, f"{option} X Y Z"))
 
 
-def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | None:
+def _given_alone(option: str, value: float | None, needs: str, given: object) -> None:
+    """Refuse ``option`` given without the option ``needs`` it qualifies (it would be
+    ignored)."""
+    if value is not None and given is None:
+        raise InvalidInputError(f"{option} qualifies {needs}; give {needs} too")
+
+
+def axis_rule(tool_axis: str | None, axis_tolerance_deg: float | None) -> AxisRule | None:
     """The tool-axis rule of ``--tool-axis normal|X Y Z --axis-tolerance DEG`` on a surface."""
     from armpath.ik.target import unit_vector
     from armpath.planning.trace import AxisRule
 
+    _given_alone("--axis-tolerance", axis_tolerance_deg, "--tool-axis", tool_axis)
     if tool_axis is None:
         return None
+    if axis_tolerance_deg is None:
+        axis_tolerance_deg = DEFAULT_AXIS_TOLERANCE_DEG
     if not (np.isfinite(axis_tolerance_deg) and 0.0 < axis_tolerance_deg <= 180.0):
         raise InvalidInputError(
             f"--axis-tolerance must be in (0, 180] deg, got {axis_tolerance_deg}"
@@ -253,8 +263,18 @@ def axis_rule(tool_axis: str | None, axis_tolerance_deg: float) -> AxisRule | No
     return AxisRule(tol_rad, normal=False, direction=direction)
 
 
+#: Largest angle of the tool axis from --tool-axis, and of the tool frame from --pose (deg),
+#: when the option is not given.
+DEFAULT_AXIS_TOLERANCE_DEG = 15.0
+DEFAULT_ANGLE_TOLERANCE_DEG = 5.0
 AxisToleranceOption = Annotated[
-    float, typer.Option("--axis-tolerance", help="Largest angle of the tool axis, deg.")
+    float | None,
+    typer.Option(
+        "--axis-tolerance",
+        help=f"Largest angle of the tool axis from --tool-axis, deg (default "
+        f"{DEFAULT_AXIS_TOLERANCE_DEG:g}).",
+        show_default=False,
+    ),
 ]
 PoseOption = Annotated[
     tuple[float, float, float] | None,
@@ -267,7 +287,12 @@ PoseOption = Annotated[
     ),
 ]
 AngleToleranceOption = Annotated[
-    float, typer.Option("--angle-tolerance", help="Largest rotation angle from --pose, deg.")
+    float | None,
+    typer.Option(
+        "--angle-tolerance",
+        help=f"Largest rotation angle from --pose, deg (default {DEFAULT_ANGLE_TOLERANCE_DEG:g}).",
+        show_default=False,
+    ),
 ]
 TaskModelOption = Annotated[
     str | None,
@@ -282,17 +307,24 @@ TaskModelOption = Annotated[
 
 def orientation_rule(
     tool_axis: str | None,
-    axis_tolerance_deg: float,
+    axis_tolerance_deg: float | None,
     pose_deg: tuple[float, float, float] | None,
-    angle_tolerance_deg: float,
+    angle_tolerance_deg: float | None,
     approach: tuple[float, float, float] = (0.0, 0.0, 1.0),
 ) -> Orientation | None:
     """The orientation rule of ``--tool-axis``/``--axis-tolerance`` (for the tool's
-    ``approach`` axis) or ``--pose``/``--angle-tolerance`` (at most one of them)."""
+    ``approach`` axis) or ``--pose``/``--angle-tolerance`` (at most one of them; a tolerance
+    without its rule is refused, not ignored)."""
     from armpath.ik.target import AxisCone, PoseOrientation
 
     if tool_axis is not None and pose_deg is not None:
         raise InvalidInputError("give --tool-axis or --pose, not both")
+    _given_alone("--axis-tolerance", axis_tolerance_deg, "--tool-axis", tool_axis)
+    _given_alone("--angle-tolerance", angle_tolerance_deg, "--pose", pose_deg)
+    if axis_tolerance_deg is None:
+        axis_tolerance_deg = DEFAULT_AXIS_TOLERANCE_DEG
+    if angle_tolerance_deg is None:
+        angle_tolerance_deg = DEFAULT_ANGLE_TOLERANCE_DEG
     for what, v in (
         ("--axis-tolerance", axis_tolerance_deg),
         ("--angle-tolerance", angle_tolerance_deg),
@@ -330,9 +362,9 @@ def reach(
     model: TaskModelOption = None,
     tip_link: TipLinkOption = None,
     tool_axis: ToolAxisOption = None,
-    axis_tolerance: AxisToleranceOption = 15.0,
+    axis_tolerance: AxisToleranceOption = None,
     pose: PoseOption = None,
-    angle_tolerance: AngleToleranceOption = 5.0,
+    angle_tolerance: AngleToleranceOption = None,
     json_out: JsonOption = False,
     out: Annotated[
         Path | None,
@@ -492,9 +524,9 @@ def plan(
         typer.Option("--to-xyz", metavar="X Y Z", help="Goal point of the tool, mm."),
     ] = None,
     tool_axis: ToolAxisOption = None,
-    axis_tolerance: AxisToleranceOption = 15.0,
+    axis_tolerance: AxisToleranceOption = None,
     pose: PoseOption = None,
-    angle_tolerance: AngleToleranceOption = 5.0,
+    angle_tolerance: AngleToleranceOption = None,
     objective: ObjectiveOption = Objective.COMMANDS,
     weights: Annotated[
         str | None,
@@ -697,7 +729,7 @@ def spotweld(
     model: TaskModelOption = None,
     tip_link: TipLinkOption = None,
     tool_axis: WeldToolAxisOption = None,
-    axis_tolerance: AxisToleranceOption = 15.0,
+    axis_tolerance: AxisToleranceOption = None,
     link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     bound: Annotated[
@@ -893,7 +925,7 @@ def trace(
     model: TaskModelOption = None,
     tip_link: TipLinkOption = None,
     tool_axis: TraceToolAxisOption = None,
-    axis_tolerance: AxisToleranceOption = 15.0,
+    axis_tolerance: AxisToleranceOption = None,
     link_radius: LinkRadiusOption = None,
     seed: SeedOption = 0,
     bound: Annotated[

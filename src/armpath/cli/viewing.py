@@ -77,7 +77,9 @@ def view(
             "its scene) to this file and exit (opens offline in any browser).",
         ),
     ] = None,
-    fps: Annotated[float, typer.Option(help="Commands per second in the HTML replay.")] = 15.0,
+    fps: Annotated[
+        float, typer.Option(help="Commands per second in the HTML replay (at most 1000).")
+    ] = 15.0,
 ) -> None:
     """Interactive 3D viewer in the browser: the arm in its scene, a slider per joint (0.1
     steps within the limits), live fingertip position and clearance (collisions in red), a

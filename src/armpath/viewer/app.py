@@ -528,6 +528,10 @@ def free_port(host: str = "127.0.0.1") -> int:
         return int(s.getsockname()[1])
 
 
+#: Most commands per second a recorded replay plays (a page cannot show them faster).
+MAX_REPLAY_FPS = 1000.0
+
+
 def replay_html(
     result: Result,
     *,
@@ -539,8 +543,10 @@ def replay_html(
     ``result``: the scene, the curve and targets, the fingertip's path and the arm moving through
     the commands at ``fps`` commands per second (at most ``max_frames`` states, evenly spread).
     What the page leaves out (:attr:`ArmViewer.notes`) is appended to ``notes``."""
-    if not fps > 0:
-        raise InvalidInputError(f"fps must be > 0, got {fps}")
+    if not 0 < fps <= MAX_REPLAY_FPS:
+        raise InvalidInputError(
+            f"fps must be > 0 and <= {MAX_REPLAY_FPS:g} commands per second, got {fps:g}"
+        )
     viewer = ArmViewer(result.arm, result.scene, port=free_port(), result=result)
     if notes is not None:
         notes.extend(viewer.notes)
