@@ -708,3 +708,21 @@ def test_degenerate_arms_and_absurd_values_are_planned_or_refused_in_one_line(tm
         f"error: --retime: the waypoints of {still} do not move (every row the same); there is "
         "no path to retime"
     ]
+
+
+def test_a_run_without_bounds_has_no_footnote_on_a_bound(tmp_path):
+    """`armpath run --no-bound` marked the missing bound '-*' and explained '*' as a bound over
+    every configuration, which was never computed. The cell is '-' and the note says no bound
+    was computed; the goal states' bound (**) is still given, and it is at most the plan."""
+    (tmp_path / "two.toml").write_text(
+        'name = "two"\n[[obstacles]]\ntype = "half_space"\nname = "floor"\n'
+        "point = [0, 0, 0]\nnormal = [0, 0, 1]\n"
+        "[tasks.spotweld]\npoints_mm = [[300, 100, 250], [300, -100, 250]]\n"
+    )
+    r = run("run", "--scene", "two.toml", "--no-bound", "--out", "o", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "o" / "spotweld.json").read_text())
+    assert doc["lower_bound"] is None
+    assert doc["goal_states_bound_commands"] <= doc["n_commands"]
+    assert f"-, {doc['goal_states_bound_commands']}**" in r.stdout and "-*" not in r.stdout
+    assert "- no lower bound computed." in r.stdout and "* Tasks 2 and 3" not in r.stdout

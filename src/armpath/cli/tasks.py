@@ -1197,6 +1197,12 @@ def _print_run(
     )
     for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
         table.add_column(escape(col), justify="left" if col == "task" else "right")
+    # the footnote * describes the trace's and the tour's bound, where one was computed
+    bounded = [d for d in (trace_doc, tour_doc) if d is not None and d.get("lower_bound")]
+
+    def starred(doc: dict[str, Any]) -> str:
+        return f"{bound_cell(doc)}*" if doc.get("lower_bound") else bound_cell(doc)
+
     if reach_doc is not None:
         table.add_row(
             f"1 reach {_fmt(reach_doc['target'], 0)} mm",
@@ -1210,7 +1216,7 @@ def _print_run(
             f"2 trace the {trace_doc['curve']['definition'].get('name', 'curve')}, "
             f"{passes_text(len(trace_doc['passes']))}",
             str(trace_doc["n_commands"]),
-            f"{bound_cell(trace_doc)}*",
+            starred(trace_doc),
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
             f"{_mm(trace_doc['min_clearance_mm'])} (tip); "
             f"{_mm(trace_doc['clearance']['min_body_clearance_mm'])} (links)",
@@ -1219,7 +1225,7 @@ def _print_run(
         table.add_row(
             f"3 spot welds, order {'-'.join(str(i) for i in tour_doc['order'])}",
             str(tour_doc["n_commands"]),
-            f"{bound_cell(tour_doc)}*, {tour_doc['goal_states_bound_commands']}**",
+            f"{starred(tour_doc)}, {tour_doc['goal_states_bound_commands']}**",
             f"{tour_doc['error_mm']:.4f} (largest)",
             f"{_mm(tour_doc['min_clearance_mm'])} (tip); "
             f"{_mm(tour_doc['clearance']['min_body_clearance_mm'])} (links)",
@@ -1241,23 +1247,23 @@ def _print_run(
         )
     if trace_doc is not None or tour_doc is not None:
         tour_bound = None if tour_doc is None else tour_doc.get("lower_bound")
-        out_console.print(
-            "* Tasks 2 and 3: bound over every configuration of the arm that may be clear at the "
-            "curve's points or the welds, obstacles ignored between them (trace: one pass per "
-            "traced arc; tour: every order)"
-            + (
-                f"; Task 3 over every order and {bound_scope(tour_bound)}."
-                if tour_bound is not None and over_lattice(tour_bound)
-                else "."
+        notes = []
+        if bounded:
+            notes.append(
+                "* Tasks 2 and 3: bound over every configuration of the arm that may be clear at "
+                "the curve's points or the welds, obstacles ignored between them (trace: one pass "
+                "per traced arc; tour: every order)"
+                + (
+                    f"; Task 3 over every order and {bound_scope(tour_bound)}."
+                    if tour_bound is not None and over_lattice(tour_bound)
+                    else "."
+                )
             )
-            + (
-                " ** Task 3: direct motions between the chosen goal states of this order."
-                if tour_doc is not None
-                else ""
-            ),
-            markup=False,
-            soft_wrap=True,
-        )
+        if len(bounded) < sum(d is not None for d in (trace_doc, tour_doc)):
+            notes.append("- no lower bound computed.")
+        if tour_doc is not None:
+            notes.append("** Task 3: direct motions between the chosen goal states of this order.")
+        out_console.print(" ".join(notes), markup=False, soft_wrap=True)
     if blind is not None:
         for line in blind.summary():
             out_console.print(f"Blind zones: {line}", markup=False, soft_wrap=True)
