@@ -695,6 +695,17 @@ def test_degenerate_arms_and_absurd_values_are_planned_or_refused_in_one_line(tm
         "error: --from: joint 6 is 1e+300 deg, beyond the 4.5e+14 deg (4.5e+15 ticks) a joint "
         "value may hold"
     ]
+    # a result file whose start is that far names the key once
+    r = run("reach", "300", "100", "200", "--json")
+    doc = json.loads(r.stdout)
+    doc["initial_deg"][5] = 1e300
+    far = tmp_path / "far.json"
+    far.write_text(json.dumps(doc))
+    r = run("export", str(far))
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        f"error: result file {far}: initial_deg: joint 6 is 1e+300 deg, beyond the 4.5e+14 deg "
+        "(4.5e+15 ticks) a joint value may hold"
+    ]
     r = run("reach", "300", "100", "200", "--link-radius", "1e300")
     assert r.returncode == 1 and error_lines(r.stderr) == [
         "error: --link-radius must be >= 0 and <= 1e+09 mm, got 1e+300"

@@ -294,8 +294,10 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
         )
     arm = _arm(doc.get("model", {}))
     try:
-        start = arm.lattice.from_display(doc["initial_deg"], f"result file {p}: initial_deg")
+        start = arm.lattice.from_display(doc["initial_deg"], "initial_deg")
         commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, arm.n_joints)
+    except InvalidInputError as exc:  # names the key and what is wrong with it
+        raise InvalidInputError(f"result file {p}: {exc}") from None
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None
     if commands.shape[0] > MAX_COMMANDS:
