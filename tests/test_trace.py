@@ -111,6 +111,39 @@ def test_a_free_circle_is_traced_in_one_closed_pass(circle_trace):
     assert r.clearance.certified_ok
 
 
+def test_a_wider_tolerance_never_takes_more_commands_round_a_circle():
+    """A pass once round a closed curve ran on past where it began by twice the tolerance: 20
+    mm with 10 mm, one command more than 3 mm took (53 against 52). It runs on 0.2 mm at most
+    now. With 0.5, 3 and 10 mm the commands do not grow with the tolerance, and each plan,
+    replayed by the independent FK, stays within its tolerance once round the circle (its
+    last command may still pass the goal: a command moves the tool some mm here)."""
+    scene = scene_from_dict(TABLE_ONLY)
+    circle = ParametricCurve(
+        "circle",
+        f"{CENTER[0]} + {RADIUS}*cos(t)",
+        f"{CENTER[1]} + {RADIUS}*sin(t)",
+        f"{CENTER[2]}",
+        0.0,
+        2 * np.pi,
+    )
+    start = deg_to_ticks([0, -90, 0, 0, -90, 0])
+    counts = []
+    for tol in (0.5, 3.0, 10.0):
+        r = plan_trace(seed_arm(), scene.world, start, circle, TraceOptions(tol, bound=False))
+        (p,) = r.passes
+        states = r.sequence.states()
+        t = np.linspace(0.0, 1.0, 41)
+        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 6) / 10.0
+        tips = independent.points(q)[:, -1, :]
+        assert circle_distance(tips).max() <= tol
+        ang = np.unwrap(np.arctan2(tips[:, 1] - CENTER[1], tips[:, 0] - CENTER[0]))
+        assert abs(ang[-1] - ang[0]) >= 2 * np.pi - 1e-3
+        assert r.covered_mm >= r.curve.length - 1e-3
+        counts.append(r.n_commands)
+    assert counts[0] >= counts[1] >= counts[2]
+
+
 @pytest.mark.slow
 def test_a_pass_whose_certificate_exceeds_the_tolerance_is_traced_again_nearer(monkeypatch):
     """With the tracer's checked instants allowed the whole tolerance, the continuous path of
