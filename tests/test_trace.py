@@ -38,8 +38,9 @@ def circle_distance(p):
     return np.hypot(rho - RADIUS, d[..., 2])
 
 
-def trace_the_circle(bound: bool = True):
-    """The seed arm traces the horizontal circle above the table (tolerance 0.1 mm)."""
+def trace_the_circle(bound: bool = True, tolerance_mm: float = 0.1):
+    """The seed arm traces the horizontal circle above the table (tolerance 0.1 mm unless
+    given)."""
     scene = scene_from_dict(TABLE_ONLY)
     circle = ParametricCurve(
         "circle",
@@ -50,7 +51,7 @@ def trace_the_circle(bound: bool = True):
         2 * np.pi,
     )
     start = deg_to_ticks([0, -90, 0, 0, -90, 0])
-    options = TraceOptions(tolerance_mm=0.1, bound=bound)
+    options = TraceOptions(tolerance_mm=tolerance_mm, bound=bound)
     return plan_trace(seed_arm(), scene.world, start, circle, options)
 
 
@@ -117,19 +118,9 @@ def test_a_wider_tolerance_never_takes_more_commands_round_a_circle():
     now. With 0.5, 3 and 10 mm the commands do not grow with the tolerance, and each plan,
     replayed by the independent FK, stays within its tolerance once round the circle (its
     last command may still pass the goal: a command moves the tool some mm here)."""
-    scene = scene_from_dict(TABLE_ONLY)
-    circle = ParametricCurve(
-        "circle",
-        f"{CENTER[0]} + {RADIUS}*cos(t)",
-        f"{CENTER[1]} + {RADIUS}*sin(t)",
-        f"{CENTER[2]}",
-        0.0,
-        2 * np.pi,
-    )
-    start = deg_to_ticks([0, -90, 0, 0, -90, 0])
     counts = []
     for tol in (0.5, 3.0, 10.0):
-        r = plan_trace(seed_arm(), scene.world, start, circle, TraceOptions(tol, bound=False))
+        r = trace_the_circle(bound=False, tolerance_mm=tol)
         (p,) = r.passes
         states = r.sequence.states()
         t = np.linspace(0.0, 1.0, 41)
