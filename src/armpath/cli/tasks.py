@@ -141,13 +141,11 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
             f"{span.max(initial=0.0):.1f} {units} (least possible {lb.max_joint_change_deg:.3f})"
         )
     else:  # the largest of each unit's joints (a SCARA's turns in deg, its quill in mm)
-        change = ", ".join(
-            f"{span[k]:.2f} {unit} (q{k + 1})"
-            for unit in dict.fromkeys(grid.units)
-            for k in [
-                max((i for i, u in enumerate(grid.units) if u == unit), key=lambda i: span[i])
-            ]
-        )
+        parts = []
+        for unit in dict.fromkeys(grid.units):
+            k = max((i for i, u in enumerate(grid.units) if u == unit), key=lambda i: span[i])
+            parts.append(f"{span[k]:.2f} {unit} (q{k + 1})")
+        change = ", ".join(parts)
     table.add_row("largest joint change", change)
     table.add_row("min clearance", _clearance_text(clearance_dict(result.clearance), proven=True))
     wall = scene.wall_thickness
