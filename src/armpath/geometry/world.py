@@ -930,14 +930,14 @@ class CollisionWorld:
         """Distances between the self-collision link pairs (those of index ``which``, all by
         default) less their radii, ``(..., S)``."""
         bound = self._bound(arm)
-        pick = np.arange(len(bound.self_radii)) if which is None else np.asarray(which)
+        ends: tuple[IntArray, ...] = (bound.self_a0, bound.self_a1, bound.self_b0, bound.self_b1)
+        radii = bound.self_radii
+        if which is not None:  # a few pairs (the joint bands): only theirs measured
+            ends = tuple(np.ascontiguousarray(e[which]) for e in ends)
+            radii = radii[which]
         flat = np.ascontiguousarray(pts.reshape(-1, *pts.shape[-2:]), dtype=np.float64)
-        d = indexed_segment_distances(
-            flat,
-            *(np.ascontiguousarray(e[pick]) for e in (bound.self_a0, bound.self_a1)),
-            *(np.ascontiguousarray(e[pick]) for e in (bound.self_b0, bound.self_b1)),
-        ).reshape(*pts.shape[:-2], pick.size)
-        return np.asarray(d - bound.self_radii[pick])
+        d = indexed_segment_distances(flat, *ends).reshape(*pts.shape[:-2], len(radii))
+        return np.asarray(d - radii)
 
     def clearances(self, arm: SerialArm, q: ArrayLike) -> FloatArray:
         """Clearance of every part to every obstacle, ``(..., P, O)``; capsule radii subtracted."""

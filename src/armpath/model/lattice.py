@@ -193,11 +193,10 @@ class Lattice:
         t = self.to_ticks_float(q)
         if not np.all(np.isfinite(t)):
             raise InvalidInputError(f"{what} must be finite numbers")
-        flat = np.asarray(t).reshape(-1, self.n_joints)
-        far = np.argwhere(np.abs(flat) > MAX_STATE_TICKS)
-        if far.size:
-            i = int(far[0, 1])
-            value = float(flat[far[0, 0], i])
+        if np.abs(t).max(initial=0.0) > MAX_STATE_TICKS:
+            flat = np.asarray(t).reshape(-1, self.n_joints)
+            row, i = (int(x) for x in np.argwhere(np.abs(flat) > MAX_STATE_TICKS)[0])
+            value = float(flat[row, i])
             raise InvalidInputError(
                 f"{what}: joint {i + 1} is {value * self.tick_display[i]:g} {self.units[i]}, "
                 f"beyond the {MAX_STATE_TICKS * self.tick_display[i]:.3g} {self.units[i]} "

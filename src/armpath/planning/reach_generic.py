@@ -355,14 +355,19 @@ def _box(arm: SerialArm, q: FloatArray, tol: float) -> tuple[IntArray, FloatArra
             else:
                 hi_s = mid
         radius = box(lo_s)
-        if _count(radius) > BOX_BUDGET:
-            # even one tick either way on every joint is too many (3^11 > the budget): one
-            # tick on the joints that move the tool most, as many as the budget holds
-            fit = int(np.log(BOX_BUDGET) / np.log(3.0))
-            radius = np.zeros(arm.n_joints, dtype=np.int64)
-            radius[np.argsort(-np.where(active, lever, -1.0), kind="stable")[:fit]] = 1
-            radius[~active] = 0
+        if _count(radius) > BOX_BUDGET:  # even one tick either way on every joint (3^11)
+            radius = _one_tick_on_most(np.where(active, lever, 0.0), BOX_BUDGET)
     return _offsets(radius), J
+
+
+def _one_tick_on_most(lever: FloatArray, budget: int) -> IntArray:
+    """Radii of one tick on the joints of largest ``lever`` (how far a tick moves the tool;
+    0: the joint gets none), as many as a box of ``budget`` offsets holds (3^k)."""
+    fit = int(np.log(budget) / np.log(3.0))
+    radius = np.zeros(lever.size, dtype=np.int64)
+    radius[np.argsort(-lever, kind="stable")[:fit]] = 1
+    radius[lever <= 0.0] = 0
+    return radius
 
 
 def _offsets(radius: IntArray) -> IntArray:
@@ -443,9 +448,7 @@ def _solved_fine(
     radius = max(int(np.floor((COARSE_BUDGET ** (1.0 / coarse.size) - 1) / 2)), 1)
     radii = np.full(coarse.size, radius, dtype=np.int64)
     if _count(radii) > COARSE_BUDGET:
-        radii[
-            np.argsort(-lever[coarse], kind="stable")[int(np.log(COARSE_BUDGET) / np.log(3)) :]
-        ] = 0
+        radii = _one_tick_on_most(lever[coarse], COARSE_BUDGET)
     d_c = _offsets(radii)
     exact = grid.to_ticks_float(q)
     base = np.round(exact).astype(np.int64)
