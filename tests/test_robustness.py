@@ -564,7 +564,7 @@ def test_a_run_whose_task_finds_no_plan_writes_the_others(tmp_path):
     (line,) = error_lines(r.stderr)
     assert r.returncode == 1
     assert line.startswith("error: Task 3: spot welds found no plan: target 2: target (0, 0, 1500)")
-    assert line.endswith("(the other tasks' results are written to o)")
+    assert line.endswith("(the finished tasks' results are written to o)")
     out = tmp_path / "o"
     assert not (out / "spotweld.json").exists()
     doc = json.loads((out / "reach.json").read_text())
@@ -577,6 +577,44 @@ def test_a_run_whose_task_finds_no_plan_writes_the_others(tmp_path):
     (line,) = error_lines(r.stderr)
     assert r.returncode == 1 and "is out of reach" in line and "written" not in line
     assert not (tmp_path / "n").exists()
+
+
+def test_a_run_whose_time_limit_runs_out_writes_the_tasks_it_finished(tmp_path, monkeypatch):
+    """`armpath run` whose time limit runs out in Task 2, while it writes its files: the reach
+    finished before is written (and replays to its target by the independent seed FK), Task 2
+    leaves none of its files, Task 3 is not run, the report says so, and the run ends with the
+    time limit's one error line, exit 1. It wrote nothing at all before. Run in this process
+    with the trace's writing stubbed to run out, so the test does not hang on the clock."""
+    import armpath.cli.tasks as cli_tasks
+    from cli_in_process import run_in_process
+
+    def runs_out(folder, *args, **kwargs):
+        folder.write_text("trace.json", "{")  # half written when the limit runs out
+        raise TimeLimitError("the time limit of 9 s ran out while writing trace.gif")
+
+    monkeypatch.setattr(cli_tasks, "_write_trace", runs_out)
+    (tmp_path / "part.toml").write_text(
+        'name = "part"\n[[obstacles]]\ntype = "half_space"\nname = "floor"\n'
+        "point = [0, 0, 0]\nnormal = [0, 0, 1]\n"
+        "[tasks.reach]\ntarget_mm = [300, 100, 200]\n"
+        '[tasks.trace.curve]\ntype = "polyline"\nname = "line"\n'
+        "points_mm = [[300, 0, 200], [300, 20, 200]]\n"
+        "[tasks.spotweld]\npoints_mm = [[300, 100, 250]]\n"
+    )
+    r = run_in_process(["run", "--scene", "part.toml", "--no-bound", "--out", "o"], tmp_path)
+    (line,) = error_lines(r.stderr)
+    assert r.returncode == 1
+    assert line.startswith("error: Task 2: trace the line: the time limit of 9 s ran out while")
+    assert "Task 3: spot welds: not run: the time limit had run out" in line
+    assert line.endswith("(the finished tasks' results are written to o)")
+    out = tmp_path / "o"
+    assert not (out / "trace.json").exists() and not (out / "spotweld.json").exists()
+    doc = json.loads((out / "reach.json").read_text())
+    tip = independent.points(independent.replay(doc["initial_deg"], doc["commands"])[-1])[-1]
+    assert np.linalg.norm(tip - [300, 100, 200]) <= doc["tolerance_mm"]
+    report = (out / "summary.md").read_text()
+    assert "## Task 2: trace the line: not finished" in report
+    assert "## Task 3: spot welds: not finished" in report and "trace.json" not in report
 
 
 def test_wall_convention_of_a_scene_without_workpiece_is_not_none():

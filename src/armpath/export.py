@@ -10,7 +10,7 @@ import json
 import os
 import shutil
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -568,6 +568,11 @@ class OutputFolder:
     def staged(self) -> list[str]:
         """Names of the files staged so far."""
         return sorted(p.name for p in self._staging.iterdir())
+
+    def unstage(self, names: Iterable[str]) -> None:
+        """Drop the staged files ``names`` (a task cut short leaves none of its files)."""
+        for name in names:
+            self.file(name).unlink(missing_ok=True)
 
     def commit(self) -> list[Path]:
         """Move every staged file into the destination folder; returns their final paths.

@@ -182,11 +182,13 @@ def summary_markdown(
     files: Sequence[str] = (),
     heading: str = "seed tasks",
     failed: Sequence[tuple[str, str]] = (),
+    unfinished: Sequence[tuple[str, str]] = (),
 ) -> str:
     """The report: ``tasks`` are (title, result document) for reach, trace and spot welds;
     ``blind_zone_lines`` the blind-zone summary; ``files`` the names written beside it (figures
     are shown when present); ``heading`` what was run (the seed tasks, or an arm in a scene);
-    ``failed`` (title, why) for each task that found no plan."""
+    ``failed`` (title, why) for each task that found no plan; ``unfinished`` (title, why) for
+    each task the time limit cut short or left unrun."""
     available = set(files)
     glance, notes = _glance(tasks)
     wall = next((doc["wall_thickness"] for _, doc in tasks), None)
@@ -253,6 +255,8 @@ def summary_markdown(
             out += ["", shown]
     for title, why in failed:
         out += ["", f"## {title}: no plan", "", f"- {why}"]
+    for title, why in unfinished:
+        out += ["", f"## {title}: not finished", "", f"- {why}"]
     if blind_zone_lines:
         out += ["", "## Blind zones of the seed arm", ""]
         out += [f"- {line}" for line in blind_zone_lines]

@@ -49,6 +49,7 @@ from armpath.errors import (
     CollisionError,
     InvalidInputError,
     PlanningError,
+    TimeLimitError,
     UnreachableError,
 )
 from armpath.planning.choices import Objective, VisitOrder
@@ -1008,7 +1009,8 @@ def run(
     tool box; 2, trace the crack; 3, spot welds inside the workpiece; then the seed arm's blind
     zones). Writes each task's result (JSON, CSV, XLSX), figures and animations (GIF), and a
     one-page report summary.md. A task that finds no plan is reported there and the others'
-    results are written; the run then ends with its error (exit 1)."""
+    results are written; the run then ends with its error (exit 1). So too where --time-limit
+    runs out: the tasks finished by then are written, the rest reported as not finished."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
     from armpath.export import output_folder, reach_result_dict, tour_result_dict, trace_result_dict
     from armpath.planning.bounds.search import check_max_samples
@@ -1087,8 +1089,12 @@ def run(
             return doc
 
         # a task that finds no plan (out of reach, no clear motion) is reported and the others
-        # run on: their results are written, then the run ends with the failure's error line
+        # run on: their results are written, then the run ends with the failure's error line.
+        # Where the time limit runs out, the tasks finished by then are written, the one under
+        # way leaves none of its files, and those after it are not run.
         failed: list[tuple[str, str]] = []
+        unfinished: list[tuple[str, str]] = []
+        ran_out: TimeLimitError | None = None
         docs: dict[str, dict[str, Any]] = {}
         try:
             with output_folder(out) as folder:
@@ -1099,22 +1105,36 @@ def run(
                 ):
                     if not has[key]:
                         continue
+                    if ran_out is not None:
+                        unfinished.append((titles[key], "not run: the time limit had run out"))
+                        continue
+                    before = set(folder.staged())
                     try:
                         docs[key] = job(folder)
                     except TASK_FAILURES as exc:
                         failed.append((titles[key], str(exc)))
+                    except TimeLimitError as exc:
+                        folder.unstage(set(folder.staged()) - before)
+                        unfinished.append((titles[key], str(exc)))
+                        ran_out = exc
                 reach_doc, trace_doc, tour_doc = (
                     docs.get(key) for key in ("reach", "trace", "spotweld")
                 )
-                if failed and len(failed) == sum(has.values()):
+                if not docs:
                     # no task found a plan: nothing is written (one reason said once)
+                    if ran_out is not None:
+                        raise ran_out
                     reasons = list(dict.fromkeys(why for _, why in failed))
                     raise PlanningError(
                         reasons[0]
                         if len(reasons) == 1
                         else "; ".join(f"{title}: {why}" for title, why in failed)
                     )
-                if blind_job is not None:
+                if blind_job is not None and ran_out is not None:
+                    unfinished.append(
+                        ("Blind zones of the seed arm", "not run: the time limit had run out")
+                    )
+                elif blind_job is not None:
                     with progress("blind zones ...") as say:
                         say("blind zones: arm plane, meridian map and workpiece faces")
                         blind = blind_job.result()
@@ -1135,6 +1155,7 @@ def run(
                     [*folder.staged(), "summary.md"],
                     heading=heading,
                     failed=failed,
+                    unfinished=unfinished,
                 )
                 folder.write_text("summary.md", report)
                 if html:
@@ -1143,11 +1164,13 @@ def run(
             if blind_job is not None:
                 blind_job.cancel()  # (done by then, unless a task failed)
         _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading, seed_job)
-        if failed:
-            raise PlanningError(
-                "; ".join(f"{title} found no plan: {why}" for title, why in failed)
-                + f" (the other tasks' results are written to {folder.path})"
+        if failed or ran_out is not None:
+            problems = [f"{title} found no plan: {why}" for title, why in failed]
+            problems += [f"{title}: {why}" for title, why in unfinished]
+            message = (
+                "; ".join(problems) + f" (the finished tasks' results are written to {folder.path})"
             )
+            raise PlanningError(message) if ran_out is None else TimeLimitError(message)
 
 
 def _background_say() -> Callable[[str], None]:
