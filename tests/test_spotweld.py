@@ -258,4 +258,13 @@ def test_a_tour_too_long_to_bound_says_why_it_has_no_bound(tmp_path, monkeypatch
     r = run_in_process(["spotweld", "--scene", str(scene), "--order", "given", "--json"], tmp_path)
     doc = json.loads(r.stdout)
     assert doc["lower_bound"] is None and len(doc["visits"]) == 3
+    assert doc["no_bound_because"].endswith("takes at most 2 welds, this tour has 3")
     assert all(v["error_mm"] <= 0.05 for v in doc["visits"])
+    # the result says why it has no bound (the table's words come from it), and a bound
+    # computed has no reason beside it
+    args = ["spotweld", "--scene", str(scene), "--order", "given", "--json"]
+    doc = json.loads(run_in_process([*args, "--no-bound"], tmp_path).stdout)
+    assert doc["lower_bound"] is None and doc["no_bound_because"] == "not asked for"
+    monkeypatch.setattr(tour, "MAX_BOUND_TARGETS", 24)
+    doc = json.loads(run_in_process(args, tmp_path).stdout)
+    assert doc["lower_bound_commands"] <= doc["n_commands"] and doc["no_bound_because"] is None

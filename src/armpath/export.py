@@ -211,6 +211,7 @@ def tour_result_dict(
         "metrics": metrics_dict(result.metrics),
         "lower_bound_commands": None if result.lower_bound is None else result.lower_bound.commands,
         "lower_bound": _bound_dict(result.lower_bound, seq.n_commands),
+        "no_bound_because": result.no_bound_because,
         "goal_states_bound_commands": result.order_lower_bounds[result.order],
         "goal_states_bound_method": (
             "for the chosen order: fewest commands of direct motions (obstacles ignored) "

@@ -292,6 +292,7 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
                 True,
             ),
             "lower_bound": _obj("the lower bound, how it was computed and the gap", nullable=True),
+            "no_bound_because": _str("why lower_bound is null (null where it was computed)", True),
             "goal_states_bound_commands": _int(
                 "bound of the chosen order through the candidate goal states (ranks the orders)"
             ),

@@ -647,17 +647,10 @@ def _tour_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
         f"{doc['n_commands']}  (bound for the chosen goal states and order: "
         f"{doc['goal_states_bound_commands']})",
     )
-    from armpath.planning.tour import MAX_BOUND_TARGETS
-
     if bound_skipped:
         missing = "not computed (--no-bound)"
-    elif len(doc["visits"]) > MAX_BOUND_TARGETS:
-        missing = (
-            f"not computed: the bound over every goal configuration takes at most "
-            f"{MAX_BOUND_TARGETS} welds, this tour has {len(doc['visits'])}"
-        )
     else:
-        missing = "not computed: a weld's solution family has no member within the limits"
+        missing = f"not computed: {doc['no_bound_because']}"
     table.add_row("lower bound", _bound_text(doc["lower_bound"], "every order", missing))
     table.add_row("order", " → ".join(str(i) for i in doc["order"]))
     for v in doc["visits"]:

@@ -95,6 +95,8 @@ class TourResult:
     #: computed; and each order's bound of the same kind (empty when not computed per order).
     lower_bound: CommandBound | None = None
     order_family_bounds: dict[tuple[int, ...], int] = field(default_factory=dict)
+    #: Why :attr:`lower_bound` is None (None when it was computed).
+    no_bound_because: str | None = None
 
     @property
     def n_commands(self) -> int:
@@ -266,10 +268,12 @@ def plan_tour(
     bounds = _order_bounds(start, goals, orders, return_to_start, arm.lattice)
     ranking = sorted(orders, key=lambda o: (bounds[o], o))
     fam = _targets_family(arm, world, pts) if pts.shape[0] <= MAX_BOUND_TARGETS else None
-    family_bound, family_bounds = _family_bounds(
+    family_bound, family_bounds, no_bound_because = _family_bounds(
         fam if bound else None, start, pts, ranking, return_to_start, tolerance_mm, say,
         bound_samples,
     )  # fmt: skip
+    if not bound:
+        no_bound_because = "not asked for"
     guided_orders = _guided_orders(orders, ranking, family_bound)
     q0 = arm.lattice.to_joint(start)
     guide_all = _tour_guide(fam, pts, tolerance_mm, orientations, say, arm.lattice.to_joint(start))
@@ -573,6 +577,7 @@ def plan_tour(
         orders_not_planned=not_planned,
         lower_bound=family_bound,
         order_family_bounds=family_bounds,
+        no_bound_because=no_bound_because,
     )
 
 
@@ -696,19 +701,24 @@ def _family_bounds(
     tolerance_mm: float,
     say: Callable[[str], None],
     max_samples: int | None = None,
-) -> tuple[CommandBound | None, dict[tuple[int, ...], int]]:
+) -> tuple[CommandBound | None, dict[tuple[int, ...], int], str | None]:
     """The bound over every goal configuration: per order for a given order or up to
     :data:`EXACT_ORDER_TARGETS` targets, every order at once up to :data:`SUBSET_TARGETS`,
-    else the cheaper bound; None without a family
-    (beyond :data:`MAX_BOUND_TARGETS` targets) or where a target has no member within the
-    limits."""
+    else the cheaper bound; each order's bound where computed; and why there is none: without
+    a family (beyond :data:`MAX_BOUND_TARGETS` targets) or where a target has no member within
+    the limits."""
     if fam is None:
-        return None, {}
+        return (
+            None,
+            {},
+            f"the bound over every goal configuration takes at most {MAX_BOUND_TARGETS} "
+            f"welds, this tour has {pts.shape[0]}",
+        )
     q0 = fam.arm.lattice.to_joint(start)
     say("bounding the tour's commands over every goal configuration")
     try:
         if len(orders) == 1 or pts.shape[0] <= EXACT_ORDER_TARGETS:
-            return tour_bound(
+            found, per_order = tour_bound(
                 fam,
                 q0,
                 pts,
@@ -719,10 +729,13 @@ def _family_bounds(
                 max_samples=max_samples,
                 lattice=True,
             )
-        if pts.shape[0] <= SUBSET_TARGETS:
-            return tour_bound(
+        elif pts.shape[0] <= SUBSET_TARGETS:
+            found, per_order = tour_bound(
                 fam, q0, pts, tolerance_mm, None, back, on_progress=say, max_samples=max_samples
             )
-        return tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say), {}
-    except PlanningError:
-        return None, {}
+        else:
+            found = tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say)
+            per_order = {}
+    except PlanningError as exc:
+        return None, {}, str(exc)
+    return found, per_order, None
