@@ -493,6 +493,47 @@ def test_a_result_whose_model_cannot_be_rebuilt_is_refused(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]
 
 
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        # a GIF's frames last whole hundredths of a second and browsers show one of under
+        # 20 ms for 100 ms: --fps 1000 came out at 10 frames a second
+        (["animate", "--fps", "51"], ("--fps must be from 1 to 50", "for a GIF, got 51")),
+        (["animate", "--fps", "0"], ("--fps must be from 1 to 50",)),
+        # each frame is held as an image until written: 1.4 MB each
+        (["animate", "--frames", "1001"], ("--frames must be", "from 2 to 1000, got 1001")),
+        (["animate", "--frames", "1"], ("--frames must be", "got 1")),
+        (["view", "--export-html", "page.html", "--fps", "5000"], ("--fps must be", "1000")),
+        (["view", "--export-html", "page.html", "--fps", "nan"], ("--fps must be", "got nan")),
+    ],
+)
+def test_animation_and_replay_rates_are_refused_naming_their_option(
+    tmp_path, reach_document, args, needles
+):
+    source = tmp_path / "result.json"
+    source.write_text(json.dumps(reach_document), encoding="utf-8")
+    command, *rest = args
+    where = [str(source)] if command == "animate" else ["--result", str(source)]
+    proc = _run([command, *where, *rest], tmp_path)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    line = _error_line(proc)
+    assert all(n in line for n in needles), line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]
+
+
+def test_a_python_animation_is_refused_in_its_arguments_names(tmp_path, reach_document):
+    """From Python the same limits name the arguments; 50 frames a second are written."""
+    from armpath.errors import InvalidInputError
+    from armpath.results import load_result
+
+    source = tmp_path / "result.json"
+    source.write_text(json.dumps(reach_document), encoding="utf-8")
+    result = load_result(source)
+    with pytest.raises(InvalidInputError, match=r"max_frames must be .* from 2 to 1000"):
+        result.animate(tmp_path / "a.gif", max_frames=5000)
+    assert result.animate(tmp_path / "a.gif", fps=50, max_frames=3) == 3
+
+
 def test_energy_weights_beyond_the_limit_are_refused(tmp_path):
     """Weights of 1e308 made the weighted travel overflow to inf (a warning, then a result
     saying 'joint travel inf deg'); only their ratios matter, so they are capped."""

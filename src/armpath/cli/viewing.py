@@ -95,6 +95,10 @@ def view(
             from armpath.viewer.app import check_address
 
             check_address(host, port)
+        else:
+            from armpath.viewer.app import check_replay_fps
+
+            check_replay_fps(fps, "--fps")
         loaded = load_result(result, scene_file) if result is not None else None
         if export_html is not None:
             if loaded is None:  # the arm alone (or in its scene), at its home pose
@@ -148,20 +152,22 @@ def animate(
             "result carries.",
         ),
     ] = None,
-    fps: Annotated[int, typer.Option(help="Frames per second.")] = 15,
-    frames: Annotated[int, typer.Option(help="Largest number of frames.")] = 120,
+    fps: Annotated[
+        int, typer.Option(help="Frames per second (at most 50 for a GIF, 120 for an MP4).")
+    ] = 15,
+    frames: Annotated[int, typer.Option(help="Largest number of frames (at most 1000).")] = 120,
 ) -> None:
     """Animate a result: the arm through its commands in the scene, the fingertip's path, the
     targets and the curve (GIF with Pillow, MP4 with ffmpeg)."""
     from armpath.export import output_folder
     from armpath.results import load_result
-    from armpath.viz.animation import write_animation
+    from armpath.viz.animation import ANIMATION_FORMATS, check_animation_rate, write_animation
 
     with _cli_errors():
-        if fps < 1 or frames < 2:
-            raise InvalidInputError("--fps must be >= 1 and --frames >= 2")
-        loaded = load_result(result, scene_file)
         target = out if out is not None else result.with_suffix(".gif")
+        if target.suffix in ANIMATION_FORMATS:  # (else write_animation names the formats)
+            check_animation_rate(target.suffix, fps, frames, ("--fps", "--frames"))
+        loaded = load_result(result, scene_file)
         with output_folder(target.parent, prune=False) as folder, progress("animating ..."):
             n = write_animation(
                 folder.file(target.name), loaded.animation(), fps=fps, max_frames=frames

@@ -532,6 +532,15 @@ def free_port(host: str = "127.0.0.1") -> int:
 MAX_REPLAY_FPS = 1000.0
 
 
+def check_replay_fps(fps: float, name: str = "fps") -> None:
+    """Refuse a replay's commands per second outside (0, :data:`MAX_REPLAY_FPS`], naming it
+    ``name`` (the option that set it)."""
+    if not 0 < fps <= MAX_REPLAY_FPS:
+        raise InvalidInputError(
+            f"{name} must be > 0 and <= {MAX_REPLAY_FPS:g} commands per second, got {fps:g}"
+        )
+
+
 def replay_html(
     result: Result,
     *,
@@ -543,10 +552,7 @@ def replay_html(
     ``result``: the scene, the curve and targets, the fingertip's path and the arm moving through
     the commands at ``fps`` commands per second (at most ``max_frames`` states, evenly spread).
     What the page leaves out (:attr:`ArmViewer.notes`) is appended to ``notes``."""
-    if not 0 < fps <= MAX_REPLAY_FPS:
-        raise InvalidInputError(
-            f"fps must be > 0 and <= {MAX_REPLAY_FPS:g} commands per second, got {fps:g}"
-        )
+    check_replay_fps(fps)
     viewer = ArmViewer(result.arm, result.scene, port=free_port(), result=result)
     if notes is not None:
         notes.extend(viewer.notes)

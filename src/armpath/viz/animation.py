@@ -35,6 +35,32 @@ from armpath.viz.figures import (
 
 FloatArray = NDArray[np.float64]
 ANIMATION_FORMATS = (".gif", ".mp4")
+#: Most frames per second of a GIF: its frames last a whole number of hundredths of a second,
+#: and browsers show a frame of less than 20 ms for 100 ms (faster came out slower).
+MAX_GIF_FPS = 50
+#: Most frames per second of an MP4.
+MAX_MP4_FPS = 120
+#: Most frames of one animation: each is held as a 640 x 560 image (1.4 MB) until written.
+MAX_ANIMATION_FRAMES = 1000
+
+
+def check_animation_rate(
+    suffix: str, fps: float, max_frames: float, names: tuple[str, str] = ("fps", "max_frames")
+) -> None:
+    """Refuse frames per second or a frame count an animation of ``suffix`` (``.gif``,
+    ``.mp4``) cannot have, naming them as ``names`` (the options that set them)."""
+    most_fps = MAX_GIF_FPS if suffix == ".gif" else MAX_MP4_FPS
+    if not (isinstance(fps, int | float | np.number) and 1 <= fps <= most_fps):
+        raise InvalidInputError(
+            f"{names[0]} must be from 1 to {most_fps} frames per second for a "
+            f"{suffix.lstrip('.').upper()}, got {fps}"
+        )
+    if not (isinstance(max_frames, int | np.integer) and 2 <= max_frames <= MAX_ANIMATION_FRAMES):
+        raise InvalidInputError(
+            f"{names[1]} must be a whole number of frames from 2 to {MAX_ANIMATION_FRAMES}, "
+            f"got {max_frames}"
+        )
+
 
 #: Resolution of the frames (dots per inch of the 6.4 x 5.6 inch figure: 640 x 560 pixels).
 ANIMATION_DPI = 100
@@ -223,15 +249,15 @@ def write_animation(
 ) -> int:
     """Write ``anim`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg); returns the
     number of frames. At most ``max_frames`` evenly spread states are drawn
-    (:func:`animation_frames`); the fingertip's path so far is traced in red.
+    (:func:`animation_frames`; at most :data:`MAX_ANIMATION_FRAMES`, ``fps`` at most
+    :data:`MAX_GIF_FPS` for a GIF); the fingertip's path so far is traced in red.
 
     The still part (scene, axes, title, legend) is drawn once; each frame redraws only the arm,
     its path and the caption over it (so the arm is never hidden behind an obstacle)."""
     out = Path(path)
     if out.suffix not in ANIMATION_FORMATS:
         raise InvalidInputError(f"animation must be one of {ANIMATION_FORMATS}, got {out.name!r}")
-    if not (fps >= 1 and max_frames >= 2):
-        raise InvalidInputError(f"fps must be >= 1 and max_frames >= 2, got {fps} and {max_frames}")
+    check_animation_rate(out.suffix, fps, max_frames)
     ffmpeg = shutil.which("ffmpeg")
     if out.suffix == ".mp4" and ffmpeg is None:
         raise InvalidInputError("MP4 needs ffmpeg on the PATH; write a .gif instead")
