@@ -96,7 +96,7 @@ def load_arm(
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
             raise InvalidInputError(f"link_radius_mm must be >= 0, got {link_radius_mm}")
-        arm = arm.with_link_radii(link_radius_mm / arm.mm_per_unit)
+        arm = arm.with_link_radii(link_radius_mm)  # every arm enters in mm (SerialArm.in_mm)
     return arm
 
 

@@ -372,7 +372,7 @@ def task_setup(
         scene = scene.with_wall_thickness(wall)
     arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
     if link_radius_mm is not None:
-        arm = arm.with_link_radii(_checked_link_radius(link_radius_mm) / arm.mm_per_unit)
+        arm = arm.with_link_radii(_checked_link_radius(link_radius_mm))  # arms are in mm
     return arm, scene
 
 
