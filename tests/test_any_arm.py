@@ -19,6 +19,7 @@ from armpath.model.catalog import resolve_model
 from armpath.planning.reach import ReachOptions, plan_reach
 from armpath.planning.trace import TraceOptions, plan_trace
 from armpath.scenes import scene_from_dict
+from arms import scara_rows
 
 D = np.pi / 180
 # (a mm, alpha rad, d mm, joint offset rad), standard D-H
@@ -337,20 +338,6 @@ def test_a_trace_the_lattice_is_too_coarse_for_says_so():
         dq[j] = tick
         columns.append(np.linalg.norm(idh.dh_pose(a, alpha, d, q + dq)[:3, 3] - tip))
     assert 0.3 < named < 1.2 and 0.3 < max(columns) < 1.2
-
-
-def scara_rows() -> list:
-    """A SCARA's standard D-H table (mm, rad): arms of 300 and 250 mm at 400 mm, a quill
-    sliding 0..200 mm down (prismatic), the tool 50 mm below on the last axis."""
-    from armpath.model.dh import DHRow
-    from armpath.model.serial_arm import JointKind
-
-    return [
-        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
-        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
-        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
-        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
-    ]
 
 
 def test_a_scara_traces_a_circle_with_its_tool_pointing_down():

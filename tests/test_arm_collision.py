@@ -30,6 +30,7 @@ from armpath.model.dh import load_robot_file, robot_from_dict
 from armpath.model.serial_arm import JointKind, Landmark, Link, SerialArm
 from armpath.model.urdf import arm_from_urdf
 from armpath.workspace import sample_workspace
+from arms import scara_rows
 from independent_dh import _rx, _rz, _tx, _tz
 
 SELF_ONLY = CollisionWorld(())
@@ -563,15 +564,10 @@ def test_a_prismatic_leg_that_retracts_to_nothing_joins_its_neighbours():
     radii). Only the slide moves them apart, so they now count as neighbours, as links joined
     by a chain shorter than their radii do; every other pair is still checked, and the arm
     plans from home."""
-    from armpath.model.dh import DHRow, dh_arm
+    from armpath.model.dh import dh_arm
     from armpath.planning.motion import MotionOptions, plan_motion
 
-    rows = [
-        DHRow(300.0, 0.0, 400.0, limits=(-2.5, 2.5)),
-        DHRow(250.0, np.pi, 0.0, limits=(-2.5, 2.5)),
-        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
-        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
-    ]
+    rows = scara_rows(elbow_limit_rad=2.5)
     home = np.array([0.0, np.radians(30.0), 0.0, 0.0])
     arm = dh_arm(rows, name="scara", link_radii_mm=20.0, home=home)
 

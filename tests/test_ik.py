@@ -26,6 +26,7 @@ from armpath.kinematics import tool_pose
 from armpath.model.catalog import BUILTIN_MODELS, resolve_model
 from armpath.model.dh import DHRow, dh_arm, load_robot_file, robot_from_dict
 from armpath.model.serial_arm import JointKind
+from arms import scara_rows
 from independent_dh import brute_force_ik, dh_pose, pose_residual
 
 
@@ -375,12 +376,7 @@ def test_a_joint_that_does_not_move_the_tool_point_is_held():
     were 48 random turns of it. It is now held (at home, or at --near's value), leaving the
     two elbows, which the planar two-link closed form written here gives; the seed arm's joint
     6 likewise. Each replays on the textbook D-H product."""
-    rows = [
-        DHRow(300.0, 0.0, 400.0, limits=(-2.4, 2.4)),
-        DHRow(250.0, np.pi, 0.0, limits=(-2.4, 2.4)),
-        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
-        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
-    ]
+    rows = scara_rows()
     scara = dh_arm(rows, name="scara")
     goal = np.array([350.0, 100.0, 250.0])
     for near, held in ((None, 0.0), (np.array([0.1, 0.2, 10.0, 1.25]), 1.25)):

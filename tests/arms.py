@@ -1,0 +1,21 @@
+"""Arms the tests build from D-H tables (beside the built-in models)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armpath.model.dh import DHRow
+from armpath.model.serial_arm import JointKind
+
+
+def scara_rows(elbow_limit_rad: float = 2.4) -> list[DHRow]:
+    """A SCARA's standard D-H table (mm, rad): arms of 300 and 250 mm at 400 mm, each turning
+    within +-``elbow_limit_rad``, a quill sliding 0..200 mm down (prismatic), the tool 50 mm
+    below on the last axis."""
+    limits = (-elbow_limit_rad, elbow_limit_rad)
+    return [
+        DHRow(300.0, 0.0, 400.0, limits=limits),
+        DHRow(250.0, np.pi, 0.0, limits=limits),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+        DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
+    ]
