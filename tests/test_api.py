@@ -281,6 +281,32 @@ def test_cli_export_writes_or_refuses(seed_reach, tmp_path):
         assert not (tmp_path / "x").exists()
 
 
+def test_a_tours_tool_axis_is_the_clis_and_holds_at_each_weld(tmp_path):
+    """``armpath.spotweld(..., tool_axis=, axis_tolerance_deg=)`` (the CLI's --tool-axis and
+    --axis-tolerance, missing from Python) gives the CLI's document; by the independent seed
+    kinematics each weld is reached within the tolerance, its last link within the cone."""
+    import armpath
+
+    welds = [[300.0, -50.0, 150.0], [320.0, -50.0, 150.0]]
+    api = armpath.spotweld("seed", welds, scene="none", order="given", tool_axis=[0, 0, -1],
+                           axis_tolerance_deg=10.0, bound=False, pools=False)  # fmt: skip
+    (tmp_path / "w.toml").write_text(f'name = "w"\n[tasks.spotweld]\npoints_mm = {welds}\n')
+    cli = subprocess.run(
+        [sys.executable, "-m", "armpath", "spotweld", "--scene", "w.toml", "--order", "given",
+         "--tool-axis", "0 0 -1", "--axis-tolerance", "10", "--no-bound", "--no-pools",
+         "--json"],
+        capture_output=True, text=True, check=True, cwd=tmp_path,
+    )  # fmt: skip
+    cli_doc, api_doc = json.loads(cli.stdout), api.doc
+    assert cli_doc["commands"] == api_doc["commands"] and cli_doc["order"] == api_doc["order"]
+    states = independent.replay(api_doc["initial_deg"], api_doc["commands"])
+    for visit in api_doc["visits"]:
+        pts = independent.points(states[visit["after_command"]])
+        assert np.linalg.norm(pts[-1] - visit["target"]) <= 0.05
+        axis = (pts[-1] - pts[-2]) / np.linalg.norm(pts[-1] - pts[-2])
+        assert np.degrees(np.arccos(axis @ [0.0, 0.0, -1.0])) <= 10.0
+
+
 def test_api_refuses_bad_input_with_clear_errors():
     import armpath
     from armpath.errors import InvalidInputError
@@ -326,6 +352,23 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.spotweld("seed", bound_samples=2.5), "bound_samples must be a whole"),
         (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be numbers"),
         (lambda a: a.reach("ur5", [400, 100, 300], pose=_SHIFTED), "is not the target"),
+        # a joint state of the wrong shape failed deep inside (an IndexError from the tracer,
+        # "needs 6 joint values, got 6" from the reach)
+        (
+            lambda a: a.trace("seed", [[300, 0, 99], [320, 0, 99]], start_deg=[[0] * 6]),
+            r"start_deg must be one joint state: 6 values .* got shape \(1, 6\)",
+        ),
+        (lambda a: a.plan("seed", to_deg=[[0, -90, 0, 0, -90, 0]]), r"to_deg must be one"),
+        (lambda a: a.trace("seed", [["a", "b", "c"], [260, 0, 250]]), "curve must be points"),
+        (lambda a: a.trace("seed", [[260, 0, 250]]), r"curve must be .* K >= 2"),
+        (lambda a: a.spotweld("seed", [["a", 0, 0]]), "welds_mm must be points"),
+        (lambda a: a.spotweld("seed", np.zeros((0, 3))), r"welds_mm must be .* K >= 1"),
+        # a tolerance without the rule it qualifies was ignored
+        (lambda a: a.reach("seed", [300, 100, 200], axis_tolerance_deg=5), "give tool_axis"),
+        (lambda a: a.reach("seed", [300, 100, 200], angle_tolerance_deg=5), "give pose too"),
+        (lambda a: a.trace("seed", axis_tolerance_deg=5), "qualifies tool_axis"),
+        (lambda a: a.spotweld("seed", tool_axis="norml"), "tool_axis must be 'normal' or a"),
+        (lambda a: a.trace("seed", tool_axis=[0, 0, 1], axis_tolerance_deg=0), "in \\(0, 180\\]"),
         (
             lambda a: a.plan("seed", to_deg=[10, -90, 0, 0, -90, 0], energy_weights=[1] * 6),
             "energy weights go with the energy objective",

@@ -685,3 +685,28 @@ def test_numerical_solutions_are_deduplicated_as_pairwise(seed):
     kept = distinct_solutions(q, prismatic, 1e-6)
     assert kept.tolist() == _distinct_pairwise(q, prismatic, 1e-6)
     assert 300 <= kept.size < 900  # some copies kept (beyond 1e-6), most dropped
+
+
+def test_one_target_at_a_time_and_many_poses_by_solve_batch():
+    """``solve_ik`` given two poses stacked solved the first and dropped the second without a
+    word; it now refuses any shape but its one target's, and ``solve_batch`` solves each pose
+    (the generating joint values among the solutions, every one replayed by the textbook D-H
+    product)."""
+    from armpath.ik import complete_solver
+
+    rng = np.random.default_rng(7)
+    a, alpha, d = _random_table(rng)
+    arm = _arm(a, alpha, d)
+    Q = rng.uniform(-2.5, 2.5, (2, 6))
+    T = np.stack([dh_pose(a, alpha, d, q) for q in Q])
+    for target, position_only, needle in (
+        (T, False, r"got shape \(2, 4, 4\); complete_solver\(arm\).solve_batch"),
+        (T[0, :3, 3], False, "a point alone needs position_only=True"),
+        (T[:, :3, 3], True, r"a 3-vector \(position_only\), got shape \(2, 3\)"),
+    ):
+        with pytest.raises(InvalidInputError, match=needle):
+            solve_ik(arm, target, position_only=position_only)
+    for q, target, result in zip(Q, T, complete_solver(arm).solve_batch(T), strict=True):
+        assert _contains(result.solutions, q)
+        for found in result.solutions:
+            assert max(pose_residual(dh_pose(a, alpha, d, found), target)) < 1e-6

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_point_mm, time_limit
 from armpath.errors import InvalidInputError
+from armpath.ik.target import DEFAULT_ANGLE_TOLERANCE_DEG, DEFAULT_AXIS_TOLERANCE_DEG
 from armpath.model.serial_arm import SerialArm
 from armpath.results import Result, load_result
 from armpath.scenes import Scene
@@ -32,6 +33,7 @@ if TYPE_CHECKING:
     from armpath.commands import CommandSequence
     from armpath.geometry.curves import Curve
     from armpath.ik.target import Orientation
+    from armpath.planning.trace import AxisRule
 
 #: What names an arm: a model, a built-in model's name, or a robot file (``.json``, ``.urdf``).
 ArmLike = SerialArm | str | Path
@@ -153,7 +155,18 @@ def _start_ticks(arm: SerialArm, start_deg: ArrayLike | None) -> NDArray[np.int6
     """The lattice state of ``start_deg`` (deg, mm for a prismatic joint); None: home."""
     if start_deg is None:
         return arm.lattice.to_ticks(arm.home, "the arm's home pose")
-    return arm.lattice.from_display(_degrees(start_deg, "start_deg"), "start_deg")
+    return arm.lattice.from_display(_joint_values(arm, start_deg, "start_deg"), "start_deg")
+
+
+def _joint_values(arm: SerialArm, values: ArrayLike, what: str) -> NDArray[np.float64]:
+    """One joint state ``what`` of ``arm`` (deg, mm for a prismatic joint): one value a joint."""
+    v = _degrees(values, what)
+    if v.shape != (arm.n_joints,):
+        raise InvalidInputError(
+            f"{what} must be one joint state: {arm.n_joints} values (deg, mm for a prismatic "
+            f"joint), got shape {v.shape}"
+        )
+    return v
 
 
 def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
@@ -174,12 +187,45 @@ def _point_mm(values: ArrayLike, what: str) -> NDArray[np.float64]:
     return p
 
 
+def _points_mm(values: ArrayLike, what: str, least: int) -> NDArray[np.float64]:
+    """Points ``(K, 3)`` (mm), at least ``least`` of them: finite numbers within
+    :data:`MAX_COORDINATE_MM`."""
+    try:
+        p = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"{what} must be points (K, 3) of numbers (mm), got {values!r}"
+        ) from None
+    if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < least or not np.all(np.isfinite(p)):
+        raise InvalidInputError(
+            f"{what} must be (K, 3) finite points (mm), K >= {least}, got shape {p.shape}"
+            + ("" if np.all(np.isfinite(p)) else " with values not finite")
+        )
+    check_point_mm(p.ravel().tolist(), what)
+    return p
+
+
+def _given_alone(name: str, value: object, needs: str, given: object) -> None:
+    """Refuse the argument ``name`` given without the argument ``needs`` it qualifies (it
+    would be ignored)."""
+    if value is not None and given is None:
+        raise InvalidInputError(f"{name} qualifies {needs}; give {needs} too")
+
+
+def _axis_rule(tool_axis: Any, axis_tolerance_deg: float | None) -> AxisRule | None:
+    """The tool-axis rule of a trace or a tour: ``"normal"`` or a world direction."""
+    from armpath.planning.trace import AxisRule
+
+    _given_alone("axis_tolerance_deg", axis_tolerance_deg, "tool_axis", tool_axis)
+    return None if tool_axis is None else AxisRule.of(tool_axis, axis_tolerance_deg)
+
+
 def _orientation(
     arm: SerialArm,
     pose: Any,
-    angle_tolerance_deg: float,
+    angle_tolerance_deg: float | None,
     tool_axis: ArrayLike | None,
-    axis_tolerance_deg: float,
+    axis_tolerance_deg: float | None,
     target_mm: NDArray[np.float64],
 ) -> Orientation | None:
     """The orientation rule of a whole pose (:func:`armpath.poses.pose_matrix` forms) or of a
@@ -190,6 +236,12 @@ def _orientation(
 
     if pose is not None and tool_axis is not None:
         raise InvalidInputError("give pose or tool_axis, not both")
+    _given_alone("axis_tolerance_deg", axis_tolerance_deg, "tool_axis", tool_axis)
+    _given_alone("angle_tolerance_deg", angle_tolerance_deg, "pose", pose)
+    if axis_tolerance_deg is None:
+        axis_tolerance_deg = DEFAULT_AXIS_TOLERANCE_DEG
+    if angle_tolerance_deg is None:
+        angle_tolerance_deg = DEFAULT_ANGLE_TOLERANCE_DEG
     for what, v in (
         ("axis_tolerance_deg", axis_tolerance_deg),
         ("angle_tolerance_deg", angle_tolerance_deg),
@@ -243,9 +295,9 @@ def reach(
     start_deg: ArrayLike | None = None,
     tolerance_mm: float = 0.05,
     pose: Any = None,
-    angle_tolerance_deg: float = 5.0,
+    angle_tolerance_deg: float | None = None,
     tool_axis: ArrayLike | None = None,
-    axis_tolerance_deg: float = 15.0,
+    axis_tolerance_deg: float | None = None,
     seed: int = 0,
     time_limit_s: float | None = None,
 ) -> Result:
@@ -294,9 +346,9 @@ def plan(
     start_deg: ArrayLike | None = None,
     tolerance_mm: float = 0.05,
     pose: Any = None,
-    angle_tolerance_deg: float = 5.0,
+    angle_tolerance_deg: float | None = None,
     tool_axis: ArrayLike | None = None,
-    axis_tolerance_deg: float = 15.0,
+    axis_tolerance_deg: float | None = None,
     objective: str = "commands",
     energy_weights: ArrayLike | None = None,
     seed: int = 0,
@@ -355,7 +407,7 @@ def plan(
             if pose is not None or tool_axis is not None:
                 raise InvalidInputError("pose and tool_axis go with to_mm")
             assert to_deg is not None  # one goal given (checked above)
-            goal = the_arm.lattice.from_display(_degrees(to_deg, "to_deg"), "to_deg")
+            goal = the_arm.lattice.from_display(_joint_values(the_arm, to_deg, "to_deg"), "to_deg")
             found = plan_motion(the_arm, world, start, goal[None, :], options)
         doc = plan_result_dict(
             found,
@@ -377,6 +429,8 @@ def trace(
     start_deg: ArrayLike | None = None,
     tolerance_mm: float = 0.1,
     closed: bool = False,
+    tool_axis: str | ArrayLike | None = None,
+    axis_tolerance_deg: float | None = None,
     seed: int = 0,
     bound: bool = True,
     bound_samples: int | None = None,
@@ -386,6 +440,9 @@ def trace(
     ``(M, 3)`` mm joined by straight pieces, ``closed`` back to the first; default: the
     scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it, every reachable part, in
     the fewest passes and commands; the document lists the arcs not traced and why.
+    ``tool_axis``: keep the tool's approach axis within ``axis_tolerance_deg`` (default 15)
+    of the surface's inward normal at each point (``"normal"``, a torch kept near the normal)
+    or of a world direction (x, y, z), along the whole continuous motion of every pass.
     ``bound``: also prove a lower bound on the commands of any plan (the document's
     ``lower_bound``, with the plan's gap to it; the seed's Task 2: about a third of its time);
     False: ``None`` there. ``bound_samples``: the live samples past which the bound's search
@@ -398,10 +455,12 @@ def trace(
     from armpath.tasks import trace_task
 
     _checked(
-        {"tolerance_mm": tolerance_mm, "time_limit_s": time_limit_s},
+        {"tolerance_mm": tolerance_mm, "axis_tolerance_deg": axis_tolerance_deg,
+         "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"closed": closed, "bound": bound},
-    )
+    )  # fmt: skip
+    rule = _axis_rule(tool_axis, axis_tolerance_deg)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         path: Curve | None
@@ -413,11 +472,11 @@ def trace(
                 )
             path = curve
         else:
-            vertices = np.asarray(curve, dtype=np.float64) / the_arm.mm_per_unit
-            path = Polyline("curve", vertices, closed=closed)
+            path = Polyline("curve", _points_mm(curve, "curve", 2), closed=closed)
         options = TraceOptions(
             tolerance_mm=tolerance_mm,
             motion=MotionOptions(seed=seed),
+            axis_rule=rule,
             bound=bound,
             bound_samples=bound_samples,
         )
@@ -441,6 +500,8 @@ def spotweld(
     order: str = "auto",
     return_to_start: bool = False,
     tolerance_mm: float = 0.05,
+    tool_axis: str | ArrayLike | None = None,
+    axis_tolerance_deg: float | None = None,
     objective: str = "commands",
     seed: int = 0,
     bound: bool = True,
@@ -450,38 +511,34 @@ def spotweld(
 ) -> Result:
     """Visit the spot welds ``welds_mm (K, 3)`` (default: the scene's ``[tasks.spotweld]``)
     in the best order (``order="auto"``: every order ranked by its lower bound, the best
-    planned; ``"given"``: as listed), optionally back to the start. ``bound``: also prove a
-    lower bound on the commands of any tour, over every order and goal configuration (the
-    document's ``lower_bound``; the seed's Task 3: about a third of its time); False: ``None``
-    there. ``bound_samples``: the live samples past which the bound's search stops splitting
-    (1,000 to 2,000,000; None: 50,000; its first round may hold more; the search's rounds
-    grow in proportion): more give a tighter bound, later
-    (Task 3: 110 rather than 108 with 200,000, 75 s of bounding rather than 23 s on a 2-core
-    machine). ``pools``: plan the cheapest orders once more through pools of goal states
-    (Task 3: 121 commands rather than 126, in about twice the time without the bound); False:
-    the guided orders' goal states only."""
+    planned; ``"given"``: as listed), optionally back to the start. ``tool_axis``: at each
+    weld, keep the tool's approach axis within ``axis_tolerance_deg`` (default 15) of the
+    surface's inward normal there (``"normal"``) or of a world direction (x, y, z).
+    ``bound``: also prove a lower bound on the commands of any tour, over every order and goal
+    configuration (the document's ``lower_bound``; the seed's Task 3: about a third of its
+    time); False: ``None`` there. ``bound_samples``: the live samples past which the bound's
+    search stops splitting (1,000 to 2,000,000; None: 50,000; its first round may hold more;
+    the search's rounds grow in proportion): more give a tighter bound, later (Task 3: 110
+    rather than 108 with 200,000, 75 s of bounding rather than 23 s on a 2-core machine).
+    ``pools``: plan the cheapest orders once more through pools of goal states (Task 3: 121
+    commands rather than 126, in about twice the time without the bound); False: the guided
+    orders' goal states only."""
     from armpath.export import tour_result_dict
     from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions
     from armpath.tasks import spotweld_task
 
     _checked(
-        {"tolerance_mm": tolerance_mm, "time_limit_s": time_limit_s},
+        {"tolerance_mm": tolerance_mm, "axis_tolerance_deg": axis_tolerance_deg,
+         "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"return_to_start": return_to_start, "bound": bound, "pools": pools},
-    )
+    )  # fmt: skip
+    rule = _axis_rule(tool_axis, axis_tolerance_deg)
     options = MotionOptions(objective=objective_of(objective), seed=seed)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
-        targets = None
-        if welds_mm is not None:
-            targets = np.asarray(welds_mm, dtype=np.float64)
-            if targets.ndim != 2 or targets.shape[1] != 3 or not np.all(np.isfinite(targets)):
-                raise InvalidInputError(
-                    f"welds_mm must be (K, 3) finite points (mm), got shape {targets.shape}"
-                )
-            check_point_mm(targets.ravel().tolist(), "welds_mm")
-            targets = targets / the_arm.mm_per_unit
+        targets = None if welds_mm is None else _points_mm(welds_mm, "welds_mm", 1)
         found = spotweld_task(
             the_scene,
             the_arm,
@@ -491,6 +548,7 @@ def spotweld(
             options,
             start_ticks=_start_ticks(the_arm, start_deg),
             targets_mm=targets,
+            tool_axis=rule,
             bound=bound,
             bound_samples=bound_samples,
             pools=pools,

@@ -52,6 +52,7 @@ from armpath.errors import (
     TimeLimitError,
     UnreachableError,
 )
+from armpath.ik.target import DEFAULT_ANGLE_TOLERANCE_DEG, DEFAULT_AXIS_TOLERANCE_DEG
 from armpath.planning.choices import Objective, VisitOrder
 
 if TYPE_CHECKING:
@@ -243,29 +244,17 @@ def _given_alone(option: str, value: float | None, needs: str, given: object) ->
 
 def axis_rule(tool_axis: str | None, axis_tolerance_deg: float | None) -> AxisRule | None:
     """The tool-axis rule of ``--tool-axis normal|X Y Z --axis-tolerance DEG`` on a surface."""
-    from armpath.ik.target import unit_vector
     from armpath.planning.trace import AxisRule
 
     _given_alone("--axis-tolerance", axis_tolerance_deg, "--tool-axis", tool_axis)
     if tool_axis is None:
         return None
-    if axis_tolerance_deg is None:
-        axis_tolerance_deg = DEFAULT_AXIS_TOLERANCE_DEG
-    if not (np.isfinite(axis_tolerance_deg) and 0.0 < axis_tolerance_deg <= 180.0):
-        raise InvalidInputError(
-            f"--axis-tolerance must be in (0, 180] deg, got {axis_tolerance_deg}"
-        )
-    tol_rad = float(np.radians(axis_tolerance_deg))
+    names = ("--tool-axis", "--axis-tolerance")
     if tool_axis.strip() == "normal":
-        return AxisRule(tol_rad)
-    direction = unit_vector(_direction(tool_axis, "--tool-axis"), "--tool-axis")
-    return AxisRule(tol_rad, normal=False, direction=direction)
+        return AxisRule.of("normal", axis_tolerance_deg, names)
+    return AxisRule.of(_direction(tool_axis, "--tool-axis"), axis_tolerance_deg, names)
 
 
-#: Largest angle of the tool axis from --tool-axis, and of the tool frame from --pose (deg),
-#: when the option is not given.
-DEFAULT_AXIS_TOLERANCE_DEG = 15.0
-DEFAULT_ANGLE_TOLERANCE_DEG = 5.0
 AxisToleranceOption = Annotated[
     float | None,
     typer.Option(

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.errors import InvalidInputError
 from armpath.ik.kernels import prepare_targets
 from armpath.ik.result import IKBatch, IKResult, pose_result, solved_poses
 from armpath.model.serial_arm import SerialArm
@@ -65,6 +66,10 @@ class CompiledSolver:
 
     def solve(self, T: FloatArray) -> IKResult:
         """All real solutions of one pose (4x4, world frame, model unit)."""
+        if np.shape(T) != (4, 4):
+            raise InvalidInputError(
+                f"solve takes one 4x4 pose, got shape {np.shape(T)}; solve_batch takes many"
+            )
         target = prepare_targets(np.asarray(T, dtype=np.float64)[None], self.length_scale)
         q, res, flags, count, method, reason = self._run(target)
         return pose_result(

@@ -141,6 +141,9 @@ def solve_numerical(
         )
     kept = distinct_solutions(q[ok], prismatic, SAME_SOLUTION)
     sols = q[ok][kept]
+    # revolute angles wrapped to (-pi, pi] as the complete solvers give them (the descent
+    # wanders by whole turns); into_limits then shifts them into the joint limits
+    sols = np.where(prismatic, sols, np.pi - np.mod(np.pi - sols, 2.0 * np.pi))
     order = np.lexsort(sols.T[::-1])
     false = np.zeros(kept.size, dtype=bool)
     return IKResult(

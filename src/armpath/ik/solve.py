@@ -122,6 +122,16 @@ def solve_ik(
     gets its member nearest ``near`` as well.
     """
     n = arm.n_joints
+    shape = np.shape(target)
+    if shape != ((3,) if position_only else (4, 4)):
+        one = "a 3-vector (position_only)" if position_only else "a 4x4 pose"
+        if not position_only and shape == (3,):
+            hint = "; a point alone needs position_only=True"
+        elif not position_only:
+            hint = "; complete_solver(arm).solve_batch takes many poses"
+        else:
+            hint = ""
+        raise InvalidInputError(f"solve_ik takes one target, {one}, got shape {shape}{hint}")
     initial = None
     if near is not None:
         initial = np.asarray(near, dtype=np.float64).reshape(-1)

@@ -26,6 +26,12 @@ from armpath.errors import InvalidInputError
 FloatArray = NDArray[np.float64]
 
 
+#: Largest angle of the tool's approach axis from the direction of its rule, and of the tool
+#: frame from a whole pose, where none is given (deg).
+DEFAULT_AXIS_TOLERANCE_DEG = 15.0
+DEFAULT_ANGLE_TOLERANCE_DEG = 5.0
+
+
 def unit_vector(v: ArrayLike, what: str) -> FloatArray:
     """``v`` (a finite non-zero 3-vector of any magnitude) scaled to length 1, read-only;
     :class:`InvalidInputError` naming ``what`` otherwise."""

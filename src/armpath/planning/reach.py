@@ -653,7 +653,9 @@ def _validated_problem(
     geometry = seed_geometry_of(arm)
     start = np.asarray(start_ticks)
     if start.shape != (arm.n_joints,):
-        raise InvalidInputError(f"start state needs {arm.n_joints} joint values, got {start.size}")
+        raise InvalidInputError(
+            f"start state needs {arm.n_joints} joint values, got shape {start.shape}"
+        )
     start = CommandSequence(start, np.zeros((0, arm.n_joints), np.int64)).start_ticks
     arm.check_limits(ticks_to_rad(start), what="start state")
     p = np.asarray(target, dtype=np.float64)

@@ -77,7 +77,9 @@ def validated_start(
     grid = arm.lattice
     start = np.asarray(start_ticks)
     if start.shape != (arm.n_joints,):
-        raise InvalidInputError(f"start state needs {arm.n_joints} joint values, got {start.size}")
+        raise InvalidInputError(
+            f"start state needs {arm.n_joints} joint values, got shape {start.shape}"
+        )
     start = CommandSequence(start, np.zeros((0, arm.n_joints), np.int64), grid).start_ticks
     arm.check_limits(grid.to_joint(start), what="start state")
     for obstacle in world.obstacles:

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.geometry.curves import Curve
@@ -37,7 +37,7 @@ from armpath.geometry.world import CollisionWorld, SlackGroup
 from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.seed_position import family_from_wrist
 from armpath.ik.solve import complete_solver
-from armpath.ik.target import ToolTarget
+from armpath.ik.target import DEFAULT_AXIS_TOLERANCE_DEG, ToolTarget, unit_vector
 from armpath.kinematics import landmark_positions, tool_point_joints, tool_pose
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -116,6 +116,28 @@ class AxisRule:
     tolerance_rad: float
     normal: bool = True
     direction: FloatArray | None = None
+
+    @classmethod
+    def of(
+        cls,
+        tool_axis: str | ArrayLike,
+        tolerance_deg: float | None = None,
+        names: tuple[str, str] = ("tool_axis", "axis_tolerance_deg"),
+    ) -> AxisRule:
+        """The rule of ``tool_axis``, ``"normal"`` or a world direction (any length), within
+        ``tolerance_deg`` (in (0, 180]; None: :data:`DEFAULT_AXIS_TOLERANCE_DEG`), refused in
+        the words of ``names`` (the arguments or options that gave them)."""
+        tol = DEFAULT_AXIS_TOLERANCE_DEG if tolerance_deg is None else tolerance_deg
+        if not (isinstance(tol, int | float | np.number) and 0.0 < tol <= 180.0):
+            raise InvalidInputError(f"{names[1]} must be in (0, 180] deg, got {tol}")
+        tol_rad = float(np.radians(tol))
+        if isinstance(tool_axis, str):
+            if tool_axis.strip() != "normal":
+                raise InvalidInputError(
+                    f"{names[0]} must be 'normal' or a direction X Y Z, got {tool_axis!r}"
+                )
+            return cls(tol_rad)
+        return cls(tol_rad, normal=False, direction=unit_vector(tool_axis, names[0]))
 
     def words(self) -> str:
         """The rule in words: 'within 10 deg of the surface normal'."""
