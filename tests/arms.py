@@ -19,3 +19,12 @@ def scara_rows(elbow_limit_rad: float = 2.4) -> list[DHRow]:
         DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
         DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
     ]
+
+
+#: The UR5's standard D-H table, from its maker's published parameters: (a mm, alpha rad,
+#: d mm) of each joint.
+UR5_DH = (
+    [0.0, -425.0, -392.25, 0.0, 0.0, 0.0],
+    [np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0],
+    [89.159, 0.0, 0.0, 109.15, 94.65, 82.3],
+)

@@ -19,16 +19,12 @@ from armpath.model.catalog import resolve_model
 from armpath.planning.reach import ReachOptions, plan_reach
 from armpath.planning.trace import TraceOptions, plan_trace
 from armpath.scenes import scene_from_dict
-from arms import scara_rows
+from arms import UR5_DH, scara_rows
 
 D = np.pi / 180
 # (a mm, alpha rad, d mm, joint offset rad), standard D-H
 TABLES = {
-    "ur5": (
-        [0, -425.0, -392.25, 0, 0, 0],
-        [90 * D, 0, 0, 90 * D, -90 * D, 0],
-        [89.159, 0, 0, 109.15, 94.65, 82.3],
-    ),
+    "ur5": UR5_DH,
     "puma560": (
         [0, 431.8, 20.32, 0, 0, 0],
         [90 * D, 0, -90 * D, 90 * D, -90 * D, 0],

@@ -45,6 +45,8 @@ def test_docs_api_examples_run(tmp_path, monkeypatch):
         "armpath.load_result(",
         '("wxyz"',
         "joint_trajectory(",
+        "armpath.forward_kinematics(",
+        "armpath.inverse_kinematics(",
     ):
         assert call in covered, call
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
@@ -129,6 +131,39 @@ def test_saved_result_loads_back_and_views_anywhere(seed_reach, tmp_path):
     assert "n_commands=41" in repr(back) and "lower_bound_commands=41" in repr(back)
     fig = back.plot()
     assert len(fig.axes) == 6
+
+
+def test_a_result_is_saved_as_the_cli_writes_it_by_its_suffix(seed_reach, tmp_path):
+    """``save("r.csv")`` wrote the JSON document into r.csv; a result is now written by its
+    suffix as the CLI writes it (the command table of ``armpath reach --out``, byte for byte;
+    the workbook's commands sheet the same rows), each row's tool point the independent seed
+    kinematics' at its joint values; other suffixes, and a figure's, are refused by name, and
+    the command period of a trajectory must be a number."""
+    from openpyxl import load_workbook
+
+    from armpath.errors import InvalidInputError
+
+    subprocess.run([sys.executable, "-m", "armpath", "reach", "300", "100", "200", "--out", "o"],
+                   capture_output=True, check=True, cwd=tmp_path)  # fmt: skip
+    csv = seed_reach.save(tmp_path / "r.csv").read_text(encoding="utf-8")
+    assert csv == (tmp_path / "o" / "reach.csv").read_text(encoding="utf-8")
+    rows = [line.split(",") for line in csv.splitlines()[1:]]
+    assert len(rows) == seed_reach.n_commands == 41
+    for row in rows:
+        tip = independent.points(np.array([float(v) for v in row[7:13]]))[-1]
+        np.testing.assert_allclose([float(v) for v in row[13:16]], tip, atol=1e-5)
+    sheet = load_workbook(seed_reach.save(tmp_path / "r.xlsx"))["commands"]
+    cells = [[str(c) for c in r] for r in sheet.iter_rows(min_row=2, values_only=True)]
+    assert [[float(v) for v in r] for r in cells] == [[float(v) for v in r] for r in rows]
+    for call, words in (
+        (lambda: seed_reach.save(tmp_path / "r.txt"), "written as .json, .csv, .xlsx"),
+        (lambda: seed_reach.plot(tmp_path / "p.txt"), "written as .png, .svg, .pdf"),
+        (lambda: seed_reach.joint_trajectory(period_s="0.1"), "must be a number of seconds"),
+        (lambda: seed_reach.joint_trajectory(period_s=True), "must be a number of seconds"),
+    ):
+        with pytest.raises(InvalidInputError, match=words):
+            call()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o", "r.csv", "r.xlsx"]
 
 
 def test_poses_in_every_form_agree():
@@ -307,6 +342,46 @@ def test_a_tours_tool_axis_is_the_clis_and_holds_at_each_weld(tmp_path):
         assert np.degrees(np.arccos(axis @ [0.0, 0.0, -1.0])) <= 10.0
 
 
+def test_kinematics_from_python_in_degrees_are_the_clis_and_the_textbooks(tmp_path):
+    """``armpath.forward_kinematics`` and ``armpath.inverse_kinematics`` (deg and mm, as the
+    other functions; the package had only radian-valued ones in submodules) give the
+    documents ``armpath fk --json`` and ``armpath ik --json`` print; the seed arm's tool point
+    is the independent seed kinematics', each UR5 solution reproduces its pose by the
+    textbook D-H product, and ``near_deg`` turns the angles toward it (-187 deg, not 173)."""
+    import armpath
+    from arms import UR5_DH
+    from independent_dh import dh_pose, pose_residual
+
+    def cli(*args: str) -> dict:
+        run = subprocess.run([sys.executable, "-m", "armpath", *args, "--json"],
+                             capture_output=True, text=True, check=True, cwd=tmp_path)  # fmt: skip
+        return json.loads(run.stdout)
+
+    q = [10.0, -80.0, 30.0, 20.0, -70.0, 5.0]
+    doc = armpath.forward_kinematics("seed", q)
+    assert doc == cli("fk", *map(str, q))
+    np.testing.assert_allclose(doc["tip"], independent.points(np.array(q))[-1], atol=1e-6)
+    assert armpath.forward_kinematics("seed", [0, 120, 0, 0, 0, 0])["warnings"] == [
+        "part of the arm is below the table (z < 0)"
+    ]
+    target = np.diag([1.0, -1.0, -1.0, 1.0])
+    target[:3, 3] = [400.0, 100.0, 300.0]
+    doc = armpath.inverse_kinematics("ur5", pose=target[:3, :3], target_mm=target[:3, 3])
+    rows = " ".join(f"{v:.17g}" for v in target.ravel())
+    assert doc == cli("ik", "--model", "ur5", "--pose", rows)
+    assert doc["count"] == 8 and doc["family_dimension"] == 0
+    for sol in doc["solutions"]:
+        assert max(pose_residual(dh_pose(*UR5_DH, np.radians(sol)), target)) < 1e-6
+    near = [10.0, -80.0, 70.0, -60.0, -90.0, 20.0]
+    doc = armpath.inverse_kinematics("ur5", target_mm=[400.0, 100.0, 300.0], near_deg=near)
+    assert doc["family_dimension"] == 2 and doc["count"] > 8
+    first = np.array(doc["solutions"][0])
+    assert np.linalg.norm(dh_pose(*UR5_DH, np.radians(first))[:3, 3] - [400, 100, 300]) < 1e-6
+    # each angle is the turn of it nearest near_deg within the +-360 deg limits
+    assert np.all(np.abs(first - near) <= 180.0 + 1e-9) and np.all(np.abs(first) <= 360.0)
+    assert armpath.inverse_kinematics("seed", target_mm=[4000.0, 0.0, 0.0])["count"] == 0
+
+
 def test_api_refuses_bad_input_with_clear_errors():
     import armpath
     from armpath.errors import InvalidInputError
@@ -369,6 +444,11 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.trace("seed", axis_tolerance_deg=5), "qualifies tool_axis"),
         (lambda a: a.spotweld("seed", tool_axis="norml"), "tool_axis must be 'normal' or a"),
         (lambda a: a.trace("seed", tool_axis=[0, 0, 1], axis_tolerance_deg=0), "in \\(0, 180\\]"),
+        (lambda a: a.reach("ur5", [400, 100, 300], pose="down"), "a pose must be a 3x3 rotation"),
+        (lambda a: a.forward_kinematics("ur5", [1, 2]), "joints_deg must be one joint state: 6"),
+        (lambda a: a.forward_kinematics(3, [0] * 6), "arm must be a SerialArm"),
+        (lambda a: a.inverse_kinematics("ur5"), "give pose"),
+        (lambda a: a.inverse_kinematics("ur5", target_mm=[1, 2, 3], method="x"), "method must"),
         (
             lambda a: a.plan("seed", to_deg=[10, -90, 0, 0, -90, 0], energy_weights=[1] * 6),
             "energy weights go with the energy objective",

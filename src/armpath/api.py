@@ -287,6 +287,95 @@ def _result(doc: dict[str, Any], arm: SerialArm, scene: Scene, seq: CommandSeque
     )
 
 
+def _model(arm: ArmLike, tip_link: str | None = None) -> SerialArm:
+    """The arm of a kinematics query: a model as it is (in mm), or a built-in model or robot
+    file by name, in its own base frame (no scene places it)."""
+    from armpath.model.catalog import resolve_model
+
+    if isinstance(arm, SerialArm):
+        return arm.in_mm()
+    if not isinstance(arm, str | Path):
+        raise InvalidInputError(
+            f"arm must be a SerialArm, a built-in model's name or a robot file, got {arm!r}"
+        )
+    return resolve_model(str(arm), tip_link)
+
+
+def forward_kinematics(
+    arm: ArmLike, joints_deg: ArrayLike, *, tip_link: str | None = None
+) -> dict[str, Any]:
+    """Forward kinematics of one joint state ``joints_deg`` (deg, mm for a prismatic joint)
+    in the arm's base frame: the document ``armpath fk --json`` prints, ``tip`` (mm), ``pose``
+    (4x4, mm), each of the arm's ``points`` (mm), and ``warnings`` (a joint beyond its
+    limits; the seed arm below its table). Many states at once:
+    :func:`armpath.kinematics.tool_position` (rad)."""
+    import json
+
+    from armpath.export import fk_document, json_line
+
+    the_arm = _model(arm, tip_link)
+    values = _degrees(joints_deg, "joints_deg")
+    if values.shape != (the_arm.n_joints,) or not np.all(np.isfinite(values)):
+        raise InvalidInputError(
+            f"joints_deg must be one joint state: {the_arm.n_joints} finite values (deg, mm "
+            f"for a prismatic joint), got {values.tolist()}"
+        )
+    doc = fk_document(the_arm, the_arm.lattice.joint_from_display(values))
+    return dict(json.loads(json_line(doc)))  # rounded as the CLI prints it
+
+
+def inverse_kinematics(
+    arm: ArmLike,
+    *,
+    pose: Any = None,
+    target_mm: ArrayLike | None = None,
+    near_deg: ArrayLike | None = None,
+    method: str = "auto",
+    seeds: int = 48,
+    tip_link: str | None = None,
+) -> dict[str, Any]:
+    """Every inverse-kinematics solution of a tool ``pose`` at ``target_mm`` (a rotation, in
+    any form of :mod:`armpath.poses`; or a 4x4 transform alone, position in mm), or of the
+    tool point alone at ``target_mm``: the document ``armpath ik --json`` prints, solutions
+    in deg (mm for a prismatic joint) with their residuals, ``count`` 0 and a ``reason``
+    where there is none. Complete methods (``method``: auto, spherical-wrist, three-parallel,
+    general) give every real solution of a 6-axis pose; where the target leaves a family
+    (``family_dimension`` > 0: a point alone, a 7-axis arm) the solutions are samples of it,
+    nearest ``near_deg`` first where given."""
+    from armpath.export import ik_document
+    from armpath.ik import solve_ik
+    from armpath.ik.solve import METHODS
+    from armpath.poses import pose_matrix
+
+    _checked(None, {"seeds": seeds})
+    if method not in METHODS:
+        raise InvalidInputError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if pose is None and target_mm is None:
+        raise InvalidInputError("give pose (with target_mm for a rotation alone) or target_mm")
+    the_arm = _model(arm, tip_link)
+    near = (
+        None
+        if near_deg is None
+        else the_arm.lattice.joint_from_display(_joint_values(the_arm, near_deg, "near_deg"))
+    )
+    if pose is None:
+        assert target_mm is not None
+        point = _point_mm(target_mm, "target_mm")
+        result = solve_ik(the_arm, point, position_only=True, seeds=seeds, near=near)
+        return ik_document(the_arm, result, point, pose=False)
+    T = pose_matrix(pose)
+    if target_mm is not None:
+        at = _point_mm(target_mm, "target_mm")
+        if np.any(T[:3, 3] != 0.0) and np.linalg.norm(T[:3, 3] - at) > 1e-6:
+            raise InvalidInputError(
+                f"the pose's position {np.round(T[:3, 3], 6).tolist()} mm is not target_mm "
+                f"{np.round(at, 6).tolist()}: give one of them"
+            )
+        T[:3, 3] = at
+    result = solve_ik(the_arm, T, method=method, seeds=seeds, near=near)
+    return ik_document(the_arm, result, T, pose=True)
+
+
 def reach(
     arm: ArmLike | None,
     target_mm: ArrayLike,
@@ -563,6 +652,8 @@ __all__ = [
     "SceneLike",
     "arm_and_scene",
     "default_scene",
+    "forward_kinematics",
+    "inverse_kinematics",
     "load_arm",
     "load_result",
     "load_scene",

@@ -19,13 +19,14 @@ from numpy.typing import NDArray
 
 from armpath import __version__
 from armpath.commands import CommandSequence
-from armpath.errors import OutputError
+from armpath.errors import ArmpathError, InvalidInputError, OutputError
 from armpath.kinematics import tool_pose, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.model.serialize import arm_to_dict
 from armpath.schemas import SCHEMA_VERSION
 
 if TYPE_CHECKING:  # the result types, for annotations only: writing a result needs no planner
+    from armpath.ik.result import IKResult
     from armpath.ik.target import Orientation
     from armpath.planning.bounds import CommandBound
     from armpath.planning.motion import MotionPlan, PlanMetrics
@@ -244,6 +245,60 @@ def tour_result_dict(
     }
 
 
+def fk_document(arm: SerialArm, q: FloatArray) -> dict[str, Any]:
+    """The forward kinematics of one joint state ``q`` (rad / model units) as ``armpath fk
+    --json`` prints it: the joint values (deg, mm), the arm's points and the tool point (mm),
+    the tool pose (4x4, mm), and warnings (joint limits; the seed arm below its table)."""
+    from armpath.kinematics import landmark_positions
+
+    pts = landmark_positions(arm, q)
+    pose = tool_pose(arm, q)
+    warnings = []
+    try:
+        arm.check_limits(q, what="pose")
+    except ArmpathError as exc:
+        warnings.append(str(exc))
+    if arm.name == "seed" and np.min(pts[1:, 2]) < 0:
+        warnings.append("part of the arm is below the table (z < 0)")
+    return {
+        "model": arm.name,
+        "joints": [float(v) for v in arm.lattice.joint_display(q)],
+        "points": {n: [float(c) for c in p] for n, p in zip(arm.landmark_names, pts, strict=True)},
+        "tip": [float(c) for c in pose[:3, 3]],
+        "pose": [[float(c) for c in row] for row in pose],
+        "units": {"length": "mm", "angle": "deg", "joints": list(arm.lattice.units)},
+        "warnings": warnings,
+    }
+
+
+def ik_document(arm: SerialArm, result: IKResult, target: FloatArray, pose: bool) -> dict[str, Any]:
+    """The solutions of ``target`` (a 4x4 pose, or with ``pose`` False a point, mm) as
+    ``armpath ik --json`` prints them: joint values in deg (mm), residuals, flags, and why
+    there is none (``count`` 0)."""
+    inside: Any = result.within_limits if result.within_limits is not None else []
+    return {
+        "model": arm.name,
+        "method": result.method,
+        "target": (
+            {"pose": [[float(c) for c in r] for r in target]}
+            if pose
+            else {"position": [float(c) for c in target]}
+        ),
+        "count": result.count,
+        "family_dimension": result.family_dimension,
+        "solutions": [[float(v) for v in s] for s in arm.lattice.joint_display(result.solutions)],
+        "residuals": [
+            {"position_mm": float(p), "rotation_deg": float(np.degrees(r))}
+            for p, r in zip(result.position_residual, result.rotation_residual_rad, strict=True)
+        ],
+        "within_limits": [bool(v) for v in inside],
+        "near_double": [bool(v) for v in result.near_double],
+        "near_singular": [bool(v) for v in result.near_singular],
+        "reason": result.reason,
+        "units": {"length": "mm", "angle": "deg", "joints": list(arm.lattice.units)},
+    }
+
+
 def _bound_dict(bound: CommandBound | None, commands: int) -> dict[str, Any] | None:
     """A lower bound, how it was computed, and the plan's gap to it (commands and percent of
     the bound)."""
@@ -420,13 +475,36 @@ def write_sequence_files(
     folder: OutputFolder, stem: str, doc: dict[str, Any], arm: SerialArm, seq: CommandSequence
 ) -> None:
     """Write ``stem.json``, ``stem.csv`` and ``stem.xlsx`` of any result document."""
-    folder.write_text(f"{stem}.json", json_text(doc))
+    for suffix in RESULT_FILE_SUFFIXES:
+        write_result_file(folder, f"{stem}{suffix}", doc, arm, seq)
+
+
+#: The files a result is written as: its JSON document, its command table (CSV) and both as
+#: a workbook (the command table and a summary sheet).
+RESULT_FILE_SUFFIXES = (".json", ".csv", ".xlsx")
+
+
+def write_result_file(
+    folder: OutputFolder, name: str, doc: dict[str, Any], arm: SerialArm, seq: CommandSequence
+) -> None:
+    """Write the result document ``doc`` as ``name`` in ``folder``, by its suffix (one of
+    :data:`RESULT_FILE_SUFFIXES`)."""
+    suffix = Path(name).suffix.lower()
+    if suffix == ".json":
+        folder.write_text(name, json_text(doc))
+        return
+    if suffix not in RESULT_FILE_SUFFIXES:
+        raise InvalidInputError(
+            f"a result is written as {', '.join(RESULT_FILE_SUFFIXES)}, got {name!r}"
+        )
     header, rows = command_table(arm, seq)
-    folder.write_text(f"{stem}.csv", csv_text(header, rows))
-    write_xlsx(
-        folder.file(f"{stem}.xlsx"),
-        {"commands": (header, rows), "summary": (["quantity", "value"], summary_rows(doc))},
-    )
+    if suffix == ".csv":
+        folder.write_text(name, csv_text(header, rows))
+    else:
+        write_xlsx(
+            folder.file(name),
+            {"commands": (header, rows), "summary": (["quantity", "value"], summary_rows(doc))},
+        )
 
 
 def command_table(arm: SerialArm, seq: CommandSequence) -> tuple[list[str], list[list[Any]]]:

@@ -72,7 +72,13 @@ def pose_matrix(pose: Any) -> FloatArray:
         return out
     if hasattr(pose, "A") and not isinstance(pose, np.ndarray):  # spatialmath SO3 / SE3
         return pose_matrix(np.asarray(pose.A, dtype=np.float64))
-    m = np.asarray(pose, dtype=np.float64)
+    try:
+        m = np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            "a pose must be a 3x3 rotation, a 4x4 transform, (order, quaternion) or a "
+            f"scipy Rotation; got {pose!r}"
+        ) from None
     if m.shape == (3, 3):
         out = np.eye(4)
         out[:3, :3] = _checked_rotation(m)

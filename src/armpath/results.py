@@ -122,14 +122,17 @@ class Result:
         return json_text(self.doc)
 
     def save(self, path: str | Path) -> Path:
-        """Write the JSON document to ``path`` (the same file the CLI's ``--json`` prints);
-        :func:`load_result` reads it back. Returns the path."""
-        from armpath.export import output_folder
+        """Write the result to ``path`` by its suffix, as the CLI writes it: ``.json`` the
+        document (what ``--json`` prints; :func:`load_result` reads it back), ``.csv`` the
+        command table (step, ticks, joint values and tool point after each command), ``.xlsx``
+        both (the table and a summary sheet). Returns the path."""
+        from armpath.export import output_folder, write_result_file
 
         out = Path(path).expanduser()
         with output_folder(out.parent, prune=False) as folder:  # whole file or nothing
-            folder.write_text(out.name, self.to_json())
-        object.__setattr__(self, "path", out)
+            write_result_file(folder, out.name, self.doc, self.arm, self.sequence)
+        if out.suffix.lower() == ".json":
+            object.__setattr__(self, "path", out)
         return out
 
     def joint_trajectory(self, period_s: float | None = None) -> dict[str, Any]:
@@ -155,10 +158,20 @@ class Result:
 
     def plot(self, path: str | Path | None = None) -> Figure:
         """The joint values after each command, one panel per joint (a matplotlib Figure);
-        written as a PNG to ``path`` when given."""
-        from armpath.viz.figures import plot_joint_angles
+        written to ``path`` when given (``.png``, ``.svg`` or ``.pdf``)."""
+        from armpath.export import output_folder
+        from armpath.viz.figures import FIGURE_SUFFIXES, plot_joint_angles
 
-        return plot_joint_angles(path, self.sequence, self.title())
+        out = None if path is None else Path(path).expanduser()
+        if out is not None and out.suffix.lower() not in FIGURE_SUFFIXES:
+            raise InvalidInputError(
+                f"a figure is written as {', '.join(FIGURE_SUFFIXES)}, got {out.name!r}"
+            )
+        fig = plot_joint_angles(None, self.sequence, self.title())
+        if out is not None:
+            with output_folder(out.parent, prune=False) as folder:  # whole file or nothing
+                fig.savefig(folder.file(out.name), dpi=110)
+        return fig
 
     def animate(self, path: str | Path, *, fps: int = 15, max_frames: int = 120) -> int:
         """Write an animation of the motion (``.gif``, or ``.mp4`` with ffmpeg) to ``path``;

@@ -432,13 +432,8 @@ def _to_display(arm: SerialArm, q: np.ndarray) -> np.ndarray:
 
 
 def _from_display(arm: SerialArm, values: list[float]) -> np.ndarray:
-    from armpath.model.serial_arm import JointKind
-
-    q = np.array(values, dtype=float)
-    for i, j in enumerate(arm.joints):
-        if j.kind is JointKind.REVOLUTE:
-            q[i] = np.radians(q[i])
-    return q
+    """Joint values given in deg (revolute) and mm (prismatic) in rad / model units."""
+    return arm.lattice.joint_from_display(values)
 
 
 def _commands_csv(sequence: Any) -> str:

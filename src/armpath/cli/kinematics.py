@@ -30,7 +30,7 @@ from armpath.cli.common import (
     err_console,
     out_console,
 )
-from armpath.errors import ArmpathError, InvalidInputError
+from armpath.errors import InvalidInputError
 
 
 @app.command(context_settings=LOOSE)
@@ -52,7 +52,7 @@ def fk(
     For the seed arm the points are A–E and the fingertip; for other models the joint frame
     origins and the tool frame (4x4 pose, row-major).
     """
-    from armpath.kinematics import landmark_positions, tool_pose
+    from armpath.export import fk_document, json_line
     from armpath.model.catalog import resolve_model
 
     with _cli_errors():
@@ -60,42 +60,23 @@ def fk(
         units = _joint_units(arm)
         what = f"joint values q1 … q{arm.n_joints} ({', '.join(units)})"
         q = _from_display(arm, _numbers(angles, arm.n_joints, what))
-        pts = landmark_positions(arm, q)
-        pose = tool_pose(arm, q)
-        names = arm.landmark_names
+        doc = fk_document(arm, q)
         if json_out:
-            doc = {
-                "model": arm.name,
-                "joints": [float(v) for v in _to_display(arm, q)],
-                "points": {n: [float(c) for c in p] for n, p in zip(names, pts, strict=True)},
-                "tip": [float(c) for c in pose[:3, 3]],
-                "pose": [[float(c) for c in row] for row in pose],
-                "units": {"length": "mm", "angle": "deg", "joints": units},
-            }
-            from armpath.export import json_line
-
             typer.echo(json_line(doc))
         else:
             shown = _fmt(_to_display(arm, q), 1)
             table = Table(title=f"{arm.name}, q = {shown} {_units_text(units)}")
             for col in ("point", "x [mm]", "y [mm]", "z [mm]"):
                 table.add_column(escape(col), justify="right")
-            for n, p in zip(names, pts, strict=True):
+            for n, p in doc["points"].items():
                 table.add_row(n, *(f"{c:.4f}" for c in p))
             if arm.name == "seed":
-                table.add_row("tip", *(f"{c:.4f}" for c in pts[-1]))
+                table.add_row("tip", *(f"{c:.4f}" for c in doc["tip"]))
             out_console.print(table)
             if arm.name != "seed":
-                rows = "\n".join("  " + "  ".join(f"{c:11.6f}" for c in r) for r in pose)
+                rows = "\n".join("  " + "  ".join(f"{c:11.6f}" for c in r) for r in doc["pose"])
                 out_console.print(f"tool pose (rotation | position mm):\n{rows}")
-        warnings = []
-        try:
-            arm.check_limits(q, what="pose")
-        except ArmpathError as exc:
-            warnings.append(str(exc))
-        if arm.name == "seed" and np.min(pts[1:, 2]) < 0:
-            warnings.append("part of the arm is below the table (z < 0)")
-        for w in warnings:
+        for w in doc["warnings"]:
             err_console.print(f"warning: {w}", markup=False, soft_wrap=True)
 
 
@@ -156,6 +137,7 @@ def ik(
     family nearest a state). Exit status 1 if there is no solution; solutions outside the
     joint limits are listed, marked off limits, and count as solutions.
     """
+    from armpath.export import ik_document
     from armpath.ik import solve_ik
     from armpath.ik.solve import METHODS as IK_METHODS
     from armpath.model.catalog import resolve_model
@@ -191,27 +173,7 @@ def ik(
         units = _joint_units(arm)
         sols = _to_display(arm, result.solutions)
         inside: Any = result.within_limits if result.within_limits is not None else []
-        doc = {
-            "model": arm.name,
-            "method": result.method,
-            "target": (
-                {"pose": [[float(c) for c in r] for r in target]}
-                if pose is not None
-                else {"position": [float(c) for c in target]}
-            ),
-            "count": result.count,
-            "family_dimension": result.family_dimension,
-            "solutions": [[float(v) for v in s] for s in sols],
-            "residuals": [
-                {"position_mm": float(p), "rotation_deg": float(np.degrees(r))}
-                for p, r in zip(result.position_residual, result.rotation_residual_rad, strict=True)
-            ],
-            "within_limits": [bool(v) for v in inside],
-            "near_double": [bool(v) for v in result.near_double],
-            "near_singular": [bool(v) for v in result.near_singular],
-            "reason": result.reason,
-            "units": {"length": "mm", "angle": "deg", "joints": units},
-        }
+        doc = ik_document(arm, result, target, pose is not None)
         if json_out:
             typer.echo(json.dumps(doc))
         elif result.count:  # no solution: the error line alone

@@ -17,8 +17,9 @@ BoolArray = NDArray[np.bool_]
 class IKResult:
     """The inverse-kinematics solutions of one target.
 
-    ``solutions`` has shape ``(k, n)``: joint values in rad (revolute, wrapped to (-pi, pi]) or
-    the model's length unit (prismatic). ``position_residual`` (length unit) and
+    ``solutions`` has shape ``(k, n)``: joint values in rad (revolute: wrapped to (-pi, pi],
+    then turned by whole turns into the joint limits, or toward ``near`` where the limits
+    allow) or the model's length unit (prismatic). ``position_residual`` (length unit) and
     ``rotation_residual_rad`` are each solution's forward-kinematics distance to the target (the
     rotation residual is 0 for position-only goals). ``near_double`` marks solutions at a
     (near-)double root of the elimination, ``near_singular`` those whose Jacobian is (nearly)

@@ -279,10 +279,17 @@ def _with_nearest_member(
 def nearest_first(arm: SerialArm, result: IKResult, q: FloatArray) -> IKResult:
     """``result`` with its solutions ordered by the commands they need from ``q`` (the largest
     joint change in units of the joint's most ticks per command, revolute joints the shorter
-    way round), nearest first."""
-    d = result.solutions - np.asarray(q, dtype=np.float64)[None, :]
+    way round), nearest first; each revolute angle turned by whole turns to lie nearest ``q``
+    where the joint limits allow (a UR5's -187 deg rather than 173 deg from -80 deg)."""
+    q = np.asarray(q, dtype=np.float64)
+    sols = result.solutions.copy()
+    d = sols - q[None, :]
     for i, joint in enumerate(arm.joints):
         if joint.kind is JointKind.REVOLUTE:
+            turned = sols[:, i] - np.round(d[:, i] / (2.0 * np.pi)) * 2.0 * np.pi
+            lo, hi = joint.limits
+            fits = (turned >= lo - 1e-9) & (turned <= hi + 1e-9)
+            sols[:, i] = np.where(fits, turned, sols[:, i])
             d[:, i] = (d[:, i] + np.pi) % (2.0 * np.pi) - np.pi
     step = arm.lattice.tick * arm.lattice.max_ticks
     order = np.argsort(np.max(np.abs(d) / step, axis=1), kind="stable")
@@ -292,7 +299,7 @@ def nearest_first(arm: SerialArm, result: IKResult, q: FloatArray) -> IKResult:
 
     return replace(
         result,
-        solutions=result.solutions[order],
+        solutions=sols[order],
         position_residual=result.position_residual[order],
         rotation_residual_rad=result.rotation_residual_rad[order],
         near_double=result.near_double[order],

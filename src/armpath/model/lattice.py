@@ -12,6 +12,7 @@ unit for a prismatic one. Degrees and mm appear only at the edges (:meth:`Lattic
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from typing import Any
 
@@ -49,7 +50,12 @@ MAX_STEPS_PER_TICK = 1_000_000
 
 def check_command_period(period_s: float, what: str = "the command period") -> float:
     """``period_s`` (s) if it lies in [:data:`MIN_COMMAND_PERIOD_S`,
-    :data:`MAX_COMMAND_PERIOD_S`], else :class:`InvalidInputError` naming the limits."""
+    :data:`MAX_COMMAND_PERIOD_S`], else :class:`InvalidInputError` naming the limits (a
+    string or a flag, which ``float`` would take, is no period)."""
+    if isinstance(period_s, bool | np.bool_ | str | bytes) or not isinstance(
+        period_s, numbers.Real
+    ):
+        raise InvalidInputError(f"{what} must be a number of seconds, got {period_s!r}")
     value = float(period_s)
     if not (np.isfinite(value) and MIN_COMMAND_PERIOD_S <= value <= MAX_COMMAND_PERIOD_S):
         raise InvalidInputError(
@@ -218,6 +224,15 @@ class Lattice:
         v = np.asarray(q, dtype=np.float64)
         return np.asarray(
             np.where(self.prismatic, v * self.mm_per_unit, np.degrees(v)), dtype=np.float64
+        )
+
+    def joint_from_display(self, values: ArrayLike) -> FloatArray:
+        """Joint values ``(..., n)`` in display units (deg for revolute joints, mm for prismatic
+        ones) in rad / the length unit, on the lattice or not (:meth:`joint_display`'s
+        inverse)."""
+        v = np.asarray(values, dtype=np.float64)
+        return np.asarray(
+            np.where(self.prismatic, v / self.mm_per_unit, np.radians(v)), dtype=np.float64
         )
 
     def display(self, ticks: ArrayLike) -> FloatArray:

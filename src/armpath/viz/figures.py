@@ -247,6 +247,10 @@ def _label_marks(ax: Axes, marks: list[tuple[int, str]], x_span: float) -> None:
         )
 
 
+#: The files a figure may be written as.
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
 def plot_joint_angles(
     path: str | Path | None,
     seq: CommandSequence,
