@@ -382,6 +382,23 @@ def test_kinematics_from_python_in_degrees_are_the_clis_and_the_textbooks(tmp_pa
     assert armpath.inverse_kinematics("seed", target_mm=[4000.0, 0.0, 0.0])["count"] == 0
 
 
+def test_an_arm_given_as_an_object_is_told_where_the_scene_stands_its_arm():
+    """A ``SerialArm`` is used as it is, at its own base; the UR5 cell's [arm] stands its UR5
+    on a pedestal, so the object met the pedestal with no word of why. The error now says
+    where the scene stands its arm and how to stand it there; placed so, it plans."""
+    import armpath
+    from armpath.errors import CollisionError
+    from armpath.scenes.arm import placement_matrix
+
+    cell = armpath.load_scene(ROOT / "examples" / "ur5_cell.toml")
+    ur5 = armpath.load_arm("ur5")
+    with pytest.raises(CollisionError, match=r"not at \(-150, 0, 250\) mm where the scene"):
+        armpath.reach(ur5, [450.0, -150.0, 250.0], scene=cell)
+    placed = ur5.placed(placement_matrix(cell.arm_spec.base))
+    result = armpath.reach(placed, [450.0, -150.0, 250.0], scene=cell)
+    np.testing.assert_allclose(result.tool_positions_mm[-1], [450.0, -150.0, 250.0], atol=0.05)
+
+
 def test_api_refuses_bad_input_with_clear_errors():
     import armpath
     from armpath.errors import InvalidInputError

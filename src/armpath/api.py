@@ -14,8 +14,10 @@ stands where the scene's ``[arm]`` puts it.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -149,6 +151,29 @@ def arm_and_scene(
     if isinstance(arm, SerialArm):
         return arm.in_mm(), the_scene
     return scene_arm(the_scene, None if arm is None else str(arm), tip_link), the_scene
+
+
+@contextlib.contextmanager
+def _placement_hint(arm: ArmLike | None, scene: Scene) -> Iterator[None]:
+    """Name the likely cause of a collision where a :class:`SerialArm` given as it is stands
+    elsewhere than the scene's ``[arm]`` puts its arm (a model named by string stands there)."""
+    from armpath.errors import CollisionError
+    from armpath.scenes.arm import placement_matrix
+
+    try:
+        yield
+    except CollisionError as exc:
+        spec = scene.arm_spec
+        if not isinstance(arm, SerialArm) or spec is None or spec.base is None:
+            raise
+        if np.allclose(arm.T_world_base, placement_matrix(spec.base), atol=1e-9):
+            raise
+        where = ", ".join(f"{v:g}" for v in spec.base.position_mm)
+        raise CollisionError(
+            f"{exc} (the SerialArm given stands where its own base puts it, not at ({where}) "
+            f"mm where the scene's [arm] stands its arm: give the model by name, "
+            f"{spec.model!r}, to stand it there, or place it with SerialArm.placed)"
+        ) from None
 
 
 def _start_ticks(arm: SerialArm, start_deg: ArrayLike | None) -> NDArray[np.int64]:
@@ -409,20 +434,21 @@ def reach(
     )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
-        target = _point_mm(target_mm, "target_mm")
-        rule = _orientation(
-            the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg, target
-        )
-        found = plan_reach(
-            the_arm,
-            the_scene.world,
-            _start_ticks(the_arm, start_deg),
-            target / the_arm.mm_per_unit,
-            ReachOptions(tolerance_mm=tolerance_mm),
-            seed=seed,
-            orientation=rule,
-        )
-        doc = reach_result_dict(found, the_arm, the_scene)
+        with _placement_hint(arm, the_scene):
+            target = _point_mm(target_mm, "target_mm")
+            rule = _orientation(
+                the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg, target
+            )
+            found = plan_reach(
+                the_arm,
+                the_scene.world,
+                _start_ticks(the_arm, start_deg),
+                target / the_arm.mm_per_unit,
+                ReachOptions(tolerance_mm=tolerance_mm),
+                seed=seed,
+                orientation=rule,
+            )
+            doc = reach_result_dict(found, the_arm, the_scene)
     return _result(doc, the_arm, the_scene, found.sequence)
 
 
@@ -464,49 +490,52 @@ def plan(
     )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
-        weights = None
-        if energy_weights is not None:
-            w = np.asarray(energy_weights, dtype=np.float64)
-            if w.shape != (the_arm.n_joints,):
-                raise InvalidInputError(
-                    f"energy_weights needs one number per joint ({the_arm.n_joints}), got {w.size}"
-                )
-            weights = tuple(float(v) for v in w)
-        options = MotionOptions(
-            objective=objective_of(objective), energy_weights=weights, seed=seed
-        )
-        start = _start_ticks(the_arm, start_deg)
-        world = the_scene.world
-        target, rule = None, None
-        if to_mm is not None:
-            target = _point_mm(to_mm, "to_mm")
-            rule = _orientation(
-                the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg, target
+        with _placement_hint(arm, the_scene):
+            weights = None
+            if energy_weights is not None:
+                w = np.asarray(energy_weights, dtype=np.float64)
+                if w.shape != (the_arm.n_joints,):
+                    raise InvalidInputError(
+                        f"energy_weights needs one number per joint ({the_arm.n_joints}), "
+                        f"got {w.size}"
+                    )
+                weights = tuple(float(v) for v in w)
+            options = MotionOptions(
+                objective=objective_of(objective), energy_weights=weights, seed=seed
             )
-            found = plan_to_point(
+            start = _start_ticks(the_arm, start_deg)
+            world = the_scene.world
+            target, rule = None, None
+            if to_mm is not None:
+                target = _point_mm(to_mm, "to_mm")
+                rule = _orientation(
+                    the_arm, pose, angle_tolerance_deg, tool_axis, axis_tolerance_deg, target
+                )
+                found = plan_to_point(
+                    the_arm,
+                    world,
+                    start,
+                    target / the_arm.mm_per_unit,
+                    tolerance_mm,
+                    options,
+                    rule,
+                )
+            else:
+                if pose is not None or tool_axis is not None:
+                    raise InvalidInputError("pose and tool_axis go with to_mm")
+                assert to_deg is not None  # one goal given (checked above)
+                to = _joint_values(the_arm, to_deg, "to_deg")
+                goal = the_arm.lattice.from_display(to, "to_deg")
+                found = plan_motion(the_arm, world, start, goal[None, :], options)
+            doc = plan_result_dict(
+                found,
                 the_arm,
-                world,
-                start,
-                target / the_arm.mm_per_unit,
-                tolerance_mm,
-                options,
+                the_scene,
+                options.objective.value,
+                target,
+                tolerance_mm if target is not None else None,
                 rule,
             )
-        else:
-            if pose is not None or tool_axis is not None:
-                raise InvalidInputError("pose and tool_axis go with to_mm")
-            assert to_deg is not None  # one goal given (checked above)
-            goal = the_arm.lattice.from_display(_joint_values(the_arm, to_deg, "to_deg"), "to_deg")
-            found = plan_motion(the_arm, world, start, goal[None, :], options)
-        doc = plan_result_dict(
-            found,
-            the_arm,
-            the_scene,
-            options.objective.value,
-            target,
-            tolerance_mm if target is not None else None,
-            rule,
-        )
     return _result(doc, the_arm, the_scene, found.sequence)
 
 
@@ -552,31 +581,32 @@ def trace(
     rule = _axis_rule(tool_axis, axis_tolerance_deg)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
-        path: Curve | None
-        if curve is None or isinstance(curve, Curve):
-            if closed:
-                raise InvalidInputError(
-                    "closed goes with a curve given as points; a Curve says itself whether it "
-                    "is closed"
-                )
-            path = curve
-        else:
-            path = Polyline("curve", _points_mm(curve, "curve", 2), closed=closed)
-        options = TraceOptions(
-            tolerance_mm=tolerance_mm,
-            motion=MotionOptions(seed=seed),
-            axis_rule=rule,
-            bound=bound,
-            bound_samples=bound_samples,
-        )
-        found = trace_task(
-            the_scene,
-            the_arm,
-            options,
-            start_ticks=_start_ticks(the_arm, start_deg),
-            curve=path,
-        )
-        doc = trace_result_dict(found, the_arm, the_scene)
+        with _placement_hint(arm, the_scene):
+            path: Curve | None
+            if curve is None or isinstance(curve, Curve):
+                if closed:
+                    raise InvalidInputError(
+                        "closed goes with a curve given as points; a Curve says itself whether it "
+                        "is closed"
+                    )
+                path = curve
+            else:
+                path = Polyline("curve", _points_mm(curve, "curve", 2), closed=closed)
+            options = TraceOptions(
+                tolerance_mm=tolerance_mm,
+                motion=MotionOptions(seed=seed),
+                axis_rule=rule,
+                bound=bound,
+                bound_samples=bound_samples,
+            )
+            found = trace_task(
+                the_scene,
+                the_arm,
+                options,
+                start_ticks=_start_ticks(the_arm, start_deg),
+                curve=path,
+            )
+            doc = trace_result_dict(found, the_arm, the_scene)
     return _result(doc, the_arm, the_scene, found.sequence)
 
 
@@ -627,22 +657,23 @@ def spotweld(
     options = MotionOptions(objective=objective_of(objective), seed=seed)
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
-        targets = None if welds_mm is None else _points_mm(welds_mm, "welds_mm", 1)
-        found = spotweld_task(
-            the_scene,
-            the_arm,
-            order,
-            return_to_start,
-            tolerance_mm,
-            options,
-            start_ticks=_start_ticks(the_arm, start_deg),
-            targets_mm=targets,
-            tool_axis=rule,
-            bound=bound,
-            bound_samples=bound_samples,
-            pools=pools,
-        )
-        doc = tour_result_dict(found, the_arm, the_scene, options.objective.value)
+        with _placement_hint(arm, the_scene):
+            targets = None if welds_mm is None else _points_mm(welds_mm, "welds_mm", 1)
+            found = spotweld_task(
+                the_scene,
+                the_arm,
+                order,
+                return_to_start,
+                tolerance_mm,
+                options,
+                start_ticks=_start_ticks(the_arm, start_deg),
+                targets_mm=targets,
+                tool_axis=rule,
+                bound=bound,
+                bound_samples=bound_samples,
+                pools=pools,
+            )
+            doc = tour_result_dict(found, the_arm, the_scene, options.objective.value)
     return _result(doc, the_arm, the_scene, found.sequence)
 
 
