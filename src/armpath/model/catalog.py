@@ -168,7 +168,9 @@ def resolve_model(spec: str, tip_link: str | None = None) -> SerialArm:
     ``tip_link``) by path."""
     if spec in BUILTIN_MODELS:
         if tip_link is not None:
-            raise InvalidInputError(f"--tip-link names a link of a URDF; {spec!r} is built in")
+            raise InvalidInputError(
+                f"a tip link (--tip-link, tip_link=) names a link of a URDF; {spec!r} is built in"
+            )
         return BUILTIN_MODELS[spec]()
     if spec.strip() and (Path(spec).suffix.lower() in (".json", ".urdf") or Path(spec).is_file()):
         return load_robot_file(spec, tip_link)

@@ -295,7 +295,9 @@ def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
 
         return arm_from_urdf(p, tip_link)
     if tip_link is not None:
-        raise InvalidInputError(f"--tip-link names a link of a URDF; {p.name!r} is not one")
+        raise InvalidInputError(
+            f"a tip link (--tip-link, tip_link=) names a link of a URDF; {p.name!r} is not one"
+        )
     if suffix != ".json":
         raise InvalidInputError(f"robot file {p.name!r}: expected a .json D-H file or a .urdf")
     try:

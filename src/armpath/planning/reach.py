@@ -135,7 +135,8 @@ class LowerBound:
 
     ``commands = ceil(max_joint_change_deg / 2)``: no sequence of fewer commands can bring the
     fingertip within the tolerance. ``exact_max_joint_change_deg`` is the same minimum for
-    reaching the target exactly, attained at ``configuration_deg`` (joints 1-5).
+    reaching the target exactly, attained at ``configuration_deg`` (every joint, deg or mm;
+    joints that do not move the tool point as they start).
     """
 
     commands: int
@@ -446,7 +447,9 @@ def _lower_bound(p: _Problem, fam: _Family, tol: float) -> tuple[LowerBound, Flo
         commands=bound,
         max_joint_change_deg=float(np.degrees(best_tol)),
         exact_max_joint_change_deg=float(np.degrees(best_exact)),
-        configuration_deg=tuple(float(v) for v in np.degrees(best_q)),
+        # joint 6 does not move the fingertip: held where it starts
+        configuration_deg=tuple(float(v) for v in np.degrees(best_q))
+        + tuple(float(v) for v in np.degrees(ticks_to_rad(p.start_ticks[TIP_JOINTS:]))),
         method=(
             "min over all configurations within the tolerance of the target of the largest "
             "joint change: grid over the 2-D solution family (wrist point on a sphere around the "

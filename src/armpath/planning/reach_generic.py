@@ -763,9 +763,21 @@ def _lattice_too_coarse(
     lever = np.linalg.norm(tick_jacobian(arm, members[0]), axis=0)
     moving = np.flatnonzero(lever > 1e-9 * max(float(lever.max()), 1e-300))
     joints = ", ".join(str(j + 1) for j in moving)
+    rule = target.orientation
+    if isinstance(rule, AxisCone):
+        held = (
+            f" with the tool axis within {np.degrees(rule.tolerance_rad):g} deg of "
+            f"({', '.join(f'{v:.3g}' for v in rule.direction)})"
+        )
+        wider = ", or a wider axis tolerance (--axis-tolerance; axis_tolerance_deg=)"
+    elif rule is not None:
+        held = f" with the tool frame within {np.degrees(rule.tolerance_rad):g} deg of the pose"
+        wider = ", or a wider angle tolerance (--angle-tolerance; angle_tolerance_deg=)"
+    else:
+        held = wider = ""
     why = (
-        f"no lattice state puts the tool within {tolerance:g} {unit} of ({where}) {unit}: one "
-        f"tick of the joints that move the tool point there ({joints}) moves it "
+        f"no lattice state puts the tool within {tolerance:g} {unit} of ({where}) {unit}{held}: "
+        f"one tick of the joints that move the tool point there ({joints}) moves it "
         f"{lever[moving].min():.3g}..{lever[moving].max():.3g} {unit}"
     )
     tol = tolerance
@@ -783,9 +795,11 @@ def _lattice_too_coarse(
             )
             return (
                 f"{why}; the nearest found is {nearest:.3g} {unit} away: allow at least that "
-                f"(--tolerance; tolerance_mm= in Python){hint}"
+                f"(--tolerance; tolerance_mm= in Python){wider}{hint}"
             )
-    return f"{why}; none within {tol:g} {unit} either"
+    return f"{why}; none within {tol:g} {unit} either" + (
+        f": try{wider.removeprefix(', or')}" if wider else ""
+    )
 
 
 __all__ = [

@@ -91,16 +91,16 @@ def scene_arm(scene: Scene, model: str | None = None, tip_link: str | None = Non
     spec = scene.arm_spec
     if spec is not None and model == spec.model:
         model = None  # the scene's own arm, written out: keep all of [arm]
-    try:
-        if model is None:
-            base = spec or ArmSpec()
-            if tip_link is not None:
-                base = base.model_copy(update={"tip_link": tip_link})
-            return arm_from_spec(base, scene.base_dir)
+    if model is not None:  # the caller's model: its errors are the caller's, not the scene's
         return arm_from_spec(
             ArmSpec(model=model, base=spec.base if spec is not None else None, tip_link=tip_link),
             None,
         )
+    try:
+        base = spec or ArmSpec()
+        if tip_link is not None:
+            base = base.model_copy(update={"tip_link": tip_link})
+        return arm_from_spec(base, scene.base_dir)
     except SceneError:
         raise
     except InvalidInputError as exc:
