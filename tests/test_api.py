@@ -399,6 +399,30 @@ def test_an_arm_given_as_an_object_is_told_where_the_scene_stands_its_arm():
     np.testing.assert_allclose(result.tool_positions_mm[-1], [450.0, -150.0, 250.0], atol=0.05)
 
 
+def test_the_reach_bounds_configuration_is_a_whole_joint_state_at_the_target(seed_reach):
+    """The bound's configuration listed joints 1-5 of the seed arm's six; it now lists all six
+    (joint 6 where it starts), and the independent seed kinematics put its tool point within
+    the tolerance of the target."""
+    doc = seed_reach.doc
+    config = doc["lower_bound"]["configuration_deg"]
+    assert len(config) == 6 and config[5] == doc["initial_deg"][5]
+    tip = independent.points(np.array(config))[-1]
+    assert np.linalg.norm(tip - [300.0, 100.0, 200.0]) <= doc["tolerance_mm"] + 1e-9
+
+
+def test_a_reach_refused_for_its_lattice_names_the_orientation_rule_it_held():
+    """A tool axis held within 0.17 deg (radians meant) was refused as if the position
+    tolerance alone were too tight; the message now names the rule and the wider tolerance."""
+    import armpath
+    from armpath.errors import PlanningError
+
+    with pytest.raises(PlanningError) as caught:
+        armpath.reach("ur5", [400, 100, 300], tool_axis=[0, 0, -1], axis_tolerance_deg=0.17)
+    text = str(caught.value)
+    assert "with the tool axis within 0.17 deg of (0, 0, -1)" in text
+    assert "a wider axis tolerance (--axis-tolerance; axis_tolerance_deg=)" in text
+
+
 def test_api_refuses_bad_input_with_clear_errors():
     import armpath
     from armpath.errors import InvalidInputError
