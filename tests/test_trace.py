@@ -717,3 +717,35 @@ def test_an_untraced_stretch_over_a_closed_curves_start_is_one_arc():
         97.0,
         102.5,
     )
+
+
+def test_coverage_counts_overlapping_passes_once_and_within_the_reachable_arcs():
+    """The covered length summed the passes (an overlap counted twice) and the share of the
+    reachable arcs divided by their length whatever lay outside them (a closed circle:
+    1.00008). The union and the intersection against membership of 200,001 points."""
+    from armpath.planning.trace.reachability import CurveArc, common_mm, merged_arcs
+
+    rng = np.random.default_rng(5)
+    L = 100.0
+    s = np.linspace(0.0, L, 200_001)[:-1]
+    step = L / 200_000
+
+    def inside(arcs, closed):
+        hit = np.zeros(s.size, bool)
+        for a in arcs:
+            lo, hi = sorted((a.start_mm, a.end_mm))
+            if closed:
+                hit |= ((s - lo) % L) <= (hi - lo)
+            else:
+                hit |= (s >= lo) & (s <= hi)
+        return hit
+
+    for closed in (False, True):
+        for _ in range(50):
+            first = [CurveArc(*(rng.uniform(-20 if closed else 0, L + 30, 2))) for _ in range(3)]
+            second = [CurveArc(*(rng.uniform(0, L, 2))) for _ in range(2)]
+            a, b = merged_arcs(first, L, closed), merged_arcs(second, L, closed)
+            assert all(x0 < x1 <= y0 for (x0, x1), (y0, _) in zip(a, a[1:], strict=False))
+            ina, inb = inside(first, closed), inside(second, closed)
+            assert sum(x1 - x0 for x0, x1 in a) == pytest.approx(ina.sum() * step, abs=0.01)
+            assert common_mm(a, b) == pytest.approx((ina & inb).sum() * step, abs=0.01)

@@ -417,7 +417,7 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
             "covered_mm": covered,
             "reachable_mm": reachable,
             "curve_mm": L,
-            "of_reachable": covered / reachable if reachable > 0 else 0.0,
+            "of_reachable": result.covered_reachable_mm / reachable if reachable > 0 else 0.0,
             "of_curve": covered / L,
         },
         "metrics": metrics_dict(result.metrics),

@@ -52,7 +52,13 @@ from armpath.planning.trace.certificate import (
     certified_deviation,
 )
 from armpath.planning.trace.family import AxisRule, CurveFamily
-from armpath.planning.trace.reachability import CurveArc, CurveReachability, curve_reachability
+from armpath.planning.trace.reachability import (
+    CurveArc,
+    CurveReachability,
+    common_mm,
+    curve_reachability,
+    merged_arcs,
+)
 from armpath.planning.trace.reference import (
     CommandUnits,
     Piece,
@@ -166,7 +172,20 @@ class TraceResult:
     @property
     def covered_mm(self) -> float:
         """Length of the curve covered by the passes (mm; overlaps counted once)."""
-        return min(float(sum(p.covered_mm for p in self.passes)), self.curve.length)
+        return sum(b - a for a, b in self._covered())
+
+    @property
+    def covered_reachable_mm(self) -> float:
+        """Length of the reachable arcs covered by the passes (mm): a pass may run a hair past
+        an arc's end, found to its resolution."""
+        curve = self.curve
+        reachable = merged_arcs(self.reachability.reachable, curve.length, curve.closed)
+        return common_mm(self._covered(), reachable)
+
+    def _covered(self) -> list[tuple[float, float]]:
+        """The passes' union (:func:`merged_arcs`)."""
+        arcs = [CurveArc(p.start_mm, p.end_mm) for p in self.passes]
+        return merged_arcs(arcs, self.curve.length, self.curve.closed)
 
     @property
     def max_deviation_mm(self) -> float:

@@ -13,7 +13,7 @@ the tool must still come from outside the surface it works on), *collision with*
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from typing import TypeVar
 
@@ -47,6 +47,48 @@ class CurveArc:
     @property
     def length_mm(self) -> float:
         return self.end_mm - self.start_mm
+
+
+def merged_arcs(
+    arcs: Iterable[CurveArc], length_mm: float, closed: bool
+) -> list[tuple[float, float]]:
+    """The arcs' union as sorted disjoint intervals of arc length within the curve (a closed
+    curve's arcs taken round it: an arc running on past the start continues from 0)."""
+    pieces: list[tuple[float, float]] = []
+    for arc in arcs:
+        a, b = sorted((arc.start_mm, arc.end_mm))
+        if not closed:
+            pieces.append((max(a, 0.0), min(b, length_mm)))
+            continue
+        if b - a >= length_mm:
+            return [(0.0, length_mm)]
+        a0 = a % length_mm
+        b0 = a0 + (b - a)
+        pieces.append((a0, min(b0, length_mm)))
+        if b0 > length_mm:
+            pieces.append((0.0, b0 - length_mm))
+    out: list[tuple[float, float]] = []
+    for a, b in sorted(p for p in pieces if p[1] > p[0]):
+        if out and a <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], b))
+        else:
+            out.append((a, b))
+    return out
+
+
+def common_mm(first: list[tuple[float, float]], second: list[tuple[float, float]]) -> float:
+    """Length of the intersection of two unions of sorted disjoint intervals
+    (:func:`merged_arcs`)."""
+    total, i, j = 0.0, 0, 0
+    while i < len(first) and j < len(second):
+        lo = max(first[i][0], second[j][0])
+        hi = min(first[i][1], second[j][1])
+        total += max(hi - lo, 0.0)
+        if first[i][1] < second[j][1]:
+            i += 1
+        else:
+            j += 1
+    return total
 
 
 @dataclass(frozen=True)
