@@ -745,7 +745,7 @@ def test_coverage_counts_overlapping_passes_once_and_within_the_reachable_arcs()
             first = [CurveArc(*(rng.uniform(-20 if closed else 0, L + 30, 2))) for _ in range(3)]
             second = [CurveArc(*(rng.uniform(0, L, 2))) for _ in range(2)]
             a, b = merged_arcs(first, L, closed), merged_arcs(second, L, closed)
-            assert all(x0 < x1 <= y0 for (x0, x1), (y0, _) in zip(a, a[1:], strict=False))
+            assert all(x0 < x1 <= y0 for (x0, x1), (y0, _) in itertools.pairwise(a))
             ina, inb = inside(first, closed), inside(second, closed)
             assert sum(x1 - x0 for x0, x1 in a) == pytest.approx(ina.sum() * step, abs=0.01)
             assert common_mm(a, b) == pytest.approx((ina & inb).sum() * step, abs=0.01)
