@@ -117,3 +117,57 @@ def test_an_arms_lattice_is_refused_in_the_units_and_limits_written(tmp_path, ar
     f.write_text(f'name = "a"\n[arm]\nmodel = "ur5"\n{arm}\n')
     with pytest.raises(InvalidInputError, match=message):
         scene_arm(load_scene(f))
+
+
+def test_a_scenes_tool_is_carried_from_the_flange_of_a_dh_table_and_of_a_urdf(tmp_path):
+    """A scene's ``[arm] tool`` replaced everything after the last joint frame: a D-H table's
+    last a and alpha (a KUKA-like alpha6 = 180 deg turned the tool back into the forearm) and
+    a URDF's fixed joints up to its tip link (a 60 mm flange lost). It is now carried from the
+    flange, as the README says: the tool point at home is the textbook D-H product (and the
+    URDF chain multiplied out here) times the tool, in the scene's base placement."""
+    import json
+
+    from armpath.kinematics import tool_pose
+    from armpath.scenes.arm import scene_arm
+    from independent_dh import _rx, _rz, _tx, _tz, dh_pose
+
+    D = np.pi / 180
+    a, alpha, d = [260, 680, -35, 0, 0, 12], [-90, 0, 90, -90, 90, 180], [675, 0, 0, 670, 0, 158]
+    (tmp_path / "kr.json").write_text(json.dumps({
+        "name": "kr", "convention": "standard", "units": {"length": "mm", "angle": "deg"},
+        "links": [{"a": x, "alpha": y, "d": z} for x, y, z in zip(a, alpha, d, strict=True)],
+    }))  # fmt: skip
+    tool = _tx(5.0) @ _tz(100.0) @ _rx(30 * D)
+    base = _tz(400.0) @ _rz(90 * D)
+    (tmp_path / "kr.toml").write_text(
+        'name = "kr"\n[arm]\nmodel = "kr.json"\n'
+        "base = { position_mm = [0, 0, 400], rotation_deg = [0, 0, 90] }\n"
+        "tool = { position_mm = [5, 0, 100], rotation_deg = [30, 0, 0] }\n"
+    )
+    arm = scene_arm(load_scene(tmp_path / "kr.toml"))
+    q = np.array([10.0, -30.0, 20.0, 40.0, -50.0, 60.0]) * D
+    truth = base @ dh_pose(a, np.array(alpha) * D, d, q) @ tool
+    np.testing.assert_allclose(tool_pose(arm, q), truth, atol=1e-9)
+
+    (tmp_path / "bot.urdf").write_text(
+        '<robot name="bot"><link name="b"/><link name="l1"/><link name="l2"/><link name="f"/>'
+        '<joint name="j1" type="revolute"><parent link="b"/><child link="l1"/>'
+        '<origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+        '<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>'
+        '<origin xyz="0.4 0 0" rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+        '<joint name="flange" type="fixed"><parent link="l2"/><child link="f"/>'
+        '<origin xyz="0.06 0 0" rpy="0 -0.5235987755982988 0"/></joint></robot>'
+    )
+    (tmp_path / "bot.toml").write_text(
+        'name = "bot"\n[arm]\nmodel = "bot.urdf"\ntip_link = "f"\n'
+        "tool = { position_mm = [0, 0, 100] }\n"
+    )
+    arm = scene_arm(load_scene(tmp_path / "bot.toml"))
+    q = np.array([0.4, -0.7])
+    ry = np.array([[np.cos(-np.pi / 6), 0, np.sin(-np.pi / 6), 0], [0, 1, 0, 0],
+                   [-np.sin(-np.pi / 6), 0, np.cos(-np.pi / 6), 0], [0, 0, 0, 1.0]])  # fmt: skip
+    truth = _tz(300.0) @ _rz(q[0]) @ _tx(400.0) @ _rx(np.pi / 2) @ _rz(q[1])
+    truth = truth @ _tx(60.0) @ ry @ _tz(100.0)
+    np.testing.assert_allclose(tool_pose(arm, q), truth, atol=1e-9)

@@ -142,6 +142,7 @@ def dh_arm(
         name=name,
         joints=tuple(joints),
         T_flange_tool=tool,
+        T_joint_flange=carry if convention == "standard" else np.eye(4),
         landmarks=landmarks,
         links=links,
         home=home_q,

@@ -204,7 +204,8 @@ class SerialArm:
     joints:
         The chain, base to tip.
     T_flange_tool:
-        4x4 transform from the last joint frame to the tool frame (the fingertip for the seed arm).
+        4x4 transform from the last joint frame to the tool frame (the fingertip for the seed
+        arm), through the flange (:attr:`T_joint_flange`).
     landmarks:
         Named frame origins along the arm, base to tip.
     links:
@@ -233,6 +234,10 @@ class SerialArm:
     approach_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
     #: The time one command takes on the arm's controller (s): the clock of timed exports.
     command_period_s: float = DEFAULT_COMMAND_PERIOD_S
+    #: From the last joint frame to the flange, the frame a tool is given from
+    #: (:meth:`with_tool`): a standard D-H table's last ``a`` and ``alpha``, a URDF's fixed
+    #: joints up to its tip link; the identity where the last joint frame is the flange.
+    T_joint_flange: FloatArray = field(default_factory=lambda: np.eye(4))
 
     def __repr__(self) -> str:
         kinds = "".join("P" if j.kind == JointKind.PRISMATIC else "R" for j in self.joints)
@@ -246,6 +251,10 @@ class SerialArm:
         if n > MAX_JOINTS:  # memory and time grow with the joints (300 joints: 2.7 GB a plan)
             raise InvalidInputError(f"a serial arm may have at most {MAX_JOINTS} joints, got {n}")
         object.__setattr__(self, "T_flange_tool", _frozen(self.T_flange_tool, (4, 4), "tool"))
+        object.__setattr__(
+            self, "T_joint_flange", _frozen(self.T_joint_flange, (4, 4), "flange")
+        )
+        _check_rigid(self.T_joint_flange, "flange")
         object.__setattr__(self, "T_world_base", _frozen(self.T_world_base, (4, 4), "base"))
         object.__setattr__(self, "home", _frozen(self.home, (n,), "home"))
         for lm in self.landmarks:
@@ -311,13 +320,15 @@ class SerialArm:
         radius: float | None = None,
         approach_axis: ArrayLike | None = None,
     ) -> SerialArm:
-        """The arm carrying another tool: ``T_flange_tool`` from the last joint's frame to the
-        tool centre point. Landmarks in the tool frame are replaced by one at the new tool point
+        """The arm carrying another tool: ``T_flange_tool`` from the flange
+        (:attr:`T_joint_flange`) to the tool centre point, in place of the tool it carried.
+        Landmarks in the tool frame are replaced by one at the new tool point
         (``TCP``), and links that ended at them end there (the tool's own capsule; ``radius``
         replaces their radius when given). ``approach_axis`` (tool frame) is where the tool
         points (kept when not given)."""
         T = _frozen(T_flange_tool, (4, 4), "tool")
         _check_rigid(T, "tool")
+        T = _frozen(np.asarray(self.T_joint_flange) @ T, (4, 4), "tool")
         n = self.n_joints
         tool_frame = n + 1
         old = [i for i, lm in enumerate(self.landmarks) if lm.frame == tool_frame]
@@ -425,6 +436,7 @@ class SerialArm:
             self,
             joints=tuple(joints),
             T_flange_tool=moved(self.T_flange_tool),
+            T_joint_flange=moved(self.T_joint_flange),
             T_world_base=moved(self.T_world_base),
             landmarks=tuple(
                 replace(lm, offset=(lm.offset[0] * k, lm.offset[1] * k, lm.offset[2] * k))

@@ -48,6 +48,7 @@ def arm_to_dict(arm: SerialArm) -> dict[str, Any]:
             for i, j in enumerate(arm.joints)
         ],
         "T_flange_tool": np.asarray(arm.T_flange_tool).tolist(),
+        "T_joint_flange": np.asarray(arm.T_joint_flange).tolist(),
         "T_world_base": np.asarray(arm.T_world_base).tolist(),
         "landmarks": [
             {"name": lm.name, "frame": lm.frame, "offset": list(lm.offset)} for lm in arm.landmarks
@@ -206,6 +207,9 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             name=_text(doc, "name"),
             joints=joints,
             T_flange_tool=_numbers(doc, "T_flange_tool", (4, 4)),
+            T_joint_flange=(
+                _numbers(doc, "T_joint_flange", (4, 4)) if "T_joint_flange" in doc else np.eye(4)
+            ),
             landmarks=landmarks,
             links=links,
             home=_numbers(doc, "home", (len(joints),)),

@@ -139,6 +139,7 @@ def arm_from_urdf(
         name=f"{robot} [{tip_link}]",
         joints=tuple(joints),
         T_flange_tool=carry,
+        T_joint_flange=carry,
         landmarks=landmarks,
         links=links,
         home=np.clip(np.zeros(n), lo_all, hi_all),
