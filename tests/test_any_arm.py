@@ -7,6 +7,8 @@ commands is bounded by a multi-start SLSQP of the largest joint change written h
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize
@@ -611,3 +613,58 @@ def test_a_sixteen_joint_arm_reaches_and_a_reach_too_long_is_refused():
     arm = scene_arm(scene)
     with pytest.raises(InvalidInputError, match=f"the limit is {MAX_COMMANDS:,}"):
         plan_reach(arm, scene.world, arm.lattice.to_ticks(arm.home), [400.0, 100.0, 300.0])
+
+
+@pytest.mark.slow  # 40 s
+def test_a_five_axis_arm_traces_a_circle_and_welds(tmp_path):
+    """A five-axis arm (a KUKA-like table without its last joint, a 150 mm tool off its
+    axis) found every curve 'out of reach' (its family was solved for whole tool rotations,
+    which five joints cannot set) and its tour raised from an empty layer of the guide. It
+    now traces a free circle and visits two welds; the plan replays on the textbook D-H
+    product (times the tool) within the tolerance, once round, and at each weld."""
+    from armpath.planning.tour import plan_tour
+    from armpath.scenes.arm import scene_arm
+
+    D = np.pi / 180
+    a, alpha, d = [260, 680, -35, 0, 0], [-90, 0, 90, -90, 90], [675, 0, 0, -670, 0]
+    offset = [0, -90, 0, 0, 0]
+    (tmp_path / "kr5.json").write_text(json.dumps({
+        "name": "kr5", "convention": "standard", "units": {"length": "mm", "angle": "deg"},
+        "links": [{"a": x, "alpha": y, "d": z, "offset": o, "limits": [-170, 170]}
+                  for x, y, z, o in zip(a, alpha, d, offset, strict=True)],
+    }))  # fmt: skip
+    scene = scene_from_dict({
+        "name": "five",
+        "arm": {"model": str(tmp_path / "kr5.json"), "home_deg": [0, 10, -10, 0, -60],
+                "tool": {"position_mm": [0, 0, 150]}},
+        "tasks": {"trace": {"curve": {
+            "type": "parametric", "name": "ring", "x": "970 + 30*cos(t)",
+            "y": "30*sin(t)", "z": "1150", "t": [0, 2 * np.pi]}}},
+    })  # fmt: skip
+    arm = scene_arm(scene)
+    assert arm.n_joints == 5
+
+    def tool_point(q):
+        T = idh.dh_pose(a, np.array(alpha) * D, d, q, offset=np.array(offset) * D)
+        return (T @ np.array([0.0, 0.0, 150.0, 1.0]))[:3]
+
+    start = arm.lattice.to_ticks(arm.home)
+    r = plan_trace(arm, scene.world, start, scene.trace_curve(), TraceOptions(bound=False))
+    states = r.sequence.states()
+    assert np.all(np.abs(np.diff(states, axis=0)) <= 20)
+    t = np.linspace(0, 1, 21)
+    swept = []
+    for p in r.passes:
+        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 5) * (D / 10)
+        P = np.array([tool_point(x) for x in q])
+        dev = np.hypot(np.hypot(P[:, 0] - 970, P[:, 1]) - 30, P[:, 2] - 1150)
+        assert dev.max() <= 0.1
+        swept.append(np.unwrap(np.arctan2(P[:, 1], P[:, 0] - 970)))
+    assert sum(np.ptp(s) for s in swept) >= 2 * np.pi - 1e-3
+    welds = np.array([[960.0, 20.0, 1160.0], [990.0, -20.0, 1140.0]])
+    tour = plan_tour(arm, scene.world, start, welds, bound=False)
+    final = tour.sequence.states()
+    for v in tour.visits:
+        reached = tool_point(final[v.after_command] * (D / 10))
+        assert np.linalg.norm(reached - welds[v.target_index]) <= 0.05

@@ -532,8 +532,9 @@ class CollisionWorld:
             v, lo = o.segment_distance_bounds(p0, p1)
             values.append(v - radii)
             lowers.append(lo - radii)
-        cols_v = [np.stack(values, axis=-1).reshape(*batch, -1)] if values else []
-        cols_l = [np.stack(lowers, axis=-1).reshape(*batch, -1)] if lowers else []
+        width = p0.shape[-2] * len(values)  # (not -1: no configurations, an empty batch)
+        cols_v = [np.stack(values, axis=-1).reshape(*batch, width)] if values else []
+        cols_l = [np.stack(lowers, axis=-1).reshape(*batch, width)] if lowers else []
         if self.self_pairs(arm):
             d = self._self_clearances(arm, pts)
             cols_v.append(d)

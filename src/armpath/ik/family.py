@@ -76,6 +76,15 @@ def shift_into_limits(arm: SerialArm, q: FloatArray, near: FloatArray | None = N
     return out
 
 
+def _skew(v: FloatArray) -> FloatArray:
+    """The cross-product matrices ``(M, 3, 3)`` of vectors ``v`` ``(M, 3)``."""
+    out = np.zeros((*v.shape[:-1], 3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class GenericFamily:
     """Samples of the solution family of ``target`` for ``arm`` (any arm)."""
@@ -161,11 +170,14 @@ class GenericFamily:
         rotations: FloatArray | None = None,
         lower: FloatArray | None = None,
         upper: FloatArray | None = None,
+        axes: FloatArray | None = None,
     ) -> FloatArray:
         """Damped Newton (Levenberg-Marquardt) steps that bring each row onto the target: the
         position, the orientation rule (a penalty that acts only outside it) or, with
-        ``rotations`` ``(M, 3, 3)``, each row's own full tool rotation. Steps stay within the
-        limits and, if given, the box ``lower`` .. ``upper`` (per row or for all)."""
+        ``rotations`` ``(M, 3, 3)``, each row's own full tool rotation, or with ``axes``
+        ``(M, 3)`` each row's own direction of the tool's approach axis (the turn about it
+        free: an arm of five joints sets no more). Steps stay within the limits and, if given,
+        the box ``lower`` .. ``upper`` (per row or for all)."""
         arm = self.arm
         lo = arm.lower if lower is None else np.maximum(arm.lower, lower)
         hi = arm.upper if upper is None else np.minimum(arm.upper, upper)
@@ -189,6 +201,11 @@ class GenericFamily:
                 )
                 parts.append(e_rot)
                 jacs.append(J[:, 3:])
+            elif axes is not None:
+                axis = tool[:, :3, :3] @ np.asarray(arm.approach_axis, dtype=np.float64)
+                parts.append(axes - axis)
+                # the axis turns with the tool: d(axis) = w x axis = -[axis]x J_w dq
+                jacs.append(-_skew(axis) @ J[:, 3:])
             elif self.target.orientation is not None:
                 e_ang, J_ang = _rule_error(self.target, tool[:, :3, :3], J[:, 3:])
                 parts.append(e_ang[:, None])

@@ -251,9 +251,7 @@ class SerialArm:
         if n > MAX_JOINTS:  # memory and time grow with the joints (300 joints: 2.7 GB a plan)
             raise InvalidInputError(f"a serial arm may have at most {MAX_JOINTS} joints, got {n}")
         object.__setattr__(self, "T_flange_tool", _frozen(self.T_flange_tool, (4, 4), "tool"))
-        object.__setattr__(
-            self, "T_joint_flange", _frozen(self.T_joint_flange, (4, 4), "flange")
-        )
+        object.__setattr__(self, "T_joint_flange", _frozen(self.T_joint_flange, (4, 4), "flange"))
         _check_rigid(self.T_joint_flange, "flange")
         object.__setattr__(self, "T_world_base", _frozen(self.T_world_base, (4, 4), "base"))
         object.__setattr__(self, "home", _frozen(self.home, (n,), "home"))

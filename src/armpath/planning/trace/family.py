@@ -701,7 +701,10 @@ class GenericCurveFamily(CurveFamily):
         a = np.asarray(arm.approach_axis)
         wanted = Rs @ a  # (M, 3) the tool direction of each frame
         if not self._point_alone:
-            q = fam.refine(starts, iterations=40, rotations=Rs)
+            if arm.n_joints < 6:  # five joints set the tool's direction, not its turn about it
+                q = fam.refine(starts, iterations=40, axes=wanted)
+            else:
+                q = fam.refine(starts, iterations=40, rotations=Rs)
             # the tool axis exactly (the turn about it is free): keep what reaches the point
             axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, wanted)
             good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
