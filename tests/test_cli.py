@@ -328,3 +328,20 @@ def test_huge_joint_values_print_in_exponent_form_and_a_zero_tool_axis_is_named(
     assert max(len(line) for line in r.stdout.splitlines()) < 120
     r = run("plan", "--to-xyz", "300", "0", "200", "--tool-axis", "0", "0", "0")
     assert r.returncode == 1 and "the tool-axis direction (--tool-axis" in r.stderr
+
+
+def test_an_arm_named_with_brackets_keeps_them_in_the_table_titles(tmp_path):
+    """A URDF arm is named with its tip link ("bot [f]"): the tables read the brackets as
+    markup and showed "bot "."""
+    from cli_in_process import run_in_process
+
+    (tmp_path / "bot.urdf").write_text(
+        '<robot name="bot"><link name="b"/><link name="f"/>'
+        '<joint name="j1" type="revolute"><parent link="b"/><child link="f"/>'
+        '<origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint></robot>'
+    )
+    for args in (["fk", "--model", "bot.urdf", "10"], ["model", "show", "bot.urdf"]):
+        r = run_in_process(args, tmp_path)
+        assert r.returncode == 0, r.stderr
+        assert "bot [f]" in r.stdout

@@ -65,7 +65,7 @@ def fk(
             typer.echo(json_line(doc))
         else:
             shown = _fmt(_to_display(arm, q), 1)
-            table = Table(title=f"{arm.name}, q = {shown} {_units_text(units)}")
+            table = Table(title=escape(f"{arm.name}, q = {shown} {_units_text(units)}"))
             for col in ("point", "x [mm]", "y [mm]", "z [mm]"):
                 table.add_column(escape(col), justify="right")
             for n, p in doc["points"].items():

@@ -9,6 +9,7 @@ from typing import Annotated
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from armpath.cli.common import TipLinkOption, _cli_errors, _to_display, app, out_console
@@ -56,7 +57,9 @@ def show(
             typer.echo(json_text(arm_to_dict(arm)), nl=False)
             return
         units = arm.lattice.units
-        table = Table(title=f"{arm.name}: {arm.n_joints} joints, lengths in {arm.length_unit}")
+        table = Table(
+            title=escape(f"{arm.name}: {arm.n_joints} joints, lengths in {arm.length_unit}")
+        )
         for col in ("joint", "kind", "axis", "limits", "tick", "max ticks"):
             table.add_column(col)
         shown_limits = _to_display(arm, np.vstack([arm.lower, arm.upper]))

@@ -648,7 +648,9 @@ def rcm(
                 t_lat = np.concatenate([tp for tp, _ in lattice])
                 lattice_dev = np.concatenate([d for _, d in lattice])
             table = Table(
-                title=f"{arm.name}: tool tip held on {_fmt(c0, 1)} mm, one turn in {duration:g} s",
+                title=escape(
+                    f"{arm.name}: tool tip held on {_fmt(c0, 1)} mm, one turn in {duration:g} s"
+                ),
                 box=box.SIMPLE,
             )
             for name in ("quantity", "value", "unit"):

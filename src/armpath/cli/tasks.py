@@ -103,8 +103,9 @@ def _clearance_text(c: dict[str, Any], proven: bool = False) -> str:
 
 
 def _scene_text(name: str, wall: str | None) -> str:
-    """The scene's name and, when it has a hollow workpiece, how its wall is measured."""
-    return f"{name}; workpiece wall measured {wall}" if wall else name
+    """The scene's name and, when it has a hollow workpiece, how its wall is measured (as
+    text, not markup: a name may hold brackets)."""
+    return escape(f"{name}; workpiece wall measured {wall}" if wall else name)
 
 
 def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
@@ -113,7 +114,7 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     seq = result.sequence
     grid = seq.grid
     lb = result.lower_bound
-    table = Table(title=f"reach ({arm.name})", show_header=False)
+    table = Table(title=escape(f"reach ({arm.name})"), show_header=False)
     table.add_column("quantity", style="bold")
     table.add_column("value")
     units = _units_text(grid.units)
@@ -407,7 +408,7 @@ def _orientation_text(rule: dict[str, Any], angle_deg: float) -> str:
 
 
 def _plan_summary(doc: dict[str, Any], title: str) -> Table:
-    table = Table(title=title, show_header=False)
+    table = Table(title=escape(title), show_header=False)
     table.add_column("quantity", style="bold")
     table.add_column("value")
     m = doc["metrics"]
@@ -778,7 +779,8 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     from armpath.report import arc_ends
 
     table = Table(
-        title=f"trace {doc['curve']['definition'].get('name', 'curve')}", show_header=False
+        title=escape(f"trace {doc['curve']['definition'].get('name', 'curve')}"),
+        show_header=False,
     )
     table.add_column("quantity", style="bold")
     table.add_column("value")
@@ -1194,9 +1196,11 @@ def _print_run(
     written = folder.written
     wall = scene.wall_thickness
     table = Table(
-        title=f"armpath {__version__}: {heading}"
-        + (f", scene {scene.name}" if seed_job else "")  # another run's heading names it
-        + (f", wall thickness {wall.value}" if wall else "")
+        title=escape(
+            f"armpath {__version__}: {heading}"
+            + (f", scene {scene.name}" if seed_job else "")  # another run's heading names it
+            + (f", wall thickness {wall.value}" if wall else "")
+        )
     )
     for col in ("task", "commands", "lower bound", "error [mm]", "min clearance [mm]"):
         table.add_column(escape(col), justify="left" if col == "task" else "right")

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import numpy as np
 import typer
 from rich import box
+from rich.markup import escape
 from rich.table import Table
 
 from armpath.budget import (
@@ -172,7 +173,7 @@ def workspace(
                 ("time", f"{seconds:.1f}", "s"),
                 ("rate", f"{grid.samples / seconds / 1e6:.2f}", "million samples/s"),
             ]
-            table = Table(title=f"workspace of {arm.name}", box=box.SIMPLE)
+            table = Table(title=escape(f"workspace of {arm.name}"), box=box.SIMPLE)
             for name in ("quantity", "value", "unit"):
                 table.add_column(name)
             for row in rows:
