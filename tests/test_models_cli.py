@@ -201,6 +201,20 @@ def test_a_broken_urdf_gets_one_line_saying_what_is_wrong(tmp_path):
             "an element lacks its 'name' attribute",
         ),
         "notype.urdf": (good.replace(' type="revolute"', "", 1), "has no type"),
+        # a joint whose parent is no link: the chain began there, silently two joints short
+        "parent.urdf": (
+            good.replace('<parent link="link_2" />', '<parent link="link_2x" />', 1),
+            "joint 'q3' names parent link 'link_2x', which is not a link of the file",
+        ),
+        # a mimic joint was taken as a joint of its own
+        "mimic.urdf": (
+            good.replace(
+                '<child link="link_3" />',
+                '<child link="link_3" /><mimic joint="q2" multiplier="0.5" />',
+                1,
+            ),
+            "joint 'q3' mimics joint 'q2'",
+        ),
     }
     for name, (text, needle) in cases.items():
         (tmp_path / name).write_text(text, encoding="utf-8")

@@ -73,6 +73,14 @@ def arm_from_urdf(
         ) from None
     except Exception as exc:  # yourdfpy raises many types for malformed URDF
         raise InvalidInputError(f"URDF {p.name!r} could not be parsed: {exc}") from exc
+    link_names = {lk.name for lk in urdf.robot.links}
+    for j in urdf.robot.joints:
+        for role, name in (("parent", j.parent), ("child", j.child)):
+            if name not in link_names:
+                raise InvalidInputError(
+                    f"URDF {p.name!r}: joint {j.name!r} names {role} link {name!r}, which is "
+                    "not a link of the file"
+                )
     joints_by_child = {j.child: j for j in urdf.robot.joints}
     children: dict[str, list[str]] = {}
     for j in urdf.robot.joints:
@@ -108,6 +116,11 @@ def arm_from_urdf(
         if uj.type == "fixed":
             carry = carry @ origin
             continue
+        if getattr(uj, "mimic", None) is not None:
+            raise InvalidInputError(
+                f"URDF {p.name!r}: joint {uj.name!r} mimics joint {uj.mimic.joint!r}; armpath "
+                "commands every joint on its own, so a mimic joint is not supported"
+            )
         if uj.type is None:
             raise InvalidInputError(f"URDF {p.name!r}: joint {uj.name!r} has no type")
         if uj.type not in ("revolute", "continuous", "prismatic"):
