@@ -222,3 +222,14 @@ def test_a_broken_urdf_gets_one_line_saying_what_is_wrong(tmp_path):
         assert r.returncode == 1 and r.stdout == "", (name, r.stdout)
         assert r.stderr.count("\n") == 1 and r.stderr.startswith(f"error: URDF {name!r}"), r.stderr
         assert needle in r.stderr, r.stderr
+
+
+def test_a_robot_files_mistake_names_the_file(tmp_path):
+    """A D-H robot file's mistakes were reported as "robot file: links[0]: ...", which file
+    not said."""
+    from cli_in_process import run_in_process
+
+    (tmp_path / "typo.json").write_text('{"links": [{"a": 100, "alpah": 90}]}')
+    r = run_in_process(["fk", "0", "--model", "typo.json"], tmp_path)
+    assert r.returncode == 1
+    assert "error: robot file 'typo.json': links[0]: unknown key(s) ['alpah']" in r.stderr

@@ -171,3 +171,25 @@ def test_a_scenes_tool_is_carried_from_the_flange_of_a_dh_table_and_of_a_urdf(tm
     truth = _tz(300.0) @ _rz(q[0]) @ _tx(400.0) @ _rx(np.pi / 2) @ _rz(q[1])
     truth = truth @ _tx(60.0) @ ry @ _tz(100.0)
     np.testing.assert_allclose(tool_pose(arm, q), truth, atol=1e-9)
+
+
+def test_a_home_off_the_lattice_or_in_collision_is_named_where_it_is_written(tmp_path):
+    """A scene's home_deg off the 0.1 deg lattice was refused as "the arm's home pose", naming
+    neither the scene nor the key; a home in collision was "start state is in collision",
+    and a trace scanned its curve for seconds before saying so. Both now say where to look,
+    before any planning."""
+    from cli_in_process import run_in_process
+
+    head = 'name = "h"\n[[obstacles]]\ntype = "half_space"\nname = "table"\n'
+    head += "point = [0, 0, 0]\nnormal = [0, 0, 1]\n"
+    curve = '[tasks.trace.curve]\ntype = "polyline"\nname = "l"\n'
+    curve += "points_mm = [[300, 0, 100], [300, 20, 100]]\n"
+    (tmp_path / "off.toml").write_text(head + "[arm]\nhome_deg = [0, -90, 0, 0, -90.05, 0]\n")
+    (tmp_path / "down.toml").write_text(head + "[arm]\nhome_deg = [0, 120, 0, 0, 0, 0]\n" + curve)
+    r = run_in_process(["reach", "300", "100", "200", "--scene", "off.toml"], tmp_path)
+    assert r.returncode == 1
+    assert "scene off.toml: arm: arm.home_deg: joint 5 is not a whole number" in r.stderr
+    r = run_in_process(["trace", "--scene", "down.toml", "--no-bound"], tmp_path)
+    assert r.returncode == 1 and "reachability" not in r.stderr
+    assert "start state is in collision" in r.stderr and "the arm's home pose" in r.stderr
+    assert "[arm] home_deg" in r.stderr

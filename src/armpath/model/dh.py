@@ -174,7 +174,9 @@ def _transform(value: Any, where: str, length_scale: float) -> FloatArray:
     return T
 
 
-def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
+def robot_from_dict(
+    doc: Mapping[str, Any], name: str = "robot", source: str = "robot file"
+) -> SerialArm:
     """Build an arm from the JSON robot-file shape.
 
     ``{"convention": "standard" | "modified", "units": {"length": "mm" | "m", "angle": "deg" |
@@ -185,39 +187,36 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
     revolute, length unit for prismatic); ``"limits": null`` (or leaving it out) means unlimited,
     and ``null`` for one bound leaves that side unlimited. ``link_radii_mm`` (always mm, default
     0) is the links' capsule radius: one for every link, or ``n + 1`` (the fixed base, then the
-    link each joint moves; see :func:`~armpath.model.skeleton.physical_links`).
+    link each joint moves; see :func:`~armpath.model.skeleton.physical_links`). Messages begin
+    with ``source`` (the file's name).
     """
     if not isinstance(doc, Mapping):
-        raise InvalidInputError("a robot file must hold a JSON object")
+        raise InvalidInputError(f"{source} must hold a JSON object")
     known = {"convention", "units", "links", "base", "tool", "name", "home", "link_radii_mm"}
     unknown = sorted(set(doc) - known)
     if unknown:
-        raise InvalidInputError(f"robot file: unknown key(s) {unknown}; known: {sorted(known)}")
+        raise InvalidInputError(f"{source}: unknown key(s) {unknown}; known: {sorted(known)}")
     convention = doc.get("convention", "standard")
     if convention not in CONVENTIONS:
-        raise InvalidInputError(f"robot file: convention must be one of {CONVENTIONS}")
+        raise InvalidInputError(f"{source}: convention must be one of {CONVENTIONS}")
     units = doc.get("units", {})
     if not isinstance(units, Mapping):
-        raise InvalidInputError('robot file: units must be an object like {"length": "mm"}')
+        raise InvalidInputError(f'{source}: units must be an object like {{"length": "mm"}}')
     length_unit = units.get("length", "mm")
     angle_unit = units.get("angle", "deg")
     if length_unit not in MM_PER_LENGTH_UNIT:
-        raise InvalidInputError(
-            f"robot file: units.length must be 'mm' or 'm', got {length_unit!r}"
-        )
+        raise InvalidInputError(f"{source}: units.length must be 'mm' or 'm', got {length_unit!r}")
     if angle_unit not in ("deg", "rad"):
-        raise InvalidInputError(
-            f"robot file: units.angle must be 'deg' or 'rad', got {angle_unit!r}"
-        )
+        raise InvalidInputError(f"{source}: units.angle must be 'deg' or 'rad', got {angle_unit!r}")
     L = MM_PER_LENGTH_UNIT[length_unit]
     A = np.pi / 180.0 if angle_unit == "deg" else 1.0
     links = doc.get("links")
     if not isinstance(links, list) or not links:
-        raise InvalidInputError("robot file: 'links' must be a non-empty list of D-H rows")
+        raise InvalidInputError(f"{source}: 'links' must be a non-empty list of D-H rows")
     rows = []
     row_keys = {"a", "alpha", "d", "offset", "type", "limits", "theta"}
     for i, link in enumerate(links):
-        where = f"robot file: links[{i}]"
+        where = f"{source}: links[{i}]"
         if not isinstance(link, Mapping):
             raise InvalidInputError(f"{where} must be an object with a, alpha, d")
         bad = sorted(set(link) - row_keys)
@@ -251,21 +250,21 @@ def robot_from_dict(doc: Mapping[str, Any], name: str = "robot") -> SerialArm:
                 theta=_number(link.get("theta", 0.0), f"{where}.theta") * A,
             )
         )
-    base = _transform(doc["base"], "robot file: base", L) if "base" in doc else None
-    tool = _transform(doc["tool"], "robot file: tool", L) if "tool" in doc else None
+    base = _transform(doc["base"], f"{source}: base", L) if "base" in doc else None
+    tool = _transform(doc["tool"], f"{source}: tool", L) if "tool" in doc else None
     home = None
     if "home" in doc:
         raw = doc["home"]
         if not isinstance(raw, list) or len(raw) != len(rows):
-            raise InvalidInputError(f"robot file: home must list {len(rows)} joint values")
+            raise InvalidInputError(f"{source}: home must list {len(rows)} joint values")
         home = [
-            _number(v, f"robot file: home[{i}]") * (A if r.kind is JointKind.REVOLUTE else L)
+            _number(v, f"{source}: home[{i}]") * (A if r.kind is JointKind.REVOLUTE else L)
             for i, (v, r) in enumerate(zip(raw, rows, strict=True))
         ]
     radii: float | list[float] = 0.0
     if "link_radii_mm" in doc:
         raw = doc["link_radii_mm"]
-        where = "robot file: link_radii_mm"
+        where = f"{source}: link_radii_mm"
         if isinstance(raw, list):
             values = [_number(v, f"{where}[{i}]") for i, v in enumerate(raw)]
         else:
@@ -309,4 +308,4 @@ def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
         from armpath.model.serialize import arm_from_dict  # armpath's own model document
 
         return arm_from_dict(doc, f"robot file {p.name!r}").in_mm()  # like a D-H table's
-    return robot_from_dict(doc, name=p.stem)
+    return robot_from_dict(doc, name=p.stem, source=f"robot file {p.name!r}")

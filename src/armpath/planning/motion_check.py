@@ -204,7 +204,14 @@ def check_state_clear(
     k = int(np.argmin(slack))
     if slack[k] < 0:
         pair = pairs[k]
+        home = what == "start state" and np.allclose(q, arm.home, rtol=0.0, atol=1e-9)
         raise CollisionError(
             f"{what} is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
             f"(needs >= {pair.required:g} mm)"
+            + (
+                "; it is the arm's home pose: start elsewhere (--from; start_deg= in Python) "
+                "or move the home ([arm] home_deg)"
+                if home
+                else ""
+            )
         )

@@ -49,7 +49,7 @@ from armpath.planning.motion import (
     plan_metrics,
     plan_motion,
 )
-from armpath.planning.motion_check import MotionClearance, motion_clearance
+from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.reach import (
     GOAL_BODY_BUFFER_MM,
     MAX_TOLERANCE_MM,
@@ -246,6 +246,7 @@ def plan_tour(
     if not 1 <= orders_to_plan <= 100:
         raise InvalidInputError(f"orders to plan must be in [1, 100], got {orders_to_plan}")
     start = np.asarray(start_ticks, dtype=np.int64)
+    check_state_clear(arm, world, arm.lattice.to_joint(start))  # before the goal states
     say = on_progress or (lambda _msg: None)
     opts = options or MotionOptions()
     goals: list[IntArray] = []

@@ -80,6 +80,7 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
     if spec.home_deg is not None:
         home = _per_joint(spec.home_deg, n, "arm.home_deg")
         arm = arm.with_home(np.where(prismatic, home * mm, np.radians(home)))
+        arm.lattice.from_display(home, "arm.home_deg")  # the tasks start there: on the lattice
     return arm
 
 

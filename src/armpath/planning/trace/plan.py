@@ -45,7 +45,7 @@ from armpath.planning.motion import (
     plan_motion,
     search_clearance_extra,
 )
-from armpath.planning.motion_check import MotionClearance, motion_clearance
+from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.trace.certificate import (
     certificate_precision,
     certified_axis_angle,
@@ -220,6 +220,8 @@ def plan_trace(
     """Trace every reachable part of ``curve`` from ``start_ticks``, fewest passes first."""
     opts = options or TraceOptions()
     say = on_progress or (lambda _m: None)
+    start = np.asarray(start_ticks, dtype=np.int64)
+    check_state_clear(arm, world, arm.lattice.to_joint(start))  # before any scan
     reach = curve_reachability(
         arm, world, curve, scan_step_mm=opts.scan_step_mm, on_progress=say, rule=opts.axis_rule
     )
@@ -229,7 +231,6 @@ def plan_trace(
             + "; ".join(a.reason for a in reach.unreachable)
         )
     fam = reach.family
-    start = np.asarray(start_ticks, dtype=np.int64)
     arcs = list(reach.reachable)
     overlap = 0.0
     if _all_round(curve, arcs):
