@@ -668,3 +668,32 @@ def test_a_five_axis_arm_traces_a_circle_and_welds(tmp_path):
     for v in tour.visits:
         reached = tool_point(final[v.after_command] * (D / 10))
         assert np.linalg.norm(reached - welds[v.target_index]) <= 0.05
+
+
+def test_a_wrist_that_only_rolls_the_tool_is_held_through_a_trace():
+    """A UR5 whose tool sits on its last axis: that joint moves neither the tool point nor
+    its axis, but the pass began where the IK solution had it (-90 deg from a home of 100
+    deg: 111 commands, the transit turning it). It is now held (87 commands) and the plan
+    replays on the textbook D-H product within the tolerance of the circle."""
+    scene = scene_from_dict({
+        "name": "free",
+        "arm": {"model": "ur5", "home_deg": [0, -90, 90, -90, -90, 100],
+                "tool": {"position_mm": [0, 0, 120]}},
+        "tasks": {"trace": {"curve": {
+            "type": "parametric", "name": "c", "x": "400 + 30*cos(t)",
+            "y": "100 + 30*sin(t)", "z": "200", "t": [0, 2 * np.pi]}}},
+    })  # fmt: skip
+    from armpath.scenes.arm import scene_arm
+
+    arm = scene_arm(scene)
+    options = TraceOptions(bound=False, tolerance_mm=0.5)
+    r = plan_trace(arm, scene.world, arm.lattice.to_ticks(arm.home), scene.trace_curve(), options)
+    states = r.sequence.states()
+    assert np.all(states[:, 5] == 1000) and r.n_commands <= 90
+    t = np.linspace(0, 1, 11)
+    for p in r.passes:
+        a, b = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (a[:, None] + t[None, :, None] * (b - a)[:, None]).reshape(-1, 6) * (np.pi / 1800)
+        P = np.array([(pose("ur5", x) @ [0.0, 0.0, 120.0, 1.0])[:3] for x in q])
+        dev = np.hypot(np.hypot(P[:, 0] - 400, P[:, 1] - 100) - 30, P[:, 2] - 200)
+        assert dev.max() <= 0.5

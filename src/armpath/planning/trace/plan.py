@@ -648,7 +648,9 @@ def _trace_arcs(
                 # from there back, followed and finished along where that takes fewer commands
                 chain = None
                 if goal == finish:
-                    chain = tracer.end_chain(goal, END_CHAIN_SHARE * abs(finish - s_at))
+                    chain = tracer.end_chain(
+                        goal, END_CHAIN_SHARE * abs(finish - s_at), hold=pass_states[-1]
+                    )
                     tracer.follow(chain)
                 ahead, s_reached = tracer.run(pass_states[-1], s_at, goal, chain)
                 pass_states += ahead[1:]
@@ -819,7 +821,7 @@ def _enter(
     failures = []
     for i, s_try in enumerate(candidates):
         try:
-            q, s = tracer.start_state(s_try, need if i else _BODY_BUFFER_MM)
+            q, s = tracer.start_state(s_try, need if i else _BODY_BUFFER_MM, hold=q_from)
         except PlanningError as exc:
             failures.append(f"{s_try:.1f} mm: {exc}")
             continue
@@ -854,7 +856,7 @@ def _enter(
     for s_try in tight.tolist():
         check_time("moving onto the curve")
         try:
-            q, s = tracer.start_state(s_try, _BODY_BUFFER_MM)
+            q, s = tracer.start_state(s_try, _BODY_BUFFER_MM, hold=q_from)
         except PlanningError:
             continue
         seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)

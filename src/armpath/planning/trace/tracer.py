@@ -521,11 +521,16 @@ class Tracer:
         return cand[k], float(s[k])
 
     def start_state(
-        self, s_from: float, body_buffer_mm: float = _BODY_BUFFER_MM
+        self,
+        s_from: float,
+        body_buffer_mm: float = _BODY_BUFFER_MM,
+        hold: IntArray | None = None,
     ) -> tuple[IntArray, float]:
         """A lattice state with the tip in the band as close after ``s_from`` as found (before
         it, for a piece traced backward), whose links keep ``body_buffer_mm`` beyond the
-        clearance rule."""
+        clearance rule. ``hold``: the state the arm comes from, whose joints that do not move
+        the tool point are kept where the rules allow (a solution's own turn of a wrist that
+        only rolls the tool cost a UR-type arm up to 90 commands a transit)."""
         extra = np.where(self.extra > 0, body_buffer_mm, 0.0)
         sign, edge = self.piece.sign, self.piece.begin_mm
         near_found = False  # a state near the curve, whatever its clearance
@@ -549,6 +554,10 @@ class Tracer:
             for base in bases:
                 proj = self.project(base, E)
                 cand = self.lattice_near(proj, n, b, self.grid.nearest_ticks(proj))
+                if hold is not None and not self.tip.all():
+                    held = cand.copy()
+                    held[:, ~self.tip] = np.asarray(hold)[~self.tip]
+                    cand = np.concatenate([held, cand])  # held first: kept where they do
                 cand = cand[self.arm.within_limits(self.grid.to_joint(cand))]
                 if cand.shape[0] == 0:
                     continue
@@ -560,7 +569,12 @@ class Tracer:
                 near_found |= bool(np.any(ok))
                 ok &= self.world.satisfied(self.arm, self.grid.to_joint(cand), extra)
                 if np.any(ok):
+                    # the nearest after s_from (np.argmin: the first, a held one, of equals)
                     k = int(np.argmin(np.where(ok, sign * s, np.inf)))
+                    if hold is not None and not self.tip.all():
+                        kept = ok & np.all(cand[:, ~self.tip] == np.asarray(hold)[~self.tip], 1)
+                        if np.any(kept):  # a state that keeps them, the nearest of those
+                            k = int(np.argmin(np.where(kept, sign * s, np.inf)))
                     return cand[k], float(s[k])
         if near_found:
             raise PlanningError(
@@ -575,7 +589,9 @@ class Tracer:
             f"{tick_mm:.2g} mm a tick: too coarse for this tolerance)"
         )
 
-    def end_chain(self, goal: float, length_mm: float) -> list[IntArray]:
+    def end_chain(
+        self, goal: float, length_mm: float, hold: IntArray | None = None
+    ) -> list[IntArray]:
         """Lattice states traced from arc length ``goal`` back along the piece for
         ``length_mm``: first a state that reaches the goal as a pass does (within
         :data:`GOAL_REACHED_MM` of it, or past it by at most the tolerance), then each one
@@ -592,7 +608,7 @@ class Tracer:
         )
         back.layers, back.ref = self.layers, self.ref
         try:
-            q, s = back.start_state(goal)
+            q, s = back.start_state(goal, hold=hold)
         except PlanningError:
             return []
         sign = self.piece.sign
