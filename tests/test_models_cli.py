@@ -233,3 +233,25 @@ def test_a_robot_files_mistake_names_the_file(tmp_path):
     r = run_in_process(["fk", "0", "--model", "typo.json"], tmp_path)
     assert r.returncode == 1
     assert "error: robot file 'typo.json': links[0]: unknown key(s) ['alpah']" in r.stderr
+
+
+def test_limits_of_more_than_two_turns_are_refused_as_a_unit_slip(tmp_path):
+    """Limits of +-185 in a robot file in rad, or of +-170 in a URDF (radians by its
+    standard), made joints of +-10,600 deg and nonsense plans; both are refused."""
+    from cli_in_process import run_in_process
+
+    (tmp_path / "rad.json").write_text(
+        '{"units": {"angle": "rad"}, "links": [{"a": 100, "limits": [-185, 185]}]}'
+    )
+    (tmp_path / "deg.urdf").write_text(
+        '<robot name="d"><link name="b"/><link name="f"/>'
+        '<joint name="j1" type="revolute"><parent link="b"/><child link="f"/>'
+        '<origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-170" upper="170" effort="1" velocity="1"/></joint></robot>'
+    )
+    for name, needle in (
+        ("rad.json", "links[0].limits: -185 rad is more than two turns (720 deg)"),
+        ("deg.urdf", "joint 'j1' limits: -170 rad is more than two turns"),
+    ):
+        r = run_in_process(["model", "show", name], tmp_path)
+        assert r.returncode == 1 and needle in r.stderr, r.stderr

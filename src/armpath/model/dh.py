@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.model.lattice import MM_PER_LENGTH_UNIT
-from armpath.model.serial_arm import Joint, JointKind, SerialArm
+from armpath.model.serial_arm import Joint, JointKind, SerialArm, check_turns
 from armpath.model.skeleton import link_radii, physical_links
 
 FloatArray = NDArray[np.float64]
@@ -239,6 +239,15 @@ def robot_from_dict(
         hi = np.inf if limits_raw[1] is None else _number(limits_raw[1], f"{where}.limits[1]")
         if lo > hi:
             raise InvalidInputError(f"{where}.limits: lower {lo} exceeds upper {hi}")
+        if kind is JointKind.REVOLUTE:
+            check_turns(
+                (lo * A, hi * A),
+                f"{where}.limits",
+                angle_unit,
+                "were they written in degrees? (units.angle is rad)"
+                if angle_unit == "rad"
+                else None,
+            )
         rows.append(
             DHRow(
                 a=_number(link.get("a", 0.0), f"{where}.a") * L,

@@ -193,6 +193,31 @@ class Link:
     checked: bool = True
 
 
+#: Farthest a revolute joint's limit may lie from zero (rad): two turns either way. Farther is
+#: a unit slip (degrees read as radians: 185 "rad" is 10,600 deg); an unlimited side is null.
+MAX_REVOLUTE_LIMIT_RAD = 4.0 * np.pi
+
+
+def check_turns(
+    limits_rad: tuple[float, float], where: str, unit: str = "rad", hint: str | None = None
+) -> None:
+    """Refuse revolute ``limits_rad`` with a finite side more than :data:`MAX_REVOLUTE_LIMIT_RAD`
+    from zero, naming ``where``, the value in ``unit`` (``"rad"`` or ``"deg"``) and ``hint``
+    (what to check; by default, for radians, whether degrees were written)."""
+    for v in limits_rad:
+        if np.isfinite(v) and abs(v) > MAX_REVOLUTE_LIMIT_RAD:
+            shown = np.degrees(v) if unit == "deg" else v
+            if hint is None:
+                hint = (
+                    "were the limits written in degrees?"
+                    if unit == "rad"
+                    else "leave a side out (null) for an unlimited joint"
+                )
+            raise InvalidInputError(
+                f"{where}: {shown:g} {unit} is more than two turns (720 deg) from zero; {hint}"
+            )
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class SerialArm:
     """An immutable serial arm model.

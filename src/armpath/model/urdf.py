@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from armpath.errors import InvalidInputError
-from armpath.model.serial_arm import Joint, JointKind, SerialArm
+from armpath.model.serial_arm import Joint, JointKind, SerialArm, check_turns
 from armpath.model.skeleton import link_radii, physical_links
 
 _M_TO_MM = 1000.0
@@ -136,6 +136,12 @@ def arm_from_urdf(
                 lo = float(uj.limit.lower) * scale
             if uj.limit.upper is not None:
                 hi = float(uj.limit.upper) * scale
+        if kind is JointKind.REVOLUTE:
+            check_turns(
+                (lo, hi),
+                f"URDF {p.name!r}: joint {uj.name!r} limits",
+                hint="a URDF's limits are radians: were they written in degrees?",
+            )
         axis = np.array([1.0, 0.0, 0.0]) if uj.axis is None else np.array(uj.axis, dtype=float)
         joints.append(Joint(uj.name, carry @ origin, axis, kind, (lo, hi)))
         carry = np.eye(4)
