@@ -276,3 +276,34 @@ def test_workspace_maps_keep_their_axis_labels_inside_the_canvas(tmp_path):
     lo, hi = fig.axes[0].get_xlim()
     assert lo < 0 and hi > 100  # the 0 % and 100 % markers are drawn whole
     _assert_inside_canvas(fig)
+
+
+def test_capsules_and_meshes_are_drawn_where_they_are(tmp_path):
+    """The 3-D figures and animations left capsule and mesh obstacles out (the viewer drew
+    them); each is drawn now, its drawn points spanning the obstacle's own extent: the
+    capsule's segment widened by its radius, the mesh's vertices."""
+    import trimesh
+
+    from armpath.scenes import scene_from_dict
+    from armpath.viz.figures import draw_obstacles
+
+    trimesh.creation.icosphere(radius=50.0).export(tmp_path / "ball.stl")
+    scene = scene_from_dict(
+        {
+            "name": "parts",
+            "obstacles": [
+                {"type": "capsule", "name": "bar", "start": [100, 0, 50], "end": [300, 0, 50],
+                 "radius": 20},
+                {"type": "mesh", "name": "ball", "file": str(tmp_path / "ball.stl"),
+                 "translation": [0, 200, 100]},
+            ],
+        }
+    )  # fmt: skip
+    fig = Figure()
+    ax = fig.add_subplot(projection="3d")
+    bar, ball = draw_obstacles(ax, scene)
+    np.testing.assert_allclose(bar.min(axis=0), [80, -20, 30], atol=0.5)  # sampled round
+    np.testing.assert_allclose(bar.max(axis=0), [320, 20, 70], atol=0.5)
+    np.testing.assert_allclose(ball.min(axis=0), [-50, 150, 50], atol=1e-6)
+    np.testing.assert_allclose(ball.max(axis=0), [50, 250, 150], atol=1e-6)
+    assert len(ax.collections) >= 4  # the capsule's wall and two ends, the mesh's triangles

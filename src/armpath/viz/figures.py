@@ -17,8 +17,10 @@ from numpy.typing import ArrayLike
 
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
+from armpath.geometry.mesh import MeshObstacle
 from armpath.geometry.primitives import (
     Box,
+    Capsule,
     HalfSpace,
     SolidOfRevolution,
     Sphere,
@@ -73,6 +75,38 @@ def _draw_sphere(ax: Axes3D, s: Sphere) -> np.ndarray:
     z = s.center[2] + s.radius * np.cos(v)
     ax.plot_surface(x, y, z, color="tan", alpha=0.25, linewidth=0)
     return np.stack([x, y, z], axis=-1).reshape(-1, 3)
+
+
+def _draw_capsule(ax: Axes3D, c: Capsule) -> np.ndarray:
+    """A capsule as its cylinder and the two spheres at its ends."""
+    a, b = np.asarray(c.start, dtype=float), np.asarray(c.end, dtype=float)
+    axis = b - a
+    length = float(np.linalg.norm(axis))
+    d = axis / length if length > 0 else np.array([0.0, 0.0, 1.0])
+    e1, e2 = orthonormal_frame(d[None])
+    u = np.linspace(0, 2 * np.pi, 24)
+    ring = c.radius * (np.cos(u)[:, None] * e1 + np.sin(u)[:, None] * e2)  # (24, 3)
+    t = np.array([0.0, 1.0])
+    wall = a + t[:, None, None] * axis + ring[None]  # (2, 24, 3)
+    ax.plot_surface(*np.moveaxis(wall, -1, 0), color="tan", alpha=0.25, linewidth=0)
+    drawn = [wall.reshape(-1, 3)]
+    for centre in (a, b):
+        drawn.append(_draw_sphere(ax, Sphere("", centre, c.radius)))
+    return np.vstack(drawn)
+
+
+def _draw_mesh(ax: Axes3D, m: MeshObstacle) -> np.ndarray:
+    """A mesh as its triangles (at most 4000 of them, evenly through the list)."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    faces = np.asarray(m.faces)
+    if faces.shape[0] > 4000:
+        faces = faces[np.linspace(0, faces.shape[0] - 1, 4000).astype(np.int64)]
+    tri = np.asarray(m.vertices)[faces]
+    ax.add_collection3d(
+        Poly3DCollection(tri, facecolor="tan", edgecolor="saddlebrown", linewidths=0.2, alpha=0.25)
+    )
+    return np.asarray(m.vertices)
 
 
 def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
@@ -135,8 +169,8 @@ def label_axes_3d(ax: Axes3D, fontsize: float | None = None, labelpad: float = 4
 
 
 def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
-    """Draw every bounded obstacle the 3-D figures know how to draw (solids of revolution,
-    spheres, boxes); returns their drawn points for framing the view."""
+    """Draw every bounded obstacle (solids of revolution, spheres, boxes, capsules, meshes);
+    returns their drawn points for framing the view."""
     drawn = []
     for obstacle in scene.world.obstacles:
         if isinstance(obstacle, SolidOfRevolution):
@@ -145,6 +179,10 @@ def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
             drawn.append(_draw_sphere(ax, obstacle))
         elif isinstance(obstacle, Box):
             drawn.append(_draw_box(ax, obstacle))
+        elif isinstance(obstacle, Capsule):
+            drawn.append(_draw_capsule(ax, obstacle))
+        elif isinstance(obstacle, MeshObstacle):
+            drawn.append(_draw_mesh(ax, obstacle))
     return drawn
 
 
