@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_point_mm, time_limit
 from armpath.errors import InvalidInputError
-from armpath.ik.target import DEFAULT_ANGLE_TOLERANCE_DEG, DEFAULT_AXIS_TOLERANCE_DEG
+from armpath.ik.target import refuse_alone, rule_tolerances
 from armpath.model.serial_arm import SerialArm
 from armpath.results import Result, load_result
 from armpath.scenes import Scene
@@ -230,18 +230,11 @@ def _points_mm(values: ArrayLike, what: str, least: int) -> NDArray[np.float64]:
     return p
 
 
-def _given_alone(name: str, value: object, needs: str, given: object) -> None:
-    """Refuse the argument ``name`` given without the argument ``needs`` it qualifies (it
-    would be ignored)."""
-    if value is not None and given is None:
-        raise InvalidInputError(f"{name} qualifies {needs}; give {needs} too")
-
-
 def _axis_rule(tool_axis: Any, axis_tolerance_deg: float | None) -> AxisRule | None:
     """The tool-axis rule of a trace or a tour: ``"normal"`` or a world direction."""
     from armpath.planning.trace import AxisRule
 
-    _given_alone("axis_tolerance_deg", axis_tolerance_deg, "tool_axis", tool_axis)
+    refuse_alone("axis_tolerance_deg", axis_tolerance_deg, "tool_axis", tool_axis)
     return None if tool_axis is None else AxisRule.of(tool_axis, axis_tolerance_deg)
 
 
@@ -259,20 +252,9 @@ def _orientation(
     from armpath.ik.target import AxisCone, PoseOrientation
     from armpath.poses import pose_matrix
 
-    if pose is not None and tool_axis is not None:
-        raise InvalidInputError("give pose or tool_axis, not both")
-    _given_alone("axis_tolerance_deg", axis_tolerance_deg, "tool_axis", tool_axis)
-    _given_alone("angle_tolerance_deg", angle_tolerance_deg, "pose", pose)
-    if axis_tolerance_deg is None:
-        axis_tolerance_deg = DEFAULT_AXIS_TOLERANCE_DEG
-    if angle_tolerance_deg is None:
-        angle_tolerance_deg = DEFAULT_ANGLE_TOLERANCE_DEG
-    for what, v in (
-        ("axis_tolerance_deg", axis_tolerance_deg),
-        ("angle_tolerance_deg", angle_tolerance_deg),
-    ):
-        if not (np.isfinite(v) and 0.0 <= v <= 180.0):
-            raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
+    axis_tolerance_deg, angle_tolerance_deg = rule_tolerances(
+        axis_tolerance_deg, angle_tolerance_deg, tool_axis, pose
+    )
     if pose is not None:
         m = pose_matrix(pose)
         at = m[:3, 3]

@@ -52,7 +52,12 @@ from armpath.errors import (
     TimeLimitError,
     UnreachableError,
 )
-from armpath.ik.target import DEFAULT_ANGLE_TOLERANCE_DEG, DEFAULT_AXIS_TOLERANCE_DEG
+from armpath.ik.target import (
+    DEFAULT_ANGLE_TOLERANCE_DEG,
+    DEFAULT_AXIS_TOLERANCE_DEG,
+    refuse_alone,
+    rule_tolerances,
+)
 from armpath.planning.choices import Objective, VisitOrder
 
 if TYPE_CHECKING:
@@ -236,18 +241,11 @@ def _direction(text: str, option: str) -> np.ndarray:
     return np.array(_numbers(text.replace(",", " ").split(), 3, f"{option} X Y Z"))
 
 
-def _given_alone(option: str, value: float | None, needs: str, given: object) -> None:
-    """Refuse ``option`` given without the option ``needs`` it qualifies (it would be
-    ignored)."""
-    if value is not None and given is None:
-        raise InvalidInputError(f"{option} qualifies {needs}; give {needs} too")
-
-
 def axis_rule(tool_axis: str | None, axis_tolerance_deg: float | None) -> AxisRule | None:
     """The tool-axis rule of ``--tool-axis normal|X Y Z --axis-tolerance DEG`` on a surface."""
     from armpath.planning.trace import AxisRule
 
-    _given_alone("--axis-tolerance", axis_tolerance_deg, "--tool-axis", tool_axis)
+    refuse_alone("--axis-tolerance", axis_tolerance_deg, "--tool-axis", tool_axis)
     if tool_axis is None:
         return None
     names = ("--tool-axis", "--axis-tolerance")
@@ -306,20 +304,13 @@ def orientation_rule(
     without its rule is refused, not ignored)."""
     from armpath.ik.target import AxisCone, PoseOrientation
 
-    if tool_axis is not None and pose_deg is not None:
-        raise InvalidInputError("give --tool-axis or --pose, not both")
-    _given_alone("--axis-tolerance", axis_tolerance_deg, "--tool-axis", tool_axis)
-    _given_alone("--angle-tolerance", angle_tolerance_deg, "--pose", pose_deg)
-    if axis_tolerance_deg is None:
-        axis_tolerance_deg = DEFAULT_AXIS_TOLERANCE_DEG
-    if angle_tolerance_deg is None:
-        angle_tolerance_deg = DEFAULT_ANGLE_TOLERANCE_DEG
-    for what, v in (
-        ("--axis-tolerance", axis_tolerance_deg),
-        ("--angle-tolerance", angle_tolerance_deg),
-    ):
-        if not (np.isfinite(v) and 0.0 <= v <= 180.0):
-            raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
+    axis_tolerance_deg, angle_tolerance_deg = rule_tolerances(
+        axis_tolerance_deg,
+        angle_tolerance_deg,
+        tool_axis,
+        pose_deg,
+        ("--tool-axis", "--axis-tolerance", "--pose", "--angle-tolerance"),
+    )
     if tool_axis is not None:
         if tool_axis.strip() == "normal":
             raise InvalidInputError(

@@ -32,6 +32,42 @@ DEFAULT_AXIS_TOLERANCE_DEG = 15.0
 DEFAULT_ANGLE_TOLERANCE_DEG = 5.0
 
 
+def refuse_alone(name: str, value: object, needs: str, given: object) -> None:
+    """Refuse ``name`` given (not None) without ``needs``, the rule it qualifies (it would be
+    ignored)."""
+    if value is not None and given is None:
+        raise InvalidInputError(f"{name} qualifies {needs}; give {needs} too")
+
+
+def rule_tolerances(
+    axis_tolerance_deg: float | None,
+    angle_tolerance_deg: float | None,
+    tool_axis: object,
+    pose: object,
+    names: tuple[str, str, str, str] = (
+        "tool_axis",
+        "axis_tolerance_deg",
+        "pose",
+        "angle_tolerance_deg",
+    ),
+) -> tuple[float, float]:
+    """The axis and angle tolerances (deg) of an orientation rule, each refused without its
+    rule (``tool_axis``, ``pose``) and outside [0, 180], their defaults where not given
+    (:data:`DEFAULT_AXIS_TOLERANCE_DEG`, :data:`DEFAULT_ANGLE_TOLERANCE_DEG`); ``names``: the
+    rule's and tolerance's names where they were given (arguments or options)."""
+    axis_name, axis_tol_name, pose_name, angle_tol_name = names
+    if tool_axis is not None and pose is not None:
+        raise InvalidInputError(f"give {axis_name} or {pose_name}, not both")
+    refuse_alone(axis_tol_name, axis_tolerance_deg, axis_name, tool_axis)
+    refuse_alone(angle_tol_name, angle_tolerance_deg, pose_name, pose)
+    axis = DEFAULT_AXIS_TOLERANCE_DEG if axis_tolerance_deg is None else axis_tolerance_deg
+    angle = DEFAULT_ANGLE_TOLERANCE_DEG if angle_tolerance_deg is None else angle_tolerance_deg
+    for what, v in ((axis_tol_name, axis), (angle_tol_name, angle)):
+        if not (np.isfinite(v) and 0.0 <= v <= 180.0):
+            raise InvalidInputError(f"{what} must be between 0 and 180 deg, got {v}")
+    return float(axis), float(angle)
+
+
 def unit_vector(v: ArrayLike, what: str) -> FloatArray:
     """``v`` (a finite non-zero 3-vector of any magnitude) scaled to length 1, read-only;
     :class:`InvalidInputError` naming ``what`` otherwise."""
