@@ -255,3 +255,37 @@ def test_limits_of_more_than_two_turns_are_refused_as_a_unit_slip(tmp_path):
     ):
         r = run_in_process(["model", "show", name], tmp_path)
         assert r.returncode == 1 and needle in r.stderr, r.stderr
+
+
+def test_a_dh_table_of_axes_that_nearly_meet_reproduces_the_tool_pose(tmp_path):
+    """A URDF whose pitch is 1.5707963268 (pi/2 to ten digits) has two axes that meet but for
+    rounding (1.8e-9 mm apart): the table took the common normal along that rounding, 9e-6
+    rad off, and its tool pose was 0.007 mm off the URDF's. Now to 1e-9 mm, by the textbook
+    D-H product too."""
+    from armpath.model.dh import load_robot_file, robot_from_dict
+    from armpath.model.dh_export import dh_document
+
+    def joint(name, parent, child, xyz, rpy, axis):
+        return (
+            f'<joint name="{name}" type="revolute"><parent link="{parent}"/>'
+            f'<child link="{child}"/><origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
+            '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+        )
+
+    links = "".join(f'<link name="l{i}"/>' for i in range(6))
+    (tmp_path / "near.urdf").write_text(
+        f'<robot name="near">{links}'
+        + joint("j1", "l0", "l1", "0 0 0.25", "0 0 0", "0 0 1")
+        + joint("j2", "l1", "l2", "0.05 0 0.1", "0 0 0", "0 1 0")
+        + joint("j3", "l2", "l3", "0 0 0.4", "0 0 0", "0 1 0")
+        + joint("j4", "l3", "l4", "0.35 0 0", "0 1.5707963268 0", "0 0 1")
+        + joint("j5", "l4", "l5", "0 0 0.08", "0 0 0", "0 1 0")
+        + "</robot>"
+    )
+    arm = load_robot_file(tmp_path / "near.urdf")
+    doc = json.loads(json.dumps(dh_document(arm, "standard")))
+    q = _random_q(arm, 60, seed=3)
+    want = tool_pose(arm, q)
+    assert np.abs(tool_pose(robot_from_dict(doc), q) - want).max() <= 1e-9
+    for row, T in zip(q[:10], want[:10], strict=True):
+        assert np.abs(_dh_product(doc, row)[:3, 3] - T[:3, 3]).max() <= 1e-9
