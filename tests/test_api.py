@@ -637,3 +637,20 @@ def test_an_arm_in_metres_is_taken_in_millimetres(tmp_path):
         np.radians(plain.states_deg[-1]),
     )
     assert np.linalg.norm(T[:3, 3] - target) <= 1.0
+
+
+def test_the_modules_below_the_api_refuse_a_models_name_by_name():
+    """``tool_position("ur5", q)``, ``solve_ik("ur5", T)`` and ``sample_workspace("ur5", ...)``
+    raised AttributeError from deep inside; they take a SerialArm and now say so."""
+    from armpath.errors import InvalidInputError
+    from armpath.ik import solve_ik
+    from armpath.kinematics import tool_position
+    from armpath.workspace import sample_workspace
+
+    for call in (
+        lambda: tool_position("ur5", [0.0] * 6),
+        lambda: solve_ik("ur5", np.eye(4)),
+        lambda: sample_workspace("ur5", 1000, 10.0),
+    ):
+        with pytest.raises(InvalidInputError, match=r"armpath.load_arm\('ur5'\) gives one"):
+            call()

@@ -15,12 +15,13 @@ from numpy.typing import ArrayLike, NDArray
 from armpath import jit
 from armpath.errors import InvalidInputError
 from armpath.jit import njit
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serial_arm import JointKind, SerialArm, check_arm
 
 FloatArray = NDArray[np.float64]
 
 
 def _as_joint_array(arm: SerialArm, q: ArrayLike) -> FloatArray:
+    check_arm(arm)
     qa = np.asarray(q, dtype=np.float64)
     if qa.ndim == 0 or qa.shape[-1] != arm.n_joints:
         raise InvalidInputError(

@@ -25,7 +25,7 @@ from armpath.ik.result import IKResult
 from armpath.ik.spherical_wrist import SphericalWristSolver, wrist_center
 from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
 from armpath.kinematics import tool_point_joints
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serial_arm import JointKind, SerialArm, check_arm
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -121,6 +121,7 @@ def solve_ik(
     solutions nearest to it first (in commands of the arm's lattice); a continuous family
     gets its member nearest ``near`` as well.
     """
+    check_arm(arm)
     n = arm.n_joints
     shape = np.shape(target)
     if shape != ((3,) if position_only else (4, 4)):

@@ -193,6 +193,15 @@ class Link:
     checked: bool = True
 
 
+def check_arm(arm: object) -> None:
+    """Refuse anything but a :class:`SerialArm` where the modules below the API take one (a
+    model's name raised an AttributeError from deep inside)."""
+    if not isinstance(arm, SerialArm):
+        raise InvalidInputError(
+            f"arm must be a SerialArm (armpath.load_arm({arm!r}) gives one), got {arm!r}"
+        )
+
+
 #: Farthest a revolute joint's limit may lie from zero (rad): two turns either way. Farther is
 #: a unit slip (degrees read as radians: 185 "rad" is 10,600 deg); an unlimited side is null.
 MAX_REVOLUTE_LIMIT_RAD = 4.0 * np.pi

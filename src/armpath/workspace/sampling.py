@@ -25,7 +25,7 @@ from armpath.errors import InvalidInputError
 from armpath.geometry.world import CollisionWorld
 from armpath.jit import njit, prange, threads_pay_off
 from armpath.kinematics import z_axis_chain
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serial_arm import JointKind, SerialArm, check_arm
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -315,6 +315,7 @@ def sample_workspace(
     gets chunks of at most ``6 * MAX_CHUNK / joints`` samples (the same memory). The time limit
     in force (:func:`armpath.budget.check_time`) is checked before every chunk.
     """
+    check_arm(arm)
     samples = check_count(samples, "samples", MAX_SAMPLES, "joint samples")
     chunk = check_count(chunk, "chunk", MAX_CHUNK, "samples a chunk")
     if method not in METHODS:
