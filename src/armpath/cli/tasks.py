@@ -1097,8 +1097,13 @@ def run(
                 )
                 if not docs:
                     # no task found a plan: nothing is written (one reason said once)
-                    if ran_out is not None:
-                        raise ran_out
+                    if ran_out is not None:  # with the failures before it, if any
+                        raise TimeLimitError(
+                            "; ".join(
+                                [f"{title} found no plan: {why}" for title, why in failed]
+                                + [str(ran_out)]
+                            )
+                        )
                     reasons = list(dict.fromkeys(why for _, why in failed))
                     raise PlanningError(
                         reasons[0]
