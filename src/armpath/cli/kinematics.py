@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 import typer
@@ -171,8 +171,6 @@ def ik(
             target = np.array(_point_mm([str(v) for v in xyz], "--xyz"))
             result = solve_ik(arm, target, position_only=True, seeds=seeds, near=near_q)
         units = _joint_units(arm)
-        sols = _to_display(arm, result.solutions)
-        inside: Any = result.within_limits if result.within_limits is not None else []
         doc = ik_document(arm, result, target, pose is not None)
         if json_out:
             typer.echo(json.dumps(doc))
@@ -197,18 +195,19 @@ def ik(
                 table.add_column(f"q{i + 1}", justify="right")
             table.add_column("resid. mm", justify="right")
             table.add_column("notes")
-            for k, s in enumerate(sols):
+            inside = doc["within_limits"]
+            for k, s in enumerate(doc["solutions"]):
                 notes = []
-                if len(inside) and not inside[k]:
+                if inside and not inside[k]:
                     notes.append("off limits")
-                if result.near_double[k]:
+                if doc["near_double"][k]:
                     notes.append("near-double")
-                if result.near_singular[k]:
+                if doc["near_singular"][k]:
                     notes.append("near-singular")
                 table.add_row(
                     str(k + 1),
                     *(f"{v:.4f}" for v in s),
-                    f"{result.position_residual[k]:.0e}",
+                    f"{doc['residuals'][k]['position_mm']:.0e}",
                     ", ".join(notes),
                 )
             Console(highlight=False, width=max(out_console.width, 120)).print(table)
