@@ -238,6 +238,23 @@ def _axis_rule(tool_axis: Any, axis_tolerance_deg: float | None) -> AxisRule | N
     return None if tool_axis is None else AxisRule.of(tool_axis, axis_tolerance_deg)
 
 
+def _pose_at(pose: Any, target_mm: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The 4x4 transform of ``pose`` (:func:`armpath.poses.pose_matrix` forms) at
+    ``target_mm``: a pose with a position must hold it there (or at zero, a rotation alone)."""
+    from armpath.poses import pose_matrix
+
+    m = pose_matrix(pose)
+    at = m[:3, 3]
+    if np.any(at != 0.0) and np.linalg.norm(at - target_mm) > 1e-6:
+        raise InvalidInputError(
+            f"the pose's position {np.round(at, 6).tolist()} mm is not the target "
+            f"{np.round(target_mm, 6).tolist()} mm: the target gives the position (give "
+            "the pose as a rotation, or as a transform at the target)"
+        )
+    m[:3, 3] = target_mm
+    return m
+
+
 def _orientation(
     arm: SerialArm,
     pose: Any,
@@ -250,20 +267,12 @@ def _orientation(
     tool-axis cone about a fixed direction. A pose with a position (a 4x4 transform) must
     hold it at ``target_mm`` or at zero (a rotation alone): the target gives the position."""
     from armpath.ik.target import AxisCone, PoseOrientation
-    from armpath.poses import pose_matrix
 
     axis_tolerance_deg, angle_tolerance_deg = rule_tolerances(
         axis_tolerance_deg, angle_tolerance_deg, tool_axis, pose
     )
     if pose is not None:
-        m = pose_matrix(pose)
-        at = m[:3, 3]
-        if np.any(at != 0.0) and np.linalg.norm(at - target_mm) > 1e-6:
-            raise InvalidInputError(
-                f"the pose's position {np.round(at, 6).tolist()} mm is not the target "
-                f"{np.round(target_mm, 6).tolist()} mm: the target gives the position (give "
-                "the pose as a rotation, or as a transform at the target)"
-            )
+        m = _pose_at(pose, target_mm)
         return PoseOrientation(m[:3, :3], math.radians(angle_tolerance_deg))
     if tool_axis is not None:
         return AxisCone(
@@ -321,12 +330,9 @@ def forward_kinematics(
     from armpath.export import fk_document, json_line
 
     the_arm = _model(arm, tip_link)
-    values = _degrees(joints_deg, "joints_deg")
-    if values.shape != (the_arm.n_joints,) or not np.all(np.isfinite(values)):
-        raise InvalidInputError(
-            f"joints_deg must be one joint state: {the_arm.n_joints} finite values (deg, mm "
-            f"for a prismatic joint), got {values.tolist()}"
-        )
+    values = _joint_values(the_arm, joints_deg, "joints_deg")
+    if not np.all(np.isfinite(values)):
+        raise InvalidInputError(f"joints_deg must be finite numbers, got {values.tolist()}")
     doc = fk_document(the_arm, the_arm.lattice.joint_from_display(values))
     return dict(json.loads(json_line(doc)))  # rounded as the CLI prints it
 
@@ -370,15 +376,11 @@ def inverse_kinematics(
         point = _point_mm(target_mm, "target_mm")
         result = solve_ik(the_arm, point, position_only=True, seeds=seeds, near=near)
         return ik_document(the_arm, result, point, pose=False)
-    T = pose_matrix(pose)
-    if target_mm is not None:
-        at = _point_mm(target_mm, "target_mm")
-        if np.any(T[:3, 3] != 0.0) and np.linalg.norm(T[:3, 3] - at) > 1e-6:
-            raise InvalidInputError(
-                f"the pose's position {np.round(T[:3, 3], 6).tolist()} mm is not target_mm "
-                f"{np.round(at, 6).tolist()}: give one of them"
-            )
-        T[:3, 3] = at
+    T = (
+        pose_matrix(pose)
+        if target_mm is None
+        else _pose_at(pose, _point_mm(target_mm, "target_mm"))
+    )
     result = solve_ik(the_arm, T, method=method, seeds=seeds, near=near)
     return ik_document(the_arm, result, T, pose=True)
 
@@ -425,7 +427,7 @@ def reach(
                 the_arm,
                 the_scene.world,
                 _start_ticks(the_arm, start_deg),
-                target / the_arm.mm_per_unit,
+                target,
                 ReachOptions(tolerance_mm=tolerance_mm),
                 seed=seed,
                 orientation=rule,
@@ -497,7 +499,7 @@ def plan(
                     the_arm,
                     world,
                     start,
-                    target / the_arm.mm_per_unit,
+                    target,
                     tolerance_mm,
                     options,
                     rule,
