@@ -247,8 +247,7 @@ class Lattice:
             raise InvalidInputError(
                 f"{what} needs {self.n_joints} joint values, got {v.shape[-1] if v.ndim else 1}"
             )
-        scale = self.mm_per_unit
-        return self.to_ticks(np.where(self.prismatic, v / scale, np.radians(v)), what)
+        return self.to_ticks(self.joint_from_display(v), what)
 
     @property
     def mm_per_unit(self) -> float:

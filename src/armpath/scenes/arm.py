@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from armpath.errors import InvalidInputError, SceneError
 from armpath.model.catalog import resolve_model
 from armpath.model.lattice import MM_PER_LENGTH_UNIT
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serial_arm import SerialArm
 from armpath.scenes.build import rotation_matrix
 from armpath.scenes.scene import Scene
 from armpath.scenes.schema import ArmSpec, PlacementSpec
@@ -52,13 +52,12 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
     """The arm an ``[arm]`` table describes."""
     arm = _model(spec.model, base_dir, spec.tip_link)
     n = arm.n_joints
-    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
     mm = 1.0 / arm.mm_per_unit  # model units per mm
     if spec.tick is not None or spec.max_ticks is not None:
         tick = None
         if spec.tick is not None:
             shown = _per_joint(spec.tick, n, "arm.tick")
-            tick = np.where(prismatic, shown * mm, np.radians(shown))
+            tick = arm.lattice.joint_from_display(shown)  # a tick is a joint value
         most = None if spec.max_ticks is None else _per_joint(spec.max_ticks, n, "arm.max_ticks")
         if most is not None and not np.all(most == np.round(most)):
             raise InvalidInputError(f"arm.max_ticks must be whole numbers, got {most.tolist()}")
@@ -79,7 +78,7 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
         arm = arm.placed(placement_matrix(spec.base, arm.length_unit))
     if spec.home_deg is not None:
         home = _per_joint(spec.home_deg, n, "arm.home_deg")
-        arm = arm.with_home(np.where(prismatic, home * mm, np.radians(home)))
+        arm = arm.with_home(arm.lattice.joint_from_display(home))
         arm.lattice.from_display(home, "arm.home_deg")  # the tasks start there: on the lattice
     return arm
 
