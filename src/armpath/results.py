@@ -162,16 +162,15 @@ class Result:
         from armpath.export import output_folder
         from armpath.viz.figures import FIGURE_SUFFIXES, plot_joint_angles
 
-        out = None if path is None else Path(path).expanduser()
-        if out is not None and out.suffix.lower() not in FIGURE_SUFFIXES:
+        if path is None:
+            return plot_joint_angles(None, self.sequence, self.title())
+        out = Path(path).expanduser()
+        if out.suffix.lower() not in FIGURE_SUFFIXES:
             raise InvalidInputError(
                 f"a figure is written as {', '.join(FIGURE_SUFFIXES)}, got {out.name!r}"
             )
-        fig = plot_joint_angles(None, self.sequence, self.title())
-        if out is not None:
-            with output_folder(out.parent, prune=False) as folder:  # whole file or nothing
-                fig.savefig(folder.file(out.name), dpi=110)
-        return fig
+        with output_folder(out.parent, prune=False) as folder:  # whole file or nothing
+            return plot_joint_angles(folder.file(out.name), self.sequence, self.title())
 
     def animate(self, path: str | Path, *, fps: int = 15, max_frames: int = 120) -> int:
         """Write an animation of the motion (``.gif``, or ``.mp4`` with ffmpeg) to ``path``;
