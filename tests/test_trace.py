@@ -639,7 +639,8 @@ def test_a_pass_into_the_tight_end_of_an_arc_finishes_along_a_chain_traced_out_o
     links come within the margin of the table and the workpiece: the family narrows to a point.
     A pass traced into that end creeps; traced out of it, the tracer goes on at full stride.
     The end chain (the pass traced from the end back over half its way) is followed by the pass
-    and joined where one command reaches it: here 4 commands fewer than the pass alone. Every
+    and joined where one command reaches it: here 2 commands fewer than the pass alone (4
+    before the pass alone turned up to 2 deg along the family where it creeps). Every
     state of the chain is one legal command from the next, its first reaches the end, and the
     joined pass's continuous fingertip path (independent forward kinematics, 40 instants a
     command) stays within the tolerance of the crack (its independent closed form) and clear of
@@ -666,7 +667,7 @@ def test_a_pass_into_the_tight_end_of_an_arc_finishes_along_a_chain_traced_out_o
     tracer.follow(chain)
     joined, s_joined = tracer.run(q0, s0, goal, chain)
     assert s_alone - goal <= 1e-3 and s_joined - goal <= 1e-3  # both reach the end
-    assert len(joined) <= len(alone) - 3  # 17 commands rather than 21
+    assert len(joined) <= len(alone) - 2  # 17 commands rather than 19
     np.testing.assert_array_equal(joined[-1], chain[0])  # it ends where the chain began
     assert all(np.abs(b - a).max() <= 20 for a, b in itertools.pairwise(chain))
     end = independent.points(np.array(chain[0]) / 10.0)[-1]

@@ -103,6 +103,13 @@ _CREEP_MM = 1.0
 #: Mid-pass, a command along the reference that advances less than this (mm) is compared with
 #: the farthest of commands also turned along the family (:meth:`Tracer._along_family`).
 _STALL_MM = 2.0
+#: How far :meth:`Tracer._along_family` and :meth:`Tracer._onto_goal` turn the joints along the
+#: family (largest joint, deg), either way; the first also where no lattice state near the
+#: reference lies ahead at all. A KUKA-like arm's 150 mm ring, its reference near the wrist's
+#: fold (joint 5 at 3-6 deg, so joint 4 moves the tool point 0.02 mm a tick), stalled there
+#: with turns up to 1 deg and took a second pass (116 commands); turned up to 2 deg it goes on
+#: in one (108; 105 once the pass may end on its own first state, see :meth:`Tracer.run`).
+_TURNS_DEG = (0.25, 0.5, 1.0, 1.5, 2.0)
 #: Commands compared there by how far the command after each gets.
 _LOOKAHEAD = 6
 #: Within this distance of a pass's goal (mm), a pass that finds no command takes its last one
@@ -426,7 +433,10 @@ class Tracer:
         if endgame:
             found = self._toward_best(qk, sk, goal) or self._onto_goal(qk, sk, goal)
             return [found] if found is not None else []
-        return []
+        # no lattice state near the reference ahead (where the family's members near it have
+        # few lattice states about the curve): turned farther along the family
+        wider = self._along_family(qk, sk, goal)
+        return [wider] if wider is not None else []
 
     def _commands_toward(
         self, qk: IntArray, sk: float, s1: float, goal: float, moves: list[FloatArray]
@@ -481,7 +491,7 @@ class Tracer:
     def _along_family(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """Where the command along the reference stalls mid-pass: the lattice searched about
         targets a few mm on, the joints also turned along the family (the null space of the
-        tip's Jacobian) by up to 1 deg either way; the farthest valid command."""
+        tip's Jacobian) by each of :data:`_TURNS_DEG` either way; the farthest valid command."""
         qk_rad = self.grid.to_joint(qk)
         sign = 1.0 if goal >= sk else -1.0
         turns = self._null_moves(qk_rad)
@@ -496,22 +506,22 @@ class Tracer:
 
     def _null_moves(self, qk_rad: FloatArray) -> list[FloatArray]:
         """Joint moves (rad) along the family from ``qk_rad``: each direction of the null space
-        of the tip's Jacobian, scaled to turn a joint by 0.25, 0.5 and 1 deg either way."""
+        of the tip's Jacobian, scaled to turn a joint by each of :data:`_TURNS_DEG` either way."""
         J = position_jacobian(self.arm, qk_rad)[:, self.tip]
         _, _, vt = np.linalg.svd(J)
         moves = []
         for v in vt[3:]:
             full = np.zeros(qk_rad.size)
             full[self.tip] = v / np.abs(v).max()
-            moves += [t * full / self.deg_eq for t in (0.25, -0.25, 0.5, -0.5, 1.0, -1.0)]
+            moves += [sign * t * full / self.deg_eq for t in _TURNS_DEG for sign in (1.0, -1.0)]
         return moves
 
     def _onto_goal(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """The last command of a pass, when neither the reference nor the most slack leads
         there: the lattice is searched about several members with the tip at the goal, the
-        joints turned from ``qk`` along the family (the null space of the tip's Jacobian) by up
-        to 1 deg either way. Lattice states with the tip in the band about one point are
-        sparse; more of the family holds more of them."""
+        joints turned from ``qk`` along the family (the null space of the tip's Jacobian) by
+        each of :data:`_TURNS_DEG` either way. Lattice states with the tip in the band about
+        one point are sparse; more of the family holds more of them."""
         moves = self._null_moves(self.grid.to_joint(qk))
         cand, s = self._commands_toward(qk, sk, goal, goal, moves)
         if cand.shape[0] == 0:
@@ -658,9 +668,10 @@ class Tracer:
     ) -> tuple[list[IntArray], float]:
         """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes).
 
-        With an end ``chain`` (:meth:`end_chain`: states from the goal back toward the pass),
-        the pass may finish with a command onto one of its states and the chain reversed; of
-        those finishes and its own, the one of fewest commands is kept.
+        With an end ``chain`` (:meth:`end_chain`: states from the goal back toward the pass;
+        once round a closed curve, the state the pass began from), the pass may finish with a
+        command onto one of its states and the chain reversed; of those finishes and its own,
+        the one of fewest commands is kept.
 
         Where no command continues within :data:`_BACKTRACK_WITHIN_MM` of the goal, the last
         command is taken back and the tip turned toward the family member with the most slack
