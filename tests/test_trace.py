@@ -754,3 +754,59 @@ def test_coverage_counts_overlapping_passes_once_and_within_the_reachable_arcs()
             ina, inb = inside(first, closed), inside(second, closed)
             assert sum(x1 - x0 for x0, x1 in a) == pytest.approx(ina.sum() * step, abs=0.01)
             assert common_mm(a, b) == pytest.approx((ina & inb).sum() * step, abs=0.01)
+
+
+@pytest.mark.slow  # 55 s
+def test_a_seam_where_the_workpiece_meets_the_table_keeps_the_tip_out_of_the_table():
+    """The plane z = 0 cuts the workpiece where it stands on the table, so its seam lies on both.
+    The tip may touch the surface it follows, and rode on the table too: the plan came back
+    'NOT certified' (a sampled instant 0.0002 mm inside the table) and was written as a success.
+    The tip now keeps the tracer's buffer from every obstacle but the one it follows: replayed
+    by the independent FK, 200 instants a command, the tip never goes below the table and stays
+    within the tolerance of the seam (closed form) along every pass; the motion is certified."""
+    scene = scene_from_dict({
+        "name": "bottom",
+        "obstacles": TABLE_ONLY["obstacles"] + [
+            {"type": "hollow_frustum", "name": "workpiece", "base_center": [210, 0, 0],
+             "height": 180, "r_bottom": 168, "r_top": 96, "wall": 8}],
+        "tasks": {"trace": {"curve": {
+            "type": "plane_section", "solid": "workpiece", "plane_point": [0, 0, 0],
+            "plane_normal": [0, 0, 1]}}},
+    })  # fmt: skip
+    start = deg_to_ticks([0, -90, 0, 0, -90, 0])
+    r = plan_trace(seed_arm(), scene.world, start, scene.trace_curve(), TraceOptions(bound=False))
+    assert r.clearance.certified_ok and r.clearance.min_tip_clearance >= 0.0
+    states = r.sequence.states()
+    t = np.linspace(0.0, 1.0, 201)
+    for p in r.passes:
+        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 6) / 10.0
+        tips = independent.points(q)[:, -1, :]
+        assert tips[:, 2].min() >= 0.0
+        assert np.hypot(np.hypot(tips[:, 0] - 210.0, tips[:, 1]) - 168.0, tips[:, 2]).max() <= 0.1
+
+
+def test_a_trace_whose_motion_is_not_certified_clear_is_refused(monkeypatch):
+    """A plan is delivered only with its continuous motion proven clear: where the final
+    certificate fails, the trace is refused, naming the pair, the command and both numbers."""
+    import dataclasses
+
+    from armpath.errors import PlanningError
+    from armpath.planning.trace import plan as trace_plan
+
+    real = trace_plan.motion_clearance
+
+    def failing(*args, **kwargs):
+        mc = real(*args, **kwargs)
+        return dataclasses.replace(
+            mc,
+            certified_ok=False,
+            limiting_slack=-0.0002,
+            lower_bound_slack=-1.6,
+            limiting_command=7,
+        )
+
+    monkeypatch.setattr(trace_plan, "motion_clearance", failing)
+    with pytest.raises(PlanningError, match=r"final clearance check .* -0\.0002 mm .* command 7; "
+                       r"proven no less than -1\.6000 mm\): it is not written"):  # fmt: skip
+        trace_the_circle(bound=False, tolerance_mm=3.0)

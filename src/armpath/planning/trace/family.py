@@ -194,6 +194,9 @@ class CurveFamily:
             dtype=bool,
         )
         self._touch_cols = touching
+        #: per clearance pair, whether it is the tool tip and the surface the curve lies on
+        #: (the one pair the tip may touch while tracing)
+        self.touch_pairs: NDArray[np.bool_] = touching
         self._labels = [p.label for p in pairs]
         self._others = [p.other for p in pairs]
         self._is_self = np.array([p.is_self for p in pairs], dtype=bool)

@@ -76,8 +76,8 @@ _PATH_SAMPLES = 16
 BAND_SHARE = 0.97
 #: The share a pass is traced again with when its certified deviation exceeds the tolerance.
 FALLBACK_BAND_SHARE = 0.9
-#: Extra clearance the links keep while tracing, so the certification of the continuous motion
-#: (bound from sampling) succeeds (mm).
+#: Extra clearance the links (and the tool tip, but from the surface it follows) keep while
+#: tracing, so the certification of the continuous motion (bound from sampling) succeeds (mm).
 _BODY_BUFFER_MM = 0.02
 #: The tool axis keeps this far inside its rule's cone at the checked instants, so that the
 #: certified worst angle of the continuous motion stays within the rule (rad: 0.2 deg).
@@ -191,8 +191,10 @@ class Tracer:
         #: for a revolute joint that moves 2 deg a command, half the mm of a prismatic joint
         #: that moves 2 mm); what the tracer's joint-move thresholds are written in
         self.deg_eq = 2.0 / (np.asarray(self.grid.tick, dtype=np.float64) * self.grid.max_ticks)
-        pairs = self.world.pairs(self.arm)
-        self.extra = np.array([0.0 if p.is_tip else _BODY_BUFFER_MM for p in pairs])
+        # the tip touches the surface it follows; everything else keeps the buffer, the tip too
+        # (a curve where a workpiece meets the table: the tip rode on the table, and the
+        # certificate could not prove that it never entered it)
+        self.extra = np.where(fam.touch_pairs, 0.0, _BODY_BUFFER_MM)
         self.piece = piece
         self.layers, self.ref = piece.layers, piece.ref
         self.radii = _box_radii(int(self.tip.sum()), int(self.grid.max_ticks[self.tip].min()))
