@@ -1,6 +1,7 @@
 """The command line as a user runs it: real subprocesses, exit codes, files."""
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -73,6 +74,54 @@ def test_bad_input_gives_one_line_and_nonzero_exit(args, message, tmp_path):
     assert message in lines[0]
     assert not (tmp_path / "out").exists()
     assert list(tmp_path.iterdir()) == []  # no staging folder left behind
+
+
+def _choices():
+    """Per option with a fixed set of values: the command line before it, the option (None:
+    the argument) and the values the code behind it accepts."""
+    from armpath.controller_export import FORMATS
+    from armpath.ik.solve import METHODS as IK_METHODS
+    from armpath.schemas import RESULT_KINDS
+    from armpath.trajectory.minsnap import ORDERS, QP_SOLVERS
+    from armpath.workspace.sampling import METHODS as SAMPLING_METHODS
+
+    return [
+        (["ik", "--xyz", "300", "200", "100"], "--method", IK_METHODS),
+        (["workspace"], "--method", SAMPLING_METHODS),
+        (["trajectory", "--waypoints", "wp.csv"], "--kind", tuple(ORDERS)),
+        (["trajectory", "--waypoints", "wp.csv"], "--solver", QP_SOLVERS),
+        (["rcm"], "--kind", tuple(ORDERS)),
+        (["export", "reach.json"], "--format", FORMATS),
+        (["schema"], None, RESULT_KINDS),
+    ]
+
+
+@pytest.mark.parametrize("case", range(7))
+def test_a_bad_choice_is_a_usage_error_and_help_lists_the_choices(case, tmp_path):
+    """An option with a fixed set of values lists them in --help (the parser's choices, the
+    same set the code behind it accepts) and refuses another value as the parser refuses
+    ``--wall diagonal``: one error line naming the valid values, exit status 2, nothing
+    written."""
+    words, option, accepted = _choices()[case]
+    command = words[0]
+    shown = subprocess.run(
+        [*ARMPATH, command, "--help"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "COLUMNS": "200"},
+        timeout=600,
+    )
+    assert shown.returncode == 0, shown.stderr
+    line = next(ln for ln in shown.stdout.splitlines() if (option or "kind") in ln and "<" in ln)
+    listed = re.search(r"<([^>]*)>", line)
+    assert listed is not None and set(listed.group(1).split("|")) == set(accepted), line
+    bad = ["bogus"] if option is None else [option, "bogus"]
+    r = run(*words, *bad, cwd=tmp_path)
+    assert r.returncode == 2, r.stdout + r.stderr
+    lines = error_lines(r.stderr)
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "'bogus'" in lines[0]
+    assert all(f"'{value}'" in lines[0] for value in accepted), lines[0]
+    assert r.stdout == "" and list(tmp_path.iterdir()) == []
 
 
 def test_unwritable_output_folder(tmp_path):

@@ -4,11 +4,18 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import typer
 
 from armpath.cli.common import _cli_errors, _numbers, app, out_console
+
+#: ``armpath export --format`` and ``armpath schema KIND``: the parser's choices (--help lists
+#: them; another value is a usage error, exit status 2); the same as
+#: :data:`armpath.controller_export.FORMATS` and :data:`armpath.schemas.RESULT_KINDS`
+#: (``tests/test_cli.py`` checks), spelled out so that --help need not import them.
+ExportFormat = Literal["csv", "joint-trajectory", "steps"]
+ResultKind = Literal["reach", "plan", "trace", "spotweld"]
 
 
 @app.command("export")
@@ -20,7 +27,7 @@ def export_result(
         ),
     ],
     fmt: Annotated[
-        str,
+        ExportFormat,
         typer.Option(
             "--format",
             help="csv: time and joint values (deg / mm); joint-trajectory: the ROS "
@@ -83,7 +90,7 @@ def export_result(
 @app.command("schema")
 def schema(
     kind: Annotated[
-        str,
+        ResultKind,
         typer.Argument(help="The result kind: reach, plan, trace or spotweld.", show_default=False),
     ],
 ) -> None:

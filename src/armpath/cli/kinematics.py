@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 import typer
@@ -96,6 +96,12 @@ def _pose_argument(text: str) -> np.ndarray:
     return T
 
 
+#: ``armpath ik --method``: the parser's choices, so --help lists them and another value is a
+#: usage error (exit status 2); the same as :data:`armpath.ik.solve.METHODS`
+#: (``tests/test_cli.py`` checks), spelled out so that --help need not import the solvers.
+IkMethod = Literal["auto", "spherical-wrist", "three-parallel", "general", "numerical"]
+
+
 @app.command(context_settings=LOOSE)
 def ik(
     model: ModelOption = "seed",
@@ -109,7 +115,7 @@ def ik(
         typer.Option(help="Target tool position only, mm (numerical solver)."),
     ] = None,
     method: Annotated[
-        str,
+        IkMethod,
         typer.Option(
             help="auto, spherical-wrist, three-parallel, general (Raghavan-Roth) or numerical "
             "(--xyz: auto or numerical)."

@@ -16,7 +16,7 @@ import contextlib
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import typer
@@ -304,6 +304,14 @@ def _evenly(n: int, count: int) -> NDArray[np.int64]:
     return np.unique(np.linspace(0, n - 1, min(n, count)).round().astype(np.int64))
 
 
+#: ``--kind`` of ``armpath trajectory`` and ``armpath rcm`` and ``--solver``: the parser's
+#: choices (--help lists them; another value is a usage error, exit status 2); the same as
+#: :data:`armpath.trajectory.minsnap.ORDERS` and :data:`~armpath.trajectory.minsnap.QP_SOLVERS`
+#: (``tests/test_cli.py`` checks), spelled out so that --help need not import the solvers.
+TrajectoryKind = Literal["snap", "jerk"]
+QpSolver = Literal["clarabel", "osqp"]
+
+
 @app.command()
 def trajectory(
     waypoints: Annotated[
@@ -316,7 +324,8 @@ def trajectory(
         ),
     ],
     kind: Annotated[
-        str, typer.Option(help="snap or jerk: the derivative whose square is minimised.")
+        TrajectoryKind,
+        typer.Option(help="snap or jerk: the derivative whose square is minimised."),
     ] = "snap",
     max_velocity: Annotated[
         float,
@@ -349,9 +358,9 @@ def trajectory(
             "duration. --free: the equality-only optimum (one sparse linear solve).",
         ),
     ] = False,
-    solver: Annotated[str, typer.Option(help="QP solver for --bounded: clarabel or osqp.")] = (
-        "clarabel"
-    ),
+    solver: Annotated[
+        QpSolver, typer.Option(help="QP solver for --bounded: clarabel or osqp.")
+    ] = "clarabel",
     retime: Annotated[
         bool,
         typer.Option(
@@ -560,7 +569,10 @@ def rcm(
         int, typer.Option(help=f"Waypoints on the circle (3 to {MAX_WAYPOINTS - 1:,}).")
     ] = 24,
     duration: Annotated[float, typer.Option(help="Time for one turn, s.")] = 8.0,
-    kind: Annotated[str, typer.Option(help="snap or jerk.")] = "snap",
+    kind: Annotated[
+        TrajectoryKind,
+        typer.Option(help="snap or jerk: the derivative whose square is minimised."),
+    ] = "snap",
     period: PeriodOption = 0.01,
     out: Annotated[
         Path | None,

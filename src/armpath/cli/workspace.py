@@ -13,7 +13,7 @@ import dataclasses
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import typer
@@ -71,6 +71,12 @@ def _percent_steps(say: Callable[[str], None], what: str) -> Callable[[int, int]
     return report
 
 
+#: ``armpath workspace --method``: the parser's choices (--help lists them; another value is a
+#: usage error, exit status 2); the same as :data:`armpath.workspace.sampling.METHODS`
+#: (``tests/test_cli.py`` checks), spelled out so that --help need not import the sampler.
+SamplingMethod = Literal["uniform", "stratified"]
+
+
 @app.command()
 def workspace(
     model: Annotated[
@@ -96,7 +102,8 @@ def workspace(
         typer.Option(help=f"Voxel edge, mm (at most {MAX_GRID_CELLS:,} voxels over the reach)."),
     ] = 20.0,
     method: Annotated[
-        str, typer.Option(help="uniform, or stratified (a Latin hypercube per chunk).")
+        SamplingMethod,
+        typer.Option(help="uniform, or stratified (a Latin hypercube per chunk)."),
     ] = "uniform",
     seed: Annotated[int, typer.Option(help="Random seed (same seed, same workspace).")] = 0,
     chunk: Annotated[
