@@ -289,3 +289,172 @@ def test_a_dh_table_of_axes_that_nearly_meet_reproduces_the_tool_pose(tmp_path):
     assert np.abs(tool_pose(robot_from_dict(doc), q) - want).max() <= 1e-9
     for row, T in zip(q[:10], want[:10], strict=True):
         assert np.abs(_dh_product(doc, row)[:3, 3] - T[:3, 3]).max() <= 1e-9
+
+
+def _one_error_line(args: list[str], cwd) -> str:
+    """The one ``error:`` line (exit 1, nothing on stdout) of a CLI run in process, any warning
+    raised as an error (a RuntimeWarning printed before the line is a defect too)."""
+    import warnings
+
+    from cli_in_process import run_in_process
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = run_in_process(args, cwd)
+    assert r.returncode == 1 and r.stdout == "", (args, r.stdout, r.stderr)
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("error: "), (args, r.stderr)
+    return r.stderr.strip()
+
+
+def _fk_tip(args: list[str], cwd) -> list[float]:
+    from cli_in_process import run_in_process
+
+    r = run_in_process(["fk", *args, "--json"], cwd)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    return json.loads(r.stdout)["tip"]
+
+
+def _urdf(origin: str, name2: str = "j2", kind: str = "revolute", limit: str = "-1 1") -> str:
+    lower, upper = limit.split()
+    return (
+        '<robot name="r"><link name="a"/><link name="b"/><link name="c"/>'
+        f'<joint name="j1" type="revolute"><parent link="a"/><child link="b"/>'
+        f'<origin xyz="{origin}"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        f'<joint name="{name2}" type="{kind}"><parent link="b"/><child link="c"/>'
+        '<origin xyz="0.1 0 0"/><axis xyz="1 0 0"/>'
+        f'<limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/></joint></robot>'
+    )
+
+
+def test_lengths_of_a_robot_file_beyond_the_coordinate_limit_are_refused_naming_where(tmp_path):
+    """A D-H link of a = 1e308 mm made ``workspace`` raise OverflowError, ``fk`` print a tip of
+    1e308 after RuntimeWarnings and ``reach`` a traceback; a URDF origin of 1e300 m the same.
+    Every length of a robot file (a, d, a prismatic offset and limits, home, radii, base and
+    tool translations; URDF origins and prismatic limits; a model document's translations) is
+    now refused beyond the 1e9 mm every scene coordinate and target is held to, naming where
+    in the file. Files within it still work."""
+    limit = "is beyond the largest length a model may use (1e+09 mm, as for scenes and targets)"
+    eye = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    far = [[1, 0, 0, 5e9], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    files = {
+        "huge.json": ({"links": [{"a": 1e308}, {"a": 100}]}, "links[0].a: 1e+308 mm"),
+        "d.json": (
+            {"units": {"length": "m"}, "links": [{"a": 0.1}, {"d": 2e6}]},
+            "links[1].d: 2e+06 m",
+        ),
+        "slide.json": (
+            {"links": [{"a": 10}, {"type": "prismatic", "limits": [0, 2e9]}]},
+            "links[1].limits[1]: 2e+09 mm",
+        ),
+        "offset.json": (
+            {"links": [{"a": 10}, {"type": "prismatic", "offset": -3e9}]},
+            "links[1].offset: -3e+09 mm",
+        ),
+        "base.json": ({"links": [{"a": 10}, {"a": 10}], "base": far}, "base: translation x"),
+        "tool.json": ({"links": [{"a": 10}, {"a": 10}], "base": eye, "tool": far}, "tool: transl"),
+        # an integer beyond any float (JSON has no limit) is no finite number either
+        "int.json": ({"links": [{"a": 10**400}, {"a": 10}]}, "links[0].a must be finite"),
+    }
+    for name, (doc, where) in files.items():
+        (tmp_path / name).write_text(json.dumps(doc))
+        line = _one_error_line(["fk", "0", "0", "--model", name, "--json"], tmp_path)
+        assert line.startswith(f"error: robot file {name!r}: {where}"), line
+        if name != "int.json":
+            assert limit in line, line
+    line = "error: robot file 'huge.json': links[0].a: 1e+308 mm " + limit
+    for args in (
+        ["workspace", "--model", "huge.json", "--samples", "1000"],
+        ["reach", "100", "0", "0", "--model", "huge.json"],
+    ):
+        assert _one_error_line(args, tmp_path) == line
+    (tmp_path / "huge.urdf").write_text(_urdf("1e300 0 0"))
+    (tmp_path / "slide.urdf").write_text(_urdf("0 0 0", kind="prismatic", limit="0 1e7"))
+    assert _one_error_line(["reach", "100", "0", "0", "--model", "huge.urdf"], tmp_path) == (
+        f"error: URDF 'huge.urdf': joint 'j1' origin xyz (x): 1e+300 m {limit}"
+    )
+    assert _one_error_line(["fk", "0", "0", "--model", "slide.urdf"], tmp_path) == (
+        f"error: URDF 'slide.urdf': joint 'j2' limit upper: 1e+10 mm {limit}"
+    )
+    # armpath's own model document: a translation changed to 1e300 mm
+    (tmp_path / "ok.urdf").write_text(_urdf("0.2 0 0.3"))
+    from cli_in_process import run_in_process
+
+    r = run_in_process(["model", "convert", "ok.urdf", "--to", "json", "--out", "m.json"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "m.json").read_text())
+    doc["joints"][1]["T_parent_joint"][1][3] = 1e300
+    (tmp_path / "m_far.json").write_text(json.dumps(doc))
+    line = _one_error_line(["fk", "0", "0", "--model", "m_far.json"], tmp_path)
+    assert line == (
+        "error: robot file 'm_far.json': malformed arm: joint 2: T_parent_joint translation y: "
+        f"1e+300 mm {limit}"
+    ), line
+    # within the limit: the tool point where the lengths put it
+    (tmp_path / "long.json").write_text(json.dumps({"links": [{"a": 1e9}, {"a": 250, "d": 40}]}))
+    assert _fk_tip(["0", "0", "--model", "long.json"], tmp_path) == [1e9 + 250, 0.0, 40.0]
+    assert _fk_tip(["0", "0", "--model", "ok.urdf"], tmp_path) == [300.0, 0.0, 300.0]
+    assert _fk_tip(["0", "0", "--model", "m.json"], tmp_path) == [300.0, 0.0, 300.0]
+
+
+def test_the_base_and_tool_of_a_robot_file_must_be_rigid_transforms(tmp_path):
+    """A robot file's base of diag(2, 2, 2, 1) doubled every distance silently and an all-zero
+    rotation block put every point at the base; neither is a placement. The base and the tool
+    are now refused unless rigid (rotation block orthonormal with determinant +1 to 1e-6, last
+    row 0 0 0 1), naming the field and the file; a rotation written to six digits is one."""
+    rows = [{"a": 100}, {"a": 100}]
+
+    def matrix(r, t=(0, 0, 0), last=(0, 0, 0, 1)):
+        return [[*r[0], t[0]], [*r[1], t[1]], [*r[2], t[2]], list(last)]
+
+    scale = matrix([[2, 0, 0], [0, 2, 0], [0, 0, 2]])
+    zero = matrix([[0, 0, 0], [0, 0, 0], [0, 0, 0]])
+    mirror = matrix([[1, 0, 0], [0, 1, 0], [0, 0, -1]])
+    skew = matrix([[1, 0, 0], [0, 1, 0], [0, 0, 1]], last=(0, 0, 0.5, 1))
+    not_rigid = "is not a rigid transform: "
+    cases = {
+        "scale.json": ({"base": scale}, f"base {not_rigid}its rotation block (the upper-left"),
+        "zero.json": ({"tool": zero}, f"tool {not_rigid}its rotation block"),
+        "mirror.json": ({"base": mirror}, f"base {not_rigid}its rotation block is a reflection"),
+        "skew.json": ({"tool": skew}, f"tool {not_rigid}its last row must be 0 0 0 1, got 0 0 0.5"),
+    }
+    for name, (extra, message) in cases.items():
+        (tmp_path / name).write_text(json.dumps({"links": rows, **extra}))
+        line = _one_error_line(["fk", "0", "0", "--model", name], tmp_path)
+        assert line.startswith(f"error: robot file {name!r}: {message}"), line
+    # a model document's base: named by its key
+    from cli_in_process import run_in_process
+
+    (tmp_path / "ok.json").write_text(json.dumps({"links": rows}))
+    r = run_in_process(["model", "convert", "ok.json", "--to", "json", "--out", "m.json"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "m.json").read_text())
+    doc["T_world_base"] = scale
+    (tmp_path / "m_scaled.json").write_text(json.dumps(doc))
+    line = _one_error_line(["fk", "0", "0", "--model", "m_scaled.json"], tmp_path)
+    assert line.startswith(
+        f"error: robot file 'm_scaled.json': malformed arm: the document: base (T_world_base) "
+        f"{not_rigid}"
+    ), line
+    # rigid ones still place the arm: 30 deg about z written to six digits, then 10 mm up
+    turn = matrix([[0.866025, -0.5, 0], [0.5, 0.866025, 0], [0, 0, 1]], t=(0, 0, 10))
+    (tmp_path / "turned.json").write_text(json.dumps({"links": rows, "base": turn}))
+    tip = _fk_tip(["0", "0", "--model", "turned.json"], tmp_path)
+    np.testing.assert_allclose(tip, [173.205, 100.0, 10.0], atol=1e-6)
+
+
+def test_a_urdf_with_two_joints_of_one_name_is_refused(tmp_path):
+    """A URDF whose two joints were both named j1 was read as an arm of two j1 joints
+    (``model show`` listed both); a name says which joint a limit, a tip link or a message
+    means, so a second one is refused, naming it. Two links of one name the same."""
+    (tmp_path / "twice.urdf").write_text(_urdf("0.1 0 0", name2="j1"))
+    line = _one_error_line(["model", "show", "twice.urdf"], tmp_path)
+    assert line == (
+        "error: URDF 'twice.urdf': more than one joint is named 'j1'; each joint needs a name "
+        "of its own"
+    )
+    (tmp_path / "links.urdf").write_text(_urdf("0.1 0 0").replace('"c"', '"b"'))
+    line = _one_error_line(["model", "show", "links.urdf"], tmp_path)
+    assert "more than one link is named 'b'" in line, line
+    (tmp_path / "ok.urdf").write_text(_urdf("0.1 0 0"))
+    assert _fk_tip(["0", "0", "--model", "ok.urdf"], tmp_path) == [200.0, 0.0, 0.0]

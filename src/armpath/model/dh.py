@@ -26,7 +26,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.errors import InvalidInputError
 from armpath.model.lattice import MM_PER_LENGTH_UNIT
-from armpath.model.serial_arm import Joint, JointKind, SerialArm, check_turns
+from armpath.model.serial_arm import (
+    Joint,
+    JointKind,
+    SerialArm,
+    check_length,
+    check_rigid,
+    check_turns,
+)
 from armpath.model.skeleton import link_radii, physical_links
 
 FloatArray = NDArray[np.float64]
@@ -160,17 +167,38 @@ def dh_arm(
 def _number(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise InvalidInputError(f"{where} must be a number, got {value!r}")
-    if not np.isfinite(value):
-        raise InvalidInputError(f"{where} must be finite, got {value!r}")
-    return float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond any float (JSON integers have no limit)
+        x = np.inf
+    if not np.isfinite(x):
+        raise InvalidInputError(f"{where} must be finite, got {x!r}")
+    return x
 
 
-def _transform(value: Any, where: str, length_scale: float) -> FloatArray:
-    arr = np.asarray(value, dtype=np.float64) if isinstance(value, list) else None
-    if arr is None or arr.shape not in ((4, 4), (16,)) or not np.all(np.isfinite(arr)):
-        raise InvalidInputError(f"{where} must be a 4x4 matrix (nested or 16 numbers, row-major)")
+def _length(value: Any, where: str, unit: str) -> float:
+    """A length of the file (``unit``) in mm, within the model's largest length."""
+    return check_length(_number(value, where), where, unit) * MM_PER_LENGTH_UNIT[unit]
+
+
+def _transform(value: Any, where: str, unit: str) -> FloatArray:
+    """A 4x4 rigid transform of the file, its translation (``unit``) in mm."""
+    wrong = InvalidInputError(
+        f"{where} must be a 4x4 matrix (nested or 16 finite numbers, row-major)"
+    )
+    if not isinstance(value, list):
+        raise wrong
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):  # text, ragged rows, a huge integer
+        raise wrong from None
+    if arr.shape not in ((4, 4), (16,)) or not np.all(np.isfinite(arr)):
+        raise wrong
     T = arr.reshape(4, 4).copy()
-    T[:3, 3] *= length_scale
+    for k, axis in enumerate("xyz"):
+        check_length(float(T[k, 3]), f"{where}: translation {axis}", unit)
+    check_rigid(T, where)
+    T[:3, 3] *= MM_PER_LENGTH_UNIT[unit]
     return T
 
 
@@ -237,6 +265,10 @@ def robot_from_dict(
             )
         lo = -np.inf if limits_raw[0] is None else _number(limits_raw[0], f"{where}.limits[0]")
         hi = np.inf if limits_raw[1] is None else _number(limits_raw[1], f"{where}.limits[1]")
+        if kind is JointKind.PRISMATIC:  # lengths, as a, d and offset
+            for side, v in enumerate((lo, hi)):
+                if np.isfinite(v):
+                    check_length(v, f"{where}.limits[{side}]", length_unit)
         if lo > hi:
             raise InvalidInputError(f"{where}.limits: lower {lo} exceeds upper {hi}")
         if kind is JointKind.REVOLUTE:
@@ -248,26 +280,33 @@ def robot_from_dict(
                 if angle_unit == "rad"
                 else None,
             )
+        offset = link.get("offset", 0.0)
         rows.append(
             DHRow(
-                a=_number(link.get("a", 0.0), f"{where}.a") * L,
+                a=_length(link.get("a", 0.0), f"{where}.a", length_unit),
                 alpha=_number(link.get("alpha", 0.0), f"{where}.alpha") * A,
-                d=_number(link.get("d", 0.0), f"{where}.d") * L,
-                offset=_number(link.get("offset", 0.0), f"{where}.offset") * q_scale,
+                d=_length(link.get("d", 0.0), f"{where}.d", length_unit),
+                offset=(
+                    _length(offset, f"{where}.offset", length_unit)
+                    if kind is JointKind.PRISMATIC
+                    else _number(offset, f"{where}.offset") * A
+                ),
                 kind=kind,
                 limits=(lo * q_scale, hi * q_scale),
                 theta=_number(link.get("theta", 0.0), f"{where}.theta") * A,
             )
         )
-    base = _transform(doc["base"], f"{source}: base", L) if "base" in doc else None
-    tool = _transform(doc["tool"], f"{source}: tool", L) if "tool" in doc else None
+    base = _transform(doc["base"], f"{source}: base", length_unit) if "base" in doc else None
+    tool = _transform(doc["tool"], f"{source}: tool", length_unit) if "tool" in doc else None
     home = None
     if "home" in doc:
         raw = doc["home"]
         if not isinstance(raw, list) or len(raw) != len(rows):
             raise InvalidInputError(f"{source}: home must list {len(rows)} joint values")
         home = [
-            _number(v, f"{source}: home[{i}]") * (A if r.kind is JointKind.REVOLUTE else L)
+            _number(v, f"{source}: home[{i}]") * A
+            if r.kind is JointKind.REVOLUTE
+            else _length(v, f"{source}: home[{i}]", length_unit)
             for i, (v, r) in enumerate(zip(raw, rows, strict=True))
         ]
     radii: float | list[float] = 0.0
@@ -275,9 +314,9 @@ def robot_from_dict(
         raw = doc["link_radii_mm"]
         where = f"{source}: link_radii_mm"
         if isinstance(raw, list):
-            values = [_number(v, f"{where}[{i}]") for i, v in enumerate(raw)]
+            values = [_length(v, f"{where}[{i}]", "mm") for i, v in enumerate(raw)]
         else:
-            values = [_number(raw, where)]
+            values = [_length(raw, where, "mm")]
         radii = link_radii(values if isinstance(raw, list) else values[0], len(rows), where)
     label = doc.get("name", name)
     return dh_arm(

@@ -115,20 +115,22 @@ class Lattice:
                 f"ticks must be finite and > 0 (deg, mm for a prismatic joint), got "
                 f"{[float(f'{v:.10g}') for v in shown]}"
             )
-        if max_ticks.dtype.kind not in "iu" and not np.all(max_ticks == np.round(max_ticks)):
+        if max_ticks.dtype.kind not in "iuf" or not np.all(max_ticks == np.round(max_ticks)):
             raise InvalidInputError(f"max ticks must be whole numbers, got {max_ticks.tolist()}")
-        max_ticks = max_ticks.astype(np.int64)
+        # the range before the cast: a float beyond int64 would cast to garbage with a warning
         if not np.all((max_ticks >= 1) & (max_ticks <= MAX_TICKS_PER_COMMAND)):
             raise InvalidInputError(
                 f"max ticks per command must be in [1, {MAX_TICKS_PER_COMMAND:,}], got "
                 f"{max_ticks.tolist()}"
             )
+        max_ticks = max_ticks.astype(np.int64)
         lo = np.where(prismatic, MIN_TICK_MM, MIN_TICK_DEG)
         hi = np.where(prismatic, MAX_TICK_MM, MAX_TICK_DEG)
         if np.any((shown < lo * (1 - 1e-9)) | (shown > hi * (1 + 1e-9))):
             raise InvalidInputError(
                 f"ticks must be {MIN_TICK_DEG:g} to {MAX_TICK_DEG:g} deg (revolute) or "
-                f"{MIN_TICK_MM:g} to {MAX_TICK_MM:g} mm (prismatic), got {shown.tolist()}"
+                f"{MIN_TICK_MM:g} to {MAX_TICK_MM:g} mm (prismatic), got "
+                f"{[float(f'{v:.10g}') for v in shown]}"
             )
         steps = check_steps_per_tick(1 if self.steps_per_tick is None else self.steps_per_tick, n)
         period = check_command_period(self.command_period_s)
@@ -196,15 +198,17 @@ class Lattice:
     def to_ticks(self, q: ArrayLike, what: str = "joint state") -> IntArray:
         """Tick state of joint values that lie on the lattice (within 1e-6 tick); raises
         :class:`InvalidInputError` naming the first joint that does not."""
-        t = self.to_ticks_float(q)
-        if not np.all(np.isfinite(t)):
+        values = np.asarray(q, dtype=np.float64)
+        if not np.all(np.isfinite(values)):
             raise InvalidInputError(f"{what} must be finite numbers")
-        if np.abs(t).max(initial=0.0) > MAX_STATE_TICKS:
+        with np.errstate(over="ignore"):  # a huge finite value: refused below, by its size
+            t = self.to_ticks_float(values)
+        if not np.abs(t).max(initial=0.0) <= MAX_STATE_TICKS:
             flat = np.asarray(t).reshape(-1, self.n_joints)
-            row, i = (int(x) for x in np.argwhere(np.abs(flat) > MAX_STATE_TICKS)[0])
-            value = float(flat[row, i])
+            row, i = (int(x) for x in np.argwhere(~(np.abs(flat) <= MAX_STATE_TICKS))[0])
+            value = float(self.joint_display(values.reshape(-1, self.n_joints)[row])[i])
             raise InvalidInputError(
-                f"{what}: joint {i + 1} is {value * self.tick_display[i]:g} {self.units[i]}, "
+                f"{what}: joint {i + 1} is {value:g} {self.units[i]}, "
                 f"beyond the {MAX_STATE_TICKS * self.tick_display[i]:.3g} {self.units[i]} "
                 f"({MAX_STATE_TICKS:.3g} ticks) a joint value may hold"
             )
@@ -310,11 +314,17 @@ class Lattice:
         bad = np.abs(commands) > self.max_ticks
         if np.any(bad):
             k, i = np.argwhere(bad)[0]
-            raise CommandError(
-                f"command {k + 1}, joint {i + 1}: increment {commands[k, i]} ticks is outside "
-                f"[-{self.max_ticks[i]}, {self.max_ticks[i]}] (at most "
-                f"{self.max_ticks[i] * self.tick_display[i]:.10g} {self.units[i]})"
-            )
+            raise self.increment_error(int(k), int(i), int(commands[k, i]))
+
+    def increment_error(self, k: int, i: int, ticks: int) -> CommandError:
+        """The error of command ``k`` (from 0) moving joint ``i`` by ``ticks``, more than its
+        most ticks a command (any whole number: one read from JSON may exceed int64)."""
+        shown = f"{ticks}" if abs(ticks) < 10**15 else f"{float(ticks):.3g}"
+        return CommandError(
+            f"command {k + 1}, joint {i + 1}: increment {shown} ticks is outside "
+            f"[-{self.max_ticks[i]}, {self.max_ticks[i]}] (at most "
+            f"{self.max_ticks[i] * self.tick_display[i]:.10g} {self.units[i]})"
+        )
 
     def split(self, delta_ticks: ArrayLike, n_commands: int) -> IntArray:
         """Split a joint move into ``n_commands`` legal commands that track the straight line:

@@ -24,7 +24,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import MAX_JOINTS
+from armpath.budget import MAX_COORDINATE_MM, MAX_JOINTS
 from armpath.errors import InvalidInputError, JointLimitError
 from armpath.model.lattice import (
     DEFAULT_COMMAND_PERIOD_S,
@@ -36,17 +36,46 @@ from armpath.model.lattice import (
     check_command_period,
     check_steps_per_tick,
 )
+from armpath.poses import ORTHONORMAL_TOLERANCE
 
 FloatArray = NDArray[np.float64]
 
 
-def _check_rigid(T: FloatArray, what: str) -> None:
-    if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0]) or not np.allclose(
-        T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-9
-    ):
-        raise InvalidInputError(f"{what} is not a rigid transform")
-    if np.linalg.det(T[:3, :3]) < 0:
-        raise InvalidInputError(f"{what} is a reflection, not a rotation")
+def check_rigid(T: FloatArray, what: str) -> None:
+    """Refuse a finite 4x4 ``T`` that is not a rigid transform (a rotation, then a translation),
+    naming ``what``: its rotation block must be orthonormal with determinant +1 and its last
+    row 0 0 0 1, each to :data:`~armpath.poses.ORTHONORMAL_TOLERANCE`. A scaling, shear or
+    reflection would move every point the transform places, silently."""
+    tol = ORTHONORMAL_TOLERANCE
+    if np.abs(T[3] - [0.0, 0.0, 0.0, 1.0]).max() > tol:
+        raise InvalidInputError(
+            f"{what} is not a rigid transform: its last row must be 0 0 0 1, got "
+            f"{' '.join(f'{v:g}' for v in T[3])}"
+        )
+    R = T[:3, :3]
+    if np.abs(R.T @ R - np.eye(3)).max() > tol:
+        raise InvalidInputError(
+            f"{what} is not a rigid transform: its rotation block (the upper-left 3x3) must be "
+            f"orthonormal (to {tol:g}), not scale, shear or collapse lengths"
+        )
+    if np.linalg.det(R) < 0:
+        raise InvalidInputError(
+            f"{what} is not a rigid transform: its rotation block is a reflection "
+            "(determinant -1), not a rotation"
+        )
+
+
+def check_length(value: float, where: str, unit: str = "mm") -> float:
+    """``value`` (a length in ``unit`` of a model: a link length, an offset, a translation, a
+    prismatic limit), or :class:`InvalidInputError` naming ``where`` and the limit when it lies
+    beyond :data:`~armpath.budget.MAX_COORDINATE_MM` (a model longer than a scene may be wide:
+    its kinematics would lose every digit, or overflow)."""
+    if abs(value) * MM_PER_LENGTH_UNIT[unit] > MAX_COORDINATE_MM:
+        raise InvalidInputError(
+            f"{where}: {value:g} {unit} is beyond the largest length a model may use "
+            f"({MAX_COORDINATE_MM:g} mm, as for scenes and targets)"
+        )
+    return value
 
 
 def _frozen(a: ArrayLike, shape: tuple[int, ...], what: str) -> FloatArray:
@@ -103,10 +132,7 @@ class Joint:
 
     def __post_init__(self) -> None:
         T = _frozen(self.T_parent_joint, (4, 4), f"joint {self.name!r} T_parent_joint")
-        if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0]) or not np.allclose(
-            T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-9
-        ):
-            raise InvalidInputError(f"joint {self.name!r}: T_parent_joint is not a rigid transform")
+        check_rigid(T, f"joint {self.name!r}: T_parent_joint")
         axis = np.array(self.axis, dtype=np.float64)
         norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
         if axis.shape != (3,) or not np.isfinite(norm) or norm < 1e-12:
@@ -285,9 +311,11 @@ class SerialArm:
         if n > MAX_JOINTS:  # memory and time grow with the joints (300 joints: 2.7 GB a plan)
             raise InvalidInputError(f"a serial arm may have at most {MAX_JOINTS} joints, got {n}")
         object.__setattr__(self, "T_flange_tool", _frozen(self.T_flange_tool, (4, 4), "tool"))
+        check_rigid(self.T_flange_tool, "tool (T_flange_tool)")
         object.__setattr__(self, "T_joint_flange", _frozen(self.T_joint_flange, (4, 4), "flange"))
-        _check_rigid(self.T_joint_flange, "flange")
+        check_rigid(self.T_joint_flange, "flange (T_joint_flange)")
         object.__setattr__(self, "T_world_base", _frozen(self.T_world_base, (4, 4), "base"))
+        check_rigid(self.T_world_base, "base (T_world_base)")
         object.__setattr__(self, "home", _frozen(self.home, (n,), "home"))
         for lm in self.landmarks:
             if not 0 <= lm.frame <= n + 1:
@@ -343,7 +371,7 @@ class SerialArm:
         """The arm standing at ``T_world_cell_base`` in a cell (its own base transform applied
         after it): where a scene puts the arm."""
         T = _frozen(T_world_cell_base, (4, 4), "base placement")
-        _check_rigid(T, "base placement")
+        check_rigid(T, "base placement")
         return replace(self, T_world_base=T @ self.T_world_base)
 
     def with_tool(
@@ -359,7 +387,7 @@ class SerialArm:
         replaces their radius when given). ``approach_axis`` (tool frame) is where the tool
         points (kept when not given)."""
         T = _frozen(T_flange_tool, (4, 4), "tool")
-        _check_rigid(T, "tool")
+        check_rigid(T, "tool")
         T = _frozen(np.asarray(self.T_joint_flange) @ T, (4, 4), "tool")
         n = self.n_joints
         tool_frame = n + 1

@@ -15,8 +15,8 @@ from typing import Any, TypeVar
 import numpy as np
 
 from armpath.errors import InvalidInputError
-from armpath.model.lattice import DEFAULT_COMMAND_PERIOD_S
-from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm
+from armpath.model.lattice import DEFAULT_COMMAND_PERIOD_S, MM_PER_LENGTH_UNIT
+from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, SerialArm, check_length
 
 T = TypeVar("T")
 
@@ -118,6 +118,23 @@ def _numbers(item: dict[str, Any], key: str, shape: tuple[int, ...]) -> np.ndarr
     return np.asarray(given, dtype=np.float64)
 
 
+def _lengths(values: np.ndarray, key: str, unit: str) -> np.ndarray:
+    """``values`` (lengths in ``unit``: a translation, an offset), each within the largest
+    length a model may use."""
+    for k, v in enumerate(values.ravel().tolist()):
+        check_length(v, key if values.size == 1 else f"{key}[{k}]", unit)
+    return values
+
+
+def _placement(item: dict[str, Any], key: str, unit: str) -> np.ndarray:
+    """``item[key]``, a 4x4 transform whose translation (``unit``) is within the largest length
+    a model may use (its rigidity is :class:`SerialArm`'s to check)."""
+    T = _numbers(item, key, (4, 4))
+    for k, axis in enumerate("xyz"):
+        check_length(float(T[k, 3]), f"{key} translation {axis}", unit)
+    return T
+
+
 def _limits(j: dict[str, Any]) -> tuple[float, float]:
     """A joint's ``[lower, upper]``, null for an open side."""
     value = j["limits"]
@@ -158,24 +175,31 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
 
     def joint(j: dict[str, Any]) -> Joint:
         name = _text(j, "name")
-        T_parent_joint = _numbers(j, "T_parent_joint", (4, 4))
+        T_parent_joint = _placement(j, "T_parent_joint", unit)
         axis = _numbers(j, "axis", (3,))
         kind = j["kind"]
         if kind not in [k.value for k in JointKind]:
             raise ValueError(f"kind must be 'revolute' or 'prismatic', got {kind!r}")
+        limits = _limits(j)
+        if kind == JointKind.PRISMATIC.value:  # lengths, as the translations
+            for side, v in zip(("lower", "upper"), limits, strict=True):
+                if np.isfinite(v):
+                    check_length(v, f"limits ({side})", unit)
         return Joint(
             name,
             T_parent_joint,
             axis,
             JointKind(kind),
-            _limits(j),
+            limits,
             None if j["tick"] is None else _number(j, "tick"),
             _whole(j, "max_ticks"),
             _whole(j, "steps_per_tick") if "steps_per_tick" in j else 1,
         )
 
     def landmark(m: dict[str, Any]) -> Landmark:
-        offset = _numbers(m, "offset", (3,)) if "offset" in m else np.zeros(3)
+        offset = (
+            _lengths(_numbers(m, "offset", (3,)), "offset", unit) if "offset" in m else np.zeros(3)
+        )
         return Landmark(_text(m, "name"), _whole(m, "frame"), tuple(offset.tolist()))
 
     def link(k: dict[str, Any]) -> Link:
@@ -186,11 +210,14 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             _text(k, "name"),
             _whole(k, "start"),
             _whole(k, "end"),
-            _number(k, "radius"),
+            check_length(_number(k, "radius"), "radius", unit),
             checked,
         )
 
     try:
+        unit = _text(doc, "length_unit")  # of every length below
+        if unit not in MM_PER_LENGTH_UNIT:
+            raise ValueError(f"length_unit must be 'mm' or 'm', got {unit!r}")
         joints = parts("joints", "joint", joint)
         if not joints:
             raise ValueError("joints is empty: a serial arm needs at least one joint")
@@ -203,18 +230,21 @@ def arm_from_dict(doc: dict[str, Any], what: str = "model") -> SerialArm:
             raise ValueError(
                 f"parameters must be a list of [name, number] pairs, got {parameters!r}"
             )
+        home = _numbers(doc, "home", (len(joints),))
+        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in joints])
+        _lengths(home[prismatic], "home (a prismatic joint's)", unit)
         return SerialArm(
             name=_text(doc, "name"),
             joints=joints,
-            T_flange_tool=_numbers(doc, "T_flange_tool", (4, 4)),
+            T_flange_tool=_placement(doc, "T_flange_tool", unit),
             T_joint_flange=(
-                _numbers(doc, "T_joint_flange", (4, 4)) if "T_joint_flange" in doc else np.eye(4)
+                _placement(doc, "T_joint_flange", unit) if "T_joint_flange" in doc else np.eye(4)
             ),
             landmarks=landmarks,
             links=links,
-            home=_numbers(doc, "home", (len(joints),)),
-            length_unit=_text(doc, "length_unit"),
-            T_world_base=_numbers(doc, "T_world_base", (4, 4)),
+            home=home,
+            length_unit=unit,
+            T_world_base=_placement(doc, "T_world_base", unit),
             parameters=tuple((k, _as_number(v, k)) for k, v in parameters),
             approach_axis=tuple(
                 _numbers(doc, "approach_axis", (3,)).tolist()

@@ -9,13 +9,14 @@ so their radii are ``link_radii_mm`` (default 0).
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from armpath.errors import InvalidInputError
-from armpath.model.serial_arm import Joint, JointKind, SerialArm, check_turns
+from armpath.model.serial_arm import Joint, JointKind, SerialArm, check_length, check_turns
 from armpath.model.skeleton import link_radii, physical_links
 
 _M_TO_MM = 1000.0
@@ -73,6 +74,16 @@ def arm_from_urdf(
         ) from None
     except Exception as exc:  # yourdfpy raises many types for malformed URDF
         raise InvalidInputError(f"URDF {p.name!r} could not be parsed: {exc}") from exc
+    for element, named in (
+        ("joint", [j.name for j in urdf.robot.joints]),
+        ("link", [lk.name for lk in urdf.robot.links]),
+    ):
+        twice = sorted(n for n, count in Counter(named).items() if count > 1)
+        if twice:  # yourdfpy keeps both: a chain by name would be ambiguous
+            raise InvalidInputError(
+                f"URDF {p.name!r}: more than one {element} is named {twice[0]!r}; each "
+                f"{element} needs a name of its own"
+            )
     link_names = {lk.name for lk in urdf.robot.links}
     for j in urdf.robot.joints:
         for role, name in (("parent", j.parent), ("child", j.child)):
@@ -112,6 +123,9 @@ def arm_from_urdf(
     carry = np.eye(4)
     for uj in path_joints:
         origin = np.eye(4) if uj.origin is None else np.array(uj.origin, dtype=np.float64)
+        for k, coordinate in enumerate("xyz"):
+            where = f"URDF {p.name!r}: joint {uj.name!r} origin xyz ({coordinate})"
+            check_length(float(origin[k, 3]), where, "m")
         origin[:3, 3] *= _M_TO_MM
         if uj.type == "fixed":
             carry = carry @ origin
@@ -136,6 +150,10 @@ def arm_from_urdf(
                 lo = float(uj.limit.lower) * scale
             if uj.limit.upper is not None:
                 hi = float(uj.limit.upper) * scale
+        if kind is JointKind.PRISMATIC:  # lengths, as the origins
+            for side, v in (("lower", lo), ("upper", hi)):
+                if np.isfinite(v):
+                    check_length(v, f"URDF {p.name!r}: joint {uj.name!r} limit {side}")
         if kind is JointKind.REVOLUTE:
             check_turns(
                 (lo, hi),
