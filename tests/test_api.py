@@ -10,6 +10,7 @@ import re
 import shutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -164,6 +165,39 @@ def test_a_result_is_saved_as_the_cli_writes_it_by_its_suffix(seed_reach, tmp_pa
         with pytest.raises(InvalidInputError, match=words):
             call()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["o", "r.csv", "r.xlsx"]
+
+
+def test_a_result_is_read_from_and_saved_to_paths_of_files_only(seed_reach, tmp_path):
+    """``load_result(5)``, ``load_result(path, scene=5)`` and ``save(5)`` raised TypeError;
+    ``save("dir/")`` said a result is written as .json, .csv or .xlsx, "got 'dir'". Each is
+    now an InvalidInputError naming the parameter. ``save`` creates missing folders on the
+    way, as the CLI's ``--out`` does, and the file it wrote loads back."""
+    import armpath
+    from armpath.errors import InvalidInputError
+
+    saved = seed_reach.save(tmp_path / "new" / "deeper" / "r.json")
+    assert saved == tmp_path / "new" / "deeper" / "r.json"
+    assert armpath.load_result(saved).n_commands == seed_reach.n_commands == 41
+    folder = "must name a file (a folder and a file name, e.g. results/reach.json), got the folder"
+    for call, words in (
+        (lambda: armpath.load_result(saved, scene=5), "scene must be a Scene or a scene file"),
+        (lambda: armpath.load_result(b"r.json"), "path must be a result file's path"),
+        (
+            lambda: seed_reach.save(5),
+            "path must be a file's path (str or pathlib.Path), got int",
+        ),
+        (lambda: seed_reach.save(f"{tmp_path}/out/"), f"{folder} '{tmp_path}/out/'"),
+        (lambda: seed_reach.save(tmp_path / "new"), f"{folder} '{tmp_path}/new'"),
+        (lambda: seed_reach.plot(5), "path must be a file's path"),
+        (
+            lambda: seed_reach.animate(None),
+            "path must be a file's path (str or pathlib.Path), got NoneType",
+        ),
+    ):
+        with pytest.raises(InvalidInputError, match=re.escape(words)):
+            call()
+    assert not (tmp_path / "out").exists()
+    assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["deeper"]
 
 
 def test_poses_in_every_form_agree():
@@ -466,7 +500,29 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.load_arm("ur5", link_radius_mm="3"), "link_radius_mm must be a number"),
         (lambda a: a.trace("seed", [[300, 0, 99], [320, 0, 99]], closed="no"), "closed must be"),
         (lambda a: a.spotweld("seed", bound_samples=2.5), "bound_samples must be a whole"),
-        (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be numbers"),
+        (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be real numbers"),
+        # None for a tolerance failed deep in the planners (a TypeError); text that numpy
+        # parses ("1") or a complex number (its imaginary part dropped with a ComplexWarning)
+        # was taken as joint values, while tolerance_mm="0.1" was refused
+        (lambda a: a.reach("seed", [300, 100, 200], tolerance_mm=None), "tolerance_mm must be"),
+        (lambda a: a.plan("seed", to_mm=[300, 100, 200], tolerance_mm=None), "tolerance_mm mus"),
+        (lambda a: a.trace("seed", tolerance_mm=None), "tolerance_mm must be a number, got None"),
+        (lambda a: a.spotweld("seed", tolerance_mm=None), "tolerance_mm must be a number"),
+        (lambda a: a.forward_kinematics("seed", [1j] * 6), r"joints_deg must be real numbers"),
+        (lambda a: a.forward_kinematics("seed", ["1"] * 6), r"joints_deg must be real numbers"),
+        (lambda a: a.forward_kinematics("seed", [True] * 6), r"joints_deg must be real numbers"),
+        (lambda a: a.reach("seed", ["300", "100", "200"]), "target_mm must be three finite"),
+        (
+            lambda a: a.inverse_kinematics("seed", target_mm=[300, 100, 200], near_deg=[1j] * 6),
+            "near_deg must be real numbers",
+        ),
+        (
+            lambda a: a.plan(
+                "seed", to_deg=[10, -90, 0, 0, -90, 0], objective="energy", energy_weights="abc"
+            ),
+            "energy_weights must be real numbers, got 'abc'",
+        ),
+        (lambda a: a.load_result(5), r"path must be a result file's path \(str or pathlib"),
         (lambda a: a.reach("ur5", [400, 100, 300], pose=_SHIFTED), "is not the target"),
         # a joint state of the wrong shape failed deep inside (an IndexError from the tracer,
         # "needs 6 joint values, got 6" from the reach)
@@ -502,8 +558,10 @@ def test_api_refuses_values_of_the_wrong_kind_by_name(call, words):
     import armpath
     from armpath.errors import InvalidInputError
 
-    with pytest.raises(InvalidInputError, match=words):
-        call(armpath)
+    with warnings.catch_warnings():  # refused before any work: no warning either
+        warnings.simplefilter("error")
+        with pytest.raises(InvalidInputError, match=words):
+            call(armpath)
 
 
 def test_float32_joint_values_stay_on_the_lattice():

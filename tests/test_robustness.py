@@ -775,3 +775,78 @@ def test_a_run_without_bounds_has_no_footnote_on_a_bound(tmp_path):
     assert doc["goal_states_bound_commands"] <= doc["n_commands"]
     assert f"-, {doc['goal_states_bound_commands']}**" in r.stdout and "-*" not in r.stdout
     assert "- no lower bound computed." in r.stdout and "* Tasks 2 and 3" not in r.stdout
+
+
+def test_a_results_commands_must_be_integers_within_the_lattice_checked_before_conversion(
+    tmp_path,
+):
+    """A result whose commands held 10**30 made export, animate and view raise OverflowError
+    (numpy's int64 conversion); 1.5 was cut to 1 and "3" read as 3 ticks, so the replay
+    failed later on its recorded tip. Each command is now checked as JSON gives it: integers
+    within the joint's most ticks a command, the command and joint named, in one line."""
+    from cli_in_process import run_in_process
+
+    r = run_in_process(["plan", "--to", "4", "-90", "0", "0", "-90", "0", "--json"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["commands"][0] == [20, 0, 0, 0, 0, 0]
+    cases = {
+        "huge": (10**30, "increment 1e+30 ticks is outside [-20, 20] (at most 2 deg)"),
+        "wide": (21, "increment 21 ticks is outside [-20, 20] (at most 2 deg)"),
+        "half": (1.5, "a command moves a joint by an integer number of ticks, got 1.5"),
+        "flag": (True, "an integer number of ticks, got True"),
+        "text": ("3", "an integer number of ticks, got '3'"),
+    }  # fmt: skip
+    for name, (value, needle) in cases.items():
+        changed = json.loads(json.dumps(doc))
+        changed["commands"][0][0] = value
+        (tmp_path / f"{name}.json").write_text(json.dumps(changed))
+        for args in (
+            ["export", f"{name}.json"],
+            ["animate", f"{name}.json", "--out", "a.gif"],
+            ["view", "--result", f"{name}.json", "--export-html", "x.html"],
+        ):
+            r = run_in_process(args, tmp_path)
+            assert r.returncode == 1 and r.stdout == "", (args, r.stdout)
+            (line,) = error_lines(r.stderr)
+            assert line.startswith(f"error: result file {name}.json: command 1, joint 1: ")
+            assert needle in line, line
+    short = json.loads(json.dumps(doc))
+    short["commands"][1] = [0, 0]
+    (tmp_path / "short.json").write_text(json.dumps(short))
+    r = run_in_process(["export", "short.json"], tmp_path)
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: result file short.json: command 2 must be 6 integers (ticks), got [0, 0]"
+    ]
+    (tmp_path / "good.json").write_text(json.dumps(doc))
+    r = run_in_process(["export", "good.json"], tmp_path)
+    assert r.returncode == 0 and len(r.stdout.splitlines()) == doc["n_commands"] + 2, r.stderr
+    assert not list(tmp_path.glob("*.gif")) and not list(tmp_path.glob("*.html"))
+
+
+def test_a_joint_value_beyond_any_lattice_state_is_refused_by_size_without_warnings(tmp_path):
+    """--to 1e308 overflowed the division into ticks: a RuntimeWarning, then "--to must be
+    finite numbers" of a finite number. The value is now refused by its size, the limit named,
+    and nothing else is printed; a scene's [arm] max_ticks beyond int64 is refused by the
+    lattice before it is cast (it cast to a negative number with a warning)."""
+    import warnings
+
+    from armpath.model.catalog import resolve_model
+
+    limit = "beyond the 4.5e+14 deg (4.5e+15 ticks) a joint value may hold"
+    for args, option in (
+        (["plan", "--to", "1e308", "-90", "0", "0", "-90", "0"], "--to"),
+        (["reach", "20", "-200", "120", "--from", "0", "-90", "1e308", "0", "-90", "0"], "--from"),
+    ):
+        r = run(*args, cwd=tmp_path)
+        assert r.returncode == 1 and r.stdout == "", r.stdout
+        joint = 1 if option == "--to" else 3
+        assert r.stderr == f"error: {option}: joint {joint} is 1e+308 deg, {limit}\n", r.stderr
+    ur5 = resolve_model("ur5")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for most in (np.full(6, float(2**63 - 1)), np.full(6, 1e30), np.full(6, 0.5)):
+            with pytest.raises(InvalidInputError, match=r"max ticks per command must be in \[1, "
+                               r"1,000,000\]|max ticks must be whole numbers"):  # fmt: skip
+                ur5.with_lattice(None, most)
+        assert ur5.with_lattice(None, np.full(6, 7.0)).lattice.max_ticks.tolist() == [7] * 6

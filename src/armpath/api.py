@@ -50,14 +50,16 @@ def _checked(
     numbers_: dict[str, Any] | None = None,
     counts: dict[str, Any] | None = None,
     flags: dict[str, Any] | None = None,
+    required: dict[str, Any] | None = None,
 ) -> None:
     """Refuse, by name, keyword values of the wrong kind before any work: ``numbers_`` must be
-    real numbers (or None), ``counts`` whole numbers >= 0, ``flags`` True or False. The ranges
+    real numbers (or None: the option's default), ``required`` real numbers (None is no
+    value: a tolerance), ``counts`` whole numbers >= 0, ``flags`` True or False. The ranges
     are the options' own to check."""
-    for name, value in (numbers_ or {}).items():
-        if value is not None and (
-            isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real)
-        ):
+    for name, value in [*(numbers_ or {}).items(), *(required or {}).items()]:
+        if value is None and name not in (required or {}):
+            continue
+        if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
             raise InvalidInputError(f"{name} must be a number, got {value!r}")
     for name, value in (counts or {}).items():
         if (
@@ -71,17 +73,36 @@ def _checked(
             raise InvalidInputError(f"{name} must be True or False, got {value!r}")
 
 
+def _reals(values: ArrayLike, what: str) -> NDArray[Any]:
+    """``values`` as an array of real numbers (integers or floats, any precision), or
+    :class:`InvalidInputError` naming ``what``: text, complex numbers, flags and None are no
+    joint values or coordinates (numpy would parse ``"1"``, and drop an imaginary part with a
+    warning)."""
+    wrong = InvalidInputError(f"{what} must be real numbers, got {values!r}"[:300])
+    try:
+        a = np.asarray(values)
+        if a.dtype.kind == "O":  # Python objects: numbers of other types (Fraction), or not
+            if not all(
+                isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
+                for v in a.ravel()
+            ):
+                raise wrong
+            a = a.astype(np.float64)
+    except (TypeError, ValueError, OverflowError):  # ragged, or an integer beyond any float
+        raise wrong from None
+    if a.dtype.kind not in "iuf":
+        raise wrong
+    return a
+
+
 def _degrees(values: ArrayLike, what: str) -> NDArray[np.float64]:
     """Joint values (deg, mm) as float64; float32 ones by their shortest decimal, so that a
     value written 12.3 stays on the 0.1 deg lattice (as float32 it is 12.300000190...)."""
-    try:
-        a = np.asarray(values)
-        if a.dtype.kind == "f" and a.dtype.itemsize < 8:
-            flat = [float(np.format_float_positional(v, unique=True)) for v in a.ravel()]
-            return np.array(flat, dtype=np.float64).reshape(a.shape)
-        return np.asarray(a, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{what} must be numbers, got {values!r}") from None
+    a = _reals(values, what)
+    if a.dtype.kind == "f" and a.dtype.itemsize < 8:
+        flat = [float(np.format_float_positional(v, unique=True)) for v in a.ravel()]
+        return np.array(flat, dtype=np.float64).reshape(a.shape)
+    return np.asarray(a, dtype=np.float64)
 
 
 def load_arm(
@@ -197,8 +218,8 @@ def _joint_values(arm: SerialArm, values: ArrayLike, what: str) -> NDArray[np.fl
 def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
     wrong = InvalidInputError(f"{what} must be three finite numbers (mm), got {values!r}")
     try:
-        p = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
+        p = np.asarray(_reals(values, what), dtype=np.float64)
+    except InvalidInputError:
         raise wrong from None
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise wrong
@@ -216,10 +237,10 @@ def _points_mm(values: ArrayLike, what: str, least: int) -> NDArray[np.float64]:
     """Points ``(K, 3)`` (mm), at least ``least`` of them: finite numbers within
     :data:`MAX_COORDINATE_MM`."""
     try:
-        p = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
+        p = np.asarray(_reals(values, what), dtype=np.float64)
+    except InvalidInputError:
         raise InvalidInputError(
-            f"{what} must be points (K, 3) of numbers (mm), got {values!r}"
+            f"{what} must be points (K, 3) of numbers (mm), got {values!r}"[:300]
         ) from None
     if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < least or not np.all(np.isfinite(p)):
         raise InvalidInputError(
@@ -412,9 +433,10 @@ def reach(
     from armpath.planning.reach import ReachOptions, plan_reach
 
     _checked(
-        {"tolerance_mm": tolerance_mm, "angle_tolerance_deg": angle_tolerance_deg,
+        {"angle_tolerance_deg": angle_tolerance_deg,
          "axis_tolerance_deg": axis_tolerance_deg, "time_limit_s": time_limit_s},
         {"seed": seed},
+        required={"tolerance_mm": tolerance_mm},
     )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
@@ -468,16 +490,17 @@ def plan(
     if (to_deg is None) == (to_mm is None):
         raise InvalidInputError("give exactly one goal: to_deg or to_mm")
     _checked(
-        {"tolerance_mm": tolerance_mm, "angle_tolerance_deg": angle_tolerance_deg,
+        {"angle_tolerance_deg": angle_tolerance_deg,
          "axis_tolerance_deg": axis_tolerance_deg, "time_limit_s": time_limit_s},
         {"seed": seed},
+        required={"tolerance_mm": tolerance_mm},
     )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
         with _placement_hint(arm, the_scene):
             weights = None
             if energy_weights is not None:
-                w = np.asarray(energy_weights, dtype=np.float64)
+                w = np.asarray(_reals(energy_weights, "energy_weights"), dtype=np.float64)
                 if w.shape != (the_arm.n_joints,):
                     raise InvalidInputError(
                         f"energy_weights needs one number per joint ({the_arm.n_joints}), "
@@ -557,10 +580,11 @@ def trace(
     from armpath.tasks import trace_task
 
     _checked(
-        {"tolerance_mm": tolerance_mm, "axis_tolerance_deg": axis_tolerance_deg,
+        {"axis_tolerance_deg": axis_tolerance_deg,
          "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"closed": closed, "bound": bound},
+        {"tolerance_mm": tolerance_mm},
     )  # fmt: skip
     rule = _axis_rule(tool_axis, axis_tolerance_deg)
     with time_limit(time_limit_s):
@@ -632,10 +656,11 @@ def spotweld(
     from armpath.tasks import spotweld_task
 
     _checked(
-        {"tolerance_mm": tolerance_mm, "axis_tolerance_deg": axis_tolerance_deg,
+        {"axis_tolerance_deg": axis_tolerance_deg,
          "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"return_to_start": return_to_start, "bound": bound, "pools": pools},
+        {"tolerance_mm": tolerance_mm},
     )  # fmt: skip
     rule = _axis_rule(tool_axis, axis_tolerance_deg)
     options = MotionOptions(objective=objective_of(objective), seed=seed)

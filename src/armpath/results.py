@@ -4,6 +4,7 @@ replays and animations: the arm and scene they were planned in, and every lattic
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -15,6 +16,7 @@ from armpath.budget import MAX_COMMANDS
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
+from armpath.model.lattice import Lattice
 from armpath.model.seed_arm import seed_arm, seed_geometry_from
 from armpath.model.serial_arm import SerialArm
 from armpath.model.serialize import arm_from_dict
@@ -122,13 +124,15 @@ class Result:
         return json_text(self.doc)
 
     def save(self, path: str | Path) -> Path:
-        """Write the result to ``path`` by its suffix, as the CLI writes it: ``.json`` the
-        document (what ``--json`` prints; :func:`load_result` reads it back), ``.csv`` the
+        """Write the result to the file ``path`` by its suffix, as the CLI writes it: ``.json``
+        the document (what ``--json`` prints; :func:`load_result` reads it back), ``.csv`` the
         command table (step, ticks, joint values and tool point after each command), ``.xlsx``
-        both (the table and a summary sheet). Returns the path."""
+        both (the table and a summary sheet). Missing folders on the way are created, as
+        ``--out`` creates its folder; the file is written whole or not at all. Returns the
+        path."""
         from armpath.export import output_folder, write_result_file
 
-        out = Path(path).expanduser()
+        out = _output_file(path, "path")
         with output_folder(out.parent, prune=False) as folder:  # whole file or nothing
             write_result_file(folder, out.name, self.doc, self.arm, self.sequence)
         if out.suffix.lower() == ".json":
@@ -164,7 +168,7 @@ class Result:
 
         if path is None:
             return plot_joint_angles(None, self.sequence, self.title())
-        out = Path(path).expanduser()
+        out = _output_file(path, "path")
         if out.suffix.lower() not in FIGURE_SUFFIXES:
             raise InvalidInputError(
                 f"a figure is written as {', '.join(FIGURE_SUFFIXES)}, got {out.name!r}"
@@ -177,7 +181,8 @@ class Result:
         returns the number of frames."""
         from armpath.viz.animation import write_animation
 
-        return write_animation(path, self.animation(), fps=fps, max_frames=max_frames)
+        out = _output_file(path, "path")
+        return write_animation(out, self.animation(), fps=fps, max_frames=max_frames)
 
     def animation(self, substeps: int = 4) -> Animation:
         """The motion as an animation (:func:`armpath.viz.animation.sequence_animation`):
@@ -193,6 +198,23 @@ class Result:
             self.curve_mm,
             substeps,
         )
+
+
+def _output_file(path: Any, what: str) -> Path:
+    """The file ``path`` (a ``str`` or ``os.PathLike``, ``~`` expanded) a result writes, or
+    :class:`InvalidInputError` naming ``what`` when it is no path or names a folder."""
+    text = os.fspath(path) if isinstance(path, str | os.PathLike) else None
+    if not isinstance(text, str):
+        raise InvalidInputError(
+            f"{what} must be a file's path (str or pathlib.Path), got {type(path).__name__}"
+        )
+    out = Path(text).expanduser()
+    if text.endswith(("/", os.sep)) or out.is_dir() or not out.name:
+        raise InvalidInputError(
+            f"{what} must name a file (a folder and a file name, e.g. results/reach.json), "
+            f"got the folder {str(path)!r}"[:300]
+        )
+    return out
 
 
 def _arm(model: Any) -> SerialArm:
@@ -224,6 +246,11 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     if isinstance(scene, Scene):
         return scene
     if scene is not None:
+        if not isinstance(scene, str | os.PathLike):
+            raise InvalidInputError(
+                "scene must be a Scene or a scene file's path (str or pathlib.Path), got "
+                f"{type(scene).__name__}"
+            )
         return load_scene(scene)
     described = doc.get("scene", {})
     if not isinstance(described, dict):
@@ -275,10 +302,43 @@ def _check_recorded_tip(doc: dict[str, Any], arm: SerialArm, seq: CommandSequenc
         )
 
 
+def _commands(raw: Any, lattice: Lattice) -> IntArray:
+    """A document's ``commands``: at most :data:`~armpath.budget.MAX_COMMANDS` rows of one whole
+    number of ticks a joint, each within the joint's most ticks a command. Checked as JSON
+    gives them, before any conversion: an integer beyond int64 (JSON has no limit) would
+    overflow it, a fraction or ``true`` would be taken as a number of ticks."""
+    n = lattice.n_joints
+    if not isinstance(raw, list):
+        got = type(raw).__name__
+        raise InvalidInputError(f"commands must be a list of commands of {n} integers, got {got}")
+    if len(raw) > MAX_COMMANDS:
+        raise InvalidInputError(
+            f"{len(raw):,} commands, more than the {MAX_COMMANDS:,} a result may have"
+        )
+    most = [int(m) for m in lattice.max_ticks]
+    for k, row in enumerate(raw):
+        if not (isinstance(row, list) and len(row) == n):
+            shown = repr(row)[:100]
+            raise InvalidInputError(f"command {k + 1} must be {n} integers (ticks), got {shown}")
+        for i, (v, m) in enumerate(zip(row, most, strict=True)):
+            if type(v) is not int:  # a float, text, null, or true (a bool is an int)
+                raise InvalidInputError(
+                    f"command {k + 1}, joint {i + 1}: a command moves a joint by an integer "
+                    f"number of ticks, got {v!r}"[:200]
+                )
+            if not -m <= v <= m:
+                raise lattice.increment_error(k, i, v)
+    return np.array(raw, dtype=np.int64).reshape(-1, n)
+
+
 def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Result:
     """Read a result JSON document; its scene comes from ``scene`` or, if omitted, from the
     scene definition the document carries (older documents: the source it names, the built-in
     seed scene or a scene file that still exists)."""
+    if not isinstance(path, str | os.PathLike) or isinstance(os.fspath(path), bytes):
+        raise InvalidInputError(
+            f"path must be a result file's path (str or pathlib.Path), got {type(path).__name__}"
+        )
     p = Path(path)
     try:
         size = p.stat().st_size
@@ -307,16 +367,11 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
     arm = _arm(doc.get("model", {}))
     try:
         start = arm.lattice.from_display(doc["initial_deg"], "initial_deg")
-        commands = np.asarray(doc["commands"], dtype=np.int64).reshape(-1, arm.n_joints)
+        commands = _commands(doc["commands"], arm.lattice)
     except InvalidInputError as exc:  # names the key and what is wrong with it
         raise InvalidInputError(f"result file {p}: {exc}") from None
     except (KeyError, TypeError, ValueError) as exc:
         raise InvalidInputError(f"result file {p}: no valid initial_deg/commands ({exc})") from None
-    if commands.shape[0] > MAX_COMMANDS:
-        raise InvalidInputError(
-            f"result file {p}: {commands.shape[0]:,} commands, more than the "
-            f"{MAX_COMMANDS:,} a result may have"
-        )
     sequence = CommandSequence(start, commands, arm.lattice)
     _check_recorded_tip(doc, arm, sequence, p)
     if "targets" in doc:
