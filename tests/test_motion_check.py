@@ -73,3 +73,42 @@ def test_empty_sequence_checks_the_start_state():
     assert mc.worst_part == "DE tip" and mc.worst_obstacle == "table"
     assert mc.certified_ok
     assert CollisionWorld((), 1.0).parts(ARM)[-1].is_tip
+
+
+def test_a_long_motion_is_certified_a_chunk_at_a_time_as_at_once(monkeypatch):
+    """Instants are evaluated 50,000 at a time and a very long sequence starts from its states
+    alone (a million commands held 1.5 GB). With chunks of 7 instants and the first round
+    capped below 4 a command, the same motion over the workpiece is certified alike: both
+    bracket the brute-force minimum of the independent model, and the chunks change nothing
+    when the first round is the same."""
+    from armpath.planning import motion_check
+
+    start = deg_to_ticks([0, -60, 0, 0, -60, 0])
+    seq = CommandSequence.straight(start, deg_to_ticks([-70, -60, 0, 0, -60, 0]))
+    whole = motion_clearance(ARM, SCENE.world, seq)
+    monkeypatch.setattr(motion_check, "_EVALUATION_CHUNK", 7)
+    chunked = motion_clearance(ARM, SCENE.world, seq)
+    assert chunked == whole
+    monkeypatch.setattr(motion_check, "_MAX_INITIAL_INSTANTS", seq.n_commands)
+    sparse = motion_clearance(ARM, SCENE.world, seq)
+    _, all_ref = _brute_force([0, -60, 0, 0, -60, 0], seq.commands)
+    for mc in (whole, sparse):
+        assert mc.certified_ok
+        assert mc.min_clearance_lower_bound <= all_ref + 0.02 and mc.min_clearance <= all_ref + 0.02
+        assert mc.min_clearance - mc.min_clearance_lower_bound <= 0.5
+
+
+def test_a_motion_is_measured_a_chunk_at_a_time_as_at_once(monkeypatch):
+    """The tool point's path length of a plan is summed 20,000 commands at a time; in chunks of
+    3 commands it is the same, and it matches the independent kinematics' polyline."""
+    from armpath.planning import motion as motion_module
+
+    start = deg_to_ticks([0, -60, 0, 0, -60, 0])
+    seq = CommandSequence.straight(start, deg_to_ticks([-70, -40, 20, 10, -60, 0]))
+    whole = motion_module.plan_metrics(ARM, seq)
+    monkeypatch.setattr(motion_module, "_METRIC_CHUNK", 3)
+    assert motion_module.plan_metrics(ARM, seq).tip_path_mm == pytest.approx(whole.tip_path_mm)
+    tips = independent.motion_points([0, -60, 0, 0, -60, 0], seq.commands, 64)[..., -1, :]
+    assert whole.tip_path_mm == pytest.approx(
+        np.linalg.norm(np.diff(tips.reshape(-1, 3), axis=0), axis=1).sum(), abs=1e-3
+    )

@@ -165,6 +165,10 @@ class MotionPlan:
     searched_samples: int
 
 
+#: Commands whose tool point path :func:`plan_metrics` samples at once.
+_METRIC_CHUNK = 20_000
+
+
 def plan_metrics(
     arm: SerialArm, sequence: CommandSequence, weights: ArrayLike | None = None
 ) -> PlanMetrics:
@@ -174,13 +178,16 @@ def plan_metrics(
     w = np.ones(arm.n_joints) if weights is None else np.asarray(weights, dtype=np.float64)
     if w.shape != (arm.n_joints,):
         raise InvalidInputError(f"energy weights need {arm.n_joints} values, got {w.size}")
-    if sequence.n_commands:
-        # the tip path within one command is smooth: 8 chords per command are within ~1e-4
-        q = sequence.sample_motion(8)
-        tip = tool_position(arm, q)
-        length = float(np.linalg.norm(np.diff(tip, axis=0), axis=-1).sum())
-    else:
-        length = 0.0
+    # the tip path within one command is smooth: 8 chords per command are within ~1e-4; summed
+    # :data:`_METRIC_CHUNK` commands at a time (a million commands sampled at once held 2 GB)
+    length = 0.0
+    states = sequence.states()
+    for lo in range(0, sequence.n_commands, _METRIC_CHUNK):
+        part = CommandSequence(
+            states[lo], sequence.commands[lo : lo + _METRIC_CHUNK], sequence.grid
+        )
+        tip = tool_position(arm, part.sample_motion(8))
+        length += float(np.linalg.norm(np.diff(tip, axis=0), axis=-1).sum())
     return PlanMetrics(
         commands=sequence.n_commands,
         tip_path_mm=length,

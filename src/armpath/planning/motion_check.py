@@ -61,6 +61,12 @@ class MotionClearance:
     evaluations: int
 
 
+#: Instants whose clearances :func:`motion_clearance` evaluates at once.
+_EVALUATION_CHUNK = 50_000
+#: Most instants a motion's first round evaluates (``initial_substeps`` a command, else one).
+_MAX_INITIAL_INSTANTS = 1_000_000
+
+
 def motion_clearance(
     arm: SerialArm,
     world: CollisionWorld,
@@ -98,13 +104,19 @@ def motion_clearance(
         return grid.to_joint(states[k] + (u - k)[:, None] * sequence.commands[k])
 
     def evaluate(u: FloatArray) -> tuple[FloatArray, FloatArray]:
-        values, lowers = world.pair_clearances(arm, config(u))
-        return values, lowers
+        # a chunk at a time: the link frames of a million instants at once held 1.5 GB
+        parts = [
+            world.pair_clearances(arm, config(u[i : i + _EVALUATION_CHUNK]))
+            for i in range(0, max(u.size, 1), _EVALUATION_CHUNK)
+        ]
+        return np.concatenate([v for v, _ in parts]), np.concatenate([lo for _, lo in parts])
 
+    # a very long sequence starts from its states alone (its instants' clearances are kept)
+    substeps = initial_substeps if n * initial_substeps <= _MAX_INITIAL_INSTANTS else 1
     u_nodes = np.unique(
         np.concatenate(
             [np.arange(n + 1, dtype=np.float64)]
-            + [np.arange(n) + j / initial_substeps for j in range(1, initial_substeps)]
+            + [np.arange(n) + j / substeps for j in range(1, substeps)]
         )
     )
     V, L = evaluate(u_nodes)  # values and proven lower bounds, (M, K)

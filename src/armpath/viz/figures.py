@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.axes3d import Axes3D
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
@@ -186,6 +186,21 @@ def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
     return drawn
 
 
+#: Most commands whose continuous motion a 3-D view samples (8 instants each); of a longer
+#: sequence, its states only, evenly spaced to about as many points (a figure shows no more,
+#: and 450,000 commands sampled whole held 1.2 GB).
+_MOST_DRAWN = 16_000
+
+
+def _drawn_motion(seq: CommandSequence) -> NDArray[np.float64]:
+    """Joint values (rad) of the instants a 3-D view draws the tool path through."""
+    if seq.n_commands <= _MOST_DRAWN:
+        return seq.sample_motion(8)
+    states = seq.states_joint()
+    every = np.unique(np.r_[np.linspace(0, seq.n_commands, 8 * _MOST_DRAWN).astype(np.int64)])
+    return states[every]
+
+
 def plot_motion_3d(
     path: str | Path,
     arm: SerialArm,
@@ -199,13 +214,13 @@ def plot_motion_3d(
     fig = Figure(figsize=(8, 7))
     ax = fig.add_subplot(projection="3d")
     assert isinstance(ax, Axes3D)
-    motion = landmark_positions(arm, seq.sample_motion(8))
-    states = landmark_positions(arm, seq.states_joint())
+    motion = landmark_positions(arm, _drawn_motion(seq))
+    every = np.unique(np.r_[0 : seq.n_commands + 1 : max(1, seq.n_commands // 12), seq.n_commands])
+    states = landmark_positions(arm, seq.states_joint()[every])  # the first and the last too
     pts = [motion.reshape(-1, 3), np.zeros((1, 3))]
     pts += draw_obstacles(ax, scene)
-    step = max(1, len(states) // 12)
-    for k in range(0, len(states), step):
-        ax.plot(*states[k].T, color="0.6", alpha=0.35, linewidth=1)
+    for ghost in states:
+        ax.plot(*ghost.T, color="0.6", alpha=0.35, linewidth=1)
     ax.plot(*states[0].T, "-o", color="0.35", linewidth=2.5, markersize=4, label="start")
     ax.plot(*states[-1].T, "-o", color="tab:blue", linewidth=2.5, markersize=4, label="end")
     ax.plot(*motion[:, -1].T, color="tab:red", linewidth=1.5, label=f"{tip_label(arm)} path")
