@@ -170,6 +170,26 @@ def _order_bounds(
     return out
 
 
+def _least_in(
+    arm: SerialArm,
+    start: IntArray,
+    tours: list[tuple[list[MotionPlan], tuple[int, ...]]],
+    opts: MotionOptions,
+) -> tuple[list[MotionPlan], tuple[int, ...]]:
+    """Of the tours planned (each its legs and order), the one of least tool point path (mm)
+    or weighted joint travel, as ``opts.objective`` asks; the fewest commands break a tie. The
+    orders are ranked and pruned by their bounds on commands, so this chooses among the orders
+    planned, not over every order."""
+
+    def cost(legs: list[MotionPlan]) -> tuple[float, int]:
+        commands = np.vstack([leg.sequence.commands for leg in legs])
+        m = plan_metrics(arm, CommandSequence(start, commands, arm.lattice), opts.energy_weights)
+        value = m.tip_path_mm if opts.objective is Objective.PATH else m.energy_deg
+        return round(value, 6), m.commands
+
+    return min(tours, key=lambda t: cost(t[0]))
+
+
 def plan_tour(
     arm: SerialArm,
     world: CollisionWorld,
@@ -387,6 +407,8 @@ def plan_tour(
 
     best: tuple[int, list[MotionPlan], tuple[int, ...]] | None = None
     planned: dict[tuple[int, ...], int] = {}
+    #: every tour planned, for an objective other than commands (see :func:`_least_in`)
+    tours: list[tuple[list[MotionPlan], tuple[int, ...]]] = []
     not_planned: dict[tuple[int, ...], str] = {}
 
     def kept(
@@ -400,6 +422,7 @@ def plan_tour(
         commands (its order's bound then counts those goal states)."""
         total = _commands(legs)
         planned[o] = min(planned.get(o, total), total)
+        tours.append((legs, o))
         not_planned.pop(o, None)
         if best is not None and total >= best[0]:
             return best
@@ -409,13 +432,16 @@ def plan_tour(
     failures: list[str] = []
     # the best-ranked orders, then every next one whose bound is below the best plan so far
     # (at most EXTRA_ORDERS more): the ranking is by bound, so the first that is not ends it
+    # (for another objective, the plan_first best-ranked orders whatever their bounds: a tour
+    # of more commands may move less)
+    by_commands = opts.objective is Objective.COMMANDS
     tried = 0
     for o in ranking[: plan_first + EXTRA_ORDERS]:
-        if tried >= plan_first and (best is None or bounds[o] >= best[0]):
+        if tried >= plan_first and (not by_commands or best is None or bounds[o] >= best[0]):
             break
         tried += 1
         name = "-".join(str(i + 1) for i in o)
-        if best is not None and bounds[o] >= best[0] and o != guided_best:
+        if by_commands and best is not None and bounds[o] >= best[0] and o != guided_best:
             not_planned[o] = (
                 f"not planned: its bound over its candidate goal states, {bounds[o]}, is no "
                 f"fewer than the {best[0]} commands planned for order "
@@ -437,6 +463,7 @@ def plan_tour(
         not_planned.pop(o, None)
         total = _commands(legs)
         planned[o] = total
+        tours.append((legs, o))
         if best is None or total < best[0]:
             best = (total, legs, o)
     # goal states chosen together at every buffer: members nearer the obstacles can lie nearer
@@ -519,12 +546,16 @@ def plan_tour(
         name = "-".join(str(i + 1) for i in o)
         say(f"planning order {name} again, {SECOND_LOOK_SEARCHES} searches per leg")
         again, through, _ = plan_order(o, name, replace(opts, searches=SECOND_LOOK_SEARCHES))
+        if again:
+            tours.append((again, o))
         if again and _commands(again) < best[0]:
             best = (_commands(again), again, o)
             planned[o] = best[0]
             if through is not None:
                 count_guided(o, through)
     _, legs, chosen = best
+    if opts.objective is not Objective.COMMANDS:
+        legs, chosen = _least_in(arm, start, tours, opts)
     if opts.objective is Objective.COMMANDS:
         # the kept legs only: a certified merge costs about a quarter second, placing a
         # leg's states up to a few seconds
