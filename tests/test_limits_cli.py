@@ -543,6 +543,27 @@ def test_energy_weights_beyond_the_limit_are_refused(tmp_path):
          "1e308,1,1,1,1,1"],
         "energy weights must be in [0, 1e+06]",
     )  # fmt: skip
+    # all 0: every motion would cost nothing, so the objective would choose nothing
+    _refused(
+        tmp_path,
+        ["plan", "--to-xyz", "300", "0", "200", "--objective", "energy", "--weights",
+         "0,0,0,0,0,0"],
+        "energy weights must not all be 0",
+    )  # fmt: skip
+
+
+def test_a_scenes_max_ticks_beyond_the_lattice_limit_is_refused_without_warnings(tmp_path):
+    """max_ticks = 2**63 - 1 was cast to int64 (a RuntimeWarning, then the error echoed
+    -9223372036854775808); the lattice checks the range before any cast, in a real process
+    whose stderr is the one error line."""
+    scene = tmp_path / "s.toml"
+    scene.write_text('name = "s"\n[arm]\nmodel = "ur5"\nmax_ticks = 9223372036854775807\n')
+    line = _refused(
+        tmp_path, ["reach", "300", "100", "200", "--scene", str(scene)],
+        "max ticks per command must be in [1, 1,000,000]", "9.223372036854776e+18",
+        process=True,
+    )  # fmt: skip
+    assert "-9223372036854775808" not in line
 
 
 @pytest.mark.parametrize("scale", [1e-300, 1e-200, 1.0, 1e200, 1e308])

@@ -150,6 +150,11 @@ class MotionOptions:
                 f"energy weights must be in [0, {MAX_ENERGY_WEIGHT:g}] (only their ratios "
                 f"matter), got {self.energy_weights}"
             )
+        if self.energy_weights is not None and not any(w > 0 for w in self.energy_weights):
+            raise InvalidInputError(
+                "energy weights must not all be 0 (only their ratios matter: every motion "
+                f"would cost nothing), got {self.energy_weights}"
+            )
 
 
 @dataclass(frozen=True, eq=False)

@@ -59,9 +59,7 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
             shown = _per_joint(spec.tick, n, "arm.tick")
             tick = arm.lattice.joint_from_display(shown)  # a tick is a joint value
         most = None if spec.max_ticks is None else _per_joint(spec.max_ticks, n, "arm.max_ticks")
-        if most is not None and not np.all(most == np.round(most)):
-            raise InvalidInputError(f"arm.max_ticks must be whole numbers, got {most.tolist()}")
-        arm = arm.with_lattice(tick, None if most is None else most.astype(np.int64))
+        arm = arm.with_lattice(tick, most)  # the lattice checks them whole and in range
     if spec.steps_per_tick is not None or spec.command_period_s is not None:
         arm = arm.with_lattice(
             steps_per_tick=spec.steps_per_tick, command_period_s=spec.command_period_s

@@ -196,9 +196,8 @@ def _drawn_motion(seq: CommandSequence) -> NDArray[np.float64]:
     """Joint values (rad) of the instants a 3-D view draws the tool path through."""
     if seq.n_commands <= _MOST_DRAWN:
         return seq.sample_motion(8)
-    states = seq.states_joint()
-    every = np.unique(np.r_[np.linspace(0, seq.n_commands, 8 * _MOST_DRAWN).astype(np.int64)])
-    return states[every]
+    every = np.unique(np.linspace(0, seq.n_commands, 8 * _MOST_DRAWN).astype(np.int64))
+    return np.asarray(seq.states_joint()[every], dtype=np.float64)
 
 
 def plot_motion_3d(
