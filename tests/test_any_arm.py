@@ -759,3 +759,43 @@ def test_a_ring_past_the_wrists_fold_is_traced_once_round_and_closed(tmp_path):
     assert dev.max() <= 0.1
     swept = np.unwrap(np.arctan2(P[:, 1] - c[1], P[:, 0] - c[0]))
     assert np.ptp(swept) >= 2 * np.pi - 1e-6
+
+
+def test_arms_the_complete_solver_does_not_suit_and_arms_of_few_joints_reach(tmp_path):
+    """Three D-H arms found 'no configuration within the limits reaching it (the nearest point
+    found is 0.0000 mm away)': one joint (a target read off its forward kinematics, rounded,
+    lies 2e-5 mm off the circle it can reach, so no member reaches it exactly), six parallel
+    joints (a planar arm) and six joints twisted 90 deg without offsets (the complete 6R
+    solver finds none of their members). Each now reaches, replayed on the textbook D-H
+    product within the tolerance, in the least number of commands its largest joint change
+    allows; a point 1 mm off the one-joint arm's circle stays out of reach."""
+    import armpath
+    from armpath.errors import UnreachableError
+
+    def robot(name, rows):
+        links = [{"a": a, "alpha": al, "d": 0, "offset": 0, "limits": None} for a, al in rows]
+        path = tmp_path / f"{name}.json"
+        units = {"length": "mm", "angle": "deg"}
+        doc = {"name": name, "convention": "standard", "units": units, "links": links}
+        path.write_text(json.dumps(doc))
+        return str(path)
+
+    cases = [
+        (robot("one", [(300, 0)]), [30.0], 0.05),
+        (robot("planar", [(100, 0)] * 6), [20.0, -15.0, 10.0, 5.0, -10.0, 30.0], 1.0),
+        (robot("twisted", [(100, 90)] * 6), [10.0, 20.0, 30.0, 40.0, 50.0, 60.0], 0.05),
+    ]
+    for model, q_deg, tol in cases:
+        n = len(q_deg)
+        a, alpha = [100.0] * n if n > 1 else [300.0], [90 * D if "twisted" in model else 0.0] * n
+        target = idh.dh_pose(a, alpha, [0.0] * n, np.radians(q_deg))[:3, 3].round(4)
+        r = armpath.reach(model, target, tolerance_mm=tol, scene="none")
+        end = np.radians(r.doc["final_deg"])
+        assert np.linalg.norm(idh.dh_pose(a, alpha, [0.0] * n, end)[:3, 3] - target) <= tol
+        assert r.doc["n_commands"] >= np.ceil(
+            np.abs(np.subtract(r.doc["final_deg"], r.doc["initial_deg"])).max() / 2
+        )
+        if n == 1:
+            assert r.doc["n_commands"] == 15  # 30 deg, 2 deg a command
+    with pytest.raises(UnreachableError):
+        armpath.reach(cases[0][0], [301.0, 0.0, 0.0], scene="none")

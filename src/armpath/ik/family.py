@@ -122,15 +122,18 @@ class GenericFamily:
         sampling found none)."""
         gen = rng or np.random.default_rng(0)
         solver = complete_solver(self.arm) if self.arm.n_joints == 6 else None
-        if solver is not None:
-            q = self._from_rotations(solver, rotations, gen)
-        else:
-            q = self._from_starts(starts, gen)
-        if q.shape[0] == 0:
-            return q
-        q = shift_into_limits(self.arm, q, near)
-        keep = self.exact(q)
-        q = q[keep]
+
+        def kept(q: FloatArray) -> FloatArray:
+            if q.shape[0] == 0:
+                return q
+            q = shift_into_limits(self.arm, q, near)
+            return q[self.exact(q)]
+
+        q = kept(self._from_rotations(solver, rotations, gen)) if solver is not None else None
+        if q is None or q.shape[0] == 0:
+            # also where the complete solver finds none: an arm it does not suit (all axes
+            # parallel, every twist 90 deg with no offsets) still has members from starts
+            q = kept(self._from_starts(starts, gen))
         if q.shape[0] > MAX_SAMPLES:
             q = q[gen.choice(q.shape[0], MAX_SAMPLES, replace=False)]
         return q

@@ -533,6 +533,18 @@ def reach_any_arm(
         dist, tip = nearest_reachable(arm, target, rng)
         if dist > tolerance:
             raise _out_of_reach(arm, target, dist, tip)
+        if target.orientation is None and dist <= tolerance / 2:
+            # an arm whose tool point cannot go everywhere near the target (fewer than three
+            # joints move it, or all in one plane) has no member reaching it exactly: the
+            # nearest point it reaches is taken, and a state within the tolerance less the
+            # distance of that point is within the tolerance of the target
+            near_point = replace(target, position=np.asarray(tip, dtype=np.float64))
+            found = reach_any_arm(
+                arm, world, start_ticks, near_point, tolerance - dist, extra_commands,
+                max_motion_checks, plan_around, seed,
+            )  # fmt: skip
+            method = f"{found.bound.method}; at the nearest point reached, {dist:.2g} {unit} off"
+            return replace(found, bound=replace(found.bound, method=method))
         if target.orientation is not None:
             raise UnreachableError(
                 f"target ({where}) {unit} is within reach but no configuration found puts the "
