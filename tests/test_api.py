@@ -327,7 +327,7 @@ def test_cli_export_writes_or_refuses(seed_reach, tmp_path):
         "nanosec": 100000000,
     }
     for args, message in (
-        (["--format", "ros"], "--format must be one of"),
+        (["--format", "ros"], "Invalid value for '--format': 'ros'"),  # a usage error: exit 2
         (["--command-period", "0"], "command period must be between"),
         (["--steps-per-tick", "1,2"], "--steps-per-tick"),
     ):
@@ -345,8 +345,9 @@ def test_cli_export_writes_or_refuses(seed_reach, tmp_path):
             capture_output=True,
             text=True,
         )
-        assert bad.returncode == 1 and bad.stderr.startswith("error:") and message in bad.stderr
-        assert len(bad.stderr.strip().splitlines()) == 1
+        status = 2 if args[0] == "--format" else 1
+        assert bad.returncode == status and bad.stderr.startswith("error:")
+        assert message in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
         assert not (tmp_path / "x").exists()
 
 

@@ -457,10 +457,10 @@ def test_a_full_disk_while_writing_is_one_line_and_leaves_nothing(tmp_path, monk
 
 def test_ik_method_is_checked():
     r = run("ik", "--method", "bogus", "--xyz", "100", "100", "100")
-    assert r.returncode == 1 and error_lines(r.stderr) == [
-        "error: --method must be one of auto, spherical-wrist, three-parallel, general, "
-        "numerical, got 'bogus'"
-    ]
+    (line,) = error_lines(r.stderr)  # a parser choice: a usage error listing the valid ones
+    assert r.returncode == 2 and line.startswith("error: Invalid value for '--method': 'bogus'")
+    for method in ("auto", "spherical-wrist", "three-parallel", "general", "numerical"):
+        assert f"'{method}'" in line
     r = run("ik", "--method", "general", "--xyz", "100", "100", "100")
     assert r.returncode == 1 and "--method auto or numerical" in r.stderr
 
