@@ -539,12 +539,12 @@ def reach_any_arm(
             # nearest point it reaches is taken, and a state within the tolerance less the
             # distance of that point is within the tolerance of the target
             near_point = replace(target, position=np.asarray(tip, dtype=np.float64))
-            found = reach_any_arm(
+            near = reach_any_arm(
                 arm, world, start_ticks, near_point, tolerance - dist, extra_commands,
                 max_motion_checks, plan_around, seed,
             )  # fmt: skip
-            method = f"{found.bound.method}; at the nearest point reached, {dist:.2g} {unit} off"
-            return replace(found, bound=replace(found.bound, method=method))
+            method = f"{near.bound.method}; at the nearest point reached, {dist:.2g} {unit} off"
+            return replace(near, bound=replace(near.bound, method=method))
         if target.orientation is not None:
             raise UnreachableError(
                 f"target ({where}) {unit} is within reach but no configuration found puts the "
