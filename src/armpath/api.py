@@ -645,11 +645,15 @@ def spotweld(
     configuration (the document's ``lower_bound``; the seed's Task 3: about a third of its
     time); False: ``None`` there. ``bound_samples``: the live samples past which the bound's
     search stops splitting (1,000 to 2,000,000; None: 50,000; its first round may hold more;
-    the search's rounds grow in proportion): more give a tighter bound, later (Task 3: 110
-    rather than 108 with 200,000, 75 s of bounding rather than 23 s on a 2-core machine).
-    ``pools``: plan the cheapest orders once more through pools of goal states (Task 3: 121
-    commands rather than 126, in about twice the time without the bound); False: the guided
-    orders' goal states only."""
+    the search's rounds grow in proportion): more give a tighter bound, later. It is read only
+    where the bound samples: a tour of at most 4 welds (8 in the order given) whose lattice
+    goal states can all be listed is bounded over those states instead (Task 3: 117 with any
+    ``bound_samples``). ``pools``: plan the cheapest orders once more through pools of goal
+    states (Task 3: 121 commands rather than 126, in about twice the time without the bound);
+    False: the guided orders' goal states only. ``objective``: ``"commands"``, or ``"path"``
+    (the tool point's path, mm) or ``"energy"`` (weighted joint travel): each leg is planned
+    for it and, of the tours planned, the one least in it is kept (the orders planned are
+    still chosen by their bounds on commands)."""
     from armpath.export import tour_result_dict
     from armpath.planning.choices import objective_of
     from armpath.planning.motion import MotionOptions

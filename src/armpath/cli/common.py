@@ -75,7 +75,9 @@ ObjectiveOption = Annotated[
     Objective,
     typer.Option(
         help="What to minimise: number of commands, fingertip path length, or weighted joint "
-        "travel (energy). Every plan reports all three."
+        "travel (energy). Every plan reports all three. A tour plans each leg for it and keeps, "
+        "of the tours it plans, the one least in it (the orders planned are chosen by their "
+        "bounds on commands)."
     ),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print the result JSON on stdout.")]
