@@ -189,3 +189,25 @@ def test_time_limit_ends_the_maps():
     with time_limit(0.01), pytest.raises(TimeLimitError, match="scanning the outer face"):
         time.sleep(0.02)
         surface_blindness(seed_arm(), scene.world, scene.workpieces[0], 3)
+
+
+def test_a_fine_map_is_drawn_in_blocks_that_keep_a_blind_pixel(monkeypatch):
+    """A map finer than 2000 pixels a side is drawn in blocks showing their highest level (50
+    million pixels drawn whole took 2 GB): a lone blind pixel stays red, a reachable block
+    blue, and the drawn image covers the same extent."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
+
+    from armpath.viz import workspace_figures as wf
+
+    monkeypatch.setattr(wf, "_MOST_DRAWN_PIXELS", 4)
+    levels = np.zeros((10, 7), dtype=np.uint8)
+    levels[9, 6] = 2  # the last pixel: its block is padded
+    levels[0:3, 0:3] = 1
+    ax = Figure().add_subplot()
+    wf._draw_levels(ax, levels, (0.0, 10.0, 0.0, 7.0), ListedColormap(["w", "b", "r"]))
+    (im,) = ax.get_images()
+    drawn = np.asarray(im.get_array()).T  # drawn[u, v], blocks of 3 x 3
+    assert drawn.shape == (4, 3)
+    assert drawn[3, 2] == 2 and drawn[0, 0] == 1 and drawn.sum() == 3
+    assert tuple(im.get_extent()) == (0.0, 10.0, 0.0, 7.0)
