@@ -601,3 +601,25 @@ def test_ik_seeds_beyond_the_solver_limit_are_refused(tmp_path, seeds):
     proc = _run(["ik", *xyz, "--seeds", seeds], tmp_path)
     assert proc.returncode == 1 and proc.stdout == ""
     assert _error_line(proc) == f"error: --seeds must be in [1, 10000], got {seeds}"
+
+
+def test_a_trajectory_of_too_many_joint_values_is_refused_before_its_samples(tmp_path):
+    """64 joints over 9,990 s at 0.01 s periods (999,000 periods, within the period and command
+    limits) held 3.1 GB and wrote 768 MB; periods times joints are capped, named with the
+    options that set them, before any sample is built; 6 joints over the same time are not."""
+    from armpath.budget import MAX_TRAJECTORY_VALUES
+
+    header = "t," + ",".join(f"j{i}" for i in range(64))
+    rows = ["0," + ",".join(["0"] * 64), "9990," + ",".join(["100"] * 64)]
+    wp = _waypoints(tmp_path, "\n".join([header, *rows]) + "\n")
+    _refused(
+        tmp_path, ["trajectory", "--waypoints", wp],
+        "joint values of the trajectory", "64 joints", "63,936,000",
+        f"the limit is {MAX_TRAJECTORY_VALUES:,}", "--period",
+    )  # fmt: skip
+    from armpath.trajectory import minimum_snap
+    from armpath.trajectory.quantize import quantize
+
+    six = minimum_snap(np.radians([[0.0] * 6, [1.0] * 6]), [0.0, 9990.0])
+    assert MAX_TRAJECTORY_VALUES >= 999_000 * 6
+    assert quantize(six, 0.01).n_periods == 999_000

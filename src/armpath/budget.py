@@ -31,6 +31,9 @@ MAX_SAMPLES = 200_000_000
 MAX_GRID_CELLS = 50_000_000
 #: Largest number of controller periods of one trajectory (one joint state each).
 MAX_PERIODS = 5_000_000
+#: Largest number of joint values (controller periods times joints) of one sampled trajectory:
+#: 80 MB an array (a 64-joint trajectory of a million periods held 3.1 GB and wrote 768 MB).
+MAX_TRAJECTORY_VALUES = 10_000_000
 #: Largest number of commands of one command sequence a planner or converter produces.
 MAX_COMMANDS = 1_000_000
 #: Largest joint value, in ticks, that rounds to an exact integer state.
@@ -171,6 +174,7 @@ __all__ = [
     "MAX_PERIODS",
     "MAX_SAMPLES",
     "MAX_TIME_LIMIT_S",
+    "MAX_TRAJECTORY_VALUES",
     "RAISE_TIME_LIMIT",
     "Deadline",
     "check_point_mm",

@@ -4,9 +4,9 @@ commands, and seed 003's fixed-point rotation.
 Every input that sets the size of the work is checked before any work, each refusal one
 ``error:`` line naming the option (:mod:`armpath.budget`): the waypoints file is read line by
 line (at most ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of ``MAX_LINE_BYTES``
-bytes), the controller periods (duration / period) are at most ``MAX_PERIODS`` and the
-commands (one a period at least, and a joint's net motion at 20 ticks a command) at most
-``MAX_COMMANDS``; the motion limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The
+bytes), the controller periods (duration / period) are at most ``MAX_PERIODS``, the
+periods times joints at most ``MAX_TRAJECTORY_VALUES`` and the commands (one a period at
+least, and a joint's net motion at 20 ticks a command) at most ``MAX_COMMANDS``; the motion limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The
 per-period CSV files are written ``CSV_CHUNK`` rows at a time.
 """
 
@@ -386,7 +386,7 @@ def trajectory(
     period). A period that moves a joint more than one command may is split into several
     commands, and then the commands (one a period) take longer than the trajectory: the table
     says how long and a warning why. At most 5,000,000 controller periods (duration /
-    --period) and 1,000,000 commands."""
+    --period), 10,000,000 periods times joints and 1,000,000 commands."""
     from armpath.export import output_folder
     from armpath.trajectory import (
         ORDERS,

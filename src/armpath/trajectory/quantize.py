@@ -26,7 +26,14 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armpath.budget import MAX_COMMANDS, MAX_PERIODS, MAX_STATE_TICKS, check_size, check_time
+from armpath.budget import (
+    MAX_COMMANDS,
+    MAX_PERIODS,
+    MAX_STATE_TICKS,
+    MAX_TRAJECTORY_VALUES,
+    check_size,
+    check_time,
+)
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
 from armpath.kinematics import tool_position
@@ -92,7 +99,8 @@ def quantize(
 
     Refused (naming ``option``, what to change) before the samples are built: more than
     ``MAX_PERIODS`` periods, more than ``MAX_COMMANDS`` commands at one a period or for the
-    joints' net motion at 20 ticks a command; and before the commands are built: more than
+    joints' net motion at 20 ticks a command, more than ``MAX_TRAJECTORY_VALUES`` periods
+    times joints; and before the commands are built: more than
     ``MAX_COMMANDS`` commands in all, or joint values beyond ``MAX_STATE_TICKS`` ticks.
     """
     if not (np.isfinite(period_s) and period_s > 0):
@@ -117,6 +125,12 @@ def quantize(
     how = f"a {duration:.6g} s trajectory in periods of {period_s:g} s"
     check_size(periods, MAX_PERIODS, f"controller periods ({how})", option)
     check_size(periods, MAX_COMMANDS, f"commands (at least one a period: {how})", option)
+    check_size(
+        periods * J,
+        MAX_TRAJECTORY_VALUES,
+        f"joint values of the trajectory ({how}, {J} joints)",
+        option,
+    )
     ends = traj.evaluate(traj.times[[0, -1]]) / ticks
     _check_state_range(ends)
     spans = np.abs(ends[1] - ends[0])
