@@ -6,8 +6,9 @@ Every input that sets the size of the work is checked before any work, each refu
 line (at most ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of ``MAX_LINE_BYTES``
 bytes), the controller periods (duration / period) are at most ``MAX_PERIODS``, the
 periods times joints at most ``MAX_TRAJECTORY_VALUES`` and the commands (one a period at
-least, and a joint's net motion at 20 ticks a command) at most ``MAX_COMMANDS``; the motion limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The
-per-period CSV files are written ``CSV_CHUNK`` rows at a time.
+least, and a joint's net motion at 20 ticks a command) at most ``MAX_COMMANDS``; the motion
+limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The per-period CSV files are
+written ``CSV_CHUNK`` rows at a time.
 """
 
 from __future__ import annotations
