@@ -193,3 +193,40 @@ def test_a_home_off_the_lattice_or_in_collision_is_named_where_it_is_written(tmp
     assert r.returncode == 1 and "reachability" not in r.stderr
     assert "start state is in collision" in r.stderr and "the arm's home pose" in r.stderr
     assert "[arm] home_deg" in r.stderr
+
+
+def test_a_key_written_twice_true_for_a_number_and_a_device_for_a_mesh_are_refused(tmp_path):
+    """YAML kept the last of a key written twice (TOML refuses it), ``radius = true`` was a
+    sphere of 1 mm, and a mesh file that is a device was said not to exist. Each is refused by
+    name; true and false where the field takes them (``open_top``) still load."""
+    from armpath.errors import InvalidInputError
+
+    twice = tmp_path / "twice.yaml"
+    twice.write_text("name: x\nname: y\n")
+    with pytest.raises(SceneError, match=r"key 'name' written twice"):
+        load_scene(twice)
+    truth = tmp_path / "truth.toml"
+    truth.write_text(
+        'name = "t"\n[[obstacles]]\ntype = "sphere"\nname = "b"\ncenter = [0, 500, 0]\n'
+        "radius = true\n"
+    )
+    with pytest.raises(SceneError, match=r"radius: must be a number, not true"):
+        load_scene(truth)
+    truth.write_text(
+        'name = "t"\n[[obstacles]]\ntype = "box"\nname = "b"\ncenter = [0, 500, false]\n'
+        "size = [1, 1, 1]\n"
+    )
+    with pytest.raises(SceneError, match=r"center: must be a number, not false"):
+        load_scene(truth)
+    fine = tmp_path / "fine.toml"
+    fine.write_text(
+        'name = "f"\n[[obstacles]]\ntype = "hollow_frustum"\nname = "w"\n'
+        "base_center = [300, 0, 0]\nheight = 100\nr_bottom = 80\nr_top = 60\nwall = 5\n"
+        "open_top = false\n"
+    )
+    (w,) = load_scene(fine).world.obstacles
+    assert isinstance(w, HollowFrustum) and w.signed_distance(np.array([300.0, 0.0, 99.0])) < 0
+    device = tmp_path / "device.toml"
+    device.write_text('name = "d"\n[[obstacles]]\ntype = "mesh"\nname = "z"\nfile = "/dev/null"\n')
+    with pytest.raises((SceneError, InvalidInputError), match=r"'/dev/null' is not a regular file"):
+        load_scene(device)

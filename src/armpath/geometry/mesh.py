@@ -428,7 +428,8 @@ def load_mesh(
     """
     p = Path(path)
     if not p.is_file():
-        raise InvalidInputError(f"mesh {name!r}: file {str(p)!r} does not exist")
+        what = "is not a regular file" if p.exists() else "does not exist"
+        raise InvalidInputError(f"mesh {name!r}: file {str(p)!r} {what}")
     suffix = p.suffix.lower()
     if suffix not in MESH_SUFFIXES:
         raise InvalidInputError(

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Hashable
 from importlib import resources
 from pathlib import Path
-from typing import get_args
+from typing import Any, get_args
 
 from pydantic import ValidationError
 
@@ -152,10 +153,32 @@ def load_scene(path: str | Path | None = None) -> Scene:
         import yaml
 
         try:
-            data = yaml.safe_load(text)
+            data = yaml.load(text, Loader=_unique_keys_loader())  # a SafeLoader
         except yaml.YAMLError as exc:
             raise SceneError(f"scene {source}: not valid YAML: {_one_line(exc)}") from None
     return scene_from_dict(data, source, base_dir)  # type: ignore[arg-type]
+
+
+def _unique_keys_loader() -> type:
+    """PyYAML's safe loader refusing a key written twice in one mapping (TOML refuses it; YAML
+    would keep the last silently)."""
+    import yaml
+
+    class UniqueKeys(yaml.SafeLoader):  # type: ignore[misc]
+        def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+            seen: set[object] = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=deep)
+                if not isinstance(key, Hashable):
+                    continue  # refused by the safe loader itself, naming it
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"key {key!r} written twice", key_node.start_mark
+                    )
+                seen.add(key)
+            return dict(super().construct_mapping(node, deep=deep))
+
+    return UniqueKeys
 
 
 def seed_scene() -> Scene:

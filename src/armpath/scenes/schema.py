@@ -4,7 +4,7 @@ and within :data:`~armpath.budget.MAX_COORDINATE_MM`."""
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar, Literal
+from typing import Annotated, ClassVar, Literal, get_args
 
 import numpy as np
 from pydantic import (
@@ -36,10 +36,33 @@ def _check_number(x: float) -> None:
         )
 
 
+def _takes_bool(annotation: object) -> bool:
+    """Whether a field's type admits true/false (``bool``, or a union or container of it)."""
+    return annotation is bool or any(_takes_bool(a) for a in get_args(annotation))
+
+
 class _FiniteVec(_Strict):
     #: fields that count (ticks, steps) rather than measure: checked with their own limits
     #: where they are used, not as coordinates or sizes
     _counts: ClassVar[frozenset[str]] = frozenset()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_truth_values(cls, data: object) -> object:
+        """true or false where a number goes is a mistake (pydantic would read 1 or 0: a
+        sphere of ``radius = true`` was 1 mm)."""
+        if not isinstance(data, dict):
+            return data
+        for name, v in data.items():
+            field = cls.model_fields.get(name)
+            if field is None or _takes_bool(field.annotation):
+                continue
+            values = v if isinstance(v, tuple | list) else (v,)
+            for x in values:
+                for y in x if isinstance(x, tuple | list) else (x,):
+                    if isinstance(y, bool):
+                        raise ValueError(f"{name}: must be a number, not {str(y).lower()}")
+        return data
 
     @field_validator("*", mode="after")
     @classmethod
