@@ -52,6 +52,13 @@ def arc_ends(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float]:
     return start, end
 
 
+def arc_text(arc: dict[str, Any], doc: dict[str, Any]) -> str:
+    """``arc 375.17 .. 2.50 mm``, with ``through 0 mm`` where it runs on past the closed
+    curve's start (it ends before it begins: see :func:`arc_ends`)."""
+    start, end = arc_ends(arc, doc)
+    return f"arc {start:.2f} .. {end:.2f} mm" + (", through 0 mm" if end < start else "")
+
+
 def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:
     """The arcs a trace result did not cover, ``(what, where, reason)``: its unreachable arcs,
     then those reachable but not traced, each kind's arcs of one reason together

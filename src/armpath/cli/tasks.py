@@ -767,7 +767,7 @@ def spotweld(
 
 
 def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
-    from armpath.report import arc_ends
+    from armpath.report import arc_text
 
     table = Table(
         title=escape(f"trace {doc['curve']['definition'].get('name', 'curve')}"),
@@ -789,10 +789,9 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     table.add_row("lower bound", _bound_text(doc.get("lower_bound"), "one pass per span", missing))
     table.add_row("passes", str(len(doc["passes"])))
     for p in doc["pass_details"]:
-        start, end = arc_ends(p, doc)
         table.add_row(
             f"  states {p['states'][0]}-{p['states'][1]}",
-            f"arc {start:.2f} .. {end:.2f} mm ({p['length_mm']:.2f} mm"
+            f"{arc_text(p, doc)} ({p['length_mm']:.2f} mm"
             + (", traced from its end" if p.get("direction") == "backward" else "")
             + f"), largest deviation {p['max_deviation_mm']:.4f} mm",
         )
@@ -803,16 +802,14 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
         f"({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
     )
     for u in doc.get("not_traced", []):
-        start, end = arc_ends(u, doc)
         table.add_row(
             "not traced",
-            f"arc {start:.2f} .. {end:.2f} mm (reachable): {u['reason']}",
+            f"{arc_text(u, doc)} (reachable): {u['reason']}",
         )
     for u in doc["unreachable"]:
-        start, end = arc_ends(u, doc)
         table.add_row(
             "unreachable",
-            f"arc {start:.2f} .. {end:.2f} mm ({u['length_mm']:.2f} mm), "
+            f"{arc_text(u, doc)} ({u['length_mm']:.2f} mm), "
             f"from {_fmt(u['start_point_mm'], 2)} to {_fmt(u['end_point_mm'], 2)} mm: "
             f"{u['reason']}",
         )
