@@ -713,3 +713,25 @@ def test_the_modules_below_the_api_refuse_a_models_name_by_name():
     ):
         with pytest.raises(InvalidInputError, match=r"armpath.load_arm\('ur5'\) gives one"):
             call()
+
+
+def test_a_tours_visits_record_the_tool_axis_rule_and_the_angle_met():
+    """A tour with --tool-axis recorded neither the rule nor the angle at each weld (a trace
+    does). Each visit now carries the rule and the angle of the tool's approach axis from it,
+    which the independent seed kinematics (the last link's direction at the visit's state)
+    agrees with, within the tolerance; without a rule, null."""
+    import armpath
+
+    welds = [[300.0, -50.0, 150.0], [320.0, -50.0, 150.0]]
+    doc = armpath.spotweld("seed", welds, scene="none", order="given", tool_axis=[0, 0, -1],
+                           axis_tolerance_deg=10, bound=False).doc  # fmt: skip
+    states = independent.replay(doc["initial_deg"], np.array(doc["commands"]))
+    for v in doc["visits"]:
+        rule = v["tool_orientation"]
+        assert rule["type"] == "axis_cone" and rule["tolerance_deg"] == pytest.approx(10.0)
+        p = independent.points(states[v["after_command"]])
+        axis = (p[-1] - p[-2]) / np.linalg.norm(p[-1] - p[-2])  # the last link, to the tip
+        angle = np.degrees(np.arccos(np.clip(axis @ [0.0, 0.0, -1.0], -1.0, 1.0)))
+        assert rule["angle_deg"] == pytest.approx(angle, abs=1e-6) and angle <= 10.0 + 1e-6
+    plain = armpath.spotweld("seed", welds, scene="none", order="given", bound=False).doc
+    assert all(v["tool_orientation"] is None for v in plain["visits"])

@@ -188,6 +188,20 @@ def _welds_from(scene: Scene) -> str:
     return f"inner surface of {spec.workpiece}, under the wall_thickness convention"
 
 
+def _orientation_met(
+    arm: SerialArm, rule: Orientation | None, target_mm: Any, q: FloatArray
+) -> dict[str, Any] | None:
+    """The orientation rule at a target and the angle the tool meets it with at ``q`` (deg), or
+    None without a rule (as the reach result's ``tool_orientation``)."""
+    from armpath.ik.target import ToolTarget
+
+    if rule is None:
+        return None
+    R = tool_pose(arm, q)[:3, :3]
+    angle = ToolTarget(np.asarray(target_mm, dtype=np.float64), rule).angles(R)
+    return {**rule.describe(), "angle_deg": float(np.degrees(angle))}
+
+
 def tour_result_dict(
     result: TourResult, arm: SerialArm, scene: Scene, objective: str
 ) -> dict[str, Any]:
@@ -201,7 +215,17 @@ def tour_result_dict(
         "targets": [list(v.target_mm) for v in sorted(result.visits, key=lambda v: v.target_index)],
         "order": [v.target_index + 1 for v in result.visits],
         "visits": [
-            {"target": list(v.target_mm), "after_command": v.after_command, "error_mm": v.error_mm}
+            {
+                "target": list(v.target_mm),
+                "after_command": v.after_command,
+                "error_mm": v.error_mm,
+                "tool_orientation": _orientation_met(
+                    arm,
+                    None if result.orientations is None else result.orientations[v.target_index],
+                    v.target_mm,
+                    seq.states_joint()[v.after_command],
+                ),
+            }
             for v in result.visits
         ],
         "returns_to_start": result.returns_to_start,
@@ -437,8 +461,6 @@ def plan_result_dict(
 ) -> dict[str, Any]:
     """The JSON document of a general motion plan (``armpath plan``); with an
     ``orientation`` rule of the tool at the target, the rule and the angle reached."""
-    from armpath.ik.target import ToolTarget
-
     seq = plan.sequence
     tip = tool_position(arm, seq.states_joint()[-1])
     doc: dict[str, Any] = {
@@ -460,14 +482,9 @@ def plan_result_dict(
         doc["target"] = np.asarray(target_mm).tolist()
         doc["error_mm"] = float(np.linalg.norm(tip - target_mm))
         doc["tolerance_mm"] = tolerance_mm
-        doc["tool_orientation"] = None
-        if orientation is not None:
-            R = tool_pose(arm, seq.states_joint()[-1])[:3, :3]
-            angle = ToolTarget(np.asarray(target_mm, dtype=np.float64), orientation).angles(R)
-            doc["tool_orientation"] = {
-                **orientation.describe(),
-                "angle_deg": float(np.degrees(angle)),
-            }
+        doc["tool_orientation"] = _orientation_met(
+            arm, orientation, target_mm, seq.states_joint()[-1]
+        )
     return doc
 
 

@@ -276,6 +276,7 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
                         "target": _POINT,
                         "after_command": _int("the command after which the weld is reached"),
                         "error_mm": _num("error there (mm)"),
+                        "tool_orientation": _ORIENTATION,
                     },
                     ("target", "after_command", "error_mm"),
                 ),

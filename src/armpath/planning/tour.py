@@ -97,6 +97,9 @@ class TourResult:
     order_family_bounds: dict[tuple[int, ...], int] = field(default_factory=dict)
     #: Why :attr:`lower_bound` is None (None when it was computed).
     no_bound_because: str | None = None
+    #: The tool orientation rule of each target (None: the tool point only; None throughout:
+    #: no rule).
+    orientations: tuple[Orientation | None, ...] | None = None
 
     @property
     def n_commands(self) -> int:
@@ -610,6 +613,7 @@ def plan_tour(
         lower_bound=family_bound,
         order_family_bounds=family_bounds,
         no_bound_because=no_bound_because,
+        orientations=None if orientations is None else tuple(orientations),
     )
 
 
