@@ -330,6 +330,8 @@ def test_cli_export_writes_or_refuses(seed_reach, tmp_path):
         (["--format", "ros"], "Invalid value for '--format': 'ros'"),  # a usage error: exit 2
         (["--command-period", "0"], "command period must be between"),
         (["--steps-per-tick", "1,2"], "--steps-per-tick"),
+        # given with a format that has no steps it was ignored
+        (["--steps-per-tick", "0"], "steps per tick (--steps-per-tick) go with the steps format"),
     ):
         bad = subprocess.run(
             [

@@ -502,6 +502,8 @@ def test_a_result_whose_model_cannot_be_rebuilt_is_refused(
         (["animate", "--frames", "1"], ("--frames must be", "got 1")),
         (["view", "--export-html", "page.html", "--fps", "5000"], ("--fps must be", "1000")),
         (["view", "--export-html", "page.html", "--fps", "nan"], ("--fps must be", "got nan")),
+        # a replay that never moves
+        (["view", "--export-html", "page.html", "--fps", "1e-300"], ("from 0.01 to 1000",)),
     ],
 )
 def test_animation_and_replay_rates_are_refused_naming_their_option(

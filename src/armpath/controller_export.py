@@ -153,9 +153,14 @@ def export_text(
     period_s: float | None = None,
     steps_per_tick: ArrayLike | None = None,
 ) -> str:
-    """The motion in ``fmt`` (one of :data:`FORMATS`) as text."""
+    """The motion in ``fmt`` (one of :data:`FORMATS`) as text; ``steps_per_tick`` goes with
+    ``"steps"`` only (given with another format, it would be ignored: refused)."""
     from armpath.export import json_text
 
+    if steps_per_tick is not None and fmt != "steps":
+        raise InvalidInputError(
+            f"steps per tick (--steps-per-tick) go with the steps format, not {fmt!r}"
+        )
     if fmt == "csv":
         return trajectory_csv(arm, sequence, period_s)
     if fmt == "joint-trajectory":

@@ -78,7 +78,7 @@ def view(
         ),
     ] = None,
     fps: Annotated[
-        float, typer.Option(help="Commands per second in the HTML replay (at most 1000).")
+        float, typer.Option(help="Commands per second in the HTML replay (0.01 to 1000).")
     ] = 15.0,
 ) -> None:
     """Interactive 3D viewer in the browser: the arm in its scene, a slider per joint (0.1

@@ -530,14 +530,17 @@ def free_port(host: str = "127.0.0.1") -> int:
 
 #: Most commands per second a recorded replay plays (a page cannot show them faster).
 MAX_REPLAY_FPS = 1000.0
+#: Fewest commands per second a replay plays (one every 100 s; 1e-300 played none).
+MIN_REPLAY_FPS = 0.01
 
 
 def check_replay_fps(fps: float, name: str = "fps") -> None:
-    """Refuse a replay's commands per second outside (0, :data:`MAX_REPLAY_FPS`], naming it
-    ``name`` (the option that set it)."""
-    if not 0 < fps <= MAX_REPLAY_FPS:
+    """Refuse a replay's commands per second outside [:data:`MIN_REPLAY_FPS`,
+    :data:`MAX_REPLAY_FPS`], naming it ``name`` (the option that set it)."""
+    if not MIN_REPLAY_FPS <= fps <= MAX_REPLAY_FPS:
         raise InvalidInputError(
-            f"{name} must be > 0 and <= {MAX_REPLAY_FPS:g} commands per second, got {fps:g}"
+            f"{name} must be from {MIN_REPLAY_FPS:g} to {MAX_REPLAY_FPS:g} commands per second, "
+            f"got {fps:g}"
         )
 
 
