@@ -542,6 +542,12 @@ def test_a_result_whose_scene_is_not_found_still_exports(tmp_path):
     (line,) = error_lines(r.stderr)
     assert r.returncode == 1 and "scene 'gone.toml', which is not found here" in line
     assert "--scene of animate and view" in line
+    # a scene of a name only (no file, no definition) is named by its name, not ''
+    doc["scene"] = {"name": "cell 7", "obstacles": [{"type": "sphere"}]}
+    (tmp_path / "named.json").write_text(json.dumps(doc))
+    r = run("animate", "named.json", "--frames", "2", cwd=tmp_path)
+    (line,) = error_lines(r.stderr)
+    assert r.returncode == 1 and "scene 'cell 7', which is not found here" in line
 
 
 def test_a_run_whose_task_finds_no_plan_writes_the_others(tmp_path):

@@ -267,9 +267,11 @@ def _scene(doc: dict[str, Any], scene: Scene | str | Path | None) -> Scene:
     elif source and Path(source).is_file():
         loaded = load_scene(source)
     else:
+        name = source or described.get("name") or "(unnamed)"
         raise InvalidInputError(
-            f"the result was planned in scene {source!r}, which is not found here; give its "
-            "scene file (--scene of animate and view; scene= of load_result)"
+            f"the result was planned in scene {name!r}, which is not found here (the result "
+            "holds no definition of it); give its scene file (--scene of animate and view; "
+            "scene= of load_result)"
         )
     return loaded.with_wall_thickness(wall) if wall else loaded
 
