@@ -79,6 +79,7 @@ def test_bad_input_gives_one_line_and_nonzero_exit(args, message, tmp_path):
 def _choices():
     """Per option with a fixed set of values: the command line before it, the option (None:
     the argument) and the values the code behind it accepts."""
+    from armpath.cli.models import CONVERT_FORMATS
     from armpath.controller_export import FORMATS
     from armpath.ik.solve import METHODS as IK_METHODS
     from armpath.schemas import RESULT_KINDS
@@ -93,19 +94,20 @@ def _choices():
         (["rcm"], "--kind", tuple(ORDERS)),
         (["export", "reach.json"], "--format", FORMATS),
         (["schema"], None, RESULT_KINDS),
+        (["model", "convert", "ur5", "--out", "x.json"], "--to", CONVERT_FORMATS),
     ]
 
 
-@pytest.mark.parametrize("case", range(7))
+@pytest.mark.parametrize("case", range(8))
 def test_a_bad_choice_is_a_usage_error_and_help_lists_the_choices(case, tmp_path):
     """An option with a fixed set of values lists them in --help (the parser's choices, the
     same set the code behind it accepts) and refuses another value as the parser refuses
     ``--wall diagonal``: one error line naming the valid values, exit status 2, nothing
     written."""
     words, option, accepted = _choices()[case]
-    command = words[0]
+    command = words[:2] if words[0] == "model" else words[:1]  # a command group's command
     shown = subprocess.run(
-        [*ARMPATH, command, "--help"],
+        [*ARMPATH, *command, "--help"],
         capture_output=True,
         text=True,
         env={**os.environ, "COLUMNS": "200"},

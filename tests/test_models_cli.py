@@ -80,7 +80,6 @@ def test_cli_convert_to_json_loads_back_with_model(tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--to", "sdf", "--out", "x.sdf"], "--to must be one of urdf, json"),
         (["--to", "urdf", "--out", "x.json"], "--out must end in .urdf"),
     ],
 )

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 import typer
@@ -37,6 +37,9 @@ ModelArgument = Annotated[
 ]
 #: The formats ``model convert`` writes.
 CONVERT_FORMATS = ("urdf", "json", "dh", "mdh")
+#: ``--to`` of ``armpath model convert``: the parser's choices (--help lists them; another is a
+#: usage error), :data:`CONVERT_FORMATS` spelled out (``tests/test_cli.py`` checks).
+ConvertFormat = Literal["urdf", "json", "dh", "mdh"]
 CONVENTION_OF = {"dh": "standard", "mdh": "modified"}
 
 
@@ -93,7 +96,7 @@ def show(
 def convert(
     model: ModelArgument,
     to: Annotated[
-        str,
+        ConvertFormat,
         typer.Option(
             "--to",
             help="urdf (chain, limits and tool; metres), dh or mdh (a JSON robot file: the "
