@@ -230,9 +230,37 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
             "pass_details": _array(
                 "each pass: its states, commands, arc, direction (forward: from start_mm to end_mm,"
                 " backward: from end_mm) and deviation",
-                {"type": "object"},
+                _obj(
+                    "a pass",
+                    {
+                        "states": _array(
+                            "its first and last state (indices of the states: 0 the start)",
+                            {"type": "integer"},
+                            2,
+                        ),
+                        "commands": _int("its commands"),
+                        "start_mm": _num("arc length where its traced arc begins (mm)"),
+                        "end_mm": _num("arc length where it ends (mm; past the length: round)"),
+                        "length_mm": _num("length it traces (mm)"),
+                        "direction": {"enum": ["forward", "backward"], "description": "its way"},
+                        "max_deviation_mm": _num("its largest deviation (mm)"),
+                        "max_deviation_bound_mm": _num("proven upper bound of it (mm)"),
+                    },
+                    ("states", "commands", "start_mm", "end_mm", "direction"),
+                ),
             ),
-            "transits": _array("the motions between passes", {"type": "object"}),
+            "transits": _array(
+                "the motions onto the curve and between passes",
+                _obj(
+                    "a transit",
+                    {
+                        "states": _array("its first and last state", {"type": "integer"}, 2),
+                        "commands": _int("its commands"),
+                        "method": _str("how it was planned"),
+                    },
+                    ("states", "commands", "method"),
+                ),
+            ),
             "covered": _array("the arcs traced", _ARC),
             "not_traced": _array("the arcs not traced and why", _ARC),
             "reachable": _array("the arcs some clear pose reaches", _ARC),
@@ -297,11 +325,46 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
             "goal_states_bound_commands": _int(
                 "bound of the chosen order through the candidate goal states (ranks the orders)"
             ),
+            "goal_states_bound_method": _str("how goal_states_bound_commands is counted"),
             "orders_ranked": _int("visiting orders ranked by their bounds"),
             "orders": _array(
-                "the best-ranked orders with their bounds and plans", {"type": "object"}
+                "the best-ranked orders with their bounds and plans",
+                _obj(
+                    "an order",
+                    {
+                        "order": _array("the welds in order (1-based)", {"type": "integer"}),
+                        "lower_bound_commands": _int(
+                            "fewest commands of direct motions (obstacles ignored) through one "
+                            "of the candidate goal states per weld: a bound for these goal states "
+                            "only, what ranks the orders (family_bound_commands is over every "
+                            "configuration)"
+                        ),
+                        "family_bound_commands": _int(
+                            "the order's bound over every goal configuration (null: not computed "
+                            "per order)",
+                            True,
+                        ),
+                        "planned_commands": _int("commands of its plan (null: not planned)", True),
+                        "not_planned_because": _str("why it was not planned", True),
+                    },
+                    ("order", "lower_bound_commands"),
+                ),
             ),
-            "legs": _array("each leg of the tour", {"type": "object"}),
+            "legs": _array(
+                "each leg of the tour",
+                _obj(
+                    "a leg",
+                    {
+                        "commands": _int("its commands"),
+                        "direct_commands": _int(
+                            "commands of the straight joint-space motion to its goal state", True
+                        ),
+                        "method": _str("direct or the search that found it"),
+                        "search_samples": _int("states the search sampled", True),
+                    },
+                    ("commands", "method"),
+                ),
+            ),
         },
         ("targets", "order", "visits", "error_mm", "metrics"),
     ),
