@@ -799,3 +799,28 @@ def test_arms_the_complete_solver_does_not_suit_and_arms_of_few_joints_reach(tmp
             assert r.doc["n_commands"] == 15  # 30 deg, 2 deg a command
     with pytest.raises(UnreachableError):
         armpath.reach(cases[0][0], [301.0, 0.0, 0.0], scene="none")
+
+
+def test_a_reach_taken_at_the_nearest_point_is_taken_there_once(tmp_path, monkeypatch):
+    """Where no member reaches the target, the reach is planned at the nearest point the arm
+    reaches; should no member be found there either (a sampler that finds none), it says so
+    rather than taking the nearest point of the nearest point again and again."""
+    import armpath
+    from armpath.errors import UnreachableError
+    from armpath.ik.family import GenericFamily
+
+    path = tmp_path / "one.json"
+    units = {"length": "mm", "angle": "deg"}
+    links = [{"a": 300, "alpha": 0, "d": 0, "offset": 0}]
+    path.write_text(json.dumps({"convention": "standard", "units": units, "links": links}))
+    calls = []
+
+    def none_found(self, *args, **kwargs):
+        calls.append(self.target.position.copy())
+        return np.zeros((0, self.arm.n_joints))
+
+    monkeypatch.setattr(GenericFamily, "samples", none_found)
+    with pytest.raises(UnreachableError, match="no configuration within the limits found"):
+        armpath.reach(str(path), [259.8076, 150.0, 0.0], scene="none")
+    assert len(calls) == 2  # the target, then the nearest point once
+    assert np.linalg.norm(calls[1] - [259.8076, 150.0, 0.0]) <= 1e-4

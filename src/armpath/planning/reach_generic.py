@@ -507,10 +507,13 @@ def reach_any_arm(
     max_motion_checks: int = 40,
     plan_around: bool = True,
     seed: int = 0,
+    at_nearest: bool = False,
 ) -> GenericReach:
     """The fewest commands from ``start_ticks`` to the target (then the smallest error), for any
-    arm (see the module docstring). Raises :class:`UnreachableError` naming the nearest
-    reachable point when no configuration within the limits reaches the target."""
+    arm (see the module docstring); ``at_nearest``: the target is already the nearest point the
+    arm reaches to the one asked for (taken once, so this ends). Raises
+    :class:`UnreachableError` naming the nearest reachable point when no configuration within
+    the limits reaches the target."""
     grid = arm.lattice
     start = validated_start(arm, world, start_ticks, target)
     s_q = grid.to_joint(start)
@@ -533,7 +536,7 @@ def reach_any_arm(
         dist, tip = nearest_reachable(arm, target, rng)
         if dist > tolerance:
             raise _out_of_reach(arm, target, dist, tip)
-        if target.orientation is None and dist <= tolerance / 2:
+        if target.orientation is None and dist <= tolerance / 2 and not at_nearest:
             # an arm whose tool point cannot go everywhere near the target (fewer than three
             # joints move it, or all in one plane) has no member reaching it exactly: the
             # nearest point it reaches is taken, and a state within the tolerance less the
@@ -541,7 +544,7 @@ def reach_any_arm(
             near_point = replace(target, position=np.asarray(tip, dtype=np.float64))
             near = reach_any_arm(
                 arm, world, start_ticks, near_point, tolerance - dist, extra_commands,
-                max_motion_checks, plan_around, seed,
+                max_motion_checks, plan_around, seed, at_nearest=True,
             )  # fmt: skip
             method = f"{near.bound.method}; at the nearest point reached, {dist:.2g} {unit} off"
             return replace(near, bound=replace(near.bound, method=method))

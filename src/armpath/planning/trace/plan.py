@@ -660,7 +660,7 @@ def _trace_arcs(
                         goal, END_CHAIN_SHARE * abs(finish - s_at), hold=pass_states[-1]
                     )
                     tracer.follow(chain)
-                elif abs(finish - begin) >= curve.length - 1e-6:
+                elif curve.closed and abs(finish - begin) >= curve.length - 1e-6:
                     # once round a closed curve: the pass may end on the state it begins from
                     # (where it began, it is within the tolerance and clear)
                     chain = [pass_states[-1]]
