@@ -401,7 +401,8 @@ def test_an_arm_named_with_brackets_keeps_them_in_the_table_titles(tmp_path):
 def test_an_arc_through_a_closed_curves_start_says_so():
     """A pass round the seed crack printed 'arc 483.07 .. 382.87 mm (765.75 mm ...)', which reads
     like the 100 mm between them; an arc that runs on past a closed curve's 0 mm now says it
-    goes through it, one within the curve does not, nor one of an open curve."""
+    goes through it, one all round says so, one within the curve does not, nor one of an open
+    curve."""
     from armpath.report import arc_text
 
     closed = {"curve": {"closed": True, "length_mm": 865.95}}
@@ -409,5 +410,12 @@ def test_an_arc_through_a_closed_curves_start_says_so():
         "arc 483.07 .. 382.87 mm, through 0 mm"
     )
     assert arc_text({"start_mm": 10.0, "end_mm": 20.0}, closed) == "arc 10.00 .. 20.00 mm"
+    # a pass once round that runs on 0.2 mm past where it began read as a 0.2 mm arc
+    assert arc_text({"start_mm": 483.07, "end_mm": 483.07 + 865.95 + 0.2}, closed) == (
+        "arc 483.07 .. 483.27 mm, once round"
+    )
+    assert arc_text({"start_mm": 483.07, "end_mm": 483.07 + 865.95 - 0.01}, closed) == (
+        "arc 483.07 .. 483.06 mm, through 0 mm"  # 0.01 mm short of once round
+    )
     opened = {"curve": {"closed": False, "length_mm": 865.95}}
     assert arc_text({"start_mm": 10.0, "end_mm": 20.0}, opened) == "arc 10.00 .. 20.00 mm"

@@ -224,6 +224,24 @@ def test_a_key_written_twice_true_for_a_number_and_a_device_for_a_mesh_are_refus
         "base_center = [300, 0, 0]\nheight = 100\nr_bottom = 80\nr_top = 60\nwall = 5\n"
         "open_top = false\n"
     )
+    # a YAML merge key ('<<: *anchor') is no key written twice, and may be overridden
+    merged = tmp_path / "merged.yaml"
+    merged.write_text(
+        "name: m\nobstacles:\n  - &s {type: sphere, name: a, center: [500, 0, 100], radius: 10}\n"
+        "  - {<<: *s, name: b, radius: 20}\n"
+    )
+    first, b = load_scene(merged).world.obstacles
+    assert (
+        first.name == "a"
+        and b.name == "b"
+        and b.signed_distance(np.array([500.0, 0.0, 100.0])) == -20.0
+    )
+    # true where text goes is not 'a number'
+    truth.write_text('name = "t"\n[[obstacles]]\ntype = "sphere"\nname = true\n'
+                     "center = [0, 500, 0]\nradius = 1\n")  # fmt: skip
+    with pytest.raises(SceneError) as text_error:
+        load_scene(truth)
+    assert "must be a number" not in str(text_error.value)
     (w,) = load_scene(fine).world.obstacles
     assert isinstance(w, HollowFrustum) and w.signed_distance(np.array([300.0, 0.0, 99.0])) < 0
     device = tmp_path / "device.toml"

@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import math
 import numbers
+import reprlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -78,7 +79,10 @@ def _reals(values: ArrayLike, what: str) -> NDArray[Any]:
     :class:`InvalidInputError` naming ``what``: text, complex numbers, flags and None are no
     joint values or coordinates (numpy would parse ``"1"``, and drop an imaginary part with a
     warning)."""
-    wrong = InvalidInputError(f"{what} must be real numbers, got {values!r}"[:300])
+
+    def wrong() -> InvalidInputError:  # built only when raised: repr of a million points is slow
+        return InvalidInputError(f"{what} must be real numbers, got {reprlib.repr(values)}")
+
     try:
         a = np.asarray(values)
         if a.dtype.kind == "O":  # Python objects: numbers of other types (Fraction), or not
@@ -86,12 +90,12 @@ def _reals(values: ArrayLike, what: str) -> NDArray[Any]:
                 isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_)
                 for v in a.ravel()
             ):
-                raise wrong
+                raise wrong()
             a = a.astype(np.float64)
     except (TypeError, ValueError, OverflowError):  # ragged, or an integer beyond any float
-        raise wrong from None
+        raise wrong() from None
     if a.dtype.kind not in "iuf":
-        raise wrong
+        raise wrong()
     return a
 
 

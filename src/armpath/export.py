@@ -207,7 +207,8 @@ def tour_result_dict(
 ) -> dict[str, Any]:
     """The JSON document of a spot-weld tour (the reach schema plus targets and visits)."""
     seq = result.sequence
-    tip = tool_position(arm, seq.states_joint()[-1])
+    states = seq.states_joint()
+    tip = tool_position(arm, states[-1])
     return {
         **_document_head("spotweld", arm, scene),
         "z_from": _welds_from(scene),
@@ -223,7 +224,7 @@ def tour_result_dict(
                     arm,
                     None if result.orientations is None else result.orientations[v.target_index],
                     v.target_mm,
-                    seq.states_joint()[v.after_command],
+                    states[v.after_command],
                 ),
             }
             for v in result.visits

@@ -54,9 +54,19 @@ def arc_ends(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float]:
 
 def arc_text(arc: dict[str, Any], doc: dict[str, Any]) -> str:
     """``arc 375.17 .. 2.50 mm``, with ``through 0 mm`` where it runs on past the closed
-    curve's start (it ends before it begins: see :func:`arc_ends`)."""
+    curve's start (see :func:`arc_ends`), or ``once round`` where it covers the whole curve
+    (it may end a little past where it began)."""
     start, end = arc_ends(arc, doc)
-    return f"arc {start:.2f} .. {end:.2f} mm" + (", through 0 mm" if end < start else "")
+    text = f"arc {start:.2f} .. {end:.2f} mm"
+    curve = doc.get("curve", {})
+    length = float(curve.get("length_mm", 0.0))
+    if not (curve.get("closed") and length > 0.0):
+        return text
+    first, last = float(arc["start_mm"]), float(arc["end_mm"])
+    if last - first >= length - 1e-6:
+        return text + ", once round"
+    crosses = math.floor(last / length + 1e-12) > math.floor(first / length + 1e-12)
+    return text + (", through 0 mm" if crosses and end > 0.0 else "")
 
 
 def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:

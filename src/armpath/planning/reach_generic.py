@@ -511,7 +511,10 @@ def reach_any_arm(
 ) -> GenericReach:
     """The fewest commands from ``start_ticks`` to the target (then the smallest error), for any
     arm (see the module docstring); ``at_nearest``: the target is already the nearest point the
-    arm reaches to the one asked for (taken once, so this ends). Raises
+    arm reaches to the one asked for (taken once, so this ends): where no member reaches the
+    target exactly but one comes within half the tolerance (an arm whose tool point cannot go
+    everywhere near it), the fewest commands are searched within the tolerance less that
+    distance of the nearest point, and the bound is the least found there. Raises
     :class:`UnreachableError` naming the nearest reachable point when no configuration within
     the limits reaches the target."""
     grid = arm.lattice
@@ -542,10 +545,16 @@ def reach_any_arm(
             # nearest point it reaches is taken, and a state within the tolerance less the
             # distance of that point is within the tolerance of the target
             near_point = replace(target, position=np.asarray(tip, dtype=np.float64))
-            near = reach_any_arm(
-                arm, world, start_ticks, near_point, tolerance - dist, extra_commands,
-                max_motion_checks, plan_around, seed, at_nearest=True,
-            )  # fmt: skip
+            try:
+                near = reach_any_arm(
+                    arm, world, start_ticks, near_point, tolerance - dist, extra_commands,
+                    max_motion_checks, plan_around, seed, at_nearest=True,
+                )  # fmt: skip
+            except UnreachableError:
+                raise UnreachableError(
+                    f"target ({where}) {unit}: no configuration within the limits found reaching "
+                    f"it, nor the nearest point the arm reaches, {dist:.2g} {unit} from it"
+                ) from None
             method = f"{near.bound.method}; at the nearest point reached, {dist:.2g} {unit} off"
             return replace(near, bound=replace(near.bound, method=method))
         if target.orientation is not None:

@@ -559,6 +559,7 @@ def plan_tour(
     _, legs, chosen = best
     if opts.objective is not Objective.COMMANDS:
         legs, chosen = _least_in(arm, start, tours, opts)
+        planned[chosen] = _commands(legs)  # the plan kept for its order, not its fewest
     if opts.objective is Objective.COMMANDS:
         # the kept legs only: a certified merge costs about a quarter second, placing a
         # leg's states up to a few seconds

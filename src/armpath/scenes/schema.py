@@ -36,9 +36,15 @@ def _check_number(x: float) -> None:
         )
 
 
+def _takes(annotation: object, kinds: tuple[type, ...]) -> bool:
+    """Whether a field's type admits a value of one of ``kinds`` (itself, or in a union or a
+    container of them)."""
+    return annotation in kinds or any(_takes(a, kinds) for a in get_args(annotation))
+
+
 def _takes_bool(annotation: object) -> bool:
-    """Whether a field's type admits true/false (``bool``, or a union or container of it)."""
-    return annotation is bool or any(_takes_bool(a) for a in get_args(annotation))
+    """Whether a field's type admits true/false."""
+    return _takes(annotation, (bool,))
 
 
 class _FiniteVec(_Strict):
@@ -55,7 +61,11 @@ class _FiniteVec(_Strict):
             return data
         for name, v in data.items():
             field = cls.model_fields.get(name)
-            if field is None or _takes_bool(field.annotation):
+            if (
+                field is None
+                or _takes_bool(field.annotation)
+                or not _takes(field.annotation, (int, float))
+            ):
                 continue
             values = v if isinstance(v, tuple | list) else (v,)
             for x in values:

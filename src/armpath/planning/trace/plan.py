@@ -260,8 +260,9 @@ def plan_trace(
     say("certifying the clearance of the whole motion")
     clearance = motion_clearance(arm, world, sequence, max_evaluations=400_000)
     if not clearance.certified_ok:  # a plan is delivered only with its motion proven clear
+        why = "a sampled instant breaks it" if clearance.violated else "not proven in its budget"
         raise PlanningError(
-            f"the trace failed its final clearance check ({clearance.limiting_pair} "
+            f"the trace failed its final clearance check, {why} ({clearance.limiting_pair} "
             f"{clearance.limiting_slack:+.4f} mm at a sampled instant of command "
             f"{clearance.limiting_command}; proven no less than "
             f"{clearance.lower_bound_slack:+.4f} mm): it is not written"
