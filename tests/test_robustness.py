@@ -856,3 +856,31 @@ def test_a_joint_value_beyond_any_lattice_state_is_refused_by_size_without_warni
                                r"1,000,000\]|max ticks must be whole numbers"):  # fmt: skip
                 ur5.with_lattice(None, most)
         assert ur5.with_lattice(None, np.full(6, 7.0)).lattice.max_ticks.tolist() == [7] * 6
+
+
+def test_a_base_standing_inside_an_obstacle_is_pointed_out(tmp_path):
+    """An arm's fixed base is not checked against obstacles, so a base placed inside a pedestal
+    (here 240 mm up a 250 mm box, 10 mm under its top) went unnoticed. The task commands now
+    warn, naming how deep and which obstacle, and go on; a base on the pedestal's top face, as
+    the UR5 cell stands it, is not warned about."""
+    from cli_in_process import run_in_process
+
+    pedestal = (
+        '[[obstacles]]\ntype = "box"\nname = "pedestal"\ncenter = [0, 0, 125]\n'
+        "size = [220, 220, 250]\n"
+    )
+    for z, warned in ((240, True), (250, False)):
+        scene = tmp_path / f"s{z}.toml"
+        scene.write_text(
+            f'name = "s"\n[arm]\nmodel = "ur5"\nbase = {{ position_mm = [0, 0, {z}] }}\n{pedestal}'
+        )
+        r = run_in_process(["reach", "400", "100", "500", "--scene", str(scene)], tmp_path)
+        assert r.returncode == 0, r.stderr
+        notes = [ln for ln in r.stderr.splitlines() if ln.startswith("warning:")]
+        if warned:
+            assert notes == [
+                "warning: the arm's base at (0, 0, 240) mm lies 10 mm inside obstacle 'pedestal' "
+                "(an arm's fixed base is not checked against obstacles): is that where it stands?"
+            ]
+        else:
+            assert notes == []

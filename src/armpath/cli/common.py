@@ -378,6 +378,11 @@ def task_setup(
     arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
     if link_radius_mm is not None:
         arm = arm.with_link_radii(_checked_link_radius(link_radius_mm))  # arms are in mm
+    from armpath.scenes.arm import buried_base_note
+
+    note = buried_base_note(arm, scene)
+    if note is not None:
+        err_console.print(f"warning: {note}", markup=False, soft_wrap=True)
     return arm, scene
 
 

@@ -106,3 +106,26 @@ def scene_arm(scene: Scene, model: str | None = None, tip_link: str | None = Non
 
 
 __all__ = ["arm_from_spec", "placement_matrix", "scene_arm"]
+
+
+#: How deep inside an obstacle an arm's base may stand before :func:`buried_base_note` says so
+#: (mm): a base on an obstacle's face stands at 0.
+BURIED_BASE_MM = 1.0
+
+
+def buried_base_note(arm: SerialArm, scene: Scene) -> str | None:
+    """A note where the arm's base frame lies more than :data:`BURIED_BASE_MM` inside one of
+    the scene's obstacles (its fixed base is not checked against them, so a base placed at the
+    floor under a pedestal, say, goes unnoticed), else None."""
+    origin = (
+        np.asarray(arm.T_world_base[:3, 3], dtype=np.float64) * MM_PER_LENGTH_UNIT[arm.length_unit]
+    )
+    for o in scene.world.obstacles:
+        depth = -float(np.asarray(o.signed_distance(origin[None]))[0])
+        if depth > BURIED_BASE_MM:
+            where = ", ".join(f"{v:g}" for v in origin)
+            return (
+                f"the arm's base at ({where}) mm lies {depth:.0f} mm inside obstacle {o.name!r} "
+                "(an arm's fixed base is not checked against obstacles): is that where it stands?"
+            )
+    return None
