@@ -105,9 +105,6 @@ def scene_arm(scene: Scene, model: str | None = None, tip_link: str | None = Non
         raise SceneError(f"scene {scene.source}: arm: {exc}") from None
 
 
-__all__ = ["arm_from_spec", "placement_matrix", "scene_arm"]
-
-
 #: How deep inside an obstacle an arm's base may stand before :func:`buried_base_note` says so
 #: (mm): a base on an obstacle's face stands at 0.
 BURIED_BASE_MM = 1.0
@@ -129,3 +126,6 @@ def buried_base_note(arm: SerialArm, scene: Scene) -> str | None:
                 "(an arm's fixed base is not checked against obstacles): is that where it stands?"
             )
     return None
+
+
+__all__ = ["arm_from_spec", "buried_base_note", "placement_matrix", "scene_arm"]

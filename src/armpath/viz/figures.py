@@ -192,12 +192,13 @@ def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
 _MOST_DRAWN = 16_000
 
 
-def _drawn_motion(seq: CommandSequence) -> NDArray[np.float64]:
-    """Joint values (rad) of the instants a 3-D view draws the tool path through."""
+def _drawn_motion(seq: CommandSequence, states: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Joint values (rad) of the instants a 3-D view draws the tool path through (``states``:
+    the sequence's, :meth:`CommandSequence.states_joint`)."""
     if seq.n_commands <= _MOST_DRAWN:
         return seq.sample_motion(8)
     every = np.unique(np.linspace(0, seq.n_commands, 8 * _MOST_DRAWN).astype(np.int64))
-    return np.asarray(seq.states_joint()[every], dtype=np.float64)
+    return np.asarray(states[every], dtype=np.float64)
 
 
 def plot_motion_3d(
@@ -213,9 +214,10 @@ def plot_motion_3d(
     fig = Figure(figsize=(8, 7))
     ax = fig.add_subplot(projection="3d")
     assert isinstance(ax, Axes3D)
-    motion = landmark_positions(arm, _drawn_motion(seq))
+    joints = seq.states_joint()
+    motion = landmark_positions(arm, _drawn_motion(seq, joints))
     every = np.unique(np.r_[0 : seq.n_commands + 1 : max(1, seq.n_commands // 12), seq.n_commands])
-    states = landmark_positions(arm, seq.states_joint()[every])  # the first and the last too
+    states = landmark_positions(arm, joints[every])  # the first and the last too
     pts = [motion.reshape(-1, 3), np.zeros((1, 3))]
     pts += draw_obstacles(ax, scene)
     for ghost in states:

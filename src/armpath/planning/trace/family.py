@@ -193,7 +193,6 @@ class CurveFamily:
             [p.is_tip and self.surface is not None and p.other == self.surface.name for p in pairs],
             dtype=bool,
         )
-        self._touch_cols = touching
         #: per clearance pair, whether it is the tool tip and the surface the curve lies on
         #: (the one pair the tip may touch while tracing)
         self.touch_pairs: NDArray[np.bool_] = touching
@@ -348,8 +347,8 @@ class CurveFamily:
             joint = np.minimum(self._hi - q, q - self._lo) * self._to_slack_units
         values, _ = self.world.pair_clearances(self.arm, q)
         pair = values - self._required
-        tip_ok = np.all(pair[:, self._touch_cols] >= -TOUCH_MM, axis=-1)
-        pair[:, self._touch_cols] = np.nan
+        tip_ok = np.all(pair[:, self.touch_pairs] >= -TOUCH_MM, axis=-1)
+        pair[:, self.touch_pairs] = np.nan
         return joint, pair, tip_ok
 
     def score(
@@ -378,14 +377,14 @@ class CurveFamily:
             top = np.minimum(top, room)
         keep = self._columns(obstacles)
         groups = [SlackGroup(keep, top, floor)] if np.any(keep) else []
-        if np.any(self._touch_cols):  # the tool tip only must not enter the surface
+        if np.any(self.touch_pairs):  # the tool tip only must not enter the surface
             # (a floor just below the threshold keeps the verdict exact)
-            groups.append(SlackGroup(self._touch_cols, -TOUCH_MM, _BELOW_TOUCH))
+            groups.append(SlackGroup(self.touch_pairs, -TOUCH_MM, _BELOW_TOUCH))
         if not groups:
             return top
         found = self.world.smallest_slacks(self.arm, q, groups)
         out = found[0] if np.any(keep) else top
-        if np.any(self._touch_cols):
+        if np.any(self.touch_pairs):
             return np.where(found[-1] >= -TOUCH_MM, out, -np.inf)
         return out
 
@@ -414,7 +413,7 @@ class CurveFamily:
         return out
 
     def _columns(self, obstacles: tuple[str, ...] | None) -> NDArray[np.bool_]:
-        cols = ~self._touch_cols
+        cols = ~self.touch_pairs
         if obstacles is None:
             return cols
         chosen = np.array([o in obstacles for o in self._others], dtype=bool)
