@@ -1095,12 +1095,7 @@ def run(
                 if not docs:
                     # no task found a plan: nothing is written (one reason said once)
                     if ran_out is not None:  # with the failures before it, if any
-                        raise TimeLimitError(
-                            "; ".join(
-                                [f"{title} found no plan: {why}" for title, why in failed]
-                                + [str(ran_out)]
-                            )
-                        )
+                        raise TimeLimitError("; ".join([*_no_plan_lines(failed), str(ran_out)]))
                     reasons = list(dict.fromkeys(why for _, why in failed))
                     raise PlanningError(
                         reasons[0]
@@ -1142,12 +1137,17 @@ def run(
                 blind_job.cancel()  # (done by then, unless a task failed)
         _print_run(folder, scene, arm, reach_doc, trace_doc, tour_doc, blind, heading, seed_job)
         if failed or ran_out is not None:
-            problems = [f"{title} found no plan: {why}" for title, why in failed]
+            problems = _no_plan_lines(failed)
             problems += [f"{title}: {why}" for title, why in unfinished]
             message = (
                 "; ".join(problems) + f" (the finished tasks' results are written to {folder.path})"
             )
             raise PlanningError(message) if ran_out is None else TimeLimitError(message)
+
+
+def _no_plan_lines(failed: list[tuple[str, str]]) -> list[str]:
+    """One line per task of ``run`` that found no plan (its title, why)."""
+    return [f"{title} found no plan: {why}" for title, why in failed]
 
 
 def _background_say() -> Callable[[str], None]:
