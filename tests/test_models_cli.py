@@ -396,6 +396,26 @@ def test_lengths_of_a_robot_file_beyond_the_coordinate_limit_are_refused_naming_
     assert _fk_tip(["0", "0", "--model", "m.json"], tmp_path) == [300.0, 0.0, 300.0]
 
 
+def test_a_scene_placing_a_far_base_beyond_the_coordinate_limit_is_refused(tmp_path):
+    """A scene's base placement and a robot file's base each within 1e9 mm but 1.8e9 mm
+    together gave a result whose saved base could not be loaded back; now the scene is refused,
+    naming the composed base and the limit. The robot file alone still works, its tool point
+    where its base puts it (the D-H product by hand: a base at x = 9e8, two 100 mm links)."""
+    limit = "is beyond the largest length a model may use (1e+09 mm, as for scenes and targets)"
+    base = [[1, 0, 0, 9e8], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    doc = {"links": [{"a": 100}, {"a": 100}], "base": base}
+    (tmp_path / "far.json").write_text(json.dumps(doc))
+    (tmp_path / "far.toml").write_text(
+        'name = "far"\n[arm]\nmodel = "far.json"\nbase = { position_mm = [9e8, 0, 0] }\n'
+    )
+    line = _one_error_line(["reach", "100", "50", "0", "--scene", "far.toml"], tmp_path)
+    assert line == (
+        "error: scene far.toml: arm: the arm's base (its placement after its own base): "
+        f"1.8e+09 mm {limit}"
+    ), line
+    assert _fk_tip(["0", "0", "--model", "far.json"], tmp_path) == [9e8 + 200, 0.0, 0.0]
+
+
 def test_the_base_and_tool_of_a_robot_file_must_be_rigid_transforms(tmp_path):
     """A robot file's base of diag(2, 2, 2, 1) doubled every distance silently and an all-zero
     rotation block put every point at the base; neither is a placement. The base and the tool

@@ -372,7 +372,10 @@ class SerialArm:
         after it): where a scene puts the arm."""
         T = _frozen(T_world_cell_base, (4, 4), "base placement")
         check_rigid(T, "base placement")
-        return replace(self, T_world_base=T @ self.T_world_base)
+        T_world_base = T @ self.T_world_base
+        for v in T_world_base[:3, 3]:  # each within the limit alone, not always together
+            check_length(v, "the arm's base (its placement after its own base)", self.length_unit)
+        return replace(self, T_world_base=T_world_base)
 
     def with_tool(
         self,
@@ -389,6 +392,8 @@ class SerialArm:
         T = _frozen(T_flange_tool, (4, 4), "tool")
         check_rigid(T, "tool")
         T = _frozen(np.asarray(self.T_joint_flange) @ T, (4, 4), "tool")
+        for v in T[:3, 3]:
+            check_length(v, "the tool (after the flange)", self.length_unit)
         n = self.n_joints
         tool_frame = n + 1
         old = [i for i, lm in enumerate(self.landmarks) if lm.frame == tool_frame]
