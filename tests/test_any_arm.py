@@ -825,3 +825,47 @@ def test_a_reach_taken_at_the_nearest_point_is_taken_there_once(tmp_path, monkey
         armpath.reach(str(path), [259.8076, 150.0, 0.0], scene="none")
     assert len(calls) == 2  # the target, then the nearest point once
     assert np.linalg.norm(calls[1] - [259.8076, 150.0, 0.0]) <= 1e-4
+
+
+def test_a_target_a_hair_above_a_table_is_reached_and_planned_to(tmp_path):
+    """A KUKA-like arm over a table (its top at z = 400 mm) found no goal state for targets
+    0.01 to about 0.9 mm above the top ("no configuration ... keeps the links 2 mm clear"),
+    though a target on the top was reached and a state 0.025 mm from the target was clear: a
+    target off the surface held the tool's own link to the planner's buffer against it. The
+    surfaces within the planner's retreat of the target now count as the one the tool meets
+    head-on. Reached and planned to, each end state replayed on the textbook D-H product (the
+    scene's base and tool): within the tolerance of the target, the tool point not in the table."""
+    import armpath
+
+    D = np.pi / 180
+    a, alpha, d = [25, 455, 35, 0, 0, 0], [-90, 0, -90, 90, -90, 0], [400, 0, 0, 420, 0, 80]
+    offset = [0, -90, 0, 0, 0, 0]
+    limits = [[-170, 170], [-190, 45], [-120, 156], [-185, 185], [-120, 120], [-350, 350]]
+    (tmp_path / "kr6.json").write_text(json.dumps({
+        "name": "kr6like", "convention": "standard", "units": {"length": "mm", "angle": "deg"},
+        "links": [{"a": x, "alpha": y, "d": z, "offset": o, "limits": lim}
+                  for x, y, z, o, lim in zip(a, alpha, d, offset, limits, strict=True)],
+        "link_radii_mm": [80, 70, 60, 50, 40, 30, 10],
+    }))  # fmt: skip
+    scene = scene_from_dict({
+        "name": "table", "clearance": {"margin_mm": 2.0, "tool_tip_exempt_mm": 8.0},
+        "arm": {"model": str(tmp_path / "kr6.json"), "home_deg": [0, -30, 30, 0, 30, 0],
+                "base": {"position_mm": [0, 0, 300], "rotation_deg": [0, 0, 90]},
+                "tool": {"position_mm": [0, 0, 180], "radius_mm": 4}},
+        "obstacles": [
+            {"type": "box", "name": "pedestal", "center": [0, 0, 150], "size": [300, 300, 300]},
+            {"type": "box", "name": "table", "center": [0, 650, 200], "size": [600, 400, 400]}],
+    })  # fmt: skip
+    base = np.array([[0.0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 1, 300], [0, 0, 0, 1]])
+
+    def tool_point(q_rad):
+        T = base @ idh.dh_pose(a, np.array(alpha) * D, d, q_rad, offset=np.array(offset) * D)
+        return (T @ np.array([0.0, 0.0, 180.0, 1.0]))[:3]
+
+    target = np.array([0.0, 650.0, 400.05])
+    for plan in (armpath.reach, lambda *x, **k: armpath.plan(*x, to_mm=target, **k)):
+        r = plan(None, target, scene=scene) if plan is armpath.reach else plan(None, scene=scene)
+        end = tool_point(np.radians(r.states_deg[-1]))
+        assert np.linalg.norm(end - target) <= 0.05
+        assert end[2] >= 400.0
+        assert r.doc["clearance"]["certified"]

@@ -675,7 +675,13 @@ def goal_links_rule(
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
     required = world.required(arm)
-    touched = {o.name for o in world.obstacles if abs(float(o.signed_distance(position))) <= 1e-6}
+    # surfaces the tool meets head-on: those within the motion planner's retreat of the target
+    # (it plans onto such a goal from a pre-goal backed off along the surface's normal); a target
+    # a hair above a table was held to the buffer against it, and refused
+    head_on = MotionOptions().approach_mm
+    touched = {
+        o.name for o in world.obstacles if abs(float(o.signed_distance(position))) <= head_on
+    }
     tool_link = pairs[int(np.flatnonzero(is_tip)[0])].part.removesuffix(" tip") if any(
         is_tip
     ) else None  # fmt: skip
