@@ -114,3 +114,26 @@ def test_the_reports_files_list_only_what_was_written():
     files = text.split("## Files", 1)[1]
     assert "`trace.json`" in files and "`*.csv / *.xlsx`" in files and "`*.gif`" in files
     assert "spotweld.json" not in files and "blindzones" not in files and "reach.json" not in files
+
+
+def test_a_reach_bound_that_is_an_estimate_is_marked_so_in_the_summary_table():
+    """The UR5 cell's reach has a sampled bound (``lower_bound.proven`` false): the summary's
+    table showed "51 | 51" as if the plan were proven fewest. It is now "~51" with a note; a
+    proven bound stays a plain number."""
+    import copy
+    from pathlib import Path
+
+    import armpath
+    from armpath.report import summary_markdown
+
+    cell = Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml"
+    r = armpath.reach(None, [450, -150, 250], scene=cell)
+    assert r.doc["lower_bound"]["proven"] is False
+    n, bound = r.n_commands, r.doc["lower_bound_commands"]
+    text = summary_markdown([("Task 1: reach", r.doc)])
+    assert f"| Task 1: reach | {n} | ~{bound} |" in text
+    assert "~ Task 1: reach: the bound is an estimate" in text
+    doc = copy.deepcopy(r.doc)
+    doc["lower_bound"]["proven"] = True
+    text = summary_markdown([("Task 1: reach", doc)])
+    assert f"| Task 1: reach | {n} | {bound} |" in text and "is an estimate" not in text

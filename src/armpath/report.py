@@ -106,7 +106,9 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
                 f"{_mm(body)} (links) | {doc['wall_thickness'] or '-'} |"
             )
             continue
-        bound, error = str(doc["lower_bound_commands"]), f"{doc['error_mm']:.4f}"
+        bound, error = bound_cell(doc), f"{doc['error_mm']:.4f}"
+        if doc["task"] == "reach" and not proven(doc):
+            notes.append(f"~ {title}: {ESTIMATE_NOTE}.")
         clearance = _mm(doc["min_clearance_mm"])
         if doc["task"] == "spotweld":
             bound = f"{bound_cell(doc)}, {doc['goal_states_bound_commands']}*"
@@ -158,6 +160,11 @@ def bound_scope(bound: dict[str, Any]) -> str:
 
 #: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).
 UNPROVEN = "estimate, not proven: the arm's self-motion is not sampled"
+#: What a bound marked ``~`` in a table is (a reach's sampled bound, a redundant arm's).
+ESTIMATE_NOTE = (
+    "the bound is an estimate (the least over sampled configurations), not proven, so the "
+    "plan is not proven fewest"
+)
 #: What a plan that meets its proven bound is said to have.
 MEETS_BOUND = "the plan meets it: the fewest commands"
 

@@ -1179,10 +1179,12 @@ def _print_run(
     """The run's table of results on stdout and the files it wrote (``seed_job``: the seed
     scene's tasks, whose heading does not name the scene)."""
     from armpath.report import (
+        ESTIMATE_NOTE,
         bound_cell,
         bound_scope,
         over_lattice,
         passes_text,
+        proven,
         uncovered_arcs,
     )
 
@@ -1207,7 +1209,7 @@ def _print_run(
         table.add_row(
             f"1 reach {_fmt(reach_doc['target'], 0)} mm",
             str(reach_doc["n_commands"]),
-            str(reach_doc["lower_bound_commands"]),
+            bound_cell(reach_doc),
             f"{reach_doc['error_mm']:.4f}",
             _mm(reach_doc["min_clearance_mm"]),
         )
@@ -1245,6 +1247,8 @@ def _print_run(
             markup=False,
             soft_wrap=True,
         )
+    if reach_doc is not None and not proven(reach_doc):
+        out_console.print(f"~ Task 1: {ESTIMATE_NOTE}.", markup=False, soft_wrap=True)
     if trace_doc is not None or tour_doc is not None:
         tour_bound = None if tour_doc is None else tour_doc.get("lower_bound")
         notes = []
