@@ -137,3 +137,17 @@ def test_a_reach_bound_that_is_an_estimate_is_marked_so_in_the_summary_table():
     doc["lower_bound"]["proven"] = True
     text = summary_markdown([("Task 1: reach", doc)])
     assert f"| Task 1: reach | {n} | {bound} |" in text and "is an estimate" not in text
+
+
+def test_one_command_is_said_in_the_singular():
+    """A reach one command away was titled "reach: 1 commands" (the result's title, the CLI's
+    figures and summary)."""
+    import armpath
+    from armpath.report import commands_text, summary_markdown
+
+    r = armpath.reach(None, [-17.8670691713, 511.645918213, 92.838339562])
+    assert r.n_commands == 1 and r.title() == "reach: 1 command"
+    assert "- 1 command (provably the fewest; lower bound 1) to" in summary_markdown(
+        [("Task 1", r.doc)]
+    )
+    assert [commands_text(n) for n in (0, 1, 2)] == ["0 commands", "1 command", "2 commands"]

@@ -85,6 +85,11 @@ def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:
     return out
 
 
+def commands_text(n: int) -> str:
+    """'1 command', '2 commands'."""
+    return f"{n} command" + ("" if n == 1 else "s")
+
+
 def passes_text(n: int) -> str:
     """'1 pass', '2 passes'."""
     return f"{n} pass" + ("" if n == 1 else "es")
@@ -249,7 +254,7 @@ def summary_markdown(
             fewest = "provably the fewest" if doc.get("provably_fewest") else "not proven fewest"
             fewest = f"{fewest}; {bound}"
             out.append(
-                f"- {doc['n_commands']} commands ({fewest}) to "
+                f"- {commands_text(doc['n_commands'])} ({fewest}) to "
                 f"({', '.join(f'{v:g}' for v in doc['target'])})"
                 f" mm, tool point error {doc['error_mm']:.4f} mm; {clearance}."
             )
@@ -257,7 +262,7 @@ def summary_markdown(
         elif doc["task"] == "trace":
             cov = doc["coverage"]
             out.append(
-                f"- {doc['n_commands']} commands in {passes_text(len(doc['passes']))}; "
+                f"- {commands_text(doc['n_commands'])} in {passes_text(len(doc['passes']))}; "
                 f"{cov['covered_mm']:.2f} of {cov['reachable_mm']:.2f} mm reachable covered "
                 f"({100 * cov['of_curve']:.1f} % of the {cov['curve_mm']:.2f} mm curve); largest "
                 f"deviation {doc['max_deviation_mm']:.4f} mm (bound "
@@ -269,7 +274,7 @@ def summary_markdown(
             order = " → ".join(str(i) for i in doc["order"])
             errors = ", ".join(f"{v['error_mm']:.4f}" for v in doc["visits"])
             out.append(
-                f"- order {order}: {doc['n_commands']} commands (bound "
+                f"- order {order}: {commands_text(doc['n_commands'])} (bound "
                 f"{doc['goal_states_bound_commands']} for this order and its goal states; "
                 f"{_bound_words(doc)}); weld errors {errors} mm in visiting order; {clearance}."
             )

@@ -115,7 +115,9 @@ class Result:
 
     def title(self) -> str:
         name = f" ({self.path.name})" if self.path is not None else ""
-        return f"{self.task}: {self.n_commands} commands{name}"
+        from armpath.report import commands_text
+
+        return f"{self.task}: {commands_text(self.n_commands)}{name}"
 
     def to_json(self) -> str:
         """The JSON document, as the CLI writes it."""

@@ -59,6 +59,7 @@ from armpath.ik.target import (
     rule_tolerances,
 )
 from armpath.planning.choices import Objective, VisitOrder
+from armpath.report import commands_text
 
 if TYPE_CHECKING:
     from armpath.export import OutputFolder
@@ -182,7 +183,7 @@ def _write_reach(
 
     write_reach_files(folder, stem, result, arm, scene)
     title = (
-        f"reach {_fmt(result.target_mm, 0)} mm: {result.n_commands} commands, "
+        f"reach {_fmt(result.target_mm, 0)} mm: {commands_text(result.n_commands)}, "
         f"error {result.error_mm:.4f} mm"
     )
     plot_motion_3d(
@@ -421,7 +422,7 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     table.add_row("method", str(doc["method"]))
     table.add_row(
         "objectives",
-        f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
+        f"{commands_text(m['commands'])}, tool path {m['tip_path_mm']:.1f} mm, "
         f"energy (joint travel, weighted) {m['energy_deg']:.1f} {_travel_unit(doc)} "
         f"(objective: {doc['objective']})",
     )
@@ -472,7 +473,7 @@ def _emit_plan(
         from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
         write_sequence_files(folder, stem, doc, arm, plan.sequence)
-        title = f"{stem}: {plan.sequence.n_commands} commands ({plan.method})"
+        title = f"{stem}: {commands_text(plan.sequence.n_commands)} ({plan.method})"
         plot_motion_3d(folder.file(f"{stem}_motion.png"), arm, scene, plan.sequence, target, title)
         plot_joint_angles(folder.file(f"{stem}_joints.png"), plan.sequence, title)
         if animate:
@@ -646,7 +647,7 @@ def _tour_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     m = doc["metrics"]
     table.add_row(
         "objectives",
-        f"{m['commands']} commands, tool path {m['tip_path_mm']:.1f} mm, "
+        f"{commands_text(m['commands'])}, tool path {m['tip_path_mm']:.1f} mm, "
         f"joint travel {m['energy_deg']:.1f} {_travel_unit(doc)}",
     )
     table.add_row("scene", _scene_text(doc["scene"]["name"], doc["wall_thickness"]))
@@ -665,7 +666,10 @@ def _write_tour(
     from armpath.viz.figures import plot_joint_angles, plot_motion_3d
 
     write_sequence_files(folder, "spotweld", doc, arm, result.sequence)
-    title = f"spot welds: {result.n_commands} commands, largest error {result.max_error_mm:.4f} mm"
+    title = (
+        f"spot welds: {commands_text(result.n_commands)}, largest error "
+        f"{result.max_error_mm:.4f} mm"
+    )
     targets = np.array(doc["targets"])  # labelled 1..N as listed in the scene
     plot_motion_3d(folder.file("spotweld_motion.png"), arm, scene, result.sequence, targets, title)
     plot_joint_angles(
@@ -851,7 +855,7 @@ def _write_trace(
     write_sequence_files(folder, "trace", doc, arm, result.sequence)
     curve = result.curve
     title = (
-        f"trace: {result.n_commands} commands, {passes_text(len(result.passes))}, "
+        f"trace: {commands_text(result.n_commands)}, {passes_text(len(result.passes))}, "
         f"largest deviation {result.max_deviation_mm:.3f} mm"
     )
     unreachable = result.reachability.unreachable
