@@ -198,6 +198,12 @@ def test_a_result_is_read_from_and_saved_to_paths_of_files_only(seed_reach, tmp_
             call()
     assert not (tmp_path / "out").exists()
     assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["deeper"]
+    # a result cut short says where its JSON breaks off (the message stopped at "starting at")
+    cut = tmp_path / "cut.json"
+    text = saved.read_text()
+    cut.write_text(text[: text.index('"task"') + 4])
+    with pytest.raises(InvalidInputError, match=re.escape("line 2 column 3 (char 4)")):
+        armpath.load_result(cut)
 
 
 def test_poses_in_every_form_agree():

@@ -357,7 +357,7 @@ def load_result(path: str | Path, scene: Scene | str | Path | None = None) -> Re
     except UnicodeDecodeError:
         raise InvalidInputError(f"result file {p} is not UTF-8 text (not a result)") from None
     except json.JSONDecodeError as exc:
-        raise InvalidInputError(f"result file {p} is not valid JSON: {exc.msg}") from None
+        raise InvalidInputError(f"result file {p} is not valid JSON: {exc}") from None
     if not isinstance(doc, dict) or doc.get("task") not in RESULT_TASKS:
         raise InvalidInputError(
             f"result file {p}: expected an armpath result with task one of {RESULT_TASKS}"
