@@ -550,6 +550,20 @@ def test_a_result_whose_scene_is_not_found_still_exports(tmp_path):
     assert r.returncode == 1 and "scene 'cell 7', which is not found here" in line
 
 
+def test_animate_says_when_it_replaces_a_gif(tmp_path):
+    """``armpath animate RESULT`` writes RESULT's name .gif by default; over a run's own GIF it
+    replaced it silently. It now says so, and says nothing of the kind the first time."""
+    r = run("plan", "--to", "2", "-90", "0", "0", "-90", "0", "--out", "res", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    said = []
+    for _ in range(2):
+        r = run("animate", "res/plan.json", "--frames", "2", cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
+        said.append(" ".join(r.stdout.split()))
+    assert said[0].startswith("wrote res/plan.gif (") and "replacing" not in said[0]
+    assert said[1].endswith("frames, replacing the file that was there)"), said[1]
+
+
 def test_a_run_whose_task_finds_no_plan_writes_the_others(tmp_path):
     """`armpath run` on a scene whose spot welds include one out of reach: the reach's result
     is written (and replays to its target by the independent seed FK), the report says which

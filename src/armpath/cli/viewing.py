@@ -142,7 +142,11 @@ def animate(
     result: Annotated[Path, typer.Argument(help="A result JSON (reach, trace, spotweld, plan).")],
     out: Annotated[
         Path | None,
-        typer.Option("--out", help="GIF or MP4 file to write. Default: the result's name, .gif."),
+        typer.Option(
+            "--out",
+            help="GIF or MP4 file to write. Default: the result's name, .gif (a file there, "
+            "such as the GIF a run wrote, is replaced, and the output says so).",
+        ),
     ] = None,
     scene_file: Annotated[
         Path | None,
@@ -168,8 +172,10 @@ def animate(
         if target.suffix in ANIMATION_FORMATS:  # (else write_animation names the formats)
             check_animation_rate(target.suffix, fps, frames, ("--fps", "--frames"))
         loaded = load_result(result, scene_file)
+        replaced = target.exists()
         with output_folder(target.parent, prune=False) as folder, progress("animating ..."):
             n = write_animation(
                 folder.file(target.name), loaded.animation(), fps=fps, max_frames=frames
             )
-        out_console.print(f"wrote {target} ({n} frames)", markup=False)
+        note = ", replacing the file that was there" if replaced else ""
+        out_console.print(f"wrote {target} ({n} frames{note})", markup=False)
