@@ -151,3 +151,19 @@ def test_one_command_is_said_in_the_singular():
         [("Task 1", r.doc)]
     )
     assert [commands_text(n) for n in (0, 1, 2)] == ["0 commands", "1 command", "2 commands"]
+
+
+def test_coverage_past_the_reachable_ends_is_said_as_all_of_it():
+    """The seed crack's pass runs a little past both ends of its reachable arc, and the tables
+    said "765.75 of 765.68 mm reachable covered", more than all; now "all 765.68 mm reachable
+    covered (the passes run 0.06 mm past its ends)". Less than all is said as before."""
+    from armpath.report import coverage_text
+
+    def cov(covered, reachable):
+        return {"covered_mm": covered, "reachable_mm": reachable}
+
+    assert coverage_text(cov(765.745439555, 765.68376038)) == (
+        "all 765.68 mm reachable covered (the passes run 0.06 mm past its ends)"
+    )
+    assert coverage_text(cov(572.18, 572.18)) == "all 572.18 mm reachable covered"
+    assert coverage_text(cov(500.0, 572.18)) == "500.00 of 572.18 mm reachable covered"

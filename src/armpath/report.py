@@ -90,6 +90,19 @@ def commands_text(n: int) -> str:
     return f"{n} command" + ("" if n == 1 else "s")
 
 
+def coverage_text(cov: dict[str, Any]) -> str:
+    """How much of a trace's reachable length its passes cover (``cov``: a result's
+    ``coverage``). Passes may run a little past the ends of the reachable arcs, which made
+    "765.75 of 765.68 mm reachable covered" read as more than all; that is said as all, and by
+    how much they run past."""
+    covered, reachable = cov["covered_mm"], cov["reachable_mm"]
+    if covered >= reachable - 0.005:
+        past = covered - reachable
+        beyond = f" (the passes run {past:.2f} mm past its ends)" if past >= 0.005 else ""
+        return f"all {reachable:.2f} mm reachable covered{beyond}"
+    return f"{covered:.2f} of {reachable:.2f} mm reachable covered"
+
+
 def passes_text(n: int) -> str:
     """'1 pass', '2 passes'."""
     return f"{n} pass" + ("" if n == 1 else "es")
@@ -263,8 +276,8 @@ def summary_markdown(
             cov = doc["coverage"]
             out.append(
                 f"- {commands_text(doc['n_commands'])} in {passes_text(len(doc['passes']))}; "
-                f"{cov['covered_mm']:.2f} of {cov['reachable_mm']:.2f} mm reachable covered "
-                f"({100 * cov['of_curve']:.1f} % of the {cov['curve_mm']:.2f} mm curve); largest "
+                f"{coverage_text(cov)} ({100 * cov['of_curve']:.1f} % of the "
+                f"{cov['curve_mm']:.2f} mm curve); largest "
                 f"deviation {doc['max_deviation_mm']:.4f} mm (bound "
                 f"{doc['max_deviation_bound_mm']:.4f} mm); {_bound_words(doc)}; {clearance}."
             )

@@ -59,7 +59,7 @@ from armpath.ik.target import (
     rule_tolerances,
 )
 from armpath.planning.choices import Objective, VisitOrder
-from armpath.report import commands_text
+from armpath.report import commands_text, coverage_text
 
 if TYPE_CHECKING:
     from armpath.export import OutputFolder
@@ -802,8 +802,7 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     cov = doc["coverage"]
     table.add_row(
         "covered",
-        f"{cov['covered_mm']:.2f} mm of {cov['reachable_mm']:.2f} mm reachable "
-        f"({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
+        f"{coverage_text(cov)} ({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
     )
     for u in doc.get("not_traced", []):
         table.add_row(
@@ -1242,8 +1241,7 @@ def _print_run(
         out_console.print(
             "; ".join(
                 [
-                    f"Task 2: {cov['covered_mm']:.2f} mm of the {cov['reachable_mm']:.2f} mm "
-                    "reachable covered",
+                    f"Task 2: {coverage_text(cov)}",
                     "error column = largest deviation of the continuous tool path",
                     *(f"{what} {at} mm ({why})" for what, at, why in uncovered_arcs(trace_doc)),
                 ]
