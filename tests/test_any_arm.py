@@ -827,24 +827,23 @@ def test_a_reach_taken_at_the_nearest_point_is_taken_there_once(tmp_path, monkey
     assert np.linalg.norm(calls[1] - [259.8076, 150.0, 0.0]) <= 1e-4
 
 
-def test_a_target_a_hair_above_a_table_is_reached_and_planned_to(tmp_path):
-    """A KUKA-like arm over a table (its top at z = 400 mm) found no goal state for targets
-    0.01 to about 0.9 mm above the top ("no configuration ... keeps the links 2 mm clear"),
-    though a target on the top was reached and a state 0.025 mm from the target was clear: a
-    target off the surface held the tool's own link to the planner's buffer against it. The
-    surfaces within the planner's retreat of the target now count as the one the tool meets
-    head-on. Reached and planned to, each end state replayed on the textbook D-H product (the
-    scene's base and tool): within the tolerance of the target, the tool point not in the table."""
-    import armpath
+KR6 = {  # a KUKA-like D-H table (standard convention, mm, deg)
+    "a": [25, 455, 35, 0, 0, 0],
+    "alpha": [-90, 0, -90, 90, -90, 0],
+    "d": [400, 0, 0, 420, 0, 80],
+    "offset": [0, -90, 0, 0, 0, 0],
+}
 
-    D = np.pi / 180
-    a, alpha, d = [25, 455, 35, 0, 0, 0], [-90, 0, -90, 90, -90, 0], [400, 0, 0, 420, 0, 80]
-    offset = [0, -90, 0, 0, 0, 0]
+
+def _kr6_over_a_table(tmp_path):
+    """The KUKA-like arm on a pedestal (base 300 mm up, turned 90 deg), a 180 mm tool of radius
+    4 mm, beside a table whose top is at z = 400 mm; and its tool point by the textbook D-H
+    product (``q`` rad)."""
     limits = [[-170, 170], [-190, 45], [-120, 156], [-185, 185], [-120, 120], [-350, 350]]
     (tmp_path / "kr6.json").write_text(json.dumps({
         "name": "kr6like", "convention": "standard", "units": {"length": "mm", "angle": "deg"},
         "links": [{"a": x, "alpha": y, "d": z, "offset": o, "limits": lim}
-                  for x, y, z, o, lim in zip(a, alpha, d, offset, limits, strict=True)],
+                  for x, y, z, o, lim in zip(*KR6.values(), limits, strict=True)],
         "link_radii_mm": [80, 70, 60, 50, 40, 30, 10],
     }))  # fmt: skip
     scene = scene_from_dict({
@@ -857,11 +856,27 @@ def test_a_target_a_hair_above_a_table_is_reached_and_planned_to(tmp_path):
             {"type": "box", "name": "table", "center": [0, 650, 200], "size": [600, 400, 400]}],
     })  # fmt: skip
     base = np.array([[0.0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 1, 300], [0, 0, 0, 1]])
+    D = np.pi / 180
 
-    def tool_point(q_rad):
-        T = base @ idh.dh_pose(a, np.array(alpha) * D, d, q_rad, offset=np.array(offset) * D)
-        return (T @ np.array([0.0, 0.0, 180.0, 1.0]))[:3]
+    def tool_point(q_rad, axis=False):
+        a, alpha, d, offset = KR6["a"], np.array(KR6["alpha"]) * D, KR6["d"], KR6["offset"]
+        T = base @ idh.dh_pose(a, alpha, d, q_rad, offset=np.array(offset) * D)
+        return T[:3, 2] if axis else (T @ np.array([0.0, 0.0, 180.0, 1.0]))[:3]
 
+    return scene, tool_point
+
+
+def test_a_target_a_hair_above_a_table_is_reached_and_planned_to(tmp_path):
+    """A KUKA-like arm over a table (its top at z = 400 mm) found no goal state for targets
+    0.01 to about 0.9 mm above the top ("no configuration ... keeps the links 2 mm clear"),
+    though a target on the top was reached and a state 0.025 mm from the target was clear: a
+    target off the surface held the tool's own link to the planner's buffer against it. The
+    surfaces within the planner's retreat of the target now count as the one the tool meets
+    head-on. Reached and planned to, each end state replayed on the textbook D-H product (the
+    scene's base and tool): within the tolerance of the target, the tool point not in the table."""
+    import armpath
+
+    scene, tool_point = _kr6_over_a_table(tmp_path)
     target = np.array([0.0, 650.0, 400.05])
     for plan in (armpath.reach, lambda *x, **k: armpath.plan(*x, to_mm=target, **k)):
         r = plan(None, target, scene=scene) if plan is armpath.reach else plan(None, scene=scene)
@@ -869,3 +884,27 @@ def test_a_target_a_hair_above_a_table_is_reached_and_planned_to(tmp_path):
         assert np.linalg.norm(end - target) <= 0.05
         assert end[2] >= 400.0
         assert r.doc["clearance"]["certified"]
+
+
+def test_a_weld_reached_only_with_the_tool_far_off_its_axis_rule_says_so(tmp_path):
+    """The KUKA-like arm reaches a weld on the table top, but not with its tool within 10 deg
+    of the surface normal: the tour said the weld was "out of reach within the joint limits:
+    the nearest reachable point ... is 0.000 mm away", as reach already did not. It now names
+    the rule, as reach does. With 60 deg it welds there: by the textbook D-H product, its tool
+    point within the tolerance and its tool axis within the cone, at the angle the result says."""
+    import armpath
+    from armpath.errors import UnreachableError
+
+    scene, tool_point = _kr6_over_a_table(tmp_path)
+    weld = [0.0, 650.0, 400.0]
+    words = "is within reach but no configuration found puts the tool there with its axis_cone"
+    with pytest.raises(UnreachableError, match=words):
+        armpath.spotweld(None, [weld], scene=scene, tool_axis="normal", axis_tolerance_deg=10)
+    r = armpath.spotweld(
+        None, [weld], scene=scene, tool_axis="normal", axis_tolerance_deg=60, bound=False
+    )
+    q = np.radians(r.states_deg[r.doc["visits"][0]["after_command"]])
+    assert np.linalg.norm(tool_point(q) - weld) <= 0.05 and tool_point(q)[2] >= 400.0
+    into_the_table = np.degrees(np.arccos(-tool_point(q, axis=True)[2]))
+    assert into_the_table <= 60.0
+    assert into_the_table == pytest.approx(r.doc["visits"][0]["tool_orientation"]["angle_deg"])

@@ -130,6 +130,27 @@ def _out_of_reach(
     )
 
 
+def _no_member(
+    arm: SerialArm, target: ToolTarget, dist: float, tip: FloatArray, tolerance: float
+) -> UnreachableError:
+    """The error of a target the family sampler found no member for: out of reach (the nearest
+    reachable point ``tip``, ``dist`` away, beyond the ``tolerance``), within reach but not with
+    the target's tool orientation rule, or not found reaching it."""
+    if dist > tolerance:
+        return _out_of_reach(arm, target, dist, tip)
+    unit = arm.length_unit
+    where = ", ".join(f"{v:g}" for v in target.position)
+    if target.orientation is not None:
+        return UnreachableError(
+            f"target ({where}) {unit} is within reach but no configuration found puts the "
+            f"tool there with its {target.orientation.describe()['type']} rule kept"
+        )
+    return UnreachableError(
+        f"target ({where}) {unit}: no configuration within the limits found reaching it "
+        f"(the nearest point found is {dist:.4f} {unit} away)"
+    )
+
+
 def _limit_bounds(arm: SerialArm) -> list[tuple[float | None, float | None]]:
     """The joint limits as scipy's bounds (None where a joint is unlimited)."""
     return [
@@ -557,15 +578,7 @@ def reach_any_arm(
                 ) from None
             method = f"{near.bound.method}; at the nearest point reached, {dist:.2g} {unit} off"
             return replace(near, bound=replace(near.bound, method=method))
-        if target.orientation is not None:
-            raise UnreachableError(
-                f"target ({where}) {unit} is within reach but no configuration found puts the "
-                f"tool there with its {target.orientation.describe()['type']} rule kept"
-            )
-        raise UnreachableError(
-            f"target ({where}) {unit}: no configuration within the limits found reaching it "
-            f"(the nearest point found is {dist:.4f} {unit} away)"
-        )
+        raise _no_member(arm, target, dist, tip, tolerance)
     bound = generic_bound(arm, target, start, tolerance, samples)
     check_size(
         bound.commands,
@@ -726,7 +739,7 @@ def generic_goal_states(
         samples = GenericFamily(arm, target).samples(near=s_q, rng=gen)
     where = ", ".join(f"{v:g}" for v in target.position)
     if samples.shape[0] == 0:
-        raise _out_of_reach(arm, target, *nearest_reachable(arm, target, gen))
+        raise _no_member(arm, target, *nearest_reachable(arm, target, gen), tolerance)
     samples = shift_into_limits(arm, samples, s_q)
     # a joint that cannot cross its own self-collision ranges reaches only the copies of its
     # values on the start's side of them (the UR5's elbow): measured there, or not at all
