@@ -360,8 +360,9 @@ def _readout_tip(text: str) -> np.ndarray:
     CHROMIUM is None, reason="needs Debian's chromium (the README test command installs it)"
 )
 def test_viewer_in_headless_chromium(seed_run, tmp_path):
-    """Open the viewer as a user would: drag the first joint's slider with the mouse, read the
-    fingertip readout, step the replay, and take a screenshot."""
+    """Open the viewer as a user would: read the page's title, drag the first joint's slider
+    with the mouse, read the fingertip readout, step the replay, and take a screenshot; the
+    exported replay carries the same title."""
     sync_api = pytest.importorskip("playwright.sync_api")
     out, _ = seed_run
     port = free_port()
@@ -396,6 +397,9 @@ def test_viewer_in_headless_chromium(seed_run, tmp_path):
                     assert time.time() < deadline and server.poll() is None, server.stderr.read()
                     time.sleep(0.5)
             page.wait_for_selector("text=Fingertip", timeout=60000)
+            result = load_result(out / "reach.json")
+            title = f"armpath - reach: {result.n_commands} commands (reach.json)"
+            page.wait_for_function("t => document.title === t", arg=title, timeout=15000)
             start = _readout_tip(page.inner_text("body"))
             assert np.allclose(start, independent.points([0, -90, 0, 0, -90, 0])[-1], atol=0.01)
             # Drag θ1's thumb to about three quarters of its track.
@@ -418,7 +422,6 @@ def test_viewer_in_headless_chromium(seed_run, tmp_path):
             )
             assert np.allclose(_readout_tip(page.inner_text("body")), expected, atol=0.006)
             # Step the replay of reach.json three commands forward.
-            result = load_result(out / "reach.json")
             for _ in range(3):
                 page.get_by_role("button", name="step ▶").click()
             deg = result.sequence.states()[3] / 10.0
@@ -436,6 +439,7 @@ def test_viewer_in_headless_chromium(seed_run, tmp_path):
             html.write_text(replay_html(result, fps=10.0, max_frames=64))
             offline = browser.new_page(viewport={"width": 1280, "height": 800})
             offline.goto(html.as_uri())
+            assert offline.title() == title
             replay_shot = tmp_path / "replay.png"
             deadline = time.time() + 90  # decoding and software rendering are slow under load
             while True:

@@ -1,10 +1,13 @@
 """The interactive viewer: a viser server showing the arm in its scene.
 
 The page has one slider per joint (steps of one tick of the arm's lattice, 0.1 deg for the
-seed arm, within the joint's limits), a live readout of
-the fingertip position and the clearance (the violating parts turn red), a target-point input
-that runs the reach planner from the current pose, and a replay of any result (play, pause,
-step, timeline) with the fingertip's path and the result's curve and targets drawn.
+seed arm, within the joint's limits), a live readout of the fingertip position and the clearance
+(the violating parts turn red), a target-point input that runs the reach planner from the
+current pose (starting at the target of a loaded reach result), and a replay of any result
+(play, pause, step, timeline) with the fingertip's path and the result's curve and targets
+drawn. Each link is drawn at its own capsule radius (at least a small share of the arm's
+length, so thin ones stay visible), each joint as a sphere a little larger than the links
+meeting there, and the base's axes at the arm's base; the page's title names the replay shown.
 
 The scene is shown in metres (viser's unit); every number on the page is in mm and deg.
 """
@@ -13,14 +16,18 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import html
 import io
 import ipaddress
+import json
 import logging
 import re
 import socket
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,7 +41,10 @@ from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.results import Result
 from armpath.scenes import Scene
 from armpath.trajectory.quantize import joint_ticks
-from armpath.viewer.meshes import TriangleMesh, obstacle_mesh
+from armpath.viewer.meshes import TriangleMesh, obstacle_mesh, sphere_mesh
+
+if TYPE_CHECKING:
+    from viser import LineSegmentsHandle
 
 FloatArray = NDArray[np.float64]
 logger = logging.getLogger(__name__)
@@ -51,6 +61,20 @@ OBSTACLE_COLOR = (210, 180, 140)
 PATH_COLOR = (220, 60, 60)
 CURVE_COLOR = (255, 140, 0)
 TARGET_COLOR = (30, 160, 60)
+JOINT_COLOR = (30, 30, 30)
+#: Least radius a link is drawn with, as a fraction of the arm's length along its links at home,
+#: so thin links stay visible (a 3 mm tool, the seed arm's links of radius 0): 1.25 % draws the
+#: seed arm's 715 mm of links 18 mm thick.
+MIN_DRAWN_RADIUS_OF_LENGTH = 0.0125
+#: A joint marker's radius over the largest drawn radius of the links meeting at it.
+JOINT_MARKER_SCALE = 1.15
+#: Length and radius of the "/base" axes, as fractions of the arm's length along its links at
+#: home (the seed arm's: 107 mm and 2.9 mm), so they reach out of the base's joint marker.
+BASE_AXES_OF_LENGTH = 0.15
+BASE_AXES_RADIUS_OF_LENGTH = 0.004
+#: Where the "Reach a point" panel starts when no reach result is loaded (mm): the seed arm's
+#: reach target.
+DEFAULT_REACH_TARGET_MM = (300.0, -170.0, 15.0)
 #: Flags for Debian's Chromium run headless on a machine without outside network (the browser
 #: test and docs/make_screenshots.py): no sandbox as root, no GPU, no background connections.
 HEADLESS_CHROMIUM_ARGS = (
@@ -73,6 +97,75 @@ class ViewerState:
     clearance_mm: float = float("inf")
     closest: str = ""
     colliding_parts: tuple[str, ...] = ()
+
+
+def drawn_link_radii(arm: SerialArm, links: Sequence[str], length: float) -> FloatArray:
+    """The radius (model's length unit) each of ``links`` (names of ``arm``'s links, one per
+    drawn segment) is drawn with: the link's own capsule radius, at least
+    :data:`MIN_DRAWN_RADIUS_OF_LENGTH` times ``length`` (the arm's length along its links)."""
+    radius_of = {lk.name: lk.radius for lk in arm.links}
+    least = MIN_DRAWN_RADIUS_OF_LENGTH * length
+    return np.array([max(radius_of[name], least) for name in links], dtype=np.float64)
+
+
+def joint_marker_radii(arm: SerialArm, length: float) -> FloatArray:
+    """The radius (model's length unit) of the marker drawn at each of ``arm``'s landmarks:
+    :data:`JOINT_MARKER_SCALE` times the largest drawn radius (:func:`drawn_link_radii`) of
+    the links of non-zero length meeting at its point, or times the least drawn radius where
+    none does."""
+    analysis = link_analysis(arm)
+    point_of = analysis.point_of
+    least = MIN_DRAWN_RADIUS_OF_LENGTH * length
+    radii = np.full(len(arm.landmarks), least)
+    for lk, zero in zip(arm.links, analysis.degenerate, strict=True):
+        if zero:
+            continue
+        drawn = max(lk.radius, least)
+        at = (point_of == point_of[lk.start]) | (point_of == point_of[lk.end])
+        radii[at] = np.maximum(radii[at], drawn)
+    return JOINT_MARKER_SCALE * radii
+
+
+def base_frame_pose(arm: SerialArm) -> tuple[FloatArray, FloatArray]:
+    """Where the "/base" axes are drawn: the rotation (quaternion ``wxyz``) and the position
+    (viser's metres, from the model's unit as the rest of the page) of ``arm.T_world_base``."""
+    import viser.transforms as vtf
+
+    T_world_base = np.asarray(arm.T_world_base, dtype=np.float64)
+    wxyz = np.asarray(vtf.SO3.from_matrix(T_world_base[:3, :3]).wxyz, dtype=np.float64)
+    return wxyz, T_world_base[:3, 3] * MM
+
+
+def commands_text(n_commands: int) -> str:
+    """``n_commands`` with the noun: "1 command", "0 commands", "175 commands"."""
+    return f"{n_commands} command" + ("" if n_commands == 1 else "s")
+
+
+def result_title(result: Result) -> str:
+    """What the replay of ``result`` is called on the page: its task and number of commands,
+    and the file it came from ("trace: 175 commands (trace.json)")."""
+    name = f" ({result.path.name})" if result.path is not None else ""
+    return f"{result.task}: {commands_text(result.n_commands)}{name}"
+
+
+def tab_title(shown: str) -> str:
+    """The title of the page (its browser tab) while ``shown`` is on it."""
+    return f"armpath - {shown}"
+
+
+def with_title(page_html: str, title: str) -> str:
+    """``page_html`` with the text of its (first) ``<title>`` element replaced by ``title``."""
+    element = f"<title>{html.escape(title, quote=False)}</title>"
+    return re.sub(r"<title>[^<]*</title>", lambda _m: element, page_html, count=1)
+
+
+def reach_target_start_mm(result: Result | None) -> tuple[float, float, float]:
+    """Where the "Reach a point" panel starts (mm): the target of ``result`` when it is a
+    reach, else :data:`DEFAULT_REACH_TARGET_MM`."""
+    if result is not None and result.task == "reach" and len(result.targets_mm):
+        x, y, z = (float(v) for v in result.targets_mm[0])
+        return x, y, z
+    return DEFAULT_REACH_TARGET_MM
 
 
 class ArmViewer:
@@ -137,6 +230,9 @@ class ArmViewer:
         ]
         names = [p.name for p in self._parts] + [lk.name for lk in self._base_links]
         links = [p.link for p in self._parts] + [lk.name for lk in self._base_links]
+        #: radius each drawn segment is drawn with, and each landmark's marker (model's unit)
+        self._drawn_radii = drawn_link_radii(arm, links, self._reach_mm)
+        self._marker_radii = joint_marker_radii(arm, self._reach_mm)
         # per pair, the drawn segments it turns red when broken: the part against an obstacle,
         # every segment of both links of a self pair
         self._pair_drawn = [
@@ -146,7 +242,8 @@ class ArmViewer:
             for pair in self._pairs
         ]
         self._draw_scene()
-        self._build_gui()
+        self._build_gui(reach_target_start_mm(result))
+        self.page_title = tab_title(f"{arm.name} in {scene.name}")
         self._replay: CommandSequence | None = None
         self._playing = False
         self._player: threading.Thread | None = None
@@ -198,21 +295,36 @@ class ArmViewer:
                 opacity=0.35 if is_plane else 0.6,
                 side="double",
             )
-        scene.add_frame("/base", axes_length=0.1, axes_radius=0.003)
-        thickness = max(2.0 * max((p.radius for p in self._parts), default=0.0), 18.0) * MM
-        n = len(self._parts) + len(self._base_links)
-        self._links = scene.add_line_segments(
-            "/arm/links",
-            np.zeros((n, 2, 3)),
-            np.tile(np.array(LINK_COLOR, dtype=np.uint8), (n, 2, 1)),
-            thickness=thickness,
+        wxyz, position_m = base_frame_pose(self.arm)
+        self._base_frame = scene.add_frame(
+            "/base",
+            axes_length=BASE_AXES_OF_LENGTH * self._reach_mm * MM,
+            axes_radius=BASE_AXES_RADIUS_OF_LENGTH * self._reach_mm * MM,
+            wxyz=wxyz,
+            position=position_m,
         )
-        self._joints = scene.add_point_cloud(
+        # one node of line segments per drawn radius (viser draws a node at one thickness)
+        self._link_groups: list[tuple[LineSegmentsHandle, NDArray[np.intp]]] = []
+        for k, radius in enumerate(np.unique(self._drawn_radii)):
+            members = np.flatnonzero(self._drawn_radii == radius)
+            handle = scene.add_line_segments(
+                f"/arm/links/{k}",
+                np.zeros((members.size, 2, 3)),
+                np.tile(np.array(LINK_COLOR, dtype=np.uint8), (members.size, 2, 1)),
+                thickness=2.0 * float(radius) * MM,
+            )
+            self._link_groups.append((handle, members))
+        n_landmarks = len(self.arm.landmarks)
+        unit_sphere = sphere_mesh(np.zeros(3), 1.0)
+        self._joints = scene.add_batched_meshes_simple(
             "/arm/joints",
-            np.zeros((len(self.arm.landmarks), 3)),
-            (30, 30, 30),
-            point_size=1.3 * thickness,
-            point_shape="circle",
+            unit_sphere[0],
+            unit_sphere[1],
+            batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n_landmarks, 1)),
+            batched_positions=np.zeros((n_landmarks, 3)),
+            batched_scales=self._marker_radii * MM,
+            batched_colors=JOINT_COLOR,
+            side="double",
         )
         self._tip = scene.add_icosphere("/arm/tip", radius=6 * MM, color=(0, 0, 0))
         self._path = scene.add_line_segments(
@@ -224,7 +336,7 @@ class ArmViewer:
 
     # --- gui -------------------------------------------------------------------------------
 
-    def _build_gui(self) -> None:
+    def _build_gui(self, target_mm: tuple[float, float, float]) -> None:
         gui = self.server.gui
         gui.configure_theme(control_width="large")
         grid = self.arm.lattice
@@ -253,7 +365,7 @@ class ArmViewer:
                 self.sliders.append(slider)
         self.readout = gui.add_markdown("")
         with gui.add_folder("Reach a point (mm)"):
-            self.target_input = gui.add_vector3("target", (300.0, -170.0, 15.0), step=1.0)
+            self.target_input = gui.add_vector3("target", target_mm, step=1.0)
             self.reach_button = gui.add_button("Plan reach from here")
             self.reach_status = gui.add_markdown("")
             self.reach_button.on_click(lambda _event: self._on_reach())
@@ -264,6 +376,9 @@ class ArmViewer:
             self.play_buttons = gui.add_button_group("", ("◀ step", "play", "pause", "step ▶"))
             self.play_buttons.on_click(lambda event: self._on_play_button(event.target.value))
             self.speed = gui.add_slider("commands / s", min=1, max=60, step=1, initial_value=15)
+        # viser (1.1) has no setting for the page's title and serves a page titled "Viser"; its
+        # HTML element inserts markup as given, so an image that fails to load sets the title.
+        self._title_setter = gui.add_html("")
 
     # --- state -----------------------------------------------------------------------------
 
@@ -298,10 +413,10 @@ class ArmViewer:
                 [np.stack([p0, p1], axis=1), np.array(base, dtype=np.float64).reshape(-1, 2, 3)]
             )
             with self.server.atomic():
-                if n_drawn:
-                    self._links.points = (segments * MM).astype(np.float32)
-                    self._links.colors = np.repeat(colors[:, None, :], 2, axis=1)
-                self._joints.points = (pts * MM).astype(np.float32)
+                for handle, members in self._link_groups:
+                    handle.points = (segments[members] * MM).astype(np.float32)
+                    handle.colors = np.repeat(colors[members, None, :], 2, axis=1)
+                self._joints.batched_positions = (pts * MM).astype(np.float32)
                 self._tip.position = tuple(tip * MM)
                 self._updating = True
                 try:
@@ -359,12 +474,12 @@ class ArmViewer:
         finally:
             self.reach_button.disabled = False
         self.reach_status.content = (
-            f"{result.n_commands} commands, error {result.error_mm:.4f} mm, "
+            f"{commands_text(result.n_commands)}, error {result.error_mm:.4f} mm, "
             f"min clearance {result.clearance.min_clearance:.2f} mm"
         )
         self._start_replay(
             result.sequence,
-            f"reach {np.round(target, 1).tolist()} mm: {result.n_commands} commands",
+            f"reach {np.round(target, 1).tolist()} mm: {commands_text(result.n_commands)}",
         )
 
     # --- replay ----------------------------------------------------------------------------
@@ -380,7 +495,7 @@ class ArmViewer:
             self.server.scene.add_icosphere(
                 f"/replay/targets/{k}", radius=6 * MM, color=TARGET_COLOR, position=tuple(p * MM)
             )
-        self._start_replay(result.sequence, result.title())
+        self._start_replay(result.sequence, result_title(result))
 
     def _start_replay(self, seq: CommandSequence, title: str) -> None:
         self._playing = False
@@ -392,6 +507,7 @@ class ArmViewer:
         self.timeline.max = max(seq.n_commands, 1)
         self.timeline.value = 0  # type: ignore[misc]
         self.replay_info.content = f"**{title}**"
+        self.page_title = tab_title(title)
         self.show_command(0)
 
     def show_command(self, k: int) -> None:
@@ -440,6 +556,18 @@ class ArmViewer:
                 break
             self.show_command(k)
             time.sleep(1.0 / max(float(self.speed.value), 1.0))
+
+    @property
+    def page_title(self) -> str:
+        """The title of the page (its browser tab, :func:`tab_title`): "armpath - " and the
+        replay shown, or the arm and scene before any."""
+        return self._page_title
+
+    @page_title.setter
+    def page_title(self, title: str) -> None:
+        self._page_title = title
+        script = html.escape(f"document.title = {json.dumps(title)}", quote=True)
+        self._title_setter.content = f'<img src="data:," alt="" hidden onerror="{script}">'
 
     def stop(self) -> None:
         self._playing = False
@@ -566,6 +694,6 @@ def replay_html(
         for k in idx.astype(int):
             viewer.show_command(k)
             serializer.insert_sleep(1.0 / fps)
-        return str(serializer.as_html())
+        return with_title(str(serializer.as_html()), viewer.page_title)
     finally:
         viewer.stop()
