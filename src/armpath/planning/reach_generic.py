@@ -651,7 +651,18 @@ def reach_any_arm(
             f"{bound.commands + extra_commands} commands ({'; '.join(failures)})"
         )
     goals = generic_goal_states(arm, world, start, target, tolerance, samples=samples, rng=rng)
-    plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed), turn_copies=True)
+    try:
+        plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed), turn_copies=True)
+    except PlanningError as exc:
+        # the members with the joints that do not move the tool point held where they start
+        # can leave one goal state, whose motions may all fail (a tool tip 0.002 mm above a
+        # table: no motion onto it proven clear); the whole family's goal states, as
+        # plan_to_point takes them
+        try:
+            goals = generic_goal_states(arm, world, start, target, tolerance, rng=rng)
+            plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed), turn_copies=True)
+        except PlanningError:
+            raise exc from None
     end = plan.sequence.states()[-1]
     if grid.commands_needed_many((end - start)[None])[0] < bound.commands:
         # the bound is the least found over samples, not proven: a plan's end state that
