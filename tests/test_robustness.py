@@ -10,6 +10,7 @@ import json
 import re
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -898,3 +899,13 @@ def test_a_base_standing_inside_an_obstacle_is_pointed_out(tmp_path):
             ]
         else:
             assert notes == []
+        assert "ArmpathWarning" not in r.stderr  # said once, as the CLI says warnings
+        # from Python the same note is a warning (it was said by the CLI only)
+        import armpath
+        from armpath.errors import ArmpathWarning
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            armpath.reach(None, [400, 100, 500], scene=scene)
+        said = [str(w.message) for w in caught if issubclass(w.category, ArmpathWarning)]
+        assert said == ([notes[0].removeprefix("warning: ")] if warned else [])

@@ -18,6 +18,7 @@ import contextlib
 import math
 import numbers
 import reprlib
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -26,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_point_mm, time_limit
-from armpath.errors import InvalidInputError
+from armpath.errors import ArmpathWarning, InvalidInputError
 from armpath.ik.target import refuse_alone, rule_tolerances
 from armpath.model.serial_arm import SerialArm
 from armpath.results import Result, load_result
@@ -169,13 +170,19 @@ def arm_and_scene(
     given, else the seed scene for the seed arm and an empty one for any other arm; the arm
     given (a model name or file is placed where the scene's ``[arm]`` stands it), else the
     scene's arm. An arm in metres is taken in millimetres (:meth:`SerialArm.in_mm`), the unit
-    of every target, tolerance and obstacle."""
-    from armpath.scenes.arm import scene_arm
+    of every target, tolerance and obstacle. An arm whose base stands inside an obstacle is
+    pointed out with an :class:`~armpath.errors.ArmpathWarning` (a warning, not an error)."""
+    from armpath.scenes.arm import buried_base_note, scene_arm
 
     the_scene = default_scene(arm) if scene is None else load_scene(scene)
     if isinstance(arm, SerialArm):
-        return arm.in_mm(), the_scene
-    return scene_arm(the_scene, None if arm is None else str(arm), tip_link), the_scene
+        the_arm = arm.in_mm()
+    else:
+        the_arm = scene_arm(the_scene, None if arm is None else str(arm), tip_link)
+    note = buried_base_note(the_arm, the_scene)
+    if note is not None:
+        warnings.warn(note, ArmpathWarning, stacklevel=3)
+    return the_arm, the_scene
 
 
 @contextlib.contextmanager

@@ -45,3 +45,8 @@ class TimeLimitError(ArmpathError):
 
 class OutputError(ArmpathError):
     """Results could not be written (for example an unwritable output folder)."""
+
+
+class ArmpathWarning(UserWarning):
+    """Something about the input that is allowed but probably not meant (for example an arm's
+    base standing inside an obstacle); the CLI prints it as one ``warning:`` line."""

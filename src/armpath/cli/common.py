@@ -8,6 +8,7 @@ import math
 import re
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Generic, NoReturn, TypeVar
@@ -19,7 +20,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from armpath.budget import MAX_COORDINATE_MM, MAX_PERIOD_S, check_time_limit_value, time_limit
-from armpath.errors import ArmpathError, InvalidInputError
+from armpath.errors import ArmpathError, ArmpathWarning, InvalidInputError
 from armpath.geometry import WallThickness
 from armpath.model.catalog import BUILTIN_MODELS
 from armpath.planning.choices import Objective
@@ -375,7 +376,9 @@ def task_setup(
     scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
     if wall:
         scene = scene.with_wall_thickness(wall)
-    arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
+    with warnings.catch_warnings():  # said below as the CLI says warnings
+        warnings.simplefilter("ignore", ArmpathWarning)
+        arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
     if link_radius_mm is not None:
         arm = arm.with_link_radii(_checked_link_radius(link_radius_mm))  # arms are in mm
     from armpath.scenes.arm import buried_base_note
