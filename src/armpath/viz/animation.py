@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import shutil
 import subprocess
 import textwrap
@@ -42,6 +43,15 @@ MAX_GIF_FPS = 50
 MAX_MP4_FPS = 120
 #: Most frames of one animation: each is held as a 640 x 560 image (1.4 MB) until written.
 MAX_ANIMATION_FRAMES = 1000
+#: How long a GIF shows its last frame (s) before the loop starts again, so the final pose can
+#: be seen rather than flashing for one frame.
+GIF_HOLD_LAST_S = 1.0
+#: Shortest motion a GIF shows (s, from the first frame to the last): a motion of few frames
+#: gets longer frames rather than being over before it can be followed.
+GIF_MIN_MOTION_S = 1.0
+#: Fewest states :func:`sequence_animation` samples of a motion of at least one command: a
+#: short sequence gets more instants a command, so it moves smoothly and lasts a while.
+MIN_SEQUENCE_STATES = 25
 
 
 def check_animation_rate(
@@ -106,7 +116,10 @@ def sequence_animation(
     substeps: int = 4,
 ) -> Animation:
     """The arm through every command of ``sequence`` (``substeps`` frames a command before
-    thinning) in its scene, with the targets and the curve drawn."""
+    thinning, more for a sequence that would have fewer than :data:`MIN_SEQUENCE_STATES`) in
+    its scene, with the targets and the curve drawn."""
+    if sequence.n_commands:
+        substeps = max(substeps, -(-(MIN_SEQUENCE_STATES - 1) // sequence.n_commands))
     q = sequence.sample_motion(substeps)
     steps = np.linspace(0.0, sequence.n_commands, q.shape[0])
     overlays: list[Overlay] = []
@@ -252,6 +265,11 @@ def write_animation(
     (:func:`animation_frames`; at most :data:`MAX_ANIMATION_FRAMES`, ``fps`` at most
     :data:`MAX_GIF_FPS` for a GIF); the fingertip's path so far is traced in red.
 
+    A GIF's frames last whole hundredths of a second: ``1/fps`` rounded to the nearest (15 fps:
+    70 ms), longer if the motion would last less than :data:`GIF_MIN_MOTION_S`, and the last
+    frame :data:`GIF_HOLD_LAST_S` more (:func:`gif_frame_durations_ms`). Every frame uses one
+    palette, made from the first and the last frame, so fixed things keep their colours.
+
     The still part (scene, axes, title, legend) is drawn once; each frame redraws only the arm,
     its path and the caption over it (so the arm is never hidden behind an obstacle)."""
     out = Path(path)
@@ -264,12 +282,69 @@ def write_animation(
     frames = animation_frames(anim, max_frames, dpi)
     images = render_frames(frames)
     if out.suffix == ".gif":
-        first, *rest = (Image.fromarray(rgba).convert("RGB") for rgba in images)
-        first.save(out, save_all=True, append_images=rest, duration=round(1000 / fps), loop=0)
+        _write_gif(out, images, gif_frame_durations_ms(len(images), fps))
     else:
         assert ffmpeg is not None
         _write_mp4(ffmpeg, out, images, fps)
     return frames.n_frames
+
+
+def gif_frame_durations_ms(n_frames: int, fps: float) -> list[int]:
+    """How long each of ``n_frames`` GIF frames lasts (ms) at ``fps``.
+
+    A GIF stores a frame's delay in whole hundredths of a second, so ``1/fps`` is rounded to
+    the nearest (half up; 15 fps: 70 ms, 14.3 frames a second); if the frames would move
+    for less than :data:`GIF_MIN_MOTION_S` each lasts long enough that they do not (rounded up
+    to a hundredth). The last frame lasts :data:`GIF_HOLD_LAST_S` longer: the final pose stays
+    before the loop starts again. One frame: only the hold.
+    """
+    if n_frames < 1:
+        raise InvalidInputError("nothing to animate: no frames")
+    frame_cs = max(1, int(100.0 / fps + 0.5))
+    if n_frames > 1:
+        frame_cs = max(frame_cs, math.ceil(100.0 * GIF_MIN_MOTION_S / (n_frames - 1) - 1e-9))
+    hold_cs = round(100.0 * GIF_HOLD_LAST_S)
+    return [10 * frame_cs] * (n_frames - 1) + [10 * (frame_cs + hold_cs)]
+
+
+#: Colours of a GIF's one palette (a GIF palette holds at most 256).
+_GIF_COLOURS = 256
+
+
+def gif_palette(images: Sequence[NDArray[np.uint8]]) -> Image.Image:
+    """One palette for every frame of a GIF: the :data:`_GIF_COLOURS` colours most frequent in
+    ``images`` (RGB or RGBA ``(height, width, 3 or 4)``; the alpha is ignored), as a ``P``
+    image for ``Image.quantize(palette=...)``.
+
+    The figures' lines, markers, text and panes are flat colours covering many pixels, so each
+    is in the palette exactly; the rarer anti-aliased edge shades go to their nearest colour.
+    """
+    rgb = np.concatenate([np.asarray(im)[..., :3].reshape(-1, 3) for im in images])
+    packed = (rgb[:, 0].astype(np.uint32) << 16) | (rgb[:, 1].astype(np.uint32) << 8) | rgb[:, 2]
+    colours, counts = np.unique(packed, return_counts=True)
+    kept = colours[np.argsort(-counts, kind="stable")[:_GIF_COLOURS]]
+    kept = np.resize(kept, _GIF_COLOURS)  # fewer colours: repeated, the palette is whole
+    table = np.stack([(kept >> 16) & 255, (kept >> 8) & 255, kept & 255], axis=1)
+    palette = Image.new("P", (1, 1))
+    palette.putpalette(table.astype(np.uint8).ravel().tobytes())
+    return palette
+
+
+def _write_gif(out: Path, images: list[NDArray[np.uint8]], durations_ms: list[int]) -> None:
+    """Write RGBA ``images`` as a looping GIF whose frames last ``durations_ms``.
+
+    One palette serves every frame (:func:`gif_palette` of the first and the last frame: the
+    still part, the arm at both ends, the whole tip path), and each frame is mapped to it
+    without dithering, so what does not move keeps its pixels. Quantized one by one, each frame
+    got its own palette and a fixed line changed colour between frames (a red path turned
+    brown).
+    """
+    palette = gif_palette([images[0], images[-1]])
+    first, *rest = (
+        Image.fromarray(rgba).convert("RGB").quantize(palette=palette, dither=Image.Dither.NONE)
+        for rgba in images
+    )
+    first.save(out, save_all=True, append_images=rest, duration=durations_ms, loop=0)
 
 
 def render_frames(frames: AnimationFrames) -> list[NDArray[np.uint8]]:

@@ -3,15 +3,20 @@ crack trace (3-D view of the passes, deviation along the curve)."""
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
+from matplotlib.transforms import offset_copy
+from mpl_toolkits.mplot3d import proj3d
 from mpl_toolkits.mplot3d.axes3d import Axes3D
 from numpy.typing import ArrayLike, NDArray
 
@@ -120,6 +125,12 @@ def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
     return np.asarray(corners)
 
 
+def count_text(n: int, noun: str, plural: str = "") -> str:
+    """``n`` and ``noun``, in the plural (``plural``, default ``noun + "s"``) unless ``n`` is 1:
+    "1 command", "0 commands", "2 passes"."""
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def tip_label(arm: SerialArm) -> str:
     """What the figures call the point the arm works with: the seed arm's fingertip (SPEC),
     any other arm's tool point."""
@@ -210,7 +221,9 @@ def plot_motion_3d(
     title: str = "",
 ) -> Figure:
     """3-D view: obstacles, the arm at start (grey) and end (blue), the continuous tip path;
-    several targets are numbered 1, 2, ... in the order given. Returns the figure written."""
+    several targets are numbered 1, 2, ... in the order given. The end arm's joints are named
+    where the names cover no other text, dot, link or target (:func:`_label_landmarks`).
+    Returns the figure written."""
     fig = Figure(figsize=(8, 7))
     ax = fig.add_subplot(projection="3d")
     assert isinstance(ax, Axes3D)
@@ -232,19 +245,123 @@ def plot_motion_3d(
         for k, p in enumerate(t if len(t) > 1 else []):
             ax.text(*p, f"{k + 1}", **POINT_LABEL, color="darkgreen")
         pts.append(t)
-    for name, p in zip(arm.landmark_names, states[-1], strict=True):
-        ax.text(*p, f" {name}", fontsize=9, color="tab:blue")
     set_equal_axes(ax, np.vstack(pts))
     draw_table(ax, scene)
     label_axes_3d(ax)
-    ax.set_title(title or f"{seq.n_commands} commands")
+    ax.set_title(title or count_text(seq.n_commands, "command"))
     ax.legend(loc="upper left", fontsize=9)
     ax.view_init(elev=22, azim=-60)
     fig.tight_layout()
+    numbered = np.asarray(target, dtype=float).reshape(-1, 3) if target is not None else None
+    _label_landmarks(ax, arm.landmark_names, states[-1], numbered, color="tab:blue")
     fig.savefig(path, dpi=110)
     return fig
 
 
+#: Where a joint's label may go, tried in order: horizontal and vertical alignment and the
+#: offset (points) from the joint; above right first, then below right, above left, below left.
+_LABEL_SPOTS = (
+    ("left", "bottom", 4.0, 3.0),
+    ("left", "top", 4.0, -3.0),
+    ("right", "bottom", -4.0, 3.0),
+    ("right", "top", -4.0, -3.0),
+)
+_LANDMARK_LABEL_PT = 9.0  # font size of the joint labels
+_STAR_HALF_PT = 4.0  # half the size of a target star (scatter s=60: about 8 points across)
+_DOT_HALF_PT = 2.0  # half the size of a joint's dot (markersize 4)
+_LINK_HALF_PT = 1.5  # half the width of a drawn link (linewidth 2.5)
+_SAME_SPOT_PX = 3.0  # joints drawn closer than this share one label ("J1/J2")
+
+
+def _label_landmarks(
+    ax: Axes3D,
+    names: Sequence[str],
+    points: np.ndarray,
+    targets: np.ndarray | None,
+    color: str,
+) -> None:
+    """Name the joints of one drawn arm (``points`` ``(L, 3)``, joined by its links) where the
+    names stay clear; call after the view and the layout are final.
+
+    Joints drawn at the same spot share one label ("J1/J2"). Each label goes to the first place
+    of :data:`_LABEL_SPOTS` where it covers no label already written, none of the arm's dots
+    and links, no target star and no target number (:data:`POINT_LABEL`); a label with no clear
+    place is left out (a crowded wrist: a UR5's J4, J4', J5, J6 and TCP lie within a few
+    pixels). The tool point is named first, then the joints from the base out.
+    """
+    fig = ax.get_figure()
+    assert isinstance(fig, Figure)
+    canvas = FigureCanvasAgg(fig)  # drawn once: the draw sets the projection (ax.M)
+    canvas.draw()  # type: ignore[no-untyped-call]
+    renderer = canvas.get_renderer()  # type: ignore[no-untyped-call]
+    pt = fig.dpi / 72.0  # pixels a point
+
+    def projected(xyz: np.ndarray) -> np.ndarray:
+        xs, ys, _ = proj3d.proj_transform(xyz[:, 0], xyz[:, 1], xyz[:, 2], ax.M)
+        return np.asarray(ax.transData.transform(np.column_stack([xs, ys])))
+
+    def size(text: str, fontsize: float, weight: str = "normal") -> tuple[float, float]:
+        prop = FontProperties(size=fontsize, weight=weight)
+        w, h, _ = renderer.get_text_width_height_descent(text, prop, ismath=False)
+        return float(w), float(h)
+
+    def squares(centres: np.ndarray, half_pt: float) -> np.ndarray:
+        """Boxes ``(K, 4)`` x0, y0, x1, y1 (pixels) of ``half_pt`` around ``centres``."""
+        half = half_pt * pt
+        return np.hstack([centres - half, centres + half])
+
+    at = projected(points)
+    taken = [squares(at, _DOT_HALF_PT)]
+    for a, b in itertools.pairwise(at):
+        n = max(2, int(np.ceil(np.linalg.norm(b - a) / (_LINK_HALF_PT * pt))) + 1)
+        taken.append(squares(a + np.linspace(0.0, 1.0, n)[:, None] * (b - a), _LINK_HALF_PT))
+    if targets is not None and len(targets):
+        stars = projected(targets)
+        taken.append(squares(stars, _STAR_HALF_PT))
+        pad = _POINT_LABEL_PAD * POINT_LABEL["fontsize"] * pt
+        for k, (x, y) in enumerate(stars if len(targets) > 1 else []):
+            w, h = size(f"{k + 1}", POINT_LABEL["fontsize"], POINT_LABEL["fontweight"])
+            taken.append(np.array([[x - pad, y - pad, x + w + pad, y + h + pad]]))
+    blocked = np.vstack(taken)
+    # one label per spot, named by every joint there, in order from the base
+    groups: list[list[int]] = []
+    for i in range(len(points)):
+        near = [g for g in groups if np.linalg.norm(at[g[0]] - at[i]) < _SAME_SPOT_PX]
+        if near:
+            near[0].append(i)
+        else:
+            groups.append([i])
+    tool = [g for g in groups if len(points) - 1 in g]
+    for group in tool + [g for g in groups if g not in tool]:
+        text = "/".join(names[i] for i in group)
+        w, h = size(text, _LANDMARK_LABEL_PT)
+        x, y = at[group[0]]
+        for ha, va, dx, dy in _LABEL_SPOTS:
+            x0 = x + dx * pt - (w if ha == "right" else 0.0)
+            y0 = y + dy * pt - (h if va == "top" else 0.0)
+            box = np.array([x0, y0, x0 + w, y0 + h])
+            hit = (
+                (blocked[:, 0] < box[2])
+                & (box[0] < blocked[:, 2])
+                & (blocked[:, 1] < box[3])
+                & (box[1] < blocked[:, 3])
+            )
+            if hit.any():
+                continue
+            ax.text(
+                *points[group[0]],
+                text,
+                ha=ha,
+                va=va,
+                fontsize=_LANDMARK_LABEL_PT,
+                color=color,
+                transform=offset_copy(ax.transData, fig=fig, x=dx, y=dy, units="points"),
+            )
+            blocked = np.vstack([blocked, box])
+            break
+
+
+_POINT_LABEL_PAD = 0.15  # room around a point's number inside its box (of the font size)
 #: Style of numbers written next to points in 3-D views: above and right of the point (which
 #: stays visible), bold on a light box, readable over the translucent solids and the lines.
 POINT_LABEL: dict[str, Any] = {
@@ -253,7 +370,12 @@ POINT_LABEL: dict[str, Any] = {
     "fontsize": 11,
     "fontweight": "bold",
     "zorder": 10,
-    "bbox": {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7, "linewidth": 0},
+    "bbox": {
+        "boxstyle": f"round,pad={_POINT_LABEL_PAD}",
+        "facecolor": "white",
+        "alpha": 0.7,
+        "linewidth": 0,
+    },
 }
 
 #: One colour per joint, shared by the joint figures.
@@ -268,6 +390,7 @@ JOINT_STYLES: tuple[Any, ...] = (
     (0, (3, 3)),
 )
 _MIN_SPAN_DEG = 10.0  # smallest y range of a joint panel: a constant joint shows as flat
+_MOST_DOTTED_STATES = 41  # the joint figure marks each state with a dot up to 40 commands
 
 
 def _check_marks(marks: Sequence[tuple[int, str]], n_commands: int) -> list[tuple[int, str]]:
@@ -312,7 +435,9 @@ def plot_joint_angles(
     marks: Sequence[tuple[int, str]] = (),
 ) -> Figure:
     """Joint angles (deg) after each command, one panel per joint sharing the command axis, so
-    joints with equal angles never hide each other. Returns the figure written.
+    joints with equal angles never hide each other; the command axis has whole-number ticks,
+    and up to 40 commands each state is a dot (a sequence of no commands is its start alone).
+    Returns the figure written.
 
     Parameters
     ----------
@@ -333,12 +458,16 @@ def plot_joint_angles(
     fig = Figure(figsize=(9, 1.2 + 1.2 * n_joints), layout="constrained")
     axes = fig.subplots(n_joints, 1, sharex=True, squeeze=False)[:, 0]
     x_span = max(seq.n_commands, 1)
+    # each state a dot when they are few: a line of one state is not drawn at all
+    marker = "o" if len(steps) <= _MOST_DOTTED_STATES else None
     for i, ax in enumerate(axes):
         ax.plot(
             steps,
             degs[:, i],
             color=JOINT_COLOURS[i % len(JOINT_COLOURS)],
             lw=1.6,
+            marker=marker,
+            markersize=4,
             label=f"θ{i + 1}",
         )
         lo, hi = float(degs[:, i].min()), float(degs[:, i].max())
@@ -351,8 +480,12 @@ def plot_joint_angles(
         ax.yaxis.set_major_locator(MaxNLocator(4))
         ax.grid(alpha=0.3)
     _label_marks(axes[0], checked, x_span)
-    # a little room on both sides: a mark at the first or last command is not hidden by a spine
-    axes[-1].set_xlim(-0.015 * x_span, 1.015 * x_span)
+    # a little room on both sides: a mark (or a dot) at the first or last command is not hidden
+    # by a spine; no commands: the start alone, in the middle
+    room = 0.5 if seq.n_commands == 0 else (0.03 if marker else 0.015) * x_span
+    axes[-1].set_xlim(-room, seq.n_commands + room)
+    # whole commands only (a short sequence had ticks at 0.2, 0.4, ...)
+    axes[-1].xaxis.set_major_locator(MaxNLocator(integer=True, steps=[1, 2, 5, 10], min_n_ticks=1))
     axes[-1].set_xlabel("command (0 = start; the angles after each command)")
     fig.suptitle(title or "joint angles after each command")
     if path is not None:
@@ -421,6 +554,35 @@ def _plot_depth_cued(
             label=None if faded else label,
             **style,
         )
+
+
+def _plot_arm_depth_cued(
+    ax: Axes3D,
+    landmarks: np.ndarray,
+    scene: Scene,
+    eye: np.ndarray,
+    *,
+    color: str,
+    linewidth: float,
+    markersize: float,
+    label: str,
+) -> None:
+    """Draw an arm (its landmarks ``(L, 3)`` joined by straight links, a dot at each) solid,
+    fading the parts behind an obstacle seen from ``eye`` (as :func:`_plot_depth_cued`; each
+    link is tested at 24 points, so a link partly behind a solid fades only there)."""
+    s = np.linspace(0.0, 1.0, 24, endpoint=False)[:, None, None]
+    dense = (landmarks[:-1] + s * (landmarks[1:] - landmarks[:-1])).transpose(1, 0, 2)
+    dense = np.vstack([dense.reshape(-1, 3), landmarks[-1:]])
+    _plot_depth_cued(ax, dense, _hidden(dense, scene, eye), color=color, linewidth=linewidth)
+    hidden = _hidden(landmarks, scene, eye)
+    for faded in (False, True):
+        dots = landmarks[hidden == faded]
+        if len(dots):
+            alpha = _HIDDEN_ALPHA if faded else 1.0
+            ax.plot(*dots.T, "o", color=color, markersize=markersize, alpha=alpha)
+    # the legend's entry: a line with a dot
+    style = {"color": color, "linewidth": linewidth, "markersize": markersize}
+    ax.plot([], [], [], "-o", label=label, **style)
 
 
 def _check_passes(passes: Sequence[tuple[int, int]], n_commands: int) -> list[tuple[int, int]]:
@@ -492,20 +654,24 @@ def plot_trace_3d(
     first = spans[0][0] if spans else 0
     pts = [tip, curve, states[[first, -1]].reshape(-1, 3)]
     pts += draw_obstacles(ax, scene)
-    ax.plot(
-        *states[-1].T,
-        "-o",
-        color="0.55",
-        alpha=0.4,
+    # both arms solid where seen, faded only where an obstacle is in front of them (the note
+    # under the figure says so); the final state lighter and thinner than the pass's start
+    _plot_arm_depth_cued(
+        ax,
+        states[-1],
+        scene,
+        eye,
+        color="0.6",
         linewidth=1.5,
         markersize=3,
         label=f"arm at the final state ({sequence.n_commands})",
     )
-    ax.plot(
-        *states[first].T,
-        "-o",
+    _plot_arm_depth_cued(
+        ax,
+        states[first],
+        scene,
+        eye,
         color="0.3",
-        alpha=0.8,
         linewidth=2.0,
         markersize=4,
         label=f"arm at the start of pass 1 (state {first})",
@@ -574,8 +740,8 @@ def plot_trace_3d(
     set_equal_axes(ax, np.vstack(pts), zoom=1.15)
     draw_table(ax, scene)
     label_axes_3d(ax)
-    n_pass = f"{len(spans)} pass" + ("" if len(spans) == 1 else "es")
-    ax.set_title(title or f"curve trace: {sequence.n_commands} commands, {n_pass}")
+    n_commands = count_text(sequence.n_commands, "command")
+    ax.set_title(title or f"curve trace: {n_commands}, {count_text(len(spans), 'pass', 'passes')}")
     ax.view_init(elev=_TRACE_VIEW[0], azim=_TRACE_VIEW[1])
     fig.legend(loc="lower center", ncol=3, fontsize=8, frameon=False)
     fig.text(
