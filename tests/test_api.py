@@ -505,7 +505,8 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.reach("seed", "300,100,200"), "target_mm must be three finite numbers"),
         (lambda a: a.reach("seed", [300 + 1j, 0, 0]), "target_mm must be three finite"),
         (lambda a: a.reach("seed", [300, 100, 200], tolerance_mm="0.1"), "tolerance_mm must be a"),
-        (lambda a: a.reach("seed", [300, 100, 200], scene={"name": "x"}), "scene must be a Scene"),
+        (lambda a: a.reach("seed", [300, 100, 200], scene=5), "scene must be a Scene"),
+        (lambda a: a.load_scene({"name": "x", "radius": 3}), "scene given as a dict"),
         (lambda a: a.load_arm("ur5", link_radius_mm="3"), "link_radius_mm must be a number"),
         (lambda a: a.trace("seed", [[300, 0, 99], [320, 0, 99]], closed="no"), "closed must be"),
         (lambda a: a.spotweld("seed", bound_samples=2.5), "bound_samples must be a whole"),
@@ -743,3 +744,27 @@ def test_a_tours_visits_record_the_tool_axis_rule_and_the_angle_met():
         assert rule["angle_deg"] == pytest.approx(angle, abs=1e-6) and angle <= 10.0 + 1e-6
     plain = armpath.spotweld("seed", welds, scene="none", order="given", bound=False).doc
     assert all(v["tool_orientation"] is None for v in plain["visits"])
+
+
+def test_a_scene_is_given_as_a_dict_of_a_scene_files_contents(tmp_path):
+    """``armpath.load_scene({...})`` said a scene must be a Scene or a file; building one in
+    Python needed an undocumented function. A dict of a scene file's contents now makes the
+    same scene as the file: the same obstacles, and a reach in it the same commands and end."""
+    import tomllib
+
+    import armpath
+
+    text = (
+        'name = "cell"\n[arm]\nmodel = "ur5"\nbase = { position_mm = [0, 0, 250] }\n'
+        '[[obstacles]]\ntype = "box"\nname = "pedestal"\ncenter = [0, 0, 125]\n'
+        "size = [220, 220, 250]\n"
+    )
+    (tmp_path / "cell.toml").write_text(text)
+    from_file = armpath.load_scene(tmp_path / "cell.toml")
+    from_dict = armpath.load_scene(tomllib.loads(text))
+    assert [o.name for o in from_dict.world.obstacles] == ["pedestal"]
+    assert from_dict.name == from_file.name == "cell"
+    a = armpath.reach(None, [400, 100, 500], scene=from_file)
+    b = armpath.reach(None, [400, 100, 500], scene=from_dict)
+    assert a.n_commands == b.n_commands
+    np.testing.assert_array_equal(a.states_deg[-1], b.states_deg[-1])

@@ -19,7 +19,7 @@ import math
 import numbers
 import reprlib
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 #: What names an arm: a model, a built-in model's name, or a robot file (``.json``, ``.urdf``).
 ArmLike = SerialArm | str | Path
 #: What names a scene: a scene, a scene file (``.toml``, ``.yaml``), or ``"seed"``.
-SceneLike = Scene | str | Path
+SceneLike = Scene | str | Path | Mapping[str, Any]
 
 #: The scene of an arm that stands alone: no obstacles, its links kept apart from each other.
 ALONE_SCENE = {"name": "none (the arm alone)", "description": "no obstacles: self-collision only"}
@@ -132,16 +132,19 @@ def load_arm(
 
 def load_scene(source: SceneLike | None = None) -> Scene:
     """A scene: a scene file (``.toml``, ``.yaml``), ``None`` or ``"seed"`` for the seed scene,
-    ``"none"`` for an empty cell (no obstacles)."""
+    ``"none"`` for an empty cell (no obstacles), or a scene file's contents as a dict (the
+    same keys and values; relative paths in it from the working directory)."""
     from armpath.scenes import load_scene as load_scene_file
     from armpath.scenes import scene_from_dict
 
     if isinstance(source, Scene):
         return source
+    if isinstance(source, Mapping):
+        return scene_from_dict(dict(source), "given as a dict")
     if not (source is None or isinstance(source, str | Path)):
         raise InvalidInputError(
-            f"scene must be a Scene, a scene file's path, 'seed' or 'none', got "
-            f"{type(source).__name__}"
+            f"scene must be a Scene, a scene file's path, a dict of a scene file's contents, "
+            f"'seed' or 'none', got {type(source).__name__}"
         )
     if source is None or str(source) == "seed":
         return load_scene_file(None)
