@@ -30,7 +30,6 @@ from armpath.viz.figures import (
     _TRACE_VIEW,
     _eye_direction,
     _hidden,
-    count_text,
     plot_joint_angles,
     plot_motion_3d,
     plot_trace_3d,
@@ -140,10 +139,9 @@ def test_short_sequence_animation_lasts_long_enough_to_see(tmp_path):
 
 
 def test_titles_say_one_command_in_the_singular(tmp_path):
-    assert count_text(1, "command") == "1 command"
-    assert count_text(0, "command") == "0 commands"
-    assert count_text(2, "pass", "passes") == "2 passes"
-    assert count_text(1, "pass", "passes") == "1 pass"
+    from armpath.report import passes_text
+
+    assert [passes_text(n) for n in (1, 2)] == ["1 pass", "2 passes"]
     arm, scene = seed_arm(), seed_scene()
     seq = _ramp(1, [20, 20, 0, 0, 0, 0])
     fig = plot_motion_3d(tmp_path / "m.png", arm, scene, seq)

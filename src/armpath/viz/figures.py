@@ -33,6 +33,7 @@ from armpath.geometry.primitives import (
 )
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import SerialArm
+from armpath.report import commands_text, passes_text
 from armpath.scenes import Scene
 from armpath.trajectory import PiecewisePolynomial
 
@@ -123,12 +124,6 @@ def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
             if j > i:
                 ax.plot(*corners[[i, j]].T, color="saddlebrown", alpha=0.6, linewidth=1)
     return np.asarray(corners)
-
-
-def count_text(n: int, noun: str, plural: str = "") -> str:
-    """``n`` and ``noun``, in the plural (``plural``, default ``noun + "s"``) unless ``n`` is 1:
-    "1 command", "0 commands", "2 passes"."""
-    return f"{n} {noun if n == 1 else plural or noun + 's'}"
 
 
 def tip_label(arm: SerialArm) -> str:
@@ -248,7 +243,7 @@ def plot_motion_3d(
     set_equal_axes(ax, np.vstack(pts))
     draw_table(ax, scene)
     label_axes_3d(ax)
-    ax.set_title(title or count_text(seq.n_commands, "command"))
+    ax.set_title(title or commands_text(seq.n_commands))
     ax.legend(loc="upper left", fontsize=9)
     ax.view_init(elev=22, azim=-60)
     fig.tight_layout()
@@ -740,8 +735,8 @@ def plot_trace_3d(
     set_equal_axes(ax, np.vstack(pts), zoom=1.15)
     draw_table(ax, scene)
     label_axes_3d(ax)
-    n_commands = count_text(sequence.n_commands, "command")
-    ax.set_title(title or f"curve trace: {n_commands}, {count_text(len(spans), 'pass', 'passes')}")
+    counts = f"{commands_text(sequence.n_commands)}, {passes_text(len(spans))}"
+    ax.set_title(title or f"curve trace: {counts}")
     ax.view_init(elev=_TRACE_VIEW[0], azim=_TRACE_VIEW[1])
     fig.legend(loc="lower center", ncol=3, fontsize=8, frameon=False)
     fig.text(
