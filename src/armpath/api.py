@@ -339,8 +339,9 @@ def _result(doc: dict[str, Any], arm: SerialArm, scene: Scene, seq: CommandSeque
 
 
 def _model(arm: ArmLike, tip_link: str | None = None) -> SerialArm:
-    """The arm of a kinematics query: a model as it is (in mm), or a built-in model or robot
-    file by name, in its own base frame (no scene places it)."""
+    """The arm of a kinematics query: a model as it is (in mm; placed where its
+    ``T_world_base`` puts it, as :meth:`SerialArm.placed` leaves it), or a built-in model or
+    robot file by name, in the frame its own base transform puts it (no scene places it)."""
     from armpath.model.catalog import resolve_model
 
     if isinstance(arm, SerialArm):
@@ -356,10 +357,11 @@ def forward_kinematics(
     arm: ArmLike, joints_deg: ArrayLike, *, tip_link: str | None = None
 ) -> dict[str, Any]:
     """Forward kinematics of one joint state ``joints_deg`` (deg, mm for a prismatic joint)
-    in the arm's base frame: the document ``armpath fk --json`` prints, ``tip`` (mm), ``pose``
-    (4x4, mm), each of the arm's ``points`` (mm), and ``warnings`` (a joint beyond its
-    limits; the seed arm below its table). Many states at once:
-    :func:`armpath.kinematics.tool_position` (rad)."""
+    in the frame the arm's base transform puts it (a model named: its own; a
+    :class:`SerialArm` placed in a cell: the cell's): the document ``armpath fk --json``
+    prints, ``tip`` (mm), ``pose`` (4x4, mm), each of the arm's ``points`` (mm), and
+    ``warnings`` (a joint beyond its limits; the seed arm below its table). Many states at
+    once: :func:`armpath.kinematics.tool_position` (rad)."""
     import json
 
     from armpath.export import fk_document, json_line

@@ -143,9 +143,8 @@ class Result:
 
     def joint_trajectory(self, period_s: float | None = None) -> dict[str, Any]:
         """The motion as a ROS ``trajectory_msgs/JointTrajectory`` message (a JSON-ready dict:
-        positions in rad, one point per state, ``period_s`` apart (default: the arm's command
-        period); see
-        :mod:`armpath.controller_export`)."""
+        positions in rad (m for a prismatic joint), one point per state, ``period_s`` apart
+        (default: the arm's command period); see :mod:`armpath.controller_export`)."""
         from armpath.controller_export import joint_trajectory
 
         return joint_trajectory(self.arm, self.sequence, period_s)
