@@ -768,3 +768,19 @@ def test_a_scene_is_given_as_a_dict_of_a_scene_files_contents(tmp_path):
     b = armpath.reach(None, [400, 100, 500], scene=from_dict)
     assert a.n_commands == b.n_commands
     np.testing.assert_array_equal(a.states_deg[-1], b.states_deg[-1])
+
+
+def test_a_target_only_self_collision_forbids_says_so_not_obstacles():
+    """In an empty cell a target at the seed arm's base (one given in metres, say) was refused
+    because "no configuration ... keeps the links 1 mm clear of the obstacles": there are none.
+    The refusal now names what it asks: the links clear of each other, with the room the
+    planner keeps."""
+    import armpath
+    from armpath.errors import PlanningError
+
+    with pytest.raises(PlanningError) as caught:
+        armpath.reach("seed", [0.5, 0.2, 0.6], scene="none")
+    assert str(caught.value) == (
+        "no configuration reaching (0.5, 0.2, 0.6) mm keeps the links 1 mm clear of each other, "
+        "with 1.5 mm to spare for the motion onto it"
+    )

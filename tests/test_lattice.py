@@ -8,6 +8,7 @@ rebuilt from its document against the original.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -80,6 +81,13 @@ def test_display_units_and_lattice_membership():
     assert ticks.tolist() == [100, -205, 1234, 0, 0, 0]
     with pytest.raises(InvalidInputError, match="joint 3 is not a whole number of its ticks"):
         g.from_display([10.0, -20.5, 123.45, 0, 0, 0], "--from")
+    # angles all within +-6.28 "deg" and off the lattice: likely radians, and said so; values
+    # beyond that range get no such hint
+    radians = "every angle lies within +-6.28 deg: were they given in radians?"
+    with pytest.raises(InvalidInputError, match=re.escape(radians)):
+        g.from_display(np.radians([0, -30, 30, 0, 30, 0]), "start_deg")
+    with pytest.raises(InvalidInputError, match=r"\(the command lattice\)$"):
+        g.from_display([10.05, -20.5, 123.4, 0, 0, 0], "--from")
     metres = Lattice([1e-4, np.radians(0.1)], [20, 20], [True, False], "m")
     np.testing.assert_allclose(metres.tick_display, [0.1, 0.1])
     with pytest.raises(InvalidInputError, match="ticks must be"):

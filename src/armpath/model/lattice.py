@@ -216,9 +216,16 @@ class Lattice:
         off = np.abs(t - r) > ON_LATTICE_TICKS
         if np.any(off):
             i = int(np.argwhere(off)[0][-1])
+            shown = self.joint_display(values.reshape(-1, self.n_joints))[:, ~self.prismatic]
+            hint = ""
+            if shown.size and np.abs(shown).max() <= 2 * np.pi and np.any(shown):
+                hint = (
+                    "; every angle lies within +-6.28 deg: were they given in radians? joint "
+                    "values are in degrees"
+                )
             raise InvalidInputError(
                 f"{what}: joint {i + 1} is not a whole number of its ticks of "
-                f"{self.tick_text(i)} (the command lattice)"
+                f"{self.tick_text(i)} (the command lattice){hint}"
             )
         return r.astype(np.int64)
 

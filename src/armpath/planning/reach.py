@@ -1014,7 +1014,10 @@ def _goal_states(
     if not any_clear:
         raise PlanningError(
             f"no configuration reaching ({', '.join(f'{v:g}' for v in p.target)}) mm keeps the "
-            f"links {world.margin:g} mm clear of the obstacles"
+            "links "
+            + (f"{world.margin:g} mm clear of the obstacles and " if world.obstacles else "")
+            + f"{world.self_margin:g} mm clear of each other, with {body_buffer_mm:g} mm to "
+            "spare for the motion onto it"
         )
     picks = list(picked)
     states: list[IntArray] = []

@@ -766,9 +766,12 @@ def generic_goal_states(
     goal_clear = goal_links_rule(arm, world, target.position, body_buffer)
     body_ok = goal_clear(samples, tolerance)
     if not np.any(body_ok):
+        unit = arm.length_unit
         raise PlanningError(
-            f"no configuration reaching ({where}) {arm.length_unit} keeps the links "
-            f"{world.margin:g} {arm.length_unit} clear of the obstacles"
+            f"no configuration reaching ({where}) {unit} keeps the links "
+            + (f"{world.margin:g} {unit} clear of the obstacles and " if world.obstacles else "")
+            + f"{world.self_margin:g} {unit} clear of each other, with {body_buffer:g} {unit} "
+            "to spare for the motion onto it"
         )
     samples = samples[body_ok]
     metric = command_metric(arm, samples, s_q)
