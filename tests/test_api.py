@@ -784,3 +784,29 @@ def test_a_target_only_self_collision_forbids_says_so_not_obstacles():
         "no configuration reaching (0.5, 0.2, 0.6) mm keeps the links 1 mm clear of each other, "
         "with 1.5 mm to spare for the motion onto it"
     )
+
+
+def test_an_arm_is_loaded_as_a_scene_places_it():
+    """Forward kinematics in a cell's frame needed the undocumented ``arm_and_scene``:
+    ``load_arm`` gave the model in its own base frame only. ``load_arm(scene=...)`` now gives
+    the arm as the scene's ``[arm]`` places it (the UR5 cell: base at (-150, 0, 250) mm, a
+    120 mm tool); its tool point at the home pose is the maker's D-H product moved there."""
+    from pathlib import Path
+
+    import armpath
+    from arms import UR5_DH
+    from independent_dh import dh_pose
+
+    cell = Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml"
+    home = [0, -90, 90, -90, -90, 0]
+    placed = armpath.load_arm(scene=cell)
+    assert placed.name == "ur5" and np.allclose(np.degrees(placed.home), home)
+    tip = armpath.forward_kinematics(placed, home)["tip"]
+    T = dh_pose(*UR5_DH, np.radians(home))
+    expected = (T @ [0.0, 0.0, 120.0, 1.0])[:3] + np.array([-150.0, 0.0, 250.0])
+    np.testing.assert_allclose(tip, expected, atol=1e-6)
+    # the same model named, placed the same; without a scene, where its own base puts it
+    named = armpath.load_arm("ur5", scene=cell)
+    np.testing.assert_allclose(armpath.forward_kinematics(named, home)["tip"], expected, atol=1e-6)
+    alone = armpath.forward_kinematics(armpath.load_arm("ur5"), home)["tip"]
+    assert not np.allclose(alone, expected)

@@ -111,18 +111,25 @@ def _degrees(values: ArrayLike, what: str) -> NDArray[np.float64]:
 
 
 def load_arm(
-    model: str | Path = "seed",
+    model: str | Path | None = None,
     *,
+    scene: SceneLike | None = None,
     tip_link: str | None = None,
     link_radius_mm: float | None = None,
 ) -> SerialArm:
     """An arm: a built-in model by name (``"seed"``, ``"ur5"``, ``"puma560"``, ...) or a robot
     file (``.json`` D-H/MDH table, ``.urdf`` up to ``tip_link``); ``link_radius_mm`` gives
-    every link that radius (mm) for collision checks."""
+    every link that radius (mm) for collision checks. Without ``scene`` it stands where its
+    own base puts it (no model: the seed arm). With ``scene`` it is the arm as the scene's
+    ``[arm]`` places it (base, tool, home; no model: the scene's own), as the tasks take it:
+    for forward and inverse kinematics in the cell's frame."""
     from armpath.model.catalog import resolve_model
 
     _checked({"link_radius_mm": link_radius_mm})
-    arm = resolve_model(str(model), tip_link)
+    if scene is not None:
+        arm, _ = arm_and_scene(model, scene, tip_link=tip_link)
+    else:
+        arm = resolve_model(str(model or "seed"), tip_link)
     if link_radius_mm is not None:
         if not (math.isfinite(link_radius_mm) and link_radius_mm >= 0):
             raise InvalidInputError(f"link_radius_mm must be >= 0, got {link_radius_mm}")
