@@ -114,6 +114,11 @@ def test_the_reports_files_list_only_what_was_written():
     files = text.split("## Files", 1)[1]
     assert "`trace.json`" in files and "`*.csv / *.xlsx`" in files and "`*.gif`" in files
     assert "spotweld.json" not in files and "blindzones" not in files and "reach.json" not in files
+    # the figures and the web page are listed where they were written (they were not at all)
+    assert "`*.png`" not in files and "summary.html" not in files
+    text = summary_markdown([], files=["trace.json", "trace_3d.png", "summary.md", "summary.html"])
+    files = text.split("## Files", 1)[1]
+    assert "- `*.png`: figures" in files and "- `summary.html`: this report as a web page" in files
 
 
 def test_a_reach_bound_that_is_an_estimate_is_marked_so_in_the_summary_table():

@@ -16,8 +16,11 @@ FILES = {
     "trace.json": "Task 2 result (passes, coverage, unreachable arcs and why)",
     "spotweld.json": "Task 3 result (order, visits, per-weld error)",
     "*.csv / *.xlsx": "the commands (ticks of the lattice), joint values and tool point after each",
+    "*.png": "figures: each motion in 3-D, the joint angles, the trace's deviation, blind-zone "
+    "maps",
     "*.gif": "animations of the motions",
     "blindzones.csv / .npz": "blind parts of the workpiece faces; the arm-plane and meridian maps",
+    "summary.html": "this report as a web page",
 }
 
 

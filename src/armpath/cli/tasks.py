@@ -1127,7 +1127,7 @@ def run(
                 report = summary_markdown(
                     tasks,
                     blind.summary() if blind is not None else (),
-                    [*folder.staged(), "summary.md"],
+                    [*folder.staged(), "summary.md", *(["summary.html"] if html else [])],
                     heading=heading,
                     failed=failed,
                     unfinished=unfinished,
