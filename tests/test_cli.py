@@ -182,6 +182,11 @@ def test_reach_writes_json_csv_xlsx_and_figures(tmp_path):
 
     wb = load_workbook(out / "reach.xlsx")
     assert wb["commands"].max_row == doc["n_commands"] + 1
+    # the summary sheet holds the JSON's numbers as the JSON writes them (75.0, where it held
+    # 75.00000000000006)
+    summary = {row[0]: row[1] for row in wb["summary"].iter_rows(min_row=2, values_only=True)}
+    for key in ("min_clearance_mm", "error_mm", "n_commands"):
+        assert summary[key] == doc[key], key
     assert (out / "reach_motion.png").read_bytes()[:4] == b"\x89PNG"
 
 

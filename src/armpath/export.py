@@ -585,9 +585,10 @@ def write_xlsx(path: Path, sheets: dict[str, tuple[list[str], list[list[Any]]]])
 
 
 def summary_rows(doc: dict[str, Any]) -> list[list[Any]]:
-    """Key/value rows of a result document's scalar and short-list fields."""
+    """Key/value rows of a result document's scalar and short-list fields, floats tidied as in
+    the JSON (:func:`_tidy`: 75.0, not 75.00000000000006)."""
     rows: list[list[Any]] = []
-    for key, value in doc.items():
+    for key, value in _tidy(doc).items():
         if isinstance(value, bool | int | float | str) or value is None:
             rows.append([key, value])
         elif (
