@@ -813,3 +813,19 @@ def test_a_trace_whose_motion_is_not_certified_clear_is_refused(monkeypatch):
     )
     with pytest.raises(PlanningError, match=expected):
         trace_the_circle(bound=False, tolerance_mm=3.0)
+
+
+def test_progress_lines_say_where_an_arc_lies_on_a_closed_curve():
+    """The UR5 cell's seam was traced as "23.8..596.0 mm of the curve" in the progress lines, a
+    length beyond the 572 mm curve; they now say where on the curve, as the tables do."""
+    from armpath.planning.trace.plan import _span_text
+    from armpath.planning.trace.reachability import CurveArc
+
+    circle = ParametricCurve("c", "100*cos(t)", "100*sin(t)", "0", 0.0, 2 * np.pi)
+    L = circle.length
+    assert abs(L - 200 * np.pi) <= 1e-3
+    assert _span_text(circle, CurveArc(23.8, 23.8 + L)) == "once round from 23.8 mm"
+    assert _span_text(circle, CurveArc(560.0, L + 10.2)) == "560.0..10.2 mm (through 0)"
+    assert _span_text(circle, CurveArc(20.0, 120.0)) == "20.0..120.0 mm"
+    line = Polyline("l", [[0, 0, 0], [100, 0, 0]])
+    assert _span_text(line, CurveArc(5.0, 50.0)) == "5.0..50.0 mm"

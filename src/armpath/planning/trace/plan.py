@@ -583,6 +583,20 @@ _LOOP_STARTS = 24
 _LOOP_START_SLACK = 0.3
 
 
+def _span_text(curve: Curve, arc: CurveArc) -> str:
+    """Where an arc lies on the curve, for progress lines: ``23.8..121.0 mm``; on a closed
+    curve ``once round from 23.8 mm``, or ``560.0..10.2 mm (through 0)`` where it runs past the
+    curve's start (its arc lengths run on past the curve's length)."""
+    a, b = arc.start_mm, arc.end_mm
+    if not curve.closed:
+        return f"{a:.1f}..{b:.1f} mm"
+    length = curve.length
+    if b - a >= length - 1e-6:
+        return f"once round from {a % length:.1f} mm"
+    through = " (through 0)" if np.floor(b / length) > np.floor(a / length) else ""
+    return f"{a % length:.1f}..{b % length:.1f} mm{through}"
+
+
 def _trace_arcs(
     arm: SerialArm,
     world: CollisionWorld,
@@ -620,10 +634,7 @@ def _trace_arcs(
             continue
         for k, piece in enumerate(pieces):
             last_piece = k == len(pieces) - 1
-            say(
-                f"tracing pass {len(passes) + 1}: {piece.arc.start_mm:.1f}.."
-                f"{piece.arc.end_mm:.1f} mm of the curve"
-            )
+            say(f"tracing pass {len(passes) + 1}: {_span_text(curve, piece.arc)} of the curve")
             tracer = Tracer(fam, piece, opts.tolerance_mm, band_share=BAND_SHARE)
             tracer.align(arm.lattice.to_joint(states[-1]))
             here = len(states) - 1
