@@ -268,7 +268,8 @@ def test_trace_cli_rejects_a_bad_tolerance(tmp_path):
 def test_run_reports_task_2(seed_run):
     out, stdout = seed_run
     doc = json.loads((out / "trace.json").read_text())
-    assert "2 trace the" in stdout and "Task 2: 765." in stdout and "unreachable 382." in stdout
+    assert "2 trace the" in stdout and "unreachable 382." in stdout
+    assert "Task 2: all 765.68 mm reachable covered" in stdout
     for name in ("trace.csv", "trace.xlsx", "trace_3d.png", "trace_deviation.png"):
         assert (out / name).stat().st_size > 0
     assert "Task 2" in (out / "summary.md").read_text()

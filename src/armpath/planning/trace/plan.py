@@ -489,6 +489,23 @@ def _gaps_between_passes(
     return out
 
 
+def _search_need(arm: SerialArm, world: CollisionWorld, opts: TraceOptions) -> FloatArray:
+    """Each pair's clearance the motion planner's search needs of its states (mm)."""
+    return np.asarray(
+        world.required(arm)
+        + search_clearance_extra(arm, world, opts.motion.buffer_mm, opts.motion.sample_spacing_mm),
+        dtype=np.float64,
+    )
+
+
+def _has_search_room(
+    arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, opts: TraceOptions
+) -> bool:
+    """Whether lattice state ``q_ticks`` keeps every clearance the search needs."""
+    values, _ = world.pair_clearances(arm, arm.lattice.to_joint(q_ticks))
+    return bool(np.all(values - _search_need(arm, world, opts) >= 0.0))
+
+
 def _lift_off(
     arm: SerialArm,
     world: CollisionWorld,
@@ -507,9 +524,7 @@ def _lift_off(
     first, and the best certified one is taken where it gains slack, so the transit through
     the lift-off needs no more commands than the straight motion (the seed crack: 70 -> 69).
     """
-    need = world.required(arm) + search_clearance_extra(
-        arm, world, opts.motion.buffer_mm, opts.motion.sample_spacing_mm
-    )
+    need = _search_need(arm, world, opts)
     active = active_joints(arm)
     grid = arm.lattice
     rng = np.random.default_rng([opts.motion.seed, 7])
@@ -793,8 +808,10 @@ def _enter_backward(
     is certified again."""
     arm, world = tracer.arm, tracer.world
     lift = _lift_off(arm, world, q_start, opts, toward=q_from).states()
-    if lift.shape[0] < 2:
+    if lift.shape[0] < 2 and not _has_search_room(arm, world, q_start, opts):
         raise PlanningError("no lift-off from there gives the search room")
+    # (a state with the room already is searched to as it is: no lift-off is needed; a seam
+    # 1 mm above a table was left untraced there, "no lift-off gives the search room")
     search = plan_motion(arm, world, q_from, lift[-1][None, :], opts.motion)
     states = np.concatenate([search.sequence.states(), lift[-2::-1]])
     seq = CommandSequence.from_states(states, tracer.grid)

@@ -79,6 +79,11 @@ _ON_POINT_MM = 1e-6
 BACKWARD_MARGIN = 5.0
 #: Most family members kept on one layer (evenly over the tool directions).
 MAX_LAYER_NODES = 1500
+#: A layer with fewer clear members than this at the DP's tool directions is sampled again at
+#: more (every coarse direction, then the fine ones): a KUKA-like arm tracing a seam 1 mm above
+#: a table (its 4 mm tool kept near upright by the clearance rule) found none over 20 mm
+#: about a corner at a third of the free curve's directions, and its DP cut the seam there.
+_FEW_LAYER_NODES = 32
 
 
 @dataclass(frozen=True)
@@ -508,13 +513,18 @@ def reference_pieces(
     dirs = fam.coarse_dirs if fam.surface is not None else fam.coarse_dirs[::3]
     for s in np.linspace(a + inset, b - inset, n + 1):
         check_time("choosing the reference path along the curve")
-        q = fam.configs(float(s), dirs)
-        if q.shape[0] == 0:
-            continue
-        # scores above 3 count as 3 (the bonus below), so no distance beyond is measured
-        sc = fam.score(q, ceiling=_SLACK_COUNTED)
-        best = float(np.max(sc))
-        if best < 0:
+        for layer_dirs in (dirs, fam.coarse_dirs, fam.fine_dirs):
+            q = fam.configs(float(s), layer_dirs)
+            if q.shape[0] == 0:
+                continue
+            # scores above 3 count as 3 (the bonus below), so no distance beyond is measured
+            sc = fam.score(q, ceiling=_SLACK_COUNTED)
+            best = float(np.max(sc))
+            if best >= 0 and np.count_nonzero(sc >= min(0.3, 0.5 * best)) >= _FEW_LAYER_NODES:
+                break
+            # few clear members at these directions (a tool that must stay near one
+            # direction): the layer is sampled again at more
+        if q.shape[0] == 0 or best < 0:
             continue
         keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
         if keep.size > MAX_LAYER_NODES:  # evenly over the tool directions
