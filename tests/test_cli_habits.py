@@ -164,11 +164,20 @@ def test_coverage_past_the_reachable_ends_is_said_as_all_of_it():
     covered (the passes run 0.06 mm past its ends)". Less than all is said as before."""
     from armpath.report import coverage_text
 
-    def cov(covered, reachable):
-        return {"covered_mm": covered, "reachable_mm": reachable}
+    def cov(covered, reachable, within=None):
+        within = min(covered, reachable) if within is None else within
+        return {
+            "covered_mm": covered,
+            "reachable_mm": reachable,
+            "of_reachable": within / reachable,
+        }
 
     assert coverage_text(cov(765.745439555, 765.68376038)) == (
         "all 765.68 mm reachable covered (the passes run 0.06 mm past its ends)"
     )
     assert coverage_text(cov(572.18, 572.18)) == "all 572.18 mm reachable covered"
     assert coverage_text(cov(500.0, 572.18)) == "500.00 of 572.18 mm reachable covered"
+    # running 0.2 mm past an end while leaving 0.15 mm between two passes is not all of it
+    assert coverage_text(cov(600.05, 600.0, within=599.85)) == (
+        "599.85 of 600.00 mm reachable covered"
+    )

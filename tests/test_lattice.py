@@ -88,6 +88,9 @@ def test_display_units_and_lattice_membership():
         g.from_display(np.radians([0, -30, 30, 0, 30, 0]), "start_deg")
     with pytest.raises(InvalidInputError, match=r"\(the command lattice\)$"):
         g.from_display([10.05, -20.5, 123.4, 0, 0, 0], "--from")
+    # joint values in the model's own units (rad: a robot file's home) get no such hint
+    with pytest.raises(InvalidInputError, match=r"\(the command lattice\)$"):
+        g.to_ticks(np.radians([0.05, -30, 30, 0, 30, 0]), "home")
     metres = Lattice([1e-4, np.radians(0.1)], [20, 20], [True, False], "m")
     np.testing.assert_allclose(metres.tick_display, [0.1, 0.1])
     with pytest.raises(InvalidInputError, match="ticks must be"):

@@ -95,15 +95,16 @@ def commands_text(n: int) -> str:
 
 def coverage_text(cov: dict[str, Any]) -> str:
     """How much of a trace's reachable length its passes cover (``cov``: a result's
-    ``coverage``). Passes may run a little past the ends of the reachable arcs, which made
-    "765.75 of 765.68 mm reachable covered" read as more than all; that is said as all, and by
-    how much they run past."""
-    covered, reachable = cov["covered_mm"], cov["reachable_mm"]
-    if covered >= reachable - 0.005:
-        past = covered - reachable
+    ``coverage``). ``of_reachable`` is what they cover within the reachable arcs; the passes
+    may also run a little past their ends, which made "765.75 of 765.68 mm reachable covered"
+    read as more than all. All of it is said so, with how far they run past."""
+    reachable = cov["reachable_mm"]
+    within = cov["of_reachable"] * reachable
+    if within >= reachable - 0.005:
+        past = cov["covered_mm"] - within
         beyond = f" (the passes run {past:.2f} mm past its ends)" if past >= 0.005 else ""
         return f"all {reachable:.2f} mm reachable covered{beyond}"
-    return f"{covered:.2f} of {reachable:.2f} mm reachable covered"
+    return f"{within:.2f} of {reachable:.2f} mm reachable covered"
 
 
 def passes_text(n: int) -> str:
@@ -197,7 +198,7 @@ def proven(doc: dict[str, Any]) -> bool:
 
 
 def bound_cell(doc: dict[str, Any]) -> str:
-    """A trace's or tour's lower bound for a table (- when not computed; ~N an estimate)."""
+    """A result's lower bound for a table (- when not computed; ~N an estimate)."""
     bound = doc.get("lower_bound_commands")
     if bound is None:
         return "-"

@@ -216,16 +216,9 @@ class Lattice:
         off = np.abs(t - r) > ON_LATTICE_TICKS
         if np.any(off):
             i = int(np.argwhere(off)[0][-1])
-            shown = self.joint_display(values.reshape(-1, self.n_joints))[:, ~self.prismatic]
-            hint = ""
-            if shown.size and np.abs(shown).max() <= 2 * np.pi and np.any(shown):
-                hint = (
-                    "; every angle lies within +-6.28 deg: were they given in radians? joint "
-                    "values are in degrees"
-                )
             raise InvalidInputError(
                 f"{what}: joint {i + 1} is not a whole number of its ticks of "
-                f"{self.tick_text(i)} (the command lattice){hint}"
+                f"{self.tick_text(i)} (the command lattice)"
             )
         return r.astype(np.int64)
 
@@ -258,7 +251,26 @@ class Lattice:
             raise InvalidInputError(
                 f"{what} needs {self.n_joints} joint values, got {v.shape[-1] if v.ndim else 1}"
             )
-        return self.to_ticks(self.joint_from_display(v), what)
+        q = self.joint_from_display(v)
+        try:
+            return self.to_ticks(q, what)
+        except InvalidInputError as exc:
+            with np.errstate(all="ignore"):
+                t = self.to_ticks_float(q)
+                off_lattice = bool(np.any(np.abs(t - np.round(t)) > ON_LATTICE_TICKS))
+            angles = v.reshape(-1, self.n_joints)[:, ~self.prismatic]
+            if not (
+                off_lattice
+                and np.all(np.isfinite(angles))
+                and np.any(angles)
+                and np.abs(angles).max() <= 2 * np.pi
+            ):
+                raise
+            # off the lattice, every angle within a turn in radians: likely radians
+            raise InvalidInputError(
+                f"{exc}; every angle lies within +-6.28 deg: were they given in radians? joint "
+                "values are in degrees"
+            ) from None
 
     @property
     def mm_per_unit(self) -> float:

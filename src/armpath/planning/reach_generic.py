@@ -662,10 +662,18 @@ def reach_any_arm(
         # the members with the joints that do not move the tool point held where they start
         # can leave one goal state, whose motions may all fail (a tool tip 0.002 mm above a
         # table: no motion onto it proven clear); the whole family's goal states, as
-        # plan_to_point takes them
+        # plan_to_point takes them, where there are such joints and other goal states
+        if not idle.any():
+            raise
         try:
-            goals = generic_goal_states(arm, world, start, target, tolerance, rng=rng)
-            plan = plan_motion(arm, world, start, goals, MotionOptions(seed=seed), turn_copies=True)
+            more = generic_goal_states(arm, world, start, target, tolerance, rng=rng)
+        except PlanningError:
+            raise exc from None
+        new = ~(more[:, None, :] == goals[None, :, :]).all(axis=-1).any(axis=1)
+        if not new.any():
+            raise
+        try:
+            plan = plan_motion(arm, world, start, more, MotionOptions(seed=seed), turn_copies=True)
         except PlanningError:
             raise exc from None
     end = plan.sequence.states()[-1]
@@ -698,19 +706,21 @@ def goal_links_rule(
     """The goal states' clearance rule at a tool point ``position``: a function of
     configurations ``q (M, n)`` rad and a ``tip_tolerance`` telling which may be goal states,
     their links keeping the margin plus ``body_buffer`` and the tool point no deeper than
-    ``tip_tolerance`` in an obstacle. The tool's own link against the surface its point touches
-    meets it head-on from a retracted pre-goal (see plan_motion): it needs the margin only, not
-    the buffer."""
+    ``tip_tolerance`` in an obstacle. The tool's own link against the surface its point touches,
+    or the nearest surface within the planner's retreat (:attr:`MotionOptions.approach_mm`, by
+    default), meets it head-on from a retracted pre-goal (see plan_motion): it needs the margin
+    only, not the buffer."""
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
     required = world.required(arm)
-    # surfaces the tool meets head-on: those within the motion planner's retreat of the target
-    # (it plans onto such a goal from a pre-goal backed off along the surface's normal); a target
-    # a hair above a table was held to the buffer against it, and refused
-    head_on = MotionOptions().approach_mm
-    touched = {
-        o.name for o in world.obstacles if abs(float(o.signed_distance(position))) <= head_on
-    }
+    # the surfaces the tool meets head-on: those its point touches, and the nearest within the
+    # motion planner's retreat of the target (it plans onto such a goal from a pre-goal backed
+    # off along that surface's normal, see retracted_pre_goal); a target a hair above a table
+    # was held to the buffer against it, and refused
+    gaps = np.array([abs(float(o.signed_distance(position))) for o in world.obstacles])
+    touched = {o.name for o, gap in zip(world.obstacles, gaps, strict=True) if gap <= 1e-6}
+    if gaps.size and gaps.min() <= MotionOptions().approach_mm:
+        touched.add(world.obstacles[int(np.argmin(gaps))].name)
     tool_link = pairs[int(np.flatnonzero(is_tip)[0])].part.removesuffix(" tip") if any(
         is_tip
     ) else None  # fmt: skip
