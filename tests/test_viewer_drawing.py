@@ -13,6 +13,7 @@ import pytest
 from armpath.commands import CommandSequence
 from armpath.kinematics import tool_position
 from armpath.model.seed_arm import seed_arm
+from armpath.report import commands_text
 from armpath.results import Result
 from armpath.scenes import load_scene, scene_from_dict, seed_scene
 from armpath.scenes.arm import scene_arm
@@ -22,12 +23,10 @@ from armpath.viewer.app import (
     MIN_DRAWN_RADIUS_OF_LENGTH,
     ArmViewer,
     base_frame_pose,
-    commands_text,
     free_port,
     joint_marker_radii,
     reach_target_start_mm,
     replay_html,
-    result_title,
     tab_title,
     with_title,
 )
@@ -139,7 +138,7 @@ def test_counts_of_one_command_are_singular():
         "175 commands",
     ]
     result = _one_command_reach()
-    assert result_title(result) == "reach: 1 command"
+    assert result.title() == "reach: 1 command"
     viewer = ArmViewer(result.arm, result.scene, port=free_port(), result=result)
     try:
         assert viewer.replay_info.content == "**reach: 1 command**"
@@ -180,6 +179,9 @@ def test_reach_panel_starts_at_a_loaded_reachs_target():
         "trace", {}, result.arm, result.scene, result.sequence, np.zeros((0, 3)), None
     )
     assert reach_target_start_mm(trace_like) == DEFAULT_REACH_TARGET_MM
+    # no reach loaded: the scene's own reach task's target where it names one (the seed's)
+    assert reach_target_start_mm(trace_like, seed_scene()) == (20.0, -200.0, 120.0)
+    assert reach_target_start_mm(None, scene_from_dict({"name": "x"})) == DEFAULT_REACH_TARGET_MM
     viewer = ArmViewer(result.arm, result.scene, port=free_port(), result=result)
     try:
         assert tuple(viewer.target_input.value) == (20.0, -200.0, 120.0)

@@ -38,6 +38,7 @@ from armpath.geometry.primitives import HalfSpace
 from armpath.geometry.world import CollisionWorld, link_analysis
 from armpath.kinematics import landmark_positions, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.report import commands_text
 from armpath.results import Result
 from armpath.scenes import Scene
 from armpath.trajectory.quantize import joint_ticks
@@ -72,8 +73,8 @@ JOINT_MARKER_SCALE = 1.15
 #: home (the seed arm's: 107 mm and 2.9 mm), so they reach out of the base's joint marker.
 BASE_AXES_OF_LENGTH = 0.15
 BASE_AXES_RADIUS_OF_LENGTH = 0.004
-#: Where the "Reach a point" panel starts when no reach result is loaded (mm): the seed arm's
-#: reach target.
+#: Where the "Reach a point" panel starts when neither a reach result nor the scene names a
+#: target (mm): a point the seed arm reaches from its home (55 commands).
 DEFAULT_REACH_TARGET_MM = (300.0, -170.0, 15.0)
 #: Flags for Debian's Chromium run headless on a machine without outside network (the browser
 #: test and docs/make_screenshots.py): no sandbox as root, no GPU, no background connections.
@@ -136,18 +137,6 @@ def base_frame_pose(arm: SerialArm) -> tuple[FloatArray, FloatArray]:
     return wxyz, T_world_base[:3, 3] * MM
 
 
-def commands_text(n_commands: int) -> str:
-    """``n_commands`` with the noun: "1 command", "0 commands", "175 commands"."""
-    return f"{n_commands} command" + ("" if n_commands == 1 else "s")
-
-
-def result_title(result: Result) -> str:
-    """What the replay of ``result`` is called on the page: its task and number of commands,
-    and the file it came from ("trace: 175 commands (trace.json)")."""
-    name = f" ({result.path.name})" if result.path is not None else ""
-    return f"{result.task}: {commands_text(result.n_commands)}{name}"
-
-
 def tab_title(shown: str) -> str:
     """The title of the page (its browser tab) while ``shown`` is on it."""
     return f"armpath - {shown}"
@@ -159,11 +148,16 @@ def with_title(page_html: str, title: str) -> str:
     return re.sub(r"<title>[^<]*</title>", lambda _m: element, page_html, count=1)
 
 
-def reach_target_start_mm(result: Result | None) -> tuple[float, float, float]:
+def reach_target_start_mm(
+    result: Result | None, scene: Scene | None = None
+) -> tuple[float, float, float]:
     """Where the "Reach a point" panel starts (mm): the target of ``result`` when it is a
-    reach, else :data:`DEFAULT_REACH_TARGET_MM`."""
+    reach, else the scene's reach task's target, else :data:`DEFAULT_REACH_TARGET_MM`."""
     if result is not None and result.task == "reach" and len(result.targets_mm):
         x, y, z = (float(v) for v in result.targets_mm[0])
+        return x, y, z
+    if scene is not None and scene.reach_target_mm is not None:
+        x, y, z = (float(v) for v in scene.reach_target_mm)
         return x, y, z
     return DEFAULT_REACH_TARGET_MM
 
@@ -242,7 +236,7 @@ class ArmViewer:
             for pair in self._pairs
         ]
         self._draw_scene()
-        self._build_gui(reach_target_start_mm(result))
+        self._build_gui(reach_target_start_mm(result, scene))
         self.page_title = tab_title(f"{arm.name} in {scene.name}")
         self._replay: CommandSequence | None = None
         self._playing = False
@@ -495,7 +489,7 @@ class ArmViewer:
             self.server.scene.add_icosphere(
                 f"/replay/targets/{k}", radius=6 * MM, color=TARGET_COLOR, position=tuple(p * MM)
             )
-        self._start_replay(result.sequence, result_title(result))
+        self._start_replay(result.sequence, result.title())
 
     def _start_replay(self, seq: CommandSequence, title: str) -> None:
         self._playing = False
