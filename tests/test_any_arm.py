@@ -872,7 +872,8 @@ def _kr6_over_a_table(tmp_path):
 
 def test_a_target_a_hair_above_a_table_is_reached_and_planned_to(tmp_path):
     """A KUKA-like arm over a table (its top at z = 400 mm) found no goal state for targets
-    0.01 to about 0.9 mm above the top ("no configuration ... keeps the links 2 mm clear"),
+    0.01 to about 0.9 mm above the top (0.05 mm here; "no configuration ... keeps the links
+    2 mm clear"),
     though a target on the top was reached and a state 0.025 mm from the target was clear: a
     target off the surface held the tool's own link to the planner's buffer against it. The
     surfaces within the planner's retreat of the target now count as the one the tool meets

@@ -828,5 +828,6 @@ def test_progress_lines_say_where_an_arc_lies_on_a_closed_curve():
     assert _span_text(circle, CurveArc(23.8, 23.8 + L)) == "once round from 23.8 mm"
     assert _span_text(circle, CurveArc(560.0, L + 10.2)) == "560.0..10.2 mm (through 0)"
     assert _span_text(circle, CurveArc(20.0, 120.0)) == "20.0..120.0 mm"
+    assert _span_text(circle, CurveArc(560.0, L)) == f"560.0..{L:.1f} mm"
     line = Polyline("l", [[0, 0, 0], [100, 0, 0]])
     assert _span_text(line, CurveArc(5.0, 50.0)) == "5.0..50.0 mm"

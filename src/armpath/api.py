@@ -120,9 +120,10 @@ def load_arm(
     """An arm: a built-in model by name (``"seed"``, ``"ur5"``, ``"puma560"``, ...) or a robot
     file (``.json`` D-H/MDH table, ``.urdf`` up to ``tip_link``); ``link_radius_mm`` gives
     every link that radius (mm) for collision checks. Without ``scene`` it stands where its
-    own base puts it (no model: the seed arm). With ``scene`` it is the arm as the scene's
-    ``[arm]`` places it (base, tool, home; no model: the scene's own), as the tasks take it:
-    for forward and inverse kinematics in the cell's frame."""
+    own base puts it (no model: the seed arm). With ``scene`` it is the arm the tasks take
+    there, for forward and inverse kinematics in the cell's frame: no model, the scene's own
+    as its ``[arm]`` places it (base, tool, home); a model named, that model at the scene's
+    base (its own tool and home)."""
     from armpath.model.catalog import resolve_model
 
     _checked({"link_radius_mm": link_radius_mm})

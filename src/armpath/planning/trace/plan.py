@@ -608,8 +608,10 @@ def _span_text(curve: Curve, arc: CurveArc) -> str:
     length = curve.length
     if b - a >= length - 1e-6:
         return f"once round from {a % length:.1f} mm"
-    through = " (through 0)" if np.floor(b / length) > np.floor(a / length) else ""
-    return f"{a % length:.1f}..{b % length:.1f} mm{through}"
+    # an arc ending at the curve's end ends there, not at 0 of the next round
+    end = b % length if b % length > 1e-9 or b < length else length
+    through = " (through 0)" if np.floor(b / length - 1e-12) > np.floor(a / length) else ""
+    return f"{a % length:.1f}..{end:.1f} mm{through}"
 
 
 def _trace_arcs(
