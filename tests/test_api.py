@@ -435,10 +435,16 @@ def test_an_arm_given_as_an_object_is_told_where_the_scene_stands_its_arm():
 
     cell = armpath.load_scene(ROOT / "examples" / "ur5_cell.toml")
     ur5 = armpath.load_arm("ur5")
-    with pytest.raises(CollisionError, match=r"not at \(-150, 0, 250\) mm where the scene"):
+    from armpath.errors import ArmpathWarning
+
+    with (
+        pytest.raises(CollisionError, match=r"not at \(-150, 0, 250\) mm where the scene"),
+        pytest.warns(ArmpathWarning, match="stands where its own base puts it"),
+    ):
         armpath.reach(ur5, [450.0, -150.0, 250.0], scene=cell)
     placed = ur5.placed(placement_matrix(cell.arm_spec.base))
-    result = armpath.reach(placed, [450.0, -150.0, 250.0], scene=cell)
+    with pytest.warns(ArmpathWarning, match=r"\('ur5'\) carries another tool, not as"):
+        result = armpath.reach(placed, [450.0, -150.0, 250.0], scene=cell)
     np.testing.assert_allclose(result.tool_positions_mm[-1], [450.0, -150.0, 250.0], atol=0.05)
 
 
@@ -810,3 +816,34 @@ def test_an_arm_is_loaded_as_a_scene_places_it():
     np.testing.assert_allclose(armpath.forward_kinematics(named, home)["tip"], expected, atol=1e-6)
     alone = armpath.forward_kinematics(armpath.load_arm("ur5"), home)["tip"]
     assert not np.allclose(alone, expected)
+
+
+def test_the_scenes_own_model_given_unplaced_is_pointed_out():
+    """A UR5 loaded alone and given with the UR5 cell planned with its base at the origin and
+    its own tool, not where the cell stands its UR5, silently unless it collided. It now warns
+    (an ArmpathWarning naming the cell's base and load_arm(scene=...)); the arm as the cell
+    places it, and another model, are not warned about."""
+    import warnings
+    from pathlib import Path
+
+    import armpath
+    from armpath.api import arm_and_scene
+    from armpath.errors import ArmpathWarning
+
+    cell = armpath.load_scene(Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml")
+
+    def said(arm):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            arm_and_scene(arm, cell)
+        return [str(w.message) for w in caught if issubclass(w.category, ArmpathWarning)]
+
+    (note,) = said(armpath.load_arm("ur5"))
+    assert note.startswith(
+        "the arm given ('ur5') stands where its own base puts it and carries another tool, not "
+        "as scene 'UR5 welding cell' places its 'ur5' (base at (-150, 0, 250) mm, the scene's "
+        "tool)"
+    )
+    assert "armpath.load_arm(scene=...)" in note
+    assert said(armpath.load_arm(scene=cell)) == []
+    assert said(armpath.load_arm("puma560")) == []

@@ -181,19 +181,59 @@ def arm_and_scene(
     given, else the seed scene for the seed arm and an empty one for any other arm; the arm
     given (a model name or file is placed where the scene's ``[arm]`` stands it), else the
     scene's arm. An arm in metres is taken in millimetres (:meth:`SerialArm.in_mm`), the unit
-    of every target, tolerance and obstacle. An arm whose base stands inside an obstacle is
+    of every target, tolerance and obstacle. An arm whose base stands inside an obstacle, or a
+    :class:`SerialArm` of the scene's own model placed otherwise than the scene places it, is
     pointed out with an :class:`~armpath.errors.ArmpathWarning` (a warning, not an error)."""
     from armpath.scenes.arm import buried_base_note, scene_arm
 
     the_scene = default_scene(arm) if scene is None else load_scene(scene)
     if isinstance(arm, SerialArm):
         the_arm = arm.in_mm()
+        note = _placed_elsewhere_note(the_arm, the_scene)
     else:
         the_arm = scene_arm(the_scene, None if arm is None else str(arm), tip_link)
-    note = buried_base_note(the_arm, the_scene)
-    if note is not None:
-        warnings.warn(note, ArmpathWarning, stacklevel=3)
+        note = None
+    for said in (note, buried_base_note(the_arm, the_scene)):
+        if said is not None:
+            warnings.warn(said, ArmpathWarning, stacklevel=3)
     return the_arm, the_scene
+
+
+def _placed_elsewhere_note(arm: SerialArm, scene: Scene) -> str | None:
+    """A note where ``arm`` (a :class:`SerialArm` given as it is) is the model the scene's
+    ``[arm]`` places, but stands or carries its tool otherwise than the scene's (a model loaded
+    alone and given with the scene: its base at the origin, its file's tool)."""
+    from armpath.errors import ArmpathError
+    from armpath.scenes.arm import scene_arm
+
+    if scene.arm_spec is None:
+        return None
+    try:
+        placed = scene_arm(scene)
+    except ArmpathError:  # the scene's model is not to be found here: nothing to compare
+        return None
+    if placed.name != arm.name or placed.n_joints != arm.n_joints:
+        return None
+    base = np.allclose(placed.T_world_base, arm.T_world_base, atol=1e-6)
+    tool = np.allclose(placed.T_flange_tool, arm.T_flange_tool, atol=1e-6) and np.allclose(
+        placed.T_joint_flange, arm.T_joint_flange, atol=1e-6
+    )
+    if base and tool:
+        return None
+    where = ", ".join(f"{v:g}" for v in np.round(placed.T_world_base[:3, 3], 3))
+    differs = " and ".join(
+        what
+        for what, same in (
+            ("stands where its own base puts it", base),
+            ("carries another tool", tool),
+        )
+        if not same
+    )
+    return (
+        f"the arm given ({arm.name!r}) {differs}, not as scene {scene.name!r} places its "
+        f"{arm.name!r} (base at ({where}) mm, the scene's tool): armpath.load_arm(scene=...) "
+        "gives the arm as the scene places it"
+    )
 
 
 @contextlib.contextmanager
