@@ -1012,13 +1012,10 @@ def _goal_states(
         if picked.shape[0] >= 4 * count:
             break
     if not any_clear:
-        raise PlanningError(
-            f"no configuration reaching ({', '.join(f'{v:g}' for v in p.target)}) mm keeps the "
-            "links "
-            + (f"{world.margin:g} mm clear of the obstacles and " if world.obstacles else "")
-            + f"{world.self_margin:g} mm clear of each other, with {body_buffer_mm:g} mm to "
-            "spare for the motion onto it"
-        )
+        from armpath.planning.reach_generic import no_clear_goal_error
+
+        where = ", ".join(f"{v:g}" for v in p.target)
+        raise no_clear_goal_error(where, "mm", world, body_buffer_mm)
     picks = list(picked)
     states: list[IntArray] = []
     errors: list[float] = []

@@ -151,6 +151,20 @@ def _no_member(
     )
 
 
+def no_clear_goal_error(
+    where: str, unit: str, world: CollisionWorld, body_buffer: float
+) -> PlanningError:
+    """The error of a target (at ``where``, in ``unit``) none of whose sampled configurations
+    keeps the goal states' clearance: the margin from the obstacles (where there are any) and
+    between the links, with ``body_buffer`` to spare."""
+    return PlanningError(
+        f"no configuration reaching ({where}) {unit} keeps the links "
+        + (f"{world.margin:g} {unit} clear of the obstacles and " if world.obstacles else "")
+        + f"{world.self_margin:g} {unit} clear of each other, with {body_buffer:g} {unit} "
+        "to spare for the motion onto it"
+    )
+
+
 def _limit_bounds(arm: SerialArm) -> list[tuple[float | None, float | None]]:
     """The joint limits as scipy's bounds (None where a joint is unlimited)."""
     return [
@@ -781,13 +795,7 @@ def generic_goal_states(
     goal_clear = goal_links_rule(arm, world, target.position, body_buffer)
     body_ok = goal_clear(samples, tolerance)
     if not np.any(body_ok):
-        unit = arm.length_unit
-        raise PlanningError(
-            f"no configuration reaching ({where}) {unit} keeps the links "
-            + (f"{world.margin:g} {unit} clear of the obstacles and " if world.obstacles else "")
-            + f"{world.self_margin:g} {unit} clear of each other, with {body_buffer:g} {unit} "
-            "to spare for the motion onto it"
-        )
+        raise no_clear_goal_error(where, arm.length_unit, world, body_buffer)
     samples = samples[body_ok]
     metric = command_metric(arm, samples, s_q)
     members = _diverse(samples, metric, 4 * count, np.full(arm.n_joints, np.radians(spread_deg)))
@@ -883,5 +891,6 @@ __all__ = [
     "goal_links_rule",
     "lattice_candidates",
     "nearest_reachable",
+    "no_clear_goal_error",
     "reach_any_arm",
 ]
