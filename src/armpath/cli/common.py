@@ -376,16 +376,16 @@ def task_setup(
     scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
     if wall:
         scene = scene.with_wall_thickness(wall)
-    with warnings.catch_warnings():  # said below as the CLI says warnings
-        warnings.simplefilter("ignore", ArmpathWarning)
+    with warnings.catch_warnings(record=True) as said:  # said as the CLI says warnings
+        warnings.simplefilter("always", ArmpathWarning)
         arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
     if link_radius_mm is not None:
         arm = arm.with_link_radii(_checked_link_radius(link_radius_mm))  # arms are in mm
-    from armpath.scenes.arm import buried_base_note
-
-    note = buried_base_note(arm, scene)
-    if note is not None:
-        err_console.print(f"warning: {note}", markup=False, soft_wrap=True)
+    for w in said:
+        if issubclass(w.category, ArmpathWarning):
+            err_console.print(f"warning: {w.message}", markup=False, soft_wrap=True)
+        else:  # any other warning goes on as it came
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return arm, scene
 
 
