@@ -195,9 +195,10 @@ class Lattice:
         """The nearest lattice state of joint values ``(..., n)``."""
         return np.round(self.to_ticks_float(q)).astype(np.int64)
 
-    def to_ticks(self, q: ArrayLike, what: str = "joint state") -> IntArray:
+    def to_ticks(self, q: ArrayLike, what: str = "joint state", off_hint: str = "") -> IntArray:
         """Tick state of joint values that lie on the lattice (within 1e-6 tick); raises
-        :class:`InvalidInputError` naming the first joint that does not."""
+        :class:`InvalidInputError` naming the first joint that does not (``off_hint`` added to
+        what it says)."""
         values = np.asarray(q, dtype=np.float64)
         if not np.all(np.isfinite(values)):
             raise InvalidInputError(f"{what} must be finite numbers")
@@ -218,7 +219,7 @@ class Lattice:
             i = int(np.argwhere(off)[0][-1])
             raise InvalidInputError(
                 f"{what}: joint {i + 1} is not a whole number of its ticks of "
-                f"{self.tick_text(i)} (the command lattice)"
+                f"{self.tick_text(i)} (the command lattice){off_hint}"
             )
         return r.astype(np.int64)
 
@@ -251,26 +252,21 @@ class Lattice:
             raise InvalidInputError(
                 f"{what} needs {self.n_joints} joint values, got {v.shape[-1] if v.ndim else 1}"
             )
-        q = self.joint_from_display(v)
-        try:
-            return self.to_ticks(q, what)
-        except InvalidInputError as exc:
-            with np.errstate(all="ignore"):
-                t = self.to_ticks_float(q)
-                off_lattice = bool(np.any(np.abs(t - np.round(t)) > ON_LATTICE_TICKS))
-            angles = v.reshape(-1, self.n_joints)[:, ~self.prismatic]
-            if not (
-                off_lattice
-                and np.all(np.isfinite(angles))
-                and np.any(angles)
-                and np.abs(angles).max() <= 2 * np.pi
-            ):
-                raise
-            # off the lattice, every angle within a turn in radians: likely radians
-            raise InvalidInputError(
-                f"{exc}; every angle lies within +-6.28 deg: were they given in radians? joint "
-                "values are in degrees"
-            ) from None
+        # off the lattice with every angle within a turn in radians: likely radians
+        angles = v.reshape(-1, self.n_joints)[:, ~self.prismatic]
+        within_a_radian_turn = (
+            angles.size > 0
+            and bool(np.all(np.isfinite(angles)))
+            and bool(np.any(angles))
+            and float(np.abs(angles).max()) <= 2 * np.pi
+        )
+        hint = (
+            "; every angle lies within +-6.28 deg: were they given in radians? joint values are "
+            "in degrees"
+            if within_a_radian_turn
+            else ""
+        )
+        return self.to_ticks(self.joint_from_display(v), what, hint)
 
     @property
     def mm_per_unit(self) -> float:
