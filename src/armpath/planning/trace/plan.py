@@ -498,12 +498,13 @@ def _search_need(arm: SerialArm, world: CollisionWorld, opts: TraceOptions) -> F
     )
 
 
-def _has_search_room(
-    arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, opts: TraceOptions
-) -> bool:
-    """Whether lattice state ``q_ticks`` keeps every clearance the search needs."""
+def _search_slack(
+    arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, need: FloatArray
+) -> FloatArray:
+    """Of lattice states ``q_ticks`` ``(..., n)``, the smallest slack over the pairs against
+    ``need`` (:func:`_search_need`; mm): the state has the search's room where it is >= 0."""
     values, _ = world.pair_clearances(arm, arm.lattice.to_joint(q_ticks))
-    return bool(np.all(values - _search_need(arm, world, opts) >= 0.0))
+    return np.asarray((values - need).min(axis=-1), dtype=np.float64)
 
 
 def _lift_off(
@@ -532,8 +533,7 @@ def _lift_off(
     states = [np.asarray(q_ticks, dtype=np.int64)]
 
     def slack(q: IntArray) -> FloatArray:
-        values, _ = world.pair_clearances(arm, arm.lattice.to_joint(q))
-        return np.asarray((values - need).min(axis=-1), dtype=np.float64)
+        return _search_slack(arm, world, q, need)
 
     def best_certified(here: IntArray, cand: IntArray, floor: float) -> IntArray | None:
         """Of ``cand`` (within the limits), the one of most slack above ``floor`` among the 16
@@ -810,7 +810,7 @@ def _enter_backward(
     is certified again."""
     arm, world = tracer.arm, tracer.world
     lift = _lift_off(arm, world, q_start, opts, toward=q_from).states()
-    if lift.shape[0] < 2 and not _has_search_room(arm, world, q_start, opts):
+    if lift.shape[0] < 2 and _search_slack(arm, world, q_start, _search_need(arm, world, opts)) < 0:
         raise PlanningError("no lift-off from there gives the search room")
     # (a state with the room already is searched to as it is: no lift-off is needed; a seam
     # 1 mm above a table was left untraced there, "no lift-off gives the search room")
