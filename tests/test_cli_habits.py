@@ -161,7 +161,7 @@ def test_one_command_is_said_in_the_singular():
 def test_coverage_past_the_reachable_ends_is_said_as_all_of_it():
     """The seed crack's pass runs a little past both ends of its reachable arc, and the tables
     said "765.75 of 765.68 mm reachable covered", more than all; now "all 765.68 mm reachable
-    covered (the passes run 0.06 mm past its ends)". Less than all is said as before."""
+    covered (the passes run 0.06 mm past its ends in all)". Less than all is said as before."""
     from armpath.report import coverage_text
 
     def cov(covered, reachable, within=None):
@@ -173,7 +173,7 @@ def test_coverage_past_the_reachable_ends_is_said_as_all_of_it():
         }
 
     assert coverage_text(cov(765.745439555, 765.68376038)) == (
-        "all 765.68 mm reachable covered (the passes run 0.06 mm past its ends)"
+        "all 765.68 mm reachable covered (the passes run 0.06 mm past its ends in all)"
     )
     assert coverage_text(cov(572.18, 572.18)) == "all 572.18 mm reachable covered"
     assert coverage_text(cov(500.0, 572.18)) == "500.00 of 572.18 mm reachable covered"

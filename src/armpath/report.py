@@ -102,7 +102,7 @@ def coverage_text(cov: dict[str, Any]) -> str:
     within = cov["of_reachable"] * reachable
     if within >= reachable - 0.005:
         past = cov["covered_mm"] - within
-        beyond = f" (the passes run {past:.2f} mm past its ends)" if past >= 0.005 else ""
+        beyond = f" (the passes run {past:.2f} mm past its ends in all)" if past >= 0.005 else ""
         return f"all {reachable:.2f} mm reachable covered{beyond}"
     return f"{within:.2f} of {reachable:.2f} mm reachable covered"
 

@@ -394,9 +394,14 @@ def reach(
 
 
 def _orientation_text(rule: dict[str, Any], angle_deg: float) -> str:
-    """The angle reached from an orientation rule (its ``describe()``), with its tolerance."""
-    kind = str(rule["type"]).replace("_", " ")
-    return f"{angle_deg:.3f} deg from the {kind} (tolerance {rule['tolerance_deg']:g} deg)"
+    """The angle reached from an orientation rule (its ``describe()``), with its tolerance:
+    ``tool axis 16.787 deg from (0, 0, -1) (at most 20 deg)``."""
+    if rule["type"] == "axis_cone":
+        toward = ", ".join(f"{float(v) + 0.0:.4g}" for v in rule["direction"])
+        what = f"tool axis {angle_deg:.3f} deg from ({toward})"
+    else:
+        what = f"tool frame {angle_deg:.3f} deg from the pose asked"
+    return f"{what} (at most {rule['tolerance_deg']:g} deg)"
 
 
 def _plan_summary(doc: dict[str, Any], title: str) -> Table:

@@ -111,6 +111,11 @@ class AxisCone:
             "tolerance_deg": float(np.degrees(self.tolerance_rad)),
         }
 
+    def words(self) -> str:
+        """The rule in words, for messages: ``tool axis within 10 deg of (0, 0, -1)``."""
+        toward = ", ".join(f"{v:.4g}" for v in self.direction + 0.0)  # + 0.0: no "-0"
+        return f"tool axis within {np.degrees(self.tolerance_rad):g} deg of ({toward})"
+
 
 @dataclass(frozen=True)
 class PoseOrientation:
@@ -140,6 +145,10 @@ class PoseOrientation:
             "R_world_tool": self.R_world_tool.tolist(),
             "tolerance_deg": float(np.degrees(self.tolerance_rad)),
         }
+
+    def words(self) -> str:
+        """The rule in words, for messages."""
+        return f"tool frame within {np.degrees(self.tolerance_rad):g} deg of the pose asked"
 
 
 Orientation = AxisCone | PoseOrientation

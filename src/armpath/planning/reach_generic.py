@@ -143,7 +143,7 @@ def _no_member(
     if target.orientation is not None:
         return UnreachableError(
             f"target ({where}) {unit} is within reach but no configuration found puts the "
-            f"tool there with its {target.orientation.describe()['type']} rule kept"
+            f"tool there with its {target.orientation.words()}"
         )
     return UnreachableError(
         f"target ({where}) {unit}: no configuration within the limits found reaching it "
@@ -345,9 +345,7 @@ def generic_bound(
         out = _refine_bound(arm, target, start, x0, tolerance)
         if out is not None and out[0] < best:
             best, best_q = out
-    rule = (
-        "" if target.orientation is None else f" and {target.orientation.describe()['type']} rule"
-    )
+    rule = "" if target.orientation is None else f" and the {target.orientation.words()}"
     return GenericBound(
         commands=max(int(np.ceil(best - 1e-9)), 0),
         change_commands=best,
