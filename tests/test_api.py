@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -117,6 +118,14 @@ def test_plan_to_a_point_with_a_tool_axis_is_the_clis_document(tmp_path):
     angle = np.degrees(np.arccos(axis @ [0.0, 0.0, -1.0]))
     assert angle <= 20.0
     assert api.doc["tool_orientation"]["angle_deg"] == pytest.approx(angle, abs=1e-6)
+    # the table says the rule in words, not its type id ("16.787 deg from the axis cone")
+    table = subprocess.run(
+        [sys.executable, "-m", "armpath", "plan", "--to-xyz", "300", "100", "200",
+         "--tool-axis", "0", "0", "-1", "--axis-tolerance", "20"],
+        capture_output=True, text=True, check=True, cwd=tmp_path,
+        env={**os.environ, "COLUMNS": "200"},
+    ).stdout  # fmt: skip
+    assert f"tool axis {angle:.3f} deg from (0, 0, -1) (at most 20 deg)" in table
     with pytest.raises(armpath.errors.InvalidInputError, match="go with to_mm"):
         armpath.plan("seed", to_deg=[0, -90, 0, 0, -90, 0], tool_axis=[0, 0, -1])
 
