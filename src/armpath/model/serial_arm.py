@@ -385,9 +385,10 @@ class SerialArm:
     ) -> SerialArm:
         """The arm carrying another tool: ``T_flange_tool`` from the flange
         (:attr:`T_joint_flange`) to the tool centre point, in place of the tool it carried.
-        Landmarks in the tool frame are replaced by one at the new tool point
-        (``TCP``), and links that ended at them end there (the tool's own capsule; ``radius``
-        replaces their radius when given). ``approach_axis`` (tool frame) is where the tool
+        Landmarks in the tool frame (and the corner the old tool's leg turned at) are replaced
+        by one at the new tool point (``TCP``), and links that ended at them end there (the
+        tool's own capsule, straight from the last joint's frame; ``radius`` replaces their
+        radius when given). ``approach_axis`` (tool frame) is where the tool
         points (kept when not given)."""
         T = _frozen(T_flange_tool, (4, 4), "tool")
         check_rigid(T, "tool")
@@ -396,8 +397,15 @@ class SerialArm:
             check_length(v, "the tool (after the flange)", self.length_unit)
         n = self.n_joints
         tool_frame = n + 1
-        old = [i for i, lm in enumerate(self.landmarks) if lm.frame == tool_frame]
-        keep = [i for i, lm in enumerate(self.landmarks) if lm.frame != tool_frame]
+        # the old tool's points, and the corner its leg turned at (named after the tool point,
+        # in the last joint's frame): a new tool is not reached through the old one's corner
+        tool_names = {f"{lm.name}'" for lm in self.landmarks if lm.frame == tool_frame}
+        old = [
+            i
+            for i, lm in enumerate(self.landmarks)
+            if lm.frame == tool_frame or (lm.frame == n and lm.name in tool_names)
+        ]
+        keep = [i for i in range(len(self.landmarks)) if i not in old]
         landmarks = [self.landmarks[i] for i in keep] + [Landmark("TCP", tool_frame)]
         index = {old_i: new_i for new_i, old_i in enumerate(keep)}
         tcp = len(landmarks) - 1
