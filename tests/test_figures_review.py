@@ -5,6 +5,8 @@ one palette for every frame, joint labels of a 3-D view that do not cover each o
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -302,3 +304,29 @@ def test_seed_arm_keeps_every_joint_label(tmp_path):
         boxes = _text_boxes(fig)
         _assert_apart(boxes)
         assert set(arm.landmark_names) <= {name.strip() for name, _ in boxes}
+
+
+def test_the_tool_path_ends_at_the_tool_and_the_arm_is_drawn_along_its_links(tmp_path):
+    """A UR5's landmarks list its corner (J4') after the tool point: the figure drew the arm
+    in that order, a line from the tool back to the elbow, and its red path followed the
+    corner, ending nowhere near the target. The path now ends at the tool point the maker's
+    D-H product puts there (the cell's base and 120 mm tool), and each drawn segment of the
+    arm is one of its links."""
+    from arms import UR5_DH
+    from independent_dh import dh_pose
+
+    arm, scene, seq, _ = _ur5_cell()
+    fig = plot_motion_3d(tmp_path / "m.png", arm, scene, seq)
+    lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    path = np.column_stack(lines["tool point path"].get_data_3d()).astype(float)
+    T = dh_pose(*UR5_DH, seq.states_joint()[-1])
+    tool = (T @ [0.0, 0.0, 120.0, 1.0])[:3] + np.array([-150.0, 0.0, 250.0])
+    np.testing.assert_allclose(path[-1], tool, atol=1e-6)
+    end = np.column_stack(lines["end"].get_data_3d()).astype(float)
+    pts = landmark_positions(arm, seq.states_joint()[-1])
+    pairs = {frozenset((lk.start, lk.end)) for lk in arm.links}
+    index = [int(np.argmin(np.linalg.norm(pts - p, axis=1))) for p in end]
+    for a, b in itertools.pairwise(index):
+        if np.linalg.norm(pts[a] - pts[b]) > 1e-9:  # two names of one point join no link
+            assert frozenset((a, b)) in pairs
+    np.testing.assert_allclose(end[-1], tool, atol=1e-6)

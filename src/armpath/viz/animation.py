@@ -29,6 +29,7 @@ from armpath.viz.figures import (
     POINT_LABEL,
     draw_obstacles,
     draw_table,
+    drawn_chain,
     label_axes_3d,
     set_equal_axes,
     tip_label,
@@ -187,7 +188,7 @@ def animation_frames(
             f"{len(anim.times)} times"
         )
     idx = frames_for(anim.times, max_frames)
-    arms = landmark_positions(anim.arm, q[idx])
+    arms = landmark_positions(anim.arm, q[idx])[:, drawn_chain(anim.arm)]
     tips = tool_position(anim.arm, q)
     fig = Figure(figsize=(6.4, 5.6), dpi=dpi)
     # to measure the title and the legend

@@ -126,6 +126,27 @@ def _draw_box(ax: Axes3D, b: Box) -> np.ndarray:
     return np.asarray(corners)
 
 
+def drawn_chain(arm: SerialArm) -> list[int]:
+    """Landmark indices in the order the arm's links join them, base to tool point, each point
+    with the others at the same place (a zero-length leg's ends: ``J6`` and ``tool``) beside
+    it: the arm as one polyline. The landmarks list frame origins first and corners after, so
+    drawn in their own order a line ran from a UR5's tool point back to its elbow."""
+    order: list[int] = []
+    for link in arm.links:
+        for i in (link.start, link.end):
+            if not order or order[-1] != i:
+                order.append(i)
+    at = landmark_positions(arm, arm.home)
+    size = max(float(np.abs(at).max()), 1.0)
+    for i in range(len(arm.landmarks)):
+        if i in order:
+            continue
+        same = [k for k, o in enumerate(order) if np.linalg.norm(at[o] - at[i]) <= 1e-9 * size]
+        if same:  # every landmark a link leaves out lies where the skeleton already is
+            order.insert(same[0] + 1, i)
+    return order
+
+
 def tip_label(arm: SerialArm) -> str:
     """What the figures call the point the arm works with: the seed arm's fingertip (SPEC),
     any other arm's tool point."""
@@ -223,16 +244,19 @@ def plot_motion_3d(
     ax = fig.add_subplot(projection="3d")
     assert isinstance(ax, Axes3D)
     joints = seq.states_joint()
-    motion = landmark_positions(arm, _drawn_motion(seq, joints))
+    drawn = _drawn_motion(seq, joints)
+    motion = landmark_positions(arm, drawn)
+    tips = tool_position(arm, drawn)
     every = np.unique(np.r_[0 : seq.n_commands + 1 : max(1, seq.n_commands // 12), seq.n_commands])
-    states = landmark_positions(arm, joints[every])  # the first and the last too
+    chain = drawn_chain(arm)
+    states = landmark_positions(arm, joints[every])[:, chain]  # the first and the last too
     pts = [motion.reshape(-1, 3), np.zeros((1, 3))]
     pts += draw_obstacles(ax, scene)
     for ghost in states:
         ax.plot(*ghost.T, color="0.6", alpha=0.35, linewidth=1)
     ax.plot(*states[0].T, "-o", color="0.35", linewidth=2.5, markersize=4, label="start")
     ax.plot(*states[-1].T, "-o", color="tab:blue", linewidth=2.5, markersize=4, label="end")
-    ax.plot(*motion[:, -1].T, color="tab:red", linewidth=1.5, label=f"{tip_label(arm)} path")
+    ax.plot(*tips.T, color="tab:red", linewidth=1.5, label=f"{tip_label(arm)} path")
     if target is not None:
         t = np.asarray(target, dtype=float).reshape(-1, 3)
         label = "target" if len(t) == 1 else "targets (numbered)"
@@ -248,7 +272,8 @@ def plot_motion_3d(
     ax.view_init(elev=22, azim=-60)
     fig.tight_layout()
     numbered = np.asarray(target, dtype=float).reshape(-1, 3) if target is not None else None
-    _label_landmarks(ax, arm.landmark_names, states[-1], numbered, color="tab:blue")
+    names = [arm.landmark_names[i] for i in chain]
+    _label_landmarks(ax, names, states[-1], numbered, color="tab:blue")
     fig.savefig(path, dpi=110)
     return fig
 
@@ -645,7 +670,7 @@ def plot_trace_3d(
     assert isinstance(ax, Axes3D)
     eye = _eye_direction(*_TRACE_VIEW)
     tip = tool_position(arm, sequence.sample_motion(_SUBSTEPS))  # state k is row k * _SUBSTEPS
-    states = landmark_positions(arm, sequence.states_joint())
+    states = landmark_positions(arm, sequence.states_joint())[:, drawn_chain(arm)]
     first = spans[0][0] if spans else 0
     pts = [tip, curve, states[[first, -1]].reshape(-1, 3)]
     pts += draw_obstacles(ax, scene)
