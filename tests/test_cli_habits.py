@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import independent_replay as ir
@@ -181,3 +182,32 @@ def test_coverage_past_the_reachable_ends_is_said_as_all_of_it():
     assert coverage_text(cov(600.05, 600.0, within=599.85)) == (
         "599.85 of 600.00 mm reachable covered"
     )
+
+
+def test_the_tables_name_the_tool_tips_own_clearance_not_the_least_of_all():
+    """``run``'s table and the summary put the least clearance of all under "(tool tip)": a
+    link 30 mm from a ball was reported as the tool tip's though the tip stayed 75 mm above
+    the table. At the start the seed arm's link BC runs 40 mm above a 10 mm ball and its
+    fingertip is 75 mm above the table (SPEC's start pose); nothing comes nearer after."""
+    from armpath.api import trace
+    from armpath.report import summary_markdown
+
+    centre, radius = np.array([330.0, 60.0, 260.0]), 25.0
+    ball = [0.0, 255.0, 100.0]  # 40 mm below C = (0, 255, 140) at the start, on BC
+    scene = {
+        "name": "ball by the elbow",
+        "obstacles": [
+            {"type": "half_space", "name": "table", "point": [0, 0, 0], "normal": [0, 0, 1]},
+            {"type": "sphere", "name": "ball", "center": ball, "radius": 10.0},
+        ],
+    }
+    half = np.linspace(0.0, np.pi, 20)
+    points = np.column_stack(
+        [centre[0] + radius * np.cos(half), centre[1] + radius * np.sin(half), 0 * half + 260]
+    )
+    r = trace("seed", points, scene=scene, bound=False)
+    c = r.doc["clearance"]
+    assert c["min_body_clearance_mm"] == pytest.approx(40.0 - 10.0, abs=1e-6)
+    assert c["min_tool_tip_clearance_mm"] == pytest.approx(75.0, abs=1e-6)
+    text = summary_markdown([("trace", r.doc)])
+    assert "| 75.000 (tool tip) / 30.000 (links) |" in text

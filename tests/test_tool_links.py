@@ -88,9 +88,7 @@ def test_a_ball_where_the_tilted_axis_passes_the_flange_is_clear(tilted, tmp_pat
     scene = {
         "name": "ball at the old corner",
         "arm": {"model": str(tmp_path / "tilted.urdf"), "home_deg": [0, 0]},
-        "obstacles": [
-            {"type": "sphere", "name": "ball", "center": corner.tolist(), "radius": 5.0}
-        ],
+        "obstacles": [{"type": "sphere", "name": "ball", "center": corner.tolist(), "radius": 5.0}],
     }
     placed = armpath.load_arm(scene=scene)
     torch = next(lk for lk in placed.links if lk.end == len(placed.joints) + 1)
@@ -98,7 +96,6 @@ def test_a_ball_where_the_tilted_axis_passes_the_flange_is_clear(tilted, tmp_pat
     r = armpath.plan(None, to_deg=[0.1, 0.0], scene=scene)
     least = _segment_distance(corner, j2, tip) - torch.radius - 5.0 - 0.96
     assert r.doc["min_clearance_mm"] >= least
-
 
 
 def test_a_new_tool_is_not_reached_through_the_old_tools_corner(tmp_path):

@@ -40,6 +40,15 @@ def _mm(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
+def tip_and_links_text(doc: dict[str, Any], tip: str = "tool tip") -> str:
+    """A trace's or a tour's smallest clearances (mm): ``0.005 (tool tip) / 1.017 (links)``,
+    each of its own part (not the overall least, which is either)."""
+    c = doc["clearance"]
+    return (
+        f"{_mm(c['min_tool_tip_clearance_mm'])} ({tip}) / {_mm(c['min_body_clearance_mm'])} (links)"
+    )
+
+
 def arc_ends(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float]:
     """Where an arc of a trace result's curve begins and ends (mm) as a reader counts them:
     on a closed curve each within its length, so an arc that runs on past the curve's start
@@ -120,12 +129,11 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
     notes = []
     for title, doc in tasks:
         if doc["task"] == "trace":
-            body = doc["clearance"]["min_body_clearance_mm"]
             lines.append(
                 f"| {title} | {doc['n_commands']} | {bound_cell(doc)} | "
                 f"{doc['max_deviation_mm']:.4f} (largest "
-                f"deviation of the continuous path) | {_mm(doc['min_clearance_mm'])} (tool tip) / "
-                f"{_mm(body)} (links) | {doc['wall_thickness'] or '-'} |"
+                f"deviation of the continuous path) | {tip_and_links_text(doc)} | "
+                f"{doc['wall_thickness'] or '-'} |"
             )
             continue
         bound, error = bound_cell(doc), f"{doc['error_mm']:.4f}"
@@ -135,8 +143,7 @@ def _glance(tasks: Sequence[tuple[str, dict[str, Any]]]) -> tuple[list[str], lis
         if doc["task"] == "spotweld":
             bound = f"{bound_cell(doc)}, {doc['goal_states_bound_commands']}*"
             error += " (largest)"
-            body = doc["clearance"]["min_body_clearance_mm"]
-            clearance = f"{clearance} (tool tip) / {_mm(body)} (links)"
+            clearance = tip_and_links_text(doc)
             order = " → ".join(str(i) for i in doc["order"])
             first = (
                 f"the first bound holds for every order and {bound_scope(doc['lower_bound'])}"

@@ -1193,6 +1193,7 @@ def _print_run(
         over_lattice,
         passes_text,
         proven,
+        tip_and_links_text,
         uncovered_arcs,
     )
 
@@ -1228,8 +1229,7 @@ def _print_run(
             str(trace_doc["n_commands"]),
             starred(trace_doc),
             f"{trace_doc['max_deviation_mm']:.4f} (deviation)",
-            f"{_mm(trace_doc['min_clearance_mm'])} (tip); "
-            f"{_mm(trace_doc['clearance']['min_body_clearance_mm'])} (links)",
+            tip_and_links_text(trace_doc, "tip"),
         )
     if tour_doc is not None:
         table.add_row(
@@ -1237,8 +1237,7 @@ def _print_run(
             str(tour_doc["n_commands"]),
             f"{starred(tour_doc)}, {tour_doc['goal_states_bound_commands']}**",
             f"{tour_doc['error_mm']:.4f} (largest)",
-            f"{_mm(tour_doc['min_clearance_mm'])} (tip); "
-            f"{_mm(tour_doc['clearance']['min_body_clearance_mm'])} (links)",
+            tip_and_links_text(tour_doc, "tip"),
         )
     out_console.print(table)
     if trace_doc is not None:
