@@ -477,3 +477,38 @@ def test_a_urdf_with_two_joints_of_one_name_is_refused(tmp_path):
     assert "more than one link is named 'b'" in line, line
     (tmp_path / "ok.urdf").write_text(_urdf("0.1 0 0"))
     assert _fk_tip(["0", "0", "--model", "ok.urdf"], tmp_path) == [200.0, 0.0, 0.0]
+
+
+_TWO_JOINTS = """<robot name="r">
+  <link name="base"/><link name="a"/><link name="b"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0 {z}"/><axis xyz="0 0 1"/>{limit1}</joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="{x} 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+</robot>
+"""
+_LIMIT = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
+
+
+@pytest.mark.parametrize(
+    ("z", "x", "limit1", "words"),
+    [
+        # a 290 mm and a 400 mm link written in mm: 690 m of arm
+        ("290", "400", _LIMIT, "add up to 690 m, more than the 100 m"),
+        # ROS's parser refuses a revolute joint without <limit>; it was taken as unlimited
+        ("0.29", "0.4", "", "joint 'j1' is revolute but has no <limit>"),
+        # ROS reads a <limit> without lower and upper as 0 and 0; it was taken as unlimited
+        ("0.29", "0.4", '<limit effort="1" velocity="1"/>', "gives no lower or upper"),
+    ],
+)
+def test_a_urdf_in_mm_or_without_a_joints_range_is_refused(tmp_path, z, x, limit1, words):
+    path = tmp_path / "r.urdf"
+    path.write_text(_TWO_JOINTS.format(z=z, x=x, limit1=limit1), encoding="utf-8")
+    r = _cli("fk", "--model", str(path), "0", "0", cwd=tmp_path)
+    assert r.returncode == 1 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and words in lines[0]
+    # in metres, with its limits, the same file loads: the tool 290 mm up, 400 mm out
+    path.write_text(_TWO_JOINTS.format(z="0.29", x="0.4", limit1=_LIMIT), encoding="utf-8")
+    np.testing.assert_allclose(tool_pose(arm_from_urdf(path), [0.0, 0.0])[:3, 3], [400, 0, 290])

@@ -414,7 +414,8 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     else:
         count = (
             f"{doc['n_commands']}  (a direct motion to its goal state needs "
-            f"{doc['direct_commands']}; armpath reach proves a bound at the point)"
+            f"{doc['direct_commands']}; armpath reach bounds the commands to the point: "
+            "proven for the seed arm, the best found for others)"
         )
     table.add_row("commands", count)
     if "error_mm" in doc:

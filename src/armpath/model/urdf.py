@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -41,6 +42,27 @@ def _check_well_formed(path: Path) -> None:
     if root.tag != "robot":
         raise InvalidInputError(
             f"URDF {path.name!r}: the root element is <{root.tag}>, not <robot>"
+        )
+
+
+#: The longest chain (the joint origins' offsets added up, m) a URDF may give: 100 m is far
+#: beyond any arm's, and a file written in mm (a 290 mm link as 290) gives hundreds of metres.
+MAX_CHAIN_M = 100.0
+
+
+def _check_limit_given(p: Path, uj: Any) -> None:
+    """A revolute or prismatic joint's ``<limit>`` gives its range: one without (ROS's parser
+    refuses the file) or without lower and upper (ROS reads both as 0: the joint locked) is
+    refused, rather than taken as turning without limit."""
+    if uj.limit is None:
+        raise InvalidInputError(
+            f"URDF {p.name!r}: joint {uj.name!r} is {uj.type} but has no <limit> (ROS refuses "
+            "such a file); give its lower and upper limits, or make it continuous"
+        )
+    if uj.limit.lower is None and uj.limit.upper is None:
+        raise InvalidInputError(
+            f"URDF {p.name!r}: joint {uj.name!r}'s <limit> gives no lower or upper (ROS reads "
+            "both as 0, the joint locked); give them, or make the joint continuous"
         )
 
 
@@ -145,6 +167,8 @@ def arm_from_urdf(
         kind = JointKind.PRISMATIC if uj.type == "prismatic" else JointKind.REVOLUTE
         scale = _M_TO_MM if kind is JointKind.PRISMATIC else 1.0
         lo, hi = -np.inf, np.inf
+        if uj.type != "continuous":
+            _check_limit_given(p, uj)
         if uj.type != "continuous" and uj.limit is not None:
             if uj.limit.lower is not None:
                 lo = float(uj.limit.lower) * scale
@@ -165,6 +189,17 @@ def arm_from_urdf(
         carry = np.eye(4)
     if not joints:
         raise InvalidInputError(f"URDF {p.name!r}: the chain to {tip_link!r} has no moving joint")
+    chain_mm = sum(
+        float(np.linalg.norm(np.array(uj.origin, dtype=np.float64)[:3, 3])) * _M_TO_MM
+        for uj in path_joints
+        if uj.origin is not None
+    )
+    if chain_mm > MAX_CHAIN_M * _M_TO_MM:
+        raise InvalidInputError(
+            f"URDF {p.name!r}: its joint origins add up to {chain_mm / _M_TO_MM:,.0f} m, more "
+            f"than the {MAX_CHAIN_M:g} m armpath takes for an arm; a URDF's lengths are metres: "
+            "were they written in mm?"
+        )
     n = len(joints)
     names = ("base", *(j.name for j in joints), "tool")
     radii = link_radii(link_radii_mm, n, f"URDF {p.name!r}: link radii")
