@@ -6,6 +6,8 @@ of it near. Checked against hand-composed transforms of the robot file."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -123,3 +125,19 @@ def test_a_new_tool_is_not_reached_through_the_old_tools_corner(tmp_path):
     for i, lm in enumerate(other.landmarks):
         if lm.frame >= 2:
             assert _segment_distance(pts[i], j2, new_tip) <= 1e-9
+
+
+def test_model_show_says_where_a_urdf_tool_is_and_what_a_scene_tool_is_given_from(tmp_path):
+    """``model show`` said the torch was "40 0 150 mm from the flange", but that was from the
+    last joint's frame; the URDF's tip link is the flange, and a scene's tool is given from it
+    (copying the shown offset into a scene applied it twice)."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "tilted.urdf"
+    path.write_text(URDF, encoding="utf-8")
+    shown = subprocess.run(
+        [sys.executable, "-m", "armpath", "model", "show", str(path)],
+        capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "300"},
+    ).stdout  # fmt: skip
+    assert "tool: 0 0 0 mm from the flange (40 0 150 mm from the last joint's frame" in shown

@@ -78,10 +78,18 @@ def show(
                 str(int(arm.lattice.max_ticks[i])),
             )
         out_console.print(table)
-        tool = np.asarray(arm.T_flange_tool)
+        tool = np.asarray(arm.T_flange_tool)  # from the last joint's frame
+        flange = np.asarray(arm.T_joint_flange)
+        from_flange = np.linalg.solve(flange, tool)[:3, 3] + 0.0  # + 0.0: no "-0"
+        where = f"{' '.join(f'{v:.6g}' for v in from_flange)} {arm.length_unit} from the flange"
+        if not np.allclose(flange, np.eye(4)):  # a URDF's tip link, a file's flange offset
+            where += (
+                f" ({' '.join(f'{v + 0.0:.6g}' for v in tool[:3, 3])} {arm.length_unit} from "
+                "the last joint's frame; a scene's [arm] tool is given from the flange)"
+            )
         out_console.print(
-            f"tool: {' '.join(f'{v:g}' for v in tool[:3, 3])} {arm.length_unit} from the flange, "
-            f"approach axis {' '.join(f'{v:g}' for v in arm.approach_axis)} (tool frame)",
+            f"tool: {where}, approach axis {' '.join(f'{v:g}' for v in arm.approach_axis)} "
+            "(tool frame)",
             markup=False,
         )
         base = np.asarray(arm.T_world_base)
