@@ -868,7 +868,7 @@ def _lattice_too_coarse(
             hint = (
                 f" (only {moving.size} joints move the tool point: a tool offset from the "
                 "wrist centre lets the others take up the error)"
-                if moving.size <= 3
+                if moving.size <= 3 < arm.n_joints
                 else ""
             )
             return (

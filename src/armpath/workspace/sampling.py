@@ -241,8 +241,8 @@ class GridSpec:
         check_size(
             edge * edge * edge,  # Python floats: inf rather than an overflow warning
             MAX_VOXELS,
-            f"voxels of a {voxel:g} grid over the reach ({reach:.0f} {arm.length_unit}; use a "
-            f"voxel of at least {least:g})",
+            f"voxels of a {voxel:g} {arm.length_unit} grid over the reach ({reach:.0f} "
+            f"{arm.length_unit}; use a voxel of at least {least:g} {arm.length_unit})",
             option,
         )
         n = int(edge)
