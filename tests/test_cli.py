@@ -374,6 +374,13 @@ def test_a_proven_bound_the_plan_meets_is_reported_as_the_fewest():
     assert "the fewest commands" in _bound_words({"lower_bound": met})
     assert "plan 5 above it" in _bound_words({"lower_bound": above})
     assert "fewest" not in _bound_words({"lower_bound": guess})
+    # a bound that is mostly sampling error says so (a reviewer's 6-axis arm: >= 2 against 59)
+    sampled = {"commands": 2, "value_commands": 2.0, "gap_commands": 57, "gap_percent": 2850.0,
+               "proven": True, "sampling": {"largest_error_on_path_commands": 29.59}}  # fmt: skip
+    assert "weak: 29.6 commands of sampling error" in _bound_text(sampled, "every order")
+    tight = {**sampled, "commands": 103, "value_commands": 102.5,
+             "sampling": {"largest_error_on_path_commands": 1.11}}  # fmt: skip
+    assert "weak" not in _bound_text(tight, "one pass")
 
 
 def test_huge_joint_values_print_in_exponent_form_and_a_zero_tool_axis_is_named():

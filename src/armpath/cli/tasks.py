@@ -620,9 +620,16 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
         )
     if bound["gap_commands"] == 0:  # a proven bound the plan meets: no plan has fewer
         return f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); {MEETS_BOUND}"
+    error = (bound.get("sampling") or {}).get("largest_error_on_path_commands")
+    weak = (
+        f"; weak: {error:.1f} commands of sampling error were taken off it (a larger "
+        "--bound-samples lets the search split its samples finer)"
+        if error is not None and error > 0.25 * max(bound["value_commands"], 1.0)
+        else ""
+    )
     return (
         f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
-        f"plan {bound['gap_commands']} above it ({gap})"
+        f"plan {bound['gap_commands']} above it ({gap}){weak}"
     )
 
 
