@@ -500,6 +500,13 @@ _LIMIT = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
         ("0.29", "0.4", "", "joint 'j1' is revolute but has no <limit>"),
         # ROS reads a <limit> without lower and upper as 0 and 0; it was taken as unlimited
         ("0.29", "0.4", '<limit effort="1" velocity="1"/>', "gives no lower or upper"),
+        # reversed limits were refused without the file's name or their unit
+        (
+            "0.29",
+            "0.4",
+            '<limit lower="3" upper="-3" effort="1" velocity="1"/>',
+            "URDF 'r.urdf': joint 'j1' limits: lower 3 rad is above upper -3 rad",
+        ),
     ],
 )
 def test_a_urdf_in_mm_or_without_a_joints_range_is_refused(tmp_path, z, x, limit1, words):

@@ -174,6 +174,12 @@ def arm_from_urdf(
                 lo = float(uj.limit.lower) * scale
             if uj.limit.upper is not None:
                 hi = float(uj.limit.upper) * scale
+        if lo > hi:
+            unit = "m" if kind is JointKind.PRISMATIC else "rad"
+            raise InvalidInputError(
+                f"URDF {p.name!r}: joint {uj.name!r} limits: lower {lo / scale:g} {unit} is above "
+                f"upper {hi / scale:g} {unit}"
+            )
         if kind is JointKind.PRISMATIC:  # lengths, as the origins
             for side, v in (("lower", lo), ("upper", hi)):
                 if np.isfinite(v):
