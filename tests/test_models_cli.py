@@ -500,6 +500,8 @@ _LIMIT = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
         ("0.29", "0.4", "", "joint 'j1' is revolute but has no <limit>"),
         # ROS reads a <limit> without lower and upper as 0 and 0; it was taken as unlimited
         ("0.29", "0.4", '<limit effort="1" velocity="1"/>', "gives no lower or upper"),
+        # one side only: ROS reads the other as 0; it was taken as unlimited
+        ("0.29", "0.4", '<limit upper="1" effort="1" velocity="1"/>', "gives its upper only"),
         # reversed limits were refused without the file's name or their unit
         (
             "0.29",
@@ -519,3 +521,17 @@ def test_a_urdf_in_mm_or_without_a_joints_range_is_refused(tmp_path, z, x, limit
     # in metres, with its limits, the same file loads: the tool 290 mm up, 400 mm out
     path.write_text(_TWO_JOINTS.format(z="0.29", x="0.4", limit1=_LIMIT), encoding="utf-8")
     np.testing.assert_allclose(tool_pose(arm_from_urdf(path), [0.0, 0.0])[:3, 3], [400, 0, 290])
+
+
+def test_a_robot_placed_far_off_in_its_urdf_world_is_not_taken_for_mm(tmp_path):
+    """Fixed joints before the first moving one place the robot in its world: 106 m off is
+    not an arm written in mm (only the arm's own chain is held to 100 m)."""
+    world = _TWO_JOINTS.format(z="0.29", x="0.4", limit1=_LIMIT).replace(
+        '<link name="base"/>',
+        '<link name="world"/><link name="base"/><joint name="place" type="fixed">'
+        '<parent link="world"/><child link="base"/><origin xyz="80 70 0"/></joint>',
+    )
+    path = tmp_path / "placed.urdf"
+    path.write_text(world, encoding="utf-8")
+    tip = tool_pose(arm_from_urdf(path), [0.0, 0.0])[:3, 3]
+    np.testing.assert_allclose(tip, [80_400.0, 70_000.0, 290.0], atol=1e-6)

@@ -102,8 +102,8 @@ def test_a_ball_where_the_tilted_axis_passes_the_flange_is_clear(tilted, tmp_pat
 
 def test_a_new_tool_is_not_reached_through_the_old_tools_corner(tmp_path):
     """An offset gripper along the last joint's axis keeps its two legs (sideways, then along
-    it); a scene's tool put in its place runs straight from the last joint's frame to the new
-    tool point, not through the old gripper's corner."""
+    it); a scene's tool put on it (50 mm further out) turns at its own corner, as the same
+    tool written in the file would, and not at the old gripper's point."""
     import armpath
     from armpath.kinematics import landmark_positions
 
@@ -122,9 +122,15 @@ def test_a_new_tool_is_not_reached_through_the_old_tools_corner(tmp_path):
     pts = landmark_positions(other, q)
     new_tip = tip + R2 @ np.array([0, 0, 50.0])
     np.testing.assert_allclose(pts[len(arm.joints) + 1], new_tip, atol=1e-9)
+    names = other.landmark_names
+    assert "tool" not in names  # the old tool point is gone
+    np.testing.assert_allclose(pts[names.index("TCP'")], corner, atol=1e-9)
     for i, lm in enumerate(other.landmarks):
-        if lm.frame >= 2:
-            assert _segment_distance(pts[i], j2, new_tip) <= 1e-9
+        if lm.frame >= 2:  # on the new tool's L: to the corner, then along the axis
+            on = min(
+                _segment_distance(pts[i], j2, corner), _segment_distance(pts[i], corner, new_tip)
+            )
+            assert on <= 1e-9
 
 
 def test_model_show_says_where_a_urdf_tool_is_and_what_a_scene_tool_is_given_from(tmp_path):
@@ -141,3 +147,45 @@ def test_model_show_says_where_a_urdf_tool_is_and_what_a_scene_tool_is_given_fro
         capture_output=True, text=True, check=True, env={**os.environ, "COLUMNS": "300"},
     ).stdout  # fmt: skip
     assert "tool: 0 0 0 mm from the flange (40 0 150 mm from the last joint's frame" in shown
+
+
+def test_a_dh_tables_last_a_leg_and_an_offset_gripper_keep_their_turn(tmp_path):
+    """A standard D-H table's last row with both a and alpha folds them into the tool's
+    transform, so its approach axis is not the last joint's; the skeleton must still turn at
+    the end of that a leg (where the independent D-H product puts the last frame's origin),
+    not cut across. An offset gripper given as a scene's tool turns as the same gripper in
+    the robot file does."""
+    from armpath.kinematics import landmark_positions
+    from armpath.model.dh import DHRow, dh_arm
+    from independent_dh import dh_pose
+
+    limits = (-3.0, 3.0)
+    a, alpha, d = [0.0, 400.0, 100.0], [np.pi / 2, 0.0, np.pi / 2], [300.0, 0.0, 0.0]
+    rows = [DHRow(a[i], alpha[i], d[i], limits=limits) for i in range(3)]
+    tool = np.eye(4)
+    tool[2, 3] = 150.0
+    arm = dh_arm(rows, "standard", T_flange_tool=tool, link_radii_mm=20)
+    q = np.array([0.4, -0.3, 0.9])
+    pts = landmark_positions(arm, q)
+    turn = dh_pose(a, alpha, d, q)[:3, 3]  # the last frame's origin: the a leg's end
+    tip = (dh_pose(a, alpha, d, q) @ [0.0, 0.0, 150.0, 1.0])[:3]
+    names = arm.landmark_names
+    assert np.linalg.norm(pts[names.index("tool'")] - turn) <= 1e-9
+    assert np.linalg.norm(pts[names.index("tool")] - tip) <= 1e-9
+    legs = {(names[lk.start], names[lk.end]) for lk in arm.links}
+    assert ("tool'", "tool") in legs
+
+    rows = [DHRow(0.0, 0.0, 300.0, limits=limits), DHRow(0.0, np.pi / 2, 0.0, limits=limits),
+            DHRow(400.0, 0.0, 0.0, limits=limits)]  # fmt: skip
+    gripper = np.eye(4)
+    gripper[:3, 3] = [100.0, 0.0, 150.0]
+    in_file = dh_arm(rows, "modified", T_flange_tool=gripper, link_radii_mm=20)
+    as_scene_tool = dh_arm(rows, "modified", link_radii_mm=20).with_tool(gripper)
+    for one in (in_file, as_scene_tool):
+        at = landmark_positions(one, q)
+        ends = sorted(
+            tuple(np.round(at[p], 6)) for lk in one.links[-2:] for p in (lk.start, lk.end)
+        )
+        first = sorted(tuple(np.round(at[p], 6)) for lk in in_file.links[-2:]
+                       for p in (lk.start, lk.end))  # fmt: skip
+        assert len(one.links) == len(in_file.links) and ends == first

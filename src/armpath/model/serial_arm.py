@@ -219,6 +219,32 @@ class Link:
     checked: bool = True
 
 
+def tool_corner(T_tool: ArrayLike, last_axis: ArrayLike, tiny: float = 1e-9) -> FloatArray | None:
+    """Where a tool's capsule turns, in the last joint's frame, or None for one straight leg.
+
+    ``T_tool`` is the tool frame in the last joint's frame; its approach axis (z) ends the
+    capsule. The turn is the point of that axis nearest the joint frame's origin, kept when
+    the leg to it runs square to the last joint's axis (``last_axis``: a D-H table's ``a``
+    leg, an offset gripper whose axis is the joint's) or along it (an offset along the joint's
+    own axis): the arm's skeleton turns there. A leg oblique to the joint's axis would turn at
+    a point off the tool (a torch 150 mm out and tilted 30 deg: 76 mm off it), so such a
+    tool is one straight leg from the joint frame's origin to the tool point."""
+    T = np.asarray(T_tool, dtype=np.float64)
+    t, u = T[:3, 3], T[:3, 2]
+    corner = t - float(t @ u) * u
+    size = float(np.linalg.norm(corner))
+    if size <= tiny or abs(float(t @ u)) <= tiny:
+        return None  # one leg either way: straight along the axis, or square to it
+    a = np.asarray(last_axis, dtype=np.float64)
+    cos = abs(float(corner @ a)) / (size * max(float(np.linalg.norm(a)), tiny))
+    return corner if cos <= _SQUARE or cos >= 1.0 - _SQUARE else None
+
+
+#: How near square to (or along) the last joint's axis a tool's first leg must run for the
+#: skeleton to turn at its corner (:func:`tool_corner`; cosine, about 0.06 deg).
+_SQUARE = 1e-6
+
+
 def check_arm(arm: object) -> None:
     """Refuse anything but a :class:`SerialArm` where the modules below the API take one (a
     model's name raised an AttributeError from deep inside)."""
@@ -422,6 +448,7 @@ class SerialArm:
             # the tool point was not on any link: join it to the last point of the arm
             last = max(range(len(keep)), key=lambda i: landmarks[i].frame)
             links.append(Link("tool", last, tcp, 0.0 if radius is None else radius))
+        links = self._tool_legs(links, landmarks, tcp, T)
         axis = self.approach_axis if approach_axis is None else tuple(np.asarray(approach_axis))
         return replace(
             self,
@@ -430,6 +457,29 @@ class SerialArm:
             links=tuple(links),
             approach_axis=axis,
         )
+
+    def _tool_legs(
+        self, links: list[Link], landmarks: list[Landmark], tcp: int, T_tool: FloatArray
+    ) -> list[Link]:
+        """The new tool's leg into the tool point ``tcp`` turned at its :func:`tool_corner`
+        where it has one (a corner landmark added to ``landmarks``), as a robot file's tool
+        is; the leg is named ``L{k}`` alone, ``L{k}a`` and ``L{k}b`` when it turns."""
+        into = [i for i, lk in enumerate(links) if lk.end == tcp and lk.start != tcp]
+        if len(into) != 1 or self.n_joints == 0:
+            return links
+        leg = links[into[0]]
+        base = leg.name[:-1] if leg.name[-1:] in ("a", "b") and leg.name[:-1] else leg.name
+        if any(lk.name in (f"{base}a", f"{base}b") for k, lk in enumerate(links) if k != into[0]):
+            return links  # the joint's own corner already splits this link: keep its names
+        corner = tool_corner(T_tool, self.joints[-1].axis)
+        if corner is None:
+            return [*links[: into[0]], replace(leg, name=base), *links[into[0] + 1 :]]
+        offset = (float(corner[0]), float(corner[1]), float(corner[2]))
+        landmarks.append(Landmark(f"{landmarks[tcp].name}'", self.n_joints, offset))
+        turn = len(landmarks) - 1
+        first = replace(leg, name=f"{base}a", end=turn)
+        second = replace(leg, name=f"{base}b", start=turn)
+        return [*links[: into[0]], first, second, *links[into[0] + 1 :]]
 
     def link_bodies(self) -> list[int]:
         """For each link, the body it belongs to: 0 for the fixed base (unchecked links), else

@@ -5,10 +5,11 @@ legs: first square to the joint's axis, to the *corner* (the point of the axis n
 previous frame's origin), then along the axis to the frame's origin. For D-H tables (standard or
 modified) these are exactly the table's ``a_{i-1}`` and ``d_i`` legs, so the segments run through
 every physical corner of the arm rather than cutting across it. The tool point is reached the
-same way, its approach axis (the tool frame's z) taking the place of a joint axis, where that
-axis is along the last joint's (an offset gripper); a tool tilted from it is one straight leg
-from the last joint frame's origin to the tool point (the corner of a tilted axis may lie off
-the tool altogether).
+same way, its approach axis (the tool frame's z) taking the place of a joint axis, where the
+first leg runs square to the last joint's axis or along it (a D-H table's last ``a``, an
+offset gripper); otherwise the tool is one straight leg from the last joint frame's origin to
+the tool point (:func:`~armpath.model.serial_arm.tool_corner`: the corner of a tilted torch's
+axis may lie off the torch altogether).
 
 **Link k** (``k = 0``: the fixed base; ``k = 1 .. n``: the part moved by joint k) holds the legs
 from frame k's origin to frame k + 1's (the last link to the tool point); its capsule radius is
@@ -29,18 +30,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from armpath.errors import InvalidInputError
-from armpath.model.serial_arm import Joint, JointKind, Landmark, Link
+from armpath.model.serial_arm import Joint, JointKind, Landmark, Link, tool_corner
 
 #: Legs shorter than this (length unit) are dropped: their ends are one point.
 ZERO_LENGTH = 1e-9
-#: A tool's approach axis counts as along the last joint's axis (and the tool is reached in two
-#: legs, sideways then along it) where the cosine between them is at least this.
-_PARALLEL = float(np.cos(np.radians(1e-3)))
-
-
-def _unit(v: ArrayLike) -> np.ndarray:
-    a = np.asarray(v, dtype=np.float64)
-    return a / max(float(np.linalg.norm(a)), ZERO_LENGTH)
 
 
 def link_radii(radii: float | Sequence[float] | ArrayLike, n_joints: int, what: str) -> list[float]:
@@ -110,10 +103,8 @@ def physical_links(
             T, axis, prismatic = T_tool, np.array([0.0, 0.0, 1.0]), False
         t = T[:3, 3]
         u = T[:3, :3] @ axis  # the axis in frame k - 1
-        if k > n and n > 0 and abs(float(u @ _unit(joints[-1].axis))) < _PARALLEL:
-            # a tool tilted from the last joint's axis: its corner is where its approach axis
-            # passes nearest the flange, which may lie off the tool altogether (a torch tilted
-            # 30 deg, 150 mm out: 76 mm below it); the tool is the straight leg to its point
+        if k > n and n > 0 and tool_corner(T, joints[-1].axis, ZERO_LENGTH) is None:
+            # the tool is one straight leg to its point (see tool_corner)
             u = t / max(float(np.linalg.norm(t)), ZERO_LENGTH)
         along = float(t @ u)
         corner = t - along * u

@@ -64,6 +64,12 @@ def _check_limit_given(p: Path, uj: Any) -> None:
             f"URDF {p.name!r}: joint {uj.name!r}'s <limit> gives no lower or upper (ROS reads "
             "both as 0, the joint locked); give them, or make the joint continuous"
         )
+    if uj.limit.lower is None or uj.limit.upper is None:
+        given, missing = ("upper", "lower") if uj.limit.lower is None else ("lower", "upper")
+        raise InvalidInputError(
+            f"URDF {p.name!r}: joint {uj.name!r}'s <limit> gives its {given} only (ROS reads "
+            f"the {missing} as 0); give both"
+        )
 
 
 def arm_from_urdf(
@@ -195,9 +201,12 @@ def arm_from_urdf(
         carry = np.eye(4)
     if not joints:
         raise InvalidInputError(f"URDF {p.name!r}: the chain to {tip_link!r} has no moving joint")
+    # the arm itself, from its first moving joint's origin on (fixed joints before it place
+    # the robot in its world, which may lie far off)
+    first = next(i for i, uj in enumerate(path_joints) if uj.type != "fixed")
     chain_mm = sum(
         float(np.linalg.norm(np.array(uj.origin, dtype=np.float64)[:3, 3])) * _M_TO_MM
-        for uj in path_joints
+        for uj in path_joints[first:]
         if uj.origin is not None
     )
     if chain_mm > MAX_CHAIN_M * _M_TO_MM:
