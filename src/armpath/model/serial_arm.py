@@ -413,9 +413,9 @@ class SerialArm:
         (:attr:`T_joint_flange`) to the tool centre point, in place of the tool it carried.
         Landmarks in the tool frame (and the corner the old tool's leg turned at) are replaced
         by one at the new tool point (``TCP``), and links that ended at them end there (the
-        tool's own capsule, straight from the last joint's frame; ``radius`` replaces their
-        radius when given). ``approach_axis`` (tool frame) is where the tool
-        points (kept when not given)."""
+        tool's own capsule, turned at its :func:`tool_corner` as a robot file's tool is;
+        ``radius`` replaces their radius when given). ``approach_axis`` (tool frame) is where
+        the tool points (kept when not given)."""
         T = _frozen(T_flange_tool, (4, 4), "tool")
         check_rigid(T, "tool")
         T = _frozen(np.asarray(self.T_joint_flange) @ T, (4, 4), "tool")

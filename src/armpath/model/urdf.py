@@ -52,8 +52,8 @@ MAX_CHAIN_M = 100.0
 
 def _check_limit_given(p: Path, uj: Any) -> None:
     """A revolute or prismatic joint's ``<limit>`` gives its range: one without (ROS's parser
-    refuses the file) or without lower and upper (ROS reads both as 0: the joint locked) is
-    refused, rather than taken as turning without limit."""
+    refuses the file), or without its lower or its upper (ROS reads a missing side as 0; both
+    missing: the joint locked), is refused, rather than taken as unlimited on that side."""
     if uj.limit is None:
         raise InvalidInputError(
             f"URDF {p.name!r}: joint {uj.name!r} is {uj.type} but has no <limit> (ROS refuses "
@@ -174,12 +174,8 @@ def arm_from_urdf(
         scale = _M_TO_MM if kind is JointKind.PRISMATIC else 1.0
         lo, hi = -np.inf, np.inf
         if uj.type != "continuous":
-            _check_limit_given(p, uj)
-        if uj.type != "continuous" and uj.limit is not None:
-            if uj.limit.lower is not None:
-                lo = float(uj.limit.lower) * scale
-            if uj.limit.upper is not None:
-                hi = float(uj.limit.upper) * scale
+            _check_limit_given(p, uj)  # both sides given
+            lo, hi = float(uj.limit.lower) * scale, float(uj.limit.upper) * scale
         if lo > hi:
             unit = "m" if kind is JointKind.PRISMATIC else "rad"
             raise InvalidInputError(
