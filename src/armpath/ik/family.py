@@ -55,14 +55,15 @@ def arm_size(arm: SerialArm) -> float:
 
 def shift_into_limits(arm: SerialArm, q: FloatArray, near: FloatArray | None = None) -> FloatArray:
     """Revolute joints of ``q`` ``(M, n)`` turned by whole turns: into the joint limits where
-    a turn allows, and among those (or for unlimited joints) nearest ``near``. Rows that stay
-    outside the limits are returned as they are (check with ``arm.within_limits``)."""
+    a turn allows, and among those (or for unlimited joints) nearest ``near`` (one state
+    ``(n,)``, or one per row). Rows that stay outside the limits are returned as they are
+    (check with ``arm.within_limits``)."""
     out = np.array(q, dtype=np.float64, copy=True)
     for i, joint in enumerate(arm.joints):
         if joint.kind is not JointKind.REVOLUTE:
             continue
         lo, hi = joint.limits
-        ref = 0.0 if near is None else float(near[i])
+        ref = 0.0 if near is None else np.asarray(near, dtype=np.float64)[..., i]
         v = out[:, i]
         best = ref + (v - ref + np.pi) % (2 * np.pi) - np.pi  # the turn nearest the reference
         if np.isfinite(lo) or np.isfinite(hi):
@@ -191,22 +192,26 @@ class GenericFamily:
         size = self.size
         lam = np.full(q.shape[0], 1e-3)
 
-        def errors(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        rot_rows = None if rotations is None else np.asarray(rotations)
+        axis_rows = None if axes is None else np.asarray(axes)
+        lo_rows, hi_rows = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+
+        def errors(x: FloatArray, rows: NDArray[np.int64]) -> tuple[FloatArray, FloatArray]:
             frames = forward_frames(arm, x)
             J = jacobian_from_frames(arm, frames)
             tool = frames[:, -1]
             e_pos = (self.target.position - tool[:, :3, 3]) / size
             Jp = J[:, :3] / size
             parts, jacs = [e_pos], [Jp]
-            if rotations is not None:
+            if rot_rows is not None:
                 e_rot = 0.5 * np.sum(
-                    np.cross(tool[:, :3, :3], rotations, axisa=1, axisb=1, axisc=1), axis=2
+                    np.cross(tool[:, :3, :3], rot_rows[rows], axisa=1, axisb=1, axisc=1), axis=2
                 )
                 parts.append(e_rot)
                 jacs.append(J[:, 3:])
-            elif axes is not None:
+            elif axis_rows is not None:
                 axis = tool[:, :3, :3] @ np.asarray(arm.approach_axis, dtype=np.float64)
-                parts.append(axes - axis)
+                parts.append(axis_rows[rows] - axis)
                 # the axis turns with the tool: d(axis) = w x axis = -[axis]x J_w dq
                 jacs.append(-_skew(axis) @ J[:, 3:])
             elif self.target.orientation is not None:
@@ -215,23 +220,46 @@ class GenericFamily:
                 jacs.append(J_ang[:, None, :])
             return np.concatenate(parts, axis=1), np.concatenate(jacs, axis=1)
 
-        err, J = errors(q)
+        # the damping measures a prismatic joint's move in the arm's size, as a revolute one's
+        # in radians: in its own mm it held a track's carriage where it stood (a start 1 m off
+        # along a 2 m track never came nearer than 0.6 m)
+        # (a joint held by ``lower`` == ``upper`` takes no part in the steps)
+        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+        scale = np.broadcast_to(
+            np.where(np.asarray(hi) > np.asarray(lo), np.where(prismatic, size, 1.0), 0.0),
+            q.shape,
+        )
+        err, J = errors(q, np.arange(q.shape[0]))
         cost = np.sum(err**2, axis=1)
+        # rows on the target to rounding stop moving (they are independent of each other)
+        on_target = (EXACT_FRACTION * 1e-2) ** 2
+        rows = np.flatnonzero(cost >= on_target)
         for _ in range(iterations):
-            JtJ = np.swapaxes(J, 1, 2) @ J
-            g = np.einsum("sji,sj->si", J, err)
-            dq = np.linalg.solve(JtJ + lam[:, None, None] * np.eye(n), g[..., None])[..., 0]
-            q_new = np.clip(q + dq, lo, hi)
-            err_new, J_new = errors(q_new)
-            cost_new = np.sum(err_new**2, axis=1)
-            better = cost_new < cost
-            q[better] = q_new[better]
-            err[better] = err_new[better]
-            J[better] = J_new[better]
-            cost[better] = cost_new[better]
-            lam = np.where(better, np.maximum(lam / 5.0, 1e-12), np.minimum(lam * 5.0, 1e8))
-            if np.all(cost < (EXACT_FRACTION * 1e-2) ** 2):
+            if rows.size == 0:
                 break
+            sr = scale[rows]
+            Jr, er, lr = J[rows] * sr[:, None, :], err[rows], lam[rows]
+            JtJ = np.swapaxes(Jr, 1, 2) @ Jr
+            g = np.einsum("sji,sj->si", Jr, er)
+            dx = np.linalg.solve(JtJ + lr[:, None, None] * np.eye(n), g[..., None])[..., 0]
+            dq = dx * sr
+            q_new = np.clip(
+                q[rows] + dq,
+                lo_rows[rows] if lo_rows.ndim == 2 else lo_rows,
+                hi_rows[rows] if hi_rows.ndim == 2 else hi_rows,
+            )
+            err_new, J_new = errors(q_new, rows)
+            cost_new = np.sum(err_new**2, axis=1)
+            better = cost_new < cost[rows]
+            won = rows[better]
+            q[won], err[won], J[won], cost[won] = (
+                q_new[better],
+                err_new[better],
+                J_new[better],
+                cost_new[better],
+            )
+            lam[rows] = np.where(better, np.maximum(lr / 5.0, 1e-12), np.minimum(lr * 5.0, 1e8))
+            rows = rows[cost[rows] >= on_target]
         return q
 
 

@@ -41,6 +41,7 @@ from armpath.ik.target import DEFAULT_AXIS_TOLERANCE_DEG, ToolTarget, unit_vecto
 from armpath.kinematics import landmark_positions, tool_point_joints, tool_pose
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.trace.carriage import CarriageSchedule, carriage_joint, carriage_schedule
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -622,6 +623,16 @@ class GenericCurveFamily(CurveFamily):
         self._solver = complete_solver(self.arm) if six else None
         #: the last solution found for each tool frame (numerical family): warm starts
         self._last: dict[tuple[float, ...], FloatArray] = {}
+        #: the same with the carriage at its scheduled value (:mod:`.carriage`)
+        self._last_scheduled: dict[tuple[float, ...], FloatArray] = {}
+        self._carriage = None if six else carriage_joint(self.arm, self.tip_joints)
+
+    @cached_property
+    def schedule(self) -> CarriageSchedule | None:
+        """Where the arm's carriage stands along the curve (None: the arm has none)."""
+        if self._carriage is None:
+            return None
+        return carriage_schedule(self.arm, self.curve, self._carriage)
 
     @cached_property
     def coarse_dirs(self) -> FloatArray:
@@ -679,7 +690,8 @@ class GenericCurveFamily(CurveFamily):
         q, index = q[ok], index[ok]
         if q.shape[0] == 0:
             return q, index
-        q = shift_into_limits(self.arm, q)
+        if self._solver is not None:  # Levenberg-Marquardt's are turned as they are found
+            q = shift_into_limits(self.arm, q)
         ok = GenericFamily(self.arm, ToolTarget(E)).exact(q)
         return np.asarray(q[ok], dtype=np.float64), np.asarray(index[ok], dtype=np.int64)
 
@@ -696,10 +708,12 @@ class GenericCurveFamily(CurveFamily):
         hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
         rng = np.random.default_rng(0)
         starts = rng.uniform(lo, hi, (Rs.shape[0], arm.n_joints))
+        fresh = starts.copy()
+        turn_near = np.zeros_like(starts)  # members turned nearest 0, or the one continued
         for i, key in enumerate(keys):
             last = self._last.get(key)
             if last is not None:
-                starts[i] = last
+                starts[i] = turn_near[i] = last
         a = np.asarray(arm.approach_axis)
         wanted = Rs @ a  # (M, 3) the tool direction of each frame
         if not self._point_alone:
@@ -722,9 +736,49 @@ class GenericCurveFamily(CurveFamily):
             apart, frame = cKDTree(wanted).query(got)  # chord between unit vectors
             near = apart <= 2.0 * np.sin(0.5 * _POINT_ALONE_SPACING)
             good = near & fam.exact(q)
+        # turned by whole turns nearest 0 or the solution continued: a lineage crossing 180 deg
+        # on a joint limited to +-360 deg (a UR5's) stays continuous; brought to [-180, 180)
+        # it jumped a turn there, and the reference DP, seeing a turn, cut the curve in two
+        q = shift_into_limits(arm, q, turn_near)
         for k in np.flatnonzero(good).tolist():
             self._last[keys[k]] = q[k]
-        return np.asarray(q[good], dtype=np.float64), frame[good]
+        q, frame = np.asarray(q[good], dtype=np.float64), frame[good]
+        if self.schedule is not None and not self._point_alone:
+            q_s, frame_s = self._scheduled(fam, E, Rs, keys, fresh)
+            q, frame = np.concatenate([q, q_s]), np.concatenate([frame, frame_s])
+        return q, frame
+
+    def _scheduled(
+        self,
+        fam: GenericFamily,
+        E: FloatArray,
+        Rs: FloatArray,
+        keys: list[tuple[float, ...]],
+        starts: FloatArray,
+    ) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Each tool frame of ``Rs`` solved with the carriage held at its scheduled value for
+        ``E`` (continued from the last such solution of the frame, else from ``starts``)."""
+        assert self.schedule is not None
+        arm, j = self.arm, self.schedule.joint
+        v = float(np.clip(self.schedule.at(E), arm.lower[j], arm.upper[j]))
+        starts = starts.copy()
+        turn_near = np.zeros_like(starts)
+        for i, key in enumerate(keys):
+            last = self._last_scheduled.get(key)
+            if last is not None:
+                starts[i] = turn_near[i] = last
+        starts[:, j] = v
+        lower = np.broadcast_to(arm.lower, starts.shape).copy()
+        upper = np.broadcast_to(arm.upper, starts.shape).copy()
+        lower[:, j] = upper[:, j] = v
+        q = fam.refine(starts, iterations=40, rotations=Rs, lower=lower, upper=upper)
+        a = np.asarray(arm.approach_axis)
+        axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, Rs @ a)
+        good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
+        q = shift_into_limits(arm, q, turn_near)
+        for k in np.flatnonzero(good).tolist():
+            self._last_scheduled[keys[k]] = q[k]
+        return np.asarray(q[good], dtype=np.float64), np.flatnonzero(good)
 
 
 def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = None) -> FloatArray:

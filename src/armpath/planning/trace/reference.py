@@ -149,7 +149,9 @@ def _dp_layer(
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover - compiled
     """One DP layer: for each node of ``q`` (commands) the best predecessor in ``prev_q``, either
     traced (largest joint change <= ``max_step``, costing that change) or after a lift-off
-    (costing ``lift_cost`` plus half the change: a new pass).
+    (costing ``lift_cost`` plus the change: a new pass, and the move between the passes takes
+    at least that many commands; half the change let a 7-axis arm on a slow track leave the
+    carriage's schedule for a pass that ran out of reach, then drive the track 285 mm back).
 
     Traced predecessors are looked for in a grid over the :data:`_GRID_KEYS` joints that spread
     the predecessors over most cells (cells at least ``max_step`` wide, so only a node's cell
@@ -256,9 +258,9 @@ def _dp_layer(
                 d = abs(d)
                 if d > worst:
                     worst = d
-                    if base + 0.5 * worst >= cost[b]:
+                    if base + worst >= cost[b]:
                         break
-            c = base + 0.5 * worst
+            c = base + worst
             if c < cost[b]:
                 cost[b] = c
                 arg[b] = a

@@ -1,0 +1,173 @@
+"""Where a carriage stands along a curve: the schedule of a track or gantry axis that carries a
+whole arm.
+
+An arm on a linear track (a prismatic first joint under six joints or more that set the tool's
+whole frame) has one degree of freedom more than a tool frame needs. Continued from the last
+curve point, Levenberg-Marquardt moves the cheaper joints (the arm's, by radians against the
+track's millimetres) and leaves the track where it stands until the arm runs out of reach: a
+1.7 m seam beside a track was traced in two passes and 162 commands, one move of 52 commands
+driving the track a metre back between them, or 562 in three passes with a slow track.
+
+The carriage's schedule gives the track a value at every curve point instead, chosen once per
+curve by dynamic programming over layers of the curve and a grid of track values:
+
+* a track value is *comfortable* for a curve point when the point, seen from the carriage
+  there, lies among the middle :data:`COMFORT_QUANTILES` of the arm's sampled tool positions
+  along the track's axis that lie near it across the axis (a cloud of forward kinematics at
+  random configurations within the limits, the carriage at zero); others pay
+  :data:`_OUTSIDE_COST` a layer;
+* a step between layers costs what commands cost, the larger of the track's change in its
+  commands and the tool's move relative to the carriage in commands of the arm (its first
+  joint's step swept at :data:`ARM_REACH_FRACTION` of the cloud's reach), plus a little for
+  the square of the track's (:data:`_EVEN_WEIGHT`: an even pace where the costs tie).
+
+A slow track so moves as little as its reach allows (the arm sweeps the rest); a fast one
+shares the move. The family (:class:`~armpath.planning.trace.family.GenericCurveFamily`)
+solves each tool frame with the carriage at its scheduled value beside the free continuation,
+and the reference path picks between them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.geometry.curves import Curve
+from armpath.kinematics import position_jacobian, tool_position
+from armpath.model.serial_arm import JointKind, SerialArm
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: The arm's tool positions sampled for its reach (forward kinematics, random configurations).
+_CLOUD_SAMPLES = 50000
+#: The part of the tool positions near a point across the track's axis that counts as
+#: comfortable along it (quantiles of their coordinate along the axis).
+COMFORT_QUANTILES = (0.05, 0.95)
+#: Fewest samples near a point across the axis for its comfortable range to be judged.
+_FEWEST_NEAR = 12
+#: How far across the axis (a fraction of the cloud's reach) samples count as near a point.
+_NEAR_FRACTION = 0.06
+#: Where along its reach the arm's first joint is taken to sweep the tool (its commands' worth).
+ARM_REACH_FRACTION = 0.6
+#: What a layer outside the comfortable range costs (commands): the schedule leaves it only
+#: where no comfortable value can be kept.
+_OUTSIDE_COST = 50.0
+#: The weight of the square of the carriage's commands a layer beside what the layer costs:
+#: where the commands alone tie (a slow track's whole travel costs the same however it is
+#: spread, the arm sweeping alongside for free), the carriage moves evenly. Without it a 1.7 m
+#: seam's schedule drove the track with the tool (1 mm a mm) for 400 mm, then crept; the
+#: reference left it there for the family's other members and the seam took two passes.
+_EVEN_WEIGHT = 0.25
+#: Layers of the schedule at most, and their spacing at least (mm of arc).
+_MAX_LAYERS = 2000
+_LAYER_MM = 5.0
+#: Track values of the grid at most.
+_MAX_VALUES = 8000
+
+
+def carriage_joint(arm: SerialArm, tip: BoolArray) -> int | None:
+    """The carriage: a prismatic joint that is the first of ``tip`` (the joints that move the
+    tool point) with six joints or more after it (they set the tool's frame), or None."""
+    moving = np.flatnonzero(tip)
+    if moving.size == 0:
+        return None
+    first = int(moving[0])
+    if arm.n_joints - first - 1 < 6 or arm.joints[first].kind is not JointKind.PRISMATIC:
+        return None
+    return first
+
+
+@dataclass(frozen=True)
+class CarriageSchedule:
+    """The carriage's value (model units) at curve points: joint ``joint``, layers at
+    ``points`` (mm) with the value ``value`` on each."""
+
+    joint: int
+    points: FloatArray
+    value: FloatArray
+
+    def at(self, E: FloatArray) -> float:
+        """The scheduled value at the layer nearest the point ``E`` (mm)."""
+        k = int(np.argmin(np.sum((self.points - np.asarray(E)) ** 2, axis=1)))
+        return float(self.value[k])
+
+
+def carriage_schedule(arm: SerialArm, curve: Curve, joint: int) -> CarriageSchedule:
+    """The carriage ``joint``'s schedule along ``curve`` (see the module's docstring)."""
+    rng = np.random.default_rng(0)
+    lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
+    hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    q = rng.uniform(lo, hi, (_CLOUD_SAMPLES, arm.n_joints))
+    q[:, joint] = 0.0
+    cloud = tool_position(arm, q)
+    axis = position_jacobian(arm, q[:1])[0][:, joint]
+    per_unit = float(np.linalg.norm(axis))  # mm the tool moves per unit of the carriage
+    axis = axis / per_unit
+    along = cloud @ axis
+    across = cloud - along[:, None] * axis
+    reach = max(float(np.max(np.linalg.norm(cloud - np.mean(cloud, axis=0), axis=1))), 1e-6)
+
+    n_layers = int(min(_MAX_LAYERS, max(2, np.ceil(curve.length / _LAYER_MM) + 1)))
+    s = np.linspace(0.0, curve.length, n_layers)
+    points = curve.at_arc_length(s)
+    # the comfortable range of the carriage at each layer (model units), NaN where none
+    p_along = points @ axis
+    p_across = points - p_along[:, None] * axis
+    comfort = np.full((n_layers, 2), np.nan)
+    near = _NEAR_FRACTION * reach
+    for k in range(n_layers):
+        d = np.sum((across - p_across[k]) ** 2, axis=1)
+        close = d <= near * near
+        if np.count_nonzero(close) >= _FEWEST_NEAR:
+            u_lo, u_hi = np.quantile(along[close], COMFORT_QUANTILES)
+            comfort[k] = ((p_along[k] - u_hi) / per_unit, (p_along[k] - u_lo) / per_unit)
+
+    grid = arm.lattice
+    step = float(grid.tick[joint] * grid.max_ticks[joint])  # one command of the carriage
+    arm_joint = int(np.flatnonzero(np.arange(arm.n_joints) > joint)[0])
+    arm_mm = float(grid.tick[arm_joint] * grid.max_ticks[arm_joint]) * ARM_REACH_FRACTION * reach
+    v_lo = float(lo[joint]) if np.isfinite(arm.lower[joint]) else float(np.nanmin(comfort))
+    v_hi = float(hi[joint]) if np.isfinite(arm.upper[joint]) else float(np.nanmax(comfort))
+    if not np.isfinite(v_lo) or not np.isfinite(v_hi):  # no layer comfortable anywhere
+        v_lo = v_hi = float(arm.home[joint])
+    spacing = max(step / 4.0, (v_hi - v_lo) / _MAX_VALUES, 1e-9)
+    values = np.linspace(v_lo, v_hi, int(np.floor((v_hi - v_lo) / spacing)) + 1)
+
+    def outside(k: int) -> FloatArray:
+        c0, c1 = comfort[k]
+        if np.isnan(c0):
+            return np.zeros(values.size)
+        return np.where((values >= c0) & (values <= c1), 0.0, _OUTSIDE_COST)
+
+    cost = outside(0)
+    back = np.zeros((n_layers, values.size), dtype=np.int64)
+    back[0] = np.arange(values.size)
+    for k in range(1, n_layers):
+        move = points[k] - points[k - 1]
+        # a step's cost from every value to every value within reach of one layer
+        reach_cells = int(np.ceil((np.linalg.norm(move) / per_unit + step) / spacing)) + 1
+        best = np.full(values.size, np.inf)
+        arg = np.zeros(values.size, dtype=np.int64)
+        for shift in range(-reach_cells, reach_cells + 1):
+            src = np.arange(values.size) - shift
+            ok = (src >= 0) & (src < values.size)
+            dv = shift * spacing
+            rel = np.linalg.norm(move - dv * per_unit * axis)
+            c = np.full(values.size, np.inf)
+            rate = abs(dv) / step
+            c[ok] = cost[src[ok]] + max(rate, rel / arm_mm) + _EVEN_WEIGHT * rate * rate
+            better = c < best
+            best[better], arg[better] = c[better], src[better]
+        cost = best + outside(k)
+        back[k] = arg
+    path = np.zeros(n_layers, dtype=np.int64)
+    path[-1] = int(np.argmin(cost))
+    for k in range(n_layers - 1, 0, -1):
+        path[k - 1] = back[k, path[k]]
+    return CarriageSchedule(joint, points, values[path])
+
+
+__all__ = ["CarriageSchedule", "carriage_joint", "carriage_schedule"]

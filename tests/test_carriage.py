@@ -1,0 +1,137 @@
+"""An arm on a linear track: a prismatic joint carrying a UR5 (seven joints, one more than a tool
+frame needs). The numerical IK moves the carriage as far as a target needs, and a seam longer
+than the arm reaches from one place is traced in one pass with the carriage moving along it.
+
+Judged by an independent D-H product (``independent_dh``, the textbook formula) and the seam's
+own geometry (a straight line): nothing here takes armpath's kinematics for the truth.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import armpath
+import independent_dh as idh
+from armpath.ik.family import GenericFamily
+from armpath.ik.target import ToolTarget
+from armpath.model.dh import robot_from_dict
+
+#: The track along world x (its D-H z axis turned onto x by the base), then UR5's table (deg).
+_ROWS = [
+    {"type": "prismatic", "a": 0, "alpha": -90, "d": 0, "limits": [0, 2000]},
+    {"a": 0, "alpha": 90, "d": 89.159, "offset": 0, "limits": [-360, 360]},
+    {"a": 425, "alpha": 0, "d": 0, "offset": 180, "limits": [-360, 360]},
+    {"a": 392.25, "alpha": 0, "d": 0, "offset": 0, "limits": [-360, 360]},
+    {"a": 0, "alpha": 90, "d": 109.15, "offset": 180, "limits": [-360, 360]},
+    {"a": 0, "alpha": 90, "d": 94.65, "offset": 180, "limits": [-360, 360]},
+    {"a": 0, "alpha": 0, "d": 82.3, "offset": 0, "limits": [-360, 360]},
+]
+_BASE = np.array([[0.0, 0, 1, 0], [1, 0, 0, 0], [0, 1, 0, 300], [0, 0, 0, 1]])
+_TOOL_MM = 120.0
+TRACK_UR5 = {
+    "name": "track_ur5",
+    "convention": "standard",
+    "units": {"length": "mm", "angle": "deg"},
+    "links": _ROWS,
+    "base": _BASE.tolist(),
+    "home": [500, 0, -90, 90, -90, -90, 0],
+    "link_radii_mm": [100, 100, 75, 60, 50, 45, 45, 45],
+}
+
+
+def _pose(q: np.ndarray) -> np.ndarray:
+    """The tool pose for joint values ``q`` (the track in mm, the others in rad)."""
+    pris = np.array([r.get("type") == "prismatic" for r in _ROWS])
+    offset = np.where(pris, 0.0, np.radians([r.get("offset", 0) for r in _ROWS]))
+    T = idh.dh_pose(
+        [r["a"] for r in _ROWS],
+        np.radians([r["alpha"] for r in _ROWS]),
+        [r["d"] for r in _ROWS],
+        q,
+        prismatic=pris,
+        offset=offset,
+    )
+    tool = np.eye(4)
+    tool[2, 3] = _TOOL_MM
+    return _BASE @ T @ tool
+
+
+def test_levenberg_marquardt_moves_the_carriage_as_far_as_the_target_needs():
+    """A tool frame 1.5 m along the track from where the carriage starts is reached: the
+    damping measures the carriage's move in the arm's size (in its own mm it held the carriage
+    where it stood and the tool stayed over 0.5 m off)."""
+    tool = np.eye(4)
+    tool[2, 3] = _TOOL_MM
+    arm = robot_from_dict(TRACK_UR5).with_tool(tool)
+    q_goal = np.array([1500.0, 0.3, -1.2, 1.4, -1.6, -1.5, 0.2])
+    goal = _pose(q_goal)
+    fam = GenericFamily(arm, ToolTarget(goal[:3, 3]))
+    start = np.array([[0.0, 0.3, -1.2, 1.4, -1.6, -1.5, 0.2]])
+    q = fam.refine(start, iterations=60, rotations=goal[None, :3, :3])[0]
+    got = _pose(q)
+    position_mm, rotation = idh.pose_residual(got, goal)
+    assert position_mm < 1e-6
+    assert rotation < 1e-9
+    assert 0.0 <= q[0] <= 2000.0 and q[0] > 1000.0  # the carriage went most of the way
+
+
+@pytest.mark.slow
+def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track(tmp_path):
+    """A 1.7 m seam 1 mm above a table, beside a track whose carriage moves 2 mm a command (the
+    default lattice: 20 ticks of 0.1 mm): one pass, the carriage moving along it. Before the
+    carriage was scheduled along the curve it took three passes and 562 commands, two moves
+    between them driving the track 287 and 106 commands; the reference then left the schedule
+    for a pass that ran out of reach (401 commands, two passes) until a lift-off was charged
+    its whole joint change. The commands are replayed with the independent D-H product: every
+    state on the lattice and within the limits, the tool within the tolerance of the seam at
+    every sampled instant of the pass, the pass covering the seam end to end."""
+    (tmp_path / "track_ur5.json").write_text(json.dumps(TRACK_UR5))
+    (tmp_path / "cell.toml").write_text(
+        """name = "track cell"
+[clearance]
+margin_mm = 1.0
+tool_tip_exempt_mm = 10.0
+[arm]
+model = "track_ur5.json"
+tool = { position_mm = [0, 0, 120], rotation_deg = [0, 0, 0], radius_mm = 3 }
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+[[obstacles]]
+type = "box"
+name = "table"
+center = [1000, -600, 20]
+size = [2200, 400, 40]
+[tasks.trace]
+curve = { type = "parametric", x = "100 + 1700*t", y = "-550", z = "41", t = [0, 1] }
+"""
+    )
+    result = armpath.trace(None, scene=tmp_path / "cell.toml", bound=False)
+    doc = result.doc
+    assert len(doc["passes"]) == 1
+    (i, j) = doc["passes"][0]
+
+    # the states, replayed from the start by the commands: on the lattice and within limits
+    tick = np.array([0.1] + [np.radians(0.1)] * 6)
+    ticks = np.cumsum(np.vstack([result.sequence.start_ticks, result.commands]), axis=0)
+    assert np.abs(result.commands).max() <= 20
+    q = ticks * tick
+    assert np.all(q[:, 0] >= 0.0) and np.all(q[:, 0] <= 2000.0)
+    assert np.all(np.abs(q[:, 1:]) <= 2 * np.pi)
+
+    # the pass, every command sampled 40 times: within 0.1 mm of the seam, end to end
+    f = np.linspace(0.0, 1.0, 41)[:, None]
+    pairs = zip(q[i:j], q[i + 1 : j + 1], strict=True)
+    tips = np.array([_pose(a + t * (b - a))[:3, 3] for a, b in pairs for t in f])
+    off_line = np.hypot(tips[:, 1] + 550.0, tips[:, 2] - 41.0)
+    assert off_line.max() <= 0.1
+    assert tips[:, 0].min() <= 100.0 + 0.1 and tips[:, 0].max() >= 1800.0 - 0.1
+
+    # the carriage moved with the tool along the pass
+    assert np.ptp(q[i : j + 1, 0]) > 200.0
+    assert result.n_commands <= 300
