@@ -15,9 +15,11 @@ import pytest
 
 import armpath
 import independent_dh as idh
+from armpath.geometry.curves import Polyline
 from armpath.ik.family import GenericFamily
 from armpath.ik.target import ToolTarget
 from armpath.model.dh import robot_from_dict
+from armpath.planning.trace.carriage import carriage_joint, carriage_schedule
 
 #: The track along world x (its D-H z axis turned onto x by the base), then UR5's table (deg).
 _ROWS = [
@@ -63,9 +65,7 @@ def test_levenberg_marquardt_moves_the_carriage_as_far_as_the_target_needs():
     """A tool frame 1.5 m along the track from where the carriage starts is reached: the
     damping measures the carriage's move in the arm's size (in its own mm it held the carriage
     where it stood and the tool stayed over 0.5 m off)."""
-    tool = np.eye(4)
-    tool[2, 3] = _TOOL_MM
-    arm = robot_from_dict(TRACK_UR5).with_tool(tool)
+    arm = _track_ur5_with_torch()
     q_goal = np.array([1500.0, 0.3, -1.2, 1.4, -1.6, -1.5, 0.2])
     goal = _pose(q_goal)
     fam = GenericFamily(arm, ToolTarget(goal[:3, 3]))
@@ -76,6 +76,51 @@ def test_levenberg_marquardt_moves_the_carriage_as_far_as_the_target_needs():
     assert position_mm < 1e-6
     assert rotation < 1e-9
     assert 0.0 <= q[0] <= 2000.0 and q[0] > 1000.0  # the carriage went most of the way
+
+
+def _track_ur5_with_torch():
+    tool = np.eye(4)
+    tool[2, 3] = _TOOL_MM
+    return robot_from_dict(TRACK_UR5).with_tool(tool)
+
+
+def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point():
+    """The schedule along a 1.7 m line beside the track: the carriage found (the track, not a
+    seven-joint arm of revolute joints), its value rising evenly (no layer's change above twice
+    the average), and at nine points along the line a configuration with the carriage there puts
+    the tool on the point pointing down within 30 deg (an independent least-squares solve on
+    the D-H product, from 12 starts)."""
+    from scipy.optimize import least_squares
+
+    arm = _track_ur5_with_torch()
+    tip = np.ones(7, dtype=bool)
+    tip[-1] = False  # the torch lies on the last axis
+    assert carriage_joint(arm, tip) == 0
+    iiwa = armpath.load_arm("iiwa14")
+    assert carriage_joint(iiwa, np.ones(7, dtype=bool)) is None
+    line = Polyline("seam", np.array([[100.0, -550.0, 41.0], [1800.0, -550.0, 41.0]]))
+    schedule = carriage_schedule(arm, line, 0)
+    v = schedule.value
+    assert np.all(np.diff(v) >= 0.0)
+    step = np.abs(np.diff(v))
+    assert step.max() <= 2.0 * step.mean() + 1e-9
+    rng = np.random.default_rng(1)
+    for x in np.arange(100.0, 1801.0, 212.5):
+        point = np.array([x, -550.0, 41.0])
+        track = schedule.at(point)
+
+        def residual(q6, point=point, track=track):
+            T = _pose(np.concatenate([[track], q6]))
+            down = T[:3, 2] @ np.array([0.0, 0.0, -1.0])
+            return np.concatenate(
+                [(T[:3, 3] - point) / 100.0, [max(0.0, np.cos(np.radians(30)) - down)]]
+            )
+
+        best = min(
+            (least_squares(residual, rng.uniform(-np.pi, np.pi, 6)) for _ in range(12)),
+            key=lambda r: r.cost,
+        )
+        assert np.linalg.norm(residual(best.x)) < 1e-6, (x, track)
 
 
 @pytest.mark.slow

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.budget import check_time
 from armpath.geometry.curves import Curve
 from armpath.kinematics import position_jacobian, tool_position
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -62,10 +63,11 @@ _OUTSIDE_COST = 50.0
 #: reference left it there for the family's other members and the seam took two passes.
 _EVEN_WEIGHT = 0.25
 #: Layers of the schedule at most, and their spacing at least (mm of arc).
-_MAX_LAYERS = 2000
+_MAX_LAYERS = 1000
 _LAYER_MM = 5.0
-#: Track values of the grid at most.
-_MAX_VALUES = 8000
+#: Track values of the grid at most (a quarter of a command apart where they fit: 4000 along
+#: a 2 m track at 2 mm a command); with the layers, the DP's back pointers take 16 MB at most.
+_MAX_VALUES = 4000
 
 
 def carriage_joint(arm: SerialArm, tip: BoolArray) -> int | None:
@@ -129,10 +131,11 @@ def carriage_schedule(arm: SerialArm, curve: Curve, joint: int) -> CarriageSched
     step = float(grid.tick[joint] * grid.max_ticks[joint])  # one command of the carriage
     arm_joint = int(np.flatnonzero(np.arange(arm.n_joints) > joint)[0])
     arm_mm = float(grid.tick[arm_joint] * grid.max_ticks[arm_joint]) * ARM_REACH_FRACTION * reach
-    v_lo = float(lo[joint]) if np.isfinite(arm.lower[joint]) else float(np.nanmin(comfort))
-    v_hi = float(hi[joint]) if np.isfinite(arm.upper[joint]) else float(np.nanmax(comfort))
-    if not np.isfinite(v_lo) or not np.isfinite(v_hi):  # no layer comfortable anywhere
-        v_lo = v_hi = float(arm.home[joint])
+    judged = comfort[~np.isnan(comfort[:, 0])]
+    if judged.size == 0:  # no layer judged anywhere: the carriage stays where it is at home
+        judged = np.full((1, 2), float(arm.home[joint]))
+    v_lo = float(arm.lower[joint]) if np.isfinite(arm.lower[joint]) else float(judged.min())
+    v_hi = float(arm.upper[joint]) if np.isfinite(arm.upper[joint]) else float(judged.max())
     spacing = max(step / 4.0, (v_hi - v_lo) / _MAX_VALUES, 1e-9)
     values = np.linspace(v_lo, v_hi, int(np.floor((v_hi - v_lo) / spacing)) + 1)
 
@@ -143,14 +146,14 @@ def carriage_schedule(arm: SerialArm, curve: Curve, joint: int) -> CarriageSched
         return np.where((values >= c0) & (values <= c1), 0.0, _OUTSIDE_COST)
 
     cost = outside(0)
-    back = np.zeros((n_layers, values.size), dtype=np.int64)
-    back[0] = np.arange(values.size)
+    back = np.zeros((n_layers, values.size), dtype=np.int32)
     for k in range(1, n_layers):
+        check_time("scheduling the carriage along the curve")
         move = points[k] - points[k - 1]
         # a step's cost from every value to every value within reach of one layer
         reach_cells = int(np.ceil((np.linalg.norm(move) / per_unit + step) / spacing)) + 1
         best = np.full(values.size, np.inf)
-        arg = np.zeros(values.size, dtype=np.int64)
+        arg = np.zeros(values.size, dtype=np.int32)
         for shift in range(-reach_cells, reach_cells + 1):
             src = np.arange(values.size) - shift
             ok = (src >= 0) & (src < values.size)
