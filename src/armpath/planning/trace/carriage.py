@@ -158,7 +158,7 @@ def carriage_schedule(arm: SerialArm, curve: Curve, joint: int) -> CarriageSched
             src = np.arange(values.size) - shift
             ok = (src >= 0) & (src < values.size)
             dv = shift * spacing
-            rel = np.linalg.norm(move - dv * per_unit * axis)
+            rel = float(np.linalg.norm(move - dv * per_unit * axis))
             c = np.full(values.size, np.inf)
             rate = abs(dv) / step
             c[ok] = cost[src[ok]] + max(rate, rel / arm_mm) + _EVEN_WEIGHT * rate * rate
