@@ -232,6 +232,44 @@ def test_circle_in_free_space(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_circle_round_the_arm_is_traced_in_one_pass(tmp_path):
+    """A 450 mm circle round the UR5's base, above everything in the cell: joint 1 turns a
+    whole turn, past 180 deg, within its +-360 deg. One pass, accepted by the independent
+    replay (Universal Robots' D-H table, the cell's obstacles). Before the reference followed
+    the family's members round (they were brought to [-180, 180) deg, and joint 1's jump there
+    read as a turn): two passes and 343 commands, 160 of them turning joint 1 back between;
+    then, before the direction was chosen with the limits in view, one pass of 360, begun
+    after 177 commands turning joint 1 the long way to where the limits let it go round."""
+    c, r = (-150.0, 0.0, 400.0), 450.0
+    scene = tmp_path / "round.toml"
+    text = CELL.read_text(encoding="utf-8").split("[tasks.reach]")[0]
+    scene.write_text(
+        text
+        + "[tasks.trace.curve]\n"
+        + 'type = "parametric"\nname = "round"\n'
+        + f'x = "{c[0]} + {r} * cos(t)"\ny = "{c[1]} + {r} * sin(t)"\nz = "{c[2]}"\n'
+        + f"t = [0, {2 * math.pi!r}]\n",
+        encoding="utf-8",
+    )
+    doc = _armpath(["trace", "--scene", str(scene), "--no-bound"], tmp_path)
+    phi = np.linspace(0.0, 2 * math.pi, 200_001)[:-1]
+    circle = ir.DenseCurve(
+        np.c_[c[0] + r * np.cos(phi), c[1] + r * np.sin(phi), np.full_like(phi, c[2])],
+        closed=True,
+        allowance=r * (1 - math.cos(math.pi / 200_000)),
+    )
+    rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, curve=circle, tolerance=0.1))
+    assert rep.facts["max_deviation_mm"] <= 0.1
+    assert len(doc["passes"]) == 1 and doc["not_traced"] == []
+    traced = sum(abs(p["end_mm"] - p["start_mm"]) for p in doc["pass_details"])
+    assert traced == pytest.approx(2 * math.pi * r, abs=0.5)
+    (i, j) = doc["passes"][0]
+    joint1 = rep.states_ticks[i : j + 1, 0] / 10.0  # deg
+    assert np.ptp(joint1) >= 350.0  # round once, on one side of its limits
+    assert doc["n_commands"] <= 200  # 187: 6 onto the circle, 181 round it
+
+
+@pytest.mark.slow
 def test_spot_welds_on_the_outer_face(tmp_path):
     """The four welds, given as xy and lifted onto the cone's outer face (here: the outer
     radius falls linearly from r_bottom to r_top over the height), each visited within

@@ -204,6 +204,11 @@ class CurveFamily:
         #: unlimited prismatic joint does not repeat)
         revolute = np.array([j.kind is JointKind.REVOLUTE for j in self.arm.joints])
         self.unlimited = revolute & ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
+        #: revolute joints that may turn a whole turn within their limits (the unlimited ones,
+        #: and a UR5's +-360 deg): their members are the same a turn apart, so the reference
+        #: follows them round (then turned by whole turns into the limits)
+        with np.errstate(invalid="ignore"):
+            self.turns_freely = revolute & (self.arm.upper - self.arm.lower >= 2.0 * np.pi - 1e-9)
         self._lo = np.where(np.isfinite(self.arm.lower), self.arm.lower, -np.inf)
         self._hi = np.where(np.isfinite(self.arm.upper), self.arm.upper, np.inf)
         #: joint values to the units slack is read in: deg for a revolute joint, mm (model

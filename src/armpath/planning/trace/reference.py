@@ -102,7 +102,7 @@ class CommandUnits:
     def of_family(fam: CurveFamily) -> CommandUnits:
         grid, tip = fam.arm.lattice, fam.tip_joints
         step = (np.asarray(grid.tick, dtype=np.float64) * grid.max_ticks)[tip]
-        return CommandUnits(step, np.where(fam.unlimited[tip], 2.0 * np.pi / step, 0.0))
+        return CommandUnits(step, np.where(fam.turns_freely[tip], 2.0 * np.pi / step, 0.0))
 
     def units(self, q_tip: FloatArray) -> FloatArray:
         """Tip-joint values (rad, model units) in commands."""
@@ -554,15 +554,23 @@ def reference_pieces(
         nodes.append((float(s), np.ascontiguousarray(units.units(q[keep][:, tip])), sc[keep]))
     if not nodes:
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
-    wrap = fam.unlimited[tip]
+    wrap = fam.turns_freely[tip]
     here = units.units(q_from[tip])
     # either way along the arc: backward in one pass where the DP finds it cheaper by a margin
     # (its first layer costs the approach, so an arc whose end is nearer is traced from there)
     routes = {back: _route(fam, nodes[::-1] if back else nodes, here, units) for back in directions}
+    # the DP measures a joint that turns a whole turn within its limits the shorter way round;
+    # where a pass turns it nearly a whole turn, the limits may put the pass's start a turn
+    # away, and the approach costs what it then takes (a UR5's circle round its base, begun
+    # beside the start but traced the way that ran joint 1 into its limit: 177 commands onto it)
+    cost = {
+        back: total + _limits_extra(fam, units, nodes[::-1] if back else nodes, path, lifts, here)
+        for back, (total, path, lifts) in routes.items()
+    }
     backward = (
         True in routes
         and not routes[True][2]
-        and (False not in routes or routes[True][0] < routes[False][0] - BACKWARD_MARGIN)
+        and (False not in routes or cost[True] < cost[False] - BACKWARD_MARGIN)
     )
     _, path, lifts = routes[backward]
     seq = nodes[::-1] if backward else nodes
@@ -581,6 +589,7 @@ def reference_pieces(
             < _joint_change(part[:1], prev, units.period)[0]
         ):
             part = flipped
+        comes_from = prev * units.step
         prev = part[-1]
         layers = s_seq[lo:hi]
         # where the piece begins: the arc's end, else the layer before it (the lift-off)
@@ -590,6 +599,7 @@ def reference_pieces(
             part, layers, begin, finish = part[::-1], layers[::-1], finish, begin
         rad = part * units.step
         rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
+        rad = _turned_into_limits(fam, rad, comes_from, backward)
         # the joints that do not move the tool point are left to the tracer (it keeps them)
         full = np.zeros((rad.shape[0], fam.arm.n_joints))
         full[:, tip] = rad
@@ -599,6 +609,50 @@ def reference_pieces(
             full = np.vstack([full, full])
         pieces.append(Piece(CurveArc(begin, finish), layers, full, backward))
     return pieces
+
+
+def _limits_extra(
+    fam: CurveFamily,
+    units: CommandUnits,
+    seq: list[tuple[float, FloatArray, FloatArray]],
+    path: list[int],
+    lifts: list[int],
+    here: FloatArray,
+) -> float:
+    """What the approach to a route's first pass (layers ``seq`` in the order traced, members
+    ``path``) costs beyond what the DP counted, once its joints are turned into their limits
+    (:func:`_turned_into_limits`): commands."""
+    part = np.array([seq[k][1][path[k]] for k in range(min(lifts, default=len(seq)))])
+    wrap = fam.turns_freely[fam.tip_joints]
+    rad = part * units.step
+    rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
+    start = _turned_into_limits(fam, rad, here * units.step, False)[0] / units.step
+    unlimited = np.where(fam.unlimited[fam.tip_joints], units.period, 0.0)
+    counted = _joint_change(part[:1], here, units.period)[0]
+    return float(max(_joint_change(start[None], here, unlimited)[0] - counted, 0.0))
+
+
+def _turned_into_limits(
+    fam: CurveFamily, rad: FloatArray, comes_from: FloatArray, backward: bool
+) -> FloatArray:
+    """A piece's tip joints ``rad`` (rows along the curve), each limited joint that turns a
+    whole turn within its limits turned by whole turns so that the piece lies within them,
+    starting (where it is traced from) nearest ``comes_from``; where no turn fits, the one that
+    leaves it least outside."""
+    tip = fam.tip_joints
+    lo, hi = fam.arm.lower[tip], fam.arm.upper[tip]
+    out = rad.copy()
+    first = out[-1] if backward else out[0]
+    for j in np.flatnonzero(fam.turns_freely[tip] & np.isfinite(lo) & np.isfinite(hi)):
+        turns = np.round((comes_from[j] - first[j]) / (2 * np.pi)) + np.arange(-2, 3)
+        low, high = out[:, j].min(), out[:, j].max()
+        outside = np.maximum(lo[j] - (low + 2 * np.pi * turns), 0.0) + np.maximum(
+            high + 2 * np.pi * turns - hi[j], 0.0
+        )
+        away = np.abs(first[j] + 2 * np.pi * turns - comes_from[j])
+        k = turns[np.lexsort((away, np.round(outside, 9)))[0]]
+        out[:, j] += 2 * np.pi * k
+    return out
 
 
 def _route(
