@@ -416,7 +416,8 @@ def test_reference_dp_layer_equals_brute_force():
         d = np.where(wrap, (d + 180.0) % 360.0 - 180.0, d)
         worst = np.abs(d).max(axis=-1)
         traced = np.where(worst <= max_step, prev_cost + worst, np.inf) - bonus[:, None]
-        lift = prev_cost + 120.0 + worst - bonus[:, None]
+        spread = np.abs(d).mean(axis=-1)
+        lift = prev_cost + 120.0 + worst + 0.05 * spread - bonus[:, None]
         want = np.minimum(traced.min(axis=1), lift.min(axis=1))
         np.testing.assert_allclose(cost, want, rtol=0, atol=1e-9)
         finite = np.isfinite(want)

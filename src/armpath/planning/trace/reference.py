@@ -43,6 +43,11 @@ BoolArray = NDArray[np.bool_]
 _MAX_LAYER_STEP = 6.0
 #: What a lift-off (a new pass) costs in the reference DP, as a joint change (commands).
 _LIFT_OFF = 60.0
+#: What a lift-off costs besides, per command of the joints' mean change: among members the
+#: largest change reaches alike (joint 1 turning 146 deg to the other side of a KUKA-like
+#: arm), the one whose other joints move least (its wrist unflipped: the flipped one could
+#: not be entered where its pass began, and 1.4 mm of the seam were left untraced).
+_LIFT_SPREAD = 0.05
 #: Slack (mm or deg) beyond which a reference node earns no more reward, and the reward per
 #: unit of slack (commands).
 _SLACK_COUNTED = 3.0
@@ -149,7 +154,8 @@ def _dp_layer(
 ) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.bool_]]:  # pragma: no cover - compiled
     """One DP layer: for each node of ``q`` (commands) the best predecessor in ``prev_q``, either
     traced (largest joint change <= ``max_step``, costing that change) or after a lift-off
-    (costing ``lift_cost`` plus the change: a new pass, and the move between the passes takes
+    (costing ``lift_cost`` plus the change and :data:`_LIFT_SPREAD` of the mean change: a new
+    pass, and the move between the passes takes
     at least that many commands; half the change let a 7-axis arm on a slow track leave the
     carriage's schedule for a pass that ran out of reach, then drive the track 285 mm back).
 
@@ -251,16 +257,18 @@ def _dp_layer(
             if base >= cost[b]:
                 break  # this lift-off, and every later (costlier) one, cannot win
             worst = 0.0
+            spread = 0.0
             for k in range(j):
                 d = q[b, k] - prev_q[a, k]
                 if period[k] > 0.0:
                     d -= period[k] * np.floor(d / period[k] + 0.5)
                 d = abs(d)
+                spread += d
                 if d > worst:
                     worst = d
                     if base + worst >= cost[b]:
                         break
-            c = base + worst
+            c = base + worst + _LIFT_SPREAD * spread / j
             if c < cost[b]:
                 cost[b] = c
                 arg[b] = a
@@ -579,6 +587,7 @@ def reference_pieces(
     cuts = [0, *sorted(lifts), len(seq)]
     pieces = []
     prev = here
+    comes_from = here * units.step  # where the arm is before each piece, as turned (rad)
     for i in range(len(cuts) - 1):
         lo, hi = cuts[i], cuts[i + 1]
         part = ref[lo:hi]
@@ -589,7 +598,6 @@ def reference_pieces(
             < _joint_change(part[:1], prev, units.period)[0]
         ):
             part = flipped
-        comes_from = prev * units.step
         prev = part[-1]
         layers = s_seq[lo:hi]
         # where the piece begins: the arc's end, else the layer before it (the lift-off)
@@ -600,6 +608,7 @@ def reference_pieces(
         rad = part * units.step
         rad[:, wrap] = np.unwrap(rad[:, wrap], axis=0)
         rad = _turned_into_limits(fam, rad, comes_from, backward)
+        comes_from = rad[0] if backward else rad[-1]  # where the piece is traced to
         # the joints that do not move the tool point are left to the tracer (it keeps them)
         full = np.zeros((rad.shape[0], fam.arm.n_joints))
         full[:, tip] = rad
