@@ -9,6 +9,7 @@ own geometry (a straight line): nothing here takes armpath's kinematics for the 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,6 +21,8 @@ from armpath.ik.family import GenericFamily
 from armpath.ik.target import ToolTarget
 from armpath.model.dh import robot_from_dict
 from armpath.planning.trace.carriage import carriage_joint, carriage_schedule
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 #: The track along world x (its D-H z axis turned onto x by the base), then UR5's table (deg).
 _ROWS = [
@@ -124,39 +127,18 @@ def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point():
 
 
 @pytest.mark.slow
-def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track(tmp_path):
-    """A 1.7 m seam 1 mm above a table, beside a track whose carriage moves 2 mm a command (the
-    default lattice: 20 ticks of 0.1 mm): one pass, the carriage moving along it. Before the
+def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track():
+    """``examples/track_cell.toml`` (its robot file is this module's table): a 1.7 m seam 1 mm
+    above a table, beside a track whose carriage moves 2 mm a command (the default lattice: 20
+    ticks of 0.1 mm): one pass, the carriage moving along it. Before the
     carriage was scheduled along the curve it took three passes and 562 commands, two moves
     between them driving the track 287 and 106 commands; the reference then left the schedule
     for a pass that ran out of reach (401 commands, two passes) until a lift-off was charged
     its whole joint change. The commands are replayed with the independent D-H product: every
     state on the lattice and within the limits, the tool within the tolerance of the seam at
     every sampled instant of the pass, the pass covering the seam end to end."""
-    (tmp_path / "track_ur5.json").write_text(json.dumps(TRACK_UR5))
-    (tmp_path / "cell.toml").write_text(
-        """name = "track cell"
-[clearance]
-margin_mm = 1.0
-tool_tip_exempt_mm = 10.0
-[arm]
-model = "track_ur5.json"
-tool = { position_mm = [0, 0, 120], rotation_deg = [0, 0, 0], radius_mm = 3 }
-[[obstacles]]
-type = "half_space"
-name = "floor"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-[[obstacles]]
-type = "box"
-name = "table"
-center = [1000, -600, 20]
-size = [2200, 400, 40]
-[tasks.trace]
-curve = { type = "parametric", x = "100 + 1700*t", y = "-550", z = "41", t = [0, 1] }
-"""
-    )
-    result = armpath.trace(None, scene=tmp_path / "cell.toml", bound=False)
+    assert json.loads((EXAMPLES / "track_ur5.json").read_text()) == TRACK_UR5
+    result = armpath.trace(None, scene=EXAMPLES / "track_cell.toml", bound=False)
     doc = result.doc
     assert len(doc["passes"]) == 1
     (i, j) = doc["passes"][0]

@@ -199,29 +199,39 @@ def test_seam_around_the_workpiece(tmp_path):
     assert len(doc["passes"]) == 1 and doc["n_commands"] <= 175
 
 
-@pytest.mark.slow
-def test_circle_in_free_space(tmp_path):
-    """A 40 mm circle above the table beside the workpiece, as a parametric curve: traced
-    whole, within 0.1 mm, clear (without the bound: --no-bound leaves it out)."""
-    c, r = (330.0, -200.0, 150.0), 40.0
-    scene = tmp_path / "circle.toml"
+def _cell_with_circle(
+    tmp_path: Path, name: str, c: tuple[float, float, float], r: float
+) -> tuple[Path, ir.DenseCurve]:
+    """The cell with a horizontal circle (centre ``c``, radius ``r`` mm) as its trace task,
+    written as a parametric curve, and the circle sampled densely for the replay."""
+    scene = tmp_path / f"{name}.toml"
     text = CELL.read_text(encoding="utf-8").split("[tasks.reach]")[0]
     scene.write_text(
         text
         + "[tasks.trace.curve]\n"
-        + 'type = "parametric"\nname = "circle"\n'
+        + f'type = "parametric"\nname = "{name}"\n'
         + f'x = "{c[0]} + {r} * cos(t)"\ny = "{c[1]} + {r} * sin(t)"\nz = "{c[2]}"\n'
         + f"t = [0, {2 * math.pi!r}]\n",
         encoding="utf-8",
     )
-    doc = _armpath(["trace", "--scene", str(scene), "--no-bound"], tmp_path)
-    assert doc["lower_bound"] is None and doc["lower_bound_commands"] is None  # as asked
-    phi = np.linspace(0.0, 2 * math.pi, 100_001)[:-1]
+    n = 200_000
+    phi = np.linspace(0.0, 2 * math.pi, n + 1)[:-1]
     circle = ir.DenseCurve(
         np.c_[c[0] + r * np.cos(phi), c[1] + r * np.sin(phi), np.full_like(phi, c[2])],
         closed=True,
-        allowance=r * (1 - math.cos(math.pi / 100_000)),
+        allowance=r * (1 - math.cos(math.pi / n)),
     )
+    return scene, circle
+
+
+@pytest.mark.slow
+def test_circle_in_free_space(tmp_path):
+    """A 40 mm circle above the table beside the workpiece, as a parametric curve: traced
+    whole, within 0.1 mm, clear (without the bound: --no-bound leaves it out)."""
+    r = 40.0
+    scene, circle = _cell_with_circle(tmp_path, "circle", (330.0, -200.0, 150.0), r)
+    doc = _armpath(["trace", "--scene", str(scene), "--no-bound"], tmp_path)
+    assert doc["lower_bound"] is None and doc["lower_bound_commands"] is None  # as asked
     rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, curve=circle, tolerance=0.1))
     assert rep.facts["max_deviation_mm"] <= 0.1
     assert doc["not_traced"] == []
@@ -240,24 +250,9 @@ def test_a_circle_round_the_arm_is_traced_in_one_pass(tmp_path):
     read as a turn): two passes and 343 commands, 160 of them turning joint 1 back between;
     then, before the direction was chosen with the limits in view, one pass of 360, begun
     after 177 commands turning joint 1 the long way to where the limits let it go round."""
-    c, r = (-150.0, 0.0, 400.0), 450.0
-    scene = tmp_path / "round.toml"
-    text = CELL.read_text(encoding="utf-8").split("[tasks.reach]")[0]
-    scene.write_text(
-        text
-        + "[tasks.trace.curve]\n"
-        + 'type = "parametric"\nname = "round"\n'
-        + f'x = "{c[0]} + {r} * cos(t)"\ny = "{c[1]} + {r} * sin(t)"\nz = "{c[2]}"\n'
-        + f"t = [0, {2 * math.pi!r}]\n",
-        encoding="utf-8",
-    )
+    r = 450.0
+    scene, circle = _cell_with_circle(tmp_path, "round", (-150.0, 0.0, 400.0), r)
     doc = _armpath(["trace", "--scene", str(scene), "--no-bound"], tmp_path)
-    phi = np.linspace(0.0, 2 * math.pi, 200_001)[:-1]
-    circle = ir.DenseCurve(
-        np.c_[c[0] + r * np.cos(phi), c[1] + r * np.sin(phi), np.full_like(phi, c[2])],
-        closed=True,
-        allowance=r * (1 - math.cos(math.pi / 200_000)),
-    )
     rep = _accepted(doc, ir.Truth(start_deg=HOME_DEG, curve=circle, tolerance=0.1))
     assert rep.facts["max_deviation_mm"] <= 0.1
     assert len(doc["passes"]) == 1 and doc["not_traced"] == []

@@ -181,7 +181,9 @@ class GenericFamily:
         ``rotations`` ``(M, 3, 3)``, each row's own full tool rotation, or with ``axes``
         ``(M, 3)`` each row's own direction of the tool's approach axis (the turn about it
         free: an arm of five joints sets no more). Steps stay within the limits and, if given,
-        the box ``lower`` .. ``upper`` (per row or for all)."""
+        the box ``lower`` .. ``upper`` (per row or for all; a joint whose box is one value is
+        held there). The damping counts a prismatic joint's move in the arm's size, as a
+        revolute joint's in radians; rows on the target to rounding stop."""
         arm = self.arm
         lo = arm.lower if lower is None else np.maximum(arm.lower, lower)
         hi = arm.upper if upper is None else np.minimum(arm.upper, upper)

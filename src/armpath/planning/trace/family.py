@@ -13,7 +13,9 @@ The family is searched over tool directions: :class:`SeedCurveFamily` by the see
 form (the wrist point on a sphere around the point, four geometric branches), polished by a
 batched pattern search over the tool direction; :class:`GenericCurveFamily` for any other arm
 by the all-solutions IK of each tool direction with turns about it (six joints),
-Levenberg-Marquardt from warm starts (five or seven joints and more), or, where fewer than
+Levenberg-Marquardt from warm starts (five or seven joints and more; an arm on a linear
+track also with its carriage where :mod:`armpath.planning.trace.carriage` schedules it along
+the curve), or, where fewer than
 five joints move the tool point (a SCARA, whose tool points down; a five-joint arm whose last
 joint rolls the tool), the point alone, each solution counted for the searched direction
 nearest its own, if one lies within the scan's spacing of it.
