@@ -196,7 +196,8 @@ class GenericFamily:
 
         rot_rows = None if rotations is None else np.asarray(rotations)
         axis_rows = None if axes is None else np.asarray(axes)
-        lo_rows, hi_rows = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        lo_rows = np.broadcast_to(np.asarray(lo, dtype=np.float64), q.shape)
+        hi_rows = np.broadcast_to(np.asarray(hi, dtype=np.float64), q.shape)
 
         def errors(x: FloatArray, rows: NDArray[np.int64]) -> tuple[FloatArray, FloatArray]:
             frames = forward_frames(arm, x)
@@ -227,10 +228,7 @@ class GenericFamily:
         # along a 2 m track never came nearer than 0.6 m)
         # (a joint held by ``lower`` == ``upper`` takes no part in the steps)
         prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-        scale = np.broadcast_to(
-            np.where(np.asarray(hi) > np.asarray(lo), np.where(prismatic, size, 1.0), 0.0),
-            q.shape,
-        )
+        scale = np.where(hi_rows > lo_rows, np.where(prismatic, size, 1.0), 0.0)
         err, J = errors(q, np.arange(q.shape[0]))
         cost = np.sum(err**2, axis=1)
         # rows on the target to rounding stop moving (they are independent of each other)
@@ -245,11 +243,7 @@ class GenericFamily:
             g = np.einsum("sji,sj->si", Jr, er)
             dx = np.linalg.solve(JtJ + lr[:, None, None] * np.eye(n), g[..., None])[..., 0]
             dq = dx * sr
-            q_new = np.clip(
-                q[rows] + dq,
-                lo_rows[rows] if lo_rows.ndim == 2 else lo_rows,
-                hi_rows[rows] if hi_rows.ndim == 2 else hi_rows,
-            )
+            q_new = np.clip(q[rows] + dq, lo_rows[rows], hi_rows[rows])
             err_new, J_new = errors(q_new, rows)
             cost_new = np.sum(err_new**2, axis=1)
             better = cost_new < cost[rows]

@@ -716,11 +716,7 @@ class GenericCurveFamily(CurveFamily):
         rng = np.random.default_rng(0)
         starts = rng.uniform(lo, hi, (Rs.shape[0], arm.n_joints))
         fresh = starts.copy()
-        turn_near = np.zeros_like(starts)  # members turned nearest 0, or the one continued
-        for i, key in enumerate(keys):
-            last = self._last.get(key)
-            if last is not None:
-                starts[i] = turn_near[i] = last
+        starts, turn_near = _continued(self._last, keys, starts)
         a = np.asarray(arm.approach_axis)
         wanted = Rs @ a  # (M, 3) the tool direction of each frame
         if not self._point_alone:
@@ -768,12 +764,7 @@ class GenericCurveFamily(CurveFamily):
         assert self.schedule is not None
         arm, j = self.arm, self.schedule.joint
         v = float(np.clip(self.schedule.at(E), arm.lower[j], arm.upper[j]))
-        starts = starts.copy()
-        turn_near = np.zeros_like(starts)
-        for i, key in enumerate(keys):
-            last = self._last_scheduled.get(key)
-            if last is not None:
-                starts[i] = turn_near[i] = last
+        starts, turn_near = _continued(self._last_scheduled, keys, starts)
         starts[:, j] = v
         lower = np.broadcast_to(arm.lower, starts.shape).copy()
         upper = np.broadcast_to(arm.upper, starts.shape).copy()
@@ -786,6 +777,21 @@ class GenericCurveFamily(CurveFamily):
         for k in np.flatnonzero(good).tolist():
             self._last_scheduled[keys[k]] = q[k]
         return np.asarray(q[good], dtype=np.float64), np.flatnonzero(good)
+
+
+def _continued(
+    last: dict[tuple[float, ...], FloatArray], keys: list[tuple[float, ...]], starts: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Levenberg-Marquardt's starts for the tool frames ``keys``: the solution ``last`` holds
+    for a frame (a lineage continued from the last point), else its row of ``starts``; and what
+    each solution is then turned nearest by whole turns (that solution, or 0)."""
+    out = np.array(starts, dtype=np.float64, copy=True)
+    turn_near = np.zeros_like(out)
+    for i, key in enumerate(keys):
+        found = last.get(key)
+        if found is not None:
+            out[i] = turn_near[i] = found
+    return out, turn_near
 
 
 def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = None) -> FloatArray:
