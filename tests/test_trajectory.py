@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from armpath.trajectory.retime import (
     ruckig_retime,
     scaled,
     shortest_bounded,
+    slowest_factor,
     toppra_retime,
 )
 
@@ -212,6 +214,37 @@ def test_position_and_jerk_limits_hold_everywhere(solver):
     assert traj.cost()[1] > free.cost()[1] * 1.01
 
 
+def test_position_limits_on_one_side_of_zero_hold_everywhere():
+    # A joint limited to [1, 2] (rad, or a carriage in mm): its minima lie above zero, where the
+    # largest magnitude of the position is not; each side is checked at its own extremes.
+    w = np.array([[1.5], [1.05], [1.02], [1.9], [1.1]])
+    t = np.array([0.0, 1.0, 1.6, 2.4, 3.5])
+    dense = np.linspace(0.0, t[-1], 40001)
+    assert minimum_snap(w, t).evaluate(dense).min() < 1.0 - 0.1
+    traj = minimum_snap(w, t, limits=MotionLimits(lower=1.0, upper=2.0))
+    q = traj.evaluate(dense)
+    assert q.min() >= 1.0 - 1e-5 and q.max() <= 2.0 + 1e-5
+    assert np.allclose(traj.evaluate(t)[:, 0], w[:, 0], atol=1e-7)
+    # The shortest bounded duration keeps them too (the scaled optimum, which meets the rates,
+    # overshoots the lower limit: no time scale mends that).
+    limits = MotionLimits(velocity=2.0, acceleration=5.0, lower=1.0, upper=2.0)
+    fastest = shortest_bounded(w, t, limits)
+    q = fastest.evaluate(fastest.start + np.linspace(0.0, fastest.duration, 40001))
+    assert q.min() >= 1.0 - 1e-5 and q.max() <= 2.0 + 1e-5
+    assert fastest.peak(1)[0] <= 2.0 * (1 + 2e-5) and fastest.peak(2)[0] <= 5.0 * (1 + 2e-5)
+    # Down to the lower limit and back: the scaled optimum, which meets the rates, cannot turn
+    # round at the limit in its time (the QP is infeasible there); the search slows it first.
+    w, t = np.array([[2.0], [1.0], [2.0]]), np.array([0.0, 1.0, 3.0])
+    scaled_end = slowest_factor(minimum_snap(w, t), limits) * t[-1]
+    with pytest.raises(InvalidInputError, match="cannot be met"):
+        minimum_snap(w, t * scaled_end / t[-1] * (1 + 1e-9), limits=limits)
+    fastest = shortest_bounded(w, t, limits)
+    assert fastest.duration > scaled_end
+    q = fastest.evaluate(fastest.start + np.linspace(0.0, fastest.duration, 40001))
+    assert q.min() >= 1.0 - 1e-5 and q.max() <= 2.0 + 1e-5
+    assert fastest.peak(1)[0] <= 2.0 * (1 + 2e-5) and fastest.peak(2)[0] <= 5.0 * (1 + 2e-5)
+
+
 def test_limits_that_cannot_be_met_are_reported():
     with pytest.raises(InvalidInputError, match="lengthen the segments"):
         minimum_snap([0.0, 10.0], [0.0, 1.0], limits=MotionLimits(velocity=5.0))
@@ -383,6 +416,111 @@ def test_cli_trajectory_writes_samples_commands_and_plots(tmp_path):
         [*armpath, "--waypoints", str(tmp_path / "none.csv")], capture_output=True, text=True
     )
     assert bad.returncode == 1 and bad.stderr.startswith("error: cannot read waypoints file")
+
+
+def _run_trajectory(*args):
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-m", "armpath", "trajectory", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+def test_cli_trajectory_takes_the_arm_its_lattice_units_and_limits(tmp_path):
+    # A UR5 on a linear track: joint 1 a carriage in mm, the rest in deg, 0.1 mm / 0.1 deg ticks.
+    track = Path(__file__).resolve().parents[1] / "examples" / "track_ur5.json"
+    wp = tmp_path / "wp.csv"
+    rows = [
+        [0, 0, -90, 0, 0, -90, 0],
+        [500, 30, -60, 20, 0, -60, 10],
+        [1800, 60, -45, 45, 10, -30, 20],
+    ]
+    wp.write_text("\n".join(",".join(map(str, r)) for r in rows) + "\n")
+    out = tmp_path / "tr"
+    proc = _run_trajectory("--waypoints", wp, "--model", track, "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning" not in proc.stderr
+    # the carriage's rate is in mm/s, the joints' in deg/s, each allocated by its own limit
+    assert "largest joint speed (prismatic)" in proc.stdout and "mm/s" in proc.stdout
+    header = (out / "trajectory.csv").read_text().splitlines()[0]
+    assert header == "t_s,q1_mm,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,q7_deg"
+    samples = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)
+    cmds = np.loadtxt(out / "commands.csv", delimiter=",", skiprows=1, dtype=int)[:, 1:]
+    assert cmds.shape[1] == 7 and np.abs(cmds).max() <= 20
+    # Replayed in integer ticks of 0.1 (mm or deg) from the first waypoint, one command a period
+    # (none split: the table says 0), the commands stay within half a tick of every sample and
+    # end on the last waypoint.
+    assert cmds.shape[0] == samples.shape[0] - 1
+    states = np.vstack([np.zeros((1, 7), int), np.cumsum(cmds, axis=0)]) + np.rint(
+        np.array(rows[0]) * 10
+    ).astype(int)
+    assert np.abs(states / 10.0 - samples[:, 1:]).max() <= 0.05 + 1e-6
+    assert np.array_equal(states[-1], np.rint(np.array(rows[-1]) * 10).astype(int))
+    # The carriage moves 1800 mm: at 30 mm/s and 60 mm/s^2 (the default rates read in mm) that
+    # takes at least 1800 / 30 s; in deg/rad it would have been refused or taken far longer.
+    assert samples[-1, 0] >= 1800 / 30
+
+
+def test_cli_trajectory_warns_where_the_commands_leave_the_limits_and_bounded_keeps_them(
+    tmp_path,
+):
+    # The seed arm: |joint 2| <= 125 deg (the specification). The free minimum-snap curve dips
+    # below -125 deg between waypoints at -120 and -124 deg.
+    wp = tmp_path / "wp.csv"
+    wp.write_text(
+        "0,-90,0,0,-90,0\n40,-120,20,0,-60,10\n60,-124,45,10,-30,20\n80,-60,45,10,-30,20\n"
+    )
+    free_out, bounded_out = tmp_path / "free", tmp_path / "bounded"
+    free = _run_trajectory("--waypoints", wp, "--model", "seed", "--out", free_out)
+    assert free.returncode == 0, free.stderr
+    lowest = _replayed_lowest(free_out, [0, -90, 0, 0, -90, 0])
+    assert lowest[1] < -125.0 - 1.0
+    said = " ".join(free.stderr.split())
+    assert f"joint 2 {-125.0 - lowest[1]:.4g} deg past its lower limit (-125 deg)" in said
+    bounded = _run_trajectory(
+        "--waypoints", wp, "--model", "seed", "--bounded", "--out", bounded_out
+    )
+    assert bounded.returncode == 0, bounded.stderr
+    assert "past its" not in bounded.stderr
+    lowest = _replayed_lowest(bounded_out, [0, -90, 0, 0, -90, 0])
+    assert lowest[1] >= -125.0
+    # Waypoints on the limit itself, twice.
+    on = tmp_path / "on.csv"
+    on.write_text(
+        "0,-90,0,0,-90,0\n40,-125,20,0,-60,10\n60,-100,45,10,-30,20\n80,-125,45,10,-30,20\n"
+    )
+    on_out = tmp_path / "on"
+    bounded = _run_trajectory("--waypoints", on, "--model", "seed", "--bounded", "--out", on_out)
+    assert bounded.returncode == 0, bounded.stderr
+    assert _replayed_lowest(on_out, [0, -90, 0, 0, -90, 0])[1] == -125.0
+    # Bad input on a model: one error line each.
+    wrong = tmp_path / "six.csv"
+    wrong.write_text("0,0,0,0,0,0\n10,0,0,0,0,0\n")
+    track = Path(__file__).resolve().parents[1] / "examples" / "track_ur5.json"
+    for args, needle in (
+        (["--waypoints", wrong, "--model", track], "has 7 joints"),
+        (["--waypoints", wp, "--model", "seed", "--tip-link", "tool"], "built in"),
+        (["--waypoints", wp, "--tip-link", "tool"], "give --model"),
+    ):
+        proc = _run_trajectory(*args)
+        assert proc.returncode != 0 and proc.stderr.startswith("error:"), proc.stderr
+        assert needle in proc.stderr and "Traceback" not in proc.stderr
+    beyond = tmp_path / "beyond.csv"
+    beyond.write_text("0,0,0,0,0,0\n0,130,0,0,0,0\n")
+    proc = _run_trajectory("--waypoints", beyond, "--model", "seed")
+    assert proc.returncode == 1 and proc.stderr.startswith("error:")
+    assert "waypoint 2: joint 2" in proc.stderr and "125" in proc.stderr
+
+
+def _replayed_lowest(out, first_deg):
+    cmds = np.loadtxt(out / "commands.csv", delimiter=",", skiprows=1, dtype=int)[:, 1:]
+    import independent
+
+    return independent.replay(first_deg, cmds).min(axis=0)
 
 
 # --- retiming -------------------------------------------------------------------------------

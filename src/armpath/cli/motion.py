@@ -6,7 +6,9 @@ Every input that sets the size of the work is checked before any work, each refu
 line (at most ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of ``MAX_LINE_BYTES``
 bytes), the controller periods (duration / period) are at most ``MAX_PERIODS``, the
 periods times joints at most ``MAX_TRAJECTORY_VALUES`` and the commands (one a period at
-least, and a joint's net motion at 20 ticks a command) at most ``MAX_COMMANDS``; the motion
+least, and a joint's net motion at its lattice's most ticks a command) at most
+``MAX_COMMANDS``; with ``--model`` the waypoints have the arm's joints and lie within its
+limits; the motion
 limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The per-period CSV files are
 written ``CSV_CHUNK`` rows at a time.
 """
@@ -14,6 +16,7 @@ written ``CSV_CHUNK`` rows at a time.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -36,9 +39,11 @@ from armpath.budget import (
     check_time,
 )
 from armpath.cli.common import (
+    BUILTIN_NAMES,
     ModelOption,
     PeriodOption,
     TimeLimitOption,
+    TipLinkOption,
     _cli_errors,
     _fmt,
     _joint_units,
@@ -54,6 +59,8 @@ from armpath.errors import InvalidInputError
 
 if TYPE_CHECKING:
     from armpath.export import OutputFolder
+    from armpath.model.lattice import Lattice
+    from armpath.model.serial_arm import SerialArm
 
 #: Largest joint speed limit accepted (deg/s).
 MAX_VELOCITY_DEG_S = 1e6
@@ -61,6 +68,10 @@ MAX_VELOCITY_DEG_S = 1e6
 MAX_ACCELERATION_DEG_S2 = 1e9
 #: Largest joint jerk limit accepted (deg/s^3).
 MAX_JERK_DEG_S3 = 1e12
+#: How far (ticks) the QP's position limits lie beyond the lattice values at the joint limits:
+#: less than half a tick, so the commands, each state within half a tick of the trajectory,
+#: stay within the limits.
+ROUNDING_SLACK_TICKS = 0.45
 #: Longest line of a waypoints file (bytes).
 MAX_LINE_BYTES = 65_536
 #: Rows of a per-period CSV file formatted at once.
@@ -206,18 +217,90 @@ def _check_periods(duration_s: float, period_s: float, options: str) -> None:
     check_size(periods, MAX_COMMANDS, f"commands (at least one a period: {how})", options)
 
 
-def _check_net_motion(waypoints_deg: np.ndarray, option: str) -> None:
-    """Refuse waypoints whose first and last rows are more commands apart than
-    ``MAX_COMMANDS`` (20 ticks of 0.1 deg a command)."""
-    from armpath.commands import MAX_INCREMENT_TICKS, TICK_DEG
-
-    net = float(np.max(np.abs(waypoints_deg[-1] - waypoints_deg[0]))) / TICK_DEG
+def _check_net_motion(waypoints: np.ndarray, lattice: Lattice, option: str) -> None:
+    """Refuse waypoints (rad / the model's length unit) whose first and last rows are more
+    commands apart than ``MAX_COMMANDS`` on ``lattice``."""
+    net = np.abs(waypoints[-1] - waypoints[0]) / lattice.tick
+    commands = np.ceil((net - 1.0) / lattice.max_ticks)
+    j = int(np.argmax(commands))
     check_size(
-        float(np.ceil((net - 1.0) / MAX_INCREMENT_TICKS)),
+        float(commands[j]),
         MAX_COMMANDS,
-        f"commands (a joint moves {_amount(net)} ticks from the first waypoint to the last, "
-        f"at most {MAX_INCREMENT_TICKS} a command)",
+        f"commands (joint {j + 1} moves {_amount(float(net[j]))} ticks from the first waypoint "
+        f"to the last, at most {int(lattice.max_ticks[j])} a command)",
         option,
+    )
+
+
+def _trajectory_joints(
+    model: str | None, tip_link: str | None, waypoints_display: np.ndarray, name: str
+) -> tuple[SerialArm | None, Lattice, np.ndarray]:
+    """The arm of ``armpath trajectory`` (``None`` without ``--model``), its command lattice
+    (without a model the seed controller's, 0.1 deg and 20 ticks, on every column) and the
+    waypoints in rad / the model's length unit. With a model the waypoints have one column per
+    joint, deg or mm, each row within the joint limits."""
+    from armpath.model.lattice import Lattice
+
+    n = waypoints_display.shape[1]
+    if model is None:
+        if tip_link is not None:
+            raise InvalidInputError("--tip-link names a link of the --model URDF; give --model")
+        return None, Lattice.uniform(n), np.radians(waypoints_display)
+    from armpath.model.catalog import resolve_model
+
+    arm = resolve_model(model, tip_link)
+    if n != arm.n_joints:
+        raise InvalidInputError(
+            f"{name}: the rows have {n} joint values, {arm.name} (--model) has {arm.n_joints} "
+            f"joints ({', '.join(arm.lattice.units)})"
+        )
+    W = arm.lattice.joint_from_display(waypoints_display)
+    outside = ~arm.within_limits(W)
+    if np.any(outside):
+        row = int(np.argmax(outside))
+        arm.check_limits(W[row], what=f"{name}: waypoint {row + 1}")
+    return arm, arm.lattice, W
+
+
+def _position_limits(arm: SerialArm) -> tuple[np.ndarray, np.ndarray]:
+    """Position limits (rad / length unit) for the QP: each joint's lowest and highest lattice
+    value within its limits widened by ``ROUNDING_SLACK_TICKS``, an unlimited side at the
+    largest value a joint state may hold. A trajectory within them rounds to commands within
+    the limits (each state within half a tick of it), and a waypoint on a limit lies strictly
+    inside them (on the bound itself the QP's optimum is degenerate there)."""
+    from armpath.budget import MAX_STATE_TICKS
+
+    low, high = arm.limits_in_ticks()
+    tick = arm.lattice.tick
+    return (
+        np.where(np.isfinite(low), low - ROUNDING_SLACK_TICKS, -MAX_STATE_TICKS) * tick,
+        np.where(np.isfinite(high), high + ROUNDING_SLACK_TICKS, MAX_STATE_TICKS) * tick,
+    )
+
+
+def _limits_warning(arm: SerialArm, states: np.ndarray, kind: str, bounded: bool) -> str | None:
+    """Which joint the commands (ticks ``states``) take farthest past its limits, or None."""
+    low, high = arm.limits_in_ticks()
+    below = np.maximum(low - states.min(axis=0), 0.0)
+    above = np.maximum(states.max(axis=0) - high, 0.0)
+    past = np.maximum(below, above)
+    if not np.any(past > 0):
+        return None
+    j = int(np.argmax(past))
+    side, limit = ("lower", low[j]) if below[j] >= above[j] else ("upper", high[j])
+    lattice = arm.lattice
+    amount = float(past[j] * lattice.tick_display[j])
+    unit = lattice.units[j]
+    limit_text = f"{limit * lattice.tick_display[j]:.6g} {unit}"
+    why = (
+        "--bounded held the trajectory within them; its rounding to the lattice did not"
+        if bounded
+        else f"the free minimum-{kind} curve overshoots between waypoints: --bounded keeps "
+        "every joint within its limits"
+    )
+    return (
+        f"warning: the commands take joint {j + 1} {amount:.4g} {unit} past its {side} limit "
+        f"({limit_text}); {why}"
     )
 
 
@@ -372,21 +455,36 @@ def trajectory(
         ),
     ] = False,
     period: PeriodOption = 0.01,
+    model: Annotated[
+        str | None,
+        typer.Option(
+            "--model",
+            help=f"The arm ({BUILTIN_NAMES}, or a robot file: .json D-H table or .urdf) whose "
+            "command lattice and joint limits apply: --waypoints then has one column per "
+            "joint, deg or mm (a prismatic joint, whose limits are then mm/s, mm/s^2, "
+            "mm/s^3), every waypoint within the limits, and --bounded also keeps the joints "
+            "within them. Default: any number of joints in deg on the seed controller's "
+            "lattice (0.1 deg, 20 ticks a command), no limits.",
+            show_default=False,
+        ),
+    ] = None,
+    tip_link: TipLinkOption = None,
     out: Annotated[
         Path | None,
         typer.Option(
             "--out",
-            help="Write trajectory.csv (deg, sampled every period), commands.csv (ticks of "
-            "0.1 deg) and trajectory.png here.",
+            help="Write trajectory.csv (deg, or mm for a prismatic joint, sampled every "
+            "period), commands.csv (ticks) and trajectory.png here.",
         ),
     ] = None,
     time_limit: TimeLimitOption = None,
 ) -> None:
     """Minimum-snap (or minimum-jerk) joint trajectory through waypoints, rest to rest, and its
-    commands on the 0.1 deg / 2 deg lattice (error feedback: within half a tick at every
-    period). A period that moves a joint more than one command may is split into several
-    commands, and then the commands (one a period) take longer than the trajectory: the table
-    says how long and a warning why. At most 5,000,000 controller periods (duration /
+    commands on the command lattice (the seed controller's 0.1 deg / 2 deg, or --model's; error
+    feedback: within half a tick at every period). A period that moves a joint more than one
+    command may is split into several commands, and then the commands (one a period) take
+    longer than the trajectory: the table says how long and a warning why; so too where the
+    commands leave --model's joint limits. At most 5,000,000 controller periods (duration /
     --period), 10,000,000 periods times joints and 1,000,000 commands."""
     from armpath.export import output_folder
     from armpath.trajectory import (
@@ -407,11 +505,16 @@ def trajectory(
         if max_jerk is not None:
             _check_rate(max_jerk, "--max-jerk", MAX_JERK_DEG_S3, "deg/s^3")
         _check_rate(period, "--period", MAX_PERIOD_S, "s")
-        W_deg, times = _read_waypoints(waypoints)
-        W = np.radians(W_deg)
+        W_shown, times = _read_waypoints(waypoints)
+        arm, lattice, W = _trajectory_joints(model, tip_link, W_shown, f"--waypoints {waypoints}")
+
+        def rate(value: float) -> np.ndarray:
+            """A limit given in deg (mm) per s^k in rad (length unit) per s^k, per joint."""
+            return lattice.joint_from_display(np.full(lattice.n_joints, value))
+
         allocated = times is None
         if times is None:
-            times = allocate_times(W, np.radians(max_velocity), np.radians(max_acceleration))
+            times = allocate_times(W, rate(max_velocity), rate(max_acceleration))
             options = "--period (or --max-velocity, --max-acceleration)"
         else:
             options = "--period (or the times in --waypoints)"
@@ -423,21 +526,29 @@ def trajectory(
         # The size of the work, before any: the duration (at the shortest feasible one, when
         # --bounded compresses the times, at least each segment's largest move at full speed).
         if bounded and allocated:
-            duration = float(np.sum(np.max(np.abs(np.diff(W_deg, axis=0)), axis=1))) / max_velocity
+            duration = (
+                float(np.sum(np.max(np.abs(np.diff(W_shown, axis=0)), axis=1))) / max_velocity
+            )
         else:
             duration = float(times[-1] - times[0])
         _check_periods(duration, period, options)
-        _check_net_motion(W_deg, "--waypoints")
-        if retime and not np.any(W_deg != W_deg[0]):
+        _check_net_motion(W, lattice, "--waypoints")
+        if retime and not np.any(W_shown != W_shown[0]):
             raise InvalidInputError(
                 f"--retime: the waypoints of {waypoints} do not move (every row the same); "
                 "there is no path to retime"
             )
         limits = MotionLimits(
-            velocity=np.radians(max_velocity),
-            acceleration=np.radians(max_acceleration),
-            jerk=None if max_jerk is None else np.radians(max_jerk),
+            velocity=rate(max_velocity),
+            acceleration=rate(max_acceleration),
+            jerk=None if max_jerk is None else rate(max_jerk),
         )
+        # The QP keeps the joints within the arm's limits too (on the lattice, so the commands
+        # round within them); the retimings compared keep the path and take the rates alone.
+        bounds = limits
+        if arm is not None:
+            lower, upper = _position_limits(arm)
+            bounds = dataclasses.replace(limits, lower=lower, upper=upper)
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
         with folder_cm as folder:
             with progress(f"minimum-{kind} trajectory through {len(W)} waypoints ...") as say:
@@ -446,35 +557,50 @@ def trajectory(
                     from armpath.trajectory import shortest_bounded
 
                     say("finding the shortest feasible duration ...")
-                    traj = shortest_bounded(W, times, limits, kind=kind, solver=solver)
+                    traj = shortest_bounded(W, times, bounds, kind=kind, solver=solver)
                 elif bounded:
-                    traj = minimum_snap(W, times, kind=kind, limits=limits, solver=solver)
+                    traj = minimum_snap(W, times, kind=kind, limits=bounds, solver=solver)
                 else:
                     traj = minimum_snap(W, times, kind=kind)
                 say("converting to commands ...")
-                quantized = quantize(traj, period, option=options)
-                peaks = [np.degrees(traj.peak(d).max()) for d in (1, 2, 3)]
+                quantized = quantize(traj, period, lattice, option=options)
+                peaks = [lattice.joint_display(traj.peak(d)) for d in (1, 2, 3)]
             how = "limits imposed" if bounded else "no limits imposed"
+            on = f"{arm.name}, " if arm is not None else ""
             table = Table(
-                title=f"minimum-{kind} trajectory through {len(W)} waypoints ({how})",
+                title=escape(f"minimum-{kind} trajectory through {len(W)} waypoints ({on}{how})"),
                 box=box.SIMPLE,
             )
             for name in ("quantity", "value", "unit"):
                 table.add_column(name)
+            peak_rows = [
+                (f"largest {what}{' (prismatic)' if unit == 'mm' else ''}", f"{value:.2f}",
+                 f"{unit}/s{power}")
+                for what, power, peak in zip(
+                    ("joint speed", "joint acceleration", "joint jerk"),
+                    ("", "^2", "^3"),
+                    peaks,
+                    strict=True,
+                )
+                for unit, value in _by_unit(peak, lattice.units)
+            ]  # fmt: skip
             for row in (
                 ("duration", f"{traj.duration:.3f}", "s"),
-                ("largest joint speed", f"{peaks[0]:.2f}", "deg/s"),
-                ("largest joint acceleration", f"{peaks[1]:.2f}", "deg/s^2"),
-                ("largest joint jerk", f"{peaks[2]:.2f}", "deg/s^3"),
+                *peak_rows,
                 *_timing_rows(quantized),
-                ("periods split (> 20 ticks: 2 deg)", str(quantized.split_periods), ""),
-                ("largest lattice error", f"{quantized.max_tick_error:.3f}", "ticks of 0.1 deg"),
+                (f"periods split (> {_step_text(lattice)})", str(quantized.split_periods), ""),
+                ("largest lattice error", f"{quantized.max_tick_error:.3f}", _ticks_text(lattice)),
             ):
                 table.add_row(*row)
             out_console.print(table)
-            warning = _timing_warning(quantized, traj.duration, "--period")
-            if warning:
-                err_console.print(warning, markup=False)
+            for warning in (
+                _timing_warning(quantized, traj.duration, "--period"),
+                None
+                if arm is None
+                else _limits_warning(arm, quantized.sequence.states(), kind, bounded),
+            ):
+                if warning:
+                    err_console.print(warning, markup=False)
             retimed = []
             if retime:
                 from armpath.trajectory import compare_retimings
@@ -483,11 +609,11 @@ def trajectory(
                     limits = MotionLimits(
                         velocity=limits.velocity,
                         acceleration=limits.acceleration,
-                        jerk=10.0 * np.radians(max_acceleration),
+                        jerk=rate(10.0 * max_acceleration),
                     )
                 with progress("retiming ..."):
                     retimed = compare_retimings(W, times, limits, kind=kind)
-                out_console.print(_retiming_table(retimed, limits))
+                out_console.print(_retiming_table(retimed, limits, lattice))
             if folder is not None:
                 from armpath.viz.figures import plot_trajectory
 
@@ -496,25 +622,59 @@ def trajectory(
                     _write_csv(
                         folder,
                         "trajectory.csv",
-                        ["t_s"] + [f"q{j + 1}_deg" for j in range(W.shape[1])],
-                        lambda a, b: np.column_stack([t[a:b], np.degrees(traj.evaluate(t[a:b]))]),
+                        ["t_s"] + [f"q{j + 1}_{u}" for j, u in enumerate(lattice.units)],
+                        lambda a, b: np.column_stack(
+                            [t[a:b], lattice.joint_display(traj.evaluate(t[a:b]))]
+                        ),
                         t.size,
                         "%.6f",
                     )
                     _write_commands_csv(folder, quantized.sequence)
                     say("plotting ...")
                     plot_trajectory(
-                        folder.file("trajectory.png"), traj, f"minimum-{kind} trajectory"
+                        folder.file("trajectory.png"),
+                        traj,
+                        f"{on}minimum-{kind} trajectory",
+                        lattice=lattice,
                     )
                     if retimed:
-                        folder.write_text("retiming.csv", _retiming_csv(retimed, limits))
+                        folder.write_text("retiming.csv", _retiming_csv(retimed, limits, lattice))
         if folder is not None:
             for path in folder.written:
                 out_console.print(f"wrote {path}", markup=False)
 
 
-def _retiming_table(retimed: list[Any], limits: Any) -> Table:
-    table = Table(title="retiming under the limits (deg/s, deg/s^2, deg/s^3)", box=box.SIMPLE)
+def _by_unit(values_display: np.ndarray, units: tuple[str, ...]) -> list[tuple[str, float]]:
+    """The largest of per-joint values (display units) among the joints of each unit, deg
+    first: ``[("deg", 43.75), ("mm", 12.0)]``."""
+    kinds = [u for u in ("deg", "mm") if u in units]
+    mask = np.array(units)
+    return [(u, float(np.max(values_display[mask == u]))) for u in kinds]
+
+
+def _step_text(lattice: Lattice) -> str:
+    """The most a command moves each kind of joint: ``20 ticks: 2 deg``."""
+    parts = sorted(
+        {
+            f"{int(m)} ticks: {m * t:.6g} {u}"
+            for m, t, u in zip(lattice.max_ticks, lattice.tick_display, lattice.units, strict=True)
+        }
+    )
+    return ", ".join(parts)
+
+
+def _ticks_text(lattice: Lattice) -> str:
+    """The unit of a lattice error: ``ticks of 0.1 deg``."""
+    sizes = sorted({lattice.tick_text(j) for j in range(lattice.n_joints)})
+    return "ticks of " + ", ".join(sizes)
+
+
+def _retiming_table(retimed: list[Any], limits: Any, lattice: Lattice) -> Table:
+    kinds = [u for u in ("deg", "mm") if u in lattice.units]
+    units = "; ".join(f"{u}/s, {u}/s^2, {u}/s^3" for u in kinds)
+    if len(kinds) > 1:
+        units += ": the revolute joints' peaks, below them the prismatic joints'"
+    table = Table(title=f"retiming under the limits ({units})", box=box.SIMPLE)
     for name in (
         "method",
         "duration [s]",
@@ -526,29 +686,61 @@ def _retiming_table(retimed: list[Any], limits: Any) -> Table:
     ):
         table.add_column(escape(name), justify="right")
     for r in retimed:
-        peaks = np.degrees([r.peak_velocity.max(), r.peak_acceleration.max(), r.peak_jerk.max()])
-        table.add_row(
-            r.method,
-            f"{r.duration_s:.3f}",
-            *(f"{v:.2f}" for v in peaks),
-            r.verdict(limits),
-            f"{1e3 * r.compute_s:.0f}",
-        )
+        peaks = np.reshape(_retiming_peaks(r, lattice), (len(kinds), 3))
+        for k, unit_peaks in enumerate(peaks):
+            first = k == 0
+            table.add_row(
+                r.method if first else "",
+                f"{r.duration_s:.3f}" if first else "",
+                *(f"{v:.2f}" for v in unit_peaks),
+                r.verdict(limits) if first else "",
+                f"{1e3 * r.compute_s:.0f}" if first else "",
+            )
     return table
 
 
-def _retiming_csv(retimed: list[Any], limits: Any) -> str:
+def _retiming_peaks(r: Any, lattice: Lattice) -> list[float]:
+    """A retiming's peak speed, acceleration and jerk among the joints of each unit (deg
+    first), in display units."""
+    by_derivative = [
+        _by_unit(lattice.joint_display(p), lattice.units)
+        for p in (r.peak_velocity, r.peak_acceleration, r.peak_jerk)
+    ]
+    return [by_derivative[d][k][1] for k in range(len(by_derivative[0])) for d in range(3)]
+
+
+def _retiming_csv(retimed: list[Any], limits: Any, lattice: Lattice) -> str:
+    kinds = [u for u in ("deg", "mm") if u in lattice.units]
+    peaks = [
+        f"peak_{name}_{u}_s{power}"
+        for u in kinds
+        for name, power in (("velocity", ""), ("acceleration", "2"), ("jerk", "3"))
+    ]
     lines = [
-        "method,duration_s,peak_velocity_deg_s,peak_acceleration_deg_s2,peak_jerk_deg_s3,"
-        "velocity_met,acceleration_met,jerk_met,compute_ms"
+        ",".join(
+            [
+                "method",
+                "duration_s",
+                *peaks,
+                "velocity_met",
+                "acceleration_met",
+                "jerk_met",
+                "compute_ms",
+            ]
+        )
     ]
     for r in retimed:
         met = r.within(limits)
         lines.append(
-            f"{r.method},{r.duration_s:.6f},{np.degrees(r.peak_velocity.max()):.6f},"
-            f"{np.degrees(r.peak_acceleration.max()):.6f},{np.degrees(r.peak_jerk.max()):.6f},"
-            f"{met.get('velocity', '')},{met.get('acceleration', '')},{met.get('jerk', '')},"
-            f"{1e3 * r.compute_s:.3f}"
+            ",".join(
+                [
+                    r.method,
+                    f"{r.duration_s:.6f}",
+                    *(f"{v:.6f}" for v in _retiming_peaks(r, lattice)),
+                ]
+                + [str(met.get(name, "")) for name in ("velocity", "acceleration", "jerk")]
+                + [f"{1e3 * r.compute_s:.3f}"]
+            )
         )
     return "\n".join(lines) + "\n"
 

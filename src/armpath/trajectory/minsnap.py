@@ -520,6 +520,19 @@ def _peak_points(c: FloatArray, d: int, fine: FloatArray) -> tuple[NDArray[np.in
     return seg.astype(np.int64), s
 
 
+def _signed(c: FloatArray, name: str) -> FloatArray:
+    """Segment coefficients (``(n_seg, n)``, one joint) whose largest magnitudes are where a
+    limit ``name`` may be broken: a position limit's side alone (the position moved wholly
+    below zero for ``lower``, so its minima are the peaks, wholly above for ``upper``); the
+    rates' both signs as they are."""
+    if name not in ("lower", "upper"):
+        return c
+    beyond = float(np.abs(c).sum(axis=1).max()) + 1.0  # |q| on any segment is below this
+    shifted = c.copy()
+    shifted[:, 0] += -beyond if name == "lower" else beyond
+    return shifted
+
+
 def _bounded_solve(
     problem: _Problem,
     t: FloatArray,
@@ -566,9 +579,11 @@ def _bounded_solve(
             new_G, new_h = [], []
             for name in limits:
                 d = LIMIT_DERIVATIVE[name]
-                pseg, ps = _peak_points(x.reshape(n_seg, n), d, fine)
+                pseg, ps = _peak_points(_signed(x.reshape(n_seg, n), name), d, fine)
                 keep = ~problem.pinned(d, pseg, ps)
                 pseg, ps = pseg[keep], ps[keep]
+                if ps.size == 0:
+                    continue
                 Gp, hp = _limit_rows(problem, t, {name: limits[name]}, j, pseg, ps)
                 excess = (Gp @ x - hp).reshape(-1, ps.size).max(axis=0)
                 bad = np.flatnonzero(excess > LIMIT_RTOL)

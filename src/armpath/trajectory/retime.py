@@ -150,7 +150,10 @@ def shortest_bounded(
     at which it is still feasible (bisection on the scale factor to ``rtol``, at least
     ``MIN_RTOL``). Waypoints that do not move give the free optimum unchanged.
 
-    The search ends by design: at most ``MAX_HALVINGS`` halvings of the scale, then at most
+    With position limits (``lower``, ``upper``), which no time scale mends, a scaled optimum
+    that overshoots them is slowed by doublings, at most ``MAX_HALVINGS``, until the QP keeps
+    within them. The search ends by design: at most ``MAX_HALVINGS`` halvings of the scale,
+    then at most
     ``MAX_BISECTIONS`` bisection steps, each halving ``log(hi / lo)`` (and stopping when the
     midpoint no longer differs from the ends in floating point). Below the scaled optimum's
     factor, a scale whose segment durations leave the solvable range, or at which the QP solver
@@ -160,6 +163,7 @@ def shortest_bounded(
         raise InvalidInputError(f"rtol must be in [{MIN_RTOL:g}, 1), got {rtol}")
     t = np.asarray(times, dtype=np.float64)
     free = minimum_snap(waypoints, t, kind=kind)
+    given = limits.per_joint(free.coefficients.shape[2])
     hi = slowest_factor(free, limits)  # feasible: the scaled free optimum meets the limits
     if hi == 0.0:
         return free  # nothing moves: every duration meets the limits
@@ -184,9 +188,24 @@ def shortest_bounded(
                 raise
             return None
 
-    best = solve(hi * (1 + 1e-9), first=True)
+    positions = "lower" in given or "upper" in given
+    best = solve(hi * (1 + 1e-9), first=not positions)
+    if best is None and positions:
+        # The scaled optimum meets the rates but may overshoot a position limit, which no time
+        # scale mends: slower, the QP has room to stay within it.
+        for _ in range(MAX_HALVINGS):
+            hi *= 2.0
+            best = solve(hi)
+            if best is not None:
+                break
     if best is None:
-        raise InvalidInputError("the bounded QP failed where the scaled optimum is feasible")
+        raise InvalidInputError(
+            "the bounded QP failed where the scaled optimum is feasible"
+            if not positions
+            else "no duration up to "
+            f"{hi * (t[-1] - t[0]):.3g} s keeps the joints within their position limits "
+            "through the waypoints"
+        )
     lo = hi
     for _ in range(MAX_HALVINGS):
         lo /= 2.0

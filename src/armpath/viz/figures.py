@@ -32,6 +32,7 @@ from armpath.geometry.primitives import (
     orthonormal_frame,
 )
 from armpath.kinematics import landmark_positions, tool_position
+from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.report import commands_text, passes_text
 from armpath.scenes import Scene
@@ -398,8 +399,20 @@ POINT_LABEL: dict[str, Any] = {
     },
 }
 
-#: One colour per joint, shared by the joint figures.
-JOINT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+#: One colour per joint (ten before they repeat, with another dash pattern), shared by the joint
+#: figures.
+JOINT_COLOURS = (
+    "tab:blue",
+    "tab:orange",
+    "tab:green",
+    "tab:red",
+    "tab:purple",
+    "tab:brown",
+    "tab:pink",
+    "tab:gray",
+    "tab:olive",
+    "tab:cyan",
+)
 #: One dash pattern per joint: where two joints' curves coincide both stay visible.
 JOINT_STYLES: tuple[Any, ...] = (
     "-",
@@ -871,22 +884,34 @@ def plot_trace_deviation(
     return fig
 
 
-def plot_trajectory(path: str | Path, traj: PiecewisePolynomial, title: str = "") -> Figure:
-    """Position, velocity, acceleration, jerk and snap of every joint (deg, deg/s, ...), one
-    colour and dash pattern per joint (coinciding joints stay visible), the waypoint times as
-    grey vertical lines; returns the figure written."""
+def plot_trajectory(
+    path: str | Path, traj: PiecewisePolynomial, title: str = "", lattice: Lattice | None = None
+) -> Figure:
+    """Position, velocity, acceleration, jerk and snap of every joint (deg, deg/s, ...; a
+    prismatic joint of ``lattice`` in mm, mm/s, ...), one colour and dash pattern per joint
+    (coinciding joints stay visible), the waypoint times as grey vertical lines; returns the
+    figure written."""
     t = np.linspace(traj.times[0], traj.times[-1], 1500)
+    units = ("deg",) if lattice is None else tuple(u for u in ("deg", "mm") if u in lattice.units)
+
+    def shown(values: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.degrees(values) if lattice is None else lattice.joint_display(values)
+
+    def per_time(power: str) -> str:
+        return ", ".join(f"{u}{power}" for u in units)
+
     names = (
-        "position [deg]",
-        "velocity [deg/s]",
-        "acceleration [deg/s²]",
-        "jerk [deg/s³]",
-        "snap [deg/s⁴]",
+        f"position [{per_time('')}]",
+        f"velocity [{per_time('/s')}]",
+        f"acceleration [{per_time('/s²')}]",
+        f"jerk [{per_time('/s³')}]",
+        f"snap [{per_time('/s⁴')}]",
     )
+    mixed = len(units) > 1
     fig = Figure(figsize=(9, 11.5), dpi=100, layout="constrained")
     axes = fig.subplots(len(names), 1, sharex=True)
     for d, (ax, name) in enumerate(zip(axes, names, strict=True)):
-        values = np.degrees(traj.evaluate(t, d))
+        values = shown(traj.evaluate(t, d))
         # one collection of vertical lines (thousands of waypoints stay one artist)
         ax.vlines(traj.times, 0, 1, transform=ax.get_xaxis_transform(), color="0.75", lw=0.8,
                   zorder=0)  # fmt: skip
@@ -897,7 +922,8 @@ def plot_trajectory(path: str | Path, traj: PiecewisePolynomial, title: str = ""
                 lw=1.5,
                 color=JOINT_COLOURS[j % len(JOINT_COLOURS)],
                 linestyle=JOINT_STYLES[j % len(JOINT_STYLES)],
-                label=f"joint {j + 1}",
+                label=f"joint {j + 1}"
+                + (f" [{lattice.units[j]}]" if mixed and lattice is not None else ""),
             )
         ax.set_ylabel(name)
         ax.grid(alpha=0.3)
