@@ -147,7 +147,7 @@ def test_trajectory_tiny_velocity_limit_names_the_limits(tmp_path):
         (b"0,0\n\xe9\n", "line 2 is not UTF-8"),
         (b"", "is empty"),
         (b"\n  \n", "is empty"),
-        (b"q1,q2\n", "no waypoint rows"),
+        (b"q1,q2\n", "no rows, only a header"),
         (b"1,2\n", "at least 2 waypoint rows"),
         (b"q1,q2\n1,abc\n2,3\n", "line 2, column 2: 'abc' is not a number"),
         (b"1,2,3\n4,5\n", "line 2 has 2 values, the first row has 3"),

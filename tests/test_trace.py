@@ -5,7 +5,8 @@
   distance) and sweeps all of it;
 * a straight polyline leaving the workspace: the reachable part ends exactly where the fingertip is
   ``BC + CD + DE`` from B, found to the stated resolution, with the reason "out of reach";
-* curves written in scene files (parametric expressions and polylines), and their errors.
+* curves written in scene files (parametric expressions and polylines), and their errors;
+* a curve given to ``armpath trace --curve`` as points, partly out of reach, and bad point files.
 """
 
 import itertools
@@ -263,6 +264,59 @@ def test_trace_cli_rejects_a_bad_tolerance(tmp_path):
     assert proc.returncode == 1
     assert "tolerance" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_trace_cli_takes_a_curve_as_points_partly_out_of_reach(tmp_path):
+    # A measured seam given as points (tab separated, a header line): a straight line leaving
+    # the seed arm's reach, traced in the seed scene.
+    points = tmp_path / "seam.tsv"
+    points.write_text("x\ty\tz\n300\t0\t300\n800\t0\t300\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "armpath", "trace", "--curve", str(points), "--no-bound", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["curve"]["definition"] == {
+        "type": "polyline",
+        "name": "seam",
+        "vertices": [[300.0, 0.0, 300.0], [800.0, 0.0, 300.0]],
+        "closed": False,
+    }
+    # the fingertip is at most BC + CD + DE = 575 mm from B = (0, 0, 140): out of reach beyond
+    x_max = np.sqrt(575.0**2 - 160.0**2)
+    (gap,) = doc["unreachable"]
+    assert gap["end_mm"] == 500.0 and "out of reach" in gap["blocked_by"]
+    assert x_max - 300.0 - 2.0 <= gap["start_mm"] <= x_max - 300.0 + 0.05
+    # replayed with the independent FK, 50 instants a command: the pass stays within 0.1 mm of
+    # the line and covers it from its start to the gap
+    ((first, last),) = doc["passes"]
+    tips = independent.motion_points(doc["initial_deg"], doc["commands"], 50)[:, -1, :]
+    traced = tips[50 * first : 50 * last + 1]
+    assert np.hypot(traced[:, 1], traced[:, 2] - 300.0).max() <= 0.1
+    assert traced[:, 0].min() <= 300.0 + 0.2 and traced[:, 0].max() >= x_max - 2.5
+
+
+@pytest.mark.parametrize(
+    ("content", "extra", "needle"),
+    [
+        ("1,2\n3,4\n", [], "each row needs 3 values"),
+        ("300,0,250\n300,0,250\n", [], "are the same point"),
+        ("300,0,250\n1e12,0,250\n", [], "beyond the largest coordinate"),
+        ("300,0,250\n300,10,250\n", ["--closed"], "3 or more vertices"),
+        (None, ["--closed"], "give --curve"),
+    ],
+)
+def test_trace_cli_refuses_bad_curve_points(tmp_path, content, extra, needle):
+    args = [sys.executable, "-m", "armpath", "trace", "--no-bound", *extra]
+    if content is not None:
+        (tmp_path / "c.csv").write_text(content)
+        args += ["--curve", str(tmp_path / "c.csv")]
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1 and proc.stderr.startswith("error:"), proc.stderr
+    assert needle in proc.stderr and proc.stderr.count("\n") == 1
 
 
 def test_run_reports_task_2(seed_run):

@@ -3,14 +3,13 @@ commands, and seed 003's fixed-point rotation.
 
 Every input that sets the size of the work is checked before any work, each refusal one
 ``error:`` line naming the option (:mod:`armpath.budget`): the waypoints file is read line by
-line (at most ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of ``MAX_LINE_BYTES``
-bytes), the controller periods (duration / period) are at most ``MAX_PERIODS``, the
-periods times joints at most ``MAX_TRAJECTORY_VALUES`` and the commands (one a period at
-least, and a joint's net motion at its lattice's most ticks a command) at most
-``MAX_COMMANDS``; with ``--model`` the waypoints have the arm's joints and lie within its
-limits; the motion
-limits must lie in ``(0, MAX_VELOCITY_DEG_S]`` and so on. The per-period CSV files are
-written ``CSV_CHUNK`` rows at a time.
+line (:mod:`armpath.cli.tables`: at most ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints), the
+controller periods (duration / period) are at most ``MAX_PERIODS``, the periods times joints
+at most ``MAX_TRAJECTORY_VALUES`` and the commands (one a period at least, and a joint's net
+motion at its lattice's most ticks a command) at most ``MAX_COMMANDS``; with ``--model`` the
+waypoints have the arm's joints and lie within its limits; the motion limits must lie in
+``(0, MAX_VELOCITY_DEG_S]`` and so on. The per-period CSV files are written ``CSV_CHUNK`` rows
+at a time.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
@@ -51,10 +50,10 @@ from armpath.cli.common import (
     _to_display,
     app,
     err_console,
-    is_number,
     out_console,
     progress,
 )
+from armpath.cli.tables import read_number_table
 from armpath.errors import InvalidInputError
 
 if TYPE_CHECKING:
@@ -72,8 +71,6 @@ MAX_JERK_DEG_S3 = 1e12
 #: less than half a tick, so the commands, each state within half a tick of the trajectory,
 #: stay within the limits.
 ROUNDING_SLACK_TICKS = 0.45
-#: Longest line of a waypoints file (bytes).
-MAX_LINE_BYTES = 65_536
 #: Rows of a per-period CSV file formatted at once.
 CSV_CHUNK = 50_000
 #: Largest number of points of a line in a plot (longer series keep the largest value of each
@@ -83,57 +80,21 @@ ANIMATION_STATES = 2_048
 
 
 def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
-    """Waypoints (deg) and optional times (s) from a CSV (or values separated by spaces): one
-    row per waypoint, joint angles in deg; a first column named ``t`` or ``time_s`` gives the
-    times (strictly increasing).
-
-    The file is read a line at a time and refused at the first line past a limit: at most
-    ``MAX_WAYPOINTS`` rows of ``MAX_JOINTS`` joints, lines of at most ``MAX_LINE_BYTES``
-    bytes, UTF-8 text (a byte-order mark is skipped), every value a finite number and every
-    row as long as the first. Each error names the line (and column)."""
+    """Waypoints (deg, or mm for a prismatic joint) and optional times (s) from a table
+    (:func:`~armpath.cli.tables.read_number_table`): one row per waypoint, at least 2 and at
+    most ``MAX_WAYPOINTS``, of at most ``MAX_JOINTS`` joints; a first column named ``t`` or
+    ``time_s`` gives the times (strictly increasing)."""
     name = f"--waypoints {path}"
-    header: list[str] | None = None
-    rows: list[list[float]] = []
-    width = 0
-    try:
-        with path.open("rb") as fh:
-            for number, raw in enumerate(_lines(fh, name), start=1):
-                line = _decoded(raw, number, name).strip()
-                if not line:
-                    continue
-                # commas separate the values; a line without commas may use spaces or tabs
-                cells = [c.strip() for c in line.split(",")] if "," in line else line.split()
-                check_size(
-                    len(cells),
-                    MAX_JOINTS + 1,
-                    f"{name}: columns of line {number} (a time and up to {MAX_JOINTS} joints)",
-                    "--waypoints",
-                )
-                if header is None and not rows and not all(is_number(c) for c in cells):
-                    header = [c.lower() for c in cells]
-                    width = len(cells)
-                    continue
-                if width and len(cells) != width:
-                    raise InvalidInputError(
-                        f"{name}: line {number} has {len(cells)} values, "
-                        f"{'the header has' if header else 'the first row has'} {width}"
-                    )
-                width = len(cells)
-                if len(rows) == MAX_WAYPOINTS:  # refused at the first row past the limit
-                    raise InvalidInputError(
-                        f"{name}: more than {MAX_WAYPOINTS:,} waypoints (rows; the limit is "
-                        f"{MAX_WAYPOINTS:,}); change --waypoints"
-                    )
-                rows.append([_number(c, number, k + 1, name) for k, c in enumerate(cells)])
-    except OSError as exc:
-        raise InvalidInputError(
-            f"cannot read waypoints file {path} (--waypoints): {exc.strerror or exc}"
-        ) from None
-    if not rows:
-        raise InvalidInputError(f"{name} has no waypoint rows" if header else f"{name} is empty")
-    if len(rows) < 2:
+    header, data = read_number_table(
+        path,
+        "--waypoints",
+        "waypoints",
+        MAX_WAYPOINTS,
+        MAX_JOINTS + 1,
+        f"a time and up to {MAX_JOINTS} joints",
+    )
+    if len(data) < 2:
         raise InvalidInputError(f"{name}: need at least 2 waypoint rows, got 1")
-    data = np.array(rows, dtype=np.float64)
     timed = header is not None and header[0] in ("t", "time_s")
     if timed and data.shape[1] < 2:
         raise InvalidInputError(f"{name}: a time column and no joint column")
@@ -148,45 +109,6 @@ def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
             )
         return data[:, 1:], t
     return data, None
-
-
-def _lines(fh: Any, name: str) -> Iterator[bytes]:
-    """The lines of a binary file, refusing one longer than ``MAX_LINE_BYTES``."""
-    number = 0
-    while True:
-        raw = fh.readline(MAX_LINE_BYTES + 2)
-        if not raw:
-            return
-        number += 1
-        if len(raw.rstrip(b"\r\n")) > MAX_LINE_BYTES:
-            raise InvalidInputError(
-                f"{name}: line {number} is longer than {MAX_LINE_BYTES:,} bytes"
-            )
-        yield raw
-
-
-def _decoded(raw: bytes, number: int, name: str) -> str:
-    try:
-        return raw.decode("utf-8-sig" if number == 1 else "utf-8")
-    except UnicodeDecodeError as exc:
-        raise InvalidInputError(
-            f"{name}: line {number} is not UTF-8 text (byte 0x{raw[exc.start]:02x} at "
-            f"position {exc.start + 1}); save it as UTF-8 CSV"
-        ) from None
-
-
-def _number(text: str, line: int, column: int, name: str) -> float:
-    try:
-        x = float(text)
-    except ValueError:
-        raise InvalidInputError(
-            f"{name}: line {line}, column {column}: {text!r} is not a number"
-        ) from None
-    if not math.isfinite(x):
-        raise InvalidInputError(
-            f"{name}: line {line}, column {column}: {text!r} is not a finite number"
-        )
-    return x
 
 
 def _check_choice(value: str, choices: Any, option: str) -> None:

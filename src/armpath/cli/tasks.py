@@ -15,7 +15,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from armpath import __version__
-from armpath.budget import MAX_SEARCHES
+from armpath.budget import MAX_CURVE_POINTS, MAX_SEARCHES
 from armpath.cli.common import (
     BUILTIN_NAMES,
     LOOSE,
@@ -63,6 +63,7 @@ from armpath.report import commands_text, coverage_text
 
 if TYPE_CHECKING:
     from armpath.export import OutputFolder
+    from armpath.geometry.curves import Curve
     from armpath.ik.target import Orientation
     from armpath.model.serial_arm import SerialArm
     from armpath.planning.motion import MotionOptions, MotionPlan
@@ -896,6 +897,32 @@ def _write_trace(
         _animate_into(folder, "trace", arm, scene, result.sequence, title, None, curve.sample(801))
 
 
+def _curve_from_points(path: Path, closed: bool) -> Curve:
+    """The polyline through the points (mm) of ``--curve``'s table, named after the file."""
+    from armpath.budget import MAX_COORDINATE_MM
+    from armpath.cli.tables import read_number_table
+    from armpath.geometry.curves import Polyline
+
+    _, points = read_number_table(
+        path, "--curve", "curve points", MAX_CURVE_POINTS, 3, "x, y, z in mm"
+    )
+    name = f"--curve {path}"
+    if points.shape[1] != 3:
+        raise InvalidInputError(
+            f"{name}: each row needs 3 values (x, y, z in mm), got {points.shape[1]}"
+        )
+    far = np.flatnonzero(np.abs(points).max(axis=1) > MAX_COORDINATE_MM)
+    if far.size:
+        raise InvalidInputError(
+            f"{name}: point {far[0] + 1} lies beyond the largest coordinate accepted "
+            f"({MAX_COORDINATE_MM:g} mm)"
+        )
+    try:
+        return Polyline(path.stem or "curve", points, closed)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{name}: {exc}") from None
+
+
 @app.command()
 def trace(
     tolerance: Annotated[
@@ -924,18 +951,40 @@ def trace(
         ),
     ] = True,
     bound_samples: BoundSamplesOption = None,
+    curve_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--curve",
+            help="Trace these points instead of the scene's curve: one 'x,y,z' row each, mm "
+            "(CSV, or values separated by spaces; a first line of column names is skipped), "
+            f"straight pieces between them; at most {MAX_CURVE_POINTS:,} points.",
+            show_default=False,
+        ),
+    ] = None,
+    closed: Annotated[
+        bool,
+        typer.Option(
+            "--closed/--open",
+            help="With --curve: a closed curve (a piece from the last point back to the "
+            "first) or an open one.",
+        ),
+    ] = False,
     animate: AnimateOption = False,
     time_limit: TimeLimitOption = None,
 ) -> None:
-    """Task 2: go once around the scene's curve (the crack) with the tool, every reachable
-    part, fewest passes and commands; report the unreachable arcs and why. Any arm (--model or
-    the scene's \\[arm]); --tool-axis keeps the torch near the surface normal or a direction."""
+    """Task 2: go once around the scene's curve (the crack), or --curve's points, with the
+    tool, every reachable part, fewest passes and commands; report the unreachable arcs and
+    why. Any arm (--model or the scene's \\[arm]); --tool-axis keeps the torch near the surface
+    normal or a direction."""
     from armpath.export import json_text, output_folder, trace_result_dict
     from armpath.planning.motion import MotionOptions
     from armpath.planning.trace import TraceOptions
     from armpath.tasks import trace_task
 
     with _cli_errors(time_limit):
+        if closed and curve_file is None:
+            raise InvalidInputError("--closed closes the curve of --curve; give --curve")
+        curve = None if curve_file is None else _curve_from_points(curve_file, closed)
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
@@ -949,7 +998,7 @@ def trace(
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             with progress("tracing the curve ...") as say:
-                result = trace_task(scene, arm, options, say)
+                result = trace_task(scene, arm, options, say, curve=curve)
             doc = trace_result_dict(result, arm, scene)
             if folder is not None:
                 _write_trace(folder, result, doc, arm, scene, animate)
