@@ -42,6 +42,11 @@ BoolArray = NDArray[np.bool_]
 #: A sample's position error must be below this fraction of the arm's size (1e-9 of a 1 m arm:
 #: a nanometre in mm).
 EXACT_FRACTION = 1e-9
+#: Levenberg-Marquardt stops a row whose cost falls by less than ``STALL_FRACTION`` of itself
+#: over ``STALL_WINDOW`` iterations (it stalls off the target: no step of the damped Newton
+#: method takes it nearer).
+STALL_WINDOW = 6
+STALL_FRACTION = 1e-3
 #: Largest number of family samples kept (memory of the planners' searches).
 MAX_SAMPLES = 200_000
 
@@ -183,7 +188,8 @@ class GenericFamily:
         free: an arm of five joints sets no more). Steps stay within the limits and, if given,
         the box ``lower`` .. ``upper`` (per row or for all; a joint whose box is one value is
         held there). The damping counts a prismatic joint's move in the arm's size, as a
-        revolute joint's in radians; rows on the target to rounding stop."""
+        revolute joint's in radians; rows on the target to rounding stop, and so do rows
+        whose cost falls by less than ``STALL_FRACTION`` in ``STALL_WINDOW`` iterations."""
         arm = self.arm
         lo = arm.lower if lower is None else np.maximum(arm.lower, lower)
         hi = arm.upper if upper is None else np.minimum(arm.upper, upper)
@@ -234,9 +240,18 @@ class GenericFamily:
         # rows on the target to rounding stop moving (they are independent of each other)
         on_target = (EXACT_FRACTION * 1e-2) ** 2
         rows = np.flatnonzero(cost >= on_target)
-        for _ in range(iterations):
+        window_cost = cost.copy()
+        for step in range(iterations):
             if rows.size == 0:
                 break
+            if step and step % STALL_WINDOW == 0:
+                # rows stuck in a local minimum off the target (a frame the arm cannot take at
+                # this point) stop: their cost no longer falls, and they would not reach it
+                moving = cost[rows] < (1.0 - STALL_FRACTION) * window_cost[rows]
+                rows = rows[moving]
+                window_cost[rows] = cost[rows]
+                if rows.size == 0:
+                    break
             sr = scale[rows]
             Jr, er, lr = J[rows] * sr[:, None, :], err[rows], lam[rows]
             JtJ = np.swapaxes(Jr, 1, 2) @ Jr
