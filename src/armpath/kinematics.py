@@ -32,6 +32,24 @@ def _as_joint_array(arm: SerialArm, q: ArrayLike) -> FloatArray:
     return qa
 
 
+_EYE3 = np.eye(3)
+_EYE3.setflags(write=False)
+#: The cross-product matrix K of each joint axis met, and K @ K (by the axis's bytes): what
+#: Rodrigues' formula needs of an axis, computed once rather than at every pose.
+_AXIS_MATRICES: dict[bytes, tuple[FloatArray, FloatArray]] = {}
+
+
+def _axis_matrices(axis: FloatArray) -> tuple[FloatArray, FloatArray]:
+    key = np.asarray(axis, dtype=np.float64).tobytes()
+    found = _AXIS_MATRICES.get(key)
+    if found is None:
+        K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+        found = (K, K @ K)
+        if len(_AXIS_MATRICES) < 4096:  # a process meets a few arms' axes
+            _AXIS_MATRICES[key] = found
+    return found
+
+
 def _joint_motion(axis: FloatArray, kind: JointKind, value: FloatArray) -> FloatArray:
     """4x4 motion of one joint for a batch of values: rotation about / translation along axis."""
     T = np.zeros((*value.shape, 4, 4))
@@ -40,10 +58,10 @@ def _joint_motion(axis: FloatArray, kind: JointKind, value: FloatArray) -> Float
         T[..., 0, 0] = T[..., 1, 1] = T[..., 2, 2] = 1.0
         T[..., :3, 3] = value[..., None] * axis
         return T
-    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    K, KK = _axis_matrices(axis)
     s = np.sin(value)[..., None, None]
     c = np.cos(value)[..., None, None]
-    T[..., :3, :3] = np.eye(3) + s * K + (1.0 - c) * (K @ K)
+    T[..., :3, :3] = _EYE3 + s * K + (1.0 - c) * KK
     return T
 
 

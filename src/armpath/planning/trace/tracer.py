@@ -31,7 +31,13 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.errors import PlanningError
 from armpath.jit import njit
-from armpath.kinematics import position_jacobian, tick_jacobian, tool_position
+from armpath.kinematics import (
+    forward_frames,
+    jacobian_from_frames,
+    position_jacobian,
+    tick_jacobian,
+    tool_position,
+)
 from armpath.model.lattice import unique_states
 from armpath.planning.trace.family import CurveFamily
 from armpath.planning.trace.reference import Piece
@@ -271,10 +277,11 @@ class Tracer:
         """Nearest family member to ``q`` (minimum-norm Newton steps) with the tip at ``E``."""
         q = q.copy()
         for _ in range(5):
-            e = E - tool_position(self.arm, q)
+            frames = forward_frames(self.arm, q)  # once for the tip and its Jacobian
+            e = E - frames[-1, :3, 3]
             if np.linalg.norm(e) < 1e-9:
                 break
-            J = position_jacobian(self.arm, q)[:, self.tip]
+            J = jacobian_from_frames(self.arm, frames)[:3, self.tip]
             q[self.tip] += np.linalg.pinv(J) @ e
         return q
 
