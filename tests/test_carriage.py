@@ -126,6 +126,46 @@ def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point():
         assert np.linalg.norm(residual(best.x)) < 1e-6, (x, track)
 
 
+def test_the_carriage_bound_is_the_travel_to_where_the_arm_reaches_every_point():
+    """The proven bound of an arm on a track: the tool point stays within the arm's summed
+    lengths of the carriage, so the carriage must travel to where every point of the seam is
+    that near. Checked with the independent D-H product (no sampled tool point is farther from
+    the carriage than the reach the bound takes) and by scanning the carriage's values on a
+    grid (where each point is within that reach), not by the bound's closed form."""
+    from armpath.planning.bounds.carriage import carriage_reach, carriage_travel_bound
+
+    arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")  # this table, the 120 mm tool
+    reach = carriage_reach(arm)
+    rng = np.random.default_rng(5)
+    q = np.c_[np.zeros(20000), rng.uniform(-np.pi, np.pi, (20000, 6))]
+    origin = _BASE[:3, 3]  # the carriage's origin at 0 (its D-H row has no length)
+    farthest = max(np.linalg.norm(_pose(x)[:3, 3] - origin) for x in q)
+    assert farthest <= reach and farthest >= 0.8 * reach
+    # a seam along the track from x = -200 to 2600 mm, 500 mm beside it, at z = 50
+    seam = Polyline("seam", np.array([[-200.0, 500.0, 50.0], [2600.0, 500.0, 50.0]]))
+    start = np.r_[500.0, np.radians([0, -90, 90, -90, -90, 0])]
+    bound = carriage_travel_bound(arm, seam, [(0.0, 2800.0)], start, 0.1)
+    assert bound is not None and bound.proven
+    # the carriage's values where each point is within reach, on a 0.05 mm grid
+    grid = np.arange(0.0, 2000.0 + 1e-9, 0.05)
+    x = np.linspace(-200.0, 2600.0, 561)
+    near = np.hypot(x[:, None] - grid[None, :], np.hypot(500.0, 50.0 - 300.0)) <= reach + 0.1
+    lowest = grid[np.argmax(near, axis=1)]  # each point's least carriage value within reach
+    highest = grid[near.shape[1] - 1 - np.argmax(near[:, ::-1], axis=1)]
+    A, B = lowest.max(), highest.min()
+    assert A > B  # the seam is longer than the arm reaches from one place
+    travel = min(
+        max(A - 500.0, 0.0) + (max(500.0, A) - B), max(500.0 - B, 0.0) + (A - min(500.0, B))
+    )
+    assert bound.value * 2.0 == pytest.approx(travel, abs=0.1)  # 2 mm a command
+    assert bound.commands == int(np.ceil(bound.value - 1e-9))
+    # not an arm on a track: no such bound
+    assert (
+        carriage_travel_bound(armpath.load_arm("ur5"), seam, [(0.0, 2800.0)], start[1:], 0.1)
+        is None
+    )
+
+
 @pytest.mark.slow
 def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track():
     """``examples/track_cell.toml`` (its robot file is this module's table): a 1.7 m seam 1 mm
@@ -138,7 +178,7 @@ def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track()
     state on the lattice and within the limits, the tool within the tolerance of the seam at
     every sampled instant of the pass, the pass covering the seam end to end."""
     assert json.loads((EXAMPLES / "track_ur5.json").read_text()) == TRACK_UR5
-    result = armpath.trace(None, scene=EXAMPLES / "track_cell.toml", bound=False)
+    result = armpath.trace(None, scene=EXAMPLES / "track_cell.toml")
     doc = result.doc
     assert len(doc["passes"]) == 1
     (i, j) = doc["passes"][0]
@@ -162,3 +202,8 @@ def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track()
     # the carriage moved with the tool along the pass
     assert np.ptp(q[i : j + 1, 0]) > 200.0
     assert result.n_commands <= 300
+    # its bound is proven (the carriage's travel; the family's estimate of a redundant arm is
+    # named but not taken) and below the plan
+    bound = doc["lower_bound"]
+    assert bound["proven"] and "carriage" in bound["method"]
+    assert 0 < doc["lower_bound_commands"] <= result.n_commands

@@ -167,6 +167,11 @@ BOUND_SCOPE = "every configuration that may be clear, obstacles ignored between 
 BOUND_OPENING = "legs from the start into a hollow obstacle through its opening"
 
 
+#: The same for a trace bounded by its arm's carriage (:mod:`armpath.planning.bounds.carriage`).
+CARRIAGE_SCOPE = (
+    "the carriage's travel to where the arm's summed lengths reach every point, anything else "
+    "ignored"
+)
 #: The same for a tour bounded over its lattice goal states (all of them listed).
 LATTICE_SCOPE = (
     "every lattice goal state within the tolerance that keeps the clearance rule, all listed, "
@@ -180,8 +185,10 @@ def over_lattice(bound: dict[str, Any]) -> bool:
 
 
 def bound_scope(bound: dict[str, Any]) -> str:
-    """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`) of a result's ``lower_bound``, with
-    :data:`BOUND_OPENING` where the bound sampled an opening."""
+    """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`, :data:`CARRIAGE_SCOPE`) of a result's
+    ``lower_bound``, with :data:`BOUND_OPENING` where the bound sampled an opening."""
+    if "carriage_reach_mm" in (bound.get("sampling") or {}):
+        return CARRIAGE_SCOPE
     scope = LATTICE_SCOPE if over_lattice(bound) else BOUND_SCOPE
     opening = "opening_samples" in (bound.get("sampling") or {})
     return f"{scope}; {BOUND_OPENING}" if opening else scope

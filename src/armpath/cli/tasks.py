@@ -4,6 +4,7 @@ scene's three tasks, the blind zones and the report)."""
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -613,6 +614,13 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
 
     if bound is None:
         return missing
+    sampling = bound.get("sampling") or {}
+    estimate = ""
+    if "carriage_reach_mm" in sampling:  # any passes in any order: the scope is the carriage's
+        scope = "any passes"
+        if sampling.get("family_estimate_commands") is not None:
+            value = math.ceil(sampling["family_estimate_commands"] - 1e-9)
+            estimate = f"; the family's estimate (not proven) ~{value}"
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     if not bound.get("proven", True):
         return (
@@ -629,7 +637,7 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
         else ""
     )
     return (
-        f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); "
+        f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}){estimate}; "
         f"plan {bound['gap_commands']} above it ({gap}){weak}"
     )
 

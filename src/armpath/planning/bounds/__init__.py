@@ -46,6 +46,11 @@ direction (a six-joint arm with its wrist straight): however small, a cell touch
 the curve. The sites' directions are sampled in a chart that blows each such direction up into
 a circle of azimuths (:mod:`~armpath.planning.bounds.chart`), whose cells shrink when split
 like any other (the UR5 cell's welds: 64 -> 87 commands).
+
+An arm with more joints than a tool frame needs has one member of its self-motion sampled per
+tool direction, and its bound is then an estimate, not a proof. An arm on a linear track gets a
+proven one of another kind (:mod:`~armpath.planning.bounds.carriage`): the travel its carriage
+needs to bring every point within the arm's summed lengths.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer

@@ -33,6 +33,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tick_jacobian, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
+from armpath.planning.bounds.carriage import carriage_travel_bound
 from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.bounds.trace import LAYER_INSET_MM
 from armpath.planning.motion import (
@@ -310,7 +311,9 @@ def trace_plan_bound(
     searched ``rounds`` rounds at most (None: as many as the budget allows) and until it holds
     ``max_samples`` live samples. None where the family has no member within the limits on a
     span. ``with_errors=False``: the estimate without the samples' sampling errors (not a
-    bound; see the search)."""
+    bound; see the search). For an arm on a track the larger of that and its carriage's
+    travel (:func:`~armpath.planning.bounds.carriage.carriage_travel_bound`), which is proven
+    where the family's bound of a redundant arm is an estimate."""
     fam = result.reachability.family
     reachable = result.reachability.reachable
     around = _all_round(result.curve, reachable)
@@ -351,9 +354,10 @@ def trace_plan_bound(
     tries = [[(a, b) for a, b in spans]]
     if short and len(short) < len(spans):
         tries.append([(a, b) for a, b in spans if b - a >= 2 * LAYER_INSET_MM])
+    found = None
     for these in tries:
         try:
-            return trace_bound(
+            found = trace_bound(
                 fam,
                 sequence.grid.to_joint(sequence.start_ticks),
                 these,
@@ -367,9 +371,36 @@ def trace_plan_bound(
                 max_samples=max_samples,
                 with_errors=with_errors,
             )
+            break
         except PlanningError:
             continue
-    return None
+    if not with_errors:
+        return found
+    carriage = carriage_travel_bound(
+        fam.arm,
+        result.curve,
+        [(a, b) for a, b in spans],
+        sequence.grid.to_joint(sequence.start_ticks),
+        result.tolerance_mm,
+    )
+    return _stronger(found, carriage)
+
+
+def _stronger(family: CommandBound | None, carriage: CommandBound | None) -> CommandBound | None:
+    """The bound a trace reports: the family's, or its carriage's travel (an arm on a track)
+    where that is higher or the family's is an estimate (a redundant arm's, not proven; its
+    value is then named in the carriage bound's method)."""
+    if carriage is None:
+        return family
+    if family is None:
+        return carriage
+    if family.proven:
+        return family if family.value >= carriage.value else carriage
+    return replace(
+        carriage,
+        method=f"{carriage.method}; the family's estimate, not proven: ~{family.commands}",
+        sampling={**carriage.sampling, "family_estimate_commands": family.value},
+    )
 
 
 def _pass_arc_lengths(fam: CurveFamily, q: FloatArray, p: TracePass) -> FloatArray:

@@ -1,0 +1,123 @@
+"""A proven lower bound for an arm on a linear track: how far its carriage must travel.
+
+An arm carried by a prismatic first joint (:func:`~armpath.planning.trace.carriage.carriage_joint`)
+has one degree of freedom more than a tool frame needs, and the family bound samples one member
+of its self-motion per tool frame: an estimate, not a proof. Its carriage gives a proof of
+another kind. Whatever the arm's other joints do, the tool point stays within
+``reach`` of the carriage's origin: the lengths of the fixed transforms after the carriage
+summed, with the flange's and the tool's (revolute joints turn about their origins and keep those
+lengths; a further prismatic joint adds the larger of its limits), so a curve point ``p`` is
+within the tolerance of the tool point only with the carriage at a value ``c`` where
+``|p - o(c)| <= reach + tolerance``, an interval of ``c`` (the carriage's limits too). Every
+point of every span must be visited so: the carriage must at some time stand at or above the
+largest of the intervals' lower ends, ``A``, and at some time at or below the smallest of their
+upper ends, ``B``; from where it starts, ``c0``, that takes at least
+
+* ``max(A - c0, c0 - B, 0)`` where ``A <= B``;
+* the shorter of going up to ``A`` then down to ``B`` and going down to ``B`` then up to ``A``
+  where ``A > B``,
+
+whatever the order of the points or the passes; and each command moves the carriage at most
+its step. Obstacles, the tool rule and the lattice are left out (a relaxation: still a bound).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.geometry.curves import Curve
+from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.bounds.value import CommandBound
+
+FloatArray = NDArray[np.float64]
+
+#: Most curve points whose carriage intervals are taken (spread evenly over the spans).
+MAX_POINTS = 100_000
+#: Spacing of the points along the spans (mm): the bound holds at any spacing (each point must
+#: be visited); a finer one finds the extreme points more nearly.
+POINT_SPACING_MM = 0.5
+
+
+def carriage_reach(arm: SerialArm) -> float | None:
+    """The farthest the tool point can be from the origin of the first joint's frame, after its
+    motion (model units): the fixed transforms' lengths after it summed with the flange's and
+    the tool's, a prismatic joint's larger limit added; None where a later prismatic joint is
+    unlimited."""
+    reach = float(np.linalg.norm(arm.T_joint_flange[:3, 3]))
+    reach += float(np.linalg.norm(arm.T_flange_tool[:3, 3]))
+    for joint in arm.joints[1:]:
+        reach += float(np.linalg.norm(joint.T_parent_joint[:3, 3]))
+        if joint.kind is JointKind.PRISMATIC:
+            largest = max(abs(joint.limits[0]), abs(joint.limits[1]))
+            if not math.isfinite(largest):
+                return None
+            reach += largest
+    return reach
+
+
+def carriage_travel_bound(
+    arm: SerialArm,
+    curve: Curve,
+    spans_mm: list[tuple[float, float]],
+    q_start: FloatArray,
+    tolerance_mm: float,
+) -> CommandBound | None:
+    """The commands any plan that brings the tool point within ``tolerance_mm`` of every point
+    of the spans (arc lengths mm) of ``curve``, from ``q_start`` (rad / mm), needs at least
+    for the carriage (the first joint, prismatic) to travel where the arm reaches them (see
+    the module). None where the arm's first joint is not prismatic, its lengths are not in mm,
+    a later prismatic joint is unlimited, or the spans are empty."""
+    if (
+        arm.n_joints < 2
+        or arm.joints[0].kind is not JointKind.PRISMATIC
+        or arm.length_unit != "mm"
+        or not spans_mm
+    ):
+        return None
+    reach = carriage_reach(arm)
+    if reach is None:
+        return None
+    frame = arm.T_world_base @ arm.joints[0].T_parent_joint
+    origin, axis = frame[:3, 3], frame[:3, :3] @ arm.joints[0].axis
+    total = sum(b - a for a, b in spans_mm)
+    count = int(min(MAX_POINTS, max(2, math.ceil(total / POINT_SPACING_MM) + len(spans_mm))))
+    per_span = [max(2, round(count * (b - a) / max(total, 1e-12))) for a, b in spans_mm]
+    s = np.concatenate([np.linspace(a, b, k) for (a, b), k in zip(spans_mm, per_span, strict=True)])
+    points = curve.at_arc_length(s)
+    d = points - origin
+    along = d @ axis
+    across2 = np.maximum(np.einsum("ij,ij->i", d, d) - along**2, 0.0)
+    radius = reach + tolerance_mm
+    if np.any(across2 > radius**2):  # a point no carriage value brings within reach
+        return None
+    half = np.sqrt(radius**2 - across2)
+    lower, upper = arm.joints[0].limits
+    A = float(max(np.max(along - half), lower))
+    B = float(min(np.min(along + half), upper))
+    c0 = float(q_start[0])
+    if A <= B:
+        travel = max(A - c0, c0 - B, 0.0)
+    else:
+        up_first = max(A - c0, 0.0) + (max(c0, A) - B)
+        down_first = max(c0 - B, 0.0) + (A - min(c0, B))
+        travel = min(up_first, down_first)
+    step = float(arm.lattice.max_step[0])
+    value = travel / step
+    return CommandBound(
+        commands=math.ceil(value - 1e-9),
+        value=value,
+        method=(
+            f"the carriage's travel: from {c0:g} mm to {A:.1f} mm and {B:.1f} mm, where every "
+            f"point of the curve is within the arm's reach ({reach:.1f} mm, its lengths summed) "
+            f"of it, {step:g} mm a command"
+        ),
+        parts={"carriage": value},
+        sampling={"carriage_reach_mm": reach, "carriage_points": float(s.size)},
+        proven=True,
+    )
+
+
+__all__ = ["carriage_reach", "carriage_travel_bound"]
