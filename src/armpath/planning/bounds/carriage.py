@@ -39,6 +39,9 @@ MAX_POINTS = 100_000
 #: Spacing of the points along the spans (mm): the bound holds at any spacing (each point must
 #: be visited); a finer one finds the extreme points more nearly.
 POINT_SPACING_MM = 0.5
+#: Added to the reach (mm) for where a point taken at a span's arc length may lie past it (the
+#: curve's arc-length table is interpolated): far above that error, far below a command.
+_ARC_SLACK_MM = 0.01
 
 
 def carriage_reach(arm: SerialArm) -> float | None:
@@ -90,7 +93,7 @@ def carriage_travel_bound(
     d = points - origin
     along = d @ axis
     across2 = np.maximum(np.einsum("ij,ij->i", d, d) - along**2, 0.0)
-    radius = reach + tolerance_mm
+    radius = reach + tolerance_mm + _ARC_SLACK_MM
     if np.any(across2 > radius**2):  # a point no carriage value brings within reach
         return None
     half = np.sqrt(radius**2 - across2)
