@@ -184,10 +184,15 @@ def over_lattice(bound: dict[str, Any]) -> bool:
     return "lattice_goal_states" in (bound.get("sampling") or {})
 
 
+def by_carriage(bound: dict[str, Any]) -> bool:
+    """Whether a result's ``lower_bound`` is its carriage's travel (an arm on a track)."""
+    return "carriage_reach_mm" in (bound.get("sampling") or {})
+
+
 def bound_scope(bound: dict[str, Any]) -> str:
     """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`, :data:`CARRIAGE_SCOPE`) of a result's
     ``lower_bound``, with :data:`BOUND_OPENING` where the bound sampled an opening."""
-    if "carriage_reach_mm" in (bound.get("sampling") or {}):
+    if by_carriage(bound):
         return CARRIAGE_SCOPE
     scope = LATTICE_SCOPE if over_lattice(bound) else BOUND_SCOPE
     opening = "opening_samples" in (bound.get("sampling") or {})

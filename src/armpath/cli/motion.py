@@ -504,7 +504,7 @@ def trajectory(
                     peaks,
                     strict=True,
                 )
-                for unit, value in _by_unit(peak, lattice.units)
+                for unit, value in _by_unit(peak, lattice)
             ]  # fmt: skip
             for row in (
                 ("duration", f"{traj.duration:.3f}", "s"),
@@ -566,12 +566,11 @@ def trajectory(
                 out_console.print(f"wrote {path}", markup=False)
 
 
-def _by_unit(values_display: np.ndarray, units: tuple[str, ...]) -> list[tuple[str, float]]:
+def _by_unit(values_display: np.ndarray, lattice: Lattice) -> list[tuple[str, float]]:
     """The largest of per-joint values (display units) among the joints of each unit, deg
     first: ``[("deg", 43.75), ("mm", 12.0)]``."""
-    kinds = [u for u in ("deg", "mm") if u in units]
-    mask = np.array(units)
-    return [(u, float(np.max(values_display[mask == u]))) for u in kinds]
+    mask = np.array(lattice.units)
+    return [(u, float(np.max(values_display[mask == u]))) for u in lattice.unit_kinds]
 
 
 def _step_text(lattice: Lattice) -> str:
@@ -592,7 +591,7 @@ def _ticks_text(lattice: Lattice) -> str:
 
 
 def _retiming_table(retimed: list[Any], limits: Any, lattice: Lattice) -> Table:
-    kinds = [u for u in ("deg", "mm") if u in lattice.units]
+    kinds = lattice.unit_kinds
     units = "; ".join(f"{u}/s, {u}/s^2, {u}/s^3" for u in kinds)
     if len(kinds) > 1:
         units += ": the revolute joints' peaks, below them the prismatic joints'"
@@ -625,17 +624,16 @@ def _retiming_peaks(r: Any, lattice: Lattice) -> list[float]:
     """A retiming's peak speed, acceleration and jerk among the joints of each unit (deg
     first), in display units."""
     by_derivative = [
-        _by_unit(lattice.joint_display(p), lattice.units)
+        _by_unit(lattice.joint_display(p), lattice)
         for p in (r.peak_velocity, r.peak_acceleration, r.peak_jerk)
     ]
     return [by_derivative[d][k][1] for k in range(len(by_derivative[0])) for d in range(3)]
 
 
 def _retiming_csv(retimed: list[Any], limits: Any, lattice: Lattice) -> str:
-    kinds = [u for u in ("deg", "mm") if u in lattice.units]
     peaks = [
         f"peak_{name}_{u}_s{power}"
-        for u in kinds
+        for u in lattice.unit_kinds
         for name, power in (("velocity", ""), ("acceleration", "2"), ("jerk", "3"))
     ]
     lines = [

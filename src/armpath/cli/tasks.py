@@ -610,13 +610,13 @@ def plan(
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
-    from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope
+    from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope, by_carriage
 
     if bound is None:
         return missing
     sampling = bound.get("sampling") or {}
     estimate = ""
-    if "carriage_reach_mm" in sampling:  # any passes in any order: the scope is the carriage's
+    if by_carriage(bound):  # any passes in any order: the scope is the carriage's
         scope = "any passes"
         if sampling.get("family_estimate_commands") is not None:
             value = math.ceil(sampling["family_estimate_commands"] - 1e-9)
@@ -629,7 +629,7 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
         )
     if bound["gap_commands"] == 0:  # a proven bound the plan meets: no plan has fewer
         return f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); {MEETS_BOUND}"
-    error = (bound.get("sampling") or {}).get("largest_error_on_path_commands")
+    error = sampling.get("largest_error_on_path_commands")
     weak = (
         f"; weak: {error:.1f} commands of sampling error were taken off it (a larger "
         "--bound-samples lets the search split its samples finer)"

@@ -284,6 +284,11 @@ class Lattice:
         """Display unit of each joint: ``"deg"`` or ``"mm"``."""
         return tuple("mm" if p else "deg" for p in self.prismatic)
 
+    @property
+    def unit_kinds(self) -> tuple[str, ...]:
+        """The display units its joints use, deg first: ``("deg",)``, ``("deg", "mm")``."""
+        return tuple(u for u in ("deg", "mm") if u in self.units)
+
     def tick_text(self, i: int) -> str:
         return f"{self.tick_display[i]:.10g} {self.units[i]}"
 

@@ -892,10 +892,8 @@ def plot_trajectory(
     (coinciding joints stay visible), the waypoint times as grey vertical lines; returns the
     figure written."""
     t = np.linspace(traj.times[0], traj.times[-1], 1500)
-    units = ("deg",) if lattice is None else tuple(u for u in ("deg", "mm") if u in lattice.units)
-
-    def shown(values: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.degrees(values) if lattice is None else lattice.joint_display(values)
+    grid = Lattice.uniform(traj.coefficients.shape[2]) if lattice is None else lattice
+    units = grid.unit_kinds
 
     def per_time(power: str) -> str:
         return ", ".join(f"{u}{power}" for u in units)
@@ -911,7 +909,7 @@ def plot_trajectory(
     fig = Figure(figsize=(9, 11.5), dpi=100, layout="constrained")
     axes = fig.subplots(len(names), 1, sharex=True)
     for d, (ax, name) in enumerate(zip(axes, names, strict=True)):
-        values = shown(traj.evaluate(t, d))
+        values = grid.joint_display(traj.evaluate(t, d))
         # one collection of vertical lines (thousands of waypoints stay one artist)
         ax.vlines(traj.times, 0, 1, transform=ax.get_xaxis_transform(), color="0.75", lw=0.8,
                   zorder=0)  # fmt: skip
@@ -922,8 +920,7 @@ def plot_trajectory(
                 lw=1.5,
                 color=JOINT_COLOURS[j % len(JOINT_COLOURS)],
                 linestyle=JOINT_STYLES[j % len(JOINT_STYLES)],
-                label=f"joint {j + 1}"
-                + (f" [{lattice.units[j]}]" if mixed and lattice is not None else ""),
+                label=f"joint {j + 1}" + (f" [{grid.units[j]}]" if mixed else ""),
             )
         ax.set_ylabel(name)
         ax.grid(alpha=0.3)
