@@ -168,10 +168,7 @@ BOUND_OPENING = "legs from the start into a hollow obstacle through its opening"
 
 
 #: The same for a trace bounded by its arm's carriage (:mod:`armpath.planning.bounds.carriage`).
-CARRIAGE_SCOPE = (
-    "the carriage's travel to where the arm's summed lengths reach every point, anything else "
-    "ignored"
-)
+CARRIAGE_SCOPE = "the carriage's travel to where the arm reaches every point, anything else ignored"
 #: The same for a tour bounded over its lattice goal states (all of them listed).
 LATTICE_SCOPE = (
     "every lattice goal state within the tolerance that keeps the clearance rule, all listed, "

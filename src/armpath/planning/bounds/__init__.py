@@ -50,7 +50,8 @@ like any other (the UR5 cell's welds: 64 -> 87 commands).
 An arm with more joints than a tool frame needs has one member of its self-motion sampled per
 tool direction, and its bound is then an estimate, not a proof. An arm on a linear track gets a
 proven one of another kind (:mod:`~armpath.planning.bounds.carriage`): the travel its carriage
-needs to bring every point within the arm's summed lengths.
+needs to bring every point within the arm's reach of it, a largest distance proven by branch
+and bound over the arm's joints (:mod:`~armpath.planning.bounds.farthest`).
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer

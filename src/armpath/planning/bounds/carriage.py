@@ -3,15 +3,15 @@
 An arm carried by a prismatic first joint (:func:`~armpath.planning.trace.carriage.carriage_joint`)
 has one degree of freedom more than a tool frame needs, and the family bound samples one member
 of its self-motion per tool frame: an estimate, not a proof. Its carriage gives a proof of
-another kind. Whatever the arm's other joints do, the tool point stays within
-``reach`` of the carriage's origin: the lengths of the fixed transforms after the carriage
-summed, with the flange's and the tool's (revolute joints turn about their origins and keep those
-lengths; a further prismatic joint adds the larger of its limits), so a curve point ``p`` is
-within the tolerance of the tool point only with the carriage at a value ``c`` where
-``|p - o(c)| <= reach + tolerance``, an interval of ``c`` (the carriage's limits too). Every
-point of every span must be visited so: the carriage must at some time stand at or above the
-largest of the intervals' lower ends, ``A``, and at some time at or below the smallest of their
-upper ends, ``B``; from where it starts, ``c0``, that takes at least
+another kind. Whatever the arm's other joints do, the tool point stays within ``reach`` of a
+point ``o`` fixed to the carriage: the largest distance proven by branch and bound
+(:func:`~armpath.planning.bounds.farthest.farthest_tool_point`, ``o`` on the next joint's
+axis), so a curve point ``p`` is within the tolerance of the tool point only with the
+carriage at a value ``c`` where ``|p - o(c)| <= reach + tolerance``, an interval of ``c`` (the
+carriage's limits too). Every point of every span must be visited so: the carriage must at
+some time stand at or above the largest of the intervals' lower ends, ``A``, and at some time
+at or below the smallest of their upper ends, ``B``; from where it starts, ``c0``, that takes
+at least
 
 * ``max(A - c0, c0 - B, 0)`` where ``A <= B``;
 * the shorter of going up to ``A`` then down to ``B`` and going down to ``B`` then up to ``A``
@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from armpath.geometry.curves import Curve
 from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.planning.bounds.farthest import farthest_tool_point
 from armpath.planning.bounds.value import CommandBound
 
 FloatArray = NDArray[np.float64]
@@ -42,23 +43,6 @@ POINT_SPACING_MM = 0.5
 #: Added to the reach (mm) for where a point taken at a span's arc length may lie past it (the
 #: curve's arc-length table is interpolated): far above that error, far below a command.
 _ARC_SLACK_MM = 0.01
-
-
-def carriage_reach(arm: SerialArm) -> float | None:
-    """The farthest the tool point can be from the origin of the first joint's frame, after its
-    motion (model units): the fixed transforms' lengths after it summed with the flange's and
-    the tool's, a prismatic joint's larger limit added; None where a later prismatic joint is
-    unlimited."""
-    reach = float(np.linalg.norm(arm.T_joint_flange[:3, 3]))
-    reach += float(np.linalg.norm(arm.T_flange_tool[:3, 3]))
-    for joint in arm.joints[1:]:
-        reach += float(np.linalg.norm(joint.T_parent_joint[:3, 3]))
-        if joint.kind is JointKind.PRISMATIC:
-            largest = max(abs(joint.limits[0]), abs(joint.limits[1]))
-            if not math.isfinite(largest):
-                return None
-            reach += largest
-    return reach
 
 
 def carriage_travel_bound(
@@ -80,11 +64,13 @@ def carriage_travel_bound(
         or not spans_mm
     ):
         return None
-    reach = carriage_reach(arm)
-    if reach is None:
+    farthest = farthest_tool_point(arm, 0)
+    if farthest is None:
         return None
+    reach = farthest.radius
     frame = arm.T_world_base @ arm.joints[0].T_parent_joint
-    origin, axis = frame[:3, 3], frame[:3, :3] @ arm.joints[0].axis
+    axis = frame[:3, :3] @ arm.joints[0].axis
+    origin = farthest.centre  # fixed to the carriage, where it is with the carriage at 0
     total = sum(b - a for a, b in spans_mm)
     count = int(min(MAX_POINTS, max(2, math.ceil(total / POINT_SPACING_MM) + len(spans_mm))))
     per_span = [max(2, round(count * (b - a) / max(total, 1e-12))) for a, b in spans_mm]
@@ -114,13 +100,18 @@ def carriage_travel_bound(
         value=value,
         method=(
             f"the carriage's travel: from {c0:g} mm to {A:.1f} mm and {B:.1f} mm, where every "
-            f"point of the curve is within the arm's reach ({reach:.1f} mm, its lengths summed) "
-            f"of it, {step:g} mm a command"
+            f"point of the curve is within the arm's reach of it ({reach:.1f} mm from a point "
+            f"on its next joint's axis, proven by branch and bound), {step:g} mm a command"
         ),
         parts={"carriage": value},
-        sampling={"carriage_reach_mm": reach, "carriage_points": float(s.size)},
+        sampling={
+            "carriage_reach_mm": reach,
+            "carriage_reach_found_mm": farthest.found,
+            "carriage_reach_boxes": float(farthest.boxes),
+            "carriage_points": float(s.size),
+        },
         proven=True,
     )
 
 
-__all__ = ["carriage_reach", "carriage_travel_bound"]
+__all__ = ["carriage_travel_bound"]
