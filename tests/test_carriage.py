@@ -260,3 +260,75 @@ def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track()
     bound = doc["lower_bound"]
     assert bound["proven"] and "carriage" in bound["method"]
     assert 0 < doc["lower_bound_commands"] <= result.n_commands
+
+
+@pytest.mark.slow
+def test_a_tour_along_the_track_is_bounded_by_its_carriage():
+    """The track cell's three spot welds along its table: the tour reaches each weld within
+    the tolerance (replayed with the independent D-H product), and its lower bound is the
+    carriage's travel, proven for any order (the family's estimate of this redundant arm,
+    about 195, is only named), at most the plan's commands."""
+    result = armpath.spotweld(None, scene=EXAMPLES / "track_cell.toml")
+    doc = result.doc
+    tick = np.array([0.1] + [np.radians(0.1)] * 6)
+    ticks = np.cumsum(np.vstack([result.sequence.start_ticks, result.commands]), axis=0)
+    for visit in doc["visits"]:
+        tip = _pose(ticks[visit["after_command"]] * tick)[:3, 3]
+        assert np.linalg.norm(tip - np.array(visit["target"])) <= 0.05 + 1e-9
+    assert sorted(map(tuple, (v["target"] for v in doc["visits"]))) == sorted(
+        [(200.0, -550.0, 41.0), (950.0, -650.0, 41.0), (1700.0, -550.0, 41.0)]
+    )
+    bound = doc["lower_bound"]
+    assert bound["proven"] and "carriage" in bound["method"]
+    assert 0 < doc["lower_bound_commands"] <= result.n_commands
+
+
+def _walk_travel(allowed: list[np.ndarray], grid: np.ndarray, c0: float, back: bool) -> float:
+    """The shortest carriage walk (mm) from ``c0`` that stands, in some order, at an allowed
+    grid value of each point (``allowed``: a mask over ``grid`` per point), and with ``back``
+    ends at ``c0``: every order, a 1-D distance transform along each (brute force)."""
+    from itertools import permutations
+
+    spacing = grid[1] - grid[0]
+
+    def spread(cost: np.ndarray) -> np.ndarray:  # min over c' of cost[c'] + |c - c'|
+        out = cost.copy()
+        for k in range(1, out.size):
+            out[k] = min(out[k], out[k - 1] + spacing)
+        for k in range(out.size - 2, -1, -1):
+            out[k] = min(out[k], out[k + 1] + spacing)
+        return out
+
+    best = np.inf
+    for order in permutations(range(len(allowed))):
+        cost = np.abs(grid - c0)
+        for i in order:
+            cost = np.where(allowed[i], cost, np.inf)
+            cost = spread(cost) if i != order[-1] else cost
+        total = cost + np.abs(grid - c0) if back else cost
+        best = min(best, float(total.min()))
+    return best
+
+
+def test_a_tours_carriage_bound_is_the_shortest_walk_through_where_each_weld_is_reached():
+    """Welds along the track cell's table: the carriage bound equals the shortest walk of the
+    carriage, from where it starts (and back, when the tour returns), through a value where
+    each weld is within the proven reach, found by trying every order on a 0.5 mm grid."""
+    from armpath.planning.bounds.carriage import points_travel_bound
+    from armpath.planning.bounds.farthest import farthest_tool_point
+
+    arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")
+    farthest = farthest_tool_point(arm, 0)
+    assert farthest is not None
+    welds = np.array([[200.0, -550.0, 41.0], [1000.0, -650.0, 41.0], [1700.0, -550.0, 141.0]])
+    grid = np.arange(0.0, 2000.0 + 1e-9, 0.5)
+    # the point fixed to the carriage moves along world x (the track) with it
+    centres = farthest.centre + grid[:, None] * np.array([1.0, 0.0, 0.0])
+    allowed = [np.linalg.norm(centres - w, axis=1) <= farthest.radius + 0.05 for w in welds]
+    for c0 in (0.0, 500.0, 1500.0):
+        start = np.r_[c0, np.radians([0, -90, 90, -90, -90, 0])]
+        for back in (False, True):
+            bound = points_travel_bound(arm, welds, start, 0.05, "weld", back)
+            assert bound is not None and bound.proven
+            walk = _walk_travel(allowed, grid, c0, back)
+            assert bound.value * 2.0 == pytest.approx(walk, abs=1.0), (c0, back)

@@ -607,6 +607,10 @@ def plan(
                 out_console.print(f"wrote {path}", markup=False)
 
 
+#: What a trace's family bound is over (a carriage's holds for any passes).
+TRACE_SCOPE = "one pass per span"
+
+
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
@@ -616,8 +620,8 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
         return missing
     sampling = bound.get("sampling") or {}
     estimate = ""
-    if by_carriage(bound):  # any passes in any order: the scope is the carriage's
-        scope = "any passes"
+    if by_carriage(bound):  # a trace's: any passes in any order (a tour's: every order)
+        scope = "any passes" if scope == TRACE_SCOPE else scope
         if sampling.get("family_estimate_commands") is not None:
             value = math.ceil(sampling["family_estimate_commands"] - 1e-9)
             estimate = f"; the family's estimate (not proven) ~{value}"
@@ -812,7 +816,7 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
         if bound_skipped
         else "none: the solution family has no member within the limits on a traced span"
     )
-    table.add_row("lower bound", _bound_text(doc.get("lower_bound"), "one pass per span", missing))
+    table.add_row("lower bound", _bound_text(doc.get("lower_bound"), TRACE_SCOPE, missing))
     table.add_row("passes", str(len(doc["passes"])))
     for p in doc["pass_details"]:
         table.add_row(

@@ -39,6 +39,7 @@ from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, tour_bound, tour_bound_any_order
+from armpath.planning.bounds.carriage import points_travel_bound, with_carriage
 from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.choices import Objective, VisitOrder
 from armpath.planning.motion import (
@@ -599,6 +600,14 @@ def plan_tour(
             f"tour failed its final clearance check ({clearance.limiting_pair} "
             f"{clearance.limiting_slack:+.3f} mm at command {clearance.limiting_command})"
         )
+    reported = family_bound
+    if bound:  # an arm on a track: its carriage's travel, proven (and cheap) for any order
+        carriage = points_travel_bound(
+            arm, pts, arm.lattice.to_joint(start), tolerance_mm, "weld", return_to_start
+        )
+        reported = with_carriage(family_bound, carriage)
+        if reported is not None:
+            no_bound_because = None
     return TourResult(
         sequence=sequence,
         order=chosen,
@@ -611,7 +620,7 @@ def plan_tour(
         orders_planned=planned,
         tolerance_mm=tolerance_mm,
         orders_not_planned=not_planned,
-        lower_bound=family_bound,
+        lower_bound=reported,
         order_family_bounds=family_bounds,
         no_bound_because=no_bound_because,
         orientations=None if orientations is None else tuple(orientations),

@@ -24,6 +24,7 @@ its step. Obstacles, the tool rule and the lattice are left out (a relaxation: s
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,13 +56,38 @@ def carriage_travel_bound(
     """The commands any plan that brings the tool point within ``tolerance_mm`` of every point
     of the spans (arc lengths mm) of ``curve``, from ``q_start`` (rad / mm), needs at least
     for the carriage (the first joint, prismatic) to travel where the arm reaches them (see
-    the module). None where the arm's first joint is not prismatic, its lengths are not in mm,
-    a later prismatic joint is unlimited, or the spans are empty."""
+    the module). None where the arm has no carriage (:func:`points_travel_bound`) or the spans
+    are empty."""
+    if not spans_mm:
+        return None
+    total = sum(b - a for a, b in spans_mm)
+    count = int(min(MAX_POINTS, max(2, math.ceil(total / POINT_SPACING_MM) + len(spans_mm))))
+    per_span = [max(2, round(count * (b - a) / max(total, 1e-12))) for a, b in spans_mm]
+    s = np.concatenate([np.linspace(a, b, k) for (a, b), k in zip(spans_mm, per_span, strict=True)])
+    return points_travel_bound(
+        arm, curve.at_arc_length(s), q_start, tolerance_mm + _ARC_SLACK_MM, "point of the curve"
+    )
+
+
+def points_travel_bound(
+    arm: SerialArm,
+    points_mm: FloatArray,
+    q_start: FloatArray,
+    tolerance_mm: float,
+    what: str = "weld",
+    back: bool = False,
+) -> CommandBound | None:
+    """The commands any plan that brings the tool point within ``tolerance_mm`` of each of
+    ``points_mm (N, 3)`` (in any order), from ``q_start`` (rad / mm), and with ``back`` returns
+    to it, needs at least for the carriage to travel where the arm reaches them (see the
+    module; ``what`` names a point in the method's text). None where the arm's first joint is
+    not prismatic, its lengths are not in mm, a later prismatic joint is unlimited, there are
+    no points, or a point lies beyond the arm's reach from any carriage value."""
     if (
         arm.n_joints < 2
         or arm.joints[0].kind is not JointKind.PRISMATIC
         or arm.length_unit != "mm"
-        or not spans_mm
+        or points_mm.shape[0] == 0
     ):
         return None
     farthest = farthest_tool_point(arm, 0)
@@ -70,16 +96,10 @@ def carriage_travel_bound(
     reach = farthest.radius
     frame = arm.T_world_base @ arm.joints[0].T_parent_joint
     axis = frame[:3, :3] @ arm.joints[0].axis
-    origin = farthest.centre  # fixed to the carriage, where it is with the carriage at 0
-    total = sum(b - a for a, b in spans_mm)
-    count = int(min(MAX_POINTS, max(2, math.ceil(total / POINT_SPACING_MM) + len(spans_mm))))
-    per_span = [max(2, round(count * (b - a) / max(total, 1e-12))) for a, b in spans_mm]
-    s = np.concatenate([np.linspace(a, b, k) for (a, b), k in zip(spans_mm, per_span, strict=True)])
-    points = curve.at_arc_length(s)
-    d = points - origin
+    d = points_mm - farthest.centre  # the centre where it is with the carriage at 0
     along = d @ axis
     across2 = np.maximum(np.einsum("ij,ij->i", d, d) - along**2, 0.0)
-    radius = reach + tolerance_mm + _ARC_SLACK_MM
+    radius = reach + tolerance_mm
     if np.any(across2 > radius**2):  # a point no carriage value brings within reach
         return None
     half = np.sqrt(radius**2 - across2)
@@ -87,7 +107,9 @@ def carriage_travel_bound(
     A = float(max(np.max(along - half), lower))
     B = float(min(np.min(along + half), upper))
     c0 = float(q_start[0])
-    if A <= B:
+    if back:  # a closed walk from c0 through A and B
+        travel = 2.0 * (max(A, c0) - min(B, c0))
+    elif A <= B:
         travel = max(A - c0, c0 - B, 0.0)
     else:
         up_first = max(A - c0, 0.0) + (max(c0, A) - B)
@@ -95,12 +117,13 @@ def carriage_travel_bound(
         travel = min(up_first, down_first)
     step = float(arm.lattice.max_step[0])
     value = travel / step
+    returning = f" and back to {c0:g} mm" if back else ""
     return CommandBound(
         commands=math.ceil(value - 1e-9),
         value=value,
         method=(
-            f"the carriage's travel: from {c0:g} mm to {A:.1f} mm and {B:.1f} mm, where every "
-            f"point of the curve is within the arm's reach of it ({reach:.1f} mm from a point "
+            f"the carriage's travel: from {c0:g} mm to {A:.1f} mm and {B:.1f} mm{returning}, "
+            f"where every {what} is within the arm's reach of it ({reach:.1f} mm from a point "
             f"on its next joint's axis, proven by branch and bound), {step:g} mm a command"
         ),
         parts={"carriage": value},
@@ -108,10 +131,29 @@ def carriage_travel_bound(
             "carriage_reach_mm": reach,
             "carriage_reach_found_mm": farthest.found,
             "carriage_reach_boxes": float(farthest.boxes),
-            "carriage_points": float(s.size),
+            "carriage_points": float(points_mm.shape[0]),
         },
         proven=True,
     )
 
 
-__all__ = ["carriage_travel_bound"]
+def with_carriage(
+    family: CommandBound | None, carriage: CommandBound | None
+) -> CommandBound | None:
+    """The bound to report: the family's, or its carriage's travel (an arm on a track) where
+    that is higher or the family's is an estimate (a redundant arm's, not proven; its value is
+    then named in the carriage bound's method)."""
+    if carriage is None:
+        return family
+    if family is None:
+        return carriage
+    if family.proven:
+        return family if family.value >= carriage.value else carriage
+    return replace(
+        carriage,
+        method=f"{carriage.method}; the family's estimate, not proven: ~{family.commands}",
+        sampling={**carriage.sampling, "family_estimate_commands": family.value},
+    )
+
+
+__all__ = ["carriage_travel_bound", "points_travel_bound", "with_carriage"]

@@ -33,7 +33,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tick_jacobian, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
-from armpath.planning.bounds.carriage import carriage_travel_bound
+from armpath.planning.bounds.carriage import carriage_travel_bound, with_carriage
 from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.bounds.trace import LAYER_INSET_MM
 from armpath.planning.motion import (
@@ -383,24 +383,7 @@ def trace_plan_bound(
         sequence.grid.to_joint(sequence.start_ticks),
         result.tolerance_mm,
     )
-    return _stronger(found, carriage)
-
-
-def _stronger(family: CommandBound | None, carriage: CommandBound | None) -> CommandBound | None:
-    """The bound a trace reports: the family's, or its carriage's travel (an arm on a track)
-    where that is higher or the family's is an estimate (a redundant arm's, not proven; its
-    value is then named in the carriage bound's method)."""
-    if carriage is None:
-        return family
-    if family is None:
-        return carriage
-    if family.proven:
-        return family if family.value >= carriage.value else carriage
-    return replace(
-        carriage,
-        method=f"{carriage.method}; the family's estimate, not proven: ~{family.commands}",
-        sampling={**carriage.sampling, "family_estimate_commands": family.value},
-    )
+    return with_carriage(found, carriage)
 
 
 def _pass_arc_lengths(fam: CurveFamily, q: FloatArray, p: TracePass) -> FloatArray:
