@@ -710,3 +710,38 @@ def test_one_target_at_a_time_and_many_poses_by_solve_batch():
         assert _contains(result.solutions, q)
         for found in result.solutions:
             assert max(pose_residual(dh_pose(a, alpha, d, found), target)) < 1e-6
+
+
+@pytest.mark.parametrize("name", ["iiwa14", "ur5", "scara"])
+def test_compiled_levenberg_marquardt_takes_the_numpy_steps(name):
+    """The compiled Levenberg-Marquardt (each row through its iterations in one loop) against
+    the numpy form (rows stepped together, batched solves): after 1, 2 and 5 iterations the
+    same configurations to 1e-9 rad, in each mode (the point alone, a full rotation per row,
+    an approach axis per row), with a box that holds one joint and clips the others; after
+    60, as many rows on the target (give or take two of 40: a row on the edge of converging
+    goes either way on rounding)."""
+    from armpath.ik.family import GenericFamily
+    from armpath.ik.target import ToolTarget
+
+    arm = dh_arm(scara_rows(), name="scara") if name == "scara" else BUILTIN_MODELS[name]()
+    n = arm.n_joints
+    rng = np.random.default_rng(3)
+    goal = tool_pose(arm, np.clip(rng.uniform(-1.0, 1.0, n), arm.lower, arm.upper))
+    fam = GenericFamily(arm, ToolTarget(goal[:3, 3]))
+    starts = np.clip(rng.uniform(-2.0, 2.0, (40, n)), arm.lower, arm.upper)
+    lower, upper = np.full(n, -2.5), np.full(n, 2.5)
+    lower[0] = upper[0] = starts[0, 0]  # joint 1 held where the first row has it
+    modes = [{}, {"axes": np.tile(goal[:3, 2], (40, 1))}]
+    if n >= 6:
+        modes.append({"rotations": np.tile(goal[:3, :3], (40, 1, 1))})
+    for mode in modes:
+        for box in ({}, {"lower": lower, "upper": upper}):
+            for iterations in (1, 2, 5):
+                a = fam.refine(starts, iterations, compiled=False, **mode, **box)
+                b = fam.refine(starts, iterations, **mode, **box)
+                assert np.abs(a - b).max() < 1e-9, (list(mode), list(box), iterations)
+            a = fam.refine(starts, 60, compiled=False, **mode)
+            b = fam.refine(starts, 60, **mode)
+            on_a = np.linalg.norm(tool_pose(arm, a)[:, :3, 3] - goal[:3, 3], axis=1) < 1e-6
+            on_b = np.linalg.norm(tool_pose(arm, b)[:, :3, 3] - goal[:3, 3], axis=1) < 1e-6
+            assert abs(int(on_a.sum()) - int(on_b.sum())) <= 2 and on_b.sum() >= 5

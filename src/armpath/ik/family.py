@@ -180,6 +180,7 @@ class GenericFamily:
         lower: FloatArray | None = None,
         upper: FloatArray | None = None,
         axes: FloatArray | None = None,
+        compiled: bool = True,
     ) -> FloatArray:
         """Damped Newton (Levenberg-Marquardt) steps that bring each row onto the target: the
         position, the orientation rule (a penalty that acts only outside it) or, with
@@ -189,7 +190,10 @@ class GenericFamily:
         the box ``lower`` .. ``upper`` (per row or for all; a joint whose box is one value is
         held there). The damping counts a prismatic joint's move in the arm's size, as a
         revolute joint's in radians; rows on the target to rounding stop, and so do rows
-        whose cost falls by less than ``STALL_FRACTION`` in ``STALL_WINDOW`` iterations."""
+        whose cost falls by less than ``STALL_FRACTION`` in ``STALL_WINDOW`` iterations.
+        ``compiled``: each row through its iterations in one compiled loop
+        (:mod:`armpath.ik.lm_kernel`; not for the orientation rule, a cone, which keeps the
+        numpy form), else numpy's batched steps."""
         arm = self.arm
         lo = arm.lower if lower is None else np.maximum(arm.lower, lower)
         hi = arm.upper if upper is None else np.minimum(arm.upper, upper)
@@ -235,6 +239,12 @@ class GenericFamily:
         # (a joint held by ``lower`` == ``upper`` takes no part in the steps)
         prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
         scale = np.where(hi_rows > lo_rows, np.where(prismatic, size, 1.0), 0.0)
+        if compiled and (
+            rot_rows is not None or axis_rows is not None or self.target.orientation is None
+        ):
+            return _refine_compiled(
+                self, q, iterations, rot_rows, axis_rows, lo_rows, hi_rows, scale
+            )
         err, J = errors(q, np.arange(q.shape[0]))
         cost = np.sum(err**2, axis=1)
         # rows on the target to rounding stop moving (they are independent of each other)
@@ -272,6 +282,44 @@ class GenericFamily:
             lam[rows] = np.where(better, np.maximum(lr / 5.0, 1e-12), np.minimum(lr * 5.0, 1e8))
             rows = rows[cost[rows] >= on_target]
         return q
+
+
+def _refine_compiled(
+    fam: GenericFamily,
+    q: FloatArray,
+    iterations: int,
+    rot_rows: FloatArray | None,
+    axis_rows: FloatArray | None,
+    lo_rows: FloatArray,
+    hi_rows: FloatArray,
+    scale: FloatArray,
+) -> FloatArray:
+    """:meth:`GenericFamily.refine` by the compiled loop (:mod:`armpath.ik.lm_kernel`)."""
+    from armpath.ik.lm_kernel import AXIS, POSITION, ROTATION, refine_rows
+    from armpath.kinematics import compiled_chain
+
+    m = q.shape[0]
+    mode = ROTATION if rot_rows is not None else AXIS if axis_rows is not None else POSITION
+    rot = np.zeros((m, 3, 3)) if rot_rows is None else rot_rows[:m]
+    ax = np.zeros((m, 3)) if axis_rows is None else axis_rows[:m]
+    refine_rows(
+        q,
+        int(iterations),
+        mode,
+        np.ascontiguousarray(fam.target.position, dtype=np.float64),
+        np.ascontiguousarray(rot, dtype=np.float64),
+        np.ascontiguousarray(ax, dtype=np.float64),
+        np.asarray(fam.arm.approach_axis, dtype=np.float64),
+        np.ascontiguousarray(lo_rows),
+        np.ascontiguousarray(hi_rows),
+        np.ascontiguousarray(scale),
+        float(fam.size),
+        float((EXACT_FRACTION * 1e-2) ** 2),
+        STALL_WINDOW,
+        STALL_FRACTION,
+        *compiled_chain(fam.arm)[:5],
+    )
+    return q
 
 
 def _rule_error(target: ToolTarget, R: FloatArray, Jw: FloatArray) -> tuple[FloatArray, FloatArray]:
