@@ -208,9 +208,16 @@ class CurveFamily:
         self.unlimited = revolute & ~(np.isfinite(self.arm.lower) | np.isfinite(self.arm.upper))
         #: revolute joints that may turn a whole turn within their limits (the unlimited ones,
         #: and a UR5's +-360 deg): their members are the same a turn apart, so the reference
-        #: follows them round (then turned by whole turns into the limits)
+        #: follows them round (then turned by whole turns into the limits). Not a joint with
+        #: its own self-collision ranges (:meth:`CollisionWorld.joint_bands`): a UR5's elbow
+        #: cannot fold through its upper arm, so from 90 deg it reaches -149 deg, not 211
+        #: (the way round through 180 that a whole turn would count as 121 deg)
+        banded = np.zeros(self.arm.n_joints, dtype=bool)
+        banded[list(self.world.joint_bands(self.arm))] = True
         with np.errstate(invalid="ignore"):
-            self.turns_freely = revolute & (self.arm.upper - self.arm.lower >= 2.0 * np.pi - 1e-9)
+            self.turns_freely = (
+                revolute & (self.arm.upper - self.arm.lower >= 2.0 * np.pi - 1e-9) & ~banded
+            )
         self._lo = np.where(np.isfinite(self.arm.lower), self.arm.lower, -np.inf)
         self._hi = np.where(np.isfinite(self.arm.upper), self.arm.upper, np.inf)
         #: joint values to the units slack is read in: deg for a revolute joint, mm (model

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
+from armpath.geometry.world import into_windows
 from armpath.jit import njit
 from armpath.kinematics import position_jacobian, tool_position
 from armpath.planning.trace.family import CurveFamily
@@ -557,12 +558,16 @@ def reference_pieces(
     # the same tool directions on every layer; a curve in free space (every direction allowed,
     # not half of them) takes every third, which keeps the DP's work alike
     dirs = fam.coarse_dirs if fam.surface is not None else fam.coarse_dirs[::3]
+    windows = fam.world.joint_windows(fam.arm, q_from)
     for s in np.linspace(a + inset, b - inset, n + 1):
         check_time("choosing the reference path along the curve")
         layer = _layer_members(fam, float(s), dirs)
         if layer is None:
             continue
         q, sc, best = layer
+        # a joint with self-collision ranges at its values on the start's side of them (the
+        # only ones the arm reaches from there; it does not turn freely, see the family)
+        q = into_windows(q, windows)[0]
         keep = np.flatnonzero(sc >= min(0.3, 0.5 * best))
         if keep.size > MAX_LAYER_NODES:  # evenly over the tool directions
             keep = keep[np.linspace(0, keep.size - 1, MAX_LAYER_NODES).astype(np.int64)]
