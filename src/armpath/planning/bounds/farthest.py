@@ -18,10 +18,10 @@ at most ``r_i`` long (the distance from the tool point to joint ``i``'s axis, at
 :func:`~armpath.kinematics.displacement_bounds`; 1 for a prismatic joint), each second
 derivative ``d2p/dq_i dq_j`` is the earlier joint's rotation applied to the later one's
 twist, at most ``r_max(i,j)`` (the later joint's bound) long, and ``D`` is an upper bound of
-``|p - o|`` (the summed lengths). Boxes whose bound is not above the largest distance found at
-a centre (plus a small share) cannot hold the maximum and are dropped, the others split across
-the joint that contributes most; the largest bound of the boxes left is the proven distance. A
-budget of boxes ends the search: its result stays a proof, only less tight.
+``|p - o|`` (the summed lengths). Boxes whose bound is within :data:`DISTANCE_SLACK` of the
+largest distance found at a centre are dropped, the others split across the joint that
+contributes most; the largest bound of all the boxes, dropped or left, is the proven
+distance. A budget of boxes ends the search: its result stays a proof, only less tight.
 
 The centre is put on the axis of the first revolute joint after the carriage (that joint then
 leaves every distance as it is and drops out), where the largest sampled distance is least.
@@ -140,9 +140,10 @@ def farthest_tool_point(
     box_lo = lo[free - first][None, :].copy()
     box_hi = hi[free - first][None, :].copy()
     best_sq = found * found
-    slack_sq = 2.0 * D * DISTANCE_SLACK
+    slack_sq = (found + DISTANCE_SLACK) ** 2 - found**2  # a box within it is not split
     boxes = 0
-    proven_sq = np.inf
+    dropped_sq = best_sq  # the largest bound of a box dropped (the found distance's own)
+    open_sq = np.inf  # the largest bound of the boxes not yet dropped (none evaluated: inf)
     while box_lo.shape[0]:
         if boxes + box_lo.shape[0] > max_boxes:
             break
@@ -166,11 +167,14 @@ def farthest_tool_point(
             # what each joint adds: its linear part and its share of the quadratic one
             grad_part[sl] = lin + h * (r * first_order[:, None] + D * (h @ r_pair))
         keep = upper > best_sq + slack_sq
-        proven_sq = max(best_sq, float(upper.max())) if upper.size else best_sq
+        if np.any(~keep):
+            dropped_sq = max(dropped_sq, float(upper[~keep].max()))
         if not np.any(keep):
-            proven_sq = max(best_sq, float(upper.max()))
+            open_sq = -np.inf
             box_lo = box_lo[:0]
             break
+        # the kept boxes' halves are within their bounds, whether split again or not
+        open_sq = float(upper[keep].max())
         box_lo, box_hi, grad_part = box_lo[keep], box_hi[keep], grad_part[keep]
         # split each box in two across the joint that adds most
         k = np.argmax(grad_part, axis=1)
@@ -181,8 +185,8 @@ def farthest_tool_point(
         lo_b, hi_b = box_lo.copy(), box_hi.copy()
         lo_b[rows, k] = mid
         box_lo, box_hi = np.concatenate([lo_a, lo_b]), np.concatenate([hi_a, hi_b])
-    if box_lo.shape[0]:  # the budget ran out: the boxes left keep their (last) bounds
-        proven_sq = max(proven_sq, best_sq)
+    # every box is dropped or open (the budget ran out): the largest of their bounds
+    proven_sq = max(dropped_sq, open_sq)
     return FarthestReach(
         after=after,
         centre=centre_world,
