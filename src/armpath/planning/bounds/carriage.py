@@ -122,7 +122,8 @@ def points_travel_bound(
         commands=math.ceil(value - 1e-9),
         value=value,
         method=(
-            f"the carriage's travel: from {c0:g} mm to {A:.1f} mm and {B:.1f} mm{returning}, "
+            f"the carriage's travel: from {c0:g} mm to {A:.1f} mm or beyond and to {B:.1f} mm or "
+            f"below{returning}, "
             f"where every {what} is within the arm's reach of it ({reach:.1f} mm from a point "
             f"on its next joint's axis, proven by branch and bound), {step:g} mm a command"
         ),
