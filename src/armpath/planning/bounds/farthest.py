@@ -95,7 +95,19 @@ def farthest_tool_point(
 ) -> FarthestReach | None:
     """The proven largest distance from a point of joint ``after``'s moving frame to the tool
     point, over the values of the joints after it (see the module). None where a later
-    prismatic joint is unlimited (the tool point has no farthest place)."""
+    prismatic joint is unlimited (the tool point has no farthest place). Computed once per
+    arm (a second of search or more; cached on the arm)."""
+    cache: dict[tuple[int, int], FarthestReach | None] = arm.__dict__.setdefault(
+        "_farthest_tool_point", {}
+    )
+    key = (int(after), int(max_boxes))
+    if key not in cache:
+        cache[key] = _search(arm, after, max_boxes)
+    return cache[key]
+
+
+def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
+    """:func:`farthest_tool_point`, searched."""
     n = arm.n_joints
     first = after + 1
     lo, hi = _search_ranges(arm, first)
