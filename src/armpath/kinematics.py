@@ -397,21 +397,26 @@ def displacement_bounds(arm: SerialArm) -> FloatArray:
     prismatic joint it is 1. So a motion ``dq`` moves every point of the arm by at most
     ``sum_i |dq_i| * bound_i`` (for any straight joint-space motion of that size).
     """
-    offsets = [float(np.linalg.norm(j.T_parent_joint[:3, 3])) for j in arm.joints]
+    return np.array(
+        [
+            1.0 if j.kind is JointKind.PRISMATIC else lengths_after(arm, i)
+            for i, j in enumerate(arm.joints)
+        ]
+    )
+
+
+def lengths_after(arm: SerialArm, i: int) -> float:
+    """The lengths of the fixed transforms after joint ``i`` (0-based; -1: all of them) and
+    the tool's summed, a distal prismatic joint's larger limit added (it can lengthen the
+    chain that far): no point of the arm beyond joint ``i`` is farther than this from joint
+    ``i``'s origin (inf where such a prismatic joint is unlimited)."""
+    later = arm.joints[i + 1 :]
+    offsets = [float(np.linalg.norm(j.T_parent_joint[:3, 3])) for j in later]
     offsets.append(float(np.linalg.norm(arm.T_flange_tool[:3, 3])))
-    bounds = []
-    for i, joint in enumerate(arm.joints):
-        if joint.kind is JointKind.PRISMATIC:
-            bounds.append(1.0)
-        else:
-            # a distal prismatic joint can lengthen the chain up to its limit
-            extra = sum(
-                max(abs(j.limits[0]), abs(j.limits[1]))
-                for j in arm.joints[i + 1 :]
-                if j.kind is JointKind.PRISMATIC
-            )
-            bounds.append(sum(offsets[i + 1 :]) + extra)
-    return np.array(bounds)
+    slides = [
+        max(abs(j.limits[0]), abs(j.limits[1])) for j in later if j.kind is JointKind.PRISMATIC
+    ]
+    return sum(offsets) + sum(slides)
 
 
 def geometric_jacobian(arm: SerialArm, q: ArrayLike) -> FloatArray:

@@ -167,7 +167,8 @@ BOUND_SCOPE = "every configuration that may be clear, obstacles ignored between 
 BOUND_OPENING = "legs from the start into a hollow obstacle through its opening"
 
 
-#: The same for a trace bounded by its arm's carriage (:mod:`armpath.planning.bounds.carriage`).
+#: The same for a trace or tour bounded by its arm's carriage
+#: (:mod:`armpath.planning.bounds.carriage`).
 CARRIAGE_SCOPE = "the carriage's travel to where the arm reaches every point, anything else ignored"
 #: The same for a tour bounded over its lattice goal states (all of them listed).
 LATTICE_SCOPE = (

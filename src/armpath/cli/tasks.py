@@ -607,24 +607,18 @@ def plan(
                 out_console.print(f"wrote {path}", markup=False)
 
 
-#: What a trace's family bound is over (a carriage's holds for any passes).
-TRACE_SCOPE = "one pass per span"
-
-
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
-    from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope, by_carriage
+    from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope
 
     if bound is None:
         return missing
     sampling = bound.get("sampling") or {}
     estimate = ""
-    if by_carriage(bound):  # a trace's: any passes in any order (a tour's: every order)
-        scope = "any passes" if scope == TRACE_SCOPE else scope
-        if sampling.get("family_estimate_commands") is not None:
-            value = math.ceil(sampling["family_estimate_commands"] - 1e-9)
-            estimate = f"; the family's estimate (not proven) ~{value}"
+    if sampling.get("family_estimate_commands") is not None:  # a carriage's, beside it
+        value = math.ceil(sampling["family_estimate_commands"] - 1e-9)
+        estimate = f"; the family's estimate (not proven) ~{value}"
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     if not bound.get("proven", True):
         return (
@@ -797,7 +791,7 @@ def spotweld(
 
 
 def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
-    from armpath.report import arc_text
+    from armpath.report import arc_text, by_carriage
 
     table = Table(
         title=escape(f"trace {doc['curve']['definition'].get('name', 'curve')}"),
@@ -816,7 +810,10 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
         if bound_skipped
         else "none: the solution family has no member within the limits on a traced span"
     )
-    table.add_row("lower bound", _bound_text(doc.get("lower_bound"), TRACE_SCOPE, missing))
+    bound = doc.get("lower_bound")
+    # a carriage's travel holds for any passes in any order, the family's for one a span
+    scope = "any passes" if bound is not None and by_carriage(bound) else "one pass per span"
+    table.add_row("lower bound", _bound_text(bound, scope, missing))
     table.add_row("passes", str(len(doc["passes"])))
     for p in doc["pass_details"]:
         table.add_row(

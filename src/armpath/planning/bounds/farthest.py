@@ -29,7 +29,6 @@ leaves every distance as it is and drops out), where the largest sampled distanc
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +38,7 @@ from armpath.kinematics import (
     displacement_bounds,
     forward_frames,
     jacobian_from_frames,
+    lengths_after,
     tool_point_joints,
 )
 from armpath.model.serial_arm import JointKind, SerialArm
@@ -148,7 +148,7 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
     r = displacement_bounds(arm)[free]
     ahead = np.maximum.outer(np.arange(free.size), np.arange(free.size))
     r_pair = r[ahead]  # the later joint's bound, per pair
-    D = float(np.linalg.norm(centre_world - T_after[:3, 3])) + _chain_length(arm, first)
+    D = float(np.linalg.norm(centre_world - T_after[:3, 3])) + lengths_after(arm, after)
     box_lo = lo[free - first][None, :].copy()
     box_hi = hi[free - first][None, :].copy()
     best_sq = found * found
@@ -206,19 +206,6 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
         found=float(np.sqrt(best_sq)),
         boxes=boxes,
     )
-
-
-def _chain_length(arm: SerialArm, first: int) -> float:
-    """The lengths of the fixed transforms from joint ``first``'s on and the tool's (from the
-    last joint, through the flange) summed, a prismatic joint's larger limit added: no tool
-    point is farther than this from the frame joint ``first`` hangs from (an upper bound of
-    ``|p - o|`` for the search)."""
-    total = float(np.linalg.norm(arm.T_flange_tool[:3, 3]))
-    for joint in arm.joints[first:]:
-        total += float(np.linalg.norm(joint.T_parent_joint[:3, 3]))
-        if joint.kind is JointKind.PRISMATIC:
-            total += max(abs(joint.limits[0]), abs(joint.limits[1]))
-    return total if math.isfinite(total) else math.inf
 
 
 __all__ = ["DISTANCE_SLACK", "MAX_BOXES", "FarthestReach", "farthest_tool_point"]
