@@ -886,3 +886,14 @@ def test_progress_lines_say_where_an_arc_lies_on_a_closed_curve():
     assert _span_text(circle, CurveArc(560.0, L)) == f"560.0..{L:.1f} mm"
     line = Polyline("l", [[0, 0, 0], [100, 0, 0]])
     assert _span_text(line, CurveArc(5.0, 50.0)) == "5.0..50.0 mm"
+    # the result's tables (report.arc_text) place the same arcs alike: one function places both
+    from armpath.report import arc_text
+
+    doc = {"curve": {"closed": True, "length_mm": L}}
+    for (a, b), said in (
+        ((23.8, 23.8 + L), "arc 23.80 .. 23.80 mm, once round"),
+        ((560.0, L + 10.2), "arc 560.00 .. 10.20 mm, through 0 mm"),
+        ((L + 20.0, L + 120.0), "arc 20.00 .. 120.00 mm"),
+        ((560.0, L), f"arc 560.00 .. {L:.2f} mm"),
+    ):
+        assert arc_text({"start_mm": a, "end_mm": b}, doc) == said

@@ -5,7 +5,6 @@ request)."""
 from __future__ import annotations
 
 import html
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -52,33 +51,33 @@ def tip_and_links_text(doc: dict[str, Any], tip: str = "tool tip") -> str:
 def arc_ends(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float]:
     """Where an arc of a trace result's curve begins and ends (mm) as a reader counts them:
     on a closed curve each within its length, so an arc that runs on past the curve's start
-    ends before it begins (``375.17..2.50`` on a 376.99 mm circle)."""
+    ends before it begins (``375.17..2.50`` on a 376.99 mm circle;
+    :func:`~armpath.geometry.curves.arc_within_round`)."""
+    return _arc_place(arc, doc)[:2]
+
+
+def _arc_place(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float, bool, bool]:
+    """:func:`~armpath.geometry.curves.arc_within_round` of a result's arc (an open curve's:
+    as it is, neither whole nor through 0)."""
+    from armpath.geometry.curves import arc_within_round
+
     start, end = float(arc["start_mm"]), float(arc["end_mm"])
     curve = doc.get("curve", {})
     length = float(curve.get("length_mm", 0.0))
-    if curve.get("closed") and length > 0.0:
-        turns = math.floor(start / length)
-        start, end = start - turns * length, end - turns * length
-        if end > length + 1e-9:
-            end -= length
-    return start, end
+    if not (curve.get("closed") and length > 0.0):
+        return start, end, False, False
+    return arc_within_round(start, end, length)
 
 
 def arc_text(arc: dict[str, Any], doc: dict[str, Any]) -> str:
     """``arc 375.17 .. 2.50 mm``, with ``through 0 mm`` where it runs on past the closed
     curve's start (see :func:`arc_ends`), or ``once round`` where it covers the whole curve
     (it may end a little past where it began)."""
-    start, end = arc_ends(arc, doc)
+    start, end, whole, through = _arc_place(arc, doc)
     text = f"arc {start:.2f} .. {end:.2f} mm"
-    curve = doc.get("curve", {})
-    length = float(curve.get("length_mm", 0.0))
-    if not (curve.get("closed") and length > 0.0):
-        return text
-    first, last = float(arc["start_mm"]), float(arc["end_mm"])
-    if last - first >= length - 1e-6:
+    if whole:
         return text + ", once round"
-    crosses = math.floor(last / length + 1e-12) > math.floor(first / length + 1e-12)
-    return text + (", through 0 mm" if crosses and end > 0.0 else "")
+    return text + (", through 0 mm" if through else "")
 
 
 def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:

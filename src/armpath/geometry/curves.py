@@ -16,6 +16,7 @@ scene). :class:`Curve` adds, for all of them, arc-length parametrization (``leng
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -377,6 +378,22 @@ class ConeSection(Curve):
             "plane_point": self.plane_point.tolist(),
             "plane_normal": self.plane_normal.tolist(),
         }
+
+
+def arc_within_round(
+    start_mm: float, end_mm: float, length_mm: float
+) -> tuple[float, float, bool, bool]:
+    """Where an arc of a closed curve ``length_mm`` long lies as a reader counts it (its arc
+    lengths may run on past the curve's length): ``(start, end, whole, through_zero)``, both
+    ends within one round (an arc that runs on past the curve's start ends before it begins:
+    ``375.17, 2.50`` on a 376.99 mm circle; one that ends where the curve does ends at its
+    length, not at 0), whether it covers the whole curve, and whether it runs through 0."""
+    turns = math.floor(start_mm / length_mm)
+    start, end = start_mm - turns * length_mm, end_mm - turns * length_mm
+    through = end > length_mm + 1e-9
+    if through:
+        end -= length_mm
+    return start, end, end_mm - start_mm >= length_mm - 1e-6, through
 
 
 def plane_section(

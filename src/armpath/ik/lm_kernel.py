@@ -14,12 +14,16 @@ direction of the approach axis (2). An orientation rule (a cone) stays with the 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from armpath.jit import njit
+from armpath.jit import njit, parallel_kernel_lock, prange, threads_pay_off
 from armpath.kinematics import _chain_into, jacobian_column, landmark_scratch
 
 POSITION, ROTATION, AXIS = 0, 1, 2
+#: Rows of a batch from which it is refined on numba's threads.
+PARALLEL_ROWS = 32
 
 
 @njit(cache=True)
@@ -126,7 +130,79 @@ def _damped_step(
 
 
 @njit(cache=True)
-def refine_rows(
+def _refine_row(
+    r: int,
+    q: np.ndarray,
+    iterations: int,
+    mode: int,
+    target: np.ndarray,
+    rot_rows: np.ndarray,
+    axis_rows: np.ndarray,
+    approach: np.ndarray,
+    lo_rows: np.ndarray,
+    hi_rows: np.ndarray,
+    scale_rows: np.ndarray,
+    size: float,
+    on_target: float,
+    stall_window: int,
+    stall_fraction: float,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Row ``r`` of ``q`` through its iterations, in place (see :func:`refine_rows_serial`),
+    with its own working arrays (a thread's rows share none)."""
+    n = q.shape[1]
+    m = 3 if mode == 0 else 6
+    scratch = landmark_scratch(n)
+    err = np.empty(m)
+    jac = np.empty((m, n))
+    err_new = np.empty(m)
+    jac_new = np.empty((m, n))
+    A = np.empty((n, n))
+    dq = np.empty(n)
+    q_new = np.empty(n)
+    cost = _residual(
+        q[r], mode, target, rot_rows[r], axis_rows[r], approach, size,
+        T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch, err, jac,
+    )  # fmt: skip
+    if cost < on_target:
+        return
+    lam = 1e-3
+    window_cost = cost
+    for step in range(iterations):
+        if step > 0 and step % stall_window == 0:
+            if not cost < (1.0 - stall_fraction) * window_cost:
+                break
+            window_cost = cost
+        _damped_step(jac, err, scale_rows[r], lam, A, dq)
+        for i in range(n):
+            v = q[r, i] + dq[i]
+            q_new[i] = min(max(v, lo_rows[r, i]), hi_rows[r, i])
+        cost_new = _residual(
+            q_new, mode, target, rot_rows[r], axis_rows[r], approach, size,
+            T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch,
+            err_new, jac_new,
+        )  # fmt: skip
+        if cost_new < cost:
+            for i in range(n):
+                q[r, i] = q_new[i]
+            for k in range(m):
+                err[k] = err_new[k]
+                for i in range(n):
+                    jac[k, i] = jac_new[k, i]
+            cost = cost_new
+            lam = max(lam / 5.0, 1e-12)
+        else:
+            lam = min(lam * 5.0, 1e8)
+        if cost < on_target:
+            break
+
+
+@njit(cache=True)
+def refine_rows_serial(
     q: np.ndarray,
     iterations: int,
     mode: int,
@@ -150,52 +226,61 @@ def refine_rows(
     """Refine every row of ``q (M, n)`` in place (see the module): ``rot_rows (M, 3, 3)``
     (mode 1) or ``axis_rows (M, 3)`` (mode 2) each row's goal, ``lo_rows``/``hi_rows`` its
     box, ``scale_rows`` its damping scale (0: the joint held)."""
-    n_rows, n = q.shape
-    m = 3 if mode == 0 else 6
-    scratch = landmark_scratch(n)
-    err = np.empty(m)
-    jac = np.empty((m, n))
-    err_new = np.empty(m)
-    jac_new = np.empty((m, n))
-    A = np.empty((n, n))
-    dq = np.empty(n)
-    q_new = np.empty(n)
-    for r in range(n_rows):
-        cost = _residual(
-            q[r], mode, target, rot_rows[r], axis_rows[r], approach, size,
-            T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch, err, jac,
+    for r in range(q.shape[0]):
+        _refine_row(
+            r, q, iterations, mode, target, rot_rows, axis_rows, approach, lo_rows, hi_rows,
+            scale_rows, size, on_target, stall_window, stall_fraction,
+            T_world_base, T_parent_joint, axes, prismatic, T_flange_tool,
         )  # fmt: skip
-        if cost < on_target:
-            continue
-        lam = 1e-3
-        window_cost = cost
-        for step in range(iterations):
-            if step > 0 and step % stall_window == 0:
-                if not cost < (1.0 - stall_fraction) * window_cost:
-                    break
-                window_cost = cost
-            _damped_step(jac, err, scale_rows[r], lam, A, dq)
-            for i in range(n):
-                v = q[r, i] + dq[i]
-                q_new[i] = min(max(v, lo_rows[r, i]), hi_rows[r, i])
-            cost_new = _residual(
-                q_new, mode, target, rot_rows[r], axis_rows[r], approach, size,
-                T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch,
-                err_new, jac_new,
-            )  # fmt: skip
-            if cost_new < cost:
-                for i in range(n):
-                    q[r, i] = q_new[i]
-                for k in range(m):
-                    err[k] = err_new[k]
-                    for i in range(n):
-                        jac[k, i] = jac_new[k, i]
-                cost = cost_new
-                lam = max(lam / 5.0, 1e-12)
-            else:
-                lam = min(lam * 5.0, 1e8)
-            if cost < on_target:
-                break
 
 
-__all__ = ["AXIS", "POSITION", "ROTATION", "refine_rows"]
+@njit(cache=True, parallel=True)
+def refine_rows_parallel(
+    q: np.ndarray,
+    iterations: int,
+    mode: int,
+    target: np.ndarray,
+    rot_rows: np.ndarray,
+    axis_rows: np.ndarray,
+    approach: np.ndarray,
+    lo_rows: np.ndarray,
+    hi_rows: np.ndarray,
+    scale_rows: np.ndarray,
+    size: float,
+    on_target: float,
+    stall_window: int,
+    stall_fraction: float,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`refine_rows_serial` with the rows on numba's threads (each row's steps are its
+    own, so the result is the same)."""
+    for r in prange(q.shape[0]):
+        _refine_row(
+            r, q, iterations, mode, target, rot_rows, axis_rows, approach, lo_rows, hi_rows,
+            scale_rows, size, on_target, stall_window, stall_fraction,
+            T_world_base, T_parent_joint, axes, prismatic, T_flange_tool,
+        )  # fmt: skip
+
+
+def refine_rows(q: np.ndarray, *args: Any) -> None:
+    """:func:`refine_rows_serial` (same arguments), on numba's threads where the rows are many
+    enough to pay for them (:func:`~armpath.jit.threads_pay_off`)."""
+    if not threads_pay_off(q.shape[0], PARALLEL_ROWS):
+        refine_rows_serial(q, *args)
+        return
+    with parallel_kernel_lock:
+        refine_rows_parallel(q, *args)
+
+
+__all__ = [
+    "AXIS",
+    "POSITION",
+    "ROTATION",
+    "refine_rows",
+    "refine_rows_parallel",
+    "refine_rows_serial",
+]

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError, PlanningError
-from armpath.geometry.curves import Curve
+from armpath.geometry.curves import Curve, arc_within_round
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tick_jacobian, tool_position
 from armpath.model.serial_arm import SerialArm
@@ -615,17 +615,13 @@ _LOOP_START_SLACK = 0.3
 def _span_text(curve: Curve, arc: CurveArc) -> str:
     """Where an arc lies on the curve, for progress lines: ``23.8..121.0 mm``; on a closed
     curve ``once round from 23.8 mm``, or ``560.0..10.2 mm (through 0)`` where it runs past the
-    curve's start (its arc lengths run on past the curve's length)."""
-    a, b = arc.start_mm, arc.end_mm
+    curve's start (:func:`~armpath.geometry.curves.arc_within_round`)."""
     if not curve.closed:
-        return f"{a:.1f}..{b:.1f} mm"
-    length = curve.length
-    if b - a >= length - 1e-6:
-        return f"once round from {a % length:.1f} mm"
-    # an arc ending at the curve's end ends there, not at 0 of the next round
-    end = b % length if b % length > 1e-9 or b < length else length
-    through = " (through 0)" if np.floor(b / length - 1e-12) > np.floor(a / length) else ""
-    return f"{a % length:.1f}..{end:.1f} mm{through}"
+        return f"{arc.start_mm:.1f}..{arc.end_mm:.1f} mm"
+    start, end, whole, through = arc_within_round(arc.start_mm, arc.end_mm, curve.length)
+    if whole:
+        return f"once round from {start:.1f} mm"
+    return f"{start:.1f}..{end:.1f} mm{' (through 0)' if through else ''}"
 
 
 def _trace_arcs(
