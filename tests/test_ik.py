@@ -776,3 +776,35 @@ def test_compiled_levenberg_marquardt_on_threads_takes_the_same_steps(monkeypatc
     assert np.array_equal(a, b)
     on = np.linalg.norm(tool_pose(arm, b)[:, :3, 3] - goal[:3, 3], axis=1) < 1e-6
     assert on.sum() >= 20  # the rows do converge (not a comparison of untouched starts)
+
+
+@pytest.mark.parametrize("name", ["seed", "ur5", "iiwa14"])
+def test_compiled_newton_projection_takes_the_pseudo_inverse_steps(name):
+    """The tracer's projection onto a tool point (compiled minimum-norm Newton steps) against
+    the same steps written with numpy's pseudo-inverse, the numpy forward kinematics and
+    Jacobian: 200 starts, each 0.02 rad from a configuration whose tool point is the target;
+    the same configurations to 1e-8 rad (rounding grows near a singular start), the tool point
+    on the target to 1e-6 mm where the numpy steps get there, and a held joint left where it
+    was."""
+    from armpath.ik.lm_kernel import project_point
+    from armpath.kinematics import compiled_chain, position_jacobian
+
+    arm = BUILTIN_MODELS[name]()
+    n = arm.n_joints
+    rng = np.random.default_rng(11)
+    moving = np.ones(n, dtype=bool)
+    moving[0] = name == "seed"  # the others: joint 1 held
+    for _ in range(200):
+        q = np.clip(rng.uniform(-2.0, 2.0, n), arm.lower, arm.upper)
+        E = tool_pose(arm, q + rng.normal(0.0, 0.02, n))[:3, 3]
+        want = q.copy()
+        for _ in range(5):
+            e = E - tool_pose(arm, want)[:3, 3]
+            if np.linalg.norm(e) < 1e-9:
+                break
+            want[moving] += np.linalg.pinv(position_jacobian(arm, want)[:, moving]) @ e
+        got = project_point(q, E, moving, 5, *compiled_chain(arm)[:5])
+        assert np.abs(got - want).max() < 1e-8
+        assert got[0] == q[0] or moving[0]
+        if np.linalg.norm(tool_pose(arm, want)[:3, 3] - E) < 1e-9:
+            assert np.linalg.norm(tool_pose(arm, got)[:3, 3] - E) < 1e-6

@@ -1,4 +1,5 @@
-"""Levenberg-Marquardt of :meth:`~armpath.ik.family.GenericFamily.refine`, one compiled loop.
+"""Levenberg-Marquardt of :meth:`~armpath.ik.family.GenericFamily.refine`, one compiled loop
+(and :func:`project_point`, the tracer's Newton projection onto the tool point).
 
 The numpy form steps every row of a batch together, a forward pass, a Jacobian and a batched
 solve an iteration, and costs a fraction of a millisecond an iteration in Python's overhead
@@ -266,6 +267,54 @@ def refine_rows_parallel(
         )  # fmt: skip
 
 
+@njit(cache=True)
+def project_point(
+    q: np.ndarray,
+    target: np.ndarray,
+    moving: np.ndarray,
+    iterations: int,
+    T_world_base: np.ndarray,
+    T_parent_joint: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    T_flange_tool: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - compiled
+    """A configuration near ``q`` (not changed) with the tool point at ``target``: at most
+    ``iterations`` minimum-norm Newton steps (the pseudo-inverse of the tool point's Jacobian
+    in the joints ``moving``, the others held), stopping within 1e-9 of it."""
+    n = q.shape[0]
+    out = q.copy()
+    scratch = landmark_scratch(n)
+    k = 0
+    for i in range(n):
+        if moving[i]:
+            k += 1
+    J = np.empty((3, k))
+    e = np.empty(3)
+    for _ in range(iterations):
+        pos = _chain_into(
+            out, T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch
+        )
+        tool = pos[n + 1]
+        px, py, pz = tool[0, 3], tool[1, 3], tool[2, 3]
+        e[0], e[1], e[2] = target[0] - px, target[1] - py, target[2] - pz
+        if np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) < 1e-9:
+            break
+        c = 0
+        for i in range(n):
+            if moving[i]:
+                _, _, _, v0, v1, v2 = jacobian_column(pos[i + 1], axes[i], prismatic[i], px, py, pz)
+                J[0, c], J[1, c], J[2, c] = v0, v1, v2
+                c += 1
+        step = np.linalg.pinv(J) @ e
+        c = 0
+        for i in range(n):
+            if moving[i]:
+                out[i] += step[c]
+                c += 1
+    return out
+
+
 def refine_rows(q: np.ndarray, *args: Any) -> None:
     """:func:`refine_rows_serial` (same arguments), on numba's threads where the rows are many
     enough to pay for them (:func:`~armpath.jit.threads_pay_off`)."""
@@ -280,6 +329,7 @@ __all__ = [
     "AXIS",
     "POSITION",
     "ROTATION",
+    "project_point",
     "refine_rows",
     "refine_rows_parallel",
     "refine_rows_serial",

@@ -30,10 +30,10 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import PlanningError
+from armpath.ik.lm_kernel import project_point
 from armpath.jit import njit
 from armpath.kinematics import (
-    forward_frames,
-    jacobian_from_frames,
+    compiled_chain,
     position_jacobian,
     tick_jacobian,
     tool_position,
@@ -274,16 +274,17 @@ class Tracer:
 
     # -- lattice ---------------------------------------------------------------------------
     def project(self, q: FloatArray, E: FloatArray) -> FloatArray:
-        """Nearest family member to ``q`` (minimum-norm Newton steps) with the tip at ``E``."""
-        q = q.copy()
-        for _ in range(5):
-            frames = forward_frames(self.arm, q)  # once for the tip and its Jacobian
-            e = E - frames[-1, :3, 3]
-            if np.linalg.norm(e) < 1e-9:
-                break
-            J = jacobian_from_frames(self.arm, frames)[:3, self.tip]
-            q[self.tip] += np.linalg.pinv(J) @ e
-        return q
+        """Nearest family member to ``q`` (minimum-norm Newton steps, at most five, in the
+        joints that move the tool point) with the tip at ``E`` (compiled:
+        :func:`~armpath.ik.lm_kernel.project_point`)."""
+        out = project_point(
+            np.asarray(q, dtype=np.float64),
+            np.asarray(E, dtype=np.float64),
+            self.tip,
+            5,
+            *compiled_chain(self.arm)[:5],
+        )
+        return np.asarray(out, dtype=np.float64)
 
     def lattice_near(
         self, base: FloatArray, n: FloatArray, b: FloatArray, fixed: IntArray
