@@ -897,3 +897,29 @@ def test_progress_lines_say_where_an_arc_lies_on_a_closed_curve():
         ((560.0, L), f"arc 560.00 .. {L:.2f} mm"),
     ):
         assert arc_text({"start_mm": a, "end_mm": b}, doc) == said
+
+
+def test_lattice_states_near_a_point_are_those_of_the_whole_box():
+    """The tracer walks the box of lattice offsets joint by joint and passes over a partial
+    offset with all its completions where the remaining joints cannot bring it into the disc;
+    the offsets it keeps are exactly those of a sum over the whole box in the same order (2,000
+    random boxes of 2-7 joints and disc radii, each offset's point summed by numpy)."""
+    from armpath.planning.trace.tracer import _offsets, _within_disc
+
+    rng = np.random.default_rng(1)
+    kept = 0
+    for _ in range(2000):
+        joints = int(rng.integers(2, 8))
+        radius = int(rng.integers(1, 4 if joints < 7 else 3))
+        offsets = _offsets(joints, radius).astype(np.float64)
+        A = rng.normal(0.0, rng.choice([0.01, 0.05, 0.2]), (joints, 2))
+        shift = rng.normal(0.0, 0.05, 2)
+        radius2 = float(rng.choice([0.0025, 0.01, 0.05])) ** 2
+        x = np.full(offsets.shape[0], shift[0])
+        y = np.full(offsets.shape[0], shift[1])
+        for j in range(joints):
+            x, y = x + offsets[:, j] * A[j, 0], y + offsets[:, j] * A[j, 1]
+        want = x * x + y * y <= radius2
+        assert np.array_equal(_within_disc(joints, radius, A, shift, radius2), want)
+        kept += int(want.sum())
+    assert kept > 10_000  # the discs do hold offsets (not a comparison of empty masks)

@@ -142,31 +142,57 @@ def _box_radii(joints: int, largest_step: int) -> list[int]:
 
 
 @functools.cache
-def _offsets(joints: int, radius: int) -> tuple[IntArray, FloatArray]:
-    """Every integer offset of a box of ``joints`` joints, +-``radius`` ticks, as integers and
-    as floats (shared, read-only)."""
+def _offsets(joints: int, radius: int) -> IntArray:
+    """Every integer offset of a box of ``joints`` joints, +-``radius`` ticks, the first joint
+    slowest (shared, read-only)."""
     box = np.arange(-radius, radius + 1)
     offsets = np.stack(np.meshgrid(*[box] * joints, indexing="ij"), -1).reshape(-1, joints)
-    as_float = offsets.astype(np.float64)
     offsets.flags.writeable = False
-    as_float.flags.writeable = False
-    return offsets, as_float
+    return np.asarray(offsets, dtype=np.int64)
 
 
 @njit(cache=True)
 def _within_disc(
-    offsets: FloatArray, A: FloatArray, shift: FloatArray, radius2: float
+    joints: int, radius: int, A: FloatArray, shift: FloatArray, radius2: float
 ) -> NDArray[np.bool_]:
-    """Rows ``o`` of ``offsets`` with ``|o A + shift|^2 <= radius2`` (``A`` is ``(k, 2)``):
-    one pass, no temporaries (the box has 117,649 offsets for six joints)."""
-    out = np.empty(offsets.shape[0], dtype=np.bool_)
-    for i in range(offsets.shape[0]):
-        x, y = shift[0], shift[1]
-        for j in range(offsets.shape[1]):
-            x += offsets[i, j] * A[j, 0]
-            y += offsets[i, j] * A[j, 1]
-        out[i] = x * x + y * y <= radius2
-    return out
+    """Which offsets ``o`` of the box of ``joints`` joints, +-``radius`` ticks (in the order of
+    :func:`_offsets`), have ``|o A + shift|^2 <= radius2`` (``A`` is ``(joints, 2)``). The box
+    is walked joint by joint, and a partial offset whose point lies farther from the disc than
+    the remaining joints can move it (their rows' lengths times the radius) is passed over with
+    all its completions (the box has 117,649 offsets for six joints, most of them far); each
+    kept offset's point is summed in the same order as over the whole box."""
+    width = 2 * radius + 1
+    out = np.zeros(width**joints, dtype=np.bool_)
+    reach = np.zeros(joints + 1)  # how far the joints from j on can move the point
+    for j in range(joints - 1, -1, -1):
+        reach[j] = reach[j + 1] + radius * np.sqrt(A[j, 0] ** 2 + A[j, 1] ** 2)
+    limit = np.sqrt(radius2) * (1.0 + 1e-9) + 1e-12
+    stride = np.ones(joints, dtype=np.int64)
+    for j in range(joints - 2, -1, -1):
+        stride[j] = stride[j + 1] * width
+    digit = np.zeros(joints, dtype=np.int64)
+    xs = np.empty(joints + 1)
+    ys = np.empty(joints + 1)
+    first = np.zeros(joints + 1, dtype=np.int64)  # index of the prefix's first completion
+    xs[0], ys[0] = shift[0], shift[1]
+    level = 0
+    while True:
+        o = digit[level] - radius
+        x = xs[level] + o * A[level, 0]
+        y = ys[level] + o * A[level, 1]
+        at = first[level] + digit[level] * stride[level]
+        if level == joints - 1:
+            out[at] = x * x + y * y <= radius2
+        elif np.sqrt(x * x + y * y) - reach[level + 1] <= limit:
+            level += 1
+            xs[level], ys[level], first[level], digit[level] = x, y, at, 0
+            continue
+        digit[level] += 1
+        while digit[level] == width:
+            level -= 1
+            if level < 0:
+                return out
+            digit[level] += 1
 
 
 def _frozen(q: IntArray) -> IntArray:
@@ -300,8 +326,8 @@ class Tracer:
         rounded = np.round(exact).astype(np.int64)
         shift = (rounded - exact) @ A_t
         for radius in self.radii:
-            offsets, offsets_f = _offsets(int(self.tip.sum()), radius)
-            keep = _within_disc(offsets_f, A_t, shift, (self.tol / 2) ** 2)
+            offsets = _offsets(int(self.tip.sum()), radius)
+            keep = _within_disc(int(self.tip.sum()), radius, A_t, shift, (self.tol / 2) ** 2)
             if np.count_nonzero(keep) >= _MIN_CANDIDATES:
                 break
         near = np.flatnonzero(keep)
