@@ -190,6 +190,37 @@ def test_reach_of_any_arm_within_one_command_of_the_independent_bound(
         assert r.lower_bound.commands <= int(np.ceil(bound - 1e-9))
 
 
+@pytest.mark.parametrize("beyond_mm", [0.01, 0.03])
+def test_a_target_just_beyond_a_stretched_ur5_is_reached_within_the_tolerance(beyond_mm):
+    """The farthest point of a UR5's tool from its shoulder (a local maximum of the distance on
+    the textbook D-H product, about 950 mm) moved 0.01 or 0.03 mm further out: no
+    configuration reaches it, the stretched arm comes within the 0.05 mm tolerance. The reach
+    aimed at the nearest point only within half the tolerance and refused the second ("no
+    configuration ... found reaching it"). Both are planned: the replay on the textbook
+    product within the tolerance, the error reported, the commands within one of the
+    independent bound and the reported bound not above it."""
+    arm = resolve_model("ur5")
+    shoulder = np.array([0.0, 0.0, 89.159])
+    far = minimize(
+        lambda q: -float(np.linalg.norm(tip("ur5", q) - shoulder)),
+        np.radians([-103.0, 152.0, 0.0, -50.0, 78.0, 147.0]),
+    ).x
+    out = tip("ur5", far) - shoulder
+    assert 949.0 < np.linalg.norm(out) < 951.0
+    target = tip("ur5", far) + beyond_mm * out / np.linalg.norm(out)
+    grid = arm.lattice
+    start = grid.from_display([0, -90, 90, -90, -90, 0], "start")
+    r = plan_reach(arm, CollisionWorld(()), start, target, ReachOptions())
+    q_end = grid.to_joint(r.sequence.states()[-1])
+    err = float(np.linalg.norm(tip("ur5", q_end) - target))
+    assert err <= 0.05 and err == pytest.approx(r.error_mm, abs=1e-6)
+    bound = independent_bound(
+        "ur5", grid.to_joint(start), target, 0.05, arm.lower, arm.upper, starts=6
+    )
+    assert r.n_commands <= int(np.ceil(bound - 1e-9)) + 1
+    assert r.lower_bound.commands <= int(np.ceil(bound - 1e-9))
+
+
 @pytest.mark.slow
 def test_a_free_circle_traced_by_ur5_replays_on_the_textbook_product():
     """A 60 mm circle in front of a UR5 at home (elbow at 90 deg), traced and replayed on the

@@ -135,6 +135,27 @@ def test_other_targets_reach_the_independent_optimum(target, start):
     assert result.clearance.certified_ok
 
 
+@pytest.mark.parametrize("target", [(0.0, -575.0, 140.01), (0.0, 575.0, 140.02)])
+def test_a_target_just_beyond_the_stretched_arm_is_reached_within_the_tolerance(target):
+    """The seed arm stretched along y puts its fingertip at (0, +-575, 140) mm; a target 0.01
+    or 0.02 mm above lies just beyond its reach, within the 0.05 mm tolerance of it. The
+    goal-state search solved the target exactly with two joints held on the lattice, found
+    nothing, and reported that no lattice state "satisfies the clearance rule". Now the
+    lattice states about the family's own sample are taken: the plan ends within the
+    tolerance, the replay by the independent forward kinematics gives the error reported, and
+    its command count is the independent optimum's."""
+    target = np.array(target)
+    result = plan_reach(ARM, SCENE.world, deg_to_ticks(HOME), target)
+    assert result.error_mm <= 0.05
+    states = independent.replay(HOME, result.sequence.commands)
+    tip = independent.points(states[-1])[4]
+    assert np.linalg.norm(tip - target) == pytest.approx(result.error_mm, abs=1e-9)
+    t_ind = independent_min_largest_change(target, HOME, tol=0.05, starts=20)
+    assert result.lower_bound.commands == int(np.ceil(t_ind / 2 - 1e-9))
+    assert result.n_commands <= result.lower_bound.commands + 1
+    assert result.clearance.certified_ok
+
+
 @pytest.mark.slow
 def test_lattice_can_need_one_more_command_than_the_continuous_bound():
     # 2 commands suffice in continuous joint space, but no lattice state within 2 commands is

@@ -33,6 +33,7 @@ from armpath.angles import nearest_equivalent, wrap_to_pi
 from armpath.budget import check_time
 from armpath.commands import (
     MAX_INCREMENT_TICKS,
+    TICK_DEG,
     TICK_RAD,
     CommandSequence,
     ticks_to_rad,
@@ -236,13 +237,16 @@ class _Family:
 
     ``q`` is ``(P, A, 8, 5)`` rad (polar x azimuth x branch x joint), ``change`` the largest joint
     change from the start ``(P, A, 8)`` rad (``inf`` where a branch is missing or outside the
-    limits). ``extra_q`` / ``extra_change`` hold solutions found by other means.
+    limits). ``extra_q`` / ``extra_change`` hold solutions found by other means. ``near``: the
+    grid is the family of a point within the tolerance of the target, not of the target (which
+    lies just beyond reach): configurations within the tolerance, none exactly on the target.
     """
 
     q: FloatArray
     change: FloatArray
     extra_q: FloatArray
     extra_change: FloatArray
+    near: bool = False
 
     def points(self) -> tuple[FloatArray, FloatArray]:
         """All samples flattened: ``(M, 5)`` and ``(M,)``."""
@@ -257,6 +261,7 @@ class _Family:
             self.change,
             np.vstack([self.extra_q, q[None]]),
             np.r_[self.extra_change, change],
+            self.near,
         )
 
     def step_ticks(self, limit: float) -> float:
@@ -321,7 +326,16 @@ def _reachable_family(p: _Problem, step_deg: float, tolerance_mm: float, seed: i
             f"({', '.join(f'{round(v, 2) + 0.0:.2f}' for v in tip)}) "
             f"mm is {dist:.3f} mm away"
         )
-    # the grid missed a thin sliver of the family: keep the optimizer's solution
+    # the target lies just beyond reach (a stretched arm's tool point within the tolerance of
+    # it) or the grid missed a thin sliver of the family: the family of a point between the
+    # target and the nearest reachable one, within half the tolerance of the target and so a
+    # little inside the workspace (configurations within the tolerance, every branch), and the
+    # optimizer's solution
+    tip = tool_position(p.arm, p.full(q_near))
+    toward = tip - p.target
+    inside = p.target + toward * (max(0.5 * tolerance_mm, dist) / max(dist, 1e-12))
+    if dist > 1e-9 and np.linalg.norm(inside - p.target) <= tolerance_mm:
+        fam = replace(_family(replace(p, target=inside), step_deg), near=True)
     q_near = p.normalize(q_near)
     return fam.with_point(q_near, float(np.max(np.abs(q_near - p.start_rad))))
 
@@ -437,10 +451,15 @@ def _lower_bound(p: _Problem, fam: _Family, tol: float) -> tuple[LowerBound, Flo
             best_exact, best_q = out
     if best_q is None:
         raise PlanningError("no configuration within the joint limits reaches the target")
-    relaxed = _minimax(p, best_q, tol)
     best_tol, q_within = best_exact, best_q
-    if relaxed is not None and relaxed[0] < best_exact:
-        best_tol, q_within = relaxed
+    # relaxed to the tolerance from the best configuration; where the family was sampled
+    # about a point near the target rather than at it (the target just beyond reach), from
+    # each branch's best too
+    starts = [best_q, *_seed_points(fam, 16)] if fam.near else [best_q]
+    for x0 in starts:
+        relaxed = _minimax(p, x0, tol)
+        if relaxed is not None and relaxed[0] < best_tol:
+            best_tol, q_within = relaxed
     t_ticks = best_tol / TICK_RAD
     bound = max(int(np.ceil(t_ticks / MAX_INCREMENT_TICKS - 1e-7)), 0)
     found = LowerBound(
@@ -1017,6 +1036,7 @@ def _goal_states(
         where = ", ".join(f"{v:g}" for v in p.target)
         raise no_clear_goal_error(where, "mm", world, body_buffer_mm)
     picks = list(picked)
+    any_within = False  # whether any lattice state came within the tolerance
     states: list[IntArray] = []
     errors: list[float] = []
     steps = np.stack(np.meshgrid(*[[-1, 0, 1]] * TIP_JOINTS, indexing="ij"), -1).reshape(-1, 5)
@@ -1044,7 +1064,11 @@ def _goal_states(
             c[:, :, solved] += corners[None]
             cands.append(c.reshape(-1, TIP_JOINTS))
         if not cands:
-            continue
+            # no exact solution with two joints on the lattice: the target lies on the edge of
+            # the workspace (a stretched arm's tool point within the tolerance of it, the
+            # target itself just beyond reach); the lattice states about the sample itself
+            corner = np.array([[(c >> b) & 1 for b in range(TIP_JOINTS)] for c in range(32)])
+            cands.append(np.floor(t_star).astype(np.int64) + corner)
         c5 = unique_states(np.concatenate(cands))
         c5 = unique_states((c5[:, None, :] + steps[None]).reshape(-1, TIP_JOINTS))
         c5 = c5[np.all((c5 >= p.lo_ticks) & (c5 <= p.hi_ticks), axis=-1)]
@@ -1052,6 +1076,7 @@ def _goal_states(
         within = errs <= tolerance_mm
         if not np.any(within):
             continue
+        any_within = True
         c5, errs = c5[within], errs[within]
         full = np.hstack([c5, np.broadcast_to(p.start_ticks[TIP_JOINTS:], (c5.shape[0], 1))])
         # the clear state of smallest error: candidates checked in order of error
@@ -1072,9 +1097,16 @@ def _goal_states(
         if len(states) >= count:
             break
     if not states:
+        where = ", ".join(f"{v:g}" for v in p.target)
+        if not any_within:
+            raise PlanningError(
+                f"no lattice state found within {tolerance_mm} mm of ({where}) mm: the "
+                f"{len(picks)} configurations of the family searched about have none on the "
+                f"{TICK_DEG:g} deg lattice; a wider --tolerance finds one"
+            )
         raise PlanningError(
-            f"no lattice state within {tolerance_mm} mm of "
-            f"({', '.join(f'{v:g}' for v in p.target)}) mm satisfies the clearance rule"
+            f"no lattice state within {tolerance_mm} mm of ({where}) mm satisfies the "
+            "clearance rule"
         )
     out = np.array(states, dtype=np.int64)
     change_ticks = np.max(np.abs(out[:, :TIP_JOINTS] - p.start_ticks[:TIP_JOINTS]), axis=-1)
