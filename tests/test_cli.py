@@ -431,3 +431,26 @@ def test_an_arc_through_a_closed_curves_start_says_so():
     )
     opened = {"curve": {"closed": False, "length_mm": 865.95}}
     assert arc_text({"start_mm": 10.0, "end_mm": 20.0}, opened) == "arc 10.00 .. 20.00 mm"
+
+
+def test_trace_and_spotweld_start_where_from_says(tmp_path):
+    """An arm whose home pose collides was told to start elsewhere with --from, which trace and
+    spotweld did not have (the Python API's start_deg). Both take it now: the result starts
+    there (its initial_deg; the independent replay of its first command begins there and
+    moves by it); a --from of the wrong length is one error line."""
+    (tmp_path / "cell.toml").write_text(
+        'name = "free"\n[tasks.trace]\ncurve = { type = "polyline", points_mm = '
+        "[[0, 480, 150], [30, 480, 150]] }\n[tasks.spotweld]\npoints_mm = [[20, 470, 140]]\n"
+    )
+    start = [10.0, -80.0, 5.0, 0.0, -90.0, 0.0]
+    for task in ("trace", "spotweld"):
+        r = run(task, "--scene", "cell.toml", "--from", *map(str, start), "--no-bound", "--json",
+                cwd=tmp_path)  # fmt: skip
+        assert r.returncode == 0, r.stderr
+        doc = json.loads(r.stdout)
+        assert doc["initial_deg"] == start
+        states = independent.replay(start, doc["commands"][:1])
+        assert len(states) == 2 and np.allclose(states[0], start)
+    bad = run("trace", "--scene", "cell.toml", "--from", "0", "-80", cwd=tmp_path)
+    assert bad.returncode != 0
+    assert bad.stderr.strip().splitlines()[-1].startswith("error: --from (6 joint values")

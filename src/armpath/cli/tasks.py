@@ -728,6 +728,7 @@ def spotweld(
     tool_axis: WeldToolAxisOption = None,
     axis_tolerance: AxisToleranceOption = None,
     link_radius: LinkRadiusOption = None,
+    start: FromOption = None,
     seed: SeedOption = 0,
     bound: Annotated[
         bool,
@@ -761,6 +762,7 @@ def spotweld(
 
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
+        start_ticks = None if start is None else joint_state(arm, start, "--from")
         options = MotionOptions(objective=objective, seed=seed)
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
@@ -775,6 +777,7 @@ def spotweld(
                     options,
                     on_progress=say,
                     tool_axis=axis_rule(tool_axis, axis_tolerance),
+                    start_ticks=start_ticks,
                     bound=bound,
                     bound_samples=bound_samples,
                     pools=pools,
@@ -950,6 +953,7 @@ def trace(
     tool_axis: TraceToolAxisOption = None,
     axis_tolerance: AxisToleranceOption = None,
     link_radius: LinkRadiusOption = None,
+    start: FromOption = None,
     seed: SeedOption = 0,
     bound: Annotated[
         bool,
@@ -995,6 +999,7 @@ def trace(
             raise InvalidInputError("--closed closes the curve of --curve; give --curve")
         curve = None if curve_file is None else _curve_from_points(curve_file, closed)
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
+        start_ticks = None if start is None else joint_state(arm, start, "--from")
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
             tolerance_mm=tolerance,
@@ -1007,7 +1012,7 @@ def trace(
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
             with progress("tracing the curve ...") as say:
-                result = trace_task(scene, arm, options, say, curve=curve)
+                result = trace_task(scene, arm, options, say, start_ticks, curve=curve)
             doc = trace_result_dict(result, arm, scene)
             if folder is not None:
                 _write_trace(folder, result, doc, arm, scene, animate)

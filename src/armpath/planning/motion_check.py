@@ -221,8 +221,9 @@ def check_state_clear(
             f"{what} is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
             f"(needs >= {pair.required:g} mm)"
             + (
-                "; it is the arm's home pose: start elsewhere (--from; start_deg= in Python) "
-                "or move the home ([arm] home_deg)"
+                "; it is the arm's home pose: start elsewhere (--from of reach, plan, trace "
+                "and spotweld; start_deg= in Python) or move the home ([arm] home_deg; run "
+                "starts every task there)"
                 if home
                 else ""
             )
