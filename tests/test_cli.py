@@ -454,3 +454,17 @@ def test_trace_and_spotweld_start_where_from_says(tmp_path):
     bad = run("trace", "--scene", "cell.toml", "--from", "0", "-80", cwd=tmp_path)
     assert bad.returncode != 0
     assert bad.stderr.strip().splitlines()[-1].startswith("error: --from (6 joint values")
+
+
+def test_armpath_alone_prints_its_help_and_no_error():
+    """``armpath`` with no command printed its help, then "error:  (see: armpath --help)" (an
+    empty message) with exit status 2; now its help alone, status 0, as ``armpath model``
+    does. An unknown command is still one error line."""
+    r = run()
+    assert r.returncode == 0 and "error" not in r.stderr
+    assert "Commands" in r.stdout and "trace" in r.stdout
+    bad = run("bogus")
+    assert bad.returncode == 2
+    assert bad.stderr.strip().splitlines() == [
+        "error: No such command 'bogus'. (see: armpath --help)"
+    ]

@@ -203,6 +203,8 @@ def main() -> None:
     except (typer.Abort, KeyboardInterrupt):
         _interrupted()
     except typer.TyperException as exc:  # the parser's errors (typer's click)
+        if type(exc).__name__ == "NoArgsIsHelpError":  # plain `armpath`: its help, printed
+            sys.exit(0)
         message = " ".join(str(getattr(exc, "format_message", exc.__str__)()).split())
         message = message.replace(": Value error, ", ": ")  # the enum converter's prefix
         ctx = getattr(exc, "ctx", None)
