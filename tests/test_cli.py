@@ -201,6 +201,10 @@ def test_a_second_run_into_the_same_folder_leaves_no_stale_files(tmp_path):
     names = sorted(p.name for p in out.iterdir())
     # the earlier run's animation is gone (this run wrote none); the user's file stays
     assert "plan.gif" not in names and "my_notes.txt" in names
+    # and says so: the removed file named, no other (it did not say, and a reach's results
+    # went from a folder a plan was then written to without a word)
+    removed = [line for line in second.stdout.splitlines() if line.startswith("removed ")]
+    assert removed == [f"removed {out / 'plan.gif'} (an earlier command's result in this folder)"]
     doc = json.loads((out / "plan.json").read_text())
     assert doc["final_deg"] == [20.0, -80.0, 10.0, 0.0, -80.0, 0.0]
 

@@ -660,6 +660,8 @@ class OutputFolder:
                 f"output folder {self.path} is not writable: {exc.strerror}"
             ) from None
         self.written: list[Path] = []
+        #: files of an earlier run the commit removed (see :meth:`commit`)
+        self.removed: list[Path] = []
 
     def file(self, name: str) -> Path:
         """Path inside the staging folder to write ``name`` to."""
@@ -682,9 +684,9 @@ class OutputFolder:
 
         With ``prune`` (a command's whole output folder), files an earlier armpath run wrote
         into the same folder (listed in its :data:`MANIFEST`) that this run did not write again
-        are removed, so the folder never mixes two runs' results; files armpath did not write
-        are left alone. Without it (one file written beside others: an animation, an HTML
-        page) nothing else is touched.
+        are removed (listed in :attr:`removed`), so the folder never mixes two runs' results;
+        files armpath did not write are left alone. Without it (one file written beside
+        others: an animation, an HTML page) nothing else is touched.
         """
         try:
             self.path.mkdir(parents=True, exist_ok=True)
@@ -700,7 +702,10 @@ class OutputFolder:
             for name in names:
                 os.replace(self._staging / name, self.path / name)
             for name in sorted(earlier - set(names)):
-                (self.path / name).unlink(missing_ok=True)
+                gone = self.path / name
+                if gone.is_file():
+                    gone.unlink()
+                    self.removed.append(gone)
             if self.prune:
                 (self.path / MANIFEST).write_text("\n".join(names) + "\n", encoding="utf-8")
             self.written = [self.path / n for n in names]

@@ -111,6 +111,21 @@ def _animate_into(
         )
 
 
+def print_written(folder: OutputFolder | None) -> None:
+    """The files a command wrote (``wrote PATH``), then those an earlier command had written
+    into the same folder that it removed (a folder holds one run's results)."""
+    if folder is None:
+        return
+    for path in folder.written:  # a long path on one line, not wrapped at the console's width
+        out_console.print(f"wrote {path}", markup=False, soft_wrap=True)
+    for path in folder.removed:
+        out_console.print(
+            f"removed {path} (an earlier command's result in this folder)",
+            markup=False,
+            soft_wrap=True,
+        )
+
+
 def _animate_needs_out(animate: bool, out: Path | None) -> None:
     if animate and out is None:
         raise InvalidInputError("--animate needs --out FOLDER to write the GIF into")

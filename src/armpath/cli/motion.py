@@ -51,6 +51,7 @@ from armpath.cli.common import (
     app,
     err_console,
     out_console,
+    print_written,
     progress,
 )
 from armpath.cli.tables import read_number_table
@@ -562,8 +563,7 @@ def trajectory(
                     if retimed:
                         folder.write_text("retiming.csv", _retiming_csv(retimed, limits, lattice))
         if folder is not None:
-            for path in folder.written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 def _by_unit(values_display: np.ndarray, lattice: Lattice) -> list[tuple[str, float]]:
@@ -855,5 +855,4 @@ def rcm(
                             max_frames=64,
                         )
         if folder is not None:
-            for path in folder.written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)

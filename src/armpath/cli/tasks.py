@@ -43,6 +43,7 @@ from armpath.cli.common import (
     err_console,
     joint_state,
     out_console,
+    print_written,
     progress,
     task_setup,
 )
@@ -386,13 +387,11 @@ def reach(
                 )
             if folder is not None:
                 _write_reach(folder, "reach", result, arm, scene, animate)
-        written = folder.written if folder is not None else []
         if json_out:
             typer.echo(json_text(reach_result_dict(result, arm, scene)), nl=False)
         else:
             out_console.print(_reach_summary(result, arm, scene))
-            for path in written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 def _orientation_text(rule: dict[str, Any], angle_deg: float) -> str:
@@ -603,8 +602,7 @@ def plan(
                 doc = plan_result_dict(result, arm, scene, objective.value, None, None)
                 _emit_plan(result, doc, arm, scene, folder, json_out, "plan", None, animate)
         if folder is not None and not json_out:
-            for path in folder.written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
@@ -789,8 +787,7 @@ def spotweld(
             typer.echo(json_text(doc), nl=False)
         else:
             out_console.print(_tour_summary(doc, bound_skipped=not bound))
-            for path in folder.written if folder is not None else []:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
@@ -1020,8 +1017,7 @@ def trace(
             typer.echo(json_text(doc), nl=False)
         else:
             out_console.print(_trace_summary(doc, bound_skipped=not bound))
-            for path in folder.written if folder is not None else []:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 @app.command()
@@ -1060,8 +1056,9 @@ def run(
     tool box; 2, trace the crack; 3, spot welds inside the workpiece; then the seed arm's blind
     zones). Writes each task's result (JSON, CSV, XLSX), figures and animations (GIF), and a
     one-page report summary.md. A task that finds no plan is reported there and the others'
-    results are written; the run then ends with its error (exit 1). So too where --time-limit
-    runs out: the tasks finished by then are written, the rest reported as not finished."""
+    results are written; the run then ends with its error (exit 1); where no task finds one,
+    nothing is written. So too where --time-limit runs out: the tasks finished by then are
+    written, the rest reported as not finished."""
     from armpath.cli.workspace import _blind_zones, _write_blind_zones
     from armpath.export import output_folder, reach_result_dict, tour_result_dict, trace_result_dict
     from armpath.planning.bounds.search import check_max_samples
@@ -1351,3 +1348,10 @@ def _print_run(
     out_console.print(f"wrote to {folder.path.resolve()}:", markup=False)
     for path in written:
         out_console.print(f"  {path.name}", markup=False)
+    if folder.removed:
+        out_console.print(
+            "removed (an earlier command's results in this folder): "
+            + ", ".join(path.name for path in folder.removed),
+            markup=False,
+            soft_wrap=True,
+        )

@@ -40,6 +40,7 @@ from armpath.cli.common import (
     _scene,
     app,
     out_console,
+    print_written,
     progress,
     task_setup,
 )
@@ -213,8 +214,7 @@ def workspace(
                     f"({grid.samples:,} samples, {grid.voxel:g} mm voxels)",
                 )
         if out is not None and folder is not None:
-            for path in folder.written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 def _only_workpiece(scene: Scene) -> SolidOfRevolution:
@@ -417,8 +417,7 @@ def blindzones(
             if folder is not None:
                 _write_blind_zones(folder, bz)
         if out is not None and folder is not None:
-            for path in folder.written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
 
 
 @app.command("design-sweep")
@@ -549,5 +548,4 @@ def design_sweep(
                 )
                 plot_design_sweep(folder.file("design_sweep.png"), results, reference)
         if out is not None and folder is not None:
-            for path in folder.written:
-                out_console.print(f"wrote {path}", markup=False)
+            print_written(folder)
