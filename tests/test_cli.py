@@ -472,3 +472,19 @@ def test_armpath_alone_prints_its_help_and_no_error():
     assert bad.stderr.strip().splitlines() == [
         "error: No such command 'bogus'. (see: armpath --help)"
     ]
+
+
+def test_a_trajectory_without_a_model_warns_of_waypoints_beyond_the_seed_arms_limits(tmp_path):
+    """Without --model no joint limits apply (any number of joints): six columns with joint 2
+    at -200 deg went through without a word, while --model seed refuses them. Now a warning
+    names the waypoint, the joint and the seed arm's limits; within them, none."""
+    (tmp_path / "off.csv").write_text("0,0,0,0,0,0\n10,-200,0,0,0,0\n")
+    (tmp_path / "on.csv").write_text("0,0,0,0,0,0\n10,-100,0,0,0,0\n")
+    off = run("trajectory", "--waypoints", "off.csv", cwd=tmp_path)
+    assert off.returncode == 0, off.stderr
+    said = " ".join(off.stderr.split())
+    assert "waypoint 2 has joint 2 at -200 deg, beyond the seed arm's [-125, 125] deg" in said
+    on = run("trajectory", "--waypoints", "on.csv", cwd=tmp_path)
+    assert on.returncode == 0 and "warning" not in on.stderr
+    strict = run("trajectory", "--waypoints", "off.csv", "--model", "seed", cwd=tmp_path)
+    assert strict.returncode != 0 and "outside its limits" in strict.stderr

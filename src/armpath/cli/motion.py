@@ -185,6 +185,28 @@ def _trajectory_joints(
     return arm, arm.lattice, W
 
 
+def _unchecked_limits_warning(waypoints_display: np.ndarray) -> str | None:
+    """Without ``--model`` no joint limits apply; where the waypoints have the seed arm's six
+    columns and one lies beyond its limits, a warning that says so (a newcomer takes the seed
+    arm for the default)."""
+    from armpath.model import seed_arm
+
+    arm = seed_arm()
+    if waypoints_display.shape[1] != arm.n_joints:
+        return None
+    W = arm.lattice.joint_from_display(waypoints_display)
+    outside = ~arm.within_limits(W)
+    if not np.any(outside):
+        return None
+    row = int(np.argmax(outside))
+    joint = int(np.argmax((W[row] < arm.lower) | (W[row] > arm.upper)))
+    lo, hi = np.degrees(arm.lower[joint]), np.degrees(arm.upper[joint])
+    return (
+        f"warning: no joint limits are checked without --model: waypoint {row + 1} has joint "
+        f"{joint + 1} at {waypoints_display[row, joint]:g} deg, beyond the seed arm's "
+        f"[{lo:g}, {hi:g}] deg (--model seed checks its limits)"
+    )
+
 def _position_limits(arm: SerialArm) -> tuple[np.ndarray, np.ndarray]:
     """Position limits (rad / length unit) for the QP: each joint's lowest and highest lattice
     value within its limits widened by ``ROUNDING_SLACK_TICKS``, an unlimited side at the
@@ -518,7 +540,7 @@ def trajectory(
             out_console.print(table)
             for warning in (
                 _timing_warning(quantized, traj.duration, "--period"),
-                None
+                _unchecked_limits_warning(W_shown)
                 if arm is None
                 else _limits_warning(arm, quantized.sequence.states(), kind, bounded),
             ):
