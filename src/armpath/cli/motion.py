@@ -207,6 +207,7 @@ def _unchecked_limits_warning(waypoints_display: np.ndarray) -> str | None:
         f"[{lo:g}, {hi:g}] deg (--model seed checks its limits)"
     )
 
+
 def _position_limits(arm: SerialArm) -> tuple[np.ndarray, np.ndarray]:
     """Position limits (rad / length unit) for the QP: each joint's lowest and highest lattice
     value within its limits widened by ``ROUNDING_SLACK_TICKS``, an unlimited side at the

@@ -39,6 +39,7 @@ from armpath.cli.common import (
     _cli_errors,
     _scene,
     app,
+    err_console,
     out_console,
     print_written,
     progress,
@@ -233,6 +234,18 @@ class _BlindZones:
     faces: list[Any]
     pixel: float
 
+    def warnings(self, pixel: float) -> list[str]:
+        """A warning for each map whose blind zone had not settled (too few samples for the
+        pixels: the unfilled reachable pixels count as blind)."""
+        return [
+            f"warning: the {what} map's blind zone went from {m.half_blind_area:.0f} to "
+            f"{m.blind_area:.0f} mm^2 over the second half of its {m.samples:,} samples: too "
+            f"few for {pixel:g} mm pixels, and its figures overstate the blind zone (more "
+            "--samples or a larger --pixel)"
+            for what, m in (("arm-plane", self.plane), ("meridian", self.meridian))
+            if not m.settled and m.half_blind_area is not None
+        ]
+
     def summary(self) -> list[str]:
         """One line each: the central blind zone in the plane and in 3-D, each face."""
         out = [
@@ -414,6 +427,8 @@ def blindzones(
                 f"faces by {bands} horizontal circles each",
                 markup=False,
             )
+            for warning in bz.warnings(pixel):
+                err_console.print(warning, markup=False)
             if folder is not None:
                 _write_blind_zones(folder, bz)
         if out is not None and folder is not None:
@@ -533,6 +548,16 @@ def design_sweep(
                 f"(seed arm {reference.blind_volume_mm3 / 1e6:.3g} l)",
                 markup=False,
             )
+            unsettled = sum(not r.settled for r in [*results, reference])
+            if unsettled:
+                seed_too = " (the seed arm's among them)" if not reference.settled else ""
+                err_console.print(
+                    f"warning: the blind zones of {unsettled} of the {len(results) + 1} "
+                    f"designs{seed_too} changed much over the second half of their "
+                    f"{samples:,} samples: too few for {pixel:g} mm pixels, and their blind "
+                    "volumes are overstated (more --samples or a larger --pixel)",
+                    markup=False,
+                )
             if folder is not None:
                 from armpath.viz.workspace_figures import plot_design_sweep
 

@@ -67,6 +67,14 @@ class PlaneMap:
     reach: BoolArray
     axes: tuple[str, str]
     samples: int
+    #: the blind area (mm^2) of the map from the first half of its samples: where the whole
+    #: map's differs much from it, the samples are too few for the pixels (the reachable set
+    #: still fills, and its unfilled pixels count as blind); None where not measured
+    half_blind_area: float | None = None
+
+    #: Largest change of the blind area between half the samples and all of them (a share of
+    #: the larger, or 4 pixels where that is more) at which the map is taken as settled.
+    SETTLED_SHARE = 0.05
 
     #: Enclosed unreachable regions smaller than this many pixels are sampling gaps, not blind
     #: zones.
@@ -90,6 +98,15 @@ class PlaneMap:
     def blind_area(self) -> float:
         """Area of the enclosed blind pixels (mm^2)."""
         return float(np.count_nonzero(self.blind)) * self.pixel**2
+
+    @property
+    def settled(self) -> bool:
+        """Whether the blind area hardly changed over the second half of the samples (see
+        :attr:`half_blind_area`); True where that was not measured."""
+        if self.half_blind_area is None:
+            return True
+        full, half = self.blind_area, self.half_blind_area
+        return abs(full - half) <= max(self.SETTLED_SHARE * max(full, half), 4 * self.pixel**2)
 
     @property
     def reach_area(self) -> float:
@@ -183,10 +200,14 @@ def _sample_map(
     reach = np.zeros(shape, dtype=bool)
     ranges = joint_ranges(arm)
     what = "the meridian map" if meridian else "the arm-plane map"
+    axes = ("rho", "z") if meridian else ("y", "z")
+    half, half_blind = samples // 2, None
     done = 0
     while done < samples:  # done grows by n >= 1 each time
         check_time(f"sampling {what} ({done:,} of {samples:,} samples)")
-        n = min(chunk, samples - done)
+        if done == half and half > 0:
+            half_blind = PlaneMap(origin, float(pixel), reach.copy(), axes, half).blind_area
+        n = min(chunk, samples - done, half - done if done < half else samples)
         q = np.zeros((n, 6))
         for j in joints:
             q[:, j] = rng.uniform(ranges[j, 0], ranges[j, 1], n)
@@ -198,8 +219,7 @@ def _sample_map(
         else:
             _mark(p[:, 1:], origin, pixel, reach)
         done += n
-    axes = ("rho", "z") if meridian else ("y", "z")
-    return PlaneMap(origin, float(pixel), reach, axes, samples)
+    return PlaneMap(origin, float(pixel), reach, axes, samples, half_blind)
 
 
 def arm_plane_map(

@@ -54,6 +54,9 @@ class DesignMetrics:
     blind_volume_mm3: float
     farthest_mm: float
     nearest_to_b_mm: float
+    #: whether its meridian map's blind zone had settled (see
+    #: :attr:`~armpath.workspace.blindzones.PlaneMap.settled`): False, too few samples
+    settled: bool = True
 
     def row(self) -> dict[str, float]:
         g = self.geometry
@@ -89,6 +92,7 @@ def evaluate_design(
         m.revolved_blind_volume(),
         float(reach_dist.max()),
         float(reach_dist.min()),
+        m.settled,
     )
 
 
