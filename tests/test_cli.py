@@ -428,7 +428,7 @@ def test_an_arc_through_a_closed_curves_start_says_so():
     assert arc_text({"start_mm": 10.0, "end_mm": 20.0}, closed) == "arc 10.00 .. 20.00 mm"
     # a pass once round that runs on 0.2 mm past where it began read as a 0.2 mm arc
     assert arc_text({"start_mm": 483.07, "end_mm": 483.07 + 865.95 + 0.2}, closed) == (
-        "arc 483.07 .. 483.27 mm, once round"
+        "arc once round from 483.07 mm"
     )
     assert arc_text({"start_mm": 483.07, "end_mm": 483.07 + 865.95 - 0.01}, closed) == (
         "arc 483.07 .. 483.06 mm, through 0 mm"  # 0.01 mm short of once round

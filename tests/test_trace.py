@@ -891,7 +891,7 @@ def test_progress_lines_say_where_an_arc_lies_on_a_closed_curve():
 
     doc = {"curve": {"closed": True, "length_mm": L}}
     for (a, b), said in (
-        ((23.8, 23.8 + L), "arc 23.80 .. 23.80 mm, once round"),
+        ((23.8, 23.8 + L), "arc once round from 23.80 mm"),
         ((560.0, L + 10.2), "arc 560.00 .. 10.20 mm, through 0 mm"),
         ((L + 20.0, L + 120.0), "arc 20.00 .. 120.00 mm"),
         ((560.0, L), f"arc 560.00 .. {L:.2f} mm"),

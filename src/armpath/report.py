@@ -71,13 +71,13 @@ def _arc_place(arc: dict[str, Any], doc: dict[str, Any]) -> tuple[float, float, 
 
 def arc_text(arc: dict[str, Any], doc: dict[str, Any]) -> str:
     """``arc 375.17 .. 2.50 mm``, with ``through 0 mm`` where it runs on past the closed
-    curve's start (see :func:`arc_ends`), or ``once round`` where it covers the whole curve
-    (it may end a little past where it began)."""
+    curve's start (see :func:`arc_ends`), or ``arc once round from 375.17 mm`` where it covers
+    the whole curve (it may end a little past where it began: ``arc 375.17 .. 375.37 mm``
+    read as a 0.2 mm arc)."""
     start, end, whole, through = _arc_place(arc, doc)
-    text = f"arc {start:.2f} .. {end:.2f} mm"
     if whole:
-        return text + ", once round"
-    return text + (", through 0 mm" if through else "")
+        return f"arc once round from {start:.2f} mm"
+    return f"arc {start:.2f} .. {end:.2f} mm" + (", through 0 mm" if through else "")
 
 
 def uncovered_arcs(doc: dict[str, Any]) -> list[tuple[str, str, str]]:
