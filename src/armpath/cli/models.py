@@ -68,12 +68,12 @@ def show(
         shown_limits = _to_display(arm, np.vstack([arm.lower, arm.upper]))
         for i, j in enumerate(arm.joints):
             lo, hi = shown_limits[:, i]
-            lim = "none" if not (np.isfinite(lo) or np.isfinite(hi)) else f"{lo:g} … {hi:g}"
+            unlimited = not (np.isfinite(lo) or np.isfinite(hi))
             table.add_row(
                 j.name,
                 j.kind.value,
                 " ".join(f"{v:g}" for v in j.axis),
-                f"{lim} {units[i]}",
+                "none" if unlimited else f"{lo:g} … {hi:g} {units[i]}",
                 f"{arm.lattice.tick_display[i]:g} {units[i]}",
                 str(int(arm.lattice.max_ticks[i])),
             )

@@ -128,9 +128,14 @@ def fixed_point_rotation(
         sols = batch[k].solutions
         sols = sols[limits_mask(arm, sols)]
         if sols.shape[0] == 0:
+            where = ", ".join(f"{v:.1f}" for v in wrist[k])
+            centre = ", ".join(f"{v:g}" for v in c0)
             raise InvalidInputError(
-                f"no solution inside the limits for wrist point {k} ({wrist[k].round(1)}): "
-                "the centre is not a dexterous point for this circle"
+                f"no configuration within the joint limits has the tool on ({centre}) mm with "
+                f"the wrist at ({where}) mm (point {k + 1} of {n_points} round the circle): "
+                f"the centre is not a dexterous point of {arm.name} for a circle "
+                f"{cone_deg:g} deg from this axis; try a centre nearer the middle of its "
+                "workspace (--centre), or a smaller angle (--cone)"
             )
         if previous is None:
             pick = sols[0]
