@@ -184,3 +184,17 @@ def test_a_polyline_of_more_vertices_than_the_limit_is_refused():
     many[:, 0] = np.arange(1_000_001) * 0.01
     with pytest.raises(InvalidInputError, match=r"1,000,001 \(the limit is 1,000,000\)"):
         Polyline("many", many)
+
+
+def test_too_deeply_nested_parentheses_are_one_short_error():
+    """Python's parser takes at most 200 levels of parentheses: 300 were refused as "too many
+    nested parentheses" with the whole 600-character expression repeated; now the limit is
+    named and the expression shortened. 150 levels parse and evaluate."""
+    from armpath.errors import InvalidInputError
+    from armpath.geometry.expressions import parse_expression
+
+    with pytest.raises(InvalidInputError) as err:
+        parse_expression("(" * 300 + "t" + ")" * 300)
+    said = str(err.value)
+    assert "at most 200 levels of parentheses" in said and len(said) < 200
+    assert float(parse_expression("(" * 150 + "t" + ")" * 150)(np.array([2.0]))[0]) == 2.0

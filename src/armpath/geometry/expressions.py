@@ -83,7 +83,11 @@ def parse_expression(text: str, variable: str = "t") -> Expression:
     try:
         tree = ast.parse(text.strip(), mode="eval").body
     except SyntaxError as exc:
-        raise InvalidInputError(f"expression {text!r} is not valid arithmetic: {exc.msg}") from None
+        shown = text if len(text) <= 80 else f"{text[:60]}...{text[-12:]}"
+        why = exc.msg
+        if "nested parentheses" in why:  # Python's parser takes at most 200 levels
+            why += " (at most 200 levels of parentheses)"
+        raise InvalidInputError(f"expression {shown!r} is not valid arithmetic: {why}") from None
     except (RecursionError, MemoryError):
         raise InvalidInputError(f"expression nests deeper than {_MAX_DEPTH} levels") from None
     _check(tree, text, variable)

@@ -135,9 +135,14 @@ def solve_numerical(
             n,
             method,
             f"no start converged ({tried} starts): the closest reached "
-            f"{pos_err[best]:.4g} {arm.length_unit} and {np.degrees(rot_err[best]):.4g} deg "
-            f"from the target (tolerances {position_tolerance_mm:g} mm, "
-            f"{rotation_tolerance_rad:g} rad)",
+            + (
+                f"{pos_err[best]:.4g} {arm.length_unit} from the target (tolerance "
+                f"{position_tolerance_mm:g} mm)"
+                if position_only
+                else f"{pos_err[best]:.4g} {arm.length_unit} and "
+                f"{np.degrees(rot_err[best]):.4g} deg from the target (tolerances "
+                f"{position_tolerance_mm:g} mm, {np.degrees(rotation_tolerance_rad):.2g} deg)"
+            ),
         )
     kept = distinct_solutions(q[ok], prismatic, SAME_SOLUTION)
     sols = q[ok][kept]

@@ -81,7 +81,7 @@ class Scene:
             raise SceneError(
                 f"scene {self.source} defines no [tasks.trace]: give a scene file with a "
                 "[tasks.trace.curve] (--scene; the repository's examples/ur5_cell.toml has "
-                "one), or the curve to armpath.trace"
+                "one), or the curve's points (trace --curve FILE; armpath.trace's curve)"
             )
         spec = self.trace.curve
         try:
