@@ -228,8 +228,9 @@ def _arm(model: Any) -> SerialArm:
     if isinstance(definition, dict):
         return arm_from_dict(definition, "the result's model")
     if model.get("name") != "seed":
+        named = f" {model['name']!r}" if model.get("name") is not None else " (no name)"
         raise InvalidInputError(
-            f"the result's model {model.get('name')!r} carries no definition, so it cannot be "
+            f"the result's model{named} carries no definition, so it cannot be "
             "replayed (armpath writes every model's definition; only the seed arm is known by "
             "its parameters alone)"
         )
