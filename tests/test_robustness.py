@@ -687,6 +687,12 @@ def test_outputs_inputs_and_sizes_a_review_of_the_cli_found_unbounded(tmp_path):
     done = run("fk", "--model", str(many), *["0"] * 65)
     (line,) = error_lines(done.stderr)
     assert done.returncode == 1 and "at most 64 joints, got 65" in line
+    # the count comes before what is counted against it (it said "home must list 140 joint
+    # values" for a file of 140 links and a short home)
+    many.write_text(json.dumps({"links": [{"a": 10.0, "alpha": 0.0, "d": 0.0}] * 140, "home": [0]}))
+    done = run("model", "show", str(many))
+    (line,) = error_lines(done.stderr)
+    assert done.returncode == 1 and "at most 64 joints, got 140 links" in line
     done = run("plan", "--to", "3600000", "-90", "0", "0", "-90", "0")
     (line,) = error_lines(done.stderr)
     assert done.returncode == 1 and "would need 1,800,000 (the limit is 1,000,000)" in line

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armpath.budget import MAX_JOINTS
 from armpath.errors import InvalidInputError
 from armpath.model.lattice import MM_PER_LENGTH_UNIT
 from armpath.model.serial_arm import (
@@ -241,6 +242,10 @@ def robot_from_dict(
     links = doc.get("links")
     if not isinstance(links, list) or not links:
         raise InvalidInputError(f"{source}: 'links' must be a non-empty list of D-H rows")
+    if len(links) > MAX_JOINTS:  # before what is counted against them (home, link radii)
+        raise InvalidInputError(
+            f"{source}: a serial arm may have at most {MAX_JOINTS} joints, got {len(links)} links"
+        )
     rows = []
     row_keys = {"a", "alpha", "d", "offset", "type", "limits", "theta"}
     for i, link in enumerate(links):
