@@ -488,3 +488,18 @@ def test_a_trajectory_without_a_model_warns_of_waypoints_beyond_the_seed_arms_li
     assert on.returncode == 0 and "warning" not in on.stderr
     strict = run("trajectory", "--waypoints", "off.csv", "--model", "seed", cwd=tmp_path)
     assert strict.returncode != 0 and "outside its limits" in strict.stderr
+
+
+def test_a_curve_too_long_to_scan_names_the_scan_step_option(tmp_path):
+    """A 120 m curve scanned every 4 mm needs 30,000 points (the limit 25,000): the refusal
+    named TraceOptions.scan_step_mm in Python only; trace has --scan-step now, named there,
+    and a scan step of 0 is one error line naming it. (Every 8 mm, the scan's size within the
+    limit, the part of the curve near the arm is traced: about 40 s, not run here.)"""
+    (tmp_path / "long.csv").write_text("x,y,z\n0,300,200\n60000,300,200\n120000,300,200\n")
+    base = ("trace", "--curve", "long.csv", "--scene", "none", "--no-bound")
+    too_long = run(*base, cwd=tmp_path)
+    assert too_long.returncode != 0
+    line = too_long.stderr.strip().splitlines()[-1]
+    assert "would need 30,000 (the limit is 25,000)" in line and "--scan-step" in line
+    zero = run(*base, "--scan-step", "0", cwd=tmp_path)
+    assert zero.stderr.strip().splitlines() == ["error: --scan-step must be > 0 mm, got 0"]

@@ -623,6 +623,7 @@ def trace(
     seed: int = 0,
     bound: bool = True,
     bound_samples: int | None = None,
+    scan_step_mm: float = 4.0,
     time_limit_s: float | None = None,
 ) -> Result:
     """Go along ``curve`` with the tool (a :class:`~armpath.geometry.curves.Curve`, or points
@@ -636,7 +637,9 @@ def trace(
     ``lower_bound``, with the plan's gap to it; the seed's Task 2: about a third of its time);
     False: ``None`` there. ``bound_samples``: the live samples past which the bound's search
     stops splitting (1,000 to 2,000,000; None: 50,000; its first round may hold more; the
-    search's rounds grow in proportion): more give a tighter bound, later."""
+    search's rounds grow in proportion): more give a tighter bound, later. ``scan_step_mm``:
+    how far apart the curve's reachability is scanned (a longer curve needs a larger one: at
+    most 25,000 points)."""
     from armpath.export import trace_result_dict
     from armpath.geometry.curves import Curve, Polyline
     from armpath.planning.motion import MotionOptions
@@ -648,7 +651,7 @@ def trace(
          "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"closed": closed, "bound": bound},
-        {"tolerance_mm": tolerance_mm},
+        {"tolerance_mm": tolerance_mm, "scan_step_mm": scan_step_mm},
     )  # fmt: skip
     rule = _axis_rule(tool_axis, axis_tolerance_deg)
     with time_limit(time_limit_s):
@@ -666,6 +669,7 @@ def trace(
                 path = Polyline("curve", _points_mm(curve, "curve", 2), closed=closed)
             options = TraceOptions(
                 tolerance_mm=tolerance_mm,
+                scan_step_mm=scan_step_mm,
                 motion=MotionOptions(seed=seed),
                 axis_rule=rule,
                 bound=bound,

@@ -61,6 +61,7 @@ from armpath.ik.target import (
     rule_tolerances,
 )
 from armpath.planning.choices import Objective, VisitOrder
+from armpath.planning.trace.reachability import MAX_SCAN_POINTS
 from armpath.report import commands_text, coverage_text
 
 if TYPE_CHECKING:
@@ -971,6 +972,14 @@ def trace(
             show_default=False,
         ),
     ] = None,
+    scan_step: Annotated[
+        float,
+        typer.Option(
+            "--scan-step",
+            help="How far apart the curve's reachability is scanned, mm (a longer curve needs a "
+            f"larger one: at most {MAX_SCAN_POINTS:,} points).",
+        ),
+    ] = 4.0,
     closed: Annotated[
         bool,
         typer.Option(
@@ -994,12 +1003,15 @@ def trace(
     with _cli_errors(time_limit):
         if closed and curve_file is None:
             raise InvalidInputError("--closed closes the curve of --curve; give --curve")
+        if not (math.isfinite(scan_step) and scan_step > 0.0):
+            raise InvalidInputError(f"--scan-step must be > 0 mm, got {scan_step:g}")
         curve = None if curve_file is None else _curve_from_points(curve_file, closed)
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         start_ticks = None if start is None else joint_state(arm, start, "--from")
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
             tolerance_mm=tolerance,
+            scan_step_mm=scan_step,
             motion=MotionOptions(seed=seed),
             axis_rule=rule,
             bound=bound,

@@ -146,7 +146,7 @@ def curve_reachability(
         L / scan_step_mm,
         MAX_SCAN_POINTS,
         f"scanning the {L:.4g} mm curve {curve.name!r} every {scan_step_mm:g} mm",
-        "the curve (shorter) or the scan step (larger: TraceOptions.scan_step_mm in Python)",
+        "the curve (shorter) or the scan step (larger: trace --scan-step; scan_step_mm in Python)",
     )
     n = max(int(np.ceil(L / scan_step_mm)), 4)
     s_scan = np.linspace(0.0, L, n + 1)
