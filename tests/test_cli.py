@@ -503,3 +503,18 @@ def test_a_curve_too_long_to_scan_names_the_scan_step_option(tmp_path):
     assert "would need 30,000 (the limit is 25,000)" in line and "--scan-step" in line
     zero = run(*base, "--scan-step", "0", cwd=tmp_path)
     assert zero.stderr.strip().splitlines() == ["error: --scan-step must be > 0 mm, got 0"]
+
+
+def test_waypoints_that_do_not_move_are_refused_unless_timed(tmp_path):
+    """Two identical waypoints were timed at 0.001 s with a warning about the period; with no
+    motion to time they are refused in one line. With a column of times the arm is held still
+    that long (2 s, every lattice error 0)."""
+    (tmp_path / "same.csv").write_text("0,0,0,0,0,0\n0,0,0,0,0,0\n")
+    (tmp_path / "hold.csv").write_text("t,a,b\n0,0,0\n2,0,0\n")
+    same = run("trajectory", "--waypoints", "same.csv", cwd=tmp_path)
+    assert same.returncode == 1
+    (line,) = same.stderr.strip().splitlines()
+    assert line.startswith("error: --waypoints same.csv: every row is the same")
+    hold = run("trajectory", "--waypoints", "hold.csv", cwd=tmp_path)
+    assert hold.returncode == 0, hold.stderr
+    assert re.search(r"duration\s+2\.000\s+s", hold.stdout)

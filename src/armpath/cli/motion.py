@@ -460,6 +460,11 @@ def trajectory(
 
         allocated = times is None
         if times is None:
+            if not np.any(W_shown != W_shown[0]):
+                raise InvalidInputError(
+                    f"--waypoints {waypoints}: every row is the same, so there is no motion to "
+                    "time (give a first column t of times to hold the arm still that long)"
+                )
             times = allocate_times(W, rate(max_velocity), rate(max_acceleration))
             options = "--period (or --max-velocity, --max-acceleration)"
         else:
