@@ -473,7 +473,7 @@ def reach_document():
     [
         ("nosuch", 'the result\'s "model" must be an object'),  # was an AttributeError
         ({"name": "ur5"}, "model 'ur5' carries no definition"),
-        ({}, "model None carries no definition"),
+        ({}, "model (no name) carries no definition"),
     ],
 )
 @pytest.mark.parametrize("command", ["export", "animate"])

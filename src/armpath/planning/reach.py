@@ -327,13 +327,13 @@ def _reachable_family(p: _Problem, step_deg: float, tolerance_mm: float, seed: i
             f"mm is {dist:.3f} mm away"
         )
     # the target lies just beyond reach (a stretched arm's tool point within the tolerance of
-    # it) or the grid missed a thin sliver of the family: the family of a point between the
-    # target and the nearest reachable one, within half the tolerance of the target and so a
-    # little inside the workspace (configurations within the tolerance, every branch), and the
-    # optimizer's solution
+    # it) or the grid missed a thin sliver of the family: the family of a point on the line
+    # from the target through the nearest reachable one, half way from that one to the
+    # tolerance's edge and so a little inside the workspace (configurations within the
+    # tolerance, every branch), and the optimizer's solution
     tip = tool_position(p.arm, p.full(q_near))
     toward = tip - p.target
-    inside = p.target + toward * (max(0.5 * tolerance_mm, dist) / max(dist, 1e-12))
+    inside = p.target + toward * ((dist + 0.5 * (tolerance_mm - dist)) / max(dist, 1e-12))
     if dist > 1e-9 and np.linalg.norm(inside - p.target) <= tolerance_mm:
         fam = replace(_family(replace(p, target=inside), step_deg), near=True)
     q_near = p.normalize(q_near)
@@ -1102,7 +1102,7 @@ def _goal_states(
             raise PlanningError(
                 f"no lattice state found within {tolerance_mm} mm of ({where}) mm: the "
                 f"{len(picks)} configurations of the family searched about have none on the "
-                f"{TICK_DEG:g} deg lattice; a wider --tolerance finds one"
+                f"{TICK_DEG:g} deg lattice; a wider tolerance finds one"
             )
         raise PlanningError(
             f"no lattice state within {tolerance_mm} mm of ({where}) mm satisfies the "
