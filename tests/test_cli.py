@@ -518,3 +518,16 @@ def test_waypoints_that_do_not_move_are_refused_unless_timed(tmp_path):
     hold = run("trajectory", "--waypoints", "hold.csv", cwd=tmp_path)
     assert hold.returncode == 0, hold.stderr
     assert re.search(r"duration\s+2\.000\s+s", hold.stdout)
+
+
+def test_a_table_separated_by_semicolons_says_so(tmp_path):
+    """Values separated by ';' were read as one column name per line: the first line taken
+    silently as a header and the error pointing at line 2. Now line 1 is named and the
+    separators to use."""
+    (tmp_path / "semi.csv").write_text("0;300;200\n10;300;200\n")
+    r = run("trace", "--curve", "semi.csv", "--scene", "none", cwd=tmp_path)
+    assert r.returncode != 0
+    assert r.stderr.strip().splitlines()[-1] == (
+        "error: --curve semi.csv: line 1 has values separated by ';'; separate them by commas "
+        "or spaces"
+    )

@@ -781,6 +781,13 @@ def test_degenerate_arms_and_absurd_values_are_planned_or_refused_in_one_line(tm
     r = run("trajectory", "--waypoints", str(still), "--retime", "--out", str(out))
     assert r.returncode == 1 and r.stdout == "" and not out.exists()
     assert error_lines(r.stderr) == [
+        f"error: --waypoints {still}: every row is the same, so there is no motion to time "
+        "(give a first column t of times to hold the arm still that long)"
+    ]
+    still.write_text("t,a,b\n0,0,0\n1,0,0\n")  # timed: held still, but nothing to retime
+    r = run("trajectory", "--waypoints", str(still), "--retime", "--out", str(out))
+    assert r.returncode == 1 and r.stdout == "" and not out.exists()
+    assert error_lines(r.stderr) == [
         f"error: --retime: the waypoints of {still} do not move (every row the same); there is "
         "no path to retime"
     ]

@@ -46,6 +46,11 @@ def read_number_table(
                 check_size(
                     len(cells), max_columns, f"{name}: columns of line {number} ({columns})", option
                 )
+                if ";" in line and all(is_number(c) for c in line.split(";") if c.strip()):
+                    raise InvalidInputError(
+                        f"{name}: line {number} has values separated by ';'; separate them by "
+                        "commas or spaces"
+                    )
                 if header is None and not rows and not all(is_number(c) for c in cells):
                     header = [c.lower() for c in cells]
                     width = len(cells)
