@@ -252,6 +252,16 @@ def test_huge_coordinates_and_non_utf8_scene_files_are_one_line_errors(tmp_path)
         f"error: scene {far}: obstacles.0.sphere.center: 1e+300 is beyond the largest coordinate "
         "or size a scene may use (1e+09 mm)"
     ]
+    # a curve's parameter has no unit: its limit is said without one
+    far.write_text(
+        'name = "far"\n[tasks.trace]\ncurve = { type = "parametric", x = "t", y = "300", '
+        'z = "200", t = [0, 1e12] }\n'
+    )
+    r = run("trace", "--scene", str(far))
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        f"error: scene {far}: tasks.trace.curve.parametric.t: 1e+12 is beyond the largest curve "
+        "parameter a scene may use (1e+09)"
+    ]
     bad = tmp_path / "bad.toml"
     bad.write_bytes(b'name = "x\xff"\n')
     r = run("plan", "--scene", str(bad), "--to", "0", "-90", "0", "0", "-90", "0")

@@ -26,12 +26,16 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-def _check_number(x: float) -> None:
+def _check_number(x: float, parameter: bool = False) -> None:
+    """A finite number within what a scene may hold: a coordinate or a size (mm), or with
+    ``parameter`` a curve's parameter (no unit, the same largest value)."""
     if not np.isfinite(x):
         raise ValueError("must be a finite number")
     if abs(x) > MAX_COORDINATE_MM:
         raise ValueError(
-            f"{x:g} is beyond the largest coordinate or size a scene may use "
+            f"{x:g} is beyond the largest curve parameter a scene may use ({MAX_COORDINATE_MM:g})"
+            if parameter
+            else f"{x:g} is beyond the largest coordinate or size a scene may use "
             f"({MAX_COORDINATE_MM:g} mm)"
         )
 
@@ -83,7 +87,7 @@ class _FiniteVec(_Strict):
         for x in values:
             for y in x if isinstance(x, tuple | list) else (x,):
                 if isinstance(y, float | int) and not isinstance(y, bool):
-                    _check_number(float(y))
+                    _check_number(float(y), parameter=info.field_name == "t")
         return v
 
 
