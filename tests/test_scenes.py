@@ -50,7 +50,14 @@ def test_user_scene_file(tmp_path):
         ("name = ", "not valid TOML"),
         ('description = "x"', "name: Field required"),
         (GOOD.replace('type = "half_space"', 'type = "torus"'), "obstacles.0"),
-        (GOOD.replace("[0, 0, 1]", "[0, 0]"), "obstacles.0.half_space.normal"),
+        (  # a short list: the value missing is named, not pydantic's "normal.2: Field required"
+            GOOD.replace("[0, 0, 1]", "[0, 0]"),
+            "obstacles.0.half_space.normal: too few values \\(value 3 is missing\\)$",
+        ),
+        (  # a number where an expression goes: "Input should be a valid string" was jargon
+            GOOD + '[tasks.trace]\ncurve = { type = "parametric", x = 300, y = "0", z = "0" }\n',
+            "tasks.trace.curve.parametric.x: must be text in quotes, got 300$",
+        ),
         (GOOD.replace("[0, 0, 1]", "[0, 0, 0]"), "normal must be non-zero"),
         (
             "speed = 3\n" + GOOD,

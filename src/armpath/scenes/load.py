@@ -78,6 +78,12 @@ def _schema_message(exc: ValidationError) -> str:
     unknown = [e for e in errors if e["type"] == "extra_forbidden"]
     first = unknown[0] if unknown else errors[0]
     loc = tuple(first["loc"])
+    if first["type"] == "missing" and loc and isinstance(loc[-1], int):  # a short list
+        where = ".".join(str(p) for p in loc[:-1])
+        return f"{where}: too few values (value {loc[-1] + 1} is missing)"
+    if first["type"] == "string_type":
+        where = ".".join(str(p) for p in loc)
+        return f"{where}: must be text in quotes, got {first.get('input')!r}"
     if first["type"] != "extra_forbidden":
         msg = str(first["msg"]).removeprefix("Value error, ")
         return f"{'.'.join(str(p) for p in loc)}: {msg}"
