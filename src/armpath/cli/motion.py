@@ -188,7 +188,8 @@ def _trajectory_joints(
 def _unchecked_limits_warning(waypoints_display: np.ndarray) -> str | None:
     """Without ``--model`` no joint limits apply; where the waypoints have the seed arm's six
     columns and one lies beyond its limits, a warning that says so (a newcomer takes the seed
-    arm for the default)."""
+    arm for the default), in the words of :meth:`SerialArm.check_limits`."""
+    from armpath.errors import JointLimitError
     from armpath.model import seed_arm
 
     arm = seed_arm()
@@ -199,13 +200,14 @@ def _unchecked_limits_warning(waypoints_display: np.ndarray) -> str | None:
     if not np.any(outside):
         return None
     row = int(np.argmax(outside))
-    joint = int(np.argmax((W[row] < arm.lower) | (W[row] > arm.upper)))
-    lo, hi = np.degrees(arm.lower[joint]), np.degrees(arm.upper[joint])
-    return (
-        f"warning: no joint limits are checked without --model: waypoint {row + 1} has joint "
-        f"{joint + 1} at {waypoints_display[row, joint]:g} deg, beyond the seed arm's "
-        f"[{lo:g}, {hi:g}] deg (--model seed checks its limits)"
-    )
+    try:
+        arm.check_limits(W[row], what=f"waypoint {row + 1}")
+    except JointLimitError as exc:
+        return (
+            f"warning: no joint limits are checked without --model: {exc}, the seed arm's "
+            "(--model seed checks them)"
+        )
+    return None
 
 
 def _position_limits(arm: SerialArm) -> tuple[np.ndarray, np.ndarray]:

@@ -445,7 +445,8 @@ def _lower_bound(p: _Problem, fam: _Family, tol: float) -> tuple[LowerBound, Flo
     best_exact, best_q = float(np.min(change)), None
     if np.isfinite(best_exact):
         best_q = q[int(np.argmin(change))]
-    for x0 in _seed_points(fam, 16):
+    seeds = _seed_points(fam, 16)
+    for x0 in seeds:
         out = _minimax(p, x0, None)
         if out is not None and out[0] < best_exact:
             best_exact, best_q = out
@@ -456,8 +457,7 @@ def _lower_bound(p: _Problem, fam: _Family, tol: float) -> tuple[LowerBound, Flo
     # the family (up to 16, 5 deg apart): the least change within the tolerance may lie in
     # another branch than the exact one's, and where the family was sampled about a point near
     # the target (the target just beyond reach) none is exact (about 0.5 s)
-    starts = [best_q, *_seed_points(fam, 16)]
-    for x0 in starts:
+    for x0 in [best_q, *seeds]:
         relaxed = _minimax(p, x0, tol)
         if relaxed is not None and relaxed[0] < best_tol:
             best_tol, q_within = relaxed
