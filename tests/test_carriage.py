@@ -180,18 +180,74 @@ def test_the_farthest_tool_point_of_a_limited_elbow_is_the_law_of_cosines(tmp_pa
         assert farthest.found <= expected + 1e-9
 
 
+def test_the_farthest_tool_point_at_a_height_is_proven_as_far_as_a_constrained_search_finds_it():
+    """The largest distance from the UR5's first axis (vertical, through the carriage) of a
+    tool point at a given height, proven by branch and bound: a constrained maximisation on
+    the independent D-H product (SLSQP from 40 starts, the height held within the band) comes
+    within the search's slack of it and never past it (611 mm above the shoulder the budget of
+    boxes ends the search first: never past it, only less tight). At the table's height (41
+    mm, 348 mm below the shoulder) it is about 988.8 mm, less than the 1053.5 mm ball gives
+    there (994); no tool point lies 1250 mm above the shoulder (every length from it summed:
+    1223.35 mm)."""
+    from scipy.optimize import minimize
+
+    from armpath.planning.bounds.farthest import DISTANCE_SLACK, farthest_from_axis
+
+    arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")
+    shoulder_z = 300.0 + 89.159  # the base's height and the first row's d
+    rng = np.random.default_rng(11)
+    for z_lo, z_hi in ((40.95, 41.05), (600.0, 610.0), (1000.0, 1010.0)):
+        ring = farthest_from_axis(arm, 0, z_lo - shoulder_z, z_hi - shoulder_z)
+        assert ring is not None
+        # the axis is world z through the carriage (x = 0 with it at zero, y = 0)
+        assert np.allclose(ring.axis_point, [0.0, 0.0, shoulder_z], atol=1e-9)
+        assert np.allclose(np.abs(ring.axis_dir), [0.0, 0.0, 1.0], atol=1e-12)
+
+        def tip(v: np.ndarray) -> np.ndarray:
+            return _pose(np.r_[0.0, v])[:3, 3]
+
+        best = -np.inf
+        for _ in range(40):
+            res = minimize(
+                lambda v: -float(np.hypot(*tip(v)[:2])),
+                rng.uniform(-np.pi, np.pi, 6),
+                method="SLSQP",
+                constraints=[
+                    {"type": "ineq", "fun": lambda v, z=z_lo: tip(v)[2] - z},
+                    {"type": "ineq", "fun": lambda v, z=z_hi: z - tip(v)[2]},
+                ],
+                options={"maxiter": 300},
+            )
+            z = tip(res.x)[2]
+            if z_lo - 1e-9 <= z <= z_hi + 1e-9:
+                best = max(best, -float(res.fun))
+        assert best <= ring.radius
+        assert ring.complete == (z_lo < 1000.0)
+        if ring.complete:  # searched to its slack
+            assert ring.radius - best <= DISTANCE_SLACK + 0.05, (z_lo, best, ring.radius)
+    assert 988.0 < farthest_from_axis(arm, 0, 40.95 - shoulder_z, 41.05 - shoulder_z).radius < 990
+    above = farthest_from_axis(arm, 0, 1250.0, 1260.0)
+    assert above is not None and above.radius == -np.inf
+
+
 def test_the_carriage_bound_is_the_travel_to_where_the_arm_reaches_every_point():
     """The proven bound of an arm on a track: the tool point stays within the proven farthest
-    distance of a point on the carriage, so the carriage must travel to where every point of
+    distance of a point on the carriage, and at the seam's height within the proven farthest
+    distance from the arm's first axis, so the carriage must travel to where every point of
     the seam is that near. Checked by scanning the carriage's values on a grid (where each
-    point is within that distance of the point), not by the bound's closed form."""
-    from armpath.planning.bounds.carriage import carriage_travel_bound
-    from armpath.planning.bounds.farthest import farthest_tool_point
+    point is within both distances), not by the bound's closed form."""
+    from armpath.planning.bounds.carriage import RING_BAND_MM, carriage_travel_bound
+    from armpath.planning.bounds.farthest import farthest_from_axis, farthest_tool_point
 
     arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")
     farthest = farthest_tool_point(arm, 0)
     assert farthest is not None
     reach = farthest.radius
+    height = 50.0 - (300.0 + 89.159)  # the seam's, from the shoulder on the first axis
+    ring = farthest_from_axis(
+        arm, 0, height - 0.5 * RING_BAND_MM - 0.1, height + 0.5 * RING_BAND_MM + 0.1
+    )
+    assert ring is not None and ring.radius < reach
     # a seam along the track from x = -200 to 2600 mm, 500 mm beside it, at z = 50
     seam = Polyline("seam", np.array([[-200.0, 500.0, 50.0], [2600.0, 500.0, 50.0]]))
     start = np.r_[500.0, np.radians([0, -90, 90, -90, -90, 0])]
@@ -202,7 +258,9 @@ def test_the_carriage_bound_is_the_travel_to_where_the_arm_reaches_every_point()
     x = np.linspace(-200.0, 2600.0, 561)
     o = farthest.centre  # the point fixed to the carriage, with the carriage at 0
     gap = np.hypot(x[:, None] - grid[None, :] - o[0], np.hypot(500.0 - o[1], 50.0 - o[2]))
-    near = gap <= reach + 0.1
+    # the first axis is world z through (carriage, 0)
+    from_axis = np.hypot(x[:, None] - grid[None, :], 500.0)
+    near = (gap <= reach + 0.1) & (from_axis <= ring.radius + 0.1)
     lowest = grid[np.argmax(near, axis=1)]  # each point's least carriage value within reach
     highest = grid[near.shape[1] - 1 - np.argmax(near[:, ::-1], axis=1)]
     A, B = lowest.max(), highest.min()
@@ -281,6 +339,10 @@ def test_a_tour_along_the_track_is_bounded_by_its_carriage():
     bound = doc["lower_bound"]
     assert bound["proven"] and "carriage" in bound["method"]
     assert 0 < doc["lower_bound_commands"] <= result.n_commands
+    # the arm's reach from its axis at the table's height: within 5 % (198 against 190)
+    assert result.n_commands <= 1.05 * doc["lower_bound_commands"]
+    # the arm's reach from its axis at the table's height: within 5 % (198 against 190)
+    assert result.n_commands <= 1.05 * doc["lower_bound_commands"]
 
 
 def _walk_travel(allowed: list[np.ndarray], grid: np.ndarray, c0: float, back: bool) -> float:
@@ -313,9 +375,10 @@ def _walk_travel(allowed: list[np.ndarray], grid: np.ndarray, c0: float, back: b
 def test_a_tours_carriage_bound_is_the_shortest_walk_through_where_each_weld_is_reached():
     """Welds along the track cell's table: the carriage bound equals the shortest walk of the
     carriage, from where it starts (and back, when the tour returns), through a value where
-    each weld is within the proven reach, found by trying every order on a 0.5 mm grid."""
-    from armpath.planning.bounds.carriage import points_travel_bound
-    from armpath.planning.bounds.farthest import farthest_tool_point
+    each weld is within the proven reach (of a point on the carriage, and of its first axis at
+    the weld's height), found by trying every order on a 0.5 mm grid."""
+    from armpath.planning.bounds.carriage import RING_BAND_MM, points_travel_bound
+    from armpath.planning.bounds.farthest import farthest_from_axis, farthest_tool_point
 
     arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")
     farthest = farthest_tool_point(arm, 0)
@@ -324,7 +387,17 @@ def test_a_tours_carriage_bound_is_the_shortest_walk_through_where_each_weld_is_
     grid = np.arange(0.0, 2000.0 + 1e-9, 0.5)
     # the point fixed to the carriage moves along world x (the track) with it
     centres = farthest.centre + grid[:, None] * np.array([1.0, 0.0, 0.0])
-    allowed = [np.linalg.norm(centres - w, axis=1) <= farthest.radius + 0.05 for w in welds]
+    allowed = []
+    for w in welds:
+        height = w[2] - (300.0 + 89.159)  # from the shoulder on the first axis (world z)
+        half = 0.5 * RING_BAND_MM + 0.05
+        ring = farthest_from_axis(arm, 0, height - half, height + half)
+        assert ring is not None and ring.radius < farthest.radius
+        from_axis = np.hypot(w[0] - grid, w[1])
+        allowed.append(
+            (np.linalg.norm(centres - w, axis=1) <= farthest.radius + 0.05)
+            & (from_axis <= ring.radius + 0.05)
+        )
     for c0 in (0.0, 500.0, 1500.0):
         start = np.r_[c0, np.radians([0, -90, 90, -90, -90, 0])]
         for back in (False, True):

@@ -19,6 +19,15 @@ at least
 
 whatever the order of the points or the passes; and each command moves the carriage at most
 its step. Obstacles, the tool rule and the lattice are left out (a relaxation: still a bound).
+
+A ball is round; an arm's reach is not. Where the next joint turns about an axis square to the
+track (a vertical arm on a horizontal track), the tool points at one height along that axis
+reach less far from it than the ball says away from the ball's centre: a UR5 on the track
+cell's track reaches 1053.5 mm from a point at its shoulder's height, but only 988.8 mm from
+its axis at the table's height, 348 mm below. So the points that decide ``A`` and ``B`` (up to
+:data:`MAX_RINGS` bands of heights, :data:`RING_BAND_MM` high) take the proven largest
+distance from the axis of the tool points at their heights
+(:func:`~armpath.planning.bounds.farthest.farthest_from_axis`) where it is less.
 """
 
 from __future__ import annotations
@@ -31,7 +40,12 @@ from numpy.typing import NDArray
 
 from armpath.geometry.curves import Curve
 from armpath.model.serial_arm import JointKind, SerialArm
-from armpath.planning.bounds.farthest import farthest_tool_point
+from armpath.planning.bounds.farthest import (
+    AxisReach,
+    farthest_from_axis,
+    farthest_tool_point,
+    next_axis,
+)
 from armpath.planning.bounds.value import CommandBound
 
 FloatArray = NDArray[np.float64]
@@ -44,6 +58,12 @@ POINT_SPACING_MM = 0.5
 #: Added to the reach (mm) for where a point taken at a span's arc length may lie past it (the
 #: curve's arc-length table is interpolated): far above that error, far below a command.
 _ARC_SLACK_MM = 0.01
+#: Bands of heights searched for the arm's reach from its axis (each a branch and bound of
+#: some seconds, cached on the arm): those of the points deciding ``A`` and ``B``.
+MAX_RINGS = 2
+#: Height of such a band (mm), about a deciding point's height: the points within it take
+#: its reach (a wider band reaches farther: the track cell 988.8 mm in 0.1 mm, 990.6 in 10).
+RING_BAND_MM = 0.5
 
 
 def carriage_travel_bound(
@@ -103,6 +123,10 @@ def points_travel_bound(
     if np.any(across2 > radius**2):  # a point no carriage value brings within reach
         return None
     half = np.sqrt(radius**2 - across2)
+    narrowed = _reach_at_heights(arm, points_mm, axis, d @ axis, half, tolerance_mm)
+    if narrowed is None:  # no tool point at some point's height
+        return None
+    half, rings = narrowed
     lower, upper = arm.joints[0].limits
     A = float(max(np.max(along - half), lower))
     B = float(min(np.min(along + half), upper))
@@ -124,8 +148,8 @@ def points_travel_bound(
         method=(
             f"the carriage's travel: from {c0:g} mm to {A:.1f} mm or beyond and to {B:.1f} mm or "
             f"below{returning}, "
-            f"where every {what} is within the arm's reach of it ({reach:.1f} mm from a point "
-            f"on its next joint's axis, proven by branch and bound), {step:g} mm a command"
+            f"where every {what} is within the arm's reach of it ({_reach_text(reach, rings, what)}"
+            f", proven by branch and bound), {step:g} mm a command"
         ),
         parts={"carriage": value},
         sampling={
@@ -133,9 +157,72 @@ def points_travel_bound(
             "carriage_reach_found_mm": farthest.found,
             "carriage_reach_boxes": float(farthest.boxes),
             "carriage_points": float(points_mm.shape[0]),
+            **(
+                {
+                    "carriage_axis_reach_mm": min(ring.radius for ring in rings),
+                    "carriage_axis_reach_found_mm": min(ring.found for ring in rings),
+                    "carriage_axis_reach_boxes": float(sum(ring.boxes for ring in rings)),
+                }
+                if rings
+                else {}
+            ),
         },
         proven=True,
     )
+
+
+def _reach_at_heights(
+    arm: SerialArm,
+    points_mm: FloatArray,
+    track: FloatArray,
+    along: FloatArray,
+    half: FloatArray,
+    tolerance_mm: float,
+) -> tuple[FloatArray, list[AxisReach]] | None:
+    """The half widths ``half`` of the points' carriage intervals (about ``along``, mm along
+    the unit ``track``), narrowed where the arm's proven reach from its next joint's axis at
+    the deciding points' heights is less (see the module), and the reaches taken; unchanged
+    where that axis is not square to the track. None where no tool point lies at a point's
+    height, or it is beyond that reach from the axis wherever the carriage is."""
+    axis = next_axis(arm, 0)
+    if axis is None or abs(float(axis[1] @ track)) > 1e-9:
+        return half, []
+    a_point, a_dir = axis
+    height = (points_mm - a_point) @ a_dir
+    square = points_mm - a_point - height[:, None] * a_dir
+    # the distance from the axis across the track (the carriage changes the rest)
+    across2 = np.maximum(np.einsum("ij,ij->i", square, square) - (square @ track) ** 2, 0.0)
+    half = half.copy()
+    narrowed = np.zeros(points_mm.shape[0], dtype=bool)
+    rings: list[AxisReach] = []
+    for _ in range(MAX_RINGS):
+        deciding = [int(np.argmax(along - half)), int(np.argmin(along + half))]
+        left = [i for i in deciding if not narrowed[i]]
+        if not left:
+            break
+        lo = height[left[0]] - 0.5 * RING_BAND_MM
+        hi = height[left[0]] + 0.5 * RING_BAND_MM
+        ring = farthest_from_axis(arm, 0, lo - tolerance_mm, hi + tolerance_mm)
+        if ring is None:
+            break
+        band = ~narrowed & (height >= lo) & (height <= hi)
+        radius = ring.radius + tolerance_mm
+        if np.any(across2[band] > radius**2):  # -inf: no tool point at these heights
+            return None
+        half[band] = np.minimum(half[band], np.sqrt(radius**2 - across2[band]))
+        narrowed |= band
+        rings.append(ring)
+    return half, rings
+
+
+def _reach_text(reach: float, rings: list[AxisReach], what: str) -> str:
+    """How far the arm reaches, in a carriage bound's method."""
+    ball = f"{reach:.1f} mm from a point on its next joint's axis"
+    if not rings:
+        return ball
+    radii = sorted({round(ring.radius, 1) for ring in rings})
+    at = " and ".join(f"{r:.1f}" for r in radii)
+    return f"{ball}, and {at} mm from that axis at the heights of the {what}s deciding it"
 
 
 def with_carriage(

@@ -14,17 +14,25 @@ Over a box of joint values (centre ``c``, half widths ``h``) the squared distanc
     B = 2 * ((sum_i r_i h_i)^2 + D * sum_ij r_max(i,j) h_i h_j),
 
 from Taylor's theorem: each first derivative of the tool point is a joint's twist applied to it,
-at most ``r_i`` long (the distance from the tool point to joint ``i``'s axis, at most
+at most ``r_i`` long in the box (the distance from the tool point to joint ``i``'s axis: at the
+centre, plus how far the later joints can move the point in the box, and never more than
 :func:`~armpath.kinematics.displacement_bounds`; 1 for a prismatic joint), each second
 derivative ``d2p/dq_i dq_j`` is the earlier joint's rotation applied to the later one's
 twist, at most ``r_max(i,j)`` (the later joint's bound) long, and ``D`` is an upper bound of
-``|p - o|`` (the summed lengths). Boxes whose bound is within :data:`DISTANCE_SLACK` of the
-largest distance found at a centre are dropped, the others split across the joint that
-contributes most; the largest bound of all the boxes, dropped or left, is the proven
-distance. A budget of boxes ends the search: its result stays a proof, only less tight.
+``|p - o|`` in the box (its centre's plus the first order, at most the summed lengths). Boxes
+whose bound is within :data:`DISTANCE_SLACK` of the largest distance found at a centre are
+dropped, the others split across the joint that contributes most; the largest bound of all the
+boxes, dropped or left, is the proven distance. A budget of boxes ends the search: its result
+stays a proof, only less tight.
 
 The centre is put on the axis of the first revolute joint after the carriage (that joint then
 leaves every distance as it is and drops out), where the largest sampled distance is least.
+
+A ball about one centre overstates how far the tool point gets at a height well above or below
+it. :func:`farthest_from_axis` bounds, by the same search, the distance from that axis itself
+(the part of ``p - o`` square to it) of the tool points between two heights along it: a box
+whose heights (bounded as the distance is) miss them is dropped, and the largest distance met
+is taken at box centres stepped onto the heights.
 """
 
 from __future__ import annotations
@@ -62,13 +70,16 @@ class FarthestReach:
     value of the joints after joint ``after`` within their limits (model units). ``centre`` is
     a point fixed to joint ``after``'s moving frame, given in the world with that joint and
     those before it at zero; ``found`` the largest distance met at a configuration
-    (``radius - found`` is what the search left open), ``boxes`` how many boxes it took."""
+    (``radius - found`` is what the search left open), ``boxes`` how many boxes it took,
+    ``complete`` whether it ran to its slack (False: the budget of boxes ended it, and the
+    distance is proven but less tight)."""
 
     after: int
     centre: FloatArray
     radius: float
     found: float
     boxes: int
+    complete: bool
 
 
 def _search_ranges(arm: SerialArm, first: int) -> tuple[FloatArray, FloatArray]:
@@ -108,6 +119,141 @@ def farthest_tool_point(
 
 def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
     """:func:`farthest_tool_point`, searched."""
+    setup = _setup(arm, after)
+    if setup is None:
+        return None
+    rng = np.random.default_rng(0)
+    sample = np.tile(setup.q_fixed, (_CENTRE_SAMPLES, 1))
+    sample[:, setup.first :] = rng.uniform(
+        setup.lo, setup.hi, (_CENTRE_SAMPLES, arm.n_joints - setup.first)
+    )
+    P = _tool_points(arm, sample)[0]
+    centre_world = setup.origin.copy()
+    free = setup.free
+    if setup.axis is not None:
+        # on the next revolute axis: that joint then keeps every distance
+        a_point, a_dir = setup.axis
+        d = P - a_point
+        along, sq = d @ a_dir, np.einsum("ij,ij->i", d, d)
+        # largest squared distance from a_point + t a_dir: max(sq - 2 t along + t^2), convex in t
+        lo_t, hi_t = float(along.min()), float(along.max())
+        for _ in range(80):
+            m1, m2 = lo_t + (hi_t - lo_t) / 3, hi_t - (hi_t - lo_t) / 3
+            f1 = np.max(sq - 2 * m1 * along) + m1 * m1
+            f2 = np.max(sq - 2 * m2 * along) + m2 * m2
+            lo_t, hi_t = (lo_t, m2) if f1 <= f2 else (m1, hi_t)
+        centre_world = a_point + 0.5 * (lo_t + hi_t) * a_dir
+    found = float(np.sqrt(np.max(np.einsum("ij,ij->i", P - centre_world, P - centre_world))))
+    proven_sq, best_sq, boxes, complete = _branch_and_bound(
+        arm, setup, free, centre_world, None, None, found * found, max_boxes
+    )
+    D = float(np.linalg.norm(centre_world - setup.origin)) + lengths_after(arm, after)
+    return FarthestReach(
+        after=after,
+        centre=centre_world,
+        radius=float(min(np.sqrt(proven_sq), D)),  # D: no box evaluated within the budget
+        found=float(np.sqrt(best_sq)),
+        boxes=boxes,
+        complete=complete,
+    )
+
+
+@dataclass(frozen=True)
+class AxisReach:
+    """The proven largest distance ``radius`` from the axis of joint ``after + 1`` (revolute)
+    to the tool point, over every value of the joints after joint ``after`` within their
+    limits that puts the tool point between ``heights`` along that axis (model units). The
+    axis passes through ``axis_point`` along ``axis_dir`` (unit), given in the world with joint
+    ``after`` and those before it at zero; heights are measured from ``axis_point``.
+    ``radius`` is ``-inf`` where no tool point lies between the heights. ``found`` is the
+    largest distance met at a configuration whose tool point lies between them (nan: none
+    met), ``boxes`` how many boxes the search took, ``complete`` as in
+    :class:`FarthestReach`."""
+
+    after: int
+    axis_point: FloatArray
+    axis_dir: FloatArray
+    heights: tuple[float, float]
+    radius: float
+    found: float
+    boxes: int
+    complete: bool
+
+
+def farthest_from_axis(
+    arm: SerialArm,
+    after: int,
+    height_lo: float,
+    height_hi: float,
+    max_boxes: int = MAX_BOXES,
+) -> AxisReach | None:
+    """The proven largest distance from the axis of joint ``after + 1`` to the tool point
+    among the tool points between ``height_lo`` and ``height_hi`` along that axis (see
+    :class:`AxisReach`): a ring, not a ball, for the tool points at a target's height, by the
+    branch and bound of :func:`farthest_tool_point` with the distance taken square to the axis
+    and every box dropped whose tool points provably miss the heights. None where joint
+    ``after + 1`` is not revolute or a later prismatic joint is unlimited. Cached on the arm
+    per heights (rounded to 1e-6)."""
+    cache: dict[tuple[int, float, float, int], AxisReach | None] = arm.__dict__.setdefault(
+        "_farthest_from_axis", {}
+    )
+    key = (int(after), round(float(height_lo), 6), round(float(height_hi), 6), int(max_boxes))
+    if key not in cache:
+        cache[key] = _search_ring(arm, after, key[1], key[2], max_boxes)
+    return cache[key]
+
+
+def _search_ring(
+    arm: SerialArm, after: int, height_lo: float, height_hi: float, max_boxes: int
+) -> AxisReach | None:
+    """:func:`farthest_from_axis`, searched."""
+    setup = _setup(arm, after)
+    if setup is None or setup.axis is None:
+        return None
+    a_point, a_dir = setup.axis
+    proven_sq, best_sq, boxes, complete = _branch_and_bound(
+        arm, setup, setup.free, a_point, a_dir, (height_lo, height_hi), -np.inf, max_boxes
+    )
+    D = float(np.linalg.norm(a_point - setup.origin)) + lengths_after(arm, after)
+    return AxisReach(
+        after=after,
+        axis_point=a_point,
+        axis_dir=a_dir,
+        heights=(height_lo, height_hi),
+        radius=float(min(np.sqrt(proven_sq), D)) if proven_sq >= 0 else -np.inf,
+        found=float(np.sqrt(best_sq)) if best_sq >= 0 else float("nan"),
+        boxes=boxes,
+        complete=complete,
+    )
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What both searches start from: the joints searched (``first`` on, ranges ``lo, hi``),
+    the configuration they vary (``q_fixed``: zero), the world origin of joint ``after``'s
+    moving frame there, the free joints (those that move the tool point; the next revolute
+    one left out) and the next revolute joint's axis (point, unit direction) or None."""
+
+    first: int
+    lo: FloatArray
+    hi: FloatArray
+    q_fixed: FloatArray
+    origin: FloatArray
+    free: NDArray[np.intp]
+    axis: tuple[FloatArray, FloatArray] | None
+
+
+def next_axis(arm: SerialArm, after: int) -> tuple[FloatArray, FloatArray] | None:
+    """The axis of joint ``after + 1`` where it is revolute (a point on it and its unit
+    direction, in the world with joint ``after`` and those before it at zero), the axis
+    :func:`farthest_from_axis` measures from; None where it is not revolute or a searched
+    range is unbounded."""
+    setup = _setup(arm, after)
+    return None if setup is None else setup.axis
+
+
+def _setup(arm: SerialArm, after: int) -> _Setup | None:
+    """The searches' start (:class:`_Setup`); None where a searched range is unbounded."""
     n = arm.n_joints
     first = after + 1
     lo, hi = _search_ranges(arm, first)
@@ -121,40 +267,43 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
     moving = np.zeros(n, dtype=bool)
     moving[first:] = True
     moving &= tool_point_joints(arm)
-    rng = np.random.default_rng(0)
-    sample = np.tile(q_fixed, (_CENTRE_SAMPLES, 1))
-    sample[:, first:] = rng.uniform(lo, hi, (_CENTRE_SAMPLES, n - first))
-    P = _tool_points(arm, sample)[0]
-    centre_world = T_after[:3, 3].copy()
+    axis = None
     if first < n and arm.joints[first].kind is JointKind.REVOLUTE:
-        # on the next revolute axis: that joint then keeps every distance
         axis_frame = frames0[first + 1]  # its frame turns about its own axis
-        a_point, a_dir = axis_frame[:3, 3], axis_frame[:3, :3] @ arm.joints[first].axis
-        a_dir = a_dir / np.linalg.norm(a_dir)
-        d = P - a_point
-        along, sq = d @ a_dir, np.einsum("ij,ij->i", d, d)
-        # largest squared distance from a_point + t a_dir: max(sq - 2 t along + t^2), convex in t
-        lo_t, hi_t = float(along.min()), float(along.max())
-        for _ in range(80):
-            m1, m2 = lo_t + (hi_t - lo_t) / 3, hi_t - (hi_t - lo_t) / 3
-            f1 = np.max(sq - 2 * m1 * along) + m1 * m1
-            f2 = np.max(sq - 2 * m2 * along) + m2 * m2
-            lo_t, hi_t = (lo_t, m2) if f1 <= f2 else (m1, hi_t)
-        centre_world = a_point + 0.5 * (lo_t + hi_t) * a_dir
-        moving[first] = False
-    free = np.flatnonzero(moving)
-    found = float(np.sqrt(np.max(np.einsum("ij,ij->i", P - centre_world, P - centre_world))))
-    # bounds of the derivatives (see the module)
+        a_dir = axis_frame[:3, :3] @ arm.joints[first].axis
+        axis = (axis_frame[:3, 3].copy(), a_dir / np.linalg.norm(a_dir))
+        moving[first] = False  # it keeps every distance from (and height along) its axis
+    return _Setup(first, lo, hi, q_fixed, T_after[:3, 3].copy(), np.flatnonzero(moving), axis)
+
+
+def _branch_and_bound(
+    arm: SerialArm,
+    setup: _Setup,
+    free: NDArray[np.intp],
+    centre: FloatArray,
+    axis_dir: FloatArray | None,
+    heights: tuple[float, float] | None,
+    found_sq: float,
+    max_boxes: int,
+) -> tuple[float, float, int, bool]:
+    """The search of the module over the free joints' boxes: (the proven largest squared
+    distance, the largest met, boxes taken, whether every box was dropped: False where the
+    budget ended the search). The distance is from ``centre``, or with
+    ``axis_dir`` from the axis through ``centre`` along it (the part square to it); with
+    ``heights`` only tool points whose height along the axis from ``centre`` lies between
+    them count: a box is dropped where its heights, bounded as the distance is, miss them,
+    and each box's centre is also stepped onto the middle height (one Newton step) for a
+    tool point that counts. ``found_sq`` is the largest squared distance already met
+    (``-inf``: none)."""
+    lo, hi = setup.lo, setup.hi
+    first = setup.first
     r = displacement_bounds(arm)[free]
-    ahead = np.maximum.outer(np.arange(free.size), np.arange(free.size))
-    r_pair = r[ahead]  # the later joint's bound, per pair
-    D = float(np.linalg.norm(centre_world - T_after[:3, 3])) + lengths_after(arm, after)
+    D = float(np.linalg.norm(centre - setup.origin)) + lengths_after(arm, setup.first - 1)
     box_lo = lo[free - first][None, :].copy()
     box_hi = hi[free - first][None, :].copy()
-    best_sq = found * found
-    slack_sq = (found + DISTANCE_SLACK) ** 2 - found**2  # a box within it is not split
+    best_sq = found_sq
     boxes = 0
-    dropped_sq = best_sq  # the largest bound of a box dropped (the found distance's own)
+    dropped_sq = found_sq  # the largest bound of a box dropped (the found distance's own)
     open_sq = np.inf  # the largest bound of the boxes not yet dropped (none evaluated: inf)
     while box_lo.shape[0]:
         if boxes + box_lo.shape[0] > max_boxes:
@@ -165,20 +314,55 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
         for start in range(0, box_lo.shape[0], _BATCH):
             sl = slice(start, start + _BATCH)
             c, h = 0.5 * (box_lo[sl] + box_hi[sl]), 0.5 * (box_hi[sl] - box_lo[sl])
-            q = np.tile(q_fixed, (c.shape[0], 1))
+            q = np.tile(setup.q_fixed, (c.shape[0], 1))
             q[:, free] = c
             p, J = _tool_points(arm, q)
-            e = p - centre_world
+            e, Jf = p - centre, J[:, :, free]
+            # each column's length: the tool point's distance from that joint's axis
+            R, first_order, second, pair_share = _box_derivative_bounds(
+                np.linalg.norm(Jf, axis=1), r, h
+            )
+            if axis_dir is not None:
+                height = e @ axis_dir
+                height_grad = np.einsum("j,mjk->mk", axis_dir, Jf)
+                e = e - height[:, None] * axis_dir
+                Jf = Jf - axis_dir[None, :, None] * height_grad[:, None, :]
             G = np.einsum("ij,ij->i", e, e)
-            best_sq = max(best_sq, float(G.max()))
-            grad = 2.0 * np.einsum("ij,ijk->ik", e, J[:, :, free])
+            grad = 2.0 * np.einsum("ij,ijk->ik", e, Jf)
             lin = np.abs(grad) * h
-            first_order = h @ r
-            second = np.einsum("mi,ij,mj->m", h, r_pair, h)
-            upper[sl] = G + lin.sum(axis=1) + (first_order**2 + D * second)
+            # the distance anywhere in the box: at most its centre's plus the first order
+            far = np.minimum(D, np.sqrt(G) + first_order)
+            bound = G + lin.sum(axis=1) + (first_order**2 + far * second)
             # what each joint adds: its linear part and its share of the quadratic one
-            grad_part[sl] = lin + h * (r * first_order[:, None] + D * (h @ r_pair))
-        keep = upper > best_sq + slack_sq
+            grad_part[sl] = lin + h * (R * first_order[:, None] + far[:, None] * pair_share)
+            if heights is None or axis_dir is None:
+                best_sq = max(best_sq, float(G.max()))
+            else:
+                h_lo, h_hi = heights
+                spread = (np.abs(height_grad) * h).sum(axis=1) + 0.5 * second
+                possible = (height + spread >= h_lo) & (height - spread <= h_hi)
+                bound[~possible] = -np.inf
+                inside = possible & (height >= h_lo) & (height <= h_hi)
+                if np.any(inside):
+                    best_sq = max(best_sq, float(G[inside].max()))
+                best_sq = max(
+                    best_sq,
+                    _stepped_onto(
+                        arm,
+                        setup,
+                        free,
+                        q,
+                        centre,
+                        axis_dir,
+                        heights,
+                        # only where the box may still hold a farther tool point
+                        possible & (bound > best_sq + _slack_sq(best_sq)),
+                        height,
+                        height_grad,
+                    ),
+                )
+            upper[sl] = bound
+        keep = upper > best_sq + _slack_sq(best_sq)
         if np.any(~keep):
             dropped_sq = max(dropped_sq, float(upper[~keep].max()))
         if not np.any(keep):
@@ -198,14 +382,86 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
         lo_b[rows, k] = mid
         box_lo, box_hi = np.concatenate([lo_a, lo_b]), np.concatenate([hi_a, hi_b])
     # every box is dropped or open (the budget ran out): the largest of their bounds
-    proven_sq = max(dropped_sq, open_sq)
-    return FarthestReach(
-        after=after,
-        centre=centre_world,
-        radius=float(min(np.sqrt(proven_sq), D)),  # D: no box evaluated within the budget
-        found=float(np.sqrt(best_sq)),
-        boxes=boxes,
-    )
+    return max(dropped_sq, open_sq), best_sq, boxes, open_sq == -np.inf
 
 
-__all__ = ["DISTANCE_SLACK", "MAX_BOXES", "FarthestReach", "farthest_tool_point"]
+def _box_derivative_bounds(
+    column: FloatArray, r: FloatArray, h: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Bounds of the tool point's derivatives over boxes of the free joints (in chain order),
+    from each joint's Jacobian column's length at the box's centre ``column (M, F)`` (the
+    tool point's distance from a revolute joint's axis; 1 for a prismatic one), the arm's
+    bounds ``r (F,)`` and the half widths ``h (M, F)``:
+
+    * ``R (M, F)``: the longest first derivative ``|dp/dq_i|`` in the box. The distance from
+      joint ``i``'s axis changes only with the joints after it (those before move the axis
+      and the point together), each moving the point at most its own bound, so it is at
+      most the centre's plus ``sum_{k > i} R_k h_k`` (and at most ``r_i``);
+    * ``first (M,)``: ``sum_i R_i h_i``, how far the tool point moves in the box;
+    * ``second (M,)``: ``sum_ij R_max(i,j) h_i h_j``: a second derivative ``d2p/dq_i dq_j``
+      is the earlier joint's turn of the later one's first derivative, no longer than it;
+    * ``share (M, F)``: ``sum_j R_max(i,j) h_j`` per joint ``i`` (its part of ``second``)."""
+    R = np.empty_like(column)
+    tail = np.zeros(column.shape[0])  # sum over the later joints of R_k h_k
+    for k in range(column.shape[1] - 1, -1, -1):
+        R[:, k] = np.minimum(r[k], column[:, k] + tail)
+        tail = tail + R[:, k] * h[:, k]
+    first = tail
+    before = np.cumsum(h, axis=1) - h  # sum of h_j over the earlier joints
+    second = np.einsum("mk,mk->m", R * h, h + 2.0 * before)
+    later = np.cumsum((R * h)[:, ::-1], axis=1)[:, ::-1] - R * h  # sum of R_j h_j, j later
+    share = R * (before + h) + later
+    return R, first, second, share
+
+
+def _slack_sq(best_sq: float) -> float:
+    """What a box's squared bound may exceed ``best_sq`` by and still be dropped: the
+    search's slack (:data:`DISTANCE_SLACK`) in distance."""
+    best = max(best_sq, 0.0)
+    return float((np.sqrt(best) + DISTANCE_SLACK) ** 2 - best)
+
+
+def _stepped_onto(
+    arm: SerialArm,
+    setup: _Setup,
+    free: NDArray[np.intp],
+    q: FloatArray,
+    centre: FloatArray,
+    axis_dir: FloatArray,
+    heights: tuple[float, float],
+    rows: NDArray[np.bool_],
+    height: FloatArray,
+    height_grad: FloatArray,
+) -> float:
+    """The largest squared distance from the axis of a tool point between ``heights``, met
+    after one Newton step of the ``rows`` of ``q`` onto the middle height (within the
+    joints' ranges); ``-inf`` where none is."""
+    g2 = np.einsum("ij,ij->i", height_grad, height_grad)
+    rows = rows & (g2 > 1e-12)
+    if not np.any(rows):
+        return -np.inf
+    step = (height[rows] - 0.5 * (heights[0] + heights[1])) / g2[rows]
+    q2 = q[rows].copy()
+    q2[:, free] -= step[:, None] * height_grad[rows]
+    lo, hi = setup.lo[free - setup.first], setup.hi[free - setup.first]
+    q2 = q2[np.all((q2[:, free] >= lo) & (q2[:, free] <= hi), axis=1)]
+    if q2.shape[0] == 0:
+        return -np.inf
+    e = _tool_points(arm, q2)[0] - centre
+    height2 = e @ axis_dir
+    ok = (height2 >= heights[0]) & (height2 <= heights[1])
+    if not np.any(ok):
+        return -np.inf
+    e = e[ok] - height2[ok, None] * axis_dir
+    return float(np.einsum("ij,ij->i", e, e).max())
+
+
+__all__ = [
+    "DISTANCE_SLACK",
+    "MAX_BOXES",
+    "AxisReach",
+    "FarthestReach",
+    "farthest_from_axis",
+    "farthest_tool_point",
+    "next_axis",
+]
