@@ -23,7 +23,7 @@ its step. Obstacles, the tool rule and the lattice are left out (a relaxation: s
 A ball is round; an arm's reach is not. Where the next joint turns about an axis square to the
 track (a vertical arm on a horizontal track), the tool points at one height along that axis
 reach less far from it than the ball says away from the ball's centre: a UR5 on the track
-cell's track reaches 1053.5 mm from a point at its shoulder's height, but only 988.8 mm from
+cell's track reaches 1053.5 mm from a point at its shoulder's height, but only 988.7 mm from
 its axis at the table's height, 348 mm below. So the points that decide ``A`` and ``B`` (up to
 :data:`MAX_RINGS` bands of heights, :data:`RING_BAND_MM` high) take the proven largest
 distance from the axis of the tool points at their heights
@@ -62,7 +62,7 @@ _ARC_SLACK_MM = 0.01
 #: some seconds, cached on the arm): those of the points deciding ``A`` and ``B``.
 MAX_RINGS = 2
 #: Height of such a band (mm), about a deciding point's height: the points within it take
-#: its reach (a wider band reaches farther: the track cell 988.8 mm in 0.1 mm, 990.6 in 10).
+#: its reach (a wider band reaches farther: the track cell 988.7 mm in 0.1 mm, 990.3 in 10).
 RING_BAND_MM = 0.5
 
 
@@ -222,7 +222,7 @@ def _reach_text(reach: float, rings: list[AxisReach], what: str) -> str:
         return ball
     radii = sorted({round(ring.radius, 1) for ring in rings})
     at = " and ".join(f"{r:.1f}" for r in radii)
-    return f"{ball}, and {at} mm from that axis at the heights of the {what}s deciding it"
+    return f"{ball}, and {at} mm from that axis at the height of each deciding {what}"
 
 
 def with_carriage(

@@ -19,11 +19,15 @@ centre, plus how far the later joints can move the point in the box, and never m
 :func:`~armpath.kinematics.displacement_bounds`; 1 for a prismatic joint), each second
 derivative ``d2p/dq_i dq_j`` is the earlier joint's rotation applied to the later one's
 twist, at most ``r_max(i,j)`` (the later joint's bound) long, and ``D`` is an upper bound of
-``|p - o|`` in the box (its centre's plus the first order, at most the summed lengths). Boxes
-whose bound is within :data:`DISTANCE_SLACK` of the largest distance found at a centre are
-dropped, the others split across the joint that contributes most; the largest bound of all the
-boxes, dropped or left, is the proven distance. A budget of boxes ends the search: its result
-stays a proof, only less tight.
+``|p - o|`` in the box (its centre's plus the first order, at most the summed lengths). A
+second bound takes Taylor one order further: ``G``'s Hessian at the centre (exact: the point's
+second derivatives are the earlier joint's axis across the later one's column), its largest
+value over the box bounded (concave near a farthest point, where it is at most the
+unconstrained maximum), and the third derivatives bounded as the second were; each box takes
+the lower of the two. Boxes whose bound is within :data:`DISTANCE_SLACK` of the largest
+distance found at a centre are dropped, the others split across the joint that contributes
+most; the largest bound of all the boxes, dropped or left, is the proven distance. A budget
+of boxes ends the search: its result stays a proof, only less tight.
 
 The centre is put on the axis of the first revolute joint after the carriage (that joint then
 leaves every distance as it is and drops out), where the largest sampled distance is least.
@@ -32,7 +36,11 @@ A ball about one centre overstates how far the tool point gets at a height well 
 it. :func:`farthest_from_axis` bounds, by the same search, the distance from that axis itself
 (the part of ``p - o`` square to it) of the tool points between two heights along it: a box
 whose heights (bounded as the distance is) miss them is dropped, and the largest distance met
-is taken at box centres stepped onto the heights.
+is taken at box centres stepped onto the heights. Between the heights ``G`` is at most
+``G - lam (height - middle) + |lam| (half the band)`` whatever ``lam``; each box bounds that
+sum too, with ``lam`` the multiplier at its centre (``G``'s gradient along the height's), so
+a box need not be thin across the heights to be dropped (the track cell's table height:
+51,000 boxes in 0.8 s, not 1.5 million in 5 s).
 """
 
 from __future__ import annotations
@@ -96,9 +104,10 @@ def _search_ranges(arm: SerialArm, first: int) -> tuple[FloatArray, FloatArray]:
 
 
 def _tool_points(arm: SerialArm, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Tool points ``(M, 3)`` and their Jacobians ``(M, 3, n)`` at configurations ``(M, n)``."""
+    """Tool points ``(M, 3)`` and their geometric Jacobians ``(M, 6, n)`` (rows 3-5: each
+    revolute joint's axis, zero for a prismatic one) at configurations ``(M, n)``."""
     frames = forward_frames(arm, q)
-    return frames[:, -1, :3, 3], jacobian_from_frames(arm, frames)[:, :3, :]
+    return frames[:, -1, :3, 3], jacobian_from_frames(arm, frames)
 
 
 def farthest_tool_point(
@@ -316,12 +325,15 @@ def _branch_and_bound(
             c, h = 0.5 * (box_lo[sl] + box_hi[sl]), 0.5 * (box_hi[sl] - box_lo[sl])
             q = np.tile(setup.q_fixed, (c.shape[0], 1))
             q[:, free] = c
-            p, J = _tool_points(arm, q)
-            e, Jf = p - centre, J[:, :, free]
+            p, J6 = _tool_points(arm, q)
+            e, Jf = p - centre, J6[:, :3, free]
             # each column's length: the tool point's distance from that joint's axis
             R, first_order, second, pair_share = _box_derivative_bounds(
                 np.linalg.norm(Jf, axis=1), r, h
             )
+            # second derivatives of the tool point: the earlier joint's axis across the later
+            # one's column (zero where the earlier joint slides)
+            Hp = _point_hessians(J6[:, 3:, free], Jf)
             if axis_dir is not None:
                 height = e @ axis_dir
                 height_grad = np.einsum("j,mjk->mk", axis_dir, Jf)
@@ -332,7 +344,35 @@ def _branch_and_bound(
             lin = np.abs(grad) * h
             # the distance anywhere in the box: at most its centre's plus the first order
             far = np.minimum(D, np.sqrt(G) + first_order)
-            bound = G + lin.sum(axis=1) + (first_order**2 + far * second)
+            # Taylor to first order with the second bounded, and to second order (the
+            # centre's Hessian, concave near a farthest point) with the third bounded
+            hessian = 2.0 * (np.einsum("mki,mkj->mij", Jf, Jf) + np.einsum("mk,mkij->mij", e, Hp))
+            third = _third_order(R, h)
+            bound = G + np.minimum(
+                lin.sum(axis=1) + (first_order**2 + far * second),
+                _quadratic_max(grad, hessian, h) + (second * first_order + far * third / 3.0),
+            )
+            if heights is not None and axis_dir is not None:
+                # on the heights, G is at most G - lam (height - middle) + |lam| (half the
+                # band), whatever lam: with each box's multiplier at its centre the bound
+                # of that sum is flat across the heights (a box need not be thin in them)
+                middle, half_band = 0.5 * (heights[0] + heights[1]), 0.5 * (heights[1] - heights[0])
+                g2 = np.einsum("mi,mi->m", height_grad, height_grad)
+                lam = np.where(
+                    g2 > 1e-12,
+                    np.einsum("mi,mi->m", grad, height_grad) / np.maximum(g2, 1e-12),
+                    0.0,
+                )
+                grad_l = grad - lam[:, None] * height_grad
+                hessian_l = hessian - lam[:, None, None] * np.einsum("k,mkij->mij", axis_dir, Hp)
+                at_centre = G - lam * (height - middle) + np.abs(lam) * half_band
+                relaxed = at_centre + np.minimum(
+                    (np.abs(grad_l) * h).sum(axis=1)
+                    + (first_order**2 + far * second + 0.5 * np.abs(lam) * second),
+                    _quadratic_max(grad_l, hessian_l, h)
+                    + (second * first_order + far * third / 3.0 + np.abs(lam) * third / 6.0),
+                )
+                bound = np.minimum(bound, relaxed)
             # what each joint adds: its linear part and its share of the quadratic one
             grad_part[sl] = lin + h * (R * first_order[:, None] + far[:, None] * pair_share)
             if heights is None or axis_dir is None:
@@ -412,6 +452,46 @@ def _box_derivative_bounds(
     later = np.cumsum((R * h)[:, ::-1], axis=1)[:, ::-1] - R * h  # sum of R_j h_j, j later
     share = R * (before + h) + later
     return R, first, second, share
+
+
+def _point_hessians(axes: FloatArray, columns: FloatArray) -> FloatArray:
+    """Second derivatives ``d2p/dq_i dq_j (M, 3, F, F)`` of the tool point from the joints'
+    axes ``(M, 3, F)`` (zero for a prismatic joint) and Jacobian columns ``(M, 3, F)``, in
+    chain order: the earlier joint's axis across the later one's column (a turn of the earlier
+    joint turns the later column with the rest of the chain)."""
+    crossed = np.cross(axes[:, :, :, None], columns[:, :, None, :], axis=1)  # axis_i x col_j
+    F = axes.shape[2]
+    later = np.arange(F)[None, :] >= np.arange(F)[:, None]  # j >= i
+    return np.where(later, crossed, np.swapaxes(crossed, 2, 3))
+
+
+def _quadratic_max(grad: FloatArray, hessian: FloatArray, h: FloatArray) -> FloatArray:
+    """Upper bounds ``(M,)`` of ``g . d + d' H d / 2`` over each box ``|d_i| <= h_i``: the
+    least of the term by term bound, the gradient's bound with the largest eigenvalue's
+    curvature, and where ``H`` is negative definite its unconstrained largest value."""
+    lin = (np.abs(grad) * h).sum(axis=1)
+    off = np.abs(hessian)
+    diag = np.einsum("mii->mi", hessian)
+    idx = np.arange(h.shape[1])
+    off[:, idx, idx] = np.maximum(diag, 0.0)
+    termwise = lin + 0.5 * np.einsum("mi,mij,mj->m", h, off, h)
+    eig = np.linalg.eigvalsh(hessian)
+    top = eig[:, -1]
+    curved = lin + 0.5 * np.maximum(top, 0.0) * np.einsum("mi,mi->m", h, h)
+    out = np.minimum(termwise, curved)
+    concave = top < -1e-9 * np.maximum(1.0, np.abs(eig[:, 0]))  # and not near singular
+    if np.any(concave):
+        x = np.linalg.solve(-hessian[concave], grad[concave][:, :, None])[:, :, 0]
+        out[concave] = np.minimum(out[concave], 0.5 * np.einsum("mi,mi->m", grad[concave], x))
+    return np.asarray(out, dtype=np.float64)
+
+
+def _third_order(R: FloatArray, h: FloatArray) -> FloatArray:
+    """``sum_ijk R_max(i,j,k) h_i h_j h_k (M,)`` (the latest joint's bound per triple): the
+    triples whose latest joint is ``k`` sum to the cube of the half widths up to ``k`` less
+    the cube of those before it."""
+    upto = np.cumsum(h, axis=1)
+    return np.asarray(np.einsum("mk,mk->m", R, upto**3 - (upto - h) ** 3), dtype=np.float64)
 
 
 def _slack_sq(best_sq: float) -> float:
