@@ -217,7 +217,8 @@ def test_too_few_samples_for_the_pixels_are_named_not_taken_as_blind(plane, tmp_
     """With too few samples for its pixels a map's reachable set has unfilled pixels, and the
     enclosed ones counted as blind: 20,000 samples at 10 mm gave about twice the central blind
     zone, silently. The blind area of the first half of the samples is kept: a map whose
-    blind area changes by more than 5 % (or 4 pixels) over the second half is not settled.
+    blind area changes by more than 5 % (or 4 pixels), or whose reachable area grows by more
+    than 5 %, over the second half is not settled.
     The dense map (1,500,000 samples at 5 mm) is settled; the sparse ones are not (the arm
     plane's blind area more than 1.5 times the dense one's), and blindzones says so."""
     assert plane.settled and plane.half_blind_area is not None
@@ -233,5 +234,20 @@ def test_too_few_samples_for_the_pixels_are_named_not_taken_as_blind(plane, tmp_
     )
     assert r.returncode == 0, r.stderr
     said = " ".join(r.stderr.split())
-    assert "warning: the arm-plane map's blind zone went from" in said
-    assert "too few for 10 mm pixels" in said
+    assert "the arm-plane map's reachable area went from" in said
+    assert "too few samples for 10 mm pixels" in said
+    # one sample: no blind zone, since almost nothing is reachable; its reachable area grew
+    # from nothing over the second half (the blind areas alike, 0 and 0, said nothing)
+    one = arm_plane_map(seed_arm(), 5.0, 1, seed=3)
+    assert one.half_reach_area == 0.0 and one.reach_area > 0.0 and not one.settled
+    r = subprocess.run(
+        [*ARMPATH, "blindzones", "--samples", "1", "--bands", "0"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=600,
+    )
+    assert r.returncode == 0, r.stderr
+    said = " ".join(r.stderr.split())
+    assert "warning: over the second half of its 1 sample the arm-plane map's" in said
+    assert "samples the meridian map's reachable area went from" in said

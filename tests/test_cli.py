@@ -496,7 +496,7 @@ def test_a_trajectory_without_a_model_warns_of_waypoints_beyond_the_seed_arms_li
 def test_a_curve_too_long_to_scan_names_the_scan_step_option(tmp_path):
     """A 120 m curve scanned every 4 mm needs 30,000 points (the limit 25,000): the refusal
     named TraceOptions.scan_step_mm in Python only; trace has --scan-step now, named there,
-    and a scan step of 0 is one error line naming it. (Every 8 mm, the scan's size within the
+    and a scan step of 0 or inf is one error line naming it. (Every 8 mm, the scan's size within the
     limit, the part of the curve near the arm is traced: about 40 s, not run here.)"""
     (tmp_path / "long.csv").write_text("x,y,z\n0,300,200\n60000,300,200\n120000,300,200\n")
     base = ("trace", "--curve", "long.csv", "--scene", "none", "--no-bound")
@@ -504,8 +504,12 @@ def test_a_curve_too_long_to_scan_names_the_scan_step_option(tmp_path):
     assert too_long.returncode != 0
     line = too_long.stderr.strip().splitlines()[-1]
     assert "would need 30,000 (the limit is 25,000)" in line and "--scan-step" in line
-    zero = run(*base, "--scan-step", "0", cwd=tmp_path)
-    assert zero.stderr.strip().splitlines() == ["error: --scan-step must be > 0 mm, got 0"]
+    for bad in ("0", "inf"):
+        refused = run(*base, "--scan-step", bad, cwd=tmp_path)
+        assert refused.returncode != 0
+        assert refused.stderr.strip().splitlines() == [
+            f"error: --scan-step must be a finite length > 0 mm, got {bad}"
+        ]
 
 
 def test_waypoints_that_do_not_move_are_refused_unless_timed(tmp_path):

@@ -1004,7 +1004,9 @@ def trace(
         if closed and curve_file is None:
             raise InvalidInputError("--closed closes the curve of --curve; give --curve")
         if not (math.isfinite(scan_step) and scan_step > 0.0):
-            raise InvalidInputError(f"--scan-step must be > 0 mm, got {scan_step:g}")
+            raise InvalidInputError(
+                f"--scan-step must be a finite length > 0 mm, got {scan_step:g}"
+            )
         curve = None if curve_file is None else _curve_from_points(curve_file, closed)
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
         start_ticks = None if start is None else joint_state(arm, start, "--from")

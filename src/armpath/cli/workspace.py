@@ -238,12 +238,14 @@ class _BlindZones:
         """A warning for each map whose blind zone had not settled (too few samples for the
         pixels: the unfilled reachable pixels count as blind)."""
         return [
-            f"warning: the {what} map's blind zone went from {m.half_blind_area:.0f} to "
-            f"{m.blind_area:.0f} mm^2 over the second half of its {m.samples:,} samples: too "
-            f"few for {pixel:g} mm pixels, and its figures overstate the blind zone (more "
+            f"warning: over the second half of its {m.samples:,} "
+            f"sample{'' if m.samples == 1 else 's'} the {what} map's "
+            f"reachable area went from {m.half_reach_area:.0f} to {m.reach_area:.0f} mm^2 and "
+            f"its blind zone from {m.half_blind_area:.0f} to {m.blind_area:.0f} mm^2: too few "
+            f"samples for {pixel:g} mm pixels, and its figures are not settled (more "
             "--samples or a larger --pixel)"
             for what, m in (("arm-plane", self.plane), ("meridian", self.meridian))
-            if not m.settled and m.half_blind_area is not None
+            if not m.settled and m.half_blind_area is not None and m.half_reach_area is not None
         ]
 
     def summary(self) -> list[str]:
@@ -552,10 +554,11 @@ def design_sweep(
             if unsettled:
                 seed_too = " (the seed arm's among them)" if not reference.settled else ""
                 err_console.print(
-                    f"warning: the blind zones of {unsettled} of the {len(results) + 1} "
+                    f"warning: the maps of {unsettled} of the {len(results) + 1} "
                     f"designs{seed_too} changed much over the second half of their "
-                    f"{samples:,} samples: too few for {pixel:g} mm pixels, and their blind "
-                    "volumes are overstated (more --samples or a larger --pixel)",
+                    f"{samples:,} samples (reachable or blind area): too few for {pixel:g} mm "
+                    "pixels, and their blind volumes are not settled (more --samples or a "
+                    "larger --pixel)",
                     markup=False,
                 )
             if folder is not None:

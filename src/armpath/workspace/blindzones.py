@@ -71,6 +71,9 @@ class PlaneMap:
     #: map's differs much from it, the samples are too few for the pixels (the reachable set
     #: still fills, and its unfilled pixels count as blind); None where not measured
     half_blind_area: float | None = None
+    #: the reachable area (mm^2) of the map from the first half of its samples (None where
+    #: not measured): where it grew much over the second half, the samples are too few
+    half_reach_area: float | None = None
 
     #: Largest change of the blind area between half the samples and all of them (a share of
     #: the larger, or 4 pixels where that is more) at which the map is taken as settled.
@@ -102,11 +105,17 @@ class PlaneMap:
     @property
     def settled(self) -> bool:
         """Whether the blind area hardly changed over the second half of the samples (see
-        :attr:`half_blind_area`); True where that was not measured."""
-        if self.half_blind_area is None:
-            return True
-        full, half = self.blind_area, self.half_blind_area
-        return abs(full - half) <= max(self.SETTLED_SHARE * max(full, half), 4 * self.pixel**2)
+        :attr:`half_blind_area`) and the reachable area hardly grew (by at most
+        :attr:`SETTLED_SHARE` of it: a map of a handful of samples has almost no reachable
+        pixels, and so no blind ones either); True where that was not measured."""
+        if self.half_blind_area is not None:
+            full, half = self.blind_area, self.half_blind_area
+            if abs(full - half) > max(self.SETTLED_SHARE * max(full, half), 4 * self.pixel**2):
+                return False
+        if self.half_reach_area is not None:
+            grown = self.reach_area - self.half_reach_area
+            return grown <= self.SETTLED_SHARE * self.reach_area
+        return True
 
     @property
     def reach_area(self) -> float:
@@ -201,12 +210,12 @@ def _sample_map(
     ranges = joint_ranges(arm)
     what = "the meridian map" if meridian else "the arm-plane map"
     axes = ("rho", "z") if meridian else ("y", "z")
-    half, half_blind = samples // 2, None
+    half, half_map = samples // 2, None
     done = 0
     while done < samples:  # done grows by n >= 1 each time
         check_time(f"sampling {what} ({done:,} of {samples:,} samples)")
-        if done == half and half > 0:
-            half_blind = PlaneMap(origin, float(pixel), reach.copy(), axes, half).blind_area
+        if done == half:
+            half_map = PlaneMap(origin, float(pixel), reach.copy(), axes, half)
         n = min(chunk, samples - done, half - done if done < half else samples)
         q = np.zeros((n, 6))
         for j in joints:
@@ -219,7 +228,16 @@ def _sample_map(
         else:
             _mark(p[:, 1:], origin, pixel, reach)
         done += n
-    return PlaneMap(origin, float(pixel), reach, axes, samples, half_blind)
+    assert half_map is not None  # done passes half (0 included) on its way to samples
+    return PlaneMap(
+        origin,
+        float(pixel),
+        reach,
+        axes,
+        samples,
+        half_map.blind_area,
+        half_map.reach_area,
+    )
 
 
 def arm_plane_map(

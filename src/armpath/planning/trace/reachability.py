@@ -136,7 +136,7 @@ def curve_reachability(
     """Reachable and unreachable arcs of ``curve`` (ends located to ``resolution_mm``) for
     ``arm`` in ``world``; ``rule`` narrows the tool's directions (:class:`AxisRule`)."""
     if not (np.isfinite(scan_step_mm) and scan_step_mm > 0):
-        raise InvalidInputError(f"scan step must be > 0 mm, got {scan_step_mm}")
+        raise InvalidInputError(f"scan step must be a finite length > 0 mm, got {scan_step_mm}")
     if not (np.isfinite(resolution_mm) and resolution_mm >= 1e-6):
         raise InvalidInputError(f"resolution must be >= 1e-6 mm, got {resolution_mm}")
     fam = curve_family(arm, world, curve, rule)
