@@ -538,3 +538,30 @@ def test_a_table_separated_by_semicolons_says_so(tmp_path):
         "error: --curve semi.csv: line 1 has values separated by ';'; separate them by commas "
         "or spaces"
     )
+
+
+@pytest.mark.slow
+def test_a_weld_listed_twice_is_one_warning_line(tmp_path):
+    """A warning raised while a task runs is said as the command line says warnings, one
+    ``warning:`` line (not Python's file and line), and the tour still visits every weld."""
+    (tmp_path / "dup.toml").write_text(
+        'name = "dup"\n[arm]\nmodel = "ur5"\n[tasks.spotweld]\n'
+        "points_mm = [[400, 100, 300], [300, -200, 400], [400, 100, 300]]\n"
+    )
+    r = run(
+        "spotweld",
+        "--scene",
+        "dup.toml",
+        "--no-bound",
+        "--order",
+        "given",
+        "--no-pools",
+        "--json",
+        cwd=tmp_path,
+    )
+    assert r.returncode == 0, r.stderr
+    warned = [line for line in r.stderr.splitlines() if "listed twice" in line]
+    assert len(warned) == 1 and warned[0].startswith("warning: targets 1 and 3 (0.000 mm apart)")
+    assert "ArmpathWarning" not in r.stderr
+    doc = json.loads(r.stdout)
+    assert len(doc["visits"]) == 3

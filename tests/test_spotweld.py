@@ -312,3 +312,34 @@ def test_a_tour_for_the_shortest_tool_path_keeps_the_planned_tour_of_least_path(
     fewest = min(range(len(tours)), key=lambda i: sum(g.sequence.n_commands for g in tours[i][0]))
     assert kept <= paths[fewest] + 0.05
     assert r.metrics.tip_path_mm == pytest.approx(kept, abs=0.05)
+
+
+def test_a_weld_listed_twice_is_pointed_out():
+    """Two welds within the tolerance of each other (a point listed twice) were accepted
+    without a word; the second was reached with no command of its own. Now a warning names
+    them, with how far apart they are, whatever their order (brute force over the pairs);
+    targets farther apart, or with different tool rules, are not named."""
+    import warnings
+
+    from armpath.errors import ArmpathWarning
+    from armpath.ik.target import AxisCone
+    from armpath.planning.tour import _warn_of_twins
+
+    pts = np.array([[400, 100, 300], [300, -200, 400], [400, 100, 300.03], [0, 0, 500.0]])
+    with pytest.warns(ArmpathWarning) as said:
+        _warn_of_twins(pts, None, 0.05)
+    (message,) = [str(w.message) for w in said]
+    near = [
+        (i + 1, j + 1)
+        for i, j in itertools.combinations(range(len(pts)), 2)
+        if np.linalg.norm(pts[i] - pts[j]) <= 0.05
+    ]
+    assert near == [(1, 3)]
+    assert message.startswith("targets 1 and 3 (0.030 mm apart) lie within the 0.05 mm")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _warn_of_twins(pts, None, 0.02)  # 0.03 mm apart: farther than the tolerance
+        down, up = AxisCone(np.array([0, 0, -1.0]), 0.1), AxisCone(np.array([0, 0, 1.0]), 0.1)
+        _warn_of_twins(pts, [down, down, up, down], 0.05)  # the same point, other rules
+    with pytest.warns(ArmpathWarning, match="targets 1 and 3"):
+        _warn_of_twins(pts, [down, up, AxisCone(np.array([0, 0, -1.0]), 0.1), up], 0.05)

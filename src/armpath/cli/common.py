@@ -169,7 +169,10 @@ def _cli_errors(time_limit_s: float | None = None) -> Iterator[None]:
     ``time_limit_s`` (see :mod:`armpath.budget`)."""
     try:
         check_time_limit_value(time_limit_s, "--time-limit")
-        with time_limit(time_limit_s):
+        with time_limit(time_limit_s), warnings.catch_warnings():
+            # armpath's warnings as the CLI says them: one "warning:" line each
+            warnings.simplefilter("always", ArmpathWarning)
+            warnings.showwarning = _said_as_cli(warnings.showwarning)
             yield
     except UnknownOptionError as exc:  # a usage error, as the parser's own
         _error_line(str(exc), status=2)
@@ -183,6 +186,21 @@ def _cli_errors(time_limit_s: float | None = None) -> Iterator[None]:
             "out of memory: the problem is too large for this machine; make it smaller "
             "(fewer samples, coarser grids, shorter motions)"
         )
+
+
+def _said_as_cli(
+    show: Callable[..., None],
+) -> Callable[..., None]:
+    """``warnings.showwarning`` printing an :class:`ArmpathWarning` as one ``warning:`` line on
+    stderr and passing any other warning to ``show``."""
+
+    def said(message: Warning | str, category: type[Warning], *args: Any, **kw: Any) -> None:
+        if issubclass(category, ArmpathWarning):
+            err_console.print(f"warning: {message}", markup=False, soft_wrap=True)
+        else:
+            show(message, category, *args, **kw)
+
+    return said
 
 
 def _error_line(message: str, status: int = 1) -> NoReturn:

@@ -23,15 +23,16 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_time, count_text
 from armpath.commands import CommandSequence
-from armpath.errors import ArmpathError, InvalidInputError, PlanningError
+from armpath.errors import ArmpathError, ArmpathWarning, InvalidInputError, PlanningError
 from armpath.geometry.curves import Polyline
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.target import Orientation
@@ -194,6 +195,42 @@ def _least_in(
     return min(tours, key=lambda t: cost(t[0]))
 
 
+def _warn_of_twins(
+    pts: FloatArray, orientations: Sequence[Orientation | None] | None, tolerance_mm: float
+) -> None:
+    """An :class:`~armpath.errors.ArmpathWarning` naming the targets within the tolerance of
+    each other with the same tool rule (a point listed twice): one pose reaches both, the
+    second with no command of its own."""
+    from scipy.spatial import cKDTree
+
+    pairs = sorted(cKDTree(pts).query_pairs(tolerance_mm))
+    if orientations is not None:
+        pairs = [(i, j) for i, j in pairs if _same_rule(orientations[i], orientations[j])]
+    if not pairs:
+        return
+    said = ", ".join(
+        f"{i + 1} and {j + 1} ({float(np.linalg.norm(pts[i] - pts[j])):.3f} mm apart)"
+        for i, j in pairs[:5]
+    )
+    more = f" and {len(pairs) - 5} more pairs" if len(pairs) > 5 else ""
+    warnings.warn(
+        f"targets {said}{more} lie within the {tolerance_mm:g} mm tolerance of each other: "
+        "one pose reaches both, the second with no command of its own (a point listed twice?)",
+        ArmpathWarning,
+        stacklevel=3,
+    )
+
+
+def _same_rule(a: Orientation | None, b: Orientation | None) -> bool:
+    """Whether two targets' tool rules are the same (both none, or equal field by field)."""
+    if a is None or b is None:
+        return a is b
+    return type(a) is type(b) and all(
+        np.array_equal(np.asarray(getattr(a, f.name)), np.asarray(getattr(b, f.name)))
+        for f in fields(a)
+    )
+
+
 def plan_tour(
     arm: SerialArm,
     world: CollisionWorld,
@@ -269,6 +306,7 @@ def plan_tour(
     check_max_samples(bound_samples)
     if not 1 <= orders_to_plan <= 100:
         raise InvalidInputError(f"orders to plan must be in [1, 100], got {orders_to_plan}")
+    _warn_of_twins(pts, orientations, tolerance_mm)
     start = np.asarray(start_ticks, dtype=np.int64)
     check_state_clear(arm, world, arm.lattice.to_joint(start))  # before the goal states
     say = on_progress or (lambda _msg: None)
