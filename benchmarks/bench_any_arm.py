@@ -10,7 +10,10 @@ warm-up that compiles the kernels:
   an 80 mm-radius circle (503 mm) above the table, each planned alone (``bound=False``: what
   the 30 s goal is about) and with its lower bound;
 * **the seed tasks** (reach, trace, spot welds) with their command counts, which must stay
-  63 / 139 / 121 or fewer (this machine; the tours differ between machines, see the README).
+  63 / 139 / 121 or fewer (this machine; the tours differ between machines, see the README),
+  and their bounds;
+* **a UR5 on a track** (``examples/track_cell.toml``): its trace and its tour, the proven
+  bound (the carriage's travel), the plan's gap to it and the family's estimate.
 
 Goals (issue 18, on 2 cores): a UR5 reach <= 2 s, a 500 mm trace <= 30 s. Writes
 ``benchmarks/results/any_arm.md`` and prints it.
@@ -43,6 +46,7 @@ from armpath.tasks import reach_task, spotweld_task, trace_task
 
 ROOT = Path(__file__).resolve().parents[1]
 CELL = ROOT / "examples" / "ur5_cell.toml"
+TRACK = ROOT / "examples" / "track_cell.toml"
 OUT = ROOT / "benchmarks" / "results" / "any_arm.md"
 
 #: UR5 reach targets (mm, in the base frame) across its workspace: front, side, high, low, far.
@@ -156,10 +160,39 @@ def seed_tasks() -> list[list[str]]:
     res, s = _timed(reach_task, scene, arm)
     rows.append(["1 reach", str(res.n_commands), str(res.lower_bound.commands), f"{s:.1f}"])
     res, s = _timed(trace_task, scene, arm)
-    rows.append(["2 trace", str(res.n_commands), "-", f"{s:.1f}"])
+    rows.append(["2 trace", str(res.n_commands), _bound(res.lower_bound), f"{s:.1f}"])
     res, s = _timed(spotweld_task, scene, arm)
-    bound = res.order_lower_bounds.get(res.order, "-")
-    rows.append(["3 spot welds", str(res.n_commands), f"{bound} (this order)", f"{s:.1f}"])
+    rows.append(["3 spot welds", str(res.n_commands), _bound(res.lower_bound), f"{s:.1f}"])
+    return rows
+
+
+def _bound(bound) -> str:
+    """A result's lower bound for a table: its commands, "(estimate)" where not proven."""
+    if bound is None:
+        return "-"
+    return str(bound.commands) + ("" if bound.proven else " (estimate)")
+
+
+def track_tasks() -> list[list[str]]:
+    """``examples/track_cell.toml`` (a UR5 on a 2 m track): its trace and its tour, each with
+    its proven bound (the carriage's travel) and the family's estimate named in it."""
+    scene = load_scene(TRACK)
+    arm = scene_arm(scene)
+    rows = []
+    for label, task in (("trace (1.7 m seam)", trace_task), ("spot welds (3)", spotweld_task)):
+        res, s = _timed(task, scene, arm)
+        bound = res.lower_bound
+        estimate = (bound.sampling or {}).get("family_estimate_commands") if bound else None
+        rows.append(
+            [
+                label,
+                str(res.n_commands),
+                _bound(bound),
+                "-" if bound is None else f"{100 * (res.n_commands / bound.commands - 1):.1f}",
+                "-" if estimate is None else f"{math.ceil(estimate - 1e-9)}",
+                f"{s:.1f}",
+            ]
+        )
     return rows
 
 
@@ -175,6 +208,7 @@ def main() -> int:
     cli = ur5_reach_cli(args.repeats)
     trace_rows, slowest_trace = ur5_traces()
     seed_rows = seed_tasks()
+    track_rows = track_tasks()
     v = report.versions(("numpy", "numba"))
     lines = [
         "# Any arm: UR5 reach and trace, seed tasks",
@@ -205,6 +239,23 @@ def main() -> int:
         "## Seed tasks (commands must stay 63 / 139 / 121 or fewer)",
         "",
         table(["task", "commands", "bound", "wall [s]"], seed_rows),
+        "",
+        "## A UR5 on a 2 m track, examples/track_cell.toml",
+        "",
+        table(
+            [
+                "task",
+                "commands",
+                "proven bound",
+                "plan above it [%]",
+                "family's estimate (not proven)",
+                "wall [s]",
+            ],
+            track_rows,
+        ),
+        "",
+        "The proven bound is the carriage's travel to where the arm reaches every point "
+        "(`armpath.planning.bounds.carriage`).",
         "",
     ]
     return report.write(args.out, lines)
