@@ -225,29 +225,25 @@ def test_too_few_samples_for_the_pixels_are_named_not_taken_as_blind(plane, tmp_
     sparse = arm_plane_map(seed_arm(), 10.0, 20_000, seed=3)
     assert not sparse.settled and sparse.blind_area > 1.5 * plane.blind_area
     assert not meridian_map(seed_arm(), 20.0, 4_000, seed=3).settled
-    r = subprocess.run(
-        [*ARMPATH, "blindzones", "--samples", "20000", "--pixel", "10", "--bands", "0"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        timeout=600,
-    )
-    assert r.returncode == 0, r.stderr
-    said = " ".join(r.stderr.split())
+
+    def warned(*options: str) -> str:
+        r = subprocess.run(
+            [*ARMPATH, "blindzones", *options, "--bands", "0"],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+            timeout=600,
+        )
+        assert r.returncode == 0, r.stderr
+        return " ".join(r.stderr.split())
+
+    said = warned("--samples", "20000", "--pixel", "10")
     assert "the arm-plane map's reachable area went from" in said
     assert "too few samples for 10 mm pixels" in said
     # one sample: no blind zone, since almost nothing is reachable; its reachable area grew
     # from nothing over the second half (the blind areas alike, 0 and 0, said nothing)
     one = arm_plane_map(seed_arm(), 5.0, 1, seed=3)
     assert one.half_reach_area == 0.0 and one.reach_area > 0.0 and not one.settled
-    r = subprocess.run(
-        [*ARMPATH, "blindzones", "--samples", "1", "--bands", "0"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        timeout=600,
-    )
-    assert r.returncode == 0, r.stderr
-    said = " ".join(r.stderr.split())
+    said = warned("--samples", "1")
     assert "warning: over the second half of its 1 sample the arm-plane map's" in said
     assert "samples the meridian map's reachable area went from" in said
