@@ -433,3 +433,41 @@ def test_a_tours_carriage_bound_is_the_shortest_walk_through_where_each_weld_is_
             assert bound is not None and bound.proven
             walk = _walk_travel(allowed, grid, c0, back)
             assert bound.value * 2.0 == pytest.approx(walk, abs=1.0), (c0, back)
+
+
+def test_a_point_at_a_height_no_tool_point_takes_has_no_carriage_bound():
+    """Two links turning about parallel axes square to a track keep the tool point in one
+    plane: a point 5 mm off it lies within the ball of the arm's reach but at a height no tool
+    point takes, so no carriage value brings the arm to it (no bound; the ball alone gave one).
+    In the plane, 300 mm from the axis, the bound is the travel to where the two links (700
+    mm) reach it, as the law of cosines gives: sqrt(700^2 - 300^2) either side of it."""
+    from armpath.planning.bounds.carriage import points_travel_bound
+    from armpath.planning.bounds.farthest import farthest_from_axis, next_axis
+
+    arm = robot_from_dict(
+        {
+            "name": "two_links_across_a_track",
+            "convention": "standard",
+            "units": {"length": "mm", "angle": "deg"},
+            "links": [
+                {"type": "prismatic", "a": 0, "alpha": -90, "d": 0, "limits": [0, 2000]},
+                {"a": 400, "alpha": 0, "d": 0, "limits": [-170, 170]},
+                {"a": 300, "alpha": 0, "d": 0, "limits": [-150, 150]},
+            ],
+        }
+    )
+    axis = next_axis(arm, 0)
+    assert axis is not None
+    a_point, a_dir = axis
+    track = np.array([0.0, 0.0, 1.0])  # the prismatic joint's D-H z, the base's world z
+    assert abs(a_dir @ track) < 1e-12
+    side = np.cross(a_dir, track)
+    start = np.array([100.0, 0.0, 0.0])
+    off = a_point + 5.0 * a_dir + 300.0 * side + 1500.0 * track
+    assert farthest_from_axis(arm, 0, 4.95, 5.05).radius == -np.inf
+    assert points_travel_bound(arm, off[None], start, 0.05) is None
+    on = a_point + 300.0 * side + 1500.0 * track
+    bound = points_travel_bound(arm, on[None], start, 0.05)
+    assert bound is not None
+    least = 1500.0 - np.sqrt(700.05**2 - 300.0**2)  # the least carriage value reaching it
+    assert bound.value * 2.0 == pytest.approx(least - 100.0, abs=0.6)  # the search's slack

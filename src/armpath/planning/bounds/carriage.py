@@ -59,7 +59,7 @@ POINT_SPACING_MM = 0.5
 #: curve's arc-length table is interpolated): far above that error, far below a command.
 _ARC_SLACK_MM = 0.01
 #: Bands of heights searched for the arm's reach from its axis (each a branch and bound of
-#: some seconds, cached on the arm): those of the points deciding ``A`` and ``B``.
+#: about a second, cached on the arm): those of the points deciding ``A`` and ``B``.
 MAX_RINGS = 2
 #: Height of such a band (mm), about a deciding point's height: the points within it take
 #: its reach (a wider band reaches farther: the track cell 988.7 mm in 0.1 mm, 990.3 in 10).
@@ -205,9 +205,11 @@ def _reach_at_heights(
         ring = farthest_from_axis(arm, 0, lo - tolerance_mm, hi + tolerance_mm)
         if ring is None:
             break
+        if ring.radius == -np.inf:  # no tool point at these heights
+            return None
         band = ~narrowed & (height >= lo) & (height <= hi)
         radius = ring.radius + tolerance_mm
-        if np.any(across2[band] > radius**2):  # -inf: no tool point at these heights
+        if np.any(across2[band] > radius**2):
             return None
         half[band] = np.minimum(half[band], np.sqrt(radius**2 - across2[band]))
         narrowed |= band
