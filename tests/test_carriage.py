@@ -471,3 +471,42 @@ def test_a_point_at_a_height_no_tool_point_takes_has_no_carriage_bound():
     assert bound is not None
     least = 1500.0 - np.sqrt(700.05**2 - 300.0**2)  # the least carriage value reaching it
     assert bound.value * 2.0 == pytest.approx(least - 100.0, abs=0.6)  # the search's slack
+
+
+def test_a_long_arm_on_a_track_is_bounded_by_the_first_order_search_alone():
+    """Twenty joints on a track (more than ``HESSIAN_JOINTS`` free: their second derivatives
+    are not formed, which would take the square of their count in memory per box): the
+    search stops at its budget of boxes with a proven distance still beyond every one of
+    3,000 random configurations' (forward kinematics of the independent D-H product)."""
+    from armpath.planning.bounds.farthest import HESSIAN_JOINTS, farthest_tool_point
+
+    rows = [{"type": "prismatic", "a": 0, "alpha": -90, "d": 0, "limits": [0, 1000]}] + [
+        {"a": 50, "alpha": 90 if k % 2 else -90, "d": 20, "limits": [-170, 170]} for k in range(20)
+    ]
+    arm = robot_from_dict(
+        {
+            "name": "long",
+            "convention": "standard",
+            "units": {"length": "mm", "angle": "deg"},
+            "links": rows,
+        }
+    )
+    assert arm.n_joints - 2 > HESSIAN_JOINTS
+    farthest = farthest_tool_point(arm, 0, max_boxes=5_000)
+    assert farthest is not None and not farthest.complete
+    rng = np.random.default_rng(8)
+    q = np.c_[np.zeros(3_000), rng.uniform(-np.radians(170), np.radians(170), (3_000, 20))]
+    pris = np.array([r.get("type") == "prismatic" for r in rows])
+    tips = np.array(
+        [
+            idh.dh_pose(
+                [r["a"] for r in rows],
+                np.radians([r["alpha"] for r in rows]),
+                [r["d"] for r in rows],
+                x,
+                prismatic=pris,
+            )[:3, 3]
+            for x in q
+        ]
+    )
+    assert np.linalg.norm(tips - farthest.centre, axis=1).max() <= farthest.radius

@@ -24,10 +24,11 @@ second bound takes Taylor one order further: ``G``'s Hessian at the centre (exac
 second derivatives are the earlier joint's axis across the later one's column), its largest
 value over the box bounded (concave near a farthest point, where it is at most the
 unconstrained maximum), and the third derivatives bounded as the second were; each box takes
-the lower of the two. Boxes whose bound is within :data:`DISTANCE_SLACK` of the largest
-distance found at a centre are dropped, the others split across the joint that contributes
-most; the largest bound of all the boxes, dropped or left, is the proven distance. A budget
-of boxes ends the search: its result stays a proof, only less tight.
+the lower of the two (for up to :data:`HESSIAN_JOINTS` free joints). Boxes whose bound is
+within :data:`DISTANCE_SLACK` of the largest distance found at a centre are dropped, the
+others split across the joint that contributes most; the largest bound of all the boxes,
+dropped or left, is the proven distance. A budget of boxes ends the search: its result
+stays a proof, only less tight.
 
 The centre is put on the axis of the first revolute joint after the carriage (that joint then
 leaves every distance as it is and drops out), where the largest sampled distance is least.
@@ -66,8 +67,14 @@ FloatArray = NDArray[np.float64]
 DISTANCE_SLACK = 0.5
 #: Most boxes evaluated in all (each one forward pass and Jacobian of the arm).
 MAX_BOXES = 2_000_000
-#: Boxes evaluated in one batch.
+#: Boxes evaluated in one batch at most, and the numbers (8 bytes each) a batch may hold in
+#: its largest arrays (every frame, the Jacobian, the point's second derivatives): fewer boxes
+#: for a longer arm, about 160 MB a batch whatever its joints.
 _BATCH = 100_000
+_BATCH_FLOATS = 20_000_000
+#: Free joints up to which each box is also bounded by Taylor to second order (its Hessian
+#: grows with their square; beyond, the first-order bound alone).
+HESSIAN_JOINTS = 8
 #: Joint configurations sampled to place the centre along the axis.
 _CENTRE_SAMPLES = 4000
 
@@ -310,6 +317,10 @@ def _branch_and_bound(
     D = float(np.linalg.norm(centre - setup.origin)) + lengths_after(arm, setup.first - 1)
     box_lo = lo[free - first][None, :].copy()
     box_hi = hi[free - first][None, :].copy()
+    second_order = free.size <= HESSIAN_JOINTS
+    n = arm.n_joints
+    per_box = 16 * (n + 2) + 6 * n + (3 * free.size**2 if second_order else 0)
+    batch = int(max(1000, min(_BATCH, _BATCH_FLOATS // per_box)))
     best_sq = found_sq
     boxes = 0
     dropped_sq = found_sq  # the largest bound of a box dropped (the found distance's own)
@@ -320,8 +331,8 @@ def _branch_and_bound(
         boxes += box_lo.shape[0]
         upper = np.empty(box_lo.shape[0])
         grad_part = np.empty_like(box_lo)
-        for start in range(0, box_lo.shape[0], _BATCH):
-            sl = slice(start, start + _BATCH)
+        for start in range(0, box_lo.shape[0], batch):
+            sl = slice(start, start + batch)
             c, h = 0.5 * (box_lo[sl] + box_hi[sl]), 0.5 * (box_hi[sl] - box_lo[sl])
             q = np.tile(setup.q_fixed, (c.shape[0], 1))
             q[:, free] = c
@@ -333,7 +344,7 @@ def _branch_and_bound(
             )
             # second derivatives of the tool point: the earlier joint's axis across the later
             # one's column (zero where the earlier joint slides)
-            Hp = _point_hessians(J6[:, 3:, free], Jf)
+            Hp = _point_hessians(J6[:, 3:, free], Jf) if second_order else None
             if axis_dir is not None:
                 height = e @ axis_dir
                 height_grad = np.einsum("j,mjk->mk", axis_dir, Jf)
@@ -346,12 +357,18 @@ def _branch_and_bound(
             far = np.minimum(D, np.sqrt(G) + first_order)
             # Taylor to first order with the second bounded, and to second order (the
             # centre's Hessian, concave near a farthest point) with the third bounded
-            hessian = 2.0 * (np.einsum("mki,mkj->mij", Jf, Jf) + np.einsum("mk,mkij->mij", e, Hp))
-            third = _third_order(R, h)
-            bound = G + np.minimum(
-                lin.sum(axis=1) + (first_order**2 + far * second),
-                _quadratic_max(grad, hessian, h) + (second * first_order + far * third / 3.0),
-            )
+            bound = G + lin.sum(axis=1) + (first_order**2 + far * second)
+            if Hp is not None:
+                hessian = 2.0 * (
+                    np.einsum("mki,mkj->mij", Jf, Jf) + np.einsum("mk,mkij->mij", e, Hp)
+                )
+                third = _third_order(R, h)
+                bound = np.minimum(
+                    bound,
+                    G
+                    + _quadratic_max(grad, hessian, h)
+                    + (second * first_order + far * third / 3.0),
+                )
             if heights is not None and axis_dir is not None:
                 # on the heights, G is at most G - lam (height - middle) + |lam| (half the
                 # band), whatever lam: with each box's multiplier at its centre the bound
@@ -364,14 +381,21 @@ def _branch_and_bound(
                     0.0,
                 )
                 grad_l = grad - lam[:, None] * height_grad
-                hessian_l = hessian - lam[:, None, None] * np.einsum("k,mkij->mij", axis_dir, Hp)
                 at_centre = G - lam * (height - middle) + np.abs(lam) * half_band
-                relaxed = at_centre + np.minimum(
+                relaxed = at_centre + (
                     (np.abs(grad_l) * h).sum(axis=1)
-                    + (first_order**2 + far * second + 0.5 * np.abs(lam) * second),
-                    _quadratic_max(grad_l, hessian_l, h)
-                    + (second * first_order + far * third / 3.0 + np.abs(lam) * third / 6.0),
+                    + (first_order**2 + far * second + 0.5 * np.abs(lam) * second)
                 )
+                if Hp is not None:
+                    hessian_l = hessian - lam[:, None, None] * np.einsum(
+                        "k,mkij->mij", axis_dir, Hp
+                    )
+                    relaxed = np.minimum(
+                        relaxed,
+                        at_centre
+                        + _quadratic_max(grad_l, hessian_l, h)
+                        + (second * first_order + far * third / 3.0 + np.abs(lam) * third / 6.0),
+                    )
                 bound = np.minimum(bound, relaxed)
             # what each joint adds: its linear part and its share of the quadratic one
             grad_part[sl] = lin + h * (R * first_order[:, None] + far[:, None] * pair_share)
