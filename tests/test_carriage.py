@@ -264,7 +264,11 @@ def test_the_carriage_bound_is_the_travel_to_where_the_arm_reaches_every_point()
     distance from the arm's first axis, so the carriage must travel to where every point of
     the seam is that near. Checked by scanning the carriage's values on a grid (where each
     point is within both distances), not by the bound's closed form."""
-    from armpath.planning.bounds.carriage import RING_BAND_MM, carriage_travel_bound
+    from armpath.planning.bounds.carriage import (
+        RING_BAND_MM,
+        RING_MAX_BOXES,
+        carriage_travel_bound,
+    )
     from armpath.planning.bounds.farthest import farthest_from_axis, farthest_tool_point
 
     arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")
@@ -273,7 +277,11 @@ def test_the_carriage_bound_is_the_travel_to_where_the_arm_reaches_every_point()
     reach = farthest.radius
     height = 50.0 - (300.0 + 89.159)  # the seam's, from the shoulder on the first axis
     ring = farthest_from_axis(
-        arm, 0, height - 0.5 * RING_BAND_MM - 0.1, height + 0.5 * RING_BAND_MM + 0.1
+        arm,
+        0,
+        height - 0.5 * RING_BAND_MM - 0.1,
+        height + 0.5 * RING_BAND_MM + 0.1,
+        max_boxes=RING_MAX_BOXES,
     )
     assert ring is not None and ring.radius < reach
     # a seam along the track from x = -200 to 2600 mm, 500 mm beside it, at z = 50
@@ -405,7 +413,11 @@ def test_a_tours_carriage_bound_is_the_shortest_walk_through_where_each_weld_is_
     carriage, from where it starts (and back, when the tour returns), through a value where
     each weld is within the proven reach (of a point on the carriage, and of its first axis at
     the weld's height), found by trying every order on a 0.5 mm grid."""
-    from armpath.planning.bounds.carriage import RING_BAND_MM, points_travel_bound
+    from armpath.planning.bounds.carriage import (
+        RING_BAND_MM,
+        RING_MAX_BOXES,
+        points_travel_bound,
+    )
     from armpath.planning.bounds.farthest import farthest_from_axis, farthest_tool_point
 
     arm = armpath.load_arm(scene=EXAMPLES / "track_cell.toml")
@@ -419,7 +431,7 @@ def test_a_tours_carriage_bound_is_the_shortest_walk_through_where_each_weld_is_
     for w in welds:
         height = w[2] - (300.0 + 89.159)  # from the shoulder on the first axis (world z)
         half = 0.5 * RING_BAND_MM + 0.05
-        ring = farthest_from_axis(arm, 0, height - half, height + half)
+        ring = farthest_from_axis(arm, 0, height - half, height + half, RING_MAX_BOXES)
         assert ring is not None and ring.radius < farthest.radius
         from_axis = np.hypot(w[0] - grid, w[1])
         allowed.append(

@@ -64,6 +64,9 @@ MAX_RINGS = 2
 #: Height of such a band (mm), about a deciding point's height: the points within it take
 #: its reach (a wider band reaches farther: the track cell 988.7 mm in 0.1 mm, 990.3 in 10).
 RING_BAND_MM = 0.5
+#: Boxes each such search may take (the track cell's takes about 51,000; an arm of many joints
+#: stops here, its reach still proven, only less tight, and no later than the ball's search).
+RING_MAX_BOXES = 500_000
 
 
 def carriage_travel_bound(
@@ -202,7 +205,9 @@ def _reach_at_heights(
             break
         lo = height[left[0]] - 0.5 * RING_BAND_MM
         hi = height[left[0]] + 0.5 * RING_BAND_MM
-        ring = farthest_from_axis(arm, 0, lo - tolerance_mm, hi + tolerance_mm)
+        ring = farthest_from_axis(
+            arm, 0, lo - tolerance_mm, hi + tolerance_mm, max_boxes=RING_MAX_BOXES
+        )
         if ring is None:
             break
         if ring.radius == -np.inf:  # no tool point at these heights
