@@ -46,6 +46,7 @@ a box need not be thin across the heights to be dropped (the track cell's table 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -209,11 +210,13 @@ def farthest_from_axis(
     branch and bound of :func:`farthest_tool_point` with the distance taken square to the axis
     and every box dropped whose tool points provably miss the heights. None where joint
     ``after + 1`` is not revolute or a later prismatic joint is unlimited. Cached on the arm
-    per heights (rounded to 1e-6)."""
+    per heights (widened outward to whole millionths)."""
     cache: dict[tuple[int, float, float, int], AxisReach | None] = arm.__dict__.setdefault(
         "_farthest_from_axis", {}
     )
-    key = (int(after), round(float(height_lo), 6), round(float(height_hi), 6), int(max_boxes))
+    lo = math.floor(float(height_lo) * 1e6) / 1e6
+    hi = math.ceil(float(height_hi) * 1e6) / 1e6
+    key = (int(after), lo, hi, int(max_boxes))
     if key not in cache:
         cache[key] = _search_ring(arm, after, key[1], key[2], max_boxes)
     return cache[key]
