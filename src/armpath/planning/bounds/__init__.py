@@ -51,7 +51,8 @@ An arm with more joints than a tool frame needs has one member of its self-motio
 tool direction, and its bound is then an estimate, not a proof. An arm on a linear track gets a
 proven one of another kind (:mod:`~armpath.planning.bounds.carriage`): the travel its carriage
 needs to bring every point within the arm's reach of it, a largest distance proven by branch
-and bound over the arm's joints (:mod:`~armpath.planning.bounds.farthest`).
+and bound over the arm's joints (:mod:`~armpath.planning.bounds.farthest`): from a point of
+the carriage, and from the arm's first axis at the heights of the points that decide it.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer
