@@ -799,6 +799,7 @@ def test_a_ring_past_the_wrists_fold_is_traced_once_round_and_closed(tmp_path):
     assert np.ptp(swept) >= 2 * np.pi - 1e-6
 
 
+@pytest.mark.slow
 def test_arms_the_complete_solver_does_not_suit_and_arms_of_few_joints_reach(tmp_path):
     """Three D-H arms found 'no configuration within the limits reaching it (the nearest point
     found is 0.0000 mm away)': one joint (a target read off its forward kinematics, rounded,

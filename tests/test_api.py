@@ -673,6 +673,7 @@ def _in_metres(doc: dict) -> dict:
     return doc
 
 
+@pytest.mark.slow
 def test_an_arm_in_metres_is_taken_in_millimetres(tmp_path):
     """A model document in metres plans as the same arm in mm: a target, tolerance and scene
     given in mm were applied as metres (the UR5's (300, 200, 400) mm 'out of reach ... 537.5 m
@@ -785,6 +786,7 @@ def test_a_scene_is_given_as_a_dict_of_a_scene_files_contents(tmp_path):
     np.testing.assert_array_equal(a.states_deg[-1], b.states_deg[-1])
 
 
+@pytest.mark.slow
 def test_a_target_only_self_collision_forbids_says_so_not_obstacles():
     """In an empty cell a target at the seed arm's base (one given in metres, say) was refused
     because "no configuration ... keeps the links 1 mm clear of the obstacles": there are none.

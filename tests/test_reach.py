@@ -135,6 +135,7 @@ def test_other_targets_reach_the_independent_optimum(target, start):
     assert result.clearance.certified_ok
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("target", [(0.0, -575.0, 140.01), (0.0, 575.0, 140.02)])
 def test_a_target_just_beyond_the_stretched_arm_is_reached_within_the_tolerance(target):
     """The seed arm stretched along y puts its fingertip at (0, +-575, 140) mm; a target 0.01

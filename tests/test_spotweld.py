@@ -238,6 +238,7 @@ def test_more_than_24_orders_are_compared_from_the_bounds_order_and_the_best_ran
     assert _guided_orders(orders, ranking, None) == ranking[:24]
 
 
+@pytest.mark.slow
 def test_a_tour_too_long_to_bound_says_why_it_has_no_bound(tmp_path, monkeypatch):
     """A tour of more welds than the bound over every goal configuration takes (24; 2 here,
     to keep the test short) was shown 'lower bound: not computed', --bound being on, with no
@@ -270,6 +271,7 @@ def test_a_tour_too_long_to_bound_says_why_it_has_no_bound(tmp_path, monkeypatch
     assert doc["lower_bound_commands"] <= doc["n_commands"] and doc["no_bound_because"] is None
 
 
+@pytest.mark.slow
 def test_a_tour_for_the_shortest_tool_path_keeps_the_planned_tour_of_least_path(monkeypatch):
     """``objective="path"`` (or ``"energy"``) chose the tour of fewest commands, as commands
     do: the seed's Task 3 with --objective path moved the fingertip 2285 mm against the
