@@ -403,22 +403,19 @@ def task_setup(
 ) -> tuple[SerialArm, Scene]:
     """The arm and the scene of a task command, decided once: the scene file (or the seed
     scene for the seed arm, or no obstacles for another arm standing alone), its ``[arm]`` or
-    ``--model`` (which replaces the scene's model), and ``--link-radius`` (mm, every link)."""
+    ``--model`` (which replaces the scene's model), and ``--link-radius`` (mm, every link).
+    Run within :func:`_cli_errors` (which says armpath's warnings)."""
     from armpath.api import arm_and_scene, default_scene, load_scene
 
     scene = load_scene(scene_file) if scene_file is not None else default_scene(model)
     if wall:
         scene = scene.with_wall_thickness(wall)
-    with warnings.catch_warnings(record=True) as said:  # said as the CLI says warnings
-        warnings.simplefilter("always", ArmpathWarning)
-        arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
-    if link_radius_mm is not None:
-        arm = arm.with_link_radii(_checked_link_radius(link_radius_mm))  # arms are in mm
-    for w in said:
-        if issubclass(w.category, ArmpathWarning):
-            err_console.print(f"warning: {w.message}", markup=False, soft_wrap=True)
-        else:  # any other warning goes on as it came
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    radius = None if link_radius_mm is None else _checked_link_radius(link_radius_mm)
+    # arm_and_scene's warnings (a base inside an obstacle, ...) are said by _cli_errors as they
+    # come, after every check here that can refuse the input (a refusal stays one line)
+    arm, scene = arm_and_scene(model, scene, tip_link=tip_link)
+    if radius is not None:
+        arm = arm.with_link_radii(radius)  # arms are in mm
     return arm, scene
 
 
