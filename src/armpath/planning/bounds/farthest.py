@@ -58,6 +58,7 @@ from armpath.kinematics import (
     jacobian_from_frames,
     lengths_after,
     tool_point_joints,
+    tool_position,
 )
 from armpath.model.serial_arm import JointKind, SerialArm
 
@@ -146,7 +147,6 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
     )
     P = _tool_points(arm, sample)[0]
     centre_world = setup.origin.copy()
-    free = setup.free
     if setup.axis is not None:
         # on the next revolute axis: that joint then keeps every distance
         a_point, a_dir = setup.axis
@@ -162,13 +162,12 @@ def _search(arm: SerialArm, after: int, max_boxes: int) -> FarthestReach | None:
         centre_world = a_point + 0.5 * (lo_t + hi_t) * a_dir
     found = float(np.sqrt(np.max(np.einsum("ij,ij->i", P - centre_world, P - centre_world))))
     proven_sq, best_sq, boxes, complete = _branch_and_bound(
-        arm, setup, free, centre_world, None, None, found * found, max_boxes
+        arm, setup, centre_world, None, None, found * found, max_boxes
     )
-    D = float(np.linalg.norm(centre_world - setup.origin)) + lengths_after(arm, after)
     return FarthestReach(
         after=after,
         centre=centre_world,
-        radius=float(min(np.sqrt(proven_sq), D)),  # D: no box evaluated within the budget
+        radius=float(np.sqrt(proven_sq)),
         found=float(np.sqrt(best_sq)),
         boxes=boxes,
         complete=complete,
@@ -231,15 +230,14 @@ def _search_ring(
         return None
     a_point, a_dir = setup.axis
     proven_sq, best_sq, boxes, complete = _branch_and_bound(
-        arm, setup, setup.free, a_point, a_dir, (height_lo, height_hi), -np.inf, max_boxes
+        arm, setup, a_point, a_dir, (height_lo, height_hi), -np.inf, max_boxes
     )
-    D = float(np.linalg.norm(a_point - setup.origin)) + lengths_after(arm, after)
     return AxisReach(
         after=after,
         axis_point=a_point,
         axis_dir=a_dir,
         heights=(height_lo, height_hi),
-        radius=float(min(np.sqrt(proven_sq), D)) if proven_sq >= 0 else -np.inf,
+        radius=float(np.sqrt(proven_sq)) if proven_sq >= 0 else -np.inf,
         found=float(np.sqrt(best_sq)) if best_sq >= 0 else float("nan"),
         boxes=boxes,
         complete=complete,
@@ -298,7 +296,6 @@ def _setup(arm: SerialArm, after: int) -> _Setup | None:
 def _branch_and_bound(
     arm: SerialArm,
     setup: _Setup,
-    free: NDArray[np.intp],
     centre: FloatArray,
     axis_dir: FloatArray | None,
     heights: tuple[float, float] | None,
@@ -306,8 +303,9 @@ def _branch_and_bound(
     max_boxes: int,
 ) -> tuple[float, float, int, bool]:
     """The search of the module over the free joints' boxes: (the proven largest squared
-    distance, the largest met, boxes taken, whether every box was dropped: False where the
-    budget ended the search). The distance is from ``centre``, or with
+    distance, at most that of ``D``, the summed lengths from the centre, which holds where the
+    budget allowed no box; the largest met; boxes taken; whether every box was dropped: False
+    where the budget ended the search). The distance is from ``centre``, or with
     ``axis_dir`` from the axis through ``centre`` along it (the part square to it); with
     ``heights`` only tool points whose height along the axis from ``centre`` lies between
     them count: a box is dropped where its heights, bounded as the distance is, miss them,
@@ -315,7 +313,7 @@ def _branch_and_bound(
     tool point that counts. ``found_sq`` is the largest squared distance already met
     (``-inf``: none)."""
     lo, hi = setup.lo, setup.hi
-    first = setup.first
+    first, free = setup.first, setup.free
     r = displacement_bounds(arm)[free]
     D = float(np.linalg.norm(centre - setup.origin)) + lengths_after(arm, setup.first - 1)
     box_lo = lo[free - first][None, :].copy()
@@ -417,7 +415,6 @@ def _branch_and_bound(
                     _stepped_onto(
                         arm,
                         setup,
-                        free,
                         q,
                         centre,
                         axis_dir,
@@ -426,6 +423,7 @@ def _branch_and_bound(
                         possible & (bound > best_sq + _slack_sq(best_sq)),
                         height,
                         height_grad,
+                        g2,
                     ),
                 )
             upper[sl] = bound
@@ -449,7 +447,7 @@ def _branch_and_bound(
         lo_b[rows, k] = mid
         box_lo, box_hi = np.concatenate([lo_a, lo_b]), np.concatenate([hi_a, hi_b])
     # every box is dropped or open (the budget ran out): the largest of their bounds
-    return max(dropped_sq, open_sq), best_sq, boxes, open_sq == -np.inf
+    return min(max(dropped_sq, open_sq), D * D), best_sq, boxes, open_sq == -np.inf
 
 
 def _box_derivative_bounds(
@@ -531,7 +529,6 @@ def _slack_sq(best_sq: float) -> float:
 def _stepped_onto(
     arm: SerialArm,
     setup: _Setup,
-    free: NDArray[np.intp],
     q: FloatArray,
     centre: FloatArray,
     axis_dir: FloatArray,
@@ -539,11 +536,13 @@ def _stepped_onto(
     rows: NDArray[np.bool_],
     height: FloatArray,
     height_grad: FloatArray,
+    g2: FloatArray,
 ) -> float:
     """The largest squared distance from the axis of a tool point between ``heights``, met
-    after one Newton step of the ``rows`` of ``q`` onto the middle height (within the
+    after one Newton step of the ``rows`` of ``q`` onto the middle height (``height_grad``
+    the heights' gradients in the free joints, ``g2`` their squared lengths; within the
     joints' ranges); ``-inf`` where none is."""
-    g2 = np.einsum("ij,ij->i", height_grad, height_grad)
+    free = setup.free
     rows = rows & (g2 > 1e-12)
     if not np.any(rows):
         return -np.inf
@@ -554,7 +553,7 @@ def _stepped_onto(
     q2 = q2[np.all((q2[:, free] >= lo) & (q2[:, free] <= hi), axis=1)]
     if q2.shape[0] == 0:
         return -np.inf
-    e = _tool_points(arm, q2)[0] - centre
+    e = tool_position(arm, q2) - centre
     height2 = e @ axis_dir
     ok = (height2 >= heights[0]) & (height2 <= heights[1])
     if not np.any(ok):
