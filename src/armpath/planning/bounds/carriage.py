@@ -126,7 +126,7 @@ def points_travel_bound(
     if np.any(across2 > radius**2):  # a point no carriage value brings within reach
         return None
     half = np.sqrt(radius**2 - across2)
-    narrowed = _reach_at_heights(arm, points_mm, axis, d @ axis, half, tolerance_mm)
+    narrowed = _reach_at_heights(arm, points_mm, axis, along, half, tolerance_mm)
     if narrowed is None:  # no tool point at some point's height
         return None
     half, rings = narrowed
