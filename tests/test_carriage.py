@@ -87,12 +87,16 @@ def _track_ur5_with_torch():
     return robot_from_dict(TRACK_UR5).with_tool(tool)
 
 
-def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point():
+@pytest.mark.parametrize("start_mm", [None, 500.0, 1500.0])
+def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point(start_mm):
     """The schedule along a 1.7 m line beside the track: the carriage found (the track, not a
     seven-joint arm of revolute joints), its value rising evenly (no layer's change above twice
     the average), and at nine points along the line a configuration with the carriage there puts
     the tool on the point pointing down within 30 deg (an independent least-squares solve on
-    the D-H product, from 12 starts)."""
+    the D-H product, from 12 starts). From a known start the schedule is directed: the arm
+    reaches farther toward the end the carriage travels to (from 500 mm, the end at 1800 mm:
+    the carriage ends farther back than undirected; from 1500 mm, the end at 100 mm: farther
+    on)."""
     from scipy.optimize import least_squares
 
     arm = _track_ur5_with_torch()
@@ -102,9 +106,15 @@ def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point():
     iiwa = armpath.load_arm("iiwa14")
     assert carriage_joint(iiwa, np.ones(7, dtype=bool)) is None
     line = Polyline("seam", np.array([[100.0, -550.0, 41.0], [1800.0, -550.0, 41.0]]))
-    schedule = carriage_schedule(arm, line, 0)
+    schedule = carriage_schedule(arm, line, 0, start_mm)
     v = schedule.value
     assert np.all(np.diff(v) >= 0.0)
+    if start_mm is not None:
+        undirected = carriage_schedule(arm, line, 0).value
+        if start_mm < 950.0:
+            assert v[-1] < undirected[-1] - 20.0
+        else:
+            assert v[0] > undirected[0] + 20.0
     step = np.abs(np.diff(v))
     assert step.max() <= 2.0 * step.mean() + 1e-9
     rng = np.random.default_rng(1)
@@ -349,12 +359,13 @@ def test_a_seam_longer_than_the_arm_reaches_is_traced_in_one_pass_on_its_track()
 
     # the carriage moved with the tool along the pass
     assert np.ptp(q[i : j + 1, 0]) > 200.0
-    assert result.n_commands <= 300
     # its bound is proven (the carriage's travel; the family's estimate of a redundant arm is
-    # named but not taken) and below the plan
+    # named but not taken) and below the plan: within 5 % of it (245 against 240; 268 before
+    # the schedule let the arm reach farther ahead of the carriage than behind it)
     bound = doc["lower_bound"]
     assert bound["proven"] and "carriage" in bound["method"]
     assert 0 < doc["lower_bound_commands"] <= result.n_commands
+    assert result.n_commands <= 1.05 * doc["lower_bound_commands"]
 
 
 @pytest.mark.slow
@@ -376,8 +387,6 @@ def test_a_tour_along_the_track_is_bounded_by_its_carriage():
     bound = doc["lower_bound"]
     assert bound["proven"] and "carriage" in bound["method"]
     assert 0 < doc["lower_bound_commands"] <= result.n_commands
-    # the arm's reach from its axis at the table's height: within 5 % (198 against 190)
-    assert result.n_commands <= 1.05 * doc["lower_bound_commands"]
     # the arm's reach from its axis at the table's height: within 5 % (198 against 190)
     assert result.n_commands <= 1.05 * doc["lower_bound_commands"]
 

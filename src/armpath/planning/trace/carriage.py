@@ -19,7 +19,12 @@ curve by dynamic programming over layers of the curve and a grid of track values
 * a step between layers costs what commands cost, the larger of the track's change in its
   commands and the tool's move relative to the carriage in commands of the arm (its first
   joint's step swept at :data:`ARM_REACH_FRACTION` of the cloud's reach), plus a little for
-  the square of the track's (:data:`_EVEN_WEIGHT`: an even pace where the costs tie).
+  the square of the track's (:data:`_EVEN_WEIGHT`: an even pace where the costs tie);
+* where the carriage's start is known and the curve is open, the pass is taken to begin at
+  the end nearer it, and the arm may reach farther ahead of the carriage, toward the end it
+  travels to, than behind it (:data:`AHEAD_QUANTILE`): the carriage, which moves on at its
+  full pace through the approach and the pass, stops where the arm reaches the far end from
+  as far back as it comfortably can.
 
 A slow track so moves as little as its reach allows (the arm sweeps the rest); a fast one
 shares the move. The family (:class:`~armpath.planning.trace.family.GenericCurveFamily`)
@@ -47,6 +52,18 @@ _CLOUD_SAMPLES = 50000
 #: The part of the tool positions near a point across the track's axis that counts as
 #: comfortable along it (quantiles of their coordinate along the axis).
 COMFORT_QUANTILES = (0.05, 0.95)
+#: Where the carriage's start is known and the curve is open, the pass is taken to begin at the
+#: end nearer it and the carriage to travel toward the other: the arm may then reach this far
+#: ahead of the carriage (the quantile on the side it travels toward; behind, the lower of
+#: COMFORT_QUANTILES), so that the carriage's travel ends where the arm reaches the curve's far
+#: end from as far back as it comfortably can. The track cell's 1.7 m seam from the carriage at
+#: 500 mm: 292 commands with (0.05, 0.95), 275 with (0.02, 0.98), 245 with (0.05, 0.99), 248
+#: with (0.05, 0.995); its proven bound 240.
+AHEAD_QUANTILE = 0.99
+#: Samples of that cloud for such a directed schedule: the quantiles far out need them (50,000
+#: put 122 tool positions near the seam's line, and their 0.05 and 0.95 quantiles at -621 and
+#: +547 mm where the arm's reach is symmetric; 500,000 put 1353 there, at -589 and +586).
+_DIRECTED_CLOUD_SAMPLES = 500_000
 #: Fewest samples near a point across the axis for its comfortable range to be judged.
 _FEWEST_NEAR = 12
 #: How far across the axis (a fraction of the cloud's reach) samples count as near a point.
@@ -97,12 +114,18 @@ class CarriageSchedule:
         return float(self.value[k])
 
 
-def carriage_schedule(arm: SerialArm, curve: Curve, joint: int) -> CarriageSchedule:
-    """The carriage ``joint``'s schedule along ``curve`` (see the module's docstring)."""
+def carriage_schedule(
+    arm: SerialArm, curve: Curve, joint: int, start_value: float | None = None
+) -> CarriageSchedule:
+    """The carriage ``joint``'s schedule along ``curve`` (see the module's docstring);
+    ``start_value``: where the carriage starts (model units), which directs the schedule of an
+    open curve (:data:`AHEAD_QUANTILE`)."""
     rng = np.random.default_rng(0)
     lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
     hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
-    q = rng.uniform(lo, hi, (_CLOUD_SAMPLES, arm.n_joints))
+    directed = start_value is not None and not curve.closed
+    samples = _DIRECTED_CLOUD_SAMPLES if directed else _CLOUD_SAMPLES
+    q = rng.uniform(lo, hi, (samples, arm.n_joints))
     q[:, joint] = 0.0
     cloud = tool_position(arm, q)
     axis = position_jacobian(arm, q[:1])[0][:, joint]
@@ -120,11 +143,25 @@ def carriage_schedule(arm: SerialArm, curve: Curve, joint: int) -> CarriageSched
     p_across = points - p_along[:, None] * axis
     comfort = np.full((n_layers, 2), np.nan)
     near = _NEAR_FRACTION * reach
+    quantiles = COMFORT_QUANTILES
+    if directed:
+        assert start_value is not None
+        # the tool's place along the axis with the carriage at its start, the arm in the middle
+        # of its reach; the pass begins at the curve's end nearer it
+        start_along = start_value * per_unit + float(np.median(along))
+        ends = p_along[[0, -1]]
+        near_end = int(np.argmin(np.abs(ends - start_along)))
+        ahead = ends[1 - near_end] - ends[near_end]
+        behind = COMFORT_QUANTILES[0]
+        if ahead >= 0.0:
+            quantiles = (behind, AHEAD_QUANTILE)
+        else:
+            quantiles = (1.0 - AHEAD_QUANTILE, 1.0 - behind)
     for k in range(n_layers):
         d = np.sum((across - p_across[k]) ** 2, axis=1)
         close = d <= near * near
         if np.count_nonzero(close) >= _FEWEST_NEAR:
-            u_lo, u_hi = np.quantile(along[close], COMFORT_QUANTILES)
+            u_lo, u_hi = np.quantile(along[close], quantiles)
             comfort[k] = ((p_along[k] - u_hi) / per_unit, (p_along[k] - u_lo) / per_unit)
 
     grid = arm.lattice

@@ -630,6 +630,9 @@ class GenericCurveFamily(CurveFamily):
     alone when fewer than five joints move the tool point)."""
 
     rolls: int = 6
+    #: the configuration the arm starts from (rad; model units for a prismatic joint), if
+    #: known: it directs a carriage's schedule (:func:`.carriage.carriage_schedule`)
+    start_q: FloatArray | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -646,7 +649,8 @@ class GenericCurveFamily(CurveFamily):
         """Where the arm's carriage stands along the curve (None: the arm has none)."""
         if self._carriage is None:
             return None
-        return carriage_schedule(self.arm, self.curve, self._carriage)
+        start = None if self.start_q is None else float(self.start_q[self._carriage])
+        return carriage_schedule(self.arm, self.curve, self._carriage, start)
 
     @cached_property
     def coarse_dirs(self) -> FloatArray:
@@ -816,11 +820,15 @@ def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = No
 
 
 def curve_family(
-    arm: SerialArm, world: CollisionWorld, curve: Curve, rule: AxisRule | None = None
+    arm: SerialArm,
+    world: CollisionWorld,
+    curve: Curve,
+    rule: AxisRule | None = None,
+    start_q: FloatArray | None = None,
 ) -> CurveFamily:
     """The family of ``curve`` for ``arm``: the seed closed form for the seed arm (at the
     origin, its fingertip as the tool, its lattice, no axis rule), the generic search for every
-    other arm."""
+    other arm (``start_q``: where the arm starts, rad, if known)."""
     if rule is None and arm.lattice.is_default:
         try:
             seed_geometry_of(arm)
@@ -828,7 +836,7 @@ def curve_family(
             pass  # not the plain seed arm
         else:
             return SeedCurveFamily(arm, world, curve)
-    return GenericCurveFamily(arm, world, curve, rule)
+    return GenericCurveFamily(arm, world, curve, rule, start_q=start_q)
 
 
 __all__ = [

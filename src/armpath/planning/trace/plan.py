@@ -224,7 +224,13 @@ def plan_trace(
     start = np.asarray(start_ticks, dtype=np.int64)
     check_state_clear(arm, world, arm.lattice.to_joint(start))  # before any scan
     reach = curve_reachability(
-        arm, world, curve, scan_step_mm=opts.scan_step_mm, on_progress=say, rule=opts.axis_rule
+        arm,
+        world,
+        curve,
+        scan_step_mm=opts.scan_step_mm,
+        on_progress=say,
+        rule=opts.axis_rule,
+        start_q=arm.lattice.to_joint(start),
     )
     if not reach.reachable:
         raise PlanningError(

@@ -132,14 +132,16 @@ def curve_reachability(
     resolution_mm: float = 0.05,
     on_progress: Callable[[str], None] | None = None,
     rule: AxisRule | None = None,
+    start_q: FloatArray | None = None,
 ) -> CurveReachability:
     """Reachable and unreachable arcs of ``curve`` (ends located to ``resolution_mm``) for
-    ``arm`` in ``world``; ``rule`` narrows the tool's directions (:class:`AxisRule`)."""
+    ``arm`` in ``world``; ``rule`` narrows the tool's directions (:class:`AxisRule`);
+    ``start_q``: where the arm starts (rad), if known (see :func:`curve_family`)."""
     if not (np.isfinite(scan_step_mm) and scan_step_mm > 0):
         raise InvalidInputError(f"scan step must be a finite length > 0 mm, got {scan_step_mm}")
     if not (np.isfinite(resolution_mm) and resolution_mm >= 1e-6):
         raise InvalidInputError(f"resolution must be >= 1e-6 mm, got {resolution_mm}")
-    fam = curve_family(arm, world, curve, rule)
+    fam = curve_family(arm, world, curve, rule, start_q)
     say = on_progress or (lambda _m: None)
     L = curve.length
     check_size(
