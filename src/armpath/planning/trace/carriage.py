@@ -157,10 +157,12 @@ def carriage_schedule(
             quantiles = (behind, AHEAD_QUANTILE)
         else:
             quantiles = (1.0 - AHEAD_QUANTILE, 1.0 - behind)
-    for k in range(n_layers):
-        d = np.sum((across - p_across[k]) ** 2, axis=1)
-        close = d <= near * near
-        if np.count_nonzero(close) >= _FEWEST_NEAR:
+    from scipy.spatial import cKDTree
+
+    # the samples near each layer's point across the axis (a tree: 500,000 samples by 341
+    # layers took 5 s compared one by one)
+    for k, close in enumerate(cKDTree(across).query_ball_point(p_across, near)):
+        if len(close) >= _FEWEST_NEAR:
             u_lo, u_hi = np.quantile(along[close], quantiles)
             comfort[k] = ((p_along[k] - u_hi) / per_unit, (p_along[k] - u_lo) / per_unit)
 
