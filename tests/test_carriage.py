@@ -540,3 +540,26 @@ def test_a_long_arm_on_a_track_is_bounded_by_the_first_order_search_alone():
         ]
     )
     assert np.linalg.norm(tips - farthest.centre, axis=1).max() <= farthest.radius
+
+
+def test_a_redundant_arms_family_estimate_is_named_only_where_it_is_below_the_plan():
+    """Beside a carriage's proven bound the family's estimate (one member of the self-motion
+    per tool frame, not proven) is named where it is at most the plan's commands; above them
+    (the track cell's seam: 256 against a plan of 245) it estimates nothing and is only kept
+    among the sampling figures. A proven family bound above the carriage's is reported itself."""
+    from armpath.planning.bounds import CommandBound
+    from armpath.planning.bounds.carriage import with_carriage
+
+    carriage = CommandBound(240, 239.1, "the carriage's travel", sampling={"boxes": 1.0})
+    estimate = CommandBound(256, 255.45, "the family", proven=False)
+    below = with_carriage(estimate, carriage, 260.0)
+    above = with_carriage(estimate, carriage, 245.0)
+    assert below is not None and above is not None
+    assert below.commands == above.commands == 240 and below.proven and above.proven
+    assert below.method.endswith("the family's estimate, not proven: ~256")
+    assert above.method == "the carriage's travel"
+    for b in (below, above):
+        assert b.sampling == {"boxes": 1.0, "family_estimate_commands": 255.45}
+    proven = CommandBound(250, 249.5, "the family")
+    assert with_carriage(proven, carriage, 245.0) is proven
+    assert with_carriage(None, carriage) is carriage and with_carriage(estimate, None) is estimate

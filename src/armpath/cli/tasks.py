@@ -615,9 +615,11 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
         return missing
     sampling = bound.get("sampling") or {}
     estimate = ""
-    if sampling.get("family_estimate_commands") is not None:  # a carriage's, beside it
-        value = math.ceil(sampling["family_estimate_commands"] - 1e-9)
-        estimate = f"; the family's estimate (not proven) ~{value}"
+    family = sampling.get("family_estimate_commands")
+    plan = bound["commands"] + (bound["gap_commands"] or 0)
+    if family is not None and family <= plan:  # a carriage's, beside it (above the plan, it
+        # estimates nothing: its one member per tool frame missed what the plan does)
+        estimate = f"; the family's estimate (not proven) ~{math.ceil(family - 1e-9)}"
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     if not bound.get("proven", True):
         return (

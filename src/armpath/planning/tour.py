@@ -643,7 +643,7 @@ def plan_tour(
         carriage = points_travel_bound(
             arm, pts, arm.lattice.to_joint(start), tolerance_mm, "weld", return_to_start
         )
-        reported = with_carriage(family_bound, carriage)
+        reported = with_carriage(family_bound, carriage, float(sequence.n_commands))
         if reported is not None:
             no_bound_because = None
     return TourResult(

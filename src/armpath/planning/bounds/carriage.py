@@ -233,20 +233,25 @@ def _reach_text(reach: float, rings: list[AxisReach], what: str) -> str:
 
 
 def with_carriage(
-    family: CommandBound | None, carriage: CommandBound | None
+    family: CommandBound | None,
+    carriage: CommandBound | None,
+    plan_commands: float = np.inf,
 ) -> CommandBound | None:
     """The bound to report: the family's, or its carriage's travel (an arm on a track) where
     that is higher or the family's is an estimate (a redundant arm's, not proven; its value is
-    then named in the carriage bound's method)."""
+    then kept in the carriage bound's sampling, and named in its method where it is at most the
+    plan's ``plan_commands``: above them, its one sampled member per tool frame missed what the
+    plan does, and it estimates nothing)."""
     if carriage is None:
         return family
     if family is None:
         return carriage
     if family.proven:
         return family if family.value >= carriage.value else carriage
+    named = f"; the family's estimate, not proven: ~{family.commands}"
     return replace(
         carriage,
-        method=f"{carriage.method}; the family's estimate, not proven: ~{family.commands}",
+        method=carriage.method + (named if family.value <= plan_commands else ""),
         sampling={**carriage.sampling, "family_estimate_commands": family.value},
     )
 

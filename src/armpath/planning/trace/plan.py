@@ -389,7 +389,7 @@ def trace_plan_bound(
         sequence.grid.to_joint(sequence.start_ticks),
         result.tolerance_mm,
     )
-    return with_carriage(found, carriage)
+    return with_carriage(found, carriage, float(sequence.n_commands))
 
 
 def _pass_arc_lengths(fam: CurveFamily, q: FloatArray, p: TracePass) -> FloatArray:
