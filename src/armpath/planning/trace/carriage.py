@@ -52,9 +52,10 @@ _CLOUD_SAMPLES = 50000
 #: The part of the tool positions near a point across the track's axis that counts as
 #: comfortable along it (quantiles of their coordinate along the axis).
 COMFORT_QUANTILES = (0.05, 0.95)
-#: Where the carriage's start is known and the curve is open, the pass is taken to begin at the
-#: end nearer it and the carriage to travel toward the other: the arm may then reach this far
-#: ahead of the carriage (the quantile on the side it travels toward; behind, the lower of
+#: Where the carriage's start is known and the curve is open (its ends farther apart along the
+#: track than _NEAR_FRACTION of the arm's reach), the pass is taken to begin at the end nearer
+#: it and the carriage to travel toward the other: the arm may then reach this far ahead of
+#: the carriage (the quantile on the side it travels toward; behind, the lower of
 #: COMFORT_QUANTILES), so that the carriage's travel ends where the arm reaches the curve's far
 #: end from as far back as it comfortably can. The track cell's 1.7 m seam from the carriage at
 #: 500 mm (500,000 samples each): 292 commands with (0.05, 0.95), 275 with (0.02, 0.98), 245
@@ -153,9 +154,9 @@ def carriage_schedule(
         near_end = int(np.argmin(np.abs(ends - start_along)))
         ahead = ends[1 - near_end] - ends[near_end]
         behind = COMFORT_QUANTILES[0]
-        if ahead >= 0.0:
+        if ahead > near:  # (a curve that spans less along the axis travels nowhere)
             quantiles = (behind, AHEAD_QUANTILE)
-        else:
+        elif ahead < -near:
             quantiles = (1.0 - AHEAD_QUANTILE, 1.0 - behind)
     from scipy.spatial import cKDTree
 
