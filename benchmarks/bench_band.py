@@ -107,7 +107,7 @@ def longest_command(arm, circle: Circle, tol: float, states: np.ndarray, seed: i
     """The longest arc (mm) one command was found to cover (see the module), and its search's
     starts: every :data:`EVERY`-th plan command along the curve, the same 1.3 times longer,
     and ``tries`` random ones from the plan's states (the plan's commands count too)."""
-    step = np.asarray(arm.lattice.tick, dtype=np.float64) * np.asarray(arm.lattice.max_ticks)
+    step = arm.lattice.max_step
     rng = np.random.default_rng(seed)
     starts = []
     for a, b in list(itertools.pairwise(states))[::EVERY]:

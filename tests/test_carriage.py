@@ -88,11 +88,15 @@ def _track_ur5_with_torch():
     return robot_from_dict(TRACK_UR5).with_tool(tool)
 
 
+def _seam_line() -> Polyline:
+    """The track cell's seam: 1.7 m beside the track, 1 mm above the table."""
+    return Polyline("seam", np.array([[100.0, -550.0, 41.0], [1800.0, -550.0, 41.0]]))
+
+
 @functools.cache
 def _undirected_schedule():
     """The carriage's schedule along the track cell's seam, where it starts unknown."""
-    line = Polyline("seam", np.array([[100.0, -550.0, 41.0], [1800.0, -550.0, 41.0]]))
-    return carriage_schedule(_track_ur5_with_torch(), line, 0)
+    return carriage_schedule(_track_ur5_with_torch(), _seam_line(), 0)
 
 
 @pytest.mark.parametrize("start_mm", [None, 500.0, 1500.0])
@@ -113,8 +117,9 @@ def test_the_carriage_is_scheduled_evenly_where_the_arm_reaches_every_point(star
     assert carriage_joint(arm, tip) == 0
     iiwa = armpath.load_arm("iiwa14")
     assert carriage_joint(iiwa, np.ones(7, dtype=bool)) is None
-    line = Polyline("seam", np.array([[100.0, -550.0, 41.0], [1800.0, -550.0, 41.0]]))
-    schedule = carriage_schedule(arm, line, 0, start_mm) if start_mm else _undirected_schedule()
+    schedule = (
+        carriage_schedule(arm, _seam_line(), 0, start_mm) if start_mm else _undirected_schedule()
+    )
     v = schedule.value
     assert np.all(np.diff(v) >= 0.0)
     if start_mm is not None:

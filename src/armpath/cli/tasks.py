@@ -609,16 +609,16 @@ def plan(
 def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not computed") -> str:
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
+    from armpath.planning.bounds.carriage import estimate_is_named
     from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope
 
     if bound is None:
         return missing
     sampling = bound.get("sampling") or {}
     estimate = ""
-    family = sampling.get("family_estimate_commands")
+    family = sampling.get("family_estimate_commands")  # a carriage's, beside it
     plan = bound["commands"] + (bound["gap_commands"] or 0)
-    if family is not None and family <= plan:  # a carriage's, beside it (above the plan, it
-        # estimates nothing: its one member per tool frame missed what the plan does)
+    if family is not None and estimate_is_named(family, plan):
         estimate = f"; the family's estimate (not proven) ~{math.ceil(family - 1e-9)}"
     gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     if not bound.get("proven", True):

@@ -232,6 +232,13 @@ def _reach_text(reach: float, rings: list[AxisReach], what: str) -> str:
     return f"{ball}, and {at} mm from that axis at the height of each deciding {what}"
 
 
+def estimate_is_named(estimate_commands: float, plan_commands: float) -> bool:
+    """Whether a redundant arm's family estimate (not proven) is named beside its carriage's
+    bound: where it is at most the plan's commands. Above them its one sampled member per tool
+    frame missed what the plan does, and it estimates nothing."""
+    return estimate_commands <= plan_commands
+
+
 def with_carriage(
     family: CommandBound | None,
     carriage: CommandBound | None,
@@ -239,9 +246,8 @@ def with_carriage(
 ) -> CommandBound | None:
     """The bound to report: the family's, or its carriage's travel (an arm on a track) where
     that is higher or the family's is an estimate (a redundant arm's, not proven; its value is
-    then kept in the carriage bound's sampling, and named in its method where it is at most the
-    plan's ``plan_commands``: above them, its one sampled member per tool frame missed what the
-    plan does, and it estimates nothing)."""
+    then kept in the carriage bound's sampling, and named in its method where
+    :func:`estimate_is_named` beside the plan's ``plan_commands``)."""
     if carriage is None:
         return family
     if family is None:
@@ -251,9 +257,9 @@ def with_carriage(
     named = f"; the family's estimate, not proven: ~{family.commands}"
     return replace(
         carriage,
-        method=carriage.method + (named if family.value <= plan_commands else ""),
+        method=carriage.method + (named if estimate_is_named(family.value, plan_commands) else ""),
         sampling={**carriage.sampling, "family_estimate_commands": family.value},
     )
 
 
-__all__ = ["carriage_travel_bound", "points_travel_bound", "with_carriage"]
+__all__ = ["carriage_travel_bound", "estimate_is_named", "points_travel_bound", "with_carriage"]

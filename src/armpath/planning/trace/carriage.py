@@ -121,6 +121,8 @@ def carriage_schedule(
     """The carriage ``joint``'s schedule along ``curve`` (see the module's docstring);
     ``start_value``: where the carriage starts (model units), which directs the schedule of an
     open curve (:data:`AHEAD_QUANTILE`)."""
+    from scipy.spatial import cKDTree
+
     rng = np.random.default_rng(0)
     lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
     hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
@@ -158,8 +160,6 @@ def carriage_schedule(
             quantiles = (behind, AHEAD_QUANTILE)
         elif ahead < -near:
             quantiles = (1.0 - AHEAD_QUANTILE, 1.0 - behind)
-    from scipy.spatial import cKDTree
-
     # the samples near each layer's point across the axis (a tree: 500,000 samples by 341
     # layers took 5 s compared one by one)
     for k, close in enumerate(cKDTree(across).query_ball_point(p_across, near)):
@@ -168,9 +168,9 @@ def carriage_schedule(
             comfort[k] = ((p_along[k] - u_hi) / per_unit, (p_along[k] - u_lo) / per_unit)
 
     grid = arm.lattice
-    step = float(grid.tick[joint] * grid.max_ticks[joint])  # one command of the carriage
+    step = float(grid.max_step[joint])  # one command of the carriage
     arm_joint = int(np.flatnonzero(np.arange(arm.n_joints) > joint)[0])
-    arm_mm = float(grid.tick[arm_joint] * grid.max_ticks[arm_joint]) * ARM_REACH_FRACTION * reach
+    arm_mm = float(grid.max_step[arm_joint]) * ARM_REACH_FRACTION * reach
     judged = comfort[~np.isnan(comfort[:, 0])]
     if judged.size == 0:  # no layer judged anywhere: the carriage stays where it is at home
         judged = np.full((1, 2), float(arm.home[joint]))
