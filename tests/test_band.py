@@ -1,0 +1,195 @@
+"""How far one command can follow a circle within the tolerance (planning/bounds/band.py): the
+tool point's Hessian against finite differences, the Taylor bounds against sampled commands,
+the dual bound against a brute-force grid, and the per-configuration arc limit against the
+longest command SLSQP finds with that middle configuration."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares, minimize
+
+from armpath.kinematics import position_jacobian, tool_point_joints, tool_position
+from armpath.model.catalog import ur5
+from armpath.model.seed_arm import seed_arm
+from armpath.planning.bounds.band import (
+    Circle,
+    _dual_bound,
+    command_arc_limit,
+    taylor_bounds,
+    tool_point_hessian,
+)
+
+TOL = 0.1
+
+
+@pytest.fixture(scope="module", params=["seed", "ur5"])
+def arm(request):
+    return seed_arm() if request.param == "seed" else ur5()
+
+
+def _finite_hessian(arm, q, h=1e-4):
+    n = arm.n_joints
+    out = np.zeros((3, n, n))
+    for a, b in itertools.product(range(n), repeat=2):
+        e, f = np.eye(n)[a] * h, np.eye(n)[b] * h
+        P = tool_position(arm, np.stack([q + e + f, q + e - f, q - e + f, q - e - f]))
+        out[:, a, b] = (P[0] - P[1] - P[2] + P[3]) / (4 * h * h)
+    return out
+
+
+def test_hessian_matches_finite_differences(arm):
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        q = np.clip(rng.uniform(-2.5, 2.5, arm.n_joints), arm.lower, arm.upper)
+        H = tool_point_hessian(arm, q)
+        assert np.abs(H - _finite_hessian(arm, q)).max() < 1e-4 * max(np.abs(H).max(), 1.0)
+
+
+def test_taylor_bounds_hold_for_sampled_commands(arm):
+    """Chord and bend of random commands (joint changes up to the steps, many at a corner of
+    the box) lie within the bounds, and so do their differences from the quadratic model."""
+    tb = taylor_bounds(arm)
+    tip = tool_point_joints(arm)
+    steps = np.where(tip, arm.lattice.max_step, 0.0)
+    rng = np.random.default_rng(4)
+    worst = np.zeros(4)
+    for k in range(300):
+        m = np.clip(rng.uniform(-3.0, 3.0, arm.n_joints), arm.lower, arm.upper)
+        D = steps * (np.sign(rng.uniform(-1, 1, arm.n_joints)) if k % 2 else rng.uniform(-1, 1))
+        p0, a, p1 = tool_position(arm, np.stack([m - D / 2, m, m + D / 2]))
+        c, w = p1 - p0, (p0 + p1) / 2 - a
+        J, H = position_jacobian(arm, m), tool_point_hessian(arm, m)
+        model_w = np.einsum("kab,a,b->k", H, D, D) / 8
+        worst = np.maximum(
+            worst,
+            [
+                np.linalg.norm(c),
+                np.linalg.norm(w),
+                np.linalg.norm(c - J @ D),
+                np.linalg.norm(w - model_w),
+            ],
+        )
+    assert worst[0] <= tb.chord and worst[1] <= tb.bend
+    assert worst[2] <= tb.chord_error and worst[3] <= tb.bend_error
+    assert worst[0] > 0.3 * tb.chord  # the corners come near the bound: not a vacuous one
+
+
+def test_dual_bound_against_a_grid():
+    """max g'D over a box and indefinite quadratic constraints: never below a fine grid's
+    best feasible point, and within 5 % of it (the relaxation is tight on these)."""
+    rng = np.random.default_rng(5)
+    for _ in range(6):
+        g = rng.normal(size=3)
+        steps = rng.uniform(0.5, 1.5, 3)
+        A = rng.normal(size=(3, 3))
+        A = A + A.T
+        jr = rng.normal(size=3)
+        limits = np.array([0.5, 0.3])
+        axes = [np.linspace(-s, s, 81) for s in steps]
+        D = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        ok = (np.einsum("ia,ab,ib->i", D, A, D) <= limits[0]) & ((D @ jr) ** 2 <= limits[1])
+        grid = float((D[ok] @ g).max())
+        bound = _dual_bound(g, [A, np.outer(jr, jr)], limits, steps)
+        assert bound >= grid - 1e-9
+        assert bound <= 1.05 * grid + 0.05
+    # no constraint but the box: the box's corner
+    g = np.array([1.0, -2.0, 0.5])
+    steps = np.array([0.1, 0.2, 0.3])
+    assert _dual_bound(g, [], np.zeros(0), steps) == pytest.approx(0.65, rel=1e-9)
+
+
+def _on_circle(arm, circle, angle, q_start):
+    """A configuration with the tool point on ``circle`` at ``angle`` (least squares from
+    ``q_start``)."""
+    b = circle.normal
+    u = np.cross(b, [1.0, 0.0, 0.0] if abs(b[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(b, u)
+    target = circle.centre + circle.radius_mm * (np.cos(angle) * u + np.sin(angle) * v)
+    found = least_squares(
+        lambda q: tool_position(arm, q) - target,
+        q_start,
+        bounds=(arm.lower, arm.upper),
+        xtol=1e-14,
+        ftol=1e-14,
+    )
+    assert np.linalg.norm(tool_position(arm, found.x) - target) < 1e-4
+    return found.x
+
+
+def _longest_found(arm, circle, m, tries=12):
+    """The longest arc between the nearest points of a command's ends that SLSQP finds over
+    joint changes within the steps, the middle configuration ``m``, the tool point within the
+    tolerance at 17 instants."""
+    tip = tool_point_joints(arm)
+    steps = np.where(tip, arm.lattice.max_step, 0.0)
+    instants = np.linspace(-0.5, 0.5, 17)
+    b = circle.normal
+
+    def points(D):
+        return tool_position(arm, m[None] + instants[:, None] * D[None])
+
+    def distance(P):
+        d = P - circle.centre
+        along = d @ b
+        return np.hypot(np.linalg.norm(d - along[:, None] * b, axis=1) - circle.radius_mm, along)
+
+    def angle(P):
+        d = P - circle.centre
+        u = d[0] - (d[0] @ b) * b
+        u /= np.linalg.norm(u)
+        return np.arctan2(d @ np.cross(b, u), d @ u)
+
+    rng = np.random.default_rng(6)
+    d = tool_position(arm, m) - circle.centre
+    tangent = np.cross(b, d)
+    tangent /= np.linalg.norm(tangent)
+    along = np.linalg.pinv(position_jacobian(arm, m)[:, tip]) @ tangent
+    best = 0.0
+    for k in range(tries):
+        D0 = np.zeros(arm.n_joints)  # along the tangent, then random ones
+        D0[tip] = along * (1.0 + k % 4)
+        if k >= 4:
+            D0 = rng.uniform(-1, 1, arm.n_joints) * steps * 0.3
+        for sign in (1.0, -1.0):
+            found = minimize(
+                lambda D, sign=sign: -sign * (angle(points(D))[-1]),
+                D0,
+                method="SLSQP",
+                bounds=list(zip(-steps, steps, strict=True)),
+                constraints=[{"type": "ineq", "fun": lambda D: 0.995 * TOL - distance(points(D))}],
+                options={"maxiter": 300},
+            )
+            D = found.x
+            for _ in range(20):  # one that ends a little outside: a little shorter
+                P = points(D)
+                if distance(P).max() <= TOL:
+                    best = max(best, circle.radius_mm * abs(angle(P)[-1]))
+                    break
+                D = 0.995 * D
+    return best
+
+
+@pytest.mark.parametrize(
+    ("which", "circle"),
+    [
+        ("seed", Circle(np.array([330.0, 60.0, 260.0]), np.array([0.0, 0.0, 1.0]), 25.0)),
+        ("ur5", Circle(np.array([330.0, -200.0, 0.0]), np.array([0.0, 0.0, 1.0]), 80.0)),
+    ],
+)
+def test_arc_limit_bounds_the_longest_command_found(which, circle):
+    """At configurations on the circle, no command SLSQP finds through them covers more than
+    the proven limit, and the limit is at most 15 % above the longest found."""
+    arm = seed_arm() if which == "seed" else ur5()
+    q = np.asarray(arm.home, dtype=np.float64)
+    ratios = []
+    for angle in np.linspace(0.0, 2 * np.pi, 4, endpoint=False):
+        q = _on_circle(arm, circle, angle, q)
+        limit = command_arc_limit(arm, q, circle, TOL)
+        found = _longest_found(arm, circle, q)
+        assert found <= limit
+        ratios.append(limit / found)
+    assert max(ratios) <= 1.15, ratios
