@@ -95,29 +95,39 @@ def test_dual_bound_against_a_grid():
         bound = _dual_bound(g, [A, np.outer(jr, jr)], limits, steps)
         assert bound >= grid - 1e-9
         assert bound <= 1.05 * grid + 0.05
+        # split boxes: still a bound, and no higher than the one box's
+        split = _dual_bound(g, [A, np.outer(jr, jr)], limits, steps, nodes=50)
+        assert grid - 1e-9 <= split <= bound + 1e-9
     # no constraint but the box: the box's corner
     g = np.array([1.0, -2.0, 0.5])
     steps = np.array([0.1, 0.2, 0.3])
     assert _dual_bound(g, [], np.zeros(0), steps) == pytest.approx(0.65, rel=1e-9)
 
 
-def _on_circle(arm, circle, angle, q_start):
+def _on_circle(arm, circle, angle, q_start, free=None):
     """A configuration with the tool point on ``circle`` at ``angle`` (least squares from
-    ``q_start``)."""
+    ``q_start`` over the joints ``free``, default all)."""
+    free = np.ones(arm.n_joints, dtype=bool) if free is None else free
     b = circle.normal
     u = np.cross(b, [1.0, 0.0, 0.0] if abs(b[0]) < 0.9 else [0.0, 1.0, 0.0])
     u /= np.linalg.norm(u)
     v = np.cross(b, u)
     target = circle.centre + circle.radius_mm * (np.cos(angle) * u + np.sin(angle) * v)
+
+    def full(x):
+        q = np.array(q_start, dtype=np.float64)
+        q[free] = x
+        return q
+
     found = least_squares(
-        lambda q: tool_position(arm, q) - target,
-        q_start,
-        bounds=(arm.lower, arm.upper),
+        lambda x: tool_position(arm, full(x)) - target,
+        q_start[free],
+        bounds=(arm.lower[free], arm.upper[free]),
         xtol=1e-14,
         ftol=1e-14,
     )
-    assert np.linalg.norm(tool_position(arm, found.x) - target) < 1e-4
-    return found.x
+    assert np.linalg.norm(tool_position(arm, full(found.x)) - target) < 1e-4
+    return full(found.x)
 
 
 def _longest_found(arm, circle, m, tries=12):
@@ -193,3 +203,18 @@ def test_arc_limit_bounds_the_longest_command_found(which, circle):
         assert found <= limit
         ratios.append(limit / found)
     assert max(ratios) <= 1.15, ratios
+
+
+def test_arc_limit_near_a_singular_wrist():
+    """The seed arm with its wrist straight (joint 5 at 0: joints 4 and 6 in line), where its
+    null space bends the path both ways (the constraints far from convex): the limit still
+    lies within 15 % of the longest command SLSQP finds."""
+    arm = seed_arm()
+    circle = Circle(np.array([330.0, 60.0, 260.0]), np.array([0.0, 0.0, 1.0]), 25.0)
+    start = np.radians([96.1, 9.1, 105.2, 24.3, 0.0, 0.0])
+    free = np.array([True, True, True, True, False, False])
+    q = _on_circle(arm, circle, np.radians(130.0), start, free)
+    assert q[4] == 0.0
+    found = _longest_found(arm, circle, q)
+    limit = command_arc_limit(arm, q, circle, TOL)
+    assert found <= limit <= 1.15 * found

@@ -49,6 +49,7 @@ joint change within the steps, so the longest arc over every middle configuratio
 
 from __future__ import annotations
 
+import heapq
 import math
 from dataclasses import dataclass
 
@@ -74,6 +75,9 @@ _NEWTON_STEPS = 30
 #: any command's (it tightens how far the chord may lean off the tangent); it stops earlier
 #: when a round proves no shorter chord.
 _CHORD_ROUNDS = 4
+#: The branch and bound of :func:`_dual_bound` stops where the highest box's bound lies within
+#: this share of the best joint change found.
+_BRANCH_GAP = 0.02
 
 
 @dataclass(frozen=True)
@@ -145,50 +149,71 @@ def taylor_bounds(arm: SerialArm, moves: BoolArray | None = None) -> TaylorBound
     return TaylorBounds(m1, m2 / 8.0 + bend_error, m3 / 24.0, bend_error)
 
 
-def _dual_bound(
-    g: FloatArray, blocks: list[FloatArray], limits: FloatArray, steps: FloatArray
-) -> float:
-    """An upper bound on ``g'D`` over ``|D_i| <= steps_i`` and ``D'B_l D <= limits_l`` (each
-    ``B_l`` symmetric), by weak duality (see the module): ``f = g' P^-1 g / 4 + mult . caps``
-    for nonnegative multipliers ``mult`` of every constraint (the box's as ``D_i^2 <=
-    steps_i^2``), ``P`` the constraints' matrices summed with them, positive definite. ``f``
+def _box_dual(
+    g: FloatArray, mats: FloatArray, caps: FloatArray, lo: FloatArray, hi: FloatArray
+) -> tuple[float, FloatArray]:
+    """An upper bound on ``g'D`` over ``lo <= D <= hi`` and ``D'B_l D <= caps_l`` (``mats``
+    the symmetric ``B_l``), by weak duality, and the joint change that maximises the
+    Lagrangian at the multipliers found (a candidate for the largest ``g'D``).
+
+    With the box written ``(D_i - lo_i)(D_i - hi_i) <= 0``, every constraint is ``D'B D + b'D
+    <= c``; for nonnegative multipliers ``mult`` whose ``P = sum mult B`` is positive definite,
+    ``f = h' P^-1 h / 4 + mult . c`` (``h = g - sum mult b``) bounds ``g'D`` from above. ``f``
     is convex in the multipliers; they are found by Newton steps on ``f`` less logarithmic
     barriers of ``mult`` and ``det P`` (an interior-point method, its weight shrunk
-    :data:`_BARRIER_ROUNDS` times), from the box's own multipliers (with the others nil the
-    bound is ``sum |g_i| steps_i``). Any multipliers give a bound: the one returned is ``f`` of
-    those the steps reached (or the box's, where that is less)."""
+    :data:`_BARRIER_ROUNDS` times) from the box's own (with the others nil, the bound is the
+    box's corner). Any multipliers give a bound: the value returned is ``f`` of those the
+    steps reached, or the corner's where that is less."""
     k = g.size
-    mats = np.asarray([*blocks, *(np.diag(e) for e in np.eye(k))])
-    caps = np.concatenate([limits, steps**2])
-    widest = float(np.sum(np.abs(g) * steps))
+    eye = np.eye(k)
+    quads = np.concatenate([mats, eye[:, None, :] * eye[:, :, None]])  # (l, k, k)
+    lins = np.concatenate([np.zeros((mats.shape[0], k)), -(lo + hi)[:, None] * eye])
+    consts = np.concatenate([caps, -lo * hi])
+    corner = np.where(g > 0, hi, lo)
+    widest = float(g @ corner)
 
     def factor(mult: FloatArray) -> FloatArray | None:
         try:
-            return np.asarray(np.linalg.cholesky(np.einsum("l,lab->ab", mult, mats)))
+            return np.asarray(np.linalg.cholesky(np.einsum("l,lab->ab", mult, quads)))
         except np.linalg.LinAlgError:
             return None
 
-    def bound(mult: FloatArray, L: FloatArray) -> float:
-        y = np.linalg.solve(L, g)
-        return float(y @ y) / 4.0 + float(mult @ caps)
+    def maximiser(mult: FloatArray, L: FloatArray) -> FloatArray:
+        h = g - mult @ lins
+        return np.asarray(np.linalg.solve(L.T, np.linalg.solve(L, h)) / 2.0)
 
-    box = np.maximum(np.abs(g), 1e-12 * max(float(np.abs(g).max()), 1.0)) / (2.0 * steps)
-    scale = [1e-2 * float(box.mean()) / max(float(np.abs(B).max()), 1e-300) for B in blocks]
-    mult = np.concatenate([scale, box])
-    L = factor(mult)
-    if L is None:
-        return widest
-    weight = 1e-2 * bound(mult, L) / mult.size
+    def bound(mult: FloatArray, L: FloatArray) -> float:
+        h = g - mult @ lins
+        y = np.linalg.solve(L, h)
+        return float(y @ y) / 4.0 + float(mult @ consts)
+
+    half = np.maximum(hi - lo, 1e-12) / 2.0
+    box = np.abs(g) / (2.0 * half)
+    floor = 1e-2 * max(float(box.mean()), 1e-12)
+    scale = [1e-2 * floor / max(float(np.abs(B).max()), 1e-300) for B in mats]
+    for _ in range(60):  # the box's multipliers raised until P is positive definite
+        mult = np.concatenate([scale, box + floor])
+        L = factor(mult)
+        if L is not None:
+            break
+        floor *= 4.0
+    else:
+        return widest, corner
+    weight = 1e-2 * abs(bound(mult, L)) / mult.size + 1e-12
     for _ in range(_BARRIER_ROUNDS):
         for _ in range(_NEWTON_STEPS):
             assert L is not None
-            y = np.linalg.solve(L.T, np.linalg.solve(L, g))
-            By = np.einsum("lab,b->la", mats, y)
+            D = maximiser(mult, L)
             Linv = np.linalg.inv(L)
             Pinv = Linv.T @ Linv
-            PB = np.einsum("ab,lbc->lac", Pinv, mats)  # P^-1 B_l
-            grad = caps - By @ y / 4.0 - weight * (np.einsum("laa->l", PB) + 1.0 / mult)
-            hess = 0.5 * By @ Pinv @ By.T + weight * (
+            v = np.einsum("lab,b->la", quads, D) + lins / 2.0  # B_l D + b_l / 2
+            PB = np.einsum("ab,lbc->lac", Pinv, quads)
+            grad = (
+                consts
+                - np.einsum("la,a->l", v + lins / 2.0, D)
+                - weight * (np.einsum("laa->l", PB) + 1.0 / mult)
+            )
+            hess = 2.0 * v @ Pinv @ v.T + weight * (
                 np.einsum("lab,mba->lm", PB, PB) + np.diag(1.0 / mult**2)
             )
             try:
@@ -196,15 +221,13 @@ def _dual_bound(
             except np.linalg.LinAlgError:
                 break
             decrement = -float(step @ grad)
-            if decrement < 1e-12 * (abs(weight) + 1.0):
+            if not decrement > 1e-12 * (abs(weight) + 1.0):
                 break
             # the longest step that keeps every multiplier positive, then backtracking
             shrink = step < 0
-            t = (
-                min(1.0, 0.99 * float(np.min(-mult[shrink] / step[shrink])))
-                if shrink.any()
-                else 1.0
-            )
+            t = 1.0
+            if shrink.any():
+                t = min(1.0, 0.99 * float(np.min(-mult[shrink] / step[shrink])))
 
             def merit(m: FloatArray, Lm: FloatArray, weight: float = weight) -> float:
                 return bound(m, Lm) - weight * (
@@ -223,7 +246,63 @@ def _dual_bound(
             mult, L = trial, L_trial
         weight *= 0.1
     assert L is not None
-    return min(bound(mult, L), widest)
+    value = bound(mult, L)
+    if value >= widest:
+        return widest, corner
+    return value, np.clip(maximiser(mult, L), lo, hi)
+
+
+def _dual_bound(
+    g: FloatArray,
+    blocks: list[FloatArray],
+    limits: FloatArray,
+    steps: FloatArray,
+    nodes: int = 1,
+) -> float:
+    """An upper bound on ``g'D`` over ``|D_i| <= steps_i`` and ``D'B_l D <= limits_l`` (each
+    ``B_l`` symmetric): :func:`_box_dual` of the whole box, or with ``nodes`` above one a
+    branch and bound over boxes: the box whose bound is highest is split in two at its middle
+    across the joint whose squared share of the box, times how far it takes part in the
+    constraints' negative curvature, is largest, until its bound lies within
+    :data:`_BRANCH_GAP` of the best feasible ``g'D`` found (the dual's maximisers of the
+    boxes that satisfy every constraint) or ``nodes`` boxes were bounded. The bound is the
+    highest of the boxes left. Where the constraints are far from convex (an arm near a
+    singular configuration, its null space bending the path both ways), one box's dual lies
+    far above the largest ``g'D``; split boxes bring it down."""
+    mats = np.asarray(blocks, dtype=np.float64).reshape(-1, g.size, g.size)
+    caps = np.asarray(limits, dtype=np.float64)
+
+    def feasible(D: FloatArray) -> bool:
+        return bool(np.all(np.einsum("a,lab,b->l", D, mats, D) <= caps))
+
+    # how far each joint takes part in the constraints' negative curvature (their concave
+    # parts: what a box's dual must pay for with the box's multipliers)
+    concave = np.zeros(g.size)
+    for B in mats:
+        w, V = np.linalg.eigh(B)
+        concave += np.abs(np.einsum("ak,k,ak->a", V, np.minimum(w, 0.0), V)) / max(
+            float(np.abs(w).max()), 1e-300
+        )
+    value, D = _box_dual(g, mats, caps, -steps, steps)
+    best = float(g @ D) if feasible(D) else -math.inf
+    heap = [(-value, 0, -steps, steps)]
+    count = 1
+    while count < nodes:
+        top, _, lo, hi = heap[0]
+        if math.isfinite(best) and -top - best <= _BRANCH_GAP * max(abs(best), 1e-9):
+            break
+        heapq.heappop(heap)
+        j = int(np.argmax(((hi - lo) / (2.0 * steps)) ** 2 * (concave + 1e-3)))
+        middle = 0.5 * (lo[j] + hi[j])
+        for a, b in ((lo[j], middle), (middle, hi[j])):
+            lo2, hi2 = lo.copy(), hi.copy()
+            lo2[j], hi2[j] = a, b
+            value, D = _box_dual(g, mats, caps, lo2, hi2)
+            count += 1
+            if feasible(D):
+                best = max(best, float(g @ D))
+            heapq.heappush(heap, (-value, count, lo2, hi2))
+    return -heap[0][0]
 
 
 def command_arc_limit(
@@ -233,6 +312,7 @@ def command_arc_limit(
     tolerance_mm: float,
     taylor: TaylorBounds | None = None,
     moves: BoolArray | None = None,
+    nodes: int = 200,
 ) -> float:
     """The longest arc (mm) of ``circle`` between the points nearest the start and the end of
     any command whose middle configuration is ``q_mid`` (rad / mm) and whose tool point lies
@@ -240,7 +320,8 @@ def command_arc_limit(
     where ``q_mid``'s own tool point lies farther than that from the circle; inf where the
     circle is too tight for the lemma (its radius within the path's bend and the tolerance)
     or too small for the arc to be told from the chord, and for an arm whose lengths are not
-    in mm."""
+    in mm. ``nodes``: boxes of joint changes the branch and bound of each round may bound
+    (:func:`_dual_bound`)."""
     if arm.length_unit != "mm":
         return math.inf
     tip = tool_point_joints(arm) if moves is None else moves
@@ -283,7 +364,7 @@ def command_arc_limit(
         )
         radial = (2.0 * R * tol + bend * chord) / radius_a
         limits = np.array([cap, (radial + e_c) ** 2, binormal**2])
-        along = _dual_bound(g, blocks, limits, steps) + e_c
+        along = _dual_bound(g, blocks, limits, steps, nodes) + e_c
         # every command through q_mid has |c| at most this: the next round may use it
         tighter = math.sqrt(along**2 + radial**2 + (2.0 * tol) ** 2)
         if tighter >= chord:
