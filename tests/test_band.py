@@ -218,3 +218,27 @@ def test_arc_limit_near_a_singular_wrist():
     found = _longest_found(arm, circle, q)
     limit = command_arc_limit(arm, q, circle, TOL)
     assert found <= limit <= 1.15 * found
+
+
+def test_arc_limit_for_a_middle_anywhere_in_the_band():
+    """Taken anywhere within the tolerance (at its inner edge, the chord's most room), the
+    limit at a configuration on the circle covers the longest command SLSQP finds through a
+    configuration nearby whose tool point lies at the inner edge, and lies above the limit
+    for its own middle."""
+    arm = seed_arm()
+    circle = Circle(np.array([330.0, 60.0, 260.0]), np.array([0.0, 0.0, 1.0]), 25.0)
+    q = np.asarray(arm.home, dtype=np.float64)
+    for angle in (0.5, 2.5):
+        q = _on_circle(arm, circle, angle, q)
+        # the nearest configuration with its tool point at the inner edge (minimum-norm steps)
+        q_inner = q.copy()
+        inward = (circle.centre - tool_position(arm, q)) * [1.0, 1.0, 0.0]
+        target = tool_position(arm, q) + 0.99 * TOL * inward / np.linalg.norm(inward)
+        for _ in range(5):
+            J = position_jacobian(arm, q_inner)
+            q_inner = q_inner + np.linalg.pinv(J) @ (target - tool_position(arm, q_inner))
+        assert np.abs(q_inner - q).max() < np.radians(0.05)
+        anywhere = command_arc_limit(arm, q, circle, TOL, anywhere=True)
+        assert anywhere > command_arc_limit(arm, q, circle, TOL)
+        found = _longest_found(arm, circle, q_inner)
+        assert found <= anywhere <= 1.15 * found

@@ -313,6 +313,7 @@ def command_arc_limit(
     taylor: TaylorBounds | None = None,
     moves: BoolArray | None = None,
     nodes: int = 200,
+    anywhere: bool = False,
 ) -> float:
     """The longest arc (mm) of ``circle`` between the points nearest the start and the end of
     any command whose middle configuration is ``q_mid`` (rad / mm) and whose tool point lies
@@ -321,7 +322,10 @@ def command_arc_limit(
     circle is too tight for the lemma (its radius within the path's bend and the tolerance)
     or too small for the arc to be told from the chord, and for an arm whose lengths are not
     in mm. ``nodes``: boxes of joint changes the branch and bound of each round may bound
-    (:func:`_dual_bound`)."""
+    (:func:`_dual_bound`). ``anywhere``: the middle's tool point may lie anywhere within the
+    tolerance of the circle (taken at the band's inner edge, which leaves the chord the most
+    room), the joints' derivatives those at ``q_mid``: for a sample of the family that stands
+    for the members about it."""
     if arm.length_unit != "mm":
         return math.inf
     tip = tool_point_joints(arm) if moves is None else moves
@@ -335,10 +339,14 @@ def command_arc_limit(
     a = frames[-1, :3, 3] - circle.centre
     a_plane = a - (a @ b) * b
     radius_a = float(np.linalg.norm(a_plane))  # the middle tool point's distance from the axis
-    if math.hypot(radius_a - R, float(a @ b)) > tol:
+    if radius_a < 1e-9:
+        return math.inf
+    r = a_plane / radius_a
+    if anywhere:  # the middle at the band's inner edge: the most room for the chord
+        radius_a = R - tol
+    elif math.hypot(radius_a - R, float(a @ b)) > tol:
         return 0.0  # no command through q_mid has its middle within the tolerance
     slack = R + tol - radius_a  # how far inside the outer circle it lies, 0 to 2 tol
-    r = a_plane / radius_a
     t = np.cross(b, r)
     J = jacobian_from_frames(arm, frames[None])[0][:3][:, tip]
     H = tool_point_hessian(arm, q_mid)[:, tip][:, :, tip]
