@@ -53,6 +53,12 @@ proven one of another kind (:mod:`~armpath.planning.bounds.carriage`): the trave
 needs to bring every point within the arm's reach of it, a largest distance proven by branch
 and bound over the arm's joints (:mod:`~armpath.planning.bounds.farthest`): from a point of
 the carriage, and from the arm's first axis at the heights of the points that decide it.
+
+The along part of a trace bound does not yet see the tolerance band: a joint-linear command
+follows a tight curve within it only a few millimetres. :mod:`~armpath.planning.bounds.band`
+proves how far for one middle configuration (a circle; Taylor along the joint line and a
+Lagrangian dual), and takes the largest over a sampled family (``benchmarks/bench_band.py``);
+the trace bound does not use it yet.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer

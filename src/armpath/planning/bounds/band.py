@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from armpath.jit import njit
 from armpath.kinematics import (
     forward_frames,
     jacobian_from_frames,
@@ -69,7 +70,7 @@ BoolArray = NDArray[np.bool_]
 
 #: The multipliers' minimisation (:func:`_dual_bound`): rounds of the barrier's weight (each a
 #: tenth of the last) and Newton steps in each at most (a round stops when converged).
-_BARRIER_ROUNDS = 10
+_BARRIER_ROUNDS = 7
 _NEWTON_STEPS = 30
 #: Rounds of :func:`command_arc_limit`: each takes the chord the last one proved as a bound on
 #: any command's (it tightens how far the chord may lean off the tangent); it stops earlier
@@ -149,6 +150,169 @@ def taylor_bounds(arm: SerialArm, moves: BoolArray | None = None) -> TaylorBound
     return TaylorBounds(m1, m2 / 8.0 + bend_error, m3 / 24.0, bend_error)
 
 
+@njit(cache=True)
+def _cholesky(P: np.ndarray, L: np.ndarray) -> bool:  # pragma: no cover - compiled
+    """``L`` lower triangular with ``L L' = P``; False where ``P`` is not positive definite."""
+    k = P.shape[0]
+    for j in range(k):
+        total = P[j, j]
+        for m in range(j):
+            total -= L[j, m] * L[j, m]
+        if not total > 0.0 or not np.isfinite(total):
+            return False
+        L[j, j] = np.sqrt(total)
+        for i in range(j + 1, k):
+            total = P[i, j]
+            for m in range(j):
+                total -= L[i, m] * L[j, m]
+            L[i, j] = total / L[j, j]
+        for i in range(j):
+            L[i, j] = 0.0
+    return True
+
+
+@njit(cache=True)
+def _lower_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """``y`` with ``L y = b``."""
+    k = b.size
+    y = np.empty(k)
+    for i in range(k):
+        total = b[i]
+        for m in range(i):
+            total -= L[i, m] * y[m]
+        y[i] = total / L[i, i]
+    return y
+
+
+@njit(cache=True)
+def _upper_solve(L: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """``x`` with ``L' x = y``."""
+    k = y.size
+    x = np.empty(k)
+    for i in range(k - 1, -1, -1):
+        total = y[i]
+        for m in range(i + 1, k):
+            total -= L[m, i] * x[m]
+        x[i] = total / L[i, i]
+    return x
+
+
+@njit(cache=True)
+def _dual_value(
+    g: np.ndarray,
+    quads: np.ndarray,
+    lins: np.ndarray,
+    consts: np.ndarray,
+    mult: np.ndarray,
+    L: np.ndarray,
+) -> tuple[bool, float, np.ndarray]:  # pragma: no cover - compiled
+    """Whether ``P = sum mult B`` is positive definite (its factor into ``L``), the dual's
+    value ``h' P^-1 h / 4 + mult . c`` and the Lagrangian's maximiser ``P^-1 h / 2``."""
+    k, n_c = g.size, mult.size
+    P = np.zeros((k, k))
+    h = g.copy()
+    for c in range(n_c):
+        for a in range(k):
+            h[a] -= mult[c] * lins[c, a]
+            for b in range(k):
+                P[a, b] += mult[c] * quads[c, a, b]
+    if not _cholesky(P, L):
+        return False, np.inf, h
+    y = _lower_solve(L, h)
+    value = 0.25 * (y @ y) + mult @ consts
+    return True, value, 0.5 * _upper_solve(L, y)
+
+
+@njit(cache=True)
+def _box_dual_kernel(
+    g: np.ndarray,
+    quads: np.ndarray,
+    lins: np.ndarray,
+    consts: np.ndarray,
+    mult: np.ndarray,
+    rounds: int,
+    steps: int,
+) -> tuple[bool, float, np.ndarray]:  # pragma: no cover - compiled
+    """The interior-point minimisation of :func:`_box_dual` from the multipliers ``mult``
+    (changed in place): whether they were valid, the dual's value at the last ones and the
+    Lagrangian's maximiser there."""
+    k, n_c = g.size, mult.size
+    L = np.zeros((k, k))
+    ok, value, D = _dual_value(g, quads, lins, consts, mult, L)
+    if not ok:
+        return False, np.inf, D
+    weight = 1e-2 * abs(value) / n_c + 1e-12
+    Lt = np.zeros((k, k))
+    Hf = np.zeros((n_c, n_c))
+    for _ in range(rounds):
+        for _ in range(steps):
+            # P^-1 from the factor, then the gradient and Hessian of the barrier's merit
+            Linv = np.zeros((k, k))
+            for col in range(k):
+                e = np.zeros(k)
+                e[col] = 1.0
+                Linv[:, col] = _lower_solve(L, e)
+            Pinv = Linv.T @ Linv
+            v = np.empty((n_c, k))
+            PB = np.empty((n_c, k, k))
+            grad = np.empty(n_c)
+            for c in range(n_c):
+                v[c] = quads[c] @ D + 0.5 * lins[c]
+                PB[c] = Pinv @ quads[c]
+                trace = 0.0
+                for a in range(k):
+                    trace += PB[c, a, a]
+                grad[c] = consts[c] - (v[c] + 0.5 * lins[c]) @ D - weight * (trace + 1.0 / mult[c])
+            Pv = v @ Pinv
+            hess = 2.0 * (Pv @ v.T)
+            for c in range(n_c):
+                for d in range(c, n_c):
+                    tr = 0.0
+                    for a in range(k):
+                        for b in range(k):
+                            tr += PB[c, a, b] * PB[d, b, a]
+                    hess[c, d] += weight * tr
+                    if d != c:
+                        hess[d, c] += weight * tr
+                hess[c, c] += weight / (mult[c] * mult[c])
+            if not _cholesky(hess, Hf):
+                break
+            step = -_upper_solve(Hf, _lower_solve(Hf, grad))
+            decrement = -(step @ grad)
+            if not decrement > 1e-12 * (abs(weight) + 1.0):
+                break
+            t = 1.0  # the longest step that keeps every multiplier positive
+            for c in range(n_c):
+                if step[c] < 0.0:
+                    t = min(t, -0.99 * mult[c] / step[c])
+            logdet = 0.0
+            for a in range(k):
+                logdet += 2.0 * np.log(L[a, a])
+            here = value - weight * (logdet + np.sum(np.log(mult)))
+            moved = False
+            for _ in range(50):
+                trial = mult + t * step
+                ok, v_trial, D_trial = _dual_value(g, quads, lins, consts, trial, Lt)
+                if ok:
+                    logdet = 0.0
+                    for a in range(k):
+                        logdet += 2.0 * np.log(Lt[a, a])
+                    merit = v_trial - weight * (logdet + np.sum(np.log(trial)))
+                    if merit <= here - 0.25 * t * decrement:
+                        moved = True
+                        break
+                t *= 0.5
+            if not moved:
+                break
+            mult[:] = trial
+            value, D = v_trial, D_trial
+            for a in range(k):
+                for b in range(k):
+                    L[a, b] = Lt[a, b]
+        weight *= 0.1
+    return True, value, D
+
+
 def _box_dual(
     g: FloatArray, mats: FloatArray, caps: FloatArray, lo: FloatArray, hi: FloatArray
 ) -> tuple[float, FloatArray]:
@@ -161,95 +325,36 @@ def _box_dual(
     ``f = h' P^-1 h / 4 + mult . c`` (``h = g - sum mult b``) bounds ``g'D`` from above. ``f``
     is convex in the multipliers; they are found by Newton steps on ``f`` less logarithmic
     barriers of ``mult`` and ``det P`` (an interior-point method, its weight shrunk
-    :data:`_BARRIER_ROUNDS` times) from the box's own (with the others nil, the bound is the
-    box's corner). Any multipliers give a bound: the value returned is ``f`` of those the
-    steps reached, or the corner's where that is less."""
+    :data:`_BARRIER_ROUNDS` times; compiled) from the box's own (with the others nil, the bound
+    is the box's corner), raised until ``P`` is positive definite. Any multipliers give a
+    bound: the value returned is ``f`` of those the steps reached, or the corner's where that
+    is less."""
     k = g.size
     eye = np.eye(k)
-    quads = np.concatenate([mats, eye[:, None, :] * eye[:, :, None]])  # (l, k, k)
-    lins = np.concatenate([np.zeros((mats.shape[0], k)), -(lo + hi)[:, None] * eye])
+    quads = np.ascontiguousarray(np.concatenate([mats, eye[:, None, :] * eye[:, :, None]]))
+    lins = np.ascontiguousarray(
+        np.concatenate([np.zeros((mats.shape[0], k)), -(lo + hi)[:, None] * eye])
+    )
     consts = np.concatenate([caps, -lo * hi])
     corner = np.where(g > 0, hi, lo)
     widest = float(g @ corner)
-
-    def factor(mult: FloatArray) -> FloatArray | None:
-        try:
-            return np.asarray(np.linalg.cholesky(np.einsum("l,lab->ab", mult, quads)))
-        except np.linalg.LinAlgError:
-            return None
-
-    def maximiser(mult: FloatArray, L: FloatArray) -> FloatArray:
-        h = g - mult @ lins
-        return np.asarray(np.linalg.solve(L.T, np.linalg.solve(L, h)) / 2.0)
-
-    def bound(mult: FloatArray, L: FloatArray) -> float:
-        h = g - mult @ lins
-        y = np.linalg.solve(L, h)
-        return float(y @ y) / 4.0 + float(mult @ consts)
-
     half = np.maximum(hi - lo, 1e-12) / 2.0
     box = np.abs(g) / (2.0 * half)
     floor = 1e-2 * max(float(box.mean()), 1e-12)
     scale = [1e-2 * floor / max(float(np.abs(B).max()), 1e-300) for B in mats]
     for _ in range(60):  # the box's multipliers raised until P is positive definite
         mult = np.concatenate([scale, box + floor])
-        L = factor(mult)
-        if L is not None:
+        ok, value, D = _box_dual_kernel(
+            np.asarray(g, np.float64), quads, lins, consts, mult, _BARRIER_ROUNDS, _NEWTON_STEPS
+        )
+        if ok:
             break
         floor *= 4.0
     else:
         return widest, corner
-    weight = 1e-2 * abs(bound(mult, L)) / mult.size + 1e-12
-    for _ in range(_BARRIER_ROUNDS):
-        for _ in range(_NEWTON_STEPS):
-            assert L is not None
-            D = maximiser(mult, L)
-            Linv = np.linalg.inv(L)
-            Pinv = Linv.T @ Linv
-            v = np.einsum("lab,b->la", quads, D) + lins / 2.0  # B_l D + b_l / 2
-            PB = np.einsum("ab,lbc->lac", Pinv, quads)
-            grad = (
-                consts
-                - np.einsum("la,a->l", v + lins / 2.0, D)
-                - weight * (np.einsum("laa->l", PB) + 1.0 / mult)
-            )
-            hess = 2.0 * v @ Pinv @ v.T + weight * (
-                np.einsum("lab,mba->lm", PB, PB) + np.diag(1.0 / mult**2)
-            )
-            try:
-                step = -np.linalg.solve(hess, grad)
-            except np.linalg.LinAlgError:
-                break
-            decrement = -float(step @ grad)
-            if not decrement > 1e-12 * (abs(weight) + 1.0):
-                break
-            # the longest step that keeps every multiplier positive, then backtracking
-            shrink = step < 0
-            t = 1.0
-            if shrink.any():
-                t = min(1.0, 0.99 * float(np.min(-mult[shrink] / step[shrink])))
-
-            def merit(m: FloatArray, Lm: FloatArray, weight: float = weight) -> float:
-                return bound(m, Lm) - weight * (
-                    2.0 * float(np.sum(np.log(np.diag(Lm)))) + float(np.sum(np.log(m)))
-                )
-
-            here = merit(mult, L)
-            for _ in range(50):
-                trial = mult + t * step
-                L_trial = factor(trial)
-                if L_trial is not None and merit(trial, L_trial) <= here - 0.25 * t * decrement:
-                    break
-                t *= 0.5
-            else:
-                break
-            mult, L = trial, L_trial
-        weight *= 0.1
-    assert L is not None
-    value = bound(mult, L)
-    if value >= widest:
+    if not value < widest:
         return widest, corner
-    return value, np.clip(maximiser(mult, L), lo, hi)
+    return float(value), np.clip(np.asarray(D), lo, hi)
 
 
 def _dual_bound(
@@ -381,3 +486,52 @@ def command_arc_limit(
     if chord + 2.0 * tol >= 2.0 * R:
         return math.inf
     return 2.0 * R * math.asin((chord + 2.0 * tol) / (2.0 * R))
+
+
+@dataclass(frozen=True)
+class SampledLimit:
+    """The longest arc (mm) one command can follow at any of a family's samples
+    (:func:`sampled_arc_limit`), and where: the sample's configuration (rad / mm) and the arc
+    length (mm) of its curve point; ``samples`` how many were bounded."""
+
+    arc_mm: float
+    q: FloatArray
+    s_mm: float
+    samples: int
+
+
+def sampled_arc_limit(
+    arm: SerialArm,
+    layers: list[tuple[float, FloatArray]],
+    circle: Circle,
+    tolerance_mm: float,
+    nodes: int = 200,
+) -> SampledLimit:
+    """The largest :func:`command_arc_limit` (its middle anywhere within the tolerance) over
+    the configurations of ``layers`` (each the arc length, mm, of a curve point and the
+    family's samples there, ``(M, n)``): each sample first bounded by one box's dual, then, from
+    the highest down, again with the branch and bound of ``nodes`` boxes until the highest
+    refined one is at least the next unrefined one (each value is a bound, the refined one no
+    higher). Proven per sample; between samples the family is as far sampled as it is."""
+    tip = tool_point_joints(arm)
+    tb = taylor_bounds(arm, tip)
+    where = [(s, q) for s, qs in layers for q in qs]
+    if not where:
+        return SampledLimit(0.0, np.zeros(arm.n_joints), math.nan, 0)
+    coarse = np.array(
+        [
+            command_arc_limit(arm, q, circle, tolerance_mm, tb, tip, nodes=1, anywhere=True)
+            for _, q in where
+        ]
+    )
+    order = np.argsort(-coarse, kind="stable")
+    best, best_k = -math.inf, int(order[0])
+    for k in order:
+        if coarse[k] <= best:
+            break
+        fine = command_arc_limit(
+            arm, where[k][1], circle, tolerance_mm, tb, tip, nodes=nodes, anywhere=True
+        )
+        if fine > best:
+            best, best_k = fine, int(k)
+    return SampledLimit(float(best), where[best_k][1], float(where[best_k][0]), len(where))
