@@ -18,6 +18,7 @@ from armpath.planning.bounds.band import (
     Circle,
     _dual_bound,
     command_arc_limit,
+    sampled_arc_limit,
     taylor_bounds,
     tool_point_hessian,
 )
@@ -242,3 +243,25 @@ def test_arc_limit_for_a_middle_anywhere_in_the_band():
         assert anywhere > command_arc_limit(arm, q, circle, TOL)
         found = _longest_found(arm, circle, q_inner)
         assert found <= anywhere <= 1.15 * found
+
+
+def test_sampled_limit_is_the_largest_refined_one():
+    """The lazily refined largest limit over a few layers of configurations equals the largest
+    of every configuration's limit refined in full, and names that configuration."""
+    arm = seed_arm()
+    circle = Circle(np.array([330.0, 60.0, 260.0]), np.array([0.0, 0.0, 1.0]), 25.0)
+    q = np.asarray(arm.home, dtype=np.float64)
+    layers = []
+    for s_mm, angles in ((0.0, (0.2, 0.4)), (20.0, (1.5, 1.7, 3.0))):
+        qs = []
+        for angle in angles:
+            q = _on_circle(arm, circle, angle, q)
+            qs.append(q)
+        layers.append((s_mm, np.array(qs)))
+    every = [command_arc_limit(arm, c, circle, TOL, anywhere=True) for _, qs in layers for c in qs]
+    found = sampled_arc_limit(arm, layers, circle, TOL)
+    assert found.samples == 5
+    assert found.arc_mm == pytest.approx(max(every), rel=1e-12)
+    k = int(np.argmax(every))
+    assert np.array_equal(found.q, np.vstack([qs for _, qs in layers])[k])
+    assert found.s_mm == (0.0 if k < 2 else 20.0)
