@@ -1,4 +1,4 @@
-"""How much of a curved curve one command can follow within the tolerance band (issue 21).
+"""How much of a tight curve one command can follow within the tolerance band (issue 21).
 
 The trace bound's along part counts the joints' travel through the solution family; it does
 not see that a command moves the joints *linearly*: its tool path bends only as far as the
@@ -6,7 +6,9 @@ arm's second derivatives allow, so along a tight curve it stays within the band 
 millimetres (the seed arm's 25 mm circle: about 7 mm a command, while the family's
 largest-joint length would allow 25). This module proves, for one configuration, how long an
 arc of a circle any command can cover whose tool point lies within the tolerance at its start,
-its middle and its end, the middle configuration being that one.
+its middle and its end, the middle configuration being that one
+(:func:`command_arc_limit`), and the largest over a family's samples
+(:func:`sampled_arc_limit`).
 
 **The lemma.** A command from ``q0`` changes the joints by ``D`` (each within its largest step);
 its middle configuration is ``m = q0 + D/2`` and its tool points at start, middle and end are
@@ -68,7 +70,7 @@ from armpath.model.serial_arm import JointKind, SerialArm
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-#: The multipliers' minimisation (:func:`_dual_bound`): rounds of the barrier's weight (each a
+#: The multipliers' minimisation (:func:`_box_dual`): rounds of the barrier's weight (each a
 #: tenth of the last) and Newton steps in each at most (a round stops when converged).
 _BARRIER_ROUNDS = 7
 _NEWTON_STEPS = 30
