@@ -111,7 +111,12 @@ def tool_point_hessian(arm: SerialArm, q: FloatArray) -> FloatArray:
     turns, and zero where it slides: turning an earlier joint turns the later joint's velocity
     with it; sliding one leaves it as it is."""
     frames = forward_frames(arm, np.asarray(q, dtype=np.float64)[None])[0]
-    J = jacobian_from_frames(arm, frames[None])[0][:3]
+    return _hessian_from(arm, frames, jacobian_from_frames(arm, frames[None])[0][:3])
+
+
+def _hessian_from(arm: SerialArm, frames: FloatArray, J: FloatArray) -> FloatArray:
+    """:func:`tool_point_hessian` from the configuration's frames ``(n + 2, 4, 4)`` and the
+    tool point's Jacobian ``J (3, n)``, already computed."""
     n = arm.n_joints
     H = np.zeros((3, n, n))
     for i, joint in enumerate(arm.joints):
@@ -373,11 +378,14 @@ def _dual_bound(
     constraints' negative curvature, is largest, until its bound lies within
     :data:`_BRANCH_GAP` of the best feasible ``g'D`` found (the dual's maximisers of the
     boxes that satisfy every constraint) or ``nodes`` boxes were bounded. The bound is the
-    highest of the boxes left. Where the constraints are far from convex (an arm near a
-    singular configuration, its null space bending the path both ways), one box's dual lies
-    far above the largest ``g'D``; split boxes bring it down."""
+    highest of the boxes left. A safety net: where the constraints are far from convex (an
+    arm's null space bending the path both ways) one box's dual may lie well above the largest
+    ``g'D``, and split boxes bring it down; at the configurations the tests check, a singular
+    wrist's included, one box's dual already lies within 10 % of SLSQP's longest command."""
     mats = np.asarray(blocks, dtype=np.float64).reshape(-1, g.size, g.size)
     caps = np.asarray(limits, dtype=np.float64)
+    if nodes <= 1:
+        return _box_dual(g, mats, caps, -steps, steps)[0]
 
     def feasible(D: FloatArray) -> bool:
         return bool(np.all(np.einsum("a,lab,b->l", D, mats, D) <= caps))
@@ -455,8 +463,9 @@ def command_arc_limit(
         return 0.0  # no command through q_mid has its middle within the tolerance
     slack = R + tol - radius_a  # how far inside the outer circle it lies, 0 to 2 tol
     t = np.cross(b, r)
-    J = jacobian_from_frames(arm, frames[None])[0][:3][:, tip]
-    H = tool_point_hessian(arm, q_mid)[:, tip][:, :, tip]
+    J_all = jacobian_from_frames(arm, frames[None])[0][:3]
+    J = J_all[:, tip]
+    H = _hessian_from(arm, frames, J_all)[:, tip][:, :, tip]
     steps = arm.lattice.max_step[tip]
     g, jr, jb = J.T @ t, J.T @ r, J.T @ b
     A = np.outer(g, g) + radius_a * np.einsum("k,kab->ab", r, H)
@@ -513,8 +522,9 @@ def sampled_arc_limit(
     the configurations of ``layers`` (each the arc length, mm, of a curve point and the
     family's samples there, ``(M, n)``): each sample first bounded by one box's dual, then, from
     the highest down, again with the branch and bound of ``nodes`` boxes until the highest
-    refined one is at least the next unrefined one (each value is a bound, the refined one no
-    higher). Proven per sample; between samples the family is as far sampled as it is."""
+    refined one is at least the next unrefined one (each value is a bound on its sample's
+    limit, so the unrefined ones below it need no refining). Proven per sample; between
+    samples the family is as far sampled as it is."""
     tip = tool_point_joints(arm)
     tb = taylor_bounds(arm, tip)
     where = [(s, q) for s, qs in layers for q in qs]
