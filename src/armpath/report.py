@@ -169,6 +169,12 @@ BOUND_OPENING = "legs from the start into a hollow obstacle through its opening"
 #: The same for a trace or tour bounded by its arm's carriage
 #: (:mod:`armpath.planning.bounds.carriage`).
 CARRIAGE_SCOPE = "the carriage's travel to where the arm reaches every point, anything else ignored"
+#: The same for a trace along a circle bounded by the band
+#: (:mod:`armpath.planning.bounds.band_trace`).
+BAND_SCOPE = (
+    "the longest arc one command can follow within the tolerance band, every configuration "
+    "that may be clear; the least approach to any point of the curve"
+)
 #: The same for a tour bounded over its lattice goal states (all of them listed).
 LATTICE_SCOPE = (
     "every lattice goal state within the tolerance that keeps the clearance rule, all listed, "
@@ -186,11 +192,19 @@ def by_carriage(bound: dict[str, Any]) -> bool:
     return "carriage_reach_mm" in (bound.get("sampling") or {})
 
 
+def by_band(bound: dict[str, Any]) -> bool:
+    """Whether a result's ``lower_bound`` is a trace's band bound (along a circle)."""
+    return "command_arc_limit_mm" in (bound.get("sampling") or {})
+
+
 def bound_scope(bound: dict[str, Any]) -> str:
-    """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`, :data:`CARRIAGE_SCOPE`) of a result's
-    ``lower_bound``, with :data:`BOUND_OPENING` where the bound sampled an opening."""
+    """:data:`BOUND_SCOPE` (or :data:`LATTICE_SCOPE`, :data:`CARRIAGE_SCOPE`,
+    :data:`BAND_SCOPE`) of a result's ``lower_bound``, with :data:`BOUND_OPENING` where the
+    bound sampled an opening."""
     if by_carriage(bound):
         return CARRIAGE_SCOPE
+    if by_band(bound):
+        return BAND_SCOPE
     scope = LATTICE_SCOPE if over_lattice(bound) else BOUND_SCOPE
     opening = "opening_samples" in (bound.get("sampling") or {})
     return f"{scope}; {BOUND_OPENING}" if opening else scope

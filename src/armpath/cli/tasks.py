@@ -794,7 +794,7 @@ def spotweld(
 
 
 def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
-    from armpath.report import arc_text, by_carriage
+    from armpath.report import arc_text, by_band, by_carriage
 
     table = Table(
         title=escape(f"trace {doc['curve']['definition'].get('name', 'curve')}"),
@@ -814,8 +814,10 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
         else "none: the solution family has no member within the limits on a traced span"
     )
     bound = doc.get("lower_bound")
-    # a carriage's travel holds for any passes in any order, the family's for one a span
-    scope = "any passes" if bound is not None and by_carriage(bound) else "one pass per span"
+    # a carriage's travel and the band's arcs hold for any passes in any order, the family's
+    # for one a span
+    anywhere = bound is not None and (by_carriage(bound) or by_band(bound))
+    scope = "any passes" if anywhere else "one pass per span"
     table.add_row("lower bound", _bound_text(bound, scope, missing))
     table.add_row("passes", str(len(doc["passes"])))
     for p in doc["pass_details"]:

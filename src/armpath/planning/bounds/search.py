@@ -732,9 +732,12 @@ class CellSearch:
         rounds: int | None = None,
         say: Callable[[str], None] | None = None,
         upper: float = np.inf,
+        enough: float = -np.inf,
     ) -> SearchResult | None:
         """Search ``rounds`` more rounds at most (None: :func:`search_rounds` of the budget),
-        from the incumbent ``upper`` (commands; a plan's) if lower than any found; None when
+        from the incumbent ``upper`` (commands; a plan's) if lower than any found, and only
+        while the path through clear samples costs more than ``enough`` (commands; another
+        bound's: the relaxation's optimum is at most that path's); None when
         no path reaches the end (a site without a sample in the first round) or an earlier
         call ended the search. A call after one that ended on its rounds alone goes on from
         where that one stopped (its last round's cells pruned and split, not solved again):
@@ -835,6 +838,7 @@ class CellSearch:
                 incumbent - best.value <= GAP_GOAL
                 or kept > self.max_samples
                 or stalled >= STALL_ROUNDS
+                or clear_total <= enough
             ):
                 self._ended = True
                 break

@@ -11,7 +11,14 @@ from numpy.typing import NDArray
 from armpath.errors import PlanningError
 from armpath.planning.bounds.passage import passage_method, passage_sampling, sampled_passages
 from armpath.planning.bounds.sampling import FamilySampler, _allowed_at
-from armpath.planning.bounds.search import CellSearch, Chain, Join, Loop, search_rounds
+from armpath.planning.bounds.search import (
+    CellSearch,
+    Chain,
+    Join,
+    Loop,
+    SearchResult,
+    search_rounds,
+)
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -152,6 +159,7 @@ def trace_bound(
     path_q: FloatArray | None = None,
     max_samples: int | None = None,
     through_openings: bool = True,
+    after_first: Callable[[CommandBound], float] | None = None,
 ) -> CommandBound:
     """Fewest commands of any plan that passes the tool point along each span of the curve
     (arc lengths mm, ``a < b``) within ``tolerance_mm`` from ``q_start`` (rad).
@@ -176,6 +184,9 @@ def trace_bound(
     as the sampling gets finer. ``through_openings``: the approach to a point inside a hollow
     obstacle takes at least its way through one of the obstacle's openings
     (:mod:`~armpath.planning.bounds.passage`); False: the direct approach only.
+    ``after_first``: called with the bound after the first round; what it returns (commands,
+    another bound) ends the search once the path through clear samples costs no more (the
+    family's bound cannot then pass it).
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
     rounds = search_rounds(max_samples) if rounds is None else rounds
@@ -226,15 +237,31 @@ def trace_bound(
     # against 121.9 evenly, 129.3 against 126.1 searched; the UR5 cell's seam, a loop, 68.5
     # evenly against 62.9, then 93.0)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
-    if rounds > 1:
-        # on from the first round's cells (pruned and split, not solved again); its result is
-        # the best of every round, the first's included
-        found = search.run(rounds - 1, on_progress, upper=upper_commands) or found
     if len(placements) > 1:
         placed += (
             ": of the points evenly spaced and where the plan's joint path turns, those whose "
             "first round bounds higher"
         )
+    enough = -np.inf
+    if after_first is not None:
+        enough = after_first(_bound(found, search, placed, s_all, with_errors, loop))
+    if rounds > 1 and found.clear_path > enough:
+        # on from the first round's cells (pruned and split, not solved again); its result is
+        # the best of every round, the first's included
+        found = search.run(rounds - 1, on_progress, upper=upper_commands, enough=enough) or found
+    return _bound(found, search, placed, s_all, with_errors, loop)
+
+
+def _bound(
+    found: SearchResult,
+    search: CellSearch,
+    placed: str,
+    s_all: FloatArray,
+    with_errors: bool = True,
+    loop: bool = False,
+) -> CommandBound:
+    """The trace bound of a search's result (see :func:`trace_bound`)."""
+    sampler = search.sampler
     return CommandBound(
         proven=sampler.covers_family and with_errors,
         commands=max(int(np.ceil(found.value - 1e-9)), 0),

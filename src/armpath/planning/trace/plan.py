@@ -33,6 +33,7 @@ from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tick_jacobian, tool_position
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
+from armpath.planning.bounds.band_trace import band_trace_bound, with_band
 from armpath.planning.bounds.carriage import carriage_travel_bound, with_carriage
 from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.bounds.trace import LAYER_INSET_MM
@@ -361,11 +362,25 @@ def trace_plan_bound(
     if short and len(short) < len(spans):
         tries.append([(a, b) for a, b in spans if b - a >= 2 * LAYER_INSET_MM])
     found = None
+    band: list[CommandBound | None] = [None]
+    start = sequence.grid.to_joint(sequence.start_ticks)
+
+    def along_band(first: CommandBound) -> float:
+        # a circle: how far one command can follow it within the band (bounds/band_trace.py),
+        # once the family's first round is known (it may show the band bound is no higher)
+        band[0] = None
+        if not (with_errors and first.proven):
+            return -np.inf
+        if on_progress is not None:
+            on_progress("bounding the commands along the band")
+        band[0] = band_trace_bound(fam, start, these, result.tolerance_mm, loop, first)
+        return -np.inf if band[0] is None else band[0].value
+
     for these in tries:
         try:
             found = trace_bound(
                 fam,
-                sequence.grid.to_joint(sequence.start_ticks),
+                start,
                 these,
                 result.tolerance_mm,
                 loop=loop,
@@ -376,17 +391,19 @@ def trace_plan_bound(
                 path_q=np.vstack(path_q),
                 max_samples=max_samples,
                 with_errors=with_errors,
+                after_first=along_band,
             )
             break
         except PlanningError:
             continue
     if not with_errors:
         return found
+    found = with_band(found, band[0])
     carriage = carriage_travel_bound(
         fam.arm,
         result.curve,
         [(a, b) for a, b in spans],
-        sequence.grid.to_joint(sequence.start_ticks),
+        start,
         result.tolerance_mm,
     )
     return with_carriage(found, carriage, float(sequence.n_commands))

@@ -1,0 +1,455 @@
+"""The band bound of a trace along a circle (issue 21): the least approach to the curve plus
+its traced length over the longest arc one command can follow anywhere in the family.
+
+A pass keeps the tool point within the tolerance of the curve at every instant (the trace's
+deviation is that of the continuous tool path). Where the traced spans lie on a circle (to
+within a small share of the tolerance, :func:`fitted_circle`; the band taken that much wider),
+every command of a pass has its middle configuration in the family, and by
+:mod:`~armpath.planning.bounds.band` the circle points nearest the tool point over any part of
+that command span an arc of at most the command's limit there. So if no member's limit exceeds
+``U``, a pass covering a span of length ``L`` needs at least ``(L - 2 e) / U`` commands,
+``e = 2 R asin(tol / R)`` the arc a tool point within the tolerance covers beyond the circle
+point nearest it at either end (a second pass over a span would add a command between the
+passes to save ``2 e / U``, less than one). Before the first pass the tool point has to reach
+the band: at least the least largest-joint distance from the start to any member at any point
+of the spans (:func:`least_approach`). The bound is the sum.
+
+``U`` is the largest limit over the family sampled at points along the spans
+(:func:`family_arc_limit`), each sample's limit widened by how far it differs from its
+neighbours' (the nearest member of each neighbouring tool direction, and the nearest at the
+neighbouring points along the curve): the same assumption the family's sampling errors make
+(:mod:`~armpath.planning.bounds`), that the family varies no faster within a sample's cell
+than between neighbouring samples. The least approach samples the family with the tolerance
+raised by half the spacing of its points, so every member at a point between them lies within
+a sample's cell.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armpath.budget import check_time
+from armpath.geometry.curves import Curve
+from armpath.jit import njit
+from armpath.kinematics import tool_point_joints
+from armpath.planning.bounds.band import Circle, arc_limits, command_arc_limit, taylor_bounds
+from armpath.planning.bounds.metric import _wrapped
+from armpath.planning.bounds.sampling import (
+    BRANCH_GAP,
+    FamilySampler,
+    Layer,
+    _allowed_at,
+    _delaunay_neighbours,
+)
+from armpath.planning.bounds.value import CommandBound
+from armpath.planning.trace.family import CurveFamily, fibonacci_directions
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: The traced spans count as a circle where every point of them lies within this share of the
+#: tolerance of the circle fitted to them (the band is then taken that much wider).
+FIT_SHARE = 0.05
+#: Points of the curve the circle is fitted to and checked against, per mm of the spans, and
+#: at least and at most.
+FIT_POINTS_PER_MM, FIT_POINTS_MIN, FIT_POINTS_MAX = 4.0, 512, 20_000
+#: Points along a whole circle where the family is sampled for the limit (a span gets its
+#: share, at least two), and tool directions at each. Seed arm's 25 mm circle, 250
+#: directions: 8 points 7.99 mm, 12 7.87, 16 7.73, 24 7.66 (sampled members' own largest: 7.52);
+#: 16 points and 100 directions 7.72 mm (15,044 members, about 10 s).
+LIMIT_LAYERS, LIMIT_DIRECTIONS = 16, 100
+#: Spacing (mm) of the points along the spans where the family is sampled for the least
+#: approach, and tool directions at each. Seed circle from home: 5 mm 34.1 commands, 2 mm
+#: 34.3, 10 mm 33.8.
+APPROACH_GAP_MM, APPROACH_DIRECTIONS = 5.0, 2000
+#: Tool directions of the least approach's first, coarse sampling of every point.
+APPROACH_COARSE = 300
+#: Most points of the least approach (a longer curve gets them farther apart).
+APPROACH_POINTS_MAX = 400
+#: Boxes the branch and bound may bound for one configuration's limit when it is refined.
+REFINE_NODES = 200
+
+
+def fitted_circle(curve: Curve, spans_mm: list[tuple[float, float]]) -> tuple[Circle, float]:
+    """The circle fitted to the points of ``curve`` along ``spans_mm`` (arc lengths, mm) and
+    the largest distance (mm) of those points from it: the plane through them (least
+    squares), the circle in it (algebraic fit), the distance in space."""
+    total = sum(b - a for a, b in spans_mm)
+    count = int(np.clip(FIT_POINTS_PER_MM * total, FIT_POINTS_MIN, FIT_POINTS_MAX))
+    s = np.concatenate(
+        [np.linspace(a, b, max(int(count * (b - a) / max(total, 1e-300)), 3)) for a, b in spans_mm]
+    )
+    p = np.asarray(curve.at_arc_length(s), dtype=np.float64)
+    middle = p.mean(axis=0)
+    normal = np.linalg.svd(p - middle, full_matrices=False)[2][2]
+    e1 = np.linalg.svd(p - middle, full_matrices=False)[2][0]
+    e2 = np.cross(normal, e1)
+    x, y = (p - middle) @ e1, (p - middle) @ e2
+    M = np.column_stack([x, y, np.ones_like(x)])
+    coef = np.linalg.lstsq(M, -(x**2 + y**2), rcond=None)[0]
+    cx, cy = -coef[0] / 2.0, -coef[1] / 2.0
+    r2 = cx**2 + cy**2 - coef[2]
+    if not (np.isfinite(r2) and r2 > 0.0):
+        return Circle(middle, normal, math.inf), math.inf
+    radius = math.sqrt(r2)
+    rho = np.hypot(x - cx, y - cy)
+    height = (p - middle) @ normal
+    deviation = float(np.max(np.hypot(rho - radius, height)))
+    return Circle(middle + cx * e1 + cy * e2, normal, radius), deviation
+
+
+@njit(cache=True)
+def _direction_neighbours(
+    u: FloatArray,
+    node_dir: IntArray,
+    dir_ptr: IntArray,
+    nb_ptr: IntArray,
+    nb: IntArray,
+    period: FloatArray,
+    branch_gap: float,
+    own: bool,
+) -> IntArray:  # pragma: no cover - compiled
+    """Per sample (sorted by direction, ``dir_ptr`` each direction's first), the nearest sample
+    (largest-joint distance) of each neighbouring direction that has one within
+    ``branch_gap`` commands, the samples' neighbours of the family's sampling errors
+    (:func:`~armpath.planning.bounds.sampling._sampling_errors`); -1 pads the rows."""
+    m, j = u.shape
+    width = 1
+    for d in range(nb_ptr.size - 1):
+        width = max(width, nb_ptr[d + 1] - nb_ptr[d] + 1)
+    out = np.full((m, width), -1, dtype=np.int64)
+    for i in range(m):
+        d = node_dir[i]
+        count = 0
+        for p in range(nb_ptr[d] - (1 if own else 0), nb_ptr[d + 1]):
+            e = nb[p] if p >= nb_ptr[d] else d
+            best, arg = np.inf, -1
+            for k in range(dir_ptr[e], dir_ptr[e + 1]):
+                if k == i:
+                    continue
+                worst = 0.0
+                for c in range(j):
+                    x = _wrapped(u[k, c] - u[i, c], period[c])
+                    if x > worst:
+                        worst = x
+                        if worst >= best:
+                            break
+                if worst < best:
+                    best, arg = worst, k
+            if arg >= 0 and best <= branch_gap:
+                out[i, count] = arg
+                count += 1
+    return out
+
+
+@njit(cache=True)
+def _nearest(u: FloatArray, v: FloatArray, period: FloatArray) -> IntArray:  # pragma: no cover
+    """For each sample of ``u``, the nearest of ``v`` (largest-joint distance; -1 if none)."""
+    out = np.full(u.shape[0], -1, dtype=np.int64)
+    for i in range(u.shape[0]):
+        best = np.inf
+        for k in range(v.shape[0]):
+            worst = 0.0
+            for c in range(u.shape[1]):
+                x = _wrapped(v[k, c] - u[i, c], period[c])
+                if x > worst:
+                    worst = x
+                    if worst >= best:
+                        break
+            if worst < best:
+                best, out[i] = worst, k
+    return out
+
+
+@dataclass(frozen=True)
+class FamilyLimit:
+    """The longest arc (mm) one command can follow anywhere in the family
+    (:func:`family_arc_limit`): ``arc_mm``, the sample whose cell gives it (configuration rad /
+    mm, arc length mm of its curve point) and that sample's own limit; ``samples`` bounded,
+    ``refined`` of them by branch and bound."""
+
+    arc_mm: float
+    q: FloatArray
+    s_mm: float
+    sample_arc_mm: float
+    samples: int
+    refined: int
+
+
+def _cell_limit(own: float, neighbours: FloatArray) -> float:
+    """The largest limit in a sample's cell: its own limit widened by the most it differs from
+    its neighbours' (the highest of ``max(neighbours)`` and ``2 own - min(neighbours)``)."""
+    if neighbours.size == 0:
+        return own
+    return max(float(neighbours.max()), 2.0 * own - float(neighbours.min()))
+
+
+def family_arc_limit(
+    sampler: FamilySampler,
+    circle: Circle,
+    tolerance_mm: float,
+    s_layers: list[FloatArray],
+    cyclic: bool,
+    directions: int = LIMIT_DIRECTIONS,
+    nodes: int = REFINE_NODES,
+) -> FamilyLimit:
+    """The largest limit (:func:`~armpath.planning.bounds.band.command_arc_limit`, its middle
+    anywhere within ``tolerance_mm`` of ``circle``) over the cells of the family sampled along
+    ``directions`` tool directions at the arc lengths of each span's layers ``s_layers`` (mm,
+    ascending; ``cyclic``: one span round a closed curve, its last layer next to its first).
+    Each sample's cell limit is its own widened by how far it differs from its neighbours
+    (:func:`_cell_limit`): the nearest member of each neighbouring direction
+    (:func:`_direction_neighbours`) and the nearest at the neighbouring layers of its span.
+    Every limit is first one box's dual each round
+    (:func:`~armpath.planning.bounds.band.arc_limits`); from the highest cell down, a cell's
+    sample and neighbours are refined by branch and bound (``nodes`` boxes) and the cell taken
+    at the lower of the two, until the highest refined cell is at least the next unrefined
+    one."""
+    fam = sampler.fam
+    arm = fam.arm
+    tip = tool_point_joints(arm)
+    tb = taylor_bounds(arm, tip)
+    dirs = fibonacci_directions(directions)
+    layers: list[tuple[float, Layer, IntArray]] = []
+    span_of: list[int] = []
+    for k, positions in enumerate(s_layers):
+        for s in positions:
+            check_time("bounding the commands along the band")
+            acc, (layer, _, _, _) = sampler.sampled(
+                fam.frame(float(s))[0], dirs, _allowed_at(fam, float(s)), levels=0
+            )
+            nb_ptr, nb, _ = _delaunay_neighbours(acc.dirs, acc.caps)
+            assert layer.direction is not None
+            layer = layer.subset(np.argsort(layer.direction, kind="stable"))
+            assert layer.direction is not None
+            dir_ptr = np.searchsorted(layer.direction, np.arange(acc.dirs.shape[0] + 1))
+            near = _direction_neighbours(
+                layer.u, layer.direction, dir_ptr.astype(np.int64), nb_ptr, nb,
+                sampler.period, BRANCH_GAP, sampler.turns > 1,
+            )  # fmt: skip
+            layers.append((float(s), layer, near))
+            span_of.append(k)
+    offsets = np.cumsum([0] + [lay.size for _, lay, _ in layers])
+    total = int(offsets[-1])
+    if total == 0:
+        return FamilyLimit(0.0, np.zeros(arm.n_joints), math.nan, 0.0, 0, 0)
+    # every sample's neighbours, as global indices (-1 pads)
+    rows = []
+    for i, (_, lay, near) in enumerate(layers):
+        cols = [np.where(near >= 0, near + offsets[i], -1)]
+        for step in (-1, 1):
+            j = (i + step) % len(layers) if cyclic and len(layers) > 2 else i + step
+            if 0 <= j < len(layers) and j != i and span_of[j] == span_of[i]:
+                near_j = _nearest(lay.u, layers[j][1].u, sampler.period)
+                cols.append(np.where(near_j >= 0, near_j + offsets[j], -1)[:, None])
+        rows.append(np.column_stack(cols))
+    width = max(r.shape[1] for r in rows)
+    neighbours = np.vstack(
+        [np.pad(r, ((0, 0), (0, width - r.shape[1])), constant_values=-1) for r in rows]
+    )
+    q = np.vstack([lay.q for _, lay, _ in layers])
+    s_of = np.concatenate([np.full(lay.size, s) for s, lay, _ in layers])
+    coarse = arc_limits(arm, q, circle, tolerance_mm, tb, tip, anywhere=True)
+    cells = np.array(
+        [_cell_limit(coarse[i], coarse[row[row >= 0]]) for i, row in enumerate(neighbours)]
+    )
+    # a sample with no neighbour (a sliver of the family) differs from its cell's other
+    # members by as much as any sample differs from its neighbours
+    alone = ~np.any(neighbours >= 0, axis=1)
+    if np.any(alone):
+        cells[alone] += float(np.max(cells - coarse, initial=0.0))
+    fine: dict[int, float] = {}
+
+    def refined(i: int) -> float:
+        if i not in fine:
+            check_time("bounding the commands along the band")
+            limit = command_arc_limit(
+                arm, q[i], circle, tolerance_mm, tb, tip, nodes=nodes, anywhere=True
+            )
+            fine[i] = min(float(coarse[i]), limit)
+        return fine[i]
+
+    best, best_i = -math.inf, 0
+    for i in np.argsort(-cells, kind="stable"):
+        if cells[i] <= best:
+            break
+        row = neighbours[i][neighbours[i] >= 0]
+        if row.size == 0:  # widened as the others are
+            cell = cells[i] - coarse[i] + refined(int(i))
+        else:
+            cell = min(
+                cells[i], _cell_limit(refined(int(i)), np.array([refined(int(k)) for k in row]))
+            )
+        if cell > best:
+            best, best_i = cell, int(i)
+    return FamilyLimit(float(best), q[best_i], float(s_of[best_i]), fine[best_i], total, len(fine))
+
+
+def _points_along(spans_mm: list[tuple[float, float]], gap_mm: float) -> FloatArray:
+    """Arc lengths (mm) along each span, evenly, every point of it within ``gap_mm / 2`` of
+    one of them (at most :data:`APPROACH_POINTS_MAX` in all: farther apart on a long curve)."""
+    total = sum(b - a for a, b in spans_mm)
+    gap = max(gap_mm, total / APPROACH_POINTS_MAX)
+    out = []
+    for a, b in spans_mm:
+        count = max(math.ceil((b - a) / gap), 1)
+        out.append(a + (np.arange(count) + 0.5) * (b - a) / count)
+    return np.concatenate(out)
+
+
+def least_approach(
+    fam: CurveFamily,
+    q_start: FloatArray,
+    spans_mm: list[tuple[float, float]],
+    tolerance_mm: float,
+    gap_mm: float = APPROACH_GAP_MM,
+    directions: int = APPROACH_DIRECTIONS,
+) -> float:
+    """The fewest commands (fractional: the largest-joint distance) from ``q_start`` to any
+    member of the family at any point of the spans, less the sampling errors: the family is
+    sampled at points every ``gap_mm`` (:func:`_points_along`; the spacing used is
+    ``gap_mm`` or more) with the tolerance raised by half the spacing, so that a member at any
+    point of the spans is a member there, within a sample's cell. Obstacles are ignored on
+    the way (a relaxation); the members kept are those that may be clear. Each point is
+    first sampled along :data:`APPROACH_COARSE` directions (wider cells: a lower distance),
+    then, from the nearest up, along ``directions`` until the next point's coarse distance is
+    no less than the least found (each is a bound for its point: the higher is taken)."""
+    s_all = _points_along(spans_mm, gap_mm)
+    spacing = max(gap_mm, sum(b - a for a, b in spans_mm) / APPROACH_POINTS_MAX)
+    tol = tolerance_mm + spacing / 2.0
+
+    def nearest(count: int, s: float) -> float:
+        check_time("bounding the approach to the band")
+        sampler = samplers[count]
+        layer = sampler.layer(
+            fam.frame(float(s))[0], fibonacci_directions(count), _allowed_at(fam, float(s)),
+            levels=0,
+        )  # fmt: skip
+        return float(sampler.distance_from(q_start, layer).min()) if layer.size else math.inf
+
+    coarse_count = min(APPROACH_COARSE, directions)
+    samplers = {c: FamilySampler(fam, tol, c, q_start) for c in {coarse_count, directions}}
+    coarse = np.array([nearest(coarse_count, s) for s in s_all])
+    best = math.inf
+    for k in np.argsort(coarse, kind="stable"):
+        if not coarse[k] < best:
+            break
+        best = min(best, max(float(coarse[k]), nearest(directions, s_all[k])))
+    return best
+
+
+def _limit_layers(
+    spans_mm: list[tuple[float, float]], circle: Circle, cyclic: bool
+) -> list[FloatArray]:
+    """Arc lengths (mm) of each span's layers for the limit: :data:`LIMIT_LAYERS` round a
+    whole circle, a span its share (at least two, at its ends; round a closed curve evenly
+    from its start)."""
+    circumference = 2.0 * math.pi * circle.radius_mm
+    if cyclic:
+        (a, b), count = spans_mm[0], LIMIT_LAYERS
+        return [a + (b - a) * np.arange(count) / count]
+    out = []
+    for a, b in spans_mm:
+        count = max(math.ceil(LIMIT_LAYERS * (b - a) / circumference) + 1, 2)
+        out.append(np.linspace(a, b, count))
+    return out
+
+
+def band_trace_bound(
+    fam: CurveFamily,
+    q_start: FloatArray,
+    spans_mm: list[tuple[float, float]],
+    tolerance_mm: float,
+    loop: bool = False,
+    family: CommandBound | None = None,
+) -> CommandBound | None:
+    """The band bound (see the module) of any plan whose passes trace ``spans_mm`` (arc
+    lengths, mm) within ``tolerance_mm`` from ``q_start`` (rad); ``loop``: one span round
+    the whole closed curve. None where the spans do not lie on a circle (within
+    :data:`FIT_SHARE` of the tolerance), where the lemma does not apply to it (too tight, or
+    an arm not measured in mm) or where the family has no member on them; and, given the
+    ``family`` bound (:func:`~armpath.planning.bounds.trace_bound`), where this one would not
+    be higher: its along part over the limit at the family bound's own path (the limit is at
+    least that) or over the family's limit, with the family bound's approach part (the least
+    approach is at most about that), is no more than it."""
+    arm = fam.arm
+    circle, deviation = fitted_circle(fam.curve, spans_mm)
+    if not deviation <= FIT_SHARE * tolerance_mm:
+        return None
+    band = tolerance_mm + deviation
+    tb = taylor_bounds(arm, tool_point_joints(arm))
+    if not math.isfinite(float(arc_limits(arm, np.asarray(arm.home)[None], circle, band, tb)[0])):
+        return None  # the lemma does not apply to this circle and arm
+    ends = 4.0 * circle.radius_mm * math.asin(min(band / circle.radius_mm, 1.0))
+    traced = sum(max(b - a - ends, 0.0) for a, b in spans_mm)
+
+    def lower(along: float) -> bool:  # whether the band bound would be no higher
+        if family is None:
+            return False
+        approach = math.ceil(family.parts.get("approach", 0.0) - 1e-9)
+        return approach + along <= family.value
+
+    if family is not None and family.guide_q is not None and len(family.guide_q):
+        tip = tool_point_joints(arm)
+        path = max(
+            command_arc_limit(arm, q, circle, band, tb, tip, REFINE_NODES, anywhere=True)
+            for q in family.guide_q
+        )
+        if lower(traced / max(path, 1e-300)):
+            return None
+    sampler = FamilySampler(fam, tolerance_mm, LIMIT_DIRECTIONS, q_start)
+    limit = family_arc_limit(
+        sampler, circle, band, _limit_layers(spans_mm, circle, loop), loop, LIMIT_DIRECTIONS
+    )
+    if limit.samples == 0 or not math.isfinite(limit.arc_mm) or not limit.arc_mm > ends:
+        return None
+    along = traced / limit.arc_mm
+    if lower(along):
+        return None
+    approach = least_approach(fam, q_start, spans_mm, tolerance_mm)
+    if not math.isfinite(approach):
+        return None
+    value = math.ceil(approach - 1e-9) + along
+    return CommandBound(
+        proven=sampler.covers_family,
+        commands=math.ceil(value - 1e-9),
+        value=value,
+        method=(
+            "least approach to the band plus the traced length over the longest arc one command "
+            f"can follow within it: the spans lie within {deviation:.2g} mm of a circle of radius "
+            f"{circle.radius_mm:.4g} mm; a command's middle configuration anywhere in the family "
+            f"follows at most {limit.arc_mm:.3f} mm of it (Taylor along the joint line and a "
+            "Lagrangian dual per sampled member, widened by how far neighbouring members "
+            "differ); the approach the least largest-joint distance from the start to the "
+            "family sampled along the spans, less the sampling errors"
+        ),
+        parts={"approach": float(math.ceil(approach - 1e-9)), "along": along},
+        sampling={
+            "circle_radius_mm": circle.radius_mm,
+            "circle_deviation_mm": deviation,
+            "command_arc_limit_mm": limit.arc_mm,
+            "least_approach_commands": approach,
+            "limit_samples": float(limit.samples),
+            "limit_refined": float(limit.refined),
+        },
+    )
+
+
+def with_band(family: CommandBound | None, band: CommandBound | None) -> CommandBound | None:
+    """The higher of the family bound and the band bound (its value, parts and method; the
+    family bound's guide and sampling kept, its value named in the sampling)."""
+    if band is None or family is None or not band.value > family.value:
+        return family
+    return replace(
+        family,
+        commands=band.commands,
+        value=band.value,
+        method=band.method + f"; the family's shortest path alone: {family.value:.1f}",
+        parts=band.parts,
+        sampling={**family.sampling, **band.sampling, "family_bound_commands": family.value},
+        proven=family.proven and band.proven,
+    )

@@ -1,0 +1,142 @@
+"""The band bound of a trace along a circle (planning/bounds/band_trace.py): the fitted circle
+against the curve's own geometry, the family's arc limit against the longest commands SLSQP
+finds anywhere on the circle, the least approach against SLSQP's nearest configuration on it,
+and the bound against the plans the tracer makes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+from armpath.geometry import CollisionWorld
+from armpath.geometry.curves import ParametricCurve, Polyline
+from armpath.kinematics import position_jacobian, tool_point_joints, tool_position
+from armpath.model.seed_arm import seed_arm
+from armpath.planning.bounds.band import Circle
+from armpath.planning.bounds.band_trace import (
+    family_arc_limit,
+    fitted_circle,
+    least_approach,
+)
+from armpath.planning.bounds.sampling import FamilySampler
+from armpath.planning.trace.family import curve_family
+from test_band import TOL, _longest_found, _on_circle
+
+CENTRE, RADIUS = np.array([330.0, 60.0, 260.0]), 25.0
+
+
+def _seed_circle():
+    return ParametricCurve(
+        "circle", f"{CENTRE[0]} + {RADIUS}*cos(t)", f"{CENTRE[1]} + {RADIUS}*sin(t)",
+        f"{CENTRE[2]}", 0.0, 2 * np.pi,
+    )  # fmt: skip
+
+
+def test_fitted_circle_of_a_tilted_circle_a_polygon_and_an_ellipse():
+    """A circle in a tilted plane is found exactly (centre, radius, normal); a regular polygon
+    inscribed in a circle lies within its sagitta of the fitted one and farther than half of
+    it; an ellipse is no circle."""
+    curve = ParametricCurve(
+        "tilted", "100 + 40*cos(t)", "-50 + 40*sin(t)*cos(0.5)", "200 + 40*sin(t)*sin(0.5)",
+        0.0, 2 * np.pi,
+    )  # fmt: skip
+    circle, deviation = fitted_circle(curve, [(0.0, curve.length)])
+    assert deviation < 1e-6
+    assert circle.radius_mm == pytest.approx(40.0, abs=1e-6)
+    assert np.allclose(circle.centre, [100.0, -50.0, 200.0], atol=1e-6)
+    assert abs(abs(circle.normal @ [0.0, -math.sin(0.5), math.cos(0.5)]) - 1.0) < 1e-9
+    sides, R = 24, 50.0
+    angles = 2 * np.pi * np.arange(sides) / sides
+    polygon = Polyline("polygon", np.column_stack([R * np.cos(angles), R * np.sin(angles),
+                                                   np.zeros(sides)]), closed=True)  # fmt: skip
+    sagitta = R * (1.0 - math.cos(math.pi / sides))
+    _, deviation = fitted_circle(polygon, [(0.0, polygon.length)])
+    assert 0.5 * sagitta - 1e-3 <= deviation <= sagitta + 1e-9
+    ellipse = ParametricCurve("ellipse", "60*cos(t)", "40*sin(t)", "0", 0.0, 2 * np.pi)
+    assert fitted_circle(ellipse, [(0.0, ellipse.length)])[1] > 5.0
+
+
+@pytest.fixture(scope="module")
+def free_circle():
+    arm = seed_arm()
+    return arm, curve_family(arm, CollisionWorld(()), _seed_circle())
+
+
+def test_family_limit_covers_the_longest_commands_found(free_circle):
+    """The seed arm in free space on the README's 25 mm circle: no command SLSQP finds
+    through members at six points of the circle (two configurations each, from different
+    starts) or through the sample whose cell gives the limit (its tool point moved to the
+    band's inner edge) covers more than the family's
+    limit, which lies within 40 % of the longest found (the sample's own limit, and its
+    neighbours' widening, above it)."""
+    arm, fam = free_circle
+    circle = Circle(CENTRE, np.array([0.0, 0.0, 1.0]), RADIUS)
+    sampler = FamilySampler(fam, TOL, 60, np.asarray(arm.home, dtype=np.float64))
+    layers = [fam.curve.length * np.arange(6) / 6]
+    limit = family_arc_limit(sampler, circle, TOL, layers, cyclic=True, directions=60)
+    assert limit.samples > 100 and limit.refined >= 1
+    assert limit.arc_mm >= limit.sample_arc_mm
+    # through the configuration nearest the sample that gives the limit whose tool point lies
+    # at the band's inner edge (where the limit takes the middle: the most room)
+    q = limit.q.copy()
+    inward = (CENTRE - tool_position(arm, q)) * [1.0, 1.0, 0.0]
+    target = tool_position(arm, q) + 0.99 * TOL * inward / np.linalg.norm(inward)
+    for _ in range(5):
+        q = q + np.linalg.pinv(position_jacobian(arm, q)) @ (target - tool_position(arm, q))
+    found = [_longest_found(arm, circle, q)]
+    rng = np.random.default_rng(7)
+    for angle in np.linspace(0.0, 2 * np.pi, 6, endpoint=False):
+        for _ in range(2):
+            start = np.clip(np.asarray(arm.home) + rng.normal(0.0, 0.4, 6), arm.lower, arm.upper)
+            found.append(_longest_found(arm, circle, _on_circle(arm, circle, angle, start), 6))
+    assert max(found) <= limit.arc_mm
+    assert limit.arc_mm <= 1.4 * max(found)
+
+
+def _off(arm, q, target):
+    return np.linalg.norm(tool_position(arm, q) - target)
+
+
+def _nearest_on_circle(arm, start, steps, angle, seed):
+    """SLSQP's least largest-joint distance (commands) from ``start`` to a configuration
+    whose tool point lies within the tolerance of the circle point at ``angle``."""
+    target = CENTRE + RADIUS * np.array([math.cos(angle), math.sin(angle), 0.0])
+    rng = np.random.default_rng(seed)
+    q0 = _on_circle(arm, Circle(CENTRE, np.array([0.0, 0.0, 1.0]), RADIUS), angle,
+                    np.clip(start + rng.normal(0.0, 0.3, 6), arm.lower, arm.upper))  # fmt: skip
+    x0 = np.r_[q0, np.abs((q0 - start) / steps).max()]
+    found = minimize(
+        lambda x: x[-1],
+        x0,
+        method="SLSQP",
+        bounds=[*zip(arm.lower, arm.upper, strict=True), (0.0, None)],
+        constraints=[
+            {"type": "ineq", "fun": lambda x: x[-1] - np.abs((x[:-1] - start) / steps)},
+            {"type": "ineq", "fun": lambda x: 0.99 * TOL - _off(arm, x[:-1], target)},
+        ],
+        options={"maxiter": 300},
+    )
+    q = found.x[:-1]
+    if np.linalg.norm(tool_position(arm, q) - target) > TOL:
+        return math.inf
+    return float(np.abs((q - start) / steps)[tool_point_joints(arm)].max())
+
+
+def test_least_approach_is_below_the_nearest_configuration_found(free_circle):
+    """From the seed arm's home, the least approach to the circle is no more than the least
+    largest-joint distance SLSQP finds to a configuration on it (from twelve points round
+    it, two starts each), and within two commands of it."""
+    arm, fam = free_circle
+    start = np.asarray(arm.home, dtype=np.float64)
+    steps = arm.lattice.max_step
+    bound = least_approach(fam, start, [(0.0, fam.curve.length)], TOL, 10.0, 600)
+    found = min(
+        _nearest_on_circle(arm, start, steps, angle, seed)
+        for angle in np.linspace(0.0, 2 * np.pi, 12, endpoint=False)
+        for seed in range(2)
+    )
+    assert bound <= found
+    assert found - bound <= 2.0
