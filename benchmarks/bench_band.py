@@ -1,5 +1,5 @@
-"""How far one command can follow a circle within the tolerance band (issue 21): why the closed
-curves' plans lie far above their proven bounds.
+"""How far one command can follow a circle within the tolerance band (issue 21): the closed
+circles' proven bounds that see the band, and how far their plans lie above them.
 
 Run with ``python benchmarks/bench_band.py``. For the seed arm's 25 mm circle above the seed
 workpiece (the README's) and the UR5 cell's 80 mm circle (``bench_any_arm.py``'s), each circle is
@@ -13,13 +13,10 @@ traced once with its lower bound, and then:
   of the circle, found by SLSQP from every third of the plan's commands along the circle, the
   same 1.3 times longer, and random ones (the plan's own commands counted too). A search, not
   a proof: an estimate of the most one command can cover;
-* the proven limit on the arc one command can follow (``planning/bounds/band.py``: Taylor
-  along the joint line, the band as quadratic constraints on the joint change, their dual),
-  its middle anywhere within the tolerance, at every member of the family sampled at
-  :data:`BAND_LAYERS` points along :data:`BAND_DIRECTIONS` tool directions, the largest of
-  them; and the along part it implies: the traced length less twice the tolerance at either
-  end over it, and that plus the proven bound's approach part (proven per member; the family
-  between its samples not yet: the product's bound does not use it yet);
+* the product's lower bound (with the tolerance band, ``planning/bounds/band_trace.py``):
+  its approach and along parts, the proven limit on the arc one command can follow anywhere
+  in the family (the largest over the sampled members' cells), and the family's shortest path
+  alone (its search stopped once it could not pass the band's bound);
 * the longest straight chord within the band (``4 sqrt(R tolerance)``): what a command whose
   tool path were straight could cover;
 * the along part that longest arc implies (the traced length over it, rounded up), added to
@@ -47,10 +44,6 @@ from report import table
 from scipy.optimize import minimize
 
 from armpath.kinematics import tool_position
-from armpath.planning.bounds.band import Circle as BandCircle
-from armpath.planning.bounds.band import SampledLimit, sampled_arc_limit
-from armpath.planning.bounds.sampling import FamilySampler
-from armpath.planning.trace.family import curve_family, fibonacci_directions
 from armpath.scenes import load_scene
 from armpath.scenes.arm import scene_arm
 from armpath.tasks import trace_task
@@ -68,9 +61,6 @@ EVERY = 3
 #: SHRINKS times until it lies within.
 SEARCH_SHARE = 0.995
 SHRINK, SHRINKS = 0.995, 20
-#: The family's points along the circle and tool directions at each where the proven limit
-#: per command is taken (its largest over them).
-BAND_LAYERS, BAND_DIRECTIONS = 8, 500
 
 
 def _seed_circle_scene(folder: Path) -> Path:
@@ -166,22 +156,6 @@ def longest_command(arm, circle: Circle, tol: float, states: np.ndarray, seed: i
     return best, len(starts)
 
 
-def band_limit(scene, arm, circle: Circle, tol: float) -> SampledLimit:
-    """The proven limit on the arc one command can follow (``planning/bounds/band.py``) at the
-    family's members sampled at :data:`BAND_LAYERS` evenly spaced points of the circle along
-    :data:`BAND_DIRECTIONS` tool directions (no tool rule: the family is larger, so the
-    largest limit is no smaller)."""
-    fam = curve_family(arm, scene.world, scene.trace_curve(), None, None)
-    sampler = FamilySampler(fam, tol, BAND_DIRECTIONS, np.asarray(arm.home, dtype=np.float64))
-    dirs = fibonacci_directions(BAND_DIRECTIONS)
-    layers = []
-    for s in np.linspace(0.0, fam.curve.length, BAND_LAYERS, endpoint=False):
-        layer = sampler.layer(fam.frame(float(s))[0], dirs, None, levels=0)
-        layers.append((float(s), layer.q))
-    exact = BandCircle(circle.centre, np.array([0.0, 0.0, 1.0]), circle.radius)
-    return sampled_arc_limit(arm, layers, exact, tol)
-
-
 def case(label: str, scene_path: Path, circle: Circle, seed: int, tries: int) -> list[str]:
     """The table's row of one circle (see the module)."""
     scene = load_scene(scene_path)
@@ -203,16 +177,17 @@ def case(label: str, scene_path: Path, circle: Circle, seed: int, tries: int) ->
     along_bound = 0.0 if bound is None else bound.value - approach
     along_estimate = math.ceil(traced / best - 1e-9)
     estimate = math.ceil(approach - 1e-9) + along_estimate
-    limit = band_limit(scene, arm, circle, tol)
-    along_band = (traced - 4.0 * tol) / limit.arc_mm
+    sampling = {} if bound is None else bound.sampling
+    limit = sampling.get("command_arc_limit_mm")
+    family = sampling.get("family_bound_commands", None if bound is None else bound.value)
     return [
         f"{label} ({res.curve.length:.0f} mm)",
         f"{res.n_commands} ({res.n_commands - along} + {along})",
         "-" if bound is None else f"{bound.commands} ({approach:.1f} + {along_bound:.1f})",
+        "-" if family is None else f"{family:.1f}",
         f"{np.mean(arcs):.2f} / {np.max(arcs):.2f}",
         f"{best:.2f} ({starts} starts)",
-        f"{limit.arc_mm:.2f} ({limit.samples} members)",
-        f"{along_band:.1f}; {math.ceil(approach + along_band - 1e-9)}",
+        "-" if limit is None else f"{limit:.2f} ({sampling['limit_samples']:.0f} members)",
         f"{4.0 * math.sqrt(circle.radius * tol):.2f}",
         f"{along_estimate}",
         f"{estimate}",
@@ -250,10 +225,10 @@ def main() -> int:
                 "curve",
                 "plan [commands] (approach + along)",
                 "proven bound (approach + along)",
+                "the family's shortest path alone",
                 "plan's arc per command along [mm] (mean / largest)",
                 "longest arc of one command found [mm]",
-                "proven limit per command, largest over the sampled family [mm]",
-                "along at least (traced less 4 tol, over that limit); with the approach",
+                "proven limit per command over the family's cells [mm]",
                 "straight chord in the band [mm]",
                 "along, estimated",
                 "fewest, estimated (not proven)",
@@ -265,17 +240,17 @@ def main() -> int:
         "",
         "The estimate is the proven bound's approach part plus the traced length over the "
         "longest arc one command was found to cover (a search, not a proof: see "
-        "`benchmarks/bench_band.py`). The bound's along part, the solution family's "
-        "largest-joint length along the circle less its sampling errors, is a fraction of "
-        "the estimated along part: within the 0.1 mm band a joint-linear command follows a "
-        "circle a few millimetres, not much farther than a straight chord would (its tool path "
-        "bends, but far less than these circles), which the bound leaves out. Between the "
-        "estimate and the plan lies what the tracer leaves: its commands along the circle cover "
-        "less than the longest found (the command lattice; where in the band each begins). "
-        "The proven limit per command, the largest over the sampled family's members, lies a "
-        "little above the longest found; the along part it implies, added to the approach, "
-        "is what a bound that sees the band gives once it covers the family between its "
-        "samples.",
+        "`benchmarks/bench_band.py`). The proven bound is the band's "
+        "(`planning/bounds/band_trace.py`): the least approach to any point of the circle "
+        "plus the traced length, less the tolerance's reach at the ends, over the proven "
+        "limit per command (the largest over the family's sampled members, each widened by how "
+        "far its neighbours' differ); the family's shortest path, the largest-joint length "
+        "along the circle, is a fraction of it (its search stopped after the round whose clear "
+        "path could not pass the band's bound). Within the 0.1 mm band a joint-linear command "
+        "follows a circle a few millimetres, not much farther than a straight chord would. "
+        "Between the estimate and the plan lies what the tracer leaves: its commands along "
+        "the circle cover less than the longest found (the command lattice; where in the band "
+        "each begins).",
         "",
     ]
     return report.write(args.out, lines)

@@ -17,8 +17,8 @@ from armpath.model.seed_arm import seed_arm
 from armpath.planning.bounds.band import (
     Circle,
     _dual_bound,
+    arc_limits,
     command_arc_limit,
-    sampled_arc_limit,
     taylor_bounds,
     tool_point_hessian,
 )
@@ -245,23 +245,18 @@ def test_arc_limit_for_a_middle_anywhere_in_the_band():
         assert found <= anywhere <= 1.15 * found
 
 
-def test_sampled_limit_is_the_largest_refined_one():
-    """The lazily refined largest limit over a few layers of configurations equals the largest
-    of every configuration's limit refined in full, and names that configuration."""
+def test_a_batchs_limits_are_each_configurations_own():
+    """:func:`arc_limits` over a batch (compiled, on threads) gives each configuration's one-box
+    limit, as :func:`command_arc_limit` with one box gives it alone; 0 out of the band."""
     arm = seed_arm()
     circle = Circle(np.array([330.0, 60.0, 260.0]), np.array([0.0, 0.0, 1.0]), 25.0)
     q = np.asarray(arm.home, dtype=np.float64)
-    layers = []
-    for s_mm, angles in ((0.0, (0.2, 0.4)), (20.0, (1.5, 1.7, 3.0))):
-        qs = []
-        for angle in angles:
-            q = _on_circle(arm, circle, angle, q)
-            qs.append(q)
-        layers.append((s_mm, np.array(qs)))
-    every = [command_arc_limit(arm, c, circle, TOL, anywhere=True) for _, qs in layers for c in qs]
-    found = sampled_arc_limit(arm, layers, circle, TOL)
-    assert found.samples == 5
-    assert found.arc_mm == pytest.approx(max(every), rel=1e-12)
-    k = int(np.argmax(every))
-    assert np.array_equal(found.q, np.vstack([qs for _, qs in layers])[k])
-    assert found.s_mm == (0.0 if k < 2 else 20.0)
+    qs = []
+    for angle in np.linspace(0.0, 2 * np.pi, 20, endpoint=False):
+        q = _on_circle(arm, circle, angle, q)
+        qs.append(q)
+    qs.append(np.asarray(arm.home, dtype=np.float64))  # far from the circle
+    batch = arc_limits(arm, np.array(qs), circle, TOL, anywhere=False)
+    alone = [command_arc_limit(arm, c, circle, TOL, nodes=1) for c in qs]
+    assert batch == pytest.approx(alone, rel=1e-12)
+    assert batch[-1] == 0.0 and np.all(batch[:-1] > 2.0)

@@ -17,6 +17,8 @@ from armpath.kinematics import position_jacobian, tool_point_joints, tool_positi
 from armpath.model.seed_arm import seed_arm
 from armpath.planning.bounds.band import Circle
 from armpath.planning.bounds.band_trace import (
+    _cell_limit,
+    _largest_cell,
     family_arc_limit,
     fitted_circle,
     least_approach,
@@ -140,3 +142,33 @@ def test_least_approach_is_below_the_nearest_configuration_found(free_circle):
     )
     assert bound <= found
     assert found - bound <= 2.0
+
+
+def test_the_lazily_refined_largest_cell_is_every_cells_refined_in_full():
+    """On random limits and neighbours (some samples alone), the largest cell found refining
+    from the top down equals the largest over every cell taken at the lower of its coarse and
+    its refined limit, each computed in full."""
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        m = int(rng.integers(5, 40))
+        coarse = rng.uniform(5.0, 9.0, m)
+        fine = coarse - rng.uniform(0.0, 1.5, m)
+        neighbours = np.full((m, 4), -1)
+        for i in range(m):
+            if rng.uniform() < 0.85:
+                k = rng.choice(m, size=int(rng.integers(1, 5)), replace=False)
+                neighbours[i, : k.size] = k
+        best, where = _largest_cell(coarse, neighbours, lambda i, fine=fine: float(fine[i]))
+        cells, widest = [], 0.0
+        for i in range(m):
+            row = neighbours[i][neighbours[i] >= 0]
+            if row.size:
+                c = _cell_limit(coarse[i], coarse[row])
+                widest = max(widest, c - coarse[i])
+                cells.append(min(c, _cell_limit(fine[i], fine[row])))
+            else:
+                cells.append(None)
+        full = [c if c is not None else min(coarse[i], fine[i]) + widest
+                for i, c in enumerate(cells)]  # fmt: skip
+        assert best == pytest.approx(max(full), rel=1e-12)
+        assert full[where] == pytest.approx(best, rel=1e-12)

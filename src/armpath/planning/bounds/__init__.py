@@ -54,11 +54,13 @@ needs to bring every point within the arm's reach of it, a largest distance prov
 and bound over the arm's joints (:mod:`~armpath.planning.bounds.farthest`): from a point of
 the carriage, and from the arm's first axis at the heights of the points that decide it.
 
-The along part of a trace bound does not yet see the tolerance band: a joint-linear command
-follows a tight curve within it only a few millimetres. :mod:`~armpath.planning.bounds.band`
-proves how far for one middle configuration (a circle; Taylor along the joint line and a
-Lagrangian dual), and takes the largest over a sampled family (``benchmarks/bench_band.py``);
-the trace bound does not use it yet.
+Where a trace's spans lie on a circle, its bound also sees the tolerance band: a joint-linear
+command follows a tight curve within it only a few millimetres. :mod:`~armpath.planning.bounds.band`
+proves how far for one middle configuration (Taylor along the joint line and a Lagrangian dual),
+and :mod:`~armpath.planning.bounds.band_trace` takes the largest over the family's cells (each
+sample's limit widened by how far its neighbours' differ, the sampling errors' assumption):
+the least approach to the curve plus the traced length over that limit. The higher of the two
+bounds is reported.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer

@@ -7,8 +7,9 @@ millimetres (the seed arm's 25 mm circle: about 7 mm a command, while the family
 largest-joint length would allow 25). This module proves, for one configuration, how long an
 arc of a circle any command can cover whose tool point lies within the tolerance at its start,
 its middle and its end, the middle configuration being that one
-(:func:`command_arc_limit`), and the largest over a family's samples
-(:func:`sampled_arc_limit`).
+(:func:`command_arc_limit`; a batch at once, :func:`arc_limits`).
+:mod:`~armpath.planning.bounds.band_trace` takes the largest over the family and bounds a
+trace along a circle with it.
 
 **The lemma.** A command from ``q0`` changes the joints by ``D`` (each within its largest step);
 its middle configuration is ``m = q0 + D/2`` and its tool points at start, middle and end are
@@ -748,48 +749,3 @@ def command_arc_limit(
     R = float(circle.radius_mm)
     chord = _chord_branching(mid, arm.lattice.max_step[tip], R, tol, tb, nodes)
     return float(_arcs(np.array([chord]), R, tol)[0])
-
-
-@dataclass(frozen=True)
-class SampledLimit:
-    """The longest arc (mm) one command can follow at any of a family's samples
-    (:func:`sampled_arc_limit`), and where: the sample's configuration (rad / mm) and the arc
-    length (mm) of its curve point; ``samples`` how many were bounded."""
-
-    arc_mm: float
-    q: FloatArray
-    s_mm: float
-    samples: int
-
-
-def sampled_arc_limit(
-    arm: SerialArm,
-    layers: list[tuple[float, FloatArray]],
-    circle: Circle,
-    tolerance_mm: float,
-    nodes: int = 200,
-) -> SampledLimit:
-    """The largest :func:`command_arc_limit` (its middle anywhere within the tolerance) over
-    the configurations of ``layers`` (each the arc length, mm, of a curve point and the
-    family's samples there, ``(M, n)``): each sample first bounded by one box's dual, then, from
-    the highest down, again with the branch and bound of ``nodes`` boxes until the highest
-    refined one is at least the next unrefined one (each value is a bound on its sample's
-    limit, so the unrefined ones below it need no refining). Proven per sample; between
-    samples the family is as far sampled as it is."""
-    tip = tool_point_joints(arm)
-    tb = taylor_bounds(arm, tip)
-    where = [(s, q) for s, qs in layers for q in qs]
-    if not where:
-        return SampledLimit(0.0, np.zeros(arm.n_joints), math.nan, 0)
-    coarse = arc_limits(arm, np.array([q for _, q in where]), circle, tolerance_mm, tb, tip)
-    order = np.argsort(-coarse, kind="stable")
-    best, best_k = -math.inf, int(order[0])
-    for k in order:
-        if coarse[k] <= best:
-            break
-        fine = command_arc_limit(
-            arm, where[k][1], circle, tolerance_mm, tb, tip, nodes=nodes, anywhere=True
-        )
-        if fine > best:
-            best, best_k = fine, int(k)
-    return SampledLimit(float(best), where[best_k][1], float(where[best_k][0]), len(where))

@@ -26,7 +26,9 @@ a sample's cell.
 
 from __future__ import annotations
 
+import heapq
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -36,7 +38,13 @@ from armpath.budget import check_time
 from armpath.geometry.curves import Curve
 from armpath.jit import njit
 from armpath.kinematics import tool_point_joints
-from armpath.planning.bounds.band import Circle, arc_limits, command_arc_limit, taylor_bounds
+from armpath.planning.bounds.band import (
+    Circle,
+    TaylorBounds,
+    arc_limits,
+    command_arc_limit,
+    taylor_bounds,
+)
 from armpath.planning.bounds.metric import _wrapped
 from armpath.planning.bounds.sampling import (
     BRANCH_GAP,
@@ -44,6 +52,7 @@ from armpath.planning.bounds.sampling import (
     Layer,
     _allowed_at,
     _delaunay_neighbours,
+    _Samples,
 )
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
@@ -66,10 +75,17 @@ LIMIT_LAYERS, LIMIT_DIRECTIONS = 16, 100
 #: approach, and tool directions at each. Seed circle from home: 5 mm 34.1 commands, 2 mm
 #: 34.3, 10 mm 33.8.
 APPROACH_GAP_MM, APPROACH_DIRECTIONS = 5.0, 2000
-#: Tool directions of the least approach's first, coarse sampling of every point.
-APPROACH_COARSE = 300
+#: Most times :func:`family_arc_limit` makes its samples denser where its largest cell lies, and
+#: how far that cell may lie above its own sample's limit (a share of it) for it to stop. UR5
+#: cell's 80 mm circle: 0 times 20.59 mm (21 s), 6 times 19.56 (27 s), 12 times 19.16 (40 s),
+#: 40 times 20.10 (new samples bring new wide cells); seed 25 mm circle: 7.72, 7.67, 7.67.
+LIMIT_SPLITS, SPLIT_GOAL = 6, 0.02
+#: Tool directions of the least approach's coarser samplings: every point at the first, the
+#: nearest ones at the next (UR5 cell's 80 mm circle, points 5 mm apart, 300 then 2,000: 50.0
+#: commands in 79 s; 300, 800 and 2,000 95 s; 8 mm apart 46.3 in 36 s).
+APPROACH_LEVELS: tuple[int, ...] = (300,)
 #: Most points of the least approach (a longer curve gets them farther apart).
-APPROACH_POINTS_MAX = 400
+APPROACH_POINTS_MAX = 120
 #: Boxes the branch and bound may bound for one configuration's limit when it is refined.
 REFINE_NODES = 200
 
@@ -165,6 +181,37 @@ def _nearest(u: FloatArray, v: FloatArray, period: FloatArray) -> IntArray:  # p
     return out
 
 
+def _largest_cell(
+    coarse: FloatArray, neighbours: IntArray, refined: Callable[[int], float]
+) -> tuple[float, int]:
+    """The largest cell limit (:func:`_cell_limit`) over samples whose limits are ``coarse``
+    (one box's dual: upper bounds on ``refined``'s, the branch and bound's) with neighbours
+    ``neighbours (M, W)`` (-1 pads), and the sample whose cell it is: each cell taken at the
+    lower of its limit from the coarse values and from the refined ones, the refined ones
+    computed from the highest coarse cell down until the largest found is at least the next
+    coarse one (which bounds that cell's). A sample with no neighbour (a sliver of the
+    family) has its cell widened by the largest widening of the others'."""
+    cells = np.array(
+        [_cell_limit(coarse[i], coarse[row[row >= 0]]) for i, row in enumerate(neighbours)]
+    )
+    alone = ~np.any(neighbours >= 0, axis=1)
+    widest = float(np.max(np.where(alone, 0.0, cells - coarse), initial=0.0))
+    cells[alone] += widest
+    best, best_i = -math.inf, 0
+    for i in np.argsort(-cells, kind="stable"):
+        if cells[i] <= best:
+            break
+        row = neighbours[i][neighbours[i] >= 0]
+        if row.size == 0:
+            cell = min(cells[i], refined(int(i)) + widest)
+        else:
+            fine = _cell_limit(refined(int(i)), np.array([refined(int(k)) for k in row]))
+            cell = min(cells[i], fine)
+        if cell > best:
+            best, best_i = cell, int(i)
+    return float(best), best_i
+
+
 @dataclass(frozen=True)
 class FamilyLimit:
     """The longest arc (mm) one command can follow anywhere in the family
@@ -188,6 +235,48 @@ def _cell_limit(own: float, neighbours: FloatArray) -> float:
     return max(float(neighbours.max()), 2.0 * own - float(neighbours.min()))
 
 
+@dataclass
+class _LimitLayer:
+    """The family at one point of the curve for :func:`family_arc_limit`: its arc length (mm)
+    and span, every member sampled (and the direction triangles, to split them), the samples
+    kept sorted by direction with the nearest of each neighbouring direction (-1 pads), and
+    their one-box limits (mm)."""
+
+    s_mm: float
+    span: int
+    acc: _Samples
+    triangles: IntArray
+    layer: Layer
+    near: IntArray
+    coarse: FloatArray
+
+
+def _limit_layer(
+    sampler: FamilySampler,
+    s_mm: float,
+    span: int,
+    acc: _Samples,
+    circle: Circle,
+    tolerance_mm: float,
+    tb: TaylorBounds,
+) -> _LimitLayer:
+    """:class:`_LimitLayer` of the members ``acc`` sampled at ``s_mm``."""
+    layer, _, _, triangles = sampler._filtered(acc)
+    nb_ptr, nb, _ = _delaunay_neighbours(acc.dirs, acc.caps)
+    assert layer.direction is not None
+    layer = layer.subset(np.argsort(layer.direction, kind="stable"))
+    assert layer.direction is not None
+    dir_ptr = np.searchsorted(layer.direction, np.arange(acc.dirs.shape[0] + 1))
+    near = _direction_neighbours(
+        layer.u, layer.direction, dir_ptr.astype(np.int64), nb_ptr, nb, sampler.period,
+        BRANCH_GAP, sampler.turns > 1,
+    )  # fmt: skip
+    arm = sampler.fam.arm
+    tip = tool_point_joints(arm)
+    coarse = arc_limits(arm, layer.q, circle, tolerance_mm, tb, tip, anywhere=True)
+    return _LimitLayer(s_mm, span, acc, triangles, layer, near, coarse)
+
+
 def family_arc_limit(
     sampler: FamilySampler,
     circle: Circle,
@@ -196,6 +285,7 @@ def family_arc_limit(
     cyclic: bool,
     directions: int = LIMIT_DIRECTIONS,
     nodes: int = REFINE_NODES,
+    splits: int = LIMIT_SPLITS,
 ) -> FamilyLimit:
     """The largest limit (:func:`~armpath.planning.bounds.band.command_arc_limit`, its middle
     anywhere within ``tolerance_mm`` of ``circle``) over the cells of the family sampled along
@@ -208,85 +298,87 @@ def family_arc_limit(
     (:func:`~armpath.planning.bounds.band.arc_limits`); from the highest cell down, a cell's
     sample and neighbours are refined by branch and bound (``nodes`` boxes) and the cell taken
     at the lower of the two, until the highest refined cell is at least the next unrefined
-    one."""
+    one (:func:`_largest_cell`). Then, up to ``splits`` times while the largest cell lies
+    more than :data:`SPLIT_GOAL` above its own sample's limit, the samples are made denser
+    where it is: the direction triangles about its sample split in four where a neighbouring
+    direction widens it most, else a layer added halfway to the neighbouring layer that
+    does."""
     fam = sampler.fam
     arm = fam.arm
     tip = tool_point_joints(arm)
     tb = taylor_bounds(arm, tip)
     dirs = fibonacci_directions(directions)
-    layers: list[tuple[float, Layer, IntArray]] = []
-    span_of: list[int] = []
+    layers: list[_LimitLayer] = []
+
+    def sampled(s: float, span: int) -> _LimitLayer:
+        check_time("bounding the commands along the band")
+        acc = sampler.sampled(fam.frame(s)[0], dirs, _allowed_at(fam, s), levels=0)[0]
+        return _limit_layer(sampler, s, span, acc, circle, tolerance_mm, tb)
+
     for k, positions in enumerate(s_layers):
-        for s in positions:
-            check_time("bounding the commands along the band")
-            acc, (layer, _, _, _) = sampler.sampled(
-                fam.frame(float(s))[0], dirs, _allowed_at(fam, float(s)), levels=0
-            )
-            nb_ptr, nb, _ = _delaunay_neighbours(acc.dirs, acc.caps)
-            assert layer.direction is not None
-            layer = layer.subset(np.argsort(layer.direction, kind="stable"))
-            assert layer.direction is not None
-            dir_ptr = np.searchsorted(layer.direction, np.arange(acc.dirs.shape[0] + 1))
-            near = _direction_neighbours(
-                layer.u, layer.direction, dir_ptr.astype(np.int64), nb_ptr, nb,
-                sampler.period, BRANCH_GAP, sampler.turns > 1,
-            )  # fmt: skip
-            layers.append((float(s), layer, near))
-            span_of.append(k)
-    offsets = np.cumsum([0] + [lay.size for _, lay, _ in layers])
-    total = int(offsets[-1])
-    if total == 0:
-        return FamilyLimit(0.0, np.zeros(arm.n_joints), math.nan, 0.0, 0, 0)
-    # every sample's neighbours, as global indices (-1 pads)
-    rows = []
-    for i, (_, lay, near) in enumerate(layers):
-        cols = [np.where(near >= 0, near + offsets[i], -1)]
-        for step in (-1, 1):
-            j = (i + step) % len(layers) if cyclic and len(layers) > 2 else i + step
-            if 0 <= j < len(layers) and j != i and span_of[j] == span_of[i]:
-                near_j = _nearest(lay.u, layers[j][1].u, sampler.period)
-                cols.append(np.where(near_j >= 0, near_j + offsets[j], -1)[:, None])
-        rows.append(np.column_stack(cols))
-    width = max(r.shape[1] for r in rows)
-    neighbours = np.vstack(
-        [np.pad(r, ((0, 0), (0, width - r.shape[1])), constant_values=-1) for r in rows]
-    )
-    q = np.vstack([lay.q for _, lay, _ in layers])
-    s_of = np.concatenate([np.full(lay.size, s) for s, lay, _ in layers])
-    coarse = arc_limits(arm, q, circle, tolerance_mm, tb, tip, anywhere=True)
-    cells = np.array(
-        [_cell_limit(coarse[i], coarse[row[row >= 0]]) for i, row in enumerate(neighbours)]
-    )
-    # a sample with no neighbour (a sliver of the family) differs from its cell's other
-    # members by as much as any sample differs from its neighbours
-    alone = ~np.any(neighbours >= 0, axis=1)
-    if np.any(alone):
-        cells[alone] += float(np.max(cells - coarse, initial=0.0))
-    fine: dict[int, float] = {}
+        layers += [sampled(float(s), k) for s in positions]
+    fine: dict[bytes, float] = {}
+    samples = 0
+    for split in range(splits + 1):
+        offsets = np.cumsum([0] + [lay.layer.size for lay in layers])
+        samples = max(samples, int(offsets[-1]))
+        if offsets[-1] == 0:
+            return FamilyLimit(0.0, np.zeros(arm.n_joints), math.nan, 0.0, 0, 0)
+        # every sample's neighbours, as global indices (-1 pads)
+        rows, across = [], []
+        for i, lay in enumerate(layers):
+            cols = [np.where(lay.near >= 0, lay.near + offsets[i], -1)]
+            for step in (-1, 1):
+                j = (i + step) % len(layers) if cyclic and len(layers) > 2 else i + step
+                if 0 <= j < len(layers) and j != i and layers[j].span == lay.span:
+                    near_j = _nearest(lay.layer.u, layers[j].layer.u, sampler.period)
+                    cols.append(np.where(near_j >= 0, near_j + offsets[j], -1)[:, None])
+            rows.append(np.column_stack(cols))
+            across.append(lay.near.shape[1])
+        width = max(r.shape[1] for r in rows)
+        neighbours = np.vstack(
+            [np.pad(r, ((0, 0), (0, width - r.shape[1])), constant_values=-1) for r in rows]
+        )
+        q = np.vstack([lay.layer.q for lay in layers])
+        coarse = np.concatenate([lay.coarse for lay in layers])
 
-    def refined(i: int) -> float:
-        if i not in fine:
-            check_time("bounding the commands along the band")
-            limit = command_arc_limit(
-                arm, q[i], circle, tolerance_mm, tb, tip, nodes=nodes, anywhere=True
-            )
-            fine[i] = min(float(coarse[i]), limit)
-        return fine[i]
+        def refined(i: int, q: FloatArray = q, coarse: FloatArray = coarse) -> float:
+            key = q[i].tobytes()
+            if key not in fine:
+                check_time("bounding the commands along the band")
+                limit = command_arc_limit(
+                    arm, q[i], circle, tolerance_mm, tb, tip, nodes=nodes, anywhere=True
+                )
+                fine[key] = min(float(coarse[i]), limit)
+            return fine[key]
 
-    best, best_i = -math.inf, 0
-    for i in np.argsort(-cells, kind="stable"):
-        if cells[i] <= best:
+        best, best_i = _largest_cell(coarse, neighbours, refined)
+        own = refined(best_i)
+        li = int(np.searchsorted(offsets, best_i, side="right") - 1)
+        if split == splits or best - own <= SPLIT_GOAL * best:
             break
-        row = neighbours[i][neighbours[i] >= 0]
-        if row.size == 0:  # widened as the others are
-            cell = cells[i] - coarse[i] + refined(int(i))
-        else:
-            cell = min(
-                cells[i], _cell_limit(refined(int(i)), np.array([refined(int(k)) for k in row]))
-            )
-        if cell > best:
-            best, best_i = cell, int(i)
-    return FamilyLimit(float(best), q[best_i], float(s_of[best_i]), fine[best_i], total, len(fine))
+        # which neighbour widens the cell most: one of its layer's directions, or a layer's
+        row = neighbours[best_i]
+        widening = np.where(row >= 0, np.abs(np.array([refined(int(k)) for k in row]) - own), -1.0)
+        k = int(np.argmax(widening))
+        lay = layers[li]
+        if k < across[li]:  # denser directions about the sample
+            refine = np.zeros(lay.acc.dirs.shape[0], dtype=bool)
+            assert lay.layer.direction is not None
+            refine[int(lay.layer.direction[best_i - offsets[li]])] = True
+            E = fam.frame(lay.s_mm)[0]
+            acc = sampler.split(lay.acc, E, refine, lay.triangles, _allowed_at(fam, lay.s_mm))
+            layers[li] = _limit_layer(sampler, lay.s_mm, lay.span, acc, circle, tolerance_mm, tb)
+        else:  # a layer halfway to the neighbouring one
+            lj = int(np.searchsorted(offsets, row[k], side="right") - 1)
+            a, b = lay.s_mm, layers[lj].s_mm
+            if cyclic and abs(b - a) > fam.curve.length / 2.0:
+                b += fam.curve.length if b < a else -fam.curve.length
+            middle = float(fam.curve.wrap(0.5 * (a + b))) if cyclic else 0.5 * (a + b)
+            where = li + 1 if (lj == li + 1 or (lj == 0 and li == len(layers) - 1)) else li
+            layers.insert(where, sampled(middle, lay.span))
+    key = q[best_i].tobytes()
+    return FamilyLimit(best, q[best_i], layers[li].s_mm, fine[key], samples, len(fine))
 
 
 def _points_along(spans_mm: list[tuple[float, float]], gap_mm: float) -> FloatArray:
@@ -315,9 +407,10 @@ def least_approach(
     ``gap_mm`` or more) with the tolerance raised by half the spacing, so that a member at any
     point of the spans is a member there, within a sample's cell. Obstacles are ignored on
     the way (a relaxation); the members kept are those that may be clear. Each point is
-    first sampled along :data:`APPROACH_COARSE` directions (wider cells: a lower distance),
-    then, from the nearest up, along ``directions`` until the next point's coarse distance is
-    no less than the least found (each is a bound for its point: the higher is taken)."""
+    first sampled along the first of :data:`APPROACH_LEVELS` directions (wider cells: a lower
+    distance), then the nearest point (by its latest bound) along more, up to ``directions``,
+    until the nearest has been sampled along ``directions`` (each sampling's distance is a
+    bound for its point: the higher is taken)."""
     s_all = _points_along(spans_mm, gap_mm)
     spacing = max(gap_mm, sum(b - a for a, b in spans_mm) / APPROACH_POINTS_MAX)
     tol = tolerance_mm + spacing / 2.0
@@ -331,15 +424,21 @@ def least_approach(
         )  # fmt: skip
         return float(sampler.distance_from(q_start, layer).min()) if layer.size else math.inf
 
-    coarse_count = min(APPROACH_COARSE, directions)
-    samplers = {c: FamilySampler(fam, tol, c, q_start) for c in {coarse_count, directions}}
-    coarse = np.array([nearest(coarse_count, s) for s in s_all])
-    best = math.inf
-    for k in np.argsort(coarse, kind="stable"):
-        if not coarse[k] < best:
-            break
-        best = min(best, max(float(coarse[k]), nearest(directions, s_all[k])))
-    return best
+    levels = sorted({min(c, directions) for c in APPROACH_LEVELS} | {directions})
+    samplers = {c: FamilySampler(fam, tol, c, q_start) for c in levels}
+    # each point's distance at its coarsest sampling first; the nearest point so far sampled
+    # again more finely (each sampling's distance is a bound for its point: the higher kept)
+    # until the nearest is at the finest: every other point's bound is then no lower
+    heap = [(nearest(levels[0], float(s)), 0, k) for k, s in enumerate(s_all)]
+    heapq.heapify(heap)
+    while heap:
+        value, level, k = heapq.heappop(heap)
+        if level == len(levels) - 1 or not math.isfinite(value):
+            return value
+        heapq.heappush(
+            heap, (max(value, nearest(levels[level + 1], float(s_all[k]))), level + 1, k)
+        )
+    return math.inf
 
 
 def _limit_layers(
@@ -403,8 +502,9 @@ def band_trace_bound(
             return None
     sampler = FamilySampler(fam, tolerance_mm, LIMIT_DIRECTIONS, q_start)
     limit = family_arc_limit(
-        sampler, circle, band, _limit_layers(spans_mm, circle, loop), loop, LIMIT_DIRECTIONS
-    )
+        sampler, circle, band, _limit_layers(spans_mm, circle, loop), loop, LIMIT_DIRECTIONS,
+        splits=LIMIT_SPLITS,
+    )  # fmt: skip
     if limit.samples == 0 or not math.isfinite(limit.arc_mm) or not limit.arc_mm > ends:
         return None
     along = traced / limit.arc_mm
@@ -448,7 +548,8 @@ def with_band(family: CommandBound | None, band: CommandBound | None) -> Command
         family,
         commands=band.commands,
         value=band.value,
-        method=band.method + f"; the family's shortest path alone: {family.value:.1f}",
+        method=f"{band.method}; the family's shortest path alone, {family.value:.1f}: "
+        + family.method,
         parts=band.parts,
         sampling={**family.sampling, **band.sampling, "family_bound_commands": family.value},
         proven=family.proven and band.proven,
