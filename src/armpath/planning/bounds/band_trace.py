@@ -52,6 +52,7 @@ from armpath.planning.bounds.sampling import (
     Layer,
     _allowed_at,
     _delaunay_neighbours,
+    _direction_neighbours,
     _Samples,
 )
 from armpath.planning.bounds.value import CommandBound
@@ -116,50 +117,6 @@ def fitted_circle(curve: Curve, spans_mm: list[tuple[float, float]]) -> tuple[Ci
     height = (p - middle) @ normal
     deviation = float(np.max(np.hypot(rho - radius, height)))
     return Circle(middle + cx * e1 + cy * e2, normal, radius), deviation
-
-
-@njit(cache=True)
-def _direction_neighbours(
-    u: FloatArray,
-    node_dir: IntArray,
-    dir_ptr: IntArray,
-    nb_ptr: IntArray,
-    nb: IntArray,
-    period: FloatArray,
-    branch_gap: float,
-    own: bool,
-) -> IntArray:  # pragma: no cover - compiled
-    """Per sample (sorted by direction, ``dir_ptr`` each direction's first), the nearest sample
-    (largest-joint distance) of each neighbouring direction that has one within
-    ``branch_gap`` commands, the samples' neighbours of the family's sampling errors
-    (:func:`~armpath.planning.bounds.sampling._sampling_errors`); -1 pads the rows."""
-    m, j = u.shape
-    width = 1
-    for d in range(nb_ptr.size - 1):
-        width = max(width, nb_ptr[d + 1] - nb_ptr[d] + 1)
-    out = np.full((m, width), -1, dtype=np.int64)
-    for i in range(m):
-        d = node_dir[i]
-        count = 0
-        for p in range(nb_ptr[d] - (1 if own else 0), nb_ptr[d + 1]):
-            e = nb[p] if p >= nb_ptr[d] else d
-            best, arg = np.inf, -1
-            for k in range(dir_ptr[e], dir_ptr[e + 1]):
-                if k == i:
-                    continue
-                worst = 0.0
-                for c in range(j):
-                    x = _wrapped(u[k, c] - u[i, c], period[c])
-                    if x > worst:
-                        worst = x
-                        if worst >= best:
-                            break
-                if worst < best:
-                    best, arg = worst, k
-            if arg >= 0 and best <= branch_gap:
-                out[i, count] = arg
-                count += 1
-    return out
 
 
 @njit(cache=True)

@@ -188,31 +188,29 @@ def _distinct(new: FloatArray, old: FloatArray) -> FloatArray:
 
 
 @njit(cache=True)
-def _sampling_errors(
+def _direction_neighbours(
     u: FloatArray,
-    points: FloatArray,
     node_dir: IntArray,
     dir_ptr: IntArray,
     nb_ptr: IntArray,
     nb: IntArray,
     period: FloatArray,
-    missing: float,
     branch_gap: float,
     own: bool,
-) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
-    """Per sample and joint, the largest difference to the nearest sample (Chebyshev) of each
-    neighbouring direction that has one within ``branch_gap`` commands (a member farther is on
-    another branch; ``missing`` where no neighbour has one); and per
-    sample the farthest any of the arm's ``points`` ``(M, P, 3)`` moves to those neighbours
-    (inf where none). Samples are sorted by direction; ``dir_ptr`` points at each
-    direction's first. ``own``: the other samples of a sample's own direction are neighbours
-    too (a family sampled at several turns about each direction)."""
+) -> IntArray:  # pragma: no cover - compiled
+    """Per sample, the nearest sample (largest-joint distance, command units ``u (M, J)``) of
+    each neighbouring direction that has one within ``branch_gap`` commands (a member farther
+    is on another branch); -1 pads the rows. Samples are sorted by direction; ``dir_ptr``
+    points at each direction's first. ``own``: the other samples of a sample's own direction
+    are neighbours too (a family sampled at several turns about each direction)."""
     m, j = u.shape
-    err = np.zeros((m, j))
-    moved = np.zeros(m)
+    width = 1
+    for d in range(nb_ptr.size - 1):
+        width = max(width, nb_ptr[d + 1] - nb_ptr[d] + 1)
+    out = np.full((m, width), -1, dtype=np.int64)
     for i in range(m):
         d = node_dir[i]
-        found = False
+        count = 0
         for p in range(nb_ptr[d] - (1 if own else 0), nb_ptr[d + 1]):
             e = nb[p] if p >= nb_ptr[d] else d
             best, arg = np.inf, -1
@@ -228,20 +226,51 @@ def _sampling_errors(
                             break
                 if worst < best:
                     best, arg = worst, k
-            if arg >= 0 and best <= branch_gap:  # farther: another branch, not a neighbour
-                found = True
-                for c in range(j):
-                    x = _wrapped(u[arg, c] - u[i, c], period[c])
-                    if x > err[i, c]:
-                        err[i, c] = x
-                for t in range(points.shape[1]):
-                    x = 0.0
-                    for c in range(3):
-                        x += (points[arg, t, c] - points[i, t, c]) ** 2
-                    moved[i] = max(moved[i], np.sqrt(x))
-        if not found:
+            if arg >= 0 and best <= branch_gap:
+                out[i, count] = arg
+                count += 1
+    return out
+
+
+@njit(cache=True)
+def _sampling_errors(
+    u: FloatArray,
+    points: FloatArray,
+    node_dir: IntArray,
+    dir_ptr: IntArray,
+    nb_ptr: IntArray,
+    nb: IntArray,
+    period: FloatArray,
+    missing: float,
+    branch_gap: float,
+    own: bool,
+) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
+    """Per sample and joint, the largest difference to its neighbours
+    (:func:`_direction_neighbours`: the nearest sample of each neighbouring direction within
+    ``branch_gap`` commands; ``missing`` where it has none); and per sample the farthest any
+    of the arm's ``points`` ``(M, P, 3)`` moves to them (inf where none)."""
+    m, j = u.shape
+    near = _direction_neighbours(u, node_dir, dir_ptr, nb_ptr, nb, period, branch_gap, own)
+    err = np.zeros((m, j))
+    moved = np.zeros(m)
+    for i in range(m):
+        if near[i, 0] < 0:
             err[i, :] = missing
             moved[i] = np.inf
+            continue
+        for w in range(near.shape[1]):
+            arg = near[i, w]
+            if arg < 0:
+                break
+            for c in range(j):
+                x = _wrapped(u[arg, c] - u[i, c], period[c])
+                if x > err[i, c]:
+                    err[i, c] = x
+            for t in range(points.shape[1]):
+                x = 0.0
+                for c in range(3):
+                    x += (points[arg, t, c] - points[i, t, c]) ** 2
+                moved[i] = max(moved[i], np.sqrt(x))
     return err, moved
 
 
