@@ -102,8 +102,8 @@ def fitted_circle(curve: Curve, spans_mm: list[tuple[float, float]]) -> tuple[Ci
     )
     p = np.asarray(curve.at_arc_length(s), dtype=np.float64)
     middle = p.mean(axis=0)
-    normal = np.linalg.svd(p - middle, full_matrices=False)[2][2]
-    e1 = np.linalg.svd(p - middle, full_matrices=False)[2][0]
+    axes = np.linalg.svd(p - middle, full_matrices=False)[2]  # widest first, normal last
+    normal, e1 = axes[2], axes[0]
     e2 = np.cross(normal, e1)
     x, y = (p - middle) @ e1, (p - middle) @ e2
     M = np.column_stack([x, y, np.ones_like(x)])
