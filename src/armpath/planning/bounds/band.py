@@ -674,7 +674,7 @@ def _arcs(chord: FloatArray, R: float, tol: float) -> FloatArray:
         return np.where(x < 1.0, 2.0 * R * np.arcsin(np.minimum(x, 1.0)), math.inf)
 
 
-def _applies(arm: SerialArm, circle: Circle, tol: float, tb: TaylorBounds) -> bool:
+def lemma_applies(arm: SerialArm, circle: Circle, tol: float, tb: TaylorBounds) -> bool:
     """Whether the lemma can bound commands along ``circle``: an arm measured in mm and a
     circle wider than the path's bend and the tolerance, long enough for the arc to be told
     from the chord."""
@@ -698,7 +698,7 @@ def arc_limits(
     tb = taylor_bounds(arm, tip) if taylor is None else taylor
     qs = np.asarray(qs, dtype=np.float64).reshape(-1, arm.n_joints)
     tol = float(tolerance_mm)
-    if not _applies(arm, circle, tol, tb):
+    if not lemma_applies(arm, circle, tol, tb):
         return np.full(qs.shape[0], math.inf)
     if qs.shape[0] == 0:
         return np.zeros(0)
@@ -741,7 +741,7 @@ def command_arc_limit(
     tip = tool_point_joints(arm) if moves is None else moves
     tb = taylor_bounds(arm, tip) if taylor is None else taylor
     tol = float(tolerance_mm)
-    if nodes <= 1 or not _applies(arm, circle, tol, tb):
+    if nodes <= 1 or not lemma_applies(arm, circle, tol, tb):
         return float(arc_limits(arm, q_mid, circle, tol, tb, tip, anywhere)[0])
     mid = _middles(arm, q_mid, circle, tol, tb, tip, anywhere)
     if not np.isnan(mid.fixed[0]):

@@ -43,6 +43,7 @@ from armpath.planning.bounds.band import (
     TaylorBounds,
     arc_limits,
     command_arc_limit,
+    lemma_applies,
     taylor_bounds,
 )
 from armpath.planning.bounds.metric import _wrapped
@@ -60,6 +61,7 @@ from armpath.planning.trace.family import CurveFamily, fibonacci_directions
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 #: The traced spans count as a circle where every point of them lies within this share of the
 #: tolerance of the circle fitted to them (the band is then taken that much wider).
@@ -216,8 +218,10 @@ def _limit_layer(
     circle: Circle,
     tolerance_mm: float,
     tb: TaylorBounds,
+    tip: BoolArray,
 ) -> _LimitLayer:
-    """:class:`_LimitLayer` of the members ``acc`` sampled at ``s_mm``."""
+    """:class:`_LimitLayer` of the members ``acc`` sampled at ``s_mm`` (``tip``: the joints
+    that move the tool point, ``tb`` their Taylor bounds)."""
     layer, _, _, triangles = sampler._filtered(acc)
     nb_ptr, nb, _ = _delaunay_neighbours(acc.dirs, acc.caps)
     assert layer.direction is not None
@@ -228,9 +232,7 @@ def _limit_layer(
         layer.u, layer.direction, dir_ptr.astype(np.int64), nb_ptr, nb, sampler.period,
         BRANCH_GAP, sampler.turns > 1,
     )  # fmt: skip
-    arm = sampler.fam.arm
-    tip = tool_point_joints(arm)
-    coarse = arc_limits(arm, layer.q, circle, tolerance_mm, tb, tip, anywhere=True)
+    coarse = arc_limits(sampler.fam.arm, layer.q, circle, tolerance_mm, tb, tip, anywhere=True)
     return _LimitLayer(s_mm, span, acc, triangles, layer, near, coarse)
 
 
@@ -270,7 +272,7 @@ def family_arc_limit(
     def sampled(s: float, span: int) -> _LimitLayer:
         check_time("bounding the commands along the band")
         acc = sampler.sampled(fam.frame(s)[0], dirs, _allowed_at(fam, s), levels=0)[0]
-        return _limit_layer(sampler, s, span, acc, circle, tolerance_mm, tb)
+        return _limit_layer(sampler, s, span, acc, circle, tolerance_mm, tb, tip)
 
     for k, positions in enumerate(s_layers):
         layers += [sampled(float(s), k) for s in positions]
@@ -325,7 +327,9 @@ def family_arc_limit(
             refine[int(lay.layer.direction[best_i - offsets[li]])] = True
             E = fam.frame(lay.s_mm)[0]
             acc = sampler.split(lay.acc, E, refine, lay.triangles, _allowed_at(fam, lay.s_mm))
-            layers[li] = _limit_layer(sampler, lay.s_mm, lay.span, acc, circle, tolerance_mm, tb)
+            layers[li] = _limit_layer(
+                sampler, lay.s_mm, lay.span, acc, circle, tolerance_mm, tb, tip
+            )
         else:  # a layer halfway to the neighbouring one
             lj = int(np.searchsorted(offsets, row[k], side="right") - 1)
             a, b = lay.s_mm, layers[lj].s_mm
@@ -338,16 +342,17 @@ def family_arc_limit(
     return FamilyLimit(best, q[best_i], layers[li].s_mm, fine[key], samples, len(fine))
 
 
-def _points_along(spans_mm: list[tuple[float, float]], gap_mm: float) -> FloatArray:
-    """Arc lengths (mm) along each span, evenly, every point of it within ``gap_mm / 2`` of
-    one of them (at most :data:`APPROACH_POINTS_MAX` in all: farther apart on a long curve)."""
+def _points_along(spans_mm: list[tuple[float, float]], gap_mm: float) -> tuple[FloatArray, float]:
+    """Arc lengths (mm) along each span, evenly, every point of it within half the spacing
+    returned (mm) of one of them: ``gap_mm``, or more where :data:`APPROACH_POINTS_MAX` points
+    would not do it (a long curve)."""
     total = sum(b - a for a, b in spans_mm)
     gap = max(gap_mm, total / APPROACH_POINTS_MAX)
     out = []
     for a, b in spans_mm:
         count = max(math.ceil((b - a) / gap), 1)
         out.append(a + (np.arange(count) + 0.5) * (b - a) / count)
-    return np.concatenate(out)
+    return np.concatenate(out), gap
 
 
 def least_approach(
@@ -368,8 +373,7 @@ def least_approach(
     distance), then the nearest point (by its latest bound) along more, up to ``directions``,
     until the nearest has been sampled along ``directions`` (each sampling's distance is a
     bound for its point: the higher is taken)."""
-    s_all = _points_along(spans_mm, gap_mm)
-    spacing = max(gap_mm, sum(b - a for a, b in spans_mm) / APPROACH_POINTS_MAX)
+    s_all, spacing = _points_along(spans_mm, gap_mm)
     tol = tolerance_mm + spacing / 2.0
 
     def nearest(count: int, s: float) -> float:
@@ -437,9 +441,10 @@ def band_trace_bound(
     if not deviation <= FIT_SHARE * tolerance_mm:
         return None
     band = tolerance_mm + deviation
-    tb = taylor_bounds(arm, tool_point_joints(arm))
-    if not math.isfinite(float(arc_limits(arm, np.asarray(arm.home)[None], circle, band, tb)[0])):
-        return None  # the lemma does not apply to this circle and arm
+    tip = tool_point_joints(arm)
+    tb = taylor_bounds(arm, tip)
+    if not lemma_applies(arm, circle, band, tb):
+        return None
     ends = 4.0 * circle.radius_mm * math.asin(min(band / circle.radius_mm, 1.0))
     traced = sum(max(b - a - ends, 0.0) for a, b in spans_mm)
 
@@ -450,7 +455,6 @@ def band_trace_bound(
         return approach + along <= family.value
 
     if family is not None and family.guide_q is not None and len(family.guide_q):
-        tip = tool_point_joints(arm)
         path = max(
             command_arc_limit(arm, q, circle, band, tb, tip, REFINE_NODES, anywhere=True)
             for q in family.guide_q
