@@ -46,7 +46,6 @@ from armpath.planning.bounds.band import (
     lemma_applies,
     taylor_bounds,
 )
-from armpath.planning.bounds.metric import _wrapped
 from armpath.planning.bounds.sampling import (
     BRANCH_GAP,
     FamilySampler,
@@ -55,6 +54,7 @@ from armpath.planning.bounds.sampling import (
     _delaunay_neighbours,
     _direction_neighbours,
     _Samples,
+    nearest_row,
 )
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
@@ -126,17 +126,7 @@ def _nearest(u: FloatArray, v: FloatArray, period: FloatArray) -> IntArray:  # p
     """For each sample of ``u``, the nearest of ``v`` (largest-joint distance; -1 if none)."""
     out = np.full(u.shape[0], -1, dtype=np.int64)
     for i in range(u.shape[0]):
-        best = np.inf
-        for k in range(v.shape[0]):
-            worst = 0.0
-            for c in range(u.shape[1]):
-                x = _wrapped(v[k, c] - u[i, c], period[c])
-                if x > worst:
-                    worst = x
-                    if worst >= best:
-                        break
-            if worst < best:
-                best, out[i] = worst, k
+        out[i] = nearest_row(u[i], v, 0, v.shape[0], -1, period)[0]
     return out
 
 

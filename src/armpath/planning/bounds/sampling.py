@@ -188,6 +188,29 @@ def _distinct(new: FloatArray, old: FloatArray) -> FloatArray:
 
 
 @njit(cache=True)
+def nearest_row(
+    x: FloatArray, v: FloatArray, lo: int, hi: int, skip: int, period: FloatArray
+) -> tuple[int, float]:  # pragma: no cover - compiled
+    """The row of ``v[lo:hi]`` (but row ``skip``) nearest ``x`` in the largest joint change
+    (command units, joints with a ``period`` the shorter way round) and its distance; ``(-1,
+    inf)`` if none."""
+    best, arg = np.inf, -1
+    for k in range(lo, hi):
+        if k == skip:
+            continue
+        worst = 0.0
+        for c in range(x.size):
+            d = _wrapped(v[k, c] - x[c], period[c])
+            if d > worst:
+                worst = d
+                if worst >= best:
+                    break
+        if worst < best:
+            best, arg = worst, k
+    return arg, best
+
+
+@njit(cache=True)
 def _direction_neighbours(
     u: FloatArray,
     node_dir: IntArray,
@@ -203,7 +226,7 @@ def _direction_neighbours(
     is on another branch); -1 pads the rows. Samples are sorted by direction; ``dir_ptr``
     points at each direction's first. ``own``: the other samples of a sample's own direction
     are neighbours too (a family sampled at several turns about each direction)."""
-    m, j = u.shape
+    m = u.shape[0]
     width = 1
     for d in range(nb_ptr.size - 1):
         width = max(width, nb_ptr[d + 1] - nb_ptr[d] + 1)
@@ -213,19 +236,7 @@ def _direction_neighbours(
         count = 0
         for p in range(nb_ptr[d] - (1 if own else 0), nb_ptr[d + 1]):
             e = nb[p] if p >= nb_ptr[d] else d
-            best, arg = np.inf, -1
-            for k in range(dir_ptr[e], dir_ptr[e + 1]):
-                if k == i:
-                    continue
-                worst = 0.0
-                for c in range(j):
-                    x = _wrapped(u[k, c] - u[i, c], period[c])
-                    if x > worst:
-                        worst = x
-                        if worst >= best:
-                            break
-                if worst < best:
-                    best, arg = worst, k
+            arg, best = nearest_row(u[i], u, dir_ptr[e], dir_ptr[e + 1], i, period)
             if arg >= 0 and best <= branch_gap:
                 out[i, count] = arg
                 count += 1
