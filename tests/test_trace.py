@@ -496,10 +496,9 @@ def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeyp
     """The reference DP's path zigzags between its coarse samples of the family; straightened,
     then shortened in the largest joint changes, every layer still puts the fingertip on its
     curve point (independent forward kinematics), within the joint limits and clear of
-    everything, its ends where they were (the shortened one's far end: it may begin at a
-    member nearer the arm), and its joint changes add up to clearly less: the straightening
-    (squared joint changes) by more than 15 %, the shortening (the largest joint change, what
-    commands cost, the approach from where the arm is included) by more than 2 % again."""
+    everything, its ends where they were, and its joint changes add up to clearly less: the
+    straightening (squared joint changes) by more than 15 %, the shortening (the largest joint
+    change, what commands cost) by more than 4 % again."""
     from armpath.planning.trace import reference
     from armpath.planning.trace.family import curve_family
     from armpath.planning.trace.reachability import CurveArc
@@ -514,10 +513,9 @@ def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeyp
     (straight,) = reference.reference_pieces(fam, arc, 5.0, q_from)
     monkeypatch.setattr(reference, "_STRAIGHTEN_ROUNDS", 0)
     (raw,) = reference.reference_pieces(fam, arc, 5.0, q_from)
-    np.testing.assert_array_equal(straight.ref[[0, -1]], raw.ref[[0, -1]])
-    np.testing.assert_array_equal(short.ref[-1], raw.ref[-1])
     for piece in (straight, short):
         np.testing.assert_array_equal(piece.layers, raw.layers)
+        np.testing.assert_array_equal(piece.ref[[0, -1]], raw.ref[[0, -1]])
         tips = independent.points(np.degrees(piece.ref))[:, 4]
         assert np.linalg.norm(tips - curve.at_arc_length(piece.layers), axis=-1).max() < 1e-5
         assert arm.within_limits(piece.ref).all()
@@ -529,14 +527,8 @@ def test_the_straightened_reference_stays_on_the_crack_clear_and_shorter(monkeyp
     def worth(ref):  # commands' worth of the largest joint changes, layer to layer
         return np.abs(np.diff(np.degrees(ref), axis=0)).max(axis=1).sum() / 2.0
 
-    def approach(ref):  # and from where the arm is onto the first layer
-        return np.abs(np.degrees(ref[0] - q_from)).max() / 2.0
-
     assert worth(straight.ref) < 0.85 * worth(raw.ref)
-    # 52.0 + 20.2 commands' worth straightened, 48.0 + 21.8 shortened
-    assert approach(short.ref) + worth(short.ref) < 0.98 * (
-        approach(straight.ref) + worth(straight.ref)
-    )
+    assert worth(short.ref) < 0.96 * worth(straight.ref)
 
 
 @pytest.mark.slow

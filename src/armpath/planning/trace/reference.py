@@ -412,8 +412,12 @@ def shortened(
     begins from (the last with ``begins_last``) may move too, and the largest joint change from
     there onto it is charged as well (the commands of the approach, what the dynamic program's
     first layer costs): where the family is wide, the pass then begins at the member nearest the
-    arm rather than at a sampled one (the UR5 cell's 80 mm circle: its approach 59 -> 56
-    commands, the whole trace 111 -> 108)."""
+    arm rather than at a sampled one. :func:`reference_pieces` asks for it on a pass once round
+    a closed curve, begun where the family comes nearest the arm (the UR5 cell's 80 mm circle:
+    its approach 59 -> 56 commands, the whole trace 111 -> 108). Not where a pass begins at the
+    end of an arc, most often a tight spot where the family narrows: the path along grew more
+    than the approach shrank, and the passes with it (the seed crack 139 -> 144 commands, the
+    track cell's seam 245 -> 303)."""
     from scipy.optimize import linprog  # imported when first needed
     from scipy.sparse import coo_matrix
 
@@ -624,6 +628,7 @@ def reference_pieces(
         raise PlanningError(f"no clear configuration found on the arc {a:.3f}..{b:.3f} mm")
     wrap = fam.turns_freely[tip]
     here = units.units(q_from[tip])
+    all_round = fam.curve.closed and b - a >= fam.curve.length
     # either way along the arc: backward in one pass where the DP finds it cheaper by a margin
     # (its first layer costs the approach, so an arc whose end is nearer is traced from there)
     routes = {back: _route(fam, nodes[::-1] if back else nodes, here, units) for back in directions}
@@ -672,7 +677,9 @@ def reference_pieces(
         # the joints that do not move the tool point are left to the tracer (it keeps them)
         full = np.zeros((rad.shape[0], fam.arm.n_joints))
         full[:, tip] = rad
-        full = shortened(fam, layers, straightened(fam, layers, full), origin, backward)
+        # a pass once round a closed curve may begin nearer the arm (see shortened)
+        approach = origin if all_round else None
+        full = shortened(fam, layers, straightened(fam, layers, full), approach, backward)
         if layers.size == 1:  # a one-layer piece: a constant reference
             layers = np.array([layers[0], layers[0] + 1e-9])
             full = np.vstack([full, full])
