@@ -46,6 +46,7 @@ from armpath.planning.bounds.band import (
     lemma_applies,
     taylor_bounds,
 )
+from armpath.planning.bounds.chart import BlowUp
 from armpath.planning.bounds.sampling import (
     BRANCH_GAP,
     FamilySampler,
@@ -376,7 +377,9 @@ def least_approach(
         return float(sampler.distance_from(q_start, layer).min()) if layer.size else math.inf
 
     levels = sorted({min(c, directions) for c in APPROACH_LEVELS} | {directions})
-    samplers = {c: FamilySampler(fam, tol, c, q_start) for c in levels}
+    found: dict[bytes, tuple[BlowUp, ...]] = {}  # the blow-ups at each point, found once
+    # (each point's directions allowed are _allowed_at's there, at every sampling)
+    samplers = {c: FamilySampler(fam, tol, c, q_start, blow_up_cache=found) for c in levels}
     # each point's distance at its coarsest sampling first; the nearest point so far sampled
     # again more finely (each sampling's distance is a bound for its point: the higher kept)
     # until the nearest is at the finest: every other point's bound is then no lower

@@ -358,10 +358,16 @@ class FamilySampler:
         directions: int | None = None,
         q_start: FloatArray | None = None,
         blow_ups: bool = True,
+        blow_up_cache: dict[bytes, tuple[BlowUp, ...]] | None = None,
     ) -> None:
         arm = fam.arm
         #: whether the family's singular directions are blown up (:mod:`.chart`)
         self.blow_ups = blow_ups
+        #: the blow-ups found at each tool point (by its bytes), shared by the samplers of
+        #: one family given the same dict (they depend on the point and on the directions
+        #: allowed there alone: whoever passes the dict gives each point one ``allowed``);
+        #: None: found again at each call
+        self.blow_up_cache = blow_up_cache
         self.fam = fam
         self.tip = np.asarray(fam.tip_joints, dtype=bool)
         grid = arm.lattice
@@ -484,6 +490,17 @@ class FamilySampler:
         direction)."""
         if not self.blow_ups or self.turns != 1:
             return ()
+        if self.blow_up_cache is None:
+            return self._found_blow_ups(E, allowed)
+        key = np.asarray(E, dtype=np.float64).tobytes()
+        if key not in self.blow_up_cache:
+            self.blow_up_cache[key] = self._found_blow_ups(E, allowed)
+        return self.blow_up_cache[key]
+
+    def _found_blow_ups(
+        self, E: FloatArray, allowed: Callable[[FloatArray], BoolArray] | None
+    ) -> tuple[BlowUp, ...]:
+        """What :meth:`_blow_ups` finds at ``E``, found now."""
         centers = singular_directions(
             self.fam.arm,
             self.tip,
