@@ -599,7 +599,8 @@ def reference_pieces(
     in the order traced, each ``backward`` when traced from its end; a backward second pass
     was seen to find no way in where the forward one did, a 25 mm clamp on the seed crack). The
     wrist flip (joint 4 + 180 deg, joint 5 negated) moves no link, so it is chosen per piece
-    afterwards.
+    afterwards. Each piece is then :func:`straightened` and :func:`shortened`, a pass once round
+    a closed curve with the approach onto its first layer charged too (it may begin nearer).
     """
     a, b = arc.start_mm, arc.end_mm
     tip = fam.tip_joints
