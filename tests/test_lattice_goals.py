@@ -19,7 +19,7 @@ import pytest
 from armpath.api import arm_and_scene, load_arm, load_scene
 from armpath.budget import time_limit
 from armpath.errors import TimeLimitError
-from armpath.kinematics import tool_position
+from armpath.kinematics import landmark_positions, tool_position
 from armpath.planning.bounds import lattice_goals
 from armpath.planning.bounds import tour as tour_bounds
 from armpath.planning.bounds.lattice_goals import lattice_goal_states
@@ -163,6 +163,48 @@ def test_may_be_clear_within_allows_one_motion_to_obstacles_and_two_between_link
     assert (slack[:, is_self].min(axis=1) < -2.0 * moved).any()
     assert (slack[:, ~is_self].min(axis=1) < -moved).any()
     assert 0 < truth.sum() < truth.size
+
+
+def test_may_be_clear_within_each_landmarks_motion_bounds_its_links():
+    """The per-landmark allowance against every pair's clearance measured, each part's
+    allowance the farther of its link's two ends (looked up by the link's name); and sound:
+    a clear configuration near each one is never ruled out by how far it moved each
+    landmark."""
+    arm, scene = arm_and_scene(None, Path(__file__).parents[1] / "examples" / "ur5_cell.toml")
+    world = scene.world
+    rng = np.random.default_rng(6)
+    q = rng.uniform(-np.pi, np.pi, size=(600, 6))
+    n_landmarks = landmark_positions(arm, q[:1]).shape[1]
+    moved = rng.uniform(0.0, 60.0, size=(600, n_landmarks))
+    values, _ = world.pair_clearances(arm, q)
+    slack = values - world.required(arm)
+    link = {lk.name: lk for lk in arm.links}
+    part_link = {p.name: p.link for p in world.parts(arm)}
+
+    def link_moved(name: str) -> np.ndarray:
+        return np.maximum(moved[:, link[name].start], moved[:, link[name].end])
+
+    allowance = np.column_stack(
+        [
+            link_moved(pair.part) + link_moved(pair.other)
+            if pair.is_self
+            else link_moved(part_link[pair.part])
+            for pair in world.pairs(arm)
+        ]
+    )
+    truth = np.all(slack >= -allowance, axis=1)
+    found = world.may_be_clear_within(arm, q, moved)
+    assert np.array_equal(found, truth)
+    # tighter than the one allowance for every point, and it decides some both ways
+    assert not np.any(found & ~world.may_be_clear_within(arm, q, moved.max(axis=1)))
+    assert (found != world.may_be_clear_within(arm, q, moved.max(axis=1))).any()
+    assert 0 < truth.sum() < truth.size
+    # a clear configuration a few degrees away: its landmarks' motion keeps the original
+    near = q + rng.uniform(-0.15, 0.15, size=q.shape)
+    clear = world.slack(arm, near) >= 0.0
+    shift = np.linalg.norm(landmark_positions(arm, near) - landmark_positions(arm, q), axis=-1)
+    assert clear.sum() > 50
+    assert np.all(world.may_be_clear_within(arm, q[clear], shift[clear] + 1e-9))
 
 
 def _chebyshev_commands(a: np.ndarray, b: np.ndarray, period: np.ndarray) -> int:

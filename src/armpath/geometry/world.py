@@ -962,22 +962,50 @@ class CollisionWorld:
 
     def may_be_clear_within(self, arm: SerialArm, q: ArrayLike, moved: ArrayLike) -> BoolArray:
         """Per configuration of ``q (M, n)``, whether a configuration that moves no point of
-        the arm farther than ``moved`` (length unit, scalar or ``(M,)``) from it may keep the
-        clearance rule: False where a part's slack to an obstacle is below ``-moved`` or a
-        link pair's below ``-2 moved`` (both links of a pair move), as :meth:`slack` measures
-        them. Pairs are measured only as far as that decides (:meth:`smallest_slacks` with
-        those allowances as ceilings and floors just under them)."""
+        the arm farther than ``moved`` (length unit) from it may keep the clearance rule.
+
+        ``moved`` is a scalar or ``(M,)`` (any point of the arm), or ``(M, L)``: how far each
+        of the arm's landmarks (:func:`~armpath.kinematics.landmark_positions`) moves. A part
+        is the segment between two landmarks (the last link's body and tip both lie on the
+        last link's), so none of its points moves farther than the farther of its ends; a
+        part's slack to an obstacle below minus that, or a link pair's below minus both
+        links' together, rules the configuration out (as :meth:`slack` measures them). Pairs
+        are measured only as far as that decides (:meth:`smallest_slacks` with those
+        allowances as ceilings and floors just under them)."""
         q = np.asarray(q, dtype=np.float64)
-        reach = np.broadcast_to(np.asarray(moved, dtype=np.float64), (q.shape[0],))
-        is_self = np.array([p.is_self for p in self._bound(arm).pairs], dtype=bool)
+        bound = self._bound(arm)
+        moved = np.asarray(moved, dtype=np.float64)
+        m_count = q.shape[0]
+        n_obs, n_links = len(self.obstacles), bound.link_start.size
+        n_parts, n_pairs = len(bound.parts), len(bound.pairs)
+        masks: list[BoolArray] = []
+        allowed: list[FloatArray] = []
+        if moved.ndim == 2:  # one group per part and one per link pair
+            # each part's allowance: the farther of its ends (the tip's: the last link's)
+            link = np.minimum(np.arange(n_parts), n_links - 1)
+            ends = (bound.link_start[link], bound.link_end[link])
+            part_moved = np.maximum(moved[:, ends[0]], moved[:, ends[1]])
+            self_moved = np.maximum(moved[:, bound.self_a0], moved[:, bound.self_a1])
+            self_moved += np.maximum(moved[:, bound.self_b0], moved[:, bound.self_b1])
+            for first, count, allow in (
+                *((p * n_obs, n_obs, part_moved[:, p]) for p in range(n_parts)),
+                *((n_parts * n_obs + j, 1, self_moved[:, j]) for j in range(self_moved.shape[1])),
+            ):
+                masks.append(np.zeros(n_pairs, dtype=bool))
+                masks[-1][first : first + count] = True
+                allowed.append(-allow)
+        else:  # every part alike, every link pair alike (both links move)
+            reach = np.broadcast_to(moved, (m_count,))
+            is_self = np.array([p.is_self for p in bound.pairs], dtype=bool)
+            masks, allowed = [~is_self, is_self], [-reach, -2.0 * reach]
         # each group's measuring stops once a pair is below its allowance (the floor just
         # under it); a value left at the ceiling says no pair is below
         groups = [
-            SlackGroup(mask, allowed, np.nextafter(allowed, -np.inf))
-            for mask, allowed in ((~is_self, -reach), (is_self, -2.0 * reach))
+            SlackGroup(mask, allow, np.nextafter(allow, -np.inf))
+            for mask, allow in zip(masks, allowed, strict=True)
             if mask.any()
         ]
-        keep = np.ones(q.shape[0], dtype=bool)
+        keep = np.ones(m_count, dtype=bool)
         for group, lowest in zip(groups, self.smallest_slacks(arm, q, groups), strict=True):
             keep &= lowest >= group.ceiling
         return keep

@@ -258,16 +258,16 @@ def _sampling_errors(
 ) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
     """Per sample and joint, the largest difference to its neighbours
     (:func:`_direction_neighbours`: the nearest sample of each neighbouring direction within
-    ``branch_gap`` commands; ``missing`` where it has none); and per sample the farthest any
-    of the arm's ``points`` ``(M, P, 3)`` moves to them (inf where none)."""
+    ``branch_gap`` commands; ``missing`` where it has none); and per sample how far each of
+    the arm's ``points`` ``(M, P, 3)`` moves to them at most, ``(M, P)`` (inf where none)."""
     m, j = u.shape
     near = _direction_neighbours(u, node_dir, dir_ptr, nb_ptr, nb, period, branch_gap, own)
     err = np.zeros((m, j))
-    moved = np.zeros(m)
+    moved = np.zeros((m, points.shape[1]))
     for i in range(m):
         if near[i, 0] < 0:
             err[i, :] = missing
-            moved[i] = np.inf
+            moved[i, :] = np.inf
             continue
         for w in range(near.shape[1]):
             arg = near[i, w]
@@ -281,7 +281,7 @@ def _sampling_errors(
                 x = 0.0
                 for c in range(3):
                     x += (points[arg, t, c] - points[i, t, c]) ** 2
-                moved[i] = max(moved[i], np.sqrt(x))
+                moved[i, t] = max(moved[i, t], np.sqrt(x))
     return err, moved
 
 
@@ -597,11 +597,19 @@ class FamilySampler:
             # no neighbouring direction has a member (a sliver of the family inside the joint
             # limits): the layer's median error stands in for the unknown one
             err[alone] = np.median(err[~alone], axis=0)
-            moved[alone] = np.median(moved[~alone])
+            moved[alone] = np.median(moved[~alone], axis=0)
         tol_err, slack = acc.tol_err[order], acc.slack[order]
         err = err + tol_err
-        allowance = moved + (tol_err * self.step) @ self.reach + CLEAR_MARGIN
-        keep = (slack >= -allowance) & ~self.outside_windows(u, err)
+        # how far the arm's points may move within the cell beyond the neighbours' members
+        # (the tolerance's joint change), each landmark's own way and any point at most
+        extra = (tol_err * self.step) @ self.reach + CLEAR_MARGIN
+        keep = (slack >= -(moved.max(axis=1, initial=0.0) + extra)) & ~self.outside_windows(u, err)
+        # a part moves no farther than the farther of its ends: a link far inside an obstacle
+        # whose ends move little is not cleared by the wrist's swing
+        at = np.flatnonzero(keep & (slack < 0.0))
+        keep[at] = self.fam.world.may_be_clear_within(
+            self.fam.arm, q[at], moved[at] + extra[at, None]
+        )
         if self.body is not None:
             # a sample not clear itself whose cell the body cannot keep clear anywhere
             # (:class:`ToolBody`), where the chart is the identity out to its spacing
