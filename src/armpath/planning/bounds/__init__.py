@@ -26,11 +26,14 @@ neighbours on the sphere of directions), plus the joint change that moves the to
 tolerance (pseudo-inverse of the position Jacobian). Distances between samples are taken less
 both samples' errors (:mod:`~armpath.planning.bounds.metric`), so the shortest path through the
 samples is, up to that error estimate, no longer than any path through the family. A sample is
-dropped only when no member of its cell can be clear: its slack is worse than the arm's points
-move to its neighbours, or the end of its last link's body (where the bare tool tip begins) lies
-too close to an obstacle for any direction of its cell, that end moving far less than the link's
-other end (:class:`~armpath.planning.bounds.sampling.ToolBody`: the seed crack's bound 130 ->
-134 commands, its tool near tangent to the workpiece at the ends of the reachable arc). The
+dropped only when no member of its cell can be clear: a link's slack to an obstacle is worse
+than the farther of its ends moves to its neighbours (a link pair's: both links' together;
+the UR5 circle's least approach had kept members with the upper arm 45-70 mm in the table, the
+wrist swinging 90 mm between them: 50 -> 51 commands), or the end of its last link's body
+(where the bare tool tip begins) lies too close to an obstacle for any direction of its cell,
+that end moving far less than the link's other end
+(:class:`~armpath.planning.bounds.sampling.ToolBody`: the seed crack's bound 130 -> 134
+commands, its tool near tangent to the workpiece at the ends of the reachable arc). The
 relaxation is then searched by branch and bound over the direction cells
 (:mod:`~armpath.planning.bounds.search`): a path through samples that are clear themselves
 bounds the relaxation's optimum from above, the cells that cannot hold a cheaper path are

@@ -570,9 +570,10 @@ class FamilySampler:
         what their neighbours allow (indices into ``acc.dirs``); each direction's spacing (the
         widest angle to its Delaunay neighbours, rad); the Delaunay triangles.
 
-        A sample is kept when its slack is no worse than the arm's points move to its
-        neighbours (and within the tolerance): a member nearby may then be clear where the
-        sample is not. Links are straight between those points, so none moves farther. Such a
+        A sample is kept when each link's slack is no worse than the farther of the link's ends
+        moves to its neighbours' members (and within the tolerance; a link pair's, both links'
+        together): a member nearby may then be clear where the sample is not. Links are
+        straight between those points, so none of a link's points moves farther. Such a
         sample is dropped after all when its last link's body is too close to an obstacle for
         any member of its cell (:class:`ToolBody`: the body's end moves far less than the
         link's other end)."""
