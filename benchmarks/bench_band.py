@@ -103,15 +103,16 @@ class Circle:
         d = p - self.centre
         return self.radius * np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
 
-    def depth(self, p: np.ndarray) -> np.ndarray:
-        """How far (mm) points lie inside what they must stay out of: nothing here."""
-        return np.zeros(p.shape[:-1])
+    def outside(self, p: np.ndarray) -> np.ndarray:
+        """Signed distances (mm) from what the points must stay out of: a circle has nothing
+        (no values, so no constraints: constraints that are zero everywhere stall SLSQP)."""
+        return np.zeros(0)
 
 
 class ClosedCurve:
     """A closed curve on a solid's face as a polyline (points every :data:`POLY_STEP_MM`):
     distance of points from it and arc length of their nearest points (projected onto the
-    nearest polyline segments), and how far they lie inside the solid."""
+    nearest polyline segments), and their signed distance from the solid."""
 
     radius = None
 
@@ -148,9 +149,6 @@ class ClosedCurve:
         """Signed distance (mm) of points from the solid, negative inside."""
         return np.asarray(self.solid.signed_distance(p), dtype=np.float64)
 
-    def depth(self, p: np.ndarray) -> np.ndarray:
-        return np.maximum(-self.outside(p), 0.0)
-
 
 Guide = Circle | ClosedCurve
 
@@ -165,7 +163,7 @@ def _command_arc(arm, circle: Guide, q0: np.ndarray, dq: np.ndarray) -> tuple[fl
     it must stay out of)."""
     p = tool_position(arm, q0[None] + INSTANTS[:, None] * dq[None])
     s = circle.arc(p)
-    off = np.inf if np.any(circle.depth(p) > 0.0) else float(np.max(circle.distance(p)))
+    off = np.inf if np.any(circle.outside(p) < 0.0) else float(np.max(circle.distance(p)))
     return float(s[-1] - s[0]), off
 
 
@@ -198,9 +196,8 @@ def longest_command(arm, circle: Guide, tol: float, states: np.ndarray, seed: in
 
         def within(x):
             p = tool_position(arm, x[:n][None] + INSTANTS[:, None] * x[n:][None])
-            # out of the solid: its signed distance (smooth), a small margin kept; a circle
-            # has none (constraints that are zero everywhere stall SLSQP)
-            out = circle.outside(p) - OUT_MARGIN_MM if isinstance(circle, ClosedCurve) else []
+            # out of the solid: its signed distance (smooth), a small margin kept
+            out = circle.outside(p) - OUT_MARGIN_MM
             return np.concatenate([SEARCH_SHARE * tol - circle.distance(p), out])
 
         found = minimize(
