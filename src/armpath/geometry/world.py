@@ -309,13 +309,15 @@ class SlackGroup(NamedTuple):
 @dataclass(frozen=True, eq=False)
 class _ArmBinding:
     """What a :class:`CollisionWorld` computes once per arm: its parts and pairs, what each
-    pair requires, the landmark indices of the parts' and self pairs' segments, and how far a
+    pair requires, each part's link (an index into the checked links: the last one's body and
+    tip share it), the landmark indices of the parts' and self pairs' segments, and how far a
     point can move per unit of each joint (:func:`displacement_bounds`)."""
 
     parts: tuple[Part, ...]
     pairs: tuple[ClearancePair, ...]
     required: FloatArray
     part_radius: FloatArray
+    part_link: IntArray
     link_start: IntArray
     link_end: IntArray
     tip_split: bool
@@ -406,6 +408,9 @@ class CollisionWorld:
             pairs=tuple(pairs),
             required=np.array([p.required for p in pairs], dtype=np.float64),
             part_radius=np.array([p.radius for p in parts], dtype=np.float64),
+            part_link=np.array(
+                [[lk.name for lk in checked].index(p.link) for p in parts], dtype=np.intp
+            ),
             link_start=np.array([lk.start for lk in checked], dtype=np.intp),
             link_end=np.array([lk.end for lk in checked], dtype=np.intp),
             tip_split=bool(checked) and self.tip_exempt > 0,
@@ -976,14 +981,13 @@ class CollisionWorld:
         bound = self._bound(arm)
         moved = np.asarray(moved, dtype=np.float64)
         m_count = q.shape[0]
-        n_obs, n_links = len(self.obstacles), bound.link_start.size
+        n_obs = len(self.obstacles)
         n_parts, n_pairs = len(bound.parts), len(bound.pairs)
         masks: list[BoolArray] = []
         allowed: list[FloatArray] = []
         if moved.ndim == 2:  # one group per part and one per link pair
             # each part's allowance: the farther of its ends (the tip's: the last link's)
-            link = np.minimum(np.arange(n_parts), n_links - 1)
-            ends = (bound.link_start[link], bound.link_end[link])
+            ends = (bound.link_start[bound.part_link], bound.link_end[bound.part_link])
             part_moved = np.maximum(moved[:, ends[0]], moved[:, ends[1]])
             self_moved = np.maximum(moved[:, bound.self_a0], moved[:, bound.self_a1])
             self_moved += np.maximum(moved[:, bound.self_b0], moved[:, bound.self_b1])
