@@ -408,6 +408,9 @@ class FamilySampler:
         #: the last link's body, by which whole cells of directions are dropped (see
         #: :meth:`_filtered`)
         self.body = ToolBody.of(fam.world, arm)
+        #: how many parts a pair's slack may close by at most: two where the world checks the
+        #: arm against itself (both links of a pair move), else one (only the arm's part)
+        self.movers = 2.0 if any(p.is_self for p in fam.world.pairs(arm)) else 1.0
         #: whether the samples cover the family: the tip joints beyond the tool point's three
         #: are no more than the sampled tool direction (two) and turn about it (one, where
         #: several turns are sampled); a redundant arm's self-motion is not sampled
@@ -604,9 +607,11 @@ class FamilySampler:
         # how far the arm's points may move within the cell beyond the neighbours' members
         # (the tolerance's joint change), each landmark's own way and any point at most
         extra = (tol_err * self.step) @ self.reach + CLEAR_MARGIN
-        keep = (slack >= -(moved.max(axis=1, initial=0.0) + extra)) & ~self.outside_windows(u, err)
-        # a part moves no farther than the farther of its ends: a link far inside an obstacle
-        # whose ends move little is not cleared by the wrist's swing
+        # a first cut by the farthest any landmark moves (a link pair's slack closes by both
+        # links' motion), then each part by the farther of its ends: a link far inside an
+        # obstacle whose ends move little is not cleared by the wrist's swing
+        farthest = moved.max(axis=1, initial=0.0) + extra
+        keep = (slack >= -self.movers * farthest) & ~self.outside_windows(u, err)
         at = np.flatnonzero(keep & (slack < 0.0))
         keep[at] = self.fam.world.may_be_clear_within(
             self.fam.arm, q[at], moved[at] + extra[at, None]
