@@ -207,6 +207,25 @@ def test_may_be_clear_within_each_landmarks_motion_bounds_its_links():
     assert np.all(world.may_be_clear_within(arm, q[clear], shift[clear] + 1e-9))
 
 
+def test_the_familys_clearance_cut_keeps_what_the_per_part_test_keeps():
+    """The sampler's first cut by the farthest landmark only saves work: on random UR5
+    configurations near the cell's parts and self pairs it keeps exactly what the world's
+    per-part test keeps, including the configurations whose worst slack (a link pair's) lies
+    beyond one link's motion but within both links' together."""
+    arm, scene = arm_and_scene(None, Path(__file__).parents[1] / "examples" / "ur5_cell.toml")
+    world = scene.world
+    sampler = FamilySampler(_targets_family(arm, world, np.array([[400.0, 100.0, 200.0]])), 0.05)
+    rng = np.random.default_rng(6)
+    q = rng.uniform(-np.pi, np.pi, size=(2000, 6))
+    moved = rng.uniform(0.0, 60.0, size=(2000, landmark_positions(arm, q[:1]).shape[1]))
+    slack = world.slack(arm, q)
+    truth = (slack >= 0.0) | world.may_be_clear_within(arm, q, moved)
+    assert np.array_equal(sampler.may_be_clear(q, slack, moved), truth)
+    # what a cut by one landmark's motion alone would have dropped, and both ways decided
+    assert (truth & (slack < -moved.max(axis=1))).sum() > 10
+    assert 0 < truth.sum() < truth.size
+
+
 def _chebyshev_commands(a: np.ndarray, b: np.ndarray, period: np.ndarray) -> int:
     """Whole commands of a leg between configurations in command units, joints with a
     ``period`` measured the shorter way round (an independent spelling of the metric)."""

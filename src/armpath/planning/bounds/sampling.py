@@ -607,15 +607,7 @@ class FamilySampler:
         # how far the arm's points may move within the cell beyond the neighbours' members
         # (the tolerance's joint change), each landmark's own way and any point at most
         extra = (tol_err * self.step) @ self.reach + CLEAR_MARGIN
-        # a first cut by the farthest any landmark moves (a link pair's slack closes by both
-        # links' motion), then each part by the farther of its ends: a link far inside an
-        # obstacle whose ends move little is not cleared by the wrist's swing
-        farthest = moved.max(axis=1, initial=0.0) + extra
-        keep = (slack >= -self.movers * farthest) & ~self.outside_windows(u, err)
-        at = np.flatnonzero(keep & (slack < 0.0))
-        keep[at] = self.fam.world.may_be_clear_within(
-            self.fam.arm, q[at], moved[at] + extra[at, None]
-        )
+        keep = self.may_be_clear(q, slack, moved + extra[:, None]) & ~self.outside_windows(u, err)
         if self.body is not None:
             # a sample not clear itself whose cell the body cannot keep clear anywhere
             # (:class:`ToolBody`), where the chart is the identity out to its spacing
@@ -632,6 +624,20 @@ class FamilySampler:
         real = to_real(acc.dirs[index[keep]], acc.caps)
         layer = Layer(u[keep], err[keep], q[keep], real, index[keep], clear[keep])
         return layer, unsure, spacing, triangles
+
+    def may_be_clear(self, q: FloatArray, slack: FloatArray, moved: FloatArray) -> BoolArray:
+        """Which configurations ``q (M, n)`` rad (their slack ``(M,)``, model units) may have
+        a member within ``moved (M, L)`` of each landmark that keeps the clearance rule: what
+        :meth:`CollisionWorld.may_be_clear_within` says, asked only where the slack is negative
+        and no further than a first cut by the farthest landmark allows (a link pair's slack
+        closes by both links' motion: twice that where the world checks the arm against
+        itself). A part moves no farther than the farther of its ends, so a link far inside an
+        obstacle whose ends move little is not cleared by the wrist's swing."""
+        farthest = moved.max(axis=1, initial=0.0)
+        keep = slack >= -self.movers * farthest
+        at = np.flatnonzero(keep & (slack < 0.0))
+        keep[at] = self.fam.world.may_be_clear_within(self.fam.arm, q[at], moved[at])
+        return keep
 
     def distance_from(self, q_start: FloatArray, layer: Layer, whole: bool = False) -> FloatArray:
         """Least commands from ``q_start`` (rad) to each sample's error box (rounded up to
