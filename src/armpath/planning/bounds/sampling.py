@@ -637,7 +637,7 @@ class FamilySampler:
         keep = slack >= -self.movers * farthest
         at = np.flatnonzero(keep & (slack < 0.0))
         keep[at] = self.fam.world.may_be_clear_within(self.fam.arm, q[at], moved[at])
-        return keep
+        return np.asarray(keep, dtype=bool)
 
     def distance_from(self, q_start: FloatArray, layer: Layer, whole: bool = False) -> FloatArray:
         """Least commands from ``q_start`` (rad) to each sample's error box (rounded up to
