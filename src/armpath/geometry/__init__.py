@@ -1,12 +1,14 @@
 """Collision geometry: analytic obstacle solids, arm clearance, and curves to trace."""
 
-from typing import TYPE_CHECKING
+import sys
+from typing import TYPE_CHECKING, TypeGuard
 
 from armpath.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from armpath.geometry.curves import ConeSection, Curve, ParametricCurve, Polyline, seed_crack
     from armpath.geometry.expressions import parse_expression
+    from armpath.geometry.mesh import MeshObstacle
     from armpath.geometry.primitives import (
         Box,
         Capsule,
@@ -54,6 +56,16 @@ __getattr__, __dir__ = lazy_exports(
     },
 )
 
+
+def is_mesh_obstacle(obstacle: object) -> TypeGuard["MeshObstacle"]:
+    """Whether ``obstacle`` is a mesh obstacle, asked without importing
+    :mod:`armpath.geometry.mesh`, which needs the optional packages of ``armpath[mesh]``: a
+    mesh obstacle exists only once that module has been imported, so a module that is not
+    loaded means none is."""
+    mesh = sys.modules.get("armpath.geometry.mesh")
+    return mesh is not None and isinstance(obstacle, mesh.MeshObstacle)
+
+
 __all__ = [
     "Box",
     "Capsule",
@@ -73,6 +85,7 @@ __all__ = [
     "cone_frustum",
     "cylinder",
     "hollow_frustum",
+    "is_mesh_obstacle",
     "parse_expression",
     "seed_crack",
 ]

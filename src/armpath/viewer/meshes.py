@@ -7,7 +7,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError
-from armpath.geometry.mesh import MeshObstacle
+from armpath.geometry import is_mesh_obstacle
 from armpath.geometry.primitives import (
     Box,
     Capsule,
@@ -107,7 +107,7 @@ def obstacle_mesh(obstacle: Obstacle, centre: FloatArray, half_size: float) -> T
         return capsule_mesh(obstacle)
     if isinstance(obstacle, HalfSpace):
         return half_space_patch(obstacle, centre, half_size)
-    if isinstance(obstacle, MeshObstacle):
+    if is_mesh_obstacle(obstacle):
         return np.asarray(obstacle.vertices, dtype=float), np.asarray(
             obstacle.faces, dtype=np.int64
         )

@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.commands import CommandSequence
 from armpath.errors import InvalidInputError
-from armpath.geometry.mesh import MeshObstacle
+from armpath.geometry import is_mesh_obstacle
 from armpath.geometry.primitives import (
     Box,
     Capsule,
@@ -37,6 +37,9 @@ from armpath.model.serial_arm import SerialArm
 from armpath.report import commands_text, passes_text
 from armpath.scenes import Scene
 from armpath.trajectory import PiecewisePolynomial
+
+if TYPE_CHECKING:
+    from armpath.geometry.mesh import MeshObstacle
 
 
 def _draw_solid(ax: Axes3D, solid: SolidOfRevolution, n_theta: int = 48) -> np.ndarray:
@@ -209,7 +212,7 @@ def draw_obstacles(ax: Axes3D, scene: Scene) -> list[np.ndarray]:
             drawn.append(_draw_box(ax, obstacle))
         elif isinstance(obstacle, Capsule):
             drawn.append(_draw_capsule(ax, obstacle))
-        elif isinstance(obstacle, MeshObstacle):
+        elif is_mesh_obstacle(obstacle):
             drawn.append(_draw_mesh(ax, obstacle))
     return drawn
 
