@@ -435,12 +435,13 @@ def _scene_world(scene_file: str) -> tuple[SerialArm, CollisionWorld]:
 
 
 @pytest.mark.parametrize("scene_file", ["seed", "ur5_cell", "every_kind"])
-def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file):
+def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file, monkeypatch):
     """The pruned minimum (broad-phase bounds, exact distances only where they can matter)
     equals the plain minimum over :meth:`pair_clearances` for random configurations, random
     pair masks and ceilings: pruning never changes a value. So does the compiled loop of
     :meth:`CollisionWorld.slack` (with the boxes' axis gaps as a further broad phase), with
-    and without a ceiling, and the batched fallback of a world without a table."""
+    and without a ceiling, and the batched fallback of a world without a table; and the
+    compiled loop split between threads gives every value it gives in one."""
     arm, world = _scene_world(scene_file)
     rng = np.random.default_rng(7)
     q = _within_limits(arm, 400, seed=3)
@@ -488,6 +489,18 @@ def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file):
     for got, mask, ceiling in zip(found, masks, ceilings, strict=True):
         want = np.minimum(ceiling, np.min(slack[:, mask], axis=1, initial=np.inf))
         np.testing.assert_array_equal(got, want)
+    # the same batch split between threads (as where a core is free), with floors too
+    import armpath.geometry.world as world_module
+
+    groups = [*zip(masks, ceilings, strict=True), SlackGroup(every, np.inf, floor)]
+    monkeypatch.setattr(world_module, "threads_pay_off", lambda n, threshold: False)
+    serial = world.smallest_slacks(arm, q, groups)
+    monkeypatch.setattr(world_module, "threads_pay_off", lambda n, threshold: True)
+    monkeypatch.setattr(world_module.os, "cpu_count", lambda: 3)  # uneven slices
+    threaded = world.smallest_slacks(arm, q, groups)
+    for got, want in zip(threaded, serial, strict=True):
+        np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(threaded[0], found[0])
 
 
 @pytest.mark.parametrize("scene_file", ["seed", "ur5_cell", "every_kind"])

@@ -33,7 +33,9 @@ The seed arm has no zero-length link and its pairs are AB-CD, AB-DE and BC-DE.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, NamedTuple
@@ -50,6 +52,7 @@ from armpath.geometry.compiled_world import (
 )
 from armpath.geometry.kernels import indexed_segment_distances, segments_to_point
 from armpath.geometry.primitives import HollowFrustum, Obstacle, Opening
+from armpath.jit import threads_pay_off
 from armpath.kinematics import (
     compiled_chain,
     displacement_bounds,
@@ -291,6 +294,9 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
     return out
 
 
+#: Fewest configurations whose smallest slacks (:meth:`CollisionWorld.smallest_slacks`, compiled)
+#: are split between threads, one slice per core, where a core is free.
+SLACK_THREAD_BATCH = 1_000
 #: Most configurations :meth:`CollisionWorld.segments_satisfied` checks in one call of
 #: :meth:`CollisionWorld.satisfied` (worlds with a mesh).
 SATISFIED_CHUNK = 50_000
@@ -679,13 +685,32 @@ class CollisionWorld:
             columns.append(np.asarray(cols, dtype=bool))
             ceilings.append(np.broadcast_to(np.asarray(ceiling, dtype=np.float64), (m_count,)))
             floors.append(np.broadcast_to(np.asarray(floor, dtype=np.float64), (m_count,)))
-        out = configurations_slacks(
-            np.ascontiguousarray(q),
-            np.ascontiguousarray(np.array(columns, dtype=np.bool_).reshape(len(groups), -1)),
-            np.ascontiguousarray(np.array(ceilings).reshape(len(groups), m_count)),
-            np.ascontiguousarray(np.array(floors).reshape(len(groups), m_count)),
-            *self._kernel_args(arm, bound.required, table),
-        )
+        cols = np.ascontiguousarray(np.array(columns, dtype=np.bool_).reshape(len(groups), -1))
+        ceiling_rows = np.array(ceilings).reshape(len(groups), m_count)
+        floor_rows = np.array(floors).reshape(len(groups), m_count)
+        args = self._kernel_args(arm, bound.required, table)
+
+        def part(a: int, b: int) -> FloatArray:
+            return np.asarray(
+                configurations_slacks(
+                    np.ascontiguousarray(q[a:b]),
+                    cols,
+                    np.ascontiguousarray(ceiling_rows[:, a:b]),
+                    np.ascontiguousarray(floor_rows[:, a:b]),
+                    *args,
+                )
+            )
+
+        # each configuration's values are its own, and the loop releases the GIL: a large
+        # batch runs in one slice per core where a core is free
+        threads = os.cpu_count() or 1
+        if threads_pay_off(m_count, SLACK_THREAD_BATCH) and threads > 1:
+            ends = np.linspace(0, m_count, threads + 1).astype(np.int64)
+            with ThreadPoolExecutor(max_workers=threads) as pool:
+                parts = list(pool.map(part, ends[:-1], ends[1:]))
+            out = np.concatenate(parts, axis=1)
+        else:
+            out = part(0, m_count)
         return [np.array(row) for row in out]
 
     def satisfied(
