@@ -490,13 +490,13 @@ def test_smallest_slacks_equal_the_minimum_of_every_pair(scene_file, monkeypatch
         want = np.minimum(ceiling, np.min(slack[:, mask], axis=1, initial=np.inf))
         np.testing.assert_array_equal(got, want)
     # the same batch split between threads (as where a core is free), with floors too
-    import armpath.geometry.world as world_module
+    import armpath.jit
 
     groups = [*zip(masks, ceilings, strict=True), SlackGroup(every, np.inf, floor)]
-    monkeypatch.setattr(world_module, "threads_pay_off", lambda n, threshold: False)
+    monkeypatch.setattr(armpath.jit, "threads_pay_off", lambda n, threshold: False)
     serial = world.smallest_slacks(arm, q, groups)
-    monkeypatch.setattr(world_module, "threads_pay_off", lambda n, threshold: True)
-    monkeypatch.setattr(world_module.os, "cpu_count", lambda: 3)  # uneven slices
+    monkeypatch.setattr(armpath.jit, "threads_pay_off", lambda n, threshold: True)
+    monkeypatch.setattr(armpath.jit.os, "cpu_count", lambda: 3)  # uneven slices
     threaded = world.smallest_slacks(arm, q, groups)
     for got, want in zip(threaded, serial, strict=True):
         np.testing.assert_array_equal(got, want)

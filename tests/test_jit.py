@@ -131,6 +131,26 @@ def test_threads_are_used_only_for_big_batches_on_a_machine_with_a_core_to_spare
     assert not jit.threads_pay_off(10_000, 128)
 
 
+def test_in_slices_covers_the_batch_once_in_order_one_slice_per_core(monkeypatch):
+    """Where threads pay, one slice per core, together every item once and in order, run
+    on the pool's threads; otherwise one call over the whole batch on the caller's thread."""
+    import threading
+
+    from armpath import jit
+
+    def run(a: int, b: int) -> tuple[int, int, int]:
+        return a, b, threading.get_ident()
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(jit, "threads_pay_off", lambda n, threshold: n >= threshold)
+    slices = jit.in_slices(run, 10, 5)
+    assert [s[:2] for s in slices] == [(0, 3), (3, 6), (6, 10)]
+    assert threading.get_ident() not in {s[2] for s in slices}
+    assert jit.in_slices(run, 4, 5) == [(0, 4, threading.get_ident())]
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    assert jit.in_slices(run, 10, 5) == [(0, 10, threading.get_ident())]
+
+
 def _prints_ok_with_two_threads(code: str, layer: str | None = None) -> None:
     """Run ``code`` in a fresh interpreter with two numba threads and the threading ``layer``
     (numba's default when None); it must print ``ok``."""

@@ -22,6 +22,9 @@ times slower than OpenMP, and at times slower than one thread. Where numba falls
 work queue (no OpenMP) it serves one caller at a time: call parallel kernels holding
 :data:`parallel_kernel_lock` (threads then take turns).
 
+A serial kernel compiled with ``nogil=True`` whose items are independent can instead run on
+Python threads, a slice of its batch each (:func:`in_slices`, under the same rule).
+
 Kernels copy arrays element by element (:func:`~armpath.kinematics.copy_into`,
 :func:`~armpath.ik.kernels.copy_system`) rather than by slice assignment (``a[:, :] = b``,
 ``out[k] = row``): numba compiles slice assignment through its general broadcasting code, which
@@ -38,6 +41,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar, overload
 
 F = TypeVar("F", bound=Callable[..., Any])
+R = TypeVar("R")
 
 #: ``range`` until numba is loaded, then ``numba.prange``; a kernel's module imports it as
 #: ``from armpath.jit import prange`` and is rebound before any of its kernels compiles.
@@ -137,6 +141,22 @@ def threads_pay_off(n_items: int, threshold: int) -> bool:
     if cores < 2:
         return False
     return _busy_cores() <= cores - 1.0
+
+
+def in_slices(run: Callable[[int, int], R], n_items: int, threshold: int) -> list[R]:
+    """``run(a, b)`` over the items ``[0, n_items)``: one call ``run(0, n_items)``, or, where
+    :func:`threads_pay_off` says a batch of ``n_items`` pays (``threshold`` as there), one call
+    per core on a slice each, in Python threads, the results in the slices' order. For serial
+    kernels compiled with ``nogil=True`` whose items are independent: the threads run them
+    side by side, and the values are those of one call."""
+    cores = os.cpu_count() or 1
+    if cores < 2 or not threads_pay_off(n_items, threshold):
+        return [run(0, n_items)]
+    from concurrent.futures import ThreadPoolExecutor
+
+    ends = [n_items * k // cores for k in range(cores + 1)]
+    with ThreadPoolExecutor(max_workers=cores) as pool:
+        return list(pool.map(run, ends[:-1], ends[1:]))
 
 
 #: Whether this process was forked from one whose numba threads had started (see the module's

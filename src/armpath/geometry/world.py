@@ -33,9 +33,7 @@ The seed arm has no zero-length link and its pairs are AB-CD, AB-DE and BC-DE.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, NamedTuple
@@ -52,7 +50,7 @@ from armpath.geometry.compiled_world import (
 )
 from armpath.geometry.kernels import indexed_segment_distances, segments_to_point
 from armpath.geometry.primitives import HollowFrustum, Obstacle, Opening
-from armpath.jit import threads_pay_off
+from armpath.jit import in_slices
 from armpath.kinematics import (
     compiled_chain,
     displacement_bounds,
@@ -701,16 +699,8 @@ class CollisionWorld:
                 )
             )
 
-        # each configuration's values are its own, and the loop releases the GIL: a large
-        # batch runs in one slice per core where a core is free
-        threads = os.cpu_count() or 1
-        if threads_pay_off(m_count, SLACK_THREAD_BATCH) and threads > 1:
-            ends = np.linspace(0, m_count, threads + 1).astype(np.int64)
-            with ThreadPoolExecutor(max_workers=threads) as pool:
-                parts = list(pool.map(part, ends[:-1], ends[1:]))
-            out = np.concatenate(parts, axis=1)
-        else:
-            out = part(0, m_count)
+        # each configuration's values are its own, and the loop releases the GIL
+        out = np.concatenate(in_slices(part, m_count, SLACK_THREAD_BATCH), axis=1)
         return [np.array(row) for row in out]
 
     def satisfied(
