@@ -1015,3 +1015,40 @@ def test_a_seam_just_above_a_table_is_traced_all_along(tmp_path):
             for t in np.linspace(0.0, 1.0, 21):
                 tip = tool_point(states[k] + t * (states[k + 1] - states[k]))
                 assert seam_distance(tip) <= 0.1 and tip[2] >= 400.0
+
+
+@pytest.mark.slow  # 25 s
+def test_a_line_is_begun_nearer_the_arm_where_that_costs_fewer_commands(monkeypatch):
+    """A 600 mm line before the bare UR5 at its home: the reference DP begins the pass at a
+    sampled member 70 commands from home, though one 53 away reaches the line's start, and its
+    reference shortened between fixed ends was traced in 134 commands (71 onto the line, 63
+    along). Shortened with the approach onto it charged, the reference foretells fewer (122.9
+    against 132.0 commands' worth) and is traced in 122 (66 + 56); the plan traced between
+    fixed ends (kept where it takes fewer: the margin made infinite here) gives the 134 back.
+    Each plan replays on the textbook D-H product within the tolerance, the whole line covered."""
+    from armpath.geometry.curves import Polyline
+    from armpath.planning.trace import reference
+    from armpath.scenes.arm import scene_arm
+
+    scene = scene_from_dict({"name": "free", "arm": {"model": "ur5"}})
+    arm = scene_arm(scene)
+    start = arm.lattice.to_ticks(np.zeros(6))
+    ends = np.array([[300.0, -100.0, 300.0], [900.0, -100.0, 300.0]])
+    line = Polyline("line", ends)
+    options = TraceOptions(bound=False)
+    charged = plan_trace(arm, scene.world, start, line, options)
+    monkeypatch.setattr(reference, "APPROACH_CHARGE_MARGIN", np.inf)
+    fixed = plan_trace(arm, scene.world, start, line, options)
+    assert charged.n_commands <= fixed.n_commands - 10
+    assert charged.n_commands <= 122
+    t = np.linspace(0, 1, 11)
+    for r in (charged, fixed):
+        states = r.sequence.states()
+        assert np.array_equal(states[0], start)
+        assert np.all(np.abs(np.diff(states, axis=0)) <= 20)
+        (p,) = r.passes
+        a, b = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (a[:, None] + t[None, :, None] * (b - a)[:, None]).reshape(-1, 6) * (np.pi / 1800)
+        P = np.array([pose("ur5", x)[:3, 3] for x in q])
+        assert np.hypot(P[:, 1] - ends[0, 1], P[:, 2] - ends[0, 2]).max() <= 0.1
+        assert P[:, 0].min() <= 300.0 + 0.1 and P[:, 0].max() >= 900.0 - 0.1

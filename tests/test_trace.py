@@ -590,7 +590,7 @@ def test_an_arc_without_a_reference_is_reported_not_traced(monkeypatch):
     from armpath.errors import PlanningError
     from armpath.planning.trace import plan
 
-    def no_reference(fam, arc, step, q_from):
+    def no_reference(fam, arc, step, q_from, charge_approach=False):
         raise PlanningError(f"no clear configuration found on the arc {arc.start_mm:.3f}..")
 
     monkeypatch.setattr(plan, "reference_pieces", no_reference)

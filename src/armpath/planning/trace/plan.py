@@ -219,7 +219,12 @@ def plan_trace(
     options: TraceOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
 ) -> TraceResult:
-    """Trace every reachable part of ``curve`` from ``start_ticks``, fewest passes first."""
+    """Trace every reachable part of ``curve`` from ``start_ticks``, fewest passes first.
+
+    A pass may follow a reference path begun nearer the arm, its approach charged
+    (:func:`~armpath.planning.trace.reference.reference_pieces`); where one does, the arcs are
+    traced again along references between fixed ends and the plan with fewer commands kept
+    (the one covering more where they differ by more than the tolerance)."""
     opts = options or TraceOptions()
     say = on_progress or (lambda _m: None)
     start = np.asarray(start_ticks, dtype=np.int64)
@@ -247,7 +252,15 @@ def plan_trace(
         a0 = _nearest_loop_start(fam, arm.lattice.to_joint(start), curve.length, arcs[0].start_mm)
         arcs = [CurveArc(a0, a0 + curve.length)]
         overlap = min(2.0 * opts.tolerance_mm, LOOP_OVERLAP_MM)
-    run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
+    run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, charge_approach=True)
+    if run.approach_charged:
+        # a pass followed a reference begun nearer the arm, its approach charged; what that
+        # foretells (see reference_pieces) does not always hold once traced on the lattice, so
+        # the arcs are traced again between the references' fixed ends and the better kept
+        say("tracing again along references between fixed ends, to keep the fewer commands")
+        fixed = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
+        if not run.better_than(fixed, opts.tolerance_mm):
+            run = fixed
     states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
     prof_s, prof_d = run.profile_s, run.profile_d
     not_traced += _with_lattice_hint(
@@ -617,7 +630,8 @@ def _lift_off(
 @dataclass(frozen=True)
 class _Tracing:
     """What tracing the arcs made (see :func:`_trace_arcs`): states, passes, transits, arcs
-    not traced and the deviation profile."""
+    not traced and the deviation profile; ``approach_charged``: whether a pass followed a
+    reference shortened with its approach charged."""
 
     states: list[IntArray]
     passes: list[TracePass]
@@ -625,6 +639,19 @@ class _Tracing:
     not_traced: list[tuple[CurveArc, str]]
     profile_s: list[FloatArray]
     profile_d: list[FloatArray]
+    approach_charged: bool = False
+
+    @property
+    def covered_mm(self) -> float:
+        """The arc length its passes cover (mm; an overlap counted twice)."""
+        return float(sum(abs(p.end_mm - p.start_mm) for p in self.passes))
+
+    def better_than(self, other: _Tracing, slack_mm: float) -> bool:
+        """Whether this tracing of the same arcs is the one to keep: fewer commands where it
+        covers no less than ``other`` less ``slack_mm``, else more covered."""
+        if abs(self.covered_mm - other.covered_mm) > slack_mm:
+            return self.covered_mm > other.covered_mm
+        return len(self.states) < len(other.states)
 
 
 #: Points along a closed curve where :func:`_nearest_loop_start` looks for the member nearest
@@ -656,10 +683,12 @@ def _trace_arcs(
     overlap: float,
     opts: TraceOptions,
     say: Callable[[str], None],
+    charge_approach: bool = False,
 ) -> _Tracing:
     """Trace ``arcs`` in turn from ``start`` (the last one running on by ``overlap`` mm), each
-    piece the way its reference DP chose. An arc whose pass gets stuck is put back shorter by
-    1 mm or more, so the loop ends."""
+    piece the way its reference DP chose (``charge_approach``: a piece's reference may be
+    shortened with the approach onto it charged, see :func:`reference_pieces`). An arc whose
+    pass gets stuck is put back shorter by 1 mm or more, so the loop ends."""
     fam = reach.family
     curve = reach.curve
     states: list[IntArray] = [start]
@@ -669,13 +698,18 @@ def _trace_arcs(
     prof_s: list[FloatArray] = []
     prof_d: list[FloatArray] = []
     queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
+    pieces_charged: list[bool] = []
     queue[-1] = (queue[-1][0], overlap)
     while queue:
         check_time("tracing the curve")
         arc, run_on = queue.pop(0)
         try:
             pieces = reference_pieces(
-                fam, arc, opts.layer_step_mm, arm.lattice.to_joint(states[-1])
+                fam,
+                arc,
+                opts.layer_step_mm,
+                arm.lattice.to_joint(states[-1]),
+                charge_approach=charge_approach,
             )
         except PlanningError as exc:
             # no clear member on the reference's layers (a short rest of an arc in a tight
@@ -683,6 +717,7 @@ def _trace_arcs(
             not_traced.append((arc, str(exc)))
             continue
         for k, piece in enumerate(pieces):
+            pieces_charged.append(piece.approach_charged)
             last_piece = k == len(pieces) - 1
             say(f"tracing pass {len(passes) + 1}: {_span_text(curve, piece.arc)} of the curve")
             tracer = Tracer(fam, piece, opts.tolerance_mm, band_share=BAND_SHARE)
@@ -774,7 +809,8 @@ def _trace_arcs(
                 if rest is not None:
                     queue.insert(0, (rest, run_on))
                 break
-    return _Tracing(states, passes, transits, not_traced, prof_s, prof_d)
+    charged = any(pieces_charged)
+    return _Tracing(states, passes, transits, not_traced, prof_s, prof_d, charged)
 
 
 def _entry_merged(
