@@ -1017,7 +1017,7 @@ def test_a_seam_just_above_a_table_is_traced_all_along(tmp_path):
                 assert seam_distance(tip) <= 0.1 and tip[2] >= 400.0
 
 
-@pytest.mark.slow  # 25 s
+@pytest.mark.slow  # 30 s
 def test_a_line_is_begun_nearer_the_arm_where_that_costs_fewer_commands(monkeypatch):
     """A 600 mm line before the bare UR5 at its home: the reference DP begins the pass at a
     sampled member 70 commands from home, though one 53 away reaches the line's start, and its
@@ -1025,9 +1025,12 @@ def test_a_line_is_begun_nearer_the_arm_where_that_costs_fewer_commands(monkeypa
     along). Shortened with the approach onto it charged, the reference foretells fewer (122.9
     against 132.0 commands' worth) and is traced in 122 (66 + 56); the plan traced between
     fixed ends (kept where it takes fewer: the margin made infinite here) gives the 134 back.
-    Each plan replays on the textbook D-H product within the tolerance, the whole line covered."""
+    Each plan replays on the textbook D-H product within the tolerance, the whole line covered.
+    Where a time limit runs out while tracing between fixed ends, the first plan stands."""
+    from armpath.budget import time_limit
+    from armpath.errors import TimeLimitError
     from armpath.geometry.curves import Polyline
-    from armpath.planning.trace import reference
+    from armpath.planning.trace import plan, reference
     from armpath.scenes.arm import scene_arm
 
     scene = scene_from_dict({"name": "free", "arm": {"model": "ur5"}})
@@ -1041,6 +1044,18 @@ def test_a_line_is_begun_nearer_the_arm_where_that_costs_fewer_commands(monkeypa
     fixed = plan_trace(arm, scene.world, start, line, options)
     assert charged.n_commands <= fixed.n_commands - 10
     assert charged.n_commands <= 122
+    monkeypatch.undo()
+    trace_arcs = plan._trace_arcs
+
+    def out_of_time_between_fixed_ends(*args, charge_approach=False):
+        if not charge_approach:
+            raise TimeLimitError("the time limit ran out")
+        return trace_arcs(*args, charge_approach=charge_approach)
+
+    monkeypatch.setattr(plan, "_trace_arcs", out_of_time_between_fixed_ends)
+    with time_limit(3600.0):
+        kept = plan_trace(arm, scene.world, start, line, options)
+    assert np.array_equal(kept.sequence.states(), charged.sequence.states())
     t = np.linspace(0, 1, 11)
     for r in (charged, fixed):
         states = r.sequence.states()

@@ -19,15 +19,16 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
-from armpath.budget import check_time
+from armpath.budget import check_time, current_deadline
 from armpath.commands import CommandSequence
-from armpath.errors import InvalidInputError, PlanningError
+from armpath.errors import InvalidInputError, PlanningError, TimeLimitError
 from armpath.geometry.curves import Curve, arc_within_round
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tick_jacobian, tool_position
@@ -211,6 +212,12 @@ class TraceResult:
         return max((p.max_deviation_bound_mm for p in self.passes), default=0.0)
 
 
+#: Under a time limit, the arcs are traced a second time (see :func:`plan_trace`) only while
+#: more than this many times what the first tracing took remains (the plan's certificate and
+#: bound come after it).
+_RETRACE_TIME_SHARE = 2.0
+
+
 def plan_trace(
     arm: SerialArm,
     world: CollisionWorld,
@@ -224,7 +231,9 @@ def plan_trace(
     A pass may follow a reference path begun nearer the arm, its approach charged
     (:func:`~armpath.planning.trace.reference.reference_pieces`); where one does, the arcs are
     traced again along references between fixed ends and the plan with fewer commands kept
-    (the one covering more where they differ by more than the tolerance)."""
+    (the one covering more where they differ by more than the tolerance); under a time limit,
+    only while :data:`_RETRACE_TIME_SHARE` times what the first tracing took remains, and the
+    first plan stands if the limit runs out in the second."""
     opts = options or TraceOptions()
     say = on_progress or (lambda _m: None)
     start = np.asarray(start_ticks, dtype=np.int64)
@@ -252,13 +261,20 @@ def plan_trace(
         a0 = _nearest_loop_start(fam, arm.lattice.to_joint(start), curve.length, arcs[0].start_mm)
         arcs = [CurveArc(a0, a0 + curve.length)]
         overlap = min(2.0 * opts.tolerance_mm, LOOP_OVERLAP_MM)
+    began = time.monotonic()
     run = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say, charge_approach=True)
-    if run.approach_charged:
+    deadline = current_deadline()
+    if run.approach_charged and (
+        deadline is None or deadline.remaining > _RETRACE_TIME_SHARE * (time.monotonic() - began)
+    ):
         # a pass followed a reference begun nearer the arm, its approach charged; what that
         # foretells (see reference_pieces) does not always hold once traced on the lattice, so
         # the arcs are traced again between the references' fixed ends and the better kept
         say("tracing again along references between fixed ends, to keep the fewer commands")
-        fixed = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
+        try:
+            fixed = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
+        except TimeLimitError:  # the first plan stands (its certificate still to come)
+            fixed = run
         if not run.better_than(fixed, opts.tolerance_mm):
             run = fixed
     states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
