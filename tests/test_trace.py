@@ -559,7 +559,9 @@ def test_a_line_whose_end_is_nearer_is_traced_from_its_end(monkeypatch):
     assert along.max() >= np.linalg.norm(V[1] - V[0]) - 1e-3
     # forward only
     forward_only = trace_plan.reference_pieces
-    monkeypatch.setattr(trace_plan, "reference_pieces", lambda *a: forward_only(*a[:4], (False,)))
+    monkeypatch.setattr(
+        trace_plan, "reference_pieces", lambda *a, **k: forward_only(*a[:4], (False,), **k)
+    )
     fwd = plan_trace(*args)
     assert not fwd.passes[0].backward
     assert fwd.sequence.n_commands > res.sequence.n_commands
