@@ -1,5 +1,6 @@
 """The band bound of a trace along a circle (issue 21): the least approach to the curve plus
-its traced length over the longest arc one command can follow anywhere in the family.
+its traced length over the longest arc one command can follow, where each part of it lies, in
+the family.
 
 A pass keeps the tool point within the tolerance of the curve at every instant (the trace's
 deviation is that of the continuous tool path). Where the traced spans lie on a circle (to
@@ -10,12 +11,15 @@ that command span an arc of at most the command's limit there. So if no member's
 ``U``, a pass covering a span of length ``L`` needs at least ``(L - 2 e) / U`` commands,
 ``e = 2 R asin(tol / R)`` the arc a tool point within the tolerance covers beyond the circle
 point nearest it at either end (a second pass over a span would add a command between the
-passes to save ``2 e / U``, less than one). Before the first pass the tool point has to reach
-the band: at least the least largest-joint distance from the start to any member at any point
-of the spans (:func:`least_approach`). The bound is the sum.
+passes to save ``2 e / U``, less than one). Where the limits differ along the circle, each
+part of it is counted with the largest limit of the members near enough to cover it in one
+command: the integral of ``1 / u(s)`` over the span (:func:`along_commands`; at least
+``(L - 2 e) / U``). Before the first pass the tool point has to reach the band: at least the
+least largest-joint distance from the start to any member at any point of the spans
+(:func:`least_approach`). The bound is the sum.
 
-``U`` is the largest limit over the family sampled at points along the spans
-(:func:`family_arc_limit`), each sample's limit widened by how far it differs from its
+``U``, and ``u`` between points, is the largest limit over the family sampled at points along
+the spans (:func:`family_arc_limit`), each sample's limit widened by how far it differs from its
 neighbours' (the nearest member of each neighbouring tool direction, and the nearest at the
 neighbouring points along the curve): the same assumption the family's sampling errors make
 (:mod:`~armpath.planning.bounds`), that the family varies no faster within a sample's cell
@@ -29,7 +33,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -136,30 +140,47 @@ def _largest_cell(
 ) -> tuple[float, int]:
     """The largest cell limit (:func:`_cell_limit`) over samples whose limits are ``coarse``
     (one box's dual: upper bounds on ``refined``'s, the branch and bound's) with neighbours
-    ``neighbours (M, W)`` (-1 pads), and the sample whose cell it is: each cell taken at the
-    lower of its limit from the coarse values and from the refined ones, the refined ones
-    computed from the highest coarse cell down until the largest found is at least the next
-    coarse one (which bounds that cell's). A sample with no neighbour (a sliver of the
-    family) has its cell widened by the largest widening of the others'."""
+    ``neighbours (M, W)`` (-1 pads), and the sample whose cell it is (see
+    :func:`_largest_cells`, all samples one group)."""
+    best, where = _largest_cells(coarse, neighbours, refined, np.zeros(coarse.size, np.int64))
+    return float(best[0]), int(where[0])
+
+
+def _largest_cells(
+    coarse: FloatArray,
+    neighbours: IntArray,
+    refined: Callable[[int], float],
+    groups: IntArray,
+    count: int | None = None,
+) -> tuple[FloatArray, IntArray]:
+    """The largest cell limit (:func:`_cell_limit`) within each group of samples (``groups
+    (M,)``: 0 .. ``count`` - 1, a layer of the family each), and the sample whose cell it is
+    (-inf and -1 for an empty group): each cell taken at the lower of its limit from the ``coarse``
+    values and from the ``refined`` ones, the refined ones computed from the group's highest
+    coarse cell down until the largest found is at least the next coarse one (which bounds
+    that cell's). A sample with no neighbour (a sliver of the family) has its cell widened by
+    the largest widening of the others'."""
     cells = np.array(
         [_cell_limit(coarse[i], coarse[row[row >= 0]]) for i, row in enumerate(neighbours)]
     )
     alone = ~np.any(neighbours >= 0, axis=1)
     widest = float(np.max(np.where(alone, 0.0, cells - coarse), initial=0.0))
     cells[alone] += widest
-    best, best_i = -math.inf, 0
+    count = int(groups.max(initial=-1)) + 1 if count is None else count
+    best, where = np.full(count, -math.inf), np.full(count, -1, dtype=np.int64)
     for i in np.argsort(-cells, kind="stable"):
-        if cells[i] <= best:
-            break
+        g = int(groups[i])
+        if cells[i] <= best[g]:
+            continue
         row = neighbours[i][neighbours[i] >= 0]
         if row.size == 0:
             cell = min(cells[i], refined(int(i)) + widest)
         else:
             fine = _cell_limit(refined(int(i)), np.array([refined(int(k)) for k in row]))
             cell = min(cells[i], fine)
-        if cell > best:
-            best, best_i = cell, int(i)
-    return float(best), best_i
+        if cell > best[g]:
+            best[g], where[g] = cell, int(i)
+    return best, where
 
 
 @dataclass(frozen=True)
@@ -167,7 +188,9 @@ class FamilyLimit:
     """The longest arc (mm) one command can follow anywhere in the family
     (:func:`family_arc_limit`): ``arc_mm``, the sample whose cell gives it (configuration rad /
     mm, arc length mm of its curve point) and that sample's own limit; ``samples`` bounded,
-    ``refined`` of them by branch and bound."""
+    ``refined`` of them by branch and bound; and at each layer the family was sampled at (arc
+    length mm, the span it belongs to) the largest limit over its samples' cells (mm; -inf
+    where it has none), in the order the layers lie along each span."""
 
     arc_mm: float
     q: FloatArray
@@ -175,6 +198,9 @@ class FamilyLimit:
     sample_arc_mm: float
     samples: int
     refined: int
+    layer_s_mm: FloatArray = field(default_factory=lambda: np.zeros(0))
+    layer_span: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    layer_arc_mm: FloatArray = field(default_factory=lambda: np.zeros(0))
 
 
 def _cell_limit(own: float, neighbours: FloatArray) -> float:
@@ -252,7 +278,8 @@ def family_arc_limit(
     more than :data:`SPLIT_GOAL` above its own sample's limit, the samples are made denser
     where it is: the direction triangles about its sample split in four where a neighbouring
     direction widens it most, else a layer added halfway to the neighbouring layer that
-    does."""
+    does. Last, the largest cell of each layer, refined the same way
+    (:func:`along_commands` integrates over the curve with them)."""
     fam = sampler.fam
     arm = fam.arm
     tip = tool_point_joints(arm)
@@ -329,8 +356,129 @@ def family_arc_limit(
             middle = float(fam.curve.wrap(0.5 * (a + b))) if cyclic else 0.5 * (a + b)
             where = li + 1 if (lj == li + 1 or (lj == 0 and li == len(layers) - 1)) else li
             layers.insert(where, sampled(middle, lay.span))
+    # the largest cell of each layer (the largest's refinements kept)
+    groups = np.repeat(np.arange(len(layers)), [lay.layer.size for lay in layers])
+    per_layer = _largest_cells(coarse, neighbours, refined, groups, len(layers))[0]
     key = q[best_i].tobytes()
-    return FamilyLimit(best, q[best_i], layers[li].s_mm, fine[key], samples, len(fine))
+    return FamilyLimit(
+        best, q[best_i], layers[li].s_mm, fine[key], samples, len(fine),
+        np.array([lay.s_mm for lay in layers]), np.array([lay.span for lay in layers]),
+        per_layer,
+    )  # fmt: skip
+
+
+def _limit_intervals(
+    limit: FamilyLimit, cyclic: bool, start_mm: float, length_mm: float
+) -> list[tuple[float, float, float]]:
+    """The intervals between neighbouring layers of each span of ``limit`` (arc lengths, mm)
+    and the larger of their two layers' largest cells (mm); ``cyclic``: the layers lie round
+    the closed curve of ``length_mm`` from ``start_mm``, and the intervals are given a turn
+    before and after too."""
+    out: list[tuple[float, float, float]] = []
+    for span in np.unique(limit.layer_span):
+        on = limit.layer_span == span
+        x, w = limit.layer_s_mm[on], limit.layer_arc_mm[on]
+        if cyclic:
+            x = start_mm + np.mod(x - start_mm, length_mm)
+        order = np.argsort(x, kind="stable")
+        x, w = x[order], w[order]
+        if cyclic:
+            x, w = np.append(x, x[0] + length_mm), np.append(w, w[0])
+        for i in range(x.size - 1):
+            width = max(float(w[i]), float(w[i + 1]))
+            if math.isfinite(width) and width > 0.0:
+                out.append((float(x[i]), float(x[i + 1]), width))
+    if cyclic:
+        out += [(lo + k * length_mm, hi + k * length_mm, w)
+                for lo, hi, w in out for k in (-1, 1)]  # fmt: skip
+    return out
+
+
+def _widest_reaching(
+    intervals: list[tuple[float, float, float]], s_mm: FloatArray, fallback: float
+) -> FloatArray:
+    """At each arc length of ``s_mm`` the largest width ``w`` of the ``intervals`` ``(lo, hi,
+    w)`` (mm) that lie within ``w`` of it, ``fallback`` where none does."""
+    s = np.asarray(s_mm, dtype=np.float64)
+    out = np.full(s.shape, -math.inf)
+    for lo, hi, w in intervals:
+        out = np.where((lo - w <= s) & (s <= hi + w), np.maximum(out, w), out)
+    return np.where(np.isfinite(out), out, fallback)
+
+
+def _reciprocal_integral(
+    intervals: list[tuple[float, float, float]],
+    spans_mm: list[tuple[float, float]],
+    end_mm: float,
+    fallback: float,
+) -> float:
+    """The integral over each span, less ``end_mm`` at either end, of ``1 / u`` with ``u``
+    :func:`_widest_reaching` (exact: it is constant between the ends of the reaches)."""
+    total = 0.0
+    for a, b in spans_mm:
+        lo, hi = a + end_mm, b - end_mm
+        if not hi > lo:
+            continue
+        cuts = {lo, hi} | {c for x0, x1, w in intervals for c in (x0 - w, x1 + w) if lo < c < hi}
+        edges = np.array(sorted(cuts))
+        u = _widest_reaching(intervals, 0.5 * (edges[:-1] + edges[1:]), fallback)
+        total += float(np.sum(np.diff(edges) / u))
+    return total
+
+
+def local_arc_limits(
+    limit: FamilyLimit, s_mm: FloatArray, cyclic: bool, start_mm: float, length_mm: float
+) -> FloatArray:
+    """``u(s)`` of :func:`along_commands` at the arc lengths ``s_mm`` (mm; round a closed
+    curve, ``cyclic``, from ``start_mm`` on): the largest limit of the intervals between
+    layers that lie within it of ``s``, ``limit.arc_mm`` where none does."""
+    intervals = _limit_intervals(limit, cyclic, start_mm, length_mm)
+    return _widest_reaching(intervals, s_mm, limit.arc_mm)
+
+
+def along_commands(
+    limit: FamilyLimit,
+    spans_mm: list[tuple[float, float]],
+    end_mm: float,
+    cyclic: bool,
+    length_mm: float,
+) -> float:
+    """The fewest commands (fractional) that carry the tool point along ``spans_mm`` (arc
+    lengths, mm; ``cyclic``: one span round the closed curve of ``length_mm``) by the limits
+    of ``limit``'s layers: the integral over each span, less ``end_mm`` at either end, of
+    ``1 / u(s)`` (:func:`local_arc_limits`). Between neighbouring layers of a span lies an
+    interval ``I`` whose members' limits are at most ``W_I``, the larger of the two layers'
+    largest cells; ``u(s)`` is the largest ``W_I`` of the intervals that lie within ``W_I``
+    of ``s``. A command's nearest circle points span an arc decided by two instants of it, and
+    the command between them has its middle configuration in some interval ``I``, so that arc
+    is at most ``W_I`` long and lies within ``W_I`` of ``I``: along it ``u >= W_I``, and the
+    integral of ``1 / u`` over it is at most 1. A pass's nearest points cover its span but
+    ``end_mm`` at either end, so the integral over that is at most its commands. Where the
+    limits are all alike it is the traced length over the largest."""
+    start = spans_mm[0][0] if spans_mm else 0.0
+    intervals = _limit_intervals(limit, cyclic, start, length_mm)
+    return _reciprocal_integral(intervals, spans_mm, end_mm, limit.arc_mm)
+
+
+def _along_at_most(
+    limits_mm: FloatArray,
+    s_mm: FloatArray,
+    spans_mm: list[tuple[float, float]],
+    end_mm: float,
+    cyclic: bool,
+    length_mm: float,
+) -> float:
+    """How high :func:`along_commands` comes at most, foretold from members of the family
+    whose limits ``limits_mm`` at arc lengths ``s_mm`` (mm) are known: a member's limit is at
+    most its interval's, so ``u(s)`` is at least the largest limit of the members within it
+    of ``s``; where none is, their largest is taken (a forecast there, not a bound: the
+    family's path has a few members per span)."""
+    points = [(float(s), float(s), float(w)) for s, w in zip(s_mm, limits_mm, strict=True)]
+    if cyclic:
+        start = spans_mm[0][0]
+        points = [(start + (s - start) % length_mm + k * length_mm,) * 2 + (w,)
+                  for s, _, w in points for k in (-1, 0, 1)]  # fmt: skip
+    return _reciprocal_integral(points, spans_mm, end_mm, float(np.max(limits_mm)))
 
 
 def _points_along(spans_mm: list[tuple[float, float]], gap_mm: float) -> tuple[FloatArray, float]:
@@ -426,9 +574,9 @@ def band_trace_bound(
     :data:`FIT_SHARE` of the tolerance), where the lemma does not apply to it (too tight, or
     an arm not measured in mm) or where the family has no member on them; and, given the
     ``family`` bound (:func:`~armpath.planning.bounds.trace_bound`), where this one would not
-    be higher: its along part over the limit at the family bound's own path (the limit is at
-    least that) or over the family's limit, with the family bound's approach part (the least
-    approach is at most about that), is no more than it."""
+    be higher: its along part foretold from the limits at the family bound's own path
+    (:func:`_along_at_most`) or computed from the family's, with the family bound's approach
+    part (the least approach is at most about that), is no more than it."""
     arm = fam.arm
     circle, deviation = fitted_circle(fam.curve, spans_mm)
     if not deviation <= FIT_SHARE * tolerance_mm:
@@ -439,7 +587,6 @@ def band_trace_bound(
     if not lemma_applies(arm, circle, band, tb):
         return None
     ends = 4.0 * circle.radius_mm * math.asin(min(band / circle.radius_mm, 1.0))
-    traced = sum(max(b - a - ends, 0.0) for a, b in spans_mm)
 
     def lower(along: float) -> bool:  # whether the band bound would be no higher
         if family is None:
@@ -447,12 +594,14 @@ def band_trace_bound(
         approach = math.ceil(family.parts.get("approach", 0.0) - 1e-9)
         return approach + along <= family.value
 
-    if family is not None and family.guide_q is not None and len(family.guide_q):
-        path = max(
+    guide_s = None if family is None else family.guide_s_mm
+    guide_q = None if family is None else family.guide_q
+    if guide_q is not None and guide_s is not None and 0 < len(guide_q) == len(guide_s):
+        path = np.array([
             command_arc_limit(arm, q, circle, band, tb, tip, REFINE_NODES, anywhere=True)
-            for q in family.guide_q
-        )
-        if lower(traced / max(path, 1e-300)):
+            for q in guide_q
+        ])  # fmt: skip
+        if lower(_along_at_most(path, guide_s, spans_mm, ends / 2.0, loop, fam.curve.length)):
             return None
     sampler = FamilySampler(fam, tolerance_mm, LIMIT_DIRECTIONS, q_start)
     limit = family_arc_limit(
@@ -461,13 +610,15 @@ def band_trace_bound(
     )  # fmt: skip
     if limit.samples == 0 or not math.isfinite(limit.arc_mm) or not limit.arc_mm > ends:
         return None
-    along = traced / limit.arc_mm
+    along = along_commands(limit, spans_mm, ends / 2.0, loop, fam.curve.length)
     if lower(along):
         return None
     approach = least_approach(fam, q_start, spans_mm, tolerance_mm)
     if not math.isfinite(approach):
         return None
     value = math.ceil(approach - 1e-9) + along
+    finite = limit.layer_arc_mm[np.isfinite(limit.layer_arc_mm)]
+    least = float(finite.min()) if finite.size else limit.arc_mm
     return CommandBound(
         proven=sampler.covers_family,
         commands=math.ceil(value - 1e-9),
@@ -476,9 +627,11 @@ def band_trace_bound(
             "least approach to the band plus the traced length over the longest arc one command "
             f"can follow within it: the spans lie within {deviation:.2g} mm of a circle of radius "
             f"{circle.radius_mm:.4g} mm; a command's middle configuration anywhere in the family "
-            f"follows at most {limit.arc_mm:.3f} mm of it (Taylor along the joint line and a "
-            "Lagrangian dual per sampled member, widened by how far neighbouring members "
-            "differ); the approach the least largest-joint distance from the start to the "
+            f"follows at most {limit.arc_mm:.3f} mm of it, at some points along it "
+            f"{least:.3f} mm (Taylor along the joint line and a Lagrangian dual per sampled "
+            "member, widened by how far neighbouring members differ), each part of the spans "
+            "counted over the largest limit of the members that can cover it; the approach the "
+            "least largest-joint distance from the start to the "
             "family sampled along the spans, less the sampling errors"
         ),
         parts={"approach": float(math.ceil(approach - 1e-9)), "along": along},
@@ -486,6 +639,7 @@ def band_trace_bound(
             "circle_radius_mm": circle.radius_mm,
             "circle_deviation_mm": deviation,
             "command_arc_limit_mm": limit.arc_mm,
+            "command_arc_limit_least_mm": least,
             "least_approach_commands": approach,
             "limit_samples": float(limit.samples),
             "limit_refined": float(limit.refined),
