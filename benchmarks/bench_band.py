@@ -17,8 +17,9 @@ bound, and then:
   same 1.3 times longer, and random ones (the plan's own commands counted too). A search, not
   a proof: an estimate of the most one command can cover;
 * the product's lower bound (with the tolerance band, ``planning/bounds/band_trace.py``):
-  its approach and along parts, the proven limit on the arc one command can follow anywhere
-  in the family (the largest over the sampled members' cells), and the family's shortest path
+  its approach and along parts, the proven limit on the arc one command can follow at the
+  layers where the family was sampled (least and largest over the layers, each the largest
+  over its sampled members' cells), and the family's shortest path
   alone (its search stopped once it could not pass the band's bound);
 * the longest straight chord within the band (``4 sqrt(R tolerance)``, circles only): what a
   command whose tool path were straight could cover;
@@ -255,7 +256,10 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
         "-" if family is None else f"{family:.1f}",
         f"{np.mean(arcs):.2f} / {np.max(arcs):.2f}",
         f"{best:.2f} ({starts} starts)",
-        "-" if limit is None else f"{limit:.2f} ({sampling['limit_samples']:.0f} members)",
+        "-"
+        if limit is None
+        else f"{sampling.get('command_arc_limit_least_mm', limit):.2f} - {limit:.2f} "
+        f"({sampling['limit_samples']:.0f} members)",
         "-" if circle.radius is None else f"{4.0 * math.sqrt(circle.radius * tol):.2f}",
         f"{along_estimate}",
         f"{estimate}",
@@ -297,7 +301,7 @@ def main() -> int:
                 "the family's shortest path alone",
                 "plan's arc per command along [mm] (mean / largest)",
                 "longest arc of one command found [mm]",
-                "proven limit per command over the family's cells [mm]",
+                "proven limit per command, least - largest over the layers [mm]",
                 "straight chord in the band [mm]",
                 "along, estimated",
                 "fewest, estimated (not proven)",
@@ -311,9 +315,11 @@ def main() -> int:
         "longest arc one command was found to cover (a search, not a proof: see "
         "`benchmarks/bench_band.py`). The proven bound is the band's "
         "(`planning/bounds/band_trace.py`): the least approach to any point of the circle "
-        "plus the traced length, less the tolerance's reach at the ends, over the proven "
-        "limit per command (the largest over the family's sampled members, each widened by how "
-        "far its neighbours' differ); the family's shortest path, the largest-joint length "
+        "plus the traced length, less the tolerance's reach at the ends, each part of it "
+        "counted over the proven limit per command of the layers near it (at each layer the "
+        "largest over the family's sampled members, each widened by how far its neighbours' "
+        "differ; a part is counted over the largest limit of the layers a command covering it "
+        "could lie between); the family's shortest path, the largest-joint length "
         "along the circle, is a fraction of it (its search stopped after the round whose clear "
         "path could not pass the band's bound). Within the 0.1 mm band a joint-linear command "
         "follows a circle a few millimetres, not much farther than a straight chord would. "

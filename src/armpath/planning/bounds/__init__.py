@@ -60,10 +60,11 @@ the carriage, and from the arm's first axis at the heights of the points that de
 Where a trace's spans lie on a circle, its bound also sees the tolerance band: a joint-linear
 command follows a tight curve within it only a few millimetres. :mod:`~armpath.planning.bounds.band`
 proves how far for one middle configuration (Taylor along the joint line and a Lagrangian dual),
-and :mod:`~armpath.planning.bounds.band_trace` takes the largest over the family's cells (each
-sample's limit widened by how far its neighbours' differ, the sampling errors' assumption):
-the least approach to the curve plus the traced length over that limit. The higher of the two
-bounds is reported.
+and :mod:`~armpath.planning.bounds.band_trace` takes the largest over the family's cells at
+each layer where the family is sampled along the curve (each sample's limit widened by how far
+its neighbours' differ, the sampling errors' assumption): the least approach to the curve plus
+the traced length, each part of it over the largest limit of the layers a command covering it
+could lie between. The higher of the two bounds is reported.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer

@@ -8,8 +8,8 @@ largest-joint length would allow 25). This module proves, for one configuration,
 arc of a circle any command can cover whose tool point lies within the tolerance at its start,
 its middle and its end, the middle configuration being that one
 (:func:`command_arc_limit`; a batch at once, :func:`arc_limits`).
-:mod:`~armpath.planning.bounds.band_trace` takes the largest over the family and bounds a
-trace along a circle with it.
+:mod:`~armpath.planning.bounds.band_trace` takes the largest over the family's members near
+each part of a circle and bounds a trace along it with those.
 
 **The lemma.** A command from ``q0`` changes the joints by ``D`` (each within its largest step);
 its middle configuration is ``m = q0 + D/2`` and its tool points at start, middle and end are
