@@ -388,10 +388,16 @@ def _limit_intervals(
             width = max(float(w[i]), float(w[i + 1]))
             if math.isfinite(width) and width > 0.0:
                 out.append((float(x[i]), float(x[i + 1]), width))
-    if cyclic:
-        out += [(lo + k * length_mm, hi + k * length_mm, w)
-                for lo, hi, w in out for k in (-1, 1)]  # fmt: skip
-    return out
+    return _turned(out, length_mm) if cyclic else out
+
+
+def _turned(
+    intervals: list[tuple[float, float, float]], length_mm: float
+) -> list[tuple[float, float, float]]:
+    """``intervals`` ``(lo, hi, w)`` round a closed curve of ``length_mm`` and their copies a
+    turn before and a turn after (so that reaches across the curve's start are seen)."""
+    return intervals + [(lo + k * length_mm, hi + k * length_mm, w)
+                        for lo, hi, w in intervals for k in (-1, 1)]  # fmt: skip
 
 
 def _widest_reaching(
@@ -473,11 +479,13 @@ def _along_at_most(
     most its interval's, so ``u(s)`` is at least the largest limit of the members within it
     of ``s``; where none is, their largest is taken (a forecast there, not a bound: the
     family's path has a few members per span)."""
-    points = [(float(s), float(s), float(w)) for s, w in zip(s_mm, limits_mm, strict=True)]
+    s = np.asarray(s_mm, dtype=np.float64)
     if cyclic:
         start = spans_mm[0][0]
-        points = [(start + (s - start) % length_mm + k * length_mm,) * 2 + (w,)
-                  for s, _, w in points for k in (-1, 0, 1)]  # fmt: skip
+        s = start + np.mod(s - start, length_mm)
+    points = [(float(x), float(x), float(w)) for x, w in zip(s, limits_mm, strict=True)]
+    if cyclic:
+        points = _turned(points, length_mm)
     return _reciprocal_integral(points, spans_mm, end_mm, float(np.max(limits_mm)))
 
 
