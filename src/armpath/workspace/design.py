@@ -282,16 +282,17 @@ def sweep(
     # on a 2-core machine started 259 processes and 9 GB
     cores = max(int(cpu_count()), 1)
     n_jobs = max(min(cores if n_jobs == -1 else n_jobs, cores, len(candidates)), 1)
-    with Parallel(n_jobs=n_jobs, timeout=_wait_limit()) as parallel:
 
-        def on_joblib(batch: list[SeedArmGeometry], ends_at: float | None) -> list[Any]:
-            return list(
-                parallel(
-                    delayed(_evaluate_within)(ends_at, g, pixel_mm, samples, seed) for g in batch
-                )
-            )
+    def on_joblib(batch: list[SeedArmGeometry], ends_at: float | None) -> list[Any]:
+        # one Parallel per batch, not a shared ``with Parallel(...)``: on a timeout a shared
+        # (managed) one kills its workers and at once starts new ones for the next call, which
+        # the error exit then leaves half started (the resource tracker warned of leaked
+        # semaphores on stderr); loky reuses the workers between batches either way, and each
+        # batch waits only for what is left of the limit
+        jobs = (delayed(_evaluate_within)(ends_at, g, pixel_mm, samples, seed) for g in batch)
+        return list(Parallel(n_jobs=n_jobs, timeout=_wait_limit())(jobs))
 
-        return _in_batches(candidates, n_jobs, on_joblib)
+    return _in_batches(candidates, n_jobs, on_joblib)
 
 
 def ranked(results: Sequence[DesignMetrics], tie: float = 0.005) -> list[DesignMetrics]:
