@@ -16,6 +16,9 @@ bound, and then:
   of the circle, found by SLSQP from every third of the plan's commands along the circle, the
   same 1.3 times longer, and random ones (the plan's own commands counted too). A search, not
   a proof: an estimate of the most one command can cover;
+* the same from the plan's own start states (every third of its commands along the curve,
+  the start held and the joint change searched, continuous): how much longer a command
+  could be from where the tracer stands, against the plan's own commands there;
 * the product's lower bound (with the tolerance band, ``planning/bounds/band_trace.py``):
   its approach and along parts, the proven limit on the arc one command can follow at the
   layers where the family was sampled (least and largest over the layers, each the largest
@@ -168,6 +171,53 @@ def _command_arc(arm, circle: Guide, q0: np.ndarray, dq: np.ndarray) -> tuple[fl
     return float(s[-1] - s[0]), off
 
 
+def _longest_from(arm, circle: Guide, tol: float, q0, dq, fixed_start: bool) -> float:
+    """The longest arc (mm) SLSQP finds for one command searched from ``q0``, ``dq`` (the
+    start configuration too unless ``fixed_start``), its tool path at :data:`INSTANTS` within
+    the tolerance and out of what it must stay out of; 0 if none found lies within. The
+    command it starts from counts too."""
+    n = arm.n_joints
+    step = arm.lattice.max_step
+    covered, off = _command_arc(arm, circle, q0, dq)
+    best = abs(covered) if off <= tol else 0.0
+    sign = 1.0 if covered >= 0.0 else -1.0
+
+    def split(x):
+        return (q0, x) if fixed_start else (x[:n], x[n:])
+
+    def arc(x):
+        return -sign * _command_arc(arm, circle, *split(x))[0]
+
+    def within(x):
+        q, d = split(x)
+        p = tool_position(arm, q[None] + INSTANTS[:, None] * d[None])
+        # out of the solid: its signed distance (smooth), a small margin kept
+        out = circle.outside(p) - OUT_MARGIN_MM
+        return np.concatenate([SEARCH_SHARE * tol - circle.distance(p), out])
+
+    bounds = [(-s, s) for s in step]
+    if not fixed_start:
+        bounds = [
+            (lo if np.isfinite(lo) else None, hi if np.isfinite(hi) else None)
+            for lo, hi in zip(arm.lower, arm.upper, strict=True)
+        ] + bounds
+    found = minimize(
+        arc,
+        dq if fixed_start else np.concatenate([q0, dq]),
+        method="SLSQP",
+        bounds=bounds,
+        constraints=[{"type": "ineq", "fun": within}],
+        options={"maxiter": 300},
+    )
+    q, d = split(found.x)
+    for _ in range(SHRINKS):  # a search that ends just outside: its command a little shorter
+        covered, off = _command_arc(arm, circle, q, d)
+        if off <= tol:
+            return max(best, abs(covered))
+        d = SHRINK * d
+    return best
+
+
 def longest_command(arm, circle: Guide, tol: float, states: np.ndarray, seed: int, tries: int):
     """The longest arc (mm) one command was found to cover (see the module), and its search's
     starts: every :data:`EVERY`-th plan command along the curve, the same 1.3 times longer,
@@ -179,44 +229,26 @@ def longest_command(arm, circle: Guide, tol: float, states: np.ndarray, seed: in
         starts += [(a, b - a), (a, np.clip(1.3 * (b - a), -step, step))]
     for _ in range(tries):
         starts.append((states[rng.integers(len(states))], rng.uniform(-1.0, 1.0) * step))
-    n = arm.n_joints
-    bounds = [
-        (lo if np.isfinite(lo) else None, hi if np.isfinite(hi) else None)
-        for lo, hi in zip(arm.lower, arm.upper, strict=True)
-    ]
-    bounds += [(-s, s) for s in step]
-    best = 0.0
-    for q0, dq in starts:
-        covered, off = _command_arc(arm, circle, q0, dq)
-        if off <= tol:
-            best = max(best, abs(covered))
-        sign = 1.0 if covered >= 0.0 else -1.0
-
-        def arc(x, sign=sign):
-            return -sign * _command_arc(arm, circle, x[:n], x[n:])[0]
-
-        def within(x):
-            p = tool_position(arm, x[:n][None] + INSTANTS[:, None] * x[n:][None])
-            # out of the solid: its signed distance (smooth), a small margin kept
-            out = circle.outside(p) - OUT_MARGIN_MM
-            return np.concatenate([SEARCH_SHARE * tol - circle.distance(p), out])
-
-        found = minimize(
-            arc,
-            np.concatenate([q0, dq]),
-            method="SLSQP",
-            bounds=bounds,
-            constraints=[{"type": "ineq", "fun": within}],
-            options={"maxiter": 300},
-        )
-        q, dq = found.x[:n], found.x[n:]
-        for _ in range(SHRINKS):  # a search that ends just outside: its command a little shorter
-            covered, off = _command_arc(arm, circle, q, dq)
-            if off <= tol:
-                best = max(best, abs(covered))
-                break
-            dq = SHRINK * dq
+    best = max(_longest_from(arm, circle, tol, q0, dq, fixed_start=False) for q0, dq in starts)
     return best, len(starts)
+
+
+def longest_from_own_starts(arm, circle: Guide, tol: float, passes: list[np.ndarray]):
+    """Every :data:`EVERY`-th of the plan's commands along the curve, and the longest arc (mm)
+    a command from its own start state was found to cover (searched from it and from it 1.2
+    times longer, the joint change continuous): the means of the plan's arcs and of those."""
+    step = arm.lattice.max_step
+    own, found = [], []
+    for states in passes:
+        for a, b in list(itertools.pairwise(states))[::EVERY]:
+            own.append(abs(_command_arc(arm, circle, a, b - a)[0]))
+            found.append(
+                max(
+                    _longest_from(arm, circle, tol, a, np.clip(k * (b - a), -step, step), True)
+                    for k in (1.0, 1.2)
+                )
+            )
+    return float(np.mean(own)), float(np.mean(found))
 
 
 def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: int) -> list[str]:
@@ -241,6 +273,7 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
     traced = sum(p.covered_mm for p in res.passes)
     tol = res.tolerance_mm
     best, starts = longest_command(arm, circle, tol, np.vstack(states), seed, tries)
+    own_mean, from_own = longest_from_own_starts(arm, circle, tol, states)
     bound = res.lower_bound
     approach = bound.parts.get("approach", 0.0) if bound is not None else 0.0
     along_bound = 0.0 if bound is None else bound.value - approach
@@ -256,6 +289,7 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
         "-" if family is None else f"{family:.1f}",
         f"{np.mean(arcs):.2f} / {np.max(arcs):.2f}",
         f"{best:.2f} ({starts} starts)",
+        f"{from_own:.2f} against {own_mean:.2f}",
         "-"
         if limit is None
         else f"{sampling.get('command_arc_limit_least_mm', limit):.2f} - {limit:.2f} "
@@ -301,6 +335,7 @@ def main() -> int:
                 "the family's shortest path alone",
                 "plan's arc per command along [mm] (mean / largest)",
                 "longest arc of one command found [mm]",
+                "from the plan's own start states: longest found against the plan's (mean) [mm]",
                 "proven limit per command, least - largest over the layers [mm]",
                 "straight chord in the band [mm]",
                 "along, estimated",
@@ -325,7 +360,9 @@ def main() -> int:
         "follows a circle a few millimetres, not much farther than a straight chord would. "
         "Between the estimate and the plan lies what the tracer leaves: its commands along "
         "the circle cover less than the longest found (the command lattice; where in the band "
-        "each begins). The seam is no circle: its proven bound is the family's alone (the "
+        "each begins: the column from the plan's own start states shows how much of it a "
+        "command from where the tracer stands could still gain). The seam is no circle: its "
+        "proven bound is the family's alone (the "
         "band's lemma is proven for circles), and its commands must also keep the tool point "
         "out of the workpiece (half the band, about a convex face), which the search keeps "
         "too.",
