@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -437,6 +438,24 @@ def blindzones(
             print_written(folder)
 
 
+#: The warnings filter (``-W``) that keeps the resource tracker of joblib's worker processes
+#: quiet about the semaphores it removes at exit.
+TRACKER_WARNINGS = "ignore::UserWarning:joblib.externals.loky.backend.resource_tracker"
+
+
+def quiet_worker_tracker() -> None:
+    """Keep the resource tracker that joblib's (loky's) worker processes share from writing
+    to stderr. When the time limit stops the workers while one is still starting (a loaded
+    machine takes seconds to start one), the semaphore made for it may be removed without the
+    tracker being told; at exit the tracker then reports it as leaked and, removing it again,
+    that it was gone: two warnings after the command's one ``error:`` line, about a clean-up
+    that is the tracker's job and leaves nothing behind. The tracker is a process of its own,
+    started with this process's warning options, so the filter goes there
+    (:data:`TRACKER_WARNINGS`); before the first worker starts."""
+    if TRACKER_WARNINGS not in sys.warnoptions:
+        sys.warnoptions.append(TRACKER_WARNINGS)
+
+
 @app.command("design-sweep")
 def design_sweep(
     total: Annotated[
@@ -502,6 +521,7 @@ def design_sweep(
             candidates, pixel, samples, seed, extra=1, options=("--pixel or --total", "--samples")
         )
         folder_cm = output_folder(out) if out is not None else contextlib.nullcontext()
+        quiet_worker_tracker()
         with folder_cm as folder:
             where = f"Dask at {scheduler}" if scheduler else "joblib on this machine"
             with progress(f"evaluating {len(candidates)} designs ({where}) ...") as say:
