@@ -1067,3 +1067,38 @@ def test_a_line_is_begun_nearer_the_arm_where_that_costs_fewer_commands(monkeypa
         P = np.array([pose("ur5", x)[:3, 3] for x in q])
         assert np.hypot(P[:, 1] - ends[0, 1], P[:, 2] - ends[0, 2]).max() <= 0.1
         assert P[:, 0].min() <= 300.0 + 0.1 and P[:, 0].max() >= 900.0 - 0.1
+
+
+@pytest.mark.slow
+def test_a_closed_curve_s_reasons_name_points_on_it(tmp_path):
+    """A UR5 circle that dips 20 mm into the table: the part inside is unreachable, and where
+    the arc beside it could not be entered the reasons named points past the curve's end
+    (594.4 mm on a 377 mm circle: the arc length run on across the start), and said straight
+    motions were blocked where no lattice state lay near the curve. Every point a reason names
+    now lies on the curve, and each reason comes once."""
+    import re
+
+    import armpath
+
+    scene = tmp_path / "dip.toml"
+    scene.write_text(
+        'name = "dip"\n[arm]\nmodel = "ur5"\n'
+        "base = { position_mm = [-150, 0, 250], rotation_deg = [0, 0, 0] }\n"
+        "tool = { position_mm = [0, 0, 120], rotation_deg = [0, 0, 0], radius_mm = 3 }\n"
+        "home_deg = [0, -90, 90, -90, -90, 0]\n"
+        '[[obstacles]]\nname = "table"\ntype = "half_space"\nnormal = [0, 0, 1]\n'
+        "point = [0, 0, 0]\n"
+        '[tasks.trace.curve]\ntype = "parametric"\nname = "dipping"\n'
+        'x = "400 + 60*cos(t)"\ny = "0"\nz = "40 + 60*sin(t)"\nt = [0, 6.283185307179586]\n',
+        encoding="utf-8",
+    )
+    doc = armpath.trace(None, scene=scene, bound=False).doc
+    length = 2 * np.pi * 60.0
+    assert any("collision with table" in a["reason"] for a in doc["unreachable"])
+    reasons = [a["reason"] for a in doc["not_traced"]]
+    named = [float(x) for r in reasons for x in re.findall(r"near ([\d.]+) mm", r)]
+    assert named, reasons
+    assert all(0.0 <= s <= length + 1e-6 for s in named), reasons
+    for r in reasons:
+        parts = r.split("; ")
+        assert len(parts) == len(set(parts)), r

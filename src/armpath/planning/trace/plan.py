@@ -951,7 +951,7 @@ def _enter(
         try:
             q, s = tracer.start_state(s_try, need if i else _BODY_BUFFER_MM, hold=q_from)
         except PlanningError as exc:
-            failures.append(f"{s_try:.1f} mm: {exc}")
+            failures.append(str(exc))  # it names the point
             continue
         if i == 0 and tracer.piece.sign * (s - tracer.piece.begin_mm) > GOAL_REACHED_MM:
             # entered a little past where the piece begins: the transit goes on to where the
@@ -970,22 +970,27 @@ def _enter(
             try:
                 return _enter_backward(tracer, q_from, q, opts), q, s
             except PlanningError as exc:
-                failures.append(f"{s:.1f} mm: the straight motion there is blocked; {exc}")
+                failures.append(
+                    f"{float(reach.curve.wrap(s)):.1f} mm: the straight motion there is blocked; "
+                    f"{exc}"
+                )
             continue
         # one search per entry point but the last: another entry often works where one fails
         motion_opts = opts.motion if i == len(candidates) - 1 else replace(opts.motion, attempts=1)
         try:
             return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], motion_opts), q, s
         except PlanningError as exc:
-            failures.append(f"{s:.1f} mm: {exc}")
+            failures.append(f"{float(reach.curve.wrap(s)):.1f} mm: {exc}")
     # no room for a searched transit anywhere: straight motions onto the first scan points of
     # the piece where the links keep the tracer's small buffer
     tight = tracer.piece.in_order(scan_s[inside & (scores >= _BODY_BUFFER_MM)])[:8]
+    blocked = stateless = 0
     for s_try in tight.tolist():
         check_time("moving onto the curve")
         try:
             q, s = tracer.start_state(s_try, _BODY_BUFFER_MM, hold=q_from)
         except PlanningError:
+            stateless += 1
             continue
         seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
         mc = motion_clearance(tracer.arm, tracer.world, seq)
@@ -993,8 +998,10 @@ def _enter(
             say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm (straight)")
             m = plan_metrics(tracer.arm, seq)
             return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
-    if tight.size:
-        failures.append(
-            f"straight motions onto {tight.size} more points of the arc are blocked too"
-        )
-    raise PlanningError("could not move onto the curve: " + "; ".join(failures))
+        blocked += 1
+    if blocked:
+        failures.append(f"straight motions onto {blocked} more points of the arc are blocked too")
+    if stateless:
+        failures.append(f"{stateless} more points of the arc have no lattice state to start from")
+    # each reason once (the arc's start and its first roomy scan point may be one point)
+    raise PlanningError("could not move onto the curve: " + "; ".join(dict.fromkeys(failures)))

@@ -622,16 +622,17 @@ class Tracer:
                         if np.any(kept):  # a state that keeps them, the nearest of those
                             k = int(np.argmin(np.where(kept, sign * s, np.inf)))
                     return cand[k], float(s[k])
+        at_mm = float(self.fam.curve.wrap(s_from))  # a closed curve's arc lengths run on
         if near_found:
             raise PlanningError(
                 f"no clear lattice state with the tip within {self.tol:g} mm of the curve near "
-                f"{s_from:.1f} mm"
+                f"{at_mm:.1f} mm"
             )
         # how far a tick moves the tool point, at the last configuration searched around
         tick_mm = float(np.linalg.norm(tick_jacobian(self.arm, proj), axis=0)[self.tip].max())
         raise PlanningError(
             f"no lattice state with the tip within {self.tol:g} mm of the curve near "
-            f"{s_from:.1f} mm ({int(self.tip.sum())} joints move the tool point, up to "
+            f"{at_mm:.1f} mm ({int(self.tip.sum())} joints move the tool point, up to "
             f"{tick_mm:.2g} mm a tick: too coarse for this tolerance)"
         )
 
