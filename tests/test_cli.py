@@ -219,6 +219,27 @@ def test_reach_json_on_stdout_from_another_start():
     assert np.linalg.norm(tip - [300, 250, 300]) <= 0.05
 
 
+def test_reach_above_its_bound_says_why_fewer_were_not_taken(tmp_path):
+    """The UR5 cell to a point whose least-change members (54 commands) put the arm into the
+    table: the summary's "fewer commands" row says why each count below the plan's was
+    refused, consecutive counts with one reason as a range, as the JSON lists them."""
+    from armpath.cli.tasks import _rejected_text
+
+    scene = os.path.join(os.path.dirname(__file__), "..", "examples", "ur5_cell.toml")
+    r = run("reach", "410", "-200", "150", "--scene", scene, "--out", str(tmp_path / "out"))
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "out" / "reach.json").read_text())
+    rejected = doc["fewer_commands_rejected"]
+    assert doc["n_commands"] > doc["lower_bound_commands"] and rejected
+    counts = [int(m.group(1)) for t in rejected if (m := re.match(r"(\d+) commands: ", t))]
+    assert counts == list(range(doc["lower_bound_commands"], counts[-1] + 1))
+    words = " ".join(r.stdout.replace("│", " ").split())
+    assert "fewer commands " + " ".join(_rejected_text(tuple(rejected)).split()) in words
+    # the grouping itself: ranges of equal reasons, other reasons and gaps kept apart
+    reasons = ("5 commands: a", "6 commands: a", "7 commands: b", "9 commands: b", "searched")
+    assert _rejected_text(reasons) == "5-6 commands: a; 7 commands: b; 9 commands: b; searched"
+
+
 def test_run_writes_every_task_and_a_summary(seed_run):
     from armpath.report import arc_ends
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -118,6 +119,32 @@ def _scene_text(name: str, wall: str | None) -> str:
     return escape(f"{name}; workpiece wall measured {wall}" if wall else name)
 
 
+def _rejected_text(reasons: tuple[str, ...]) -> str:
+    """Why fewer commands were not taken, each reason once: consecutive counts refused for
+    the same reason joined into a range ("54-57 commands: every goal state ... in
+    collision")."""
+    groups: list[list[Any]] = []  # [first count, last count, reason], or [None, None, text]
+    for text in reasons:
+        m = re.fullmatch(r"(\d+) commands: (.*)", text, flags=re.DOTALL)
+        if m is None:
+            groups.append([None, None, text])
+            continue
+        n, why = int(m.group(1)), m.group(2)
+        last = groups[-1] if groups else None
+        if last is not None and last[0] is not None and last[2] == why and n == last[1] + 1:
+            last[1] = n
+            continue
+        groups.append([n, n, why])
+    parts = []
+    for first, last, why in groups:
+        if first is None:
+            parts.append(why)
+        else:
+            counts = str(first) if first == last else f"{first}-{last}"
+            parts.append(f"{counts} commands: {why}")
+    return "; ".join(parts)
+
+
 def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     from armpath.export import clearance_dict
 
@@ -141,6 +168,8 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     else:
         claim = f"lower bound {lb.commands}" + ("" if lb.proven else ", found over the family")
     table.add_row("commands", f"{result.n_commands}  ({claim})")
+    if not result.meets_bound and result.fewer_commands_rejected:
+        table.add_row("fewer commands", escape(_rejected_text(result.fewer_commands_rejected)))
     if result.method != "direct":
         table.add_row("method", f"{result.method} (every direct motion is blocked)")
     table.add_row(
