@@ -136,11 +136,11 @@ def _rejected_text(reasons: tuple[str, ...]) -> str:
             continue
         groups.append([n, n, why])
     parts = []
-    for first, last, why in groups:
-        if first is None:
+    for lo, hi, why in groups:
+        if lo is None:
             parts.append(why)
         else:
-            counts = str(first) if first == last else f"{first}-{last}"
+            counts = str(lo) if lo == hi else f"{lo}-{hi}"
             parts.append(f"{counts} commands: {why}")
     return "; ".join(parts)
 

@@ -285,10 +285,10 @@ def sweep(
 
     def on_joblib(batch: list[SeedArmGeometry], ends_at: float | None) -> list[Any]:
         # one Parallel per batch, not a shared ``with Parallel(...)``: on a timeout a shared
-        # (managed) one kills its workers and at once starts new ones for the next call, which
-        # the error exit then leaves half started (the resource tracker warned of leaked
-        # semaphores on stderr); loky reuses the workers between batches either way, and each
-        # batch waits only for what is left of the limit
+        # (managed) one kills its workers and at once sets up a new executor for the next
+        # call, which the error exit then left alive; loky reuses the workers between batches
+        # either way, and each batch waits only for what is left of the limit (the worker
+        # tracker's warnings at such an exit: armpath.cli.workspace.quiet_worker_tracker)
         jobs = (delayed(_evaluate_within)(ends_at, g, pixel_mm, samples, seed) for g in batch)
         return list(Parallel(n_jobs=n_jobs, timeout=_wait_limit())(jobs))
 

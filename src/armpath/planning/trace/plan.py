@@ -937,6 +937,10 @@ def _enter(
     arc = tracer.arc
     L = reach.curve.length
     scan_s = reach.scan_s_mm
+
+    def at(s: float) -> str:  # where on the curve, for the messages (a closed one's wrapped)
+        return f"{float(reach.curve.wrap(s)):.1f} mm"
+
     if reach.curve.closed:
         scan_s = np.concatenate([scan_s, scan_s + L, scan_s + 2 * L])
         scores = np.tile(reach.scan_score, 3)
@@ -960,7 +964,7 @@ def _enter(
             back, s_back = tracer.run(q, s, tracer.piece.begin_mm)
             if tracer.piece.sign * (s_back - tracer.piece.begin_mm) <= GOAL_REACHED_MM:
                 q, s = back[-1], s_back
-        say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm")
+        say(f"moving onto the curve at {at(s)}")
         if i == 0:  # the tight start of the arc: a straight motion, else a lift-off reversed
             seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
             mc = motion_clearance(tracer.arm, tracer.world, seq)
@@ -970,17 +974,14 @@ def _enter(
             try:
                 return _enter_backward(tracer, q_from, q, opts), q, s
             except PlanningError as exc:
-                failures.append(
-                    f"{float(reach.curve.wrap(s)):.1f} mm: the straight motion there is blocked; "
-                    f"{exc}"
-                )
+                failures.append(f"{at(s)}: the straight motion there is blocked; {exc}")
             continue
         # one search per entry point but the last: another entry often works where one fails
         motion_opts = opts.motion if i == len(candidates) - 1 else replace(opts.motion, attempts=1)
         try:
             return plan_motion(tracer.arm, tracer.world, q_from, q[None, :], motion_opts), q, s
         except PlanningError as exc:
-            failures.append(f"{float(reach.curve.wrap(s)):.1f} mm: {exc}")
+            failures.append(f"{at(s)}: {exc}")
     # no room for a searched transit anywhere: straight motions onto the first scan points of
     # the piece where the links keep the tracer's small buffer
     tight = tracer.piece.in_order(scan_s[inside & (scores >= _BODY_BUFFER_MM)])[:8]
@@ -995,7 +996,7 @@ def _enter(
         seq = CommandSequence.straight(q_from, q, lattice=tracer.grid)
         mc = motion_clearance(tracer.arm, tracer.world, seq)
         if mc.certified_ok:
-            say(f"moving onto the curve at {float(reach.curve.wrap(s)):.1f} mm (straight)")
+            say(f"moving onto the curve at {at(s)} (straight)")
             m = plan_metrics(tracer.arm, seq)
             return MotionPlan(seq, 0, mc, m, seq.n_commands, "direct", 0), q, s
         blocked += 1
