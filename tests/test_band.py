@@ -131,10 +131,23 @@ def _on_circle(arm, circle, angle, q_start, free=None):
     return full(found.x)
 
 
-def _longest_found(arm, circle, m, tries=12):
+def _moved_inward(arm, circle, q, depth_mm):
+    """The configuration nearest ``q`` (minimum-norm steps) whose tool point lies
+    ``depth_mm`` nearer the axis of the horizontal ``circle``."""
+    inward = (circle.centre - tool_position(arm, q)) * [1.0, 1.0, 0.0]
+    target = tool_position(arm, q) + depth_mm * inward / np.linalg.norm(inward)
+    moved = q.copy()
+    for _ in range(5):
+        J = position_jacobian(arm, moved)
+        moved = moved + np.linalg.pinv(J) @ (target - tool_position(arm, moved))
+    return moved
+
+
+def _longest_found(arm, circle, m, tries=12, inner=None):
     """The longest arc between the nearest points of a command's ends that SLSQP finds over
     joint changes within the steps, the middle configuration ``m``, the tool point within the
-    tolerance at 17 instants."""
+    tolerance at 17 instants (and, given ``inner``, at most that far inside the circle in its
+    plane: the half band)."""
     tip = tool_point_joints(arm)
     steps = np.where(tip, arm.lattice.max_step, 0.0)
     instants = np.linspace(-0.5, 0.5, 17)
@@ -154,6 +167,14 @@ def _longest_found(arm, circle, m, tries=12):
         u /= np.linalg.norm(u)
         return np.arctan2(d @ np.cross(b, u), d @ u)
 
+    def within(P, share):
+        gap = share * TOL - distance(P)
+        if inner is None:
+            return gap
+        d = P - circle.centre
+        rho = np.linalg.norm(d - (d @ b)[:, None] * b, axis=1)
+        return np.minimum(gap, rho - (circle.radius_mm - share * inner))
+
     rng = np.random.default_rng(6)
     d = tool_position(arm, m) - circle.centre
     tangent = np.cross(b, d)
@@ -171,13 +192,13 @@ def _longest_found(arm, circle, m, tries=12):
                 D0,
                 method="SLSQP",
                 bounds=list(zip(-steps, steps, strict=True)),
-                constraints=[{"type": "ineq", "fun": lambda D: 0.995 * TOL - distance(points(D))}],
+                constraints=[{"type": "ineq", "fun": lambda D: within(points(D), 0.995)}],
                 options={"maxiter": 300},
             )
             D = found.x
             for _ in range(20):  # one that ends a little outside: a little shorter
                 P = points(D)
-                if distance(P).max() <= TOL:
+                if within(P, 1.0).min() >= 0.0:
                     best = max(best, circle.radius_mm * abs(angle(P)[-1]))
                     break
                 D = 0.995 * D
@@ -232,17 +253,34 @@ def test_arc_limit_for_a_middle_anywhere_in_the_band():
     for angle in (0.5, 2.5):
         q = _on_circle(arm, circle, angle, q)
         # the nearest configuration with its tool point at the inner edge (minimum-norm steps)
-        q_inner = q.copy()
-        inward = (circle.centre - tool_position(arm, q)) * [1.0, 1.0, 0.0]
-        target = tool_position(arm, q) + 0.99 * TOL * inward / np.linalg.norm(inward)
-        for _ in range(5):
-            J = position_jacobian(arm, q_inner)
-            q_inner = q_inner + np.linalg.pinv(J) @ (target - tool_position(arm, q_inner))
+        q_inner = _moved_inward(arm, circle, q, 0.99 * TOL)
         assert np.abs(q_inner - q).max() < np.radians(0.05)
         anywhere = command_arc_limit(arm, q, circle, TOL, anywhere=True)
         assert anywhere > command_arc_limit(arm, q, circle, TOL)
         found = _longest_found(arm, circle, q_inner)
         assert found <= anywhere <= 1.15 * found
+
+
+def test_the_half_band_s_limit_covers_the_longest_command_found_within_it():
+    """A band only 0.02 mm deep inside the circle (the tool point kept out of a solid whose
+    face the circle lies on; 0.1 mm outside): at configurations of the seed arm on its 25 mm
+    circle, their tool point moved to that inner edge, no command SLSQP finds within the half
+    band covers more than the limit with ``inner_mm``, which lies within 20 % of the longest
+    found and below the whole band's limit."""
+    arm = seed_arm()
+    circle = Circle(np.array([330.0, 60.0, 260.0]), np.array([0.0, 0.0, 1.0]), 25.0)
+    inner = 0.02
+    q = np.asarray(arm.home, dtype=np.float64)
+    for angle in (0.5, 2.5):
+        q = _on_circle(arm, circle, angle, q)
+        q_inner = _moved_inward(arm, circle, q, 0.99 * inner)
+        half = command_arc_limit(arm, q, circle, TOL, anywhere=True, inner_mm=inner)
+        assert half < command_arc_limit(arm, q, circle, TOL, anywhere=True)
+        found = _longest_found(arm, circle, q_inner, inner=inner)
+        assert found <= half <= 1.2 * found
+        assert command_arc_limit(arm, q, circle, TOL, anywhere=True, inner_mm=TOL) == (
+            command_arc_limit(arm, q, circle, TOL, anywhere=True)
+        )
 
 
 def test_a_batchs_limits_are_each_configurations_own():

@@ -34,6 +34,12 @@ outward direction ``r`` in that plane and the tangent ``t = b x r``. The in-plan
   ``2 tol``), with ``|c|`` and ``|w|`` bounded at ``m`` term by term, and ``|c|`` then by what
   the last round proved (:data:`_CHORD_ROUNDS`).
 
+**The half band.** Where the tool point must also stay out of a solid whose face the circle
+lies on, it lies at most ``inner <= tol`` inside the circle (in its plane): then ``0 <= slack
+<= tol + inner`` and the ends' squared distances from the axis differ by at most ``(R +
+tol)^2 - (R - inner)^2``, which replaces ``4 R tol`` above (``inner_mm``; the band bound
+works out ``inner`` from the face, :mod:`~armpath.planning.bounds.band_trace`).
+
 These are quadratic and linear in ``D``; with ``|D_i| <= s_i`` they bound ``t.c``. Maximising
 a linear function under quadratic constraints is not convex, but every choice of nonnegative
 multipliers ``lam, mu, nu`` with ``P = lam A + mu_r jr jr' + mu_b jb jb' + diag(nu)`` positive
@@ -484,6 +490,7 @@ def _middles(
     tb: TaylorBounds,
     tip: BoolArray,
     anywhere: bool,
+    inner: float,
 ) -> _Middles:
     """:class:`_Middles` of configurations ``qs (M, n)`` (see :func:`command_arc_limit`)."""
     qs = np.asarray(qs, dtype=np.float64).reshape(-1, arm.n_joints)
@@ -498,10 +505,11 @@ def _middles(
     fixed[radius_a < 1e-9] = math.inf
     r = a_plane / np.maximum(radius_a, 1e-9)[:, None]
     if anywhere:  # the middle at the band's inner edge: the most room for the chord
-        radius_a = np.full(qs.shape[0], R - tol)
+        radius_a = np.full(qs.shape[0], R - inner)
     else:  # no command has its middle within the tolerance where this lies outside
         fixed[np.isnan(fixed) & (np.hypot(radius_a - R, a @ b) > tol)] = 0.0
-    slack = R + tol - radius_a  # how far inside the outer circle it lies, 0 to 2 tol
+        fixed[np.isnan(fixed) & (radius_a < R - inner)] = 0.0
+    slack = R + tol - radius_a  # how far inside the outer circle it lies, 0 to tol + inner
     t = np.cross(b, r)
     J_all = jacobian_from_frames(arm, frames)[:, :3]
     J = J_all[:, :, tip]
@@ -534,6 +542,7 @@ def _round_limits(
     slack: float,
     R: float,
     tol: float,
+    inner: float,
     e_c: float,
     e_w: float,
     chord: float,
@@ -545,7 +554,7 @@ def _round_limits(
     e_c^2`` (``|t.c| <= chord``) and ``|a| D'H_r D <= 8 |a| (r.w) + 8 |a| e_w``."""
     cap = 8.0 * radius_a * slack + 4.0 * slack**2 + 8.0 * radius_a * e_w + 2.0 * chord * e_c
     cap += e_c**2
-    radial = (2.0 * R * tol + bend * chord) / radius_a
+    radial = (R * (tol + inner) + 0.5 * (tol * tol - inner * inner) + bend * chord) / radius_a
     return cap, (radial + e_c) ** 2, radial
 
 
@@ -560,6 +569,7 @@ def _chord_one_box(
     slack: float,
     R: float,
     tol: float,
+    inner: float,
     e_c: float,
     e_w: float,
     chord: float,
@@ -577,7 +587,9 @@ def _chord_one_box(
     limits = np.empty(3)
     limits[2] = (2.0 * tol + e_c) ** 2
     for _ in range(_CHORD_ROUNDS):
-        limits[0], limits[1], radial = _round_limits(radius_a, slack, R, tol, e_c, e_w, chord, bend)
+        limits[0], limits[1], radial = _round_limits(
+            radius_a, slack, R, tol, inner, e_c, e_w, chord, bend
+        )
         along = _one_box(g, mats, limits, -steps, steps)[0] + e_c
         # every command through this configuration has |c| at most this: the next round
         # may use it
@@ -599,6 +611,7 @@ def _chords_one_box(
     slack: np.ndarray,
     R: float,
     tol: float,
+    inner: float,
     e_c: float,
     e_w: float,
     chord: np.ndarray,
@@ -611,7 +624,7 @@ def _chords_one_box(
     for i in range(todo.size):
         m = todo[i]
         out[m] = _chord_one_box(
-            g[m], A[m], jr[m], jb[m], steps, radius_a[m], slack[m], R, tol, e_c, e_w,
+            g[m], A[m], jr[m], jb[m], steps, radius_a[m], slack[m], R, tol, inner, e_c, e_w,
             chord[m], bend[m],
         )  # fmt: skip
     return out
@@ -628,6 +641,7 @@ def _chords_one_box_parallel(
     slack: np.ndarray,
     R: float,
     tol: float,
+    inner: float,
     e_c: float,
     e_w: float,
     chord: np.ndarray,
@@ -639,14 +653,20 @@ def _chords_one_box_parallel(
     for i in prange(todo.size):
         m = todo[i]
         out[m] = _chord_one_box(
-            g[m], A[m], jr[m], jb[m], steps, radius_a[m], slack[m], R, tol, e_c, e_w,
+            g[m], A[m], jr[m], jb[m], steps, radius_a[m], slack[m], R, tol, inner, e_c, e_w,
             chord[m], bend[m],
         )  # fmt: skip
     return out
 
 
 def _chord_branching(
-    mid: _Middles, steps: FloatArray, R: float, tol: float, tb: TaylorBounds, nodes: int
+    mid: _Middles,
+    steps: FloatArray,
+    R: float,
+    tol: float,
+    inner: float,
+    tb: TaylorBounds,
+    nodes: int,
 ) -> float:
     """:func:`_chord_one_box` of the one configuration of ``mid`` with each round's dual by
     the branch and bound of :func:`_dual_bound` over ``nodes`` boxes."""
@@ -654,7 +674,7 @@ def _chord_branching(
     chord, e_c = float(mid.chord[0]), tb.chord_error
     for _ in range(_CHORD_ROUNDS):
         cap, radial_cap, radial = _round_limits(
-            float(mid.radius_a[0]), float(mid.slack[0]), R, tol, e_c, tb.bend_error, chord,
+            float(mid.radius_a[0]), float(mid.slack[0]), R, tol, inner, e_c, tb.bend_error, chord,
             float(mid.bend[0]),
         )  # fmt: skip
         limits = np.array([cap, radial_cap, (2.0 * tol + e_c) ** 2])
@@ -674,6 +694,12 @@ def _arcs(chord: FloatArray, R: float, tol: float) -> FloatArray:
         return np.where(x < 1.0, 2.0 * R * np.arcsin(np.minimum(x, 1.0)), math.inf)
 
 
+def _inner(tol: float, inner_mm: float | None) -> float:
+    """The band's inner half-width (mm): ``inner_mm`` within 0 and the tolerance ``tol`` (a
+    wider inner half only loosens the bound), the tolerance where not given."""
+    return tol if inner_mm is None else min(max(float(inner_mm), 0.0), tol)
+
+
 def lemma_applies(arm: SerialArm, circle: Circle, tol: float, tb: TaylorBounds) -> bool:
     """Whether the lemma can bound commands along ``circle``: an arm measured in mm and a
     circle wider than the path's bend and the tolerance, long enough for the arc to be told
@@ -690,6 +716,7 @@ def arc_limits(
     taylor: TaylorBounds | None = None,
     moves: BoolArray | None = None,
     anywhere: bool = True,
+    inner_mm: float | None = None,
 ) -> FloatArray:
     """:func:`command_arc_limit` of each configuration ``qs (M, n)`` by one box's dual each
     round (compiled over the batch): an upper bound on the limit :func:`command_arc_limit`
@@ -702,12 +729,13 @@ def arc_limits(
         return np.full(qs.shape[0], math.inf)
     if qs.shape[0] == 0:
         return np.zeros(0)
-    mid = _middles(arm, qs, circle, tol, tb, tip, anywhere)
+    inner = _inner(tol, inner_mm)
+    mid = _middles(arm, qs, circle, tol, tb, tip, anywhere, inner)
     R = float(circle.radius_mm)
     args = (
         mid.g, mid.A, mid.jr, mid.jb, np.ascontiguousarray(arm.lattice.max_step[tip]),
-        mid.radius_a, mid.slack, R, tol, tb.chord_error, tb.bend_error, mid.chord, mid.bend,
-        np.flatnonzero(np.isnan(mid.fixed)),
+        mid.radius_a, mid.slack, R, tol, inner, tb.chord_error, tb.bend_error, mid.chord,
+        mid.bend, np.flatnonzero(np.isnan(mid.fixed)),
     )  # fmt: skip
     if threads_pay_off(qs.shape[0], _PARALLEL_MIDDLES):
         with parallel_kernel_lock:
@@ -726,6 +754,7 @@ def command_arc_limit(
     moves: BoolArray | None = None,
     nodes: int = 200,
     anywhere: bool = False,
+    inner_mm: float | None = None,
 ) -> float:
     """The longest arc (mm) of ``circle`` between the points nearest the start and the end of
     any command whose middle configuration is ``q_mid`` (rad / mm) and whose tool point lies
@@ -737,15 +766,19 @@ def command_arc_limit(
     (:func:`_dual_bound`; 1: one box, :func:`arc_limits`). ``anywhere``: the middle's tool
     point may lie anywhere within the tolerance of the circle (taken at the band's inner
     edge, which leaves the chord the most room), the joints' derivatives those at ``q_mid``:
-    for a sample of the family that stands for the members about it."""
+    for a sample of the family that stands for the members about it. ``inner_mm``: how far
+    inside the circle (towards its axis, in its plane) the tool point may lie at most (mm;
+    default the tolerance, a band on both sides; less where it must stay out of a solid whose
+    face the circle lies on: the half band, see the module)."""
     tip = tool_point_joints(arm) if moves is None else moves
     tb = taylor_bounds(arm, tip) if taylor is None else taylor
     tol = float(tolerance_mm)
     if nodes <= 1 or not lemma_applies(arm, circle, tol, tb):
-        return float(arc_limits(arm, q_mid, circle, tol, tb, tip, anywhere)[0])
-    mid = _middles(arm, q_mid, circle, tol, tb, tip, anywhere)
+        return float(arc_limits(arm, q_mid, circle, tol, tb, tip, anywhere, inner_mm)[0])
+    inner = _inner(tol, inner_mm)
+    mid = _middles(arm, q_mid, circle, tol, tb, tip, anywhere, inner)
     if not np.isnan(mid.fixed[0]):
         return float(mid.fixed[0])
     R = float(circle.radius_mm)
-    chord = _chord_branching(mid, arm.lattice.max_step[tip], R, tol, tb, nodes)
+    chord = _chord_branching(mid, arm.lattice.max_step[tip], R, tol, inner, tb, nodes)
     return float(_arcs(np.array([chord]), R, tol)[0])
