@@ -23,7 +23,9 @@ bound, and then:
   its approach and along parts, the proven limit on the arc one command can follow at the
   layers where the family was sampled (least and largest over the layers, each the largest
   over its sampled members' cells), and the family's shortest path
-  alone (its search stopped once it could not pass the band's bound);
+  alone (its search stopped once it could not pass the band's bound foretold); where the
+  trace's bound is the family's (the seam), the band's bound round the whole curve computed
+  on its own, its limits and value;
 * the longest straight chord within the band (``4 sqrt(R tolerance)``, circles only): what a
   command whose tool path were straight could cover;
 * the along part that longest arc implies (the traced length over it, rounded up), added to
@@ -52,6 +54,7 @@ from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 
 from armpath.kinematics import tool_position
+from armpath.planning.bounds.band_trace import band_trace_bound
 from armpath.scenes import load_scene
 from armpath.scenes.arm import scene_arm
 from armpath.tasks import trace_task
@@ -282,6 +285,21 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
     sampling = {} if bound is None else bound.sampling
     limit = sampling.get("command_arc_limit_mm")
     family = sampling.get("family_bound_commands", None if bound is None else bound.value)
+    alone = ""
+    if limit is None and res.curve.closed and traced >= res.curve.length - 1e-6:
+        # the trace's bound is the family's: the band's own, round the whole curve, to show
+        # its limits and why it was not taken
+        band = band_trace_bound(
+            res.reachability.family, q_all[0], [(0.0, res.curve.length)], tol, loop=True
+        )
+        if band is not None:
+            sampling = band.sampling
+            limit = sampling["command_arc_limit_mm"]
+            alone = (
+                f"; the band's bound alone {band.value:.1f} = {band.parts['approach']:.0f} + "
+                f"{band.parts['along']:.1f}, windows {sampling['band_window_mm']:g} mm, "
+                f"inside the curve at most {sampling['band_inner_mm']:.3f} mm"
+            )
     return [
         f"{label} ({res.curve.length:.0f} mm)",
         f"{res.n_commands} ({res.n_commands - along} + {along})",
@@ -293,7 +311,7 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
         "-"
         if limit is None
         else f"{sampling.get('command_arc_limit_least_mm', limit):.2f} - {limit:.2f} "
-        f"({sampling['limit_samples']:.0f} members)",
+        f"({sampling['limit_samples']:.0f} members{alone})",
         "-" if circle.radius is None else f"{4.0 * math.sqrt(circle.radius * tol):.2f}",
         f"{along_estimate}",
         f"{estimate}",
@@ -356,16 +374,20 @@ def main() -> int:
         "differ; a part is counted over the largest limit of the layers a command covering it "
         "could lie between); the family's shortest path, the largest-joint length "
         "along the circle, is a fraction of it (its search stopped after the round whose clear "
-        "path could not pass the band's bound). Within the 0.1 mm band a joint-linear command "
+        "path could not pass what the band's bound was foretold to come to). Within the 0.1 "
+        "mm band a joint-linear command "
         "follows a circle a few millimetres, not much farther than a straight chord would. "
         "Between the estimate and the plan lies what the tracer leaves: its commands along "
         "the circle cover less than the longest found (the command lattice; where in the band "
         "each begins: the column from the plan's own start states shows how much of it a "
-        "command from where the tracer stands could still gain). The seam is no circle: its "
-        "proven bound is the family's alone (the "
-        "band's lemma is proven for circles), and its commands must also keep the tool point "
-        "out of the workpiece (half the band, about a convex face), which the search keeps "
-        "too.",
+        "command from where the tracer stands could still gain). The seam is no circle: the "
+        "band bounds it by windows (each layer against the circle fitted to the curve within "
+        "the window either side of it) and by the half band (its commands must also keep the "
+        "tool point out of the workpiece, about a convex face, which the search keeps too); "
+        "its proven bound is still the family's, which lies higher than the band's alone "
+        "(the least approach to the seam lies far below the family bound's approach part to "
+        "where its pass begins), so the trace skips the band there and its limits are "
+        "computed here on their own.",
         "",
     ]
     return report.write(args.out, lines)

@@ -18,8 +18,14 @@ from armpath.kinematics import position_jacobian, tool_point_joints, tool_positi
 from armpath.model.seed_arm import seed_arm
 from armpath.planning.bounds.band import Circle
 from armpath.planning.bounds.band_trace import (
+    WINDOW_FIT_SHARE,
+    WINDOW_HALF_MM,
     FamilyLimit,
+    LocalBand,
+    _band_over,
+    _bend_radius,
     _cell_limit,
+    _curve_arcs,
     _largest_cell,
     along_commands,
     family_arc_limit,
@@ -82,7 +88,8 @@ def test_family_limit_covers_the_longest_commands_found(free_circle):
     circle = Circle(CENTRE, np.array([0.0, 0.0, 1.0]), RADIUS)
     sampler = FamilySampler(fam, TOL, 60, np.asarray(arm.home, dtype=np.float64))
     layers = [fam.curve.length * np.arange(6) / 6]
-    limit = family_arc_limit(sampler, circle, TOL, layers, cyclic=True, directions=60)
+    band = LocalBand.of_circle(circle, TOL)
+    limit = family_arc_limit(sampler, lambda _s: band, layers, cyclic=True, directions=60)
     assert limit.samples > 100 and limit.refined >= 1
     assert limit.arc_mm >= limit.sample_arc_mm
     # through the configuration nearest the sample that gives the limit whose tool point lies
@@ -245,3 +252,137 @@ def test_along_commands_integrates_the_limits_where_each_part_of_the_curve_lies(
         alike = FamilyLimit(7.0, np.zeros(6), 0.0, 0.0, 1, 0, limit.layer_s_mm,
                             limit.layer_span, np.full(limit.layer_s_mm.size, 7.0))  # fmt: skip
         assert along_commands(alike, spans, end, cyclic, length) == pytest.approx(traced / 7.0)
+
+
+@pytest.fixture(scope="module")
+def ur5_seam():
+    """The UR5 cell's seam family (the tilted plane's section of the workpiece's outer face)."""
+    from pathlib import Path
+
+    from armpath.scenes import load_scene
+    from armpath.scenes.arm import scene_arm
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml")
+    arm = scene_arm(scene)
+    return curve_family(arm, scene.world, scene.trace_curve())
+
+
+def test_the_half_band_holds_every_point_of_the_tube_outside_the_workpiece(ur5_seam):
+    """Windows of the UR5 cell's seam (an ellipse on the workpiece's cone): the band's inner
+    half-width (how far inside its circle a tool point within the tolerance of the curve and
+    outside the workpiece may lie) is never passed by 200,000 random such points, the
+    workpiece's own signed distance deciding what is outside; it lies within 20 % of the
+    farthest inside found, and well below the tolerance (the half band is narrower)."""
+    fam = ur5_seam
+    curve, solid = fam.curve, fam.surface
+    assert solid is not None and solid.name == "workpiece"
+    rng = np.random.default_rng(3)
+    for s in (40.0, 150.0, 290.0):
+        window = [(s - WINDOW_HALF_MM, s + WINDOW_HALF_MM)]
+        band = _band_over(fam, window, TOL, WINDOW_FIT_SHARE, WINDOW_HALF_MM)
+        assert band is not None and band.deviation_mm < 0.25 * TOL
+        p = curve.at_arc_length(rng.uniform(*window[0], 200_000))
+        step = rng.normal(size=p.shape)
+        step *= (TOL * rng.uniform(size=p.shape[0]) ** (1 / 3) / np.linalg.norm(step, axis=1))[
+            :, None
+        ]
+        x = (p + step)[solid.signed_distance(p + step) >= 0.0]
+        b = band.circle.normal
+        inplane = (x - band.circle.centre) - np.outer((x - band.circle.centre) @ b, b)
+        inside = band.circle.radius_mm - np.linalg.norm(inplane, axis=1)
+        assert inside.max() <= band.inner_mm
+        assert band.inner_mm - band.deviation_mm <= 1.2 * (inside.max() + band.deviation_mm)
+        assert band.inner_mm < 0.8 * band.outer_mm
+
+
+def test_a_frustum_s_face_bends_no_more_than_its_bound():
+    """The workpiece's conical face: the curvature bound lies above the parallel's normal
+    curvature (cos of the cone's half-angle over the distance from the axis), measured by the
+    outward normal's turn along the parallel, and within 0.2 % of one over that distance (the
+    bound leaves the half-angle out); inf at a rim, where two faces meet within the radius."""
+    from armpath.geometry.primitives import hollow_frustum
+
+    solid = hollow_frustum("w", [0.0, 0.0, 0.0], 160.0, 110.0, 70.0, 8.0)
+    z, radius, h = 80.0, 0.1, 1e-2
+    r = 110.0 - 40.0 * z / 160.0 + 1e-9
+    p = np.array([[r * math.cos(a), r * math.sin(a), z] for a in (0.0, h / r)])
+    n = solid.outward_normal(p)
+    turn = np.linalg.norm(n[1] - n[0]) / np.linalg.norm(p[1] - p[0])
+    cos_half = 160.0 / math.hypot(160.0, 40.0)
+    assert turn == pytest.approx(cos_half / r, rel=1e-3)
+    bound = float(solid.face_curvature_bound(p[:1], radius)[0])
+    assert turn <= bound <= 1.002 / r
+    rim = np.array([[110.0 - 1e-3, 0.0, 0.05]])
+    assert np.isinf(solid.face_curvature_bound(rim, radius)[0])
+
+
+def test_curve_arcs_follow_schur_s_comparison_on_an_ellipse():
+    """The band's arcs (between circle points) measured along the curve: for an ellipse, the
+    arc between two of its points a chord apart never exceeds what :func:`_curve_arcs` gives
+    for that chord (by the ellipse's sharpest bend, measured on its points), and a circle's
+    own band leaves its arcs as they are."""
+    a_mm, b_mm = 90.0, 80.0
+    ellipse = ParametricCurve("e", f"{a_mm}*cos(t)", f"{b_mm}*sin(t)", "0", 0.0, 2 * np.pi)
+    points = ellipse.at_arc_length(np.linspace(0.0, ellipse.length, 4000))
+    bend = _bend_radius(points)
+    assert bend == pytest.approx(b_mm**2 / a_mm, rel=1e-4)
+    circle = Circle(np.zeros(3), np.array([0.0, 0.0, 1.0]), 85.0)
+    band = LocalBand(circle, 0.0, TOL, TOL, bend, math.inf)
+    s0 = np.linspace(0.0, ellipse.length, 50, endpoint=False)
+    for length in (5.0, 15.0, 30.0):
+        chord = np.linalg.norm(
+            ellipse.at_arc_length(s0 + length) - ellipse.at_arc_length(s0), axis=1
+        )
+        as_circle = 2.0 * 85.0 * np.arcsin(chord / (2.0 * 85.0))
+        assert np.all(length <= _curve_arcs(as_circle, band) + 1e-9)
+    own = LocalBand.of_circle(circle, TOL)
+    assert np.allclose(_curve_arcs(np.array([3.0, 12.0]), own), [3.0, 12.0])
+
+
+@pytest.mark.slow
+def test_a_near_circle_is_bounded_by_windows_above_the_family(tmp_path):
+    """The UR5 cell tracing an ellipse of radii 80.6 and 79.4 mm in free space beside its
+    workpiece: it lies 0.6 mm from its fitted circle (no circle for the band), but within
+    0.025 mm of the circle fitted within each 36 mm window, so the band bound is taken by
+    windows; it lies above the family's own bound and at most the plan, and no command of the
+    plan, replayed (the arc of the curve between the points nearest its tool point at 41
+    instants), covers more than the proven limit."""
+    from pathlib import Path
+
+    from armpath.scenes import load_scene
+    from armpath.scenes.arm import scene_arm
+    from armpath.tasks import trace_task
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml")
+    arm = scene_arm(scene)
+    a_mm, b_mm = 80.6, 79.4
+    curve = ParametricCurve(
+        "ellipse", f"330 + {a_mm}*cos(t)", f"-200 + {b_mm}*sin(t)", "150", 0.0, 2 * np.pi
+    )
+    assert fitted_circle(curve, [(0.0, curve.length)])[1] > 0.5
+    r = trace_task(scene, arm, curve=curve)
+    b = r.lower_bound
+    assert b is not None and b.sampling.get("band_window_mm") == WINDOW_HALF_MM
+    assert "fitted to the curve within 36 mm" in b.method
+    assert b.sampling["family_bound_commands"] < b.value <= b.commands <= r.n_commands
+    assert b.sampling["circle_deviation_mm"] <= WINDOW_FIT_SHARE * 0.1
+    # replay: the arc of the curve covered by each command of the pass, by an independent
+    # nearest-point search on a fine polyline of the ellipse
+    t = np.linspace(0.0, 2 * np.pi, 200_001)
+    dense = np.column_stack(
+        [330 + a_mm * np.cos(t), -200 + b_mm * np.sin(t), np.full(t.size, 150.0)]
+    )
+    s_dense = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(dense, axis=0), axis=1))]
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(dense)
+    states = r.sequence.states_joint()
+    p = r.passes[0]
+    u = np.linspace(0.0, 1.0, 41)
+    widest = 0.0
+    for k in range(p.first, p.last):
+        q = states[k] + u[:, None] * (states[k + 1] - states[k])
+        s = s_dense[tree.query(tool_position(arm, q))[1]]
+        s = np.unwrap(s * 2 * np.pi / s_dense[-1]) * s_dense[-1] / (2 * np.pi)
+        widest = max(widest, float(s.max() - s.min()))
+    assert 0.0 < widest <= b.sampling["command_arc_limit_mm"]

@@ -151,6 +151,16 @@ class Obstacle(ABC):
         """A ball ``(center, radius)`` containing the solid (broad phase), or None if unbounded."""
         return None
 
+    def face_curvature_bound(self, points: ArrayLike, radius: float) -> FloatArray:
+        """An upper bound on the normal curvature (per length unit) of the solid's surface
+        within ``radius`` of each of ``points (..., 3)``, where one smooth face alone passes
+        there; inf where that is not known (an edge or a corner may lie within it, or the
+        solid does not say). Outside the solid and within ``r <= radius`` of a point ``p`` of
+        that face, a point lies at most ``kappa r^2 / 2`` behind the face's tangent plane at
+        ``p``. This default knows nothing: inf."""
+        p = np.asarray(points, dtype=np.float64)
+        return np.full(p.shape[:-1], np.inf)
+
     def broad_phase(self, a: FloatArray, b: FloatArray) -> FloatArray:
         """A lower bound of the signed distance of each segment ``a[k] -> b[k]`` (``(K, 3)``
         contiguous), ``(K,)``: the distance to :meth:`enclosing_ball` (-inf: none)."""
@@ -253,6 +263,10 @@ class HalfSpace(Obstacle):
         x = np.asarray(points, dtype=np.float64)
         return np.asarray((x - self.point) @ self.normal, dtype=np.float64)
 
+    def face_curvature_bound(self, points: ArrayLike, radius: float) -> FloatArray:
+        """0: a plane does not bend."""
+        return np.zeros(np.asarray(points, dtype=np.float64).shape[:-1])
+
     def segment_distance_bounds(
         self, p0: ArrayLike, p1: ArrayLike, certify: ArrayLike = -np.inf
     ) -> tuple[FloatArray, FloatArray]:
@@ -314,6 +328,11 @@ class Sphere(ExactSegmentDistance, Obstacle):
 
     def enclosing_ball(self) -> tuple[FloatArray, float]:
         return self.center, self.radius
+
+    def face_curvature_bound(self, points: ArrayLike, radius: float) -> FloatArray:
+        """One over the sphere's radius, everywhere."""
+        shape = np.asarray(points, dtype=np.float64).shape[:-1]
+        return np.full(shape, 1.0 / self.radius)
 
     def segment_distance_exact(self, p0: FloatArray, p1: FloatArray) -> FloatArray:
         """Exact, also inside: the distance of the segment to the centre less the radius."""
@@ -517,6 +536,23 @@ class SolidOfRevolution(ExactSegmentDistance, Obstacle):
             flat, self.origin, self.axis, self.profile, self.boundary_edges
         )
         return np.asarray(d.reshape(x.shape[:-1]), dtype=np.float64)
+
+    def face_curvature_bound(self, points: ArrayLike, radius: float) -> FloatArray:
+        """Where one edge of the profile alone lies within ``radius`` of a point (in the
+        profile's half-plane, where the distance to a revolved edge is measured), its face is
+        a cone, a cylinder or a flat ring, whose normal curvature is at most one over the
+        distance from the axis: one over the point's distance less ``radius``; inf where two
+        edges (a rim, where faces meet) or the axis lie within it."""
+        r, z = self.to_profile_coords(points)
+        a = self.profile[self.boundary_edges]
+        b = np.roll(self.profile, -1, axis=0)[self.boundary_edges]
+        x = np.stack([r, z], axis=-1)[..., None, :]  # (..., 1, 2)
+        d = b - a
+        t = np.clip(np.sum((x - a) * d, axis=-1) / np.maximum(np.sum(d * d, axis=-1), 1e-300), 0, 1)
+        near = np.linalg.norm(x - (a + t[..., None] * d), axis=-1) <= radius  # (..., E)
+        alone = (np.sum(near, axis=-1) == 1) & (r > radius)
+        with np.errstate(divide="ignore"):
+            return np.asarray(np.where(alone, 1.0 / np.maximum(r - radius, 1e-300), np.inf))
 
     def enclosing_ball(self) -> tuple[FloatArray, float]:
         z = self.profile[:, 1]

@@ -57,8 +57,10 @@ needs to bring every point within the arm's reach of it, a largest distance prov
 and bound over the arm's joints (:mod:`~armpath.planning.bounds.farthest`): from a point of
 the carriage, and from the arm's first axis at the heights of the points that decide it.
 
-Where a trace's spans lie on a circle, its bound also sees the tolerance band: a joint-linear
-command follows a tight curve within it only a few millimetres. :mod:`~armpath.planning.bounds.band`
+Where a trace's spans lie on a circle, or near one within windows along them (an ellipse),
+its bound also sees the tolerance band: a joint-linear command follows a tight curve within
+it only a few millimetres (fewer where the tool point must stay out of the solid the curve
+lies on: the half band). :mod:`~armpath.planning.bounds.band`
 proves how far for one middle configuration (Taylor along the joint line and a Lagrangian dual),
 and :mod:`~armpath.planning.bounds.band_trace` takes the largest over the family's cells at
 each layer where the family is sampled along the curve (each sample's limit widened by how far

@@ -1,6 +1,6 @@
-"""The band bound of a trace along a circle (issue 21): the least approach to the curve plus
-its traced length over the longest arc one command can follow, where each part of it lies, in
-the family.
+"""The band bound of a trace along a circle, or a curve that is locally one (issue 21): the
+least approach to the curve plus its traced length over the longest arc one command can
+follow, where each part of it lies, in the family.
 
 A pass keeps the tool point within the tolerance of the curve at every instant (the trace's
 deviation is that of the continuous tool path). Where the traced spans lie on a circle (to
@@ -26,6 +26,17 @@ neighbouring points along the curve): the same assumption the family's sampling 
 than between neighbouring samples. The least approach samples the family with the tolerance
 raised by half the spacing of its points, so every member at a point between them lies within
 a sample's cell.
+
+A curve that is no circle (an ellipse where a plane cuts a cone) is bounded by windows
+(:class:`LocalBand`): each layer's members against the circle fitted to the curve within
+:data:`WINDOW_HALF_MM` of the layer, the band taken wider by how far the curve strays from
+it there; the arcs the lemma gives between circle points are measured along the curve by its
+sharpest bend there (:func:`_curve_arcs`). A command's arc lies within the windows of the
+layers its middle lies between as long as the largest limit plus the widest gap between
+layers stays within the half-width (a longer arc would hold a part of that length, whose
+command broke its own layers' limit); the bound is given only then. Where the curve lies on
+the face of a solid the tool tip may touch but not enter, the band is also narrower inside
+the circle than out (the half band, :func:`_inner_half`).
 """
 
 from __future__ import annotations
@@ -42,6 +53,7 @@ from armpath.budget import check_time
 from armpath.geometry.curves import Curve
 from armpath.jit import njit
 from armpath.kinematics import tool_point_joints
+from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds.band import (
     Circle,
     TaylorBounds,
@@ -62,7 +74,7 @@ from armpath.planning.bounds.sampling import (
     nearest_row,
 )
 from armpath.planning.bounds.value import CommandBound
-from armpath.planning.trace.family import CurveFamily, fibonacci_directions
+from armpath.planning.trace.family import TOUCH_MM, CurveFamily, fibonacci_directions
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -92,10 +104,24 @@ LIMIT_SPLITS, SPLIT_GOAL = 6, 0.02
 #: nearest ones at the next (UR5 cell's 80 mm circle, points 5 mm apart, 300 then 2,000: 50.0
 #: commands in 79 s; 300, 800 and 2,000 95 s; 8 mm apart 46.3 in 36 s).
 APPROACH_LEVELS: tuple[int, ...] = (300,)
+#: Spacing (mm) of the points where the family is sampled to foretell the least approach
+#: (:func:`_nearest_member`).
+FORECAST_GAP_MM = 12.0
 #: Most points of the least approach (a longer curve gets them farther apart).
 APPROACH_POINTS_MAX = 120
 #: Boxes the branch and bound may bound for one configuration's limit when it is refined.
 REFINE_NODES = 200
+#: A curve that is no circle (an ellipse where a plane cuts a cone) is bounded by windows:
+#: each layer's commands against the circle fitted to the curve within this arc length (mm)
+#: either side of it, where the curve lies within :data:`WINDOW_FIT_SHARE` of the tolerance of
+#: it; layers at most :data:`WINDOW_GAP_MM` apart. A command's arc must lie within its layers'
+#: windows: the largest limit plus the largest gap must not exceed the half-width (else no
+#: band bound). UR5 cell's seam (an ellipse of radii 88-94 mm): +-30 mm lie within 0.013 mm of
+#: their circle; its limits 12-16 mm.
+WINDOW_HALF_MM, WINDOW_GAP_MM, WINDOW_FIT_SHARE = 36.0, 12.0, 0.25
+#: Spacing (mm) of the points of a window where the curve's bend and the surface's normal are
+#: read.
+WINDOW_STEP_MM = 1.0
 
 
 def fitted_circle(curve: Curve, spans_mm: list[tuple[float, float]]) -> tuple[Circle, float]:
@@ -124,6 +150,115 @@ def fitted_circle(curve: Curve, spans_mm: list[tuple[float, float]]) -> tuple[Ci
     height = (p - middle) @ normal
     deviation = float(np.max(np.hypot(rho - radius, height)))
     return Circle(middle + cx * e1 + cy * e2, normal, radius), deviation
+
+
+@dataclass(frozen=True)
+class LocalBand:
+    """The band about one part of the curve that :mod:`~armpath.planning.bounds.band`'s lemma
+    bounds commands in: the circle fitted there, how far (mm) the curve's points there lie from
+    it at most (``deviation_mm``), the band's half-width outside the circle (the tolerance
+    plus the deviation) and inside it (``inner_mm``: the same, or less where the tool point
+    must stay out of the solid the curve lies on: :func:`_inner_half`), the least radius of
+    the curve's bend there (mm: its arcs are measured by it) and the half-width of the window
+    (arc length mm; inf: the whole curve)."""
+
+    circle: Circle
+    deviation_mm: float
+    outer_mm: float
+    inner_mm: float
+    bend_radius_mm: float
+    window_mm: float
+
+    @classmethod
+    def of_circle(cls, circle: Circle, tolerance_mm: float) -> LocalBand:
+        """The band ``tolerance_mm`` either side of ``circle``, the curve being the circle."""
+        tol = float(tolerance_mm)
+        return cls(circle, 0.0, tol, tol, float(circle.radius_mm), math.inf)
+
+
+def _bend_radius(points: FloatArray) -> float:
+    """The least radius (mm) of the circles through each three neighbouring ``points (K,
+    3)`` (inf for a straight run): the sharpest the curve bends along them."""
+    a, b, c = points[:-2], points[1:-1], points[2:]
+    ab, bc, ca = (np.linalg.norm(u, axis=-1) for u in (b - a, c - b, a - c))
+    area2 = np.linalg.norm(np.cross(b - a, c - a), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        radius = ab * bc * ca / (2.0 * area2)
+    radius = radius[np.isfinite(radius)]
+    return float(radius.min()) if radius.size else math.inf
+
+
+def _inner_half(fam: CurveFamily, points: FloatArray, circle: Circle, tolerance_mm: float) -> float:
+    """How far inside ``circle`` (towards its axis, in its plane) a tool point within
+    ``tolerance_mm`` of one of the curve's ``points`` may lie, at most (mm): the tolerance,
+    or less where the tool point must stay out of the solid the curve lies on (its tip is
+    checked against it: the clearance rule lets it touch, not enter). There, within ``tol``
+    of a point ``p`` of a smooth face of normal curvature at most ``kappa``, a point outside
+    lies at most ``e = kappa tol^2 / 2`` behind the tangent plane (:data:`TOUCH_MM` added);
+    with ``alpha`` the outward normal's share along the circle's outward direction at ``p``,
+    it then lies at most ``(e + sqrt(1 - alpha^2) tol) / alpha`` inward of ``p``."""
+    surface = fam.surface
+    if surface is None or not np.any(fam.touch_pairs):
+        return tolerance_mm
+    kappa = surface.face_curvature_bound(points, tolerance_mm)
+    normal = surface.outward_normal(points)
+    b = circle.normal / np.linalg.norm(circle.normal)
+    a = points - circle.centre
+    a = a - (a @ b)[:, None] * b
+    outward = a / np.maximum(np.linalg.norm(a, axis=-1), 1e-300)[:, None]
+    alpha = np.einsum("ij,ij->i", normal, outward)
+    if not (np.all(np.isfinite(kappa)) and np.all(alpha > 0.0)):
+        return tolerance_mm
+    behind = kappa * tolerance_mm**2 / 2.0 + TOUCH_MM
+    inward = (behind + np.sqrt(np.maximum(1.0 - alpha**2, 0.0)) * tolerance_mm) / alpha
+    return float(min(tolerance_mm, inward.max()))
+
+
+def _band_over(
+    fam: CurveFamily,
+    spans_mm: list[tuple[float, float]],
+    tolerance_mm: float,
+    fit_share: float,
+    window_mm: float,
+) -> LocalBand | None:
+    """:class:`LocalBand` of the curve along ``spans_mm`` (arc lengths, mm): None where it
+    does not lie within ``fit_share`` of the tolerance of the circle fitted to it."""
+    circle, deviation = fitted_circle(fam.curve, spans_mm)
+    if not deviation <= fit_share * tolerance_mm:
+        return None
+    points = np.vstack([
+        np.asarray(fam.curve.at_arc_length(
+            np.linspace(a, b, max(math.ceil((b - a) / WINDOW_STEP_MM), 2) + 1)
+        ), dtype=np.float64)
+        for a, b in spans_mm
+    ])  # fmt: skip
+    inner = _inner_half(fam, points, circle, tolerance_mm)
+    return LocalBand(
+        circle,
+        deviation,
+        tolerance_mm + deviation,
+        inner + deviation,
+        _bend_radius(points) if points.shape[0] >= 3 else circle.radius_mm,
+        window_mm,
+    )
+
+
+def _curve_arcs(arcs_mm: FloatArray, band: LocalBand) -> FloatArray:
+    """The lemma's arcs of the band's circle (mm, between the circle points nearest a
+    command's start and end: ``2 R asin(x / 2R)``, ``x`` the chord plus twice the band)
+    measured along the curve instead: the curve points nearest the two lie at most ``x``
+    apart, and along a curve that bends at most to radius ``Rb`` points ``x`` apart are at
+    most ``2 Rb asin(x / 2Rb)`` of it apart (Schur's comparison: inf where that reaches half
+    round)."""
+    arcs = np.asarray(arcs_mm, dtype=np.float64)
+    R, Rb = float(band.circle.radius_mm), float(band.bend_radius_mm)
+    if not math.isfinite(Rb):
+        return arcs
+    with np.errstate(invalid="ignore"):
+        chord = 2.0 * R * np.sin(np.minimum(arcs, math.pi * R) / (2.0 * R))
+        x = chord / (2.0 * Rb)
+        out = np.where(x < 1.0, 2.0 * Rb * np.arcsin(np.minimum(x, 1.0)), math.inf)
+    return np.asarray(np.where(np.isfinite(arcs) & (arcs > 0.0), out, arcs))
 
 
 @njit(cache=True)
@@ -201,6 +336,7 @@ class FamilyLimit:
     layer_s_mm: FloatArray = field(default_factory=lambda: np.zeros(0))
     layer_span: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     layer_arc_mm: FloatArray = field(default_factory=lambda: np.zeros(0))
+    layer_bands: tuple[LocalBand, ...] = ()
 
 
 def _cell_limit(own: float, neighbours: FloatArray) -> float:
@@ -225,6 +361,7 @@ class _LimitLayer:
     layer: Layer
     near: IntArray
     coarse: FloatArray
+    band: LocalBand
 
 
 def _limit_layer(
@@ -232,13 +369,12 @@ def _limit_layer(
     s_mm: float,
     span: int,
     acc: _Samples,
-    circle: Circle,
-    tolerance_mm: float,
+    band: LocalBand,
     tb: TaylorBounds,
     tip: BoolArray,
 ) -> _LimitLayer:
     """:class:`_LimitLayer` of the members ``acc`` sampled at ``s_mm`` (``tip``: the joints
-    that move the tool point, ``tb`` their Taylor bounds)."""
+    that move the tool point, ``tb`` their Taylor bounds), their limits in ``band``."""
     layer, _, _, triangles = sampler._filtered(acc)
     nb_ptr, nb, _ = _delaunay_neighbours(acc.dirs, acc.caps)
     assert layer.direction is not None
@@ -249,14 +385,31 @@ def _limit_layer(
         layer.u, layer.direction, dir_ptr.astype(np.int64), nb_ptr, nb, sampler.period,
         BRANCH_GAP, sampler.turns > 1,
     )  # fmt: skip
-    coarse = arc_limits(sampler.fam.arm, layer.q, circle, tolerance_mm, tb, tip, anywhere=True)
-    return _LimitLayer(s_mm, span, acc, triangles, layer, near, coarse)
+    coarse = _curve_arcs(
+        arc_limits(
+            sampler.fam.arm, layer.q, band.circle, band.outer_mm, tb, tip, anywhere=True,
+            inner_mm=band.inner_mm,
+        ),
+        band,
+    )  # fmt: skip
+    return _LimitLayer(s_mm, span, acc, triangles, layer, near, coarse, band)
+
+
+def _band_limit(
+    arm: SerialArm, q: FloatArray, band: LocalBand, tb: TaylorBounds, tip: BoolArray, nodes: int
+) -> float:
+    """:func:`~armpath.planning.bounds.band.command_arc_limit` of ``q`` in ``band`` (its middle
+    anywhere in it), along the curve (:func:`_curve_arcs`)."""
+    limit = command_arc_limit(
+        arm, q, band.circle, band.outer_mm, tb, tip, nodes=nodes, anywhere=True,
+        inner_mm=band.inner_mm,
+    )  # fmt: skip
+    return float(_curve_arcs(np.array([limit]), band)[0])
 
 
 def family_arc_limit(
     sampler: FamilySampler,
-    circle: Circle,
-    tolerance_mm: float,
+    band_at: Callable[[float], LocalBand],
     s_layers: list[FloatArray],
     cyclic: bool,
     directions: int = LIMIT_DIRECTIONS,
@@ -264,7 +417,8 @@ def family_arc_limit(
     splits: int = LIMIT_SPLITS,
 ) -> FamilyLimit:
     """The largest limit (:func:`~armpath.planning.bounds.band.command_arc_limit`, its middle
-    anywhere within ``tolerance_mm`` of ``circle``) over the cells of the family sampled along
+    anywhere in the band ``band_at`` gives at the layer's arc length, along the curve:
+    :func:`_band_limit`) over the cells of the family sampled along
     ``directions`` tool directions at the arc lengths of each span's layers ``s_layers`` (mm,
     ascending; ``cyclic``: one span round a closed curve, its last layer next to its first).
     Each sample's cell limit is its own widened by how far it differs from its neighbours
@@ -290,7 +444,7 @@ def family_arc_limit(
     def sampled(s: float, span: int) -> _LimitLayer:
         check_time("bounding the commands along the band")
         acc = sampler.sampled(fam.frame(s)[0], dirs, _allowed_at(fam, s), levels=0)[0]
-        return _limit_layer(sampler, s, span, acc, circle, tolerance_mm, tb, tip)
+        return _limit_layer(sampler, s, span, acc, band_at(s), tb, tip)
 
     for k, positions in enumerate(s_layers):
         layers += [sampled(float(s), k) for s in positions]
@@ -319,13 +473,18 @@ def family_arc_limit(
         q = np.vstack([lay.layer.q for lay in layers])
         coarse = np.concatenate([lay.coarse for lay in layers])
 
-        def refined(i: int, q: FloatArray = q, coarse: FloatArray = coarse) -> float:
-            key = q[i].tobytes()
+        def refined(
+            i: int,
+            q: FloatArray = q,
+            coarse: FloatArray = coarse,
+            offsets: IntArray = offsets,
+            bands: list[LocalBand] = [lay.band for lay in layers],  # noqa: B006 - this split's
+        ) -> float:
+            band = bands[int(np.searchsorted(offsets, i, side="right") - 1)]
+            key = q[i].tobytes() + band.circle.centre.tobytes()
             if key not in fine:
                 check_time("bounding the commands along the band")
-                limit = command_arc_limit(
-                    arm, q[i], circle, tolerance_mm, tb, tip, nodes=nodes, anywhere=True
-                )
+                limit = _band_limit(arm, q[i], band, tb, tip, nodes)
                 fine[key] = min(float(coarse[i]), limit)
             return fine[key]
 
@@ -345,9 +504,7 @@ def family_arc_limit(
             refine[int(lay.layer.direction[best_i - offsets[li]])] = True
             E = fam.frame(lay.s_mm)[0]
             acc = sampler.split(lay.acc, E, refine, lay.triangles, _allowed_at(fam, lay.s_mm))
-            layers[li] = _limit_layer(
-                sampler, lay.s_mm, lay.span, acc, circle, tolerance_mm, tb, tip
-            )
+            layers[li] = _limit_layer(sampler, lay.s_mm, lay.span, acc, lay.band, tb, tip)
         else:  # a layer halfway to the neighbouring one
             lj = int(np.searchsorted(offsets, row[k], side="right") - 1)
             a, b = lay.s_mm, layers[lj].s_mm
@@ -359,11 +516,10 @@ def family_arc_limit(
     # the largest cell of each layer (the largest's refinements kept)
     groups = np.repeat(np.arange(len(layers)), [lay.layer.size for lay in layers])
     per_layer = _largest_cells(coarse, neighbours, refined, groups, len(layers))[0]
-    key = q[best_i].tobytes()
     return FamilyLimit(
-        best, q[best_i], layers[li].s_mm, fine[key], samples, len(fine),
+        best, q[best_i], layers[li].s_mm, own, samples, len(fine),
         np.array([lay.s_mm for lay in layers]), np.array([lay.span for lay in layers]),
-        per_layer,
+        per_layer, tuple(lay.band for lay in layers),
     )  # fmt: skip
 
 
@@ -502,6 +658,28 @@ def _points_along(spans_mm: list[tuple[float, float]], gap_mm: float) -> tuple[F
     return np.concatenate(out), gap
 
 
+def _nearest_member(
+    fam: CurveFamily, q_start: FloatArray, spans_mm: list[tuple[float, float]]
+) -> float:
+    """The largest-joint distance (commands) from ``q_start`` to the nearest member of the
+    family sampled along :data:`APPROACH_LEVELS`' first count of tool directions at points
+    :data:`FORECAST_GAP_MM` apart along the spans, the samples' own (no sampling errors, no
+    blow-ups): what the least approach comes to at most, about (a forecast, not a bound)."""
+    s_all, _ = _points_along(spans_mm, FORECAST_GAP_MM)
+    sampler = FamilySampler(fam, 0.0, APPROACH_LEVELS[0], q_start, blow_ups=False)
+    nearest = math.inf
+    for s in s_all:
+        check_time("bounding the approach to the band")
+        layer = sampler.layer(
+            fam.frame(float(s))[0], sampler.base, _allowed_at(fam, float(s)), levels=0
+        )
+        if layer.size:
+            nearest = min(
+                nearest, float(sampler.distance_from(q_start, layer.without_errors()).min())
+            )
+    return nearest
+
+
 def least_approach(
     fam: CurveFamily,
     q_start: FloatArray,
@@ -552,20 +730,134 @@ def least_approach(
 
 
 def _limit_layers(
-    spans_mm: list[tuple[float, float]], circle: Circle, cyclic: bool
+    spans_mm: list[tuple[float, float]], gap_mm: float, cyclic: bool
 ) -> list[FloatArray]:
-    """Arc lengths (mm) of each span's layers for the limit: :data:`LIMIT_LAYERS` round a
-    whole circle, a span its share (at least two, at its ends; round a closed curve evenly
-    from its start)."""
-    circumference = 2.0 * math.pi * circle.radius_mm
+    """Arc lengths (mm) of each span's layers for the limit, at most ``gap_mm`` apart: at
+    least two, at its ends (round a closed curve evenly from its start, at least three)."""
     if cyclic:
-        (a, b), count = spans_mm[0], LIMIT_LAYERS
+        ((a, b),) = spans_mm
+        count = max(math.ceil((b - a) / gap_mm - 1e-9), 3)
         return [a + (b - a) * np.arange(count) / count]
     out = []
     for a, b in spans_mm:
-        count = max(math.ceil(LIMIT_LAYERS * (b - a) / circumference) + 1, 2)
+        count = max(math.ceil((b - a) / gap_mm - 1e-9) + 1, 2)
         out.append(np.linspace(a, b, count))
     return out
+
+
+class _NoBandError(Exception):
+    """A window of the curve lies on no circle closely enough for the lemma."""
+
+
+def _widest_gap(limit: FamilyLimit, cyclic: bool, length_mm: float) -> float:
+    """The largest arc length (mm) between neighbouring layers of a span of ``limit``."""
+    widest = 0.0
+    for span in np.unique(limit.layer_span):
+        x = np.sort(limit.layer_s_mm[limit.layer_span == span])
+        if cyclic:
+            x = np.sort(np.mod(x - x[0], length_mm))
+            x = np.append(x, length_mm)
+        if x.size > 1:
+            widest = max(widest, float(np.diff(x).max()))
+    return widest
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What the band bound of some spans is computed with: the Taylor bounds of the joints
+    that move the tool point (``tip``), the band at an arc length (``band_at``; raises
+    :class:`_NoBandError` where there is none), the layers' largest gap (mm) and whether the
+    spans are bounded by windows."""
+
+    tb: TaylorBounds
+    tip: BoolArray
+    band_at: Callable[[float], LocalBand]
+    gap_mm: float
+    windowed: bool
+
+
+def _setup(
+    fam: CurveFamily, spans_mm: list[tuple[float, float]], tolerance_mm: float
+) -> _Setup | None:
+    """:class:`_Setup` of ``spans_mm``: one circle where they lie within :data:`FIT_SHARE` of
+    the tolerance of it, else windows; None where the lemma does not apply to that circle."""
+    arm, curve = fam.arm, fam.curve
+    tip = tool_point_joints(arm)
+    tb = taylor_bounds(arm, tip)
+    whole = _band_over(fam, spans_mm, tolerance_mm, FIT_SHARE, math.inf)
+    if whole is not None:
+        if not lemma_applies(arm, whole.circle, whole.outer_mm, tb):
+            return None
+        gap = 2.0 * math.pi * whole.circle.radius_mm / LIMIT_LAYERS
+        return _Setup(tb, tip, lambda _s: whole, gap, False)
+
+    def band_at(s: float) -> LocalBand:
+        a, b = s - WINDOW_HALF_MM, s + WINDOW_HALF_MM
+        if not curve.closed:
+            a, b = max(a, 0.0), min(b, curve.length)
+        band = _band_over(fam, [(a, b)], tolerance_mm, WINDOW_FIT_SHARE, WINDOW_HALF_MM)
+        if band is None or not lemma_applies(arm, band.circle, band.outer_mm, tb):
+            raise _NoBandError
+        return band
+
+    return _Setup(tb, tip, band_at, WINDOW_GAP_MM, True)
+
+
+def _ends(bands: list[LocalBand]) -> float:
+    """The arc a tool point within the band covers beyond the curve point nearest it, at
+    either end of a span, twice (mm)."""
+    outer = max(b.outer_mm for b in bands)
+    bend = min(min(b.bend_radius_mm, b.circle.radius_mm) for b in bands)
+    return 4.0 * bend * math.asin(min(outer / bend, 1.0))
+
+
+def _forecast(
+    fam: CurveFamily,
+    q_start: FloatArray,
+    spans_mm: list[tuple[float, float]],
+    loop: bool,
+    family: CommandBound,
+    setup: _Setup,
+) -> tuple[float, float]:
+    """:func:`band_forecast`'s two parts, approach and along (-inf where the family bound
+    has no path to foretell the along part from); raises :class:`_NoBandError`."""
+    approach = min(family.parts.get("approach", math.inf), _nearest_member(fam, q_start, spans_mm))
+    guide_s, guide_q = family.guide_s_mm, family.guide_q
+    if guide_q is None or guide_s is None or not 0 < len(guide_q) == len(guide_s):
+        return approach, -math.inf
+    bands = [setup.band_at(float(x)) for x in guide_s]
+    path = np.array([
+        _band_limit(fam.arm, q, band, setup.tb, setup.tip, REFINE_NODES)
+        for q, band in zip(guide_q, bands, strict=True)
+    ])  # fmt: skip
+    ends = _ends(bands) / 2.0
+    return approach, _along_at_most(path, guide_s, spans_mm, ends, loop, fam.curve.length)
+
+
+def band_forecast(
+    fam: CurveFamily,
+    q_start: FloatArray,
+    spans_mm: list[tuple[float, float]],
+    tolerance_mm: float,
+    loop: bool,
+    family: CommandBound,
+) -> float:
+    """What :func:`band_trace_bound` comes to at most, about, foretold cheaply from the
+    ``family`` bound's path (a forecast, not a bound; -inf where the band bound does not
+    apply or the family bound has no path): the least approach at most the family bound's
+    approach part, or the distance to the nearest member of the family sampled coarsely
+    along the spans where that is less (:func:`_nearest_member`: the part counts the approach
+    to where its pass begins, which may lie farther: round the UR5 cell's seam 75 commands
+    against a least approach of 53), plus the along part foretold from the limits at the
+    path's members (:func:`_along_at_most`)."""
+    setup = _setup(fam, spans_mm, tolerance_mm)
+    if setup is None:
+        return -math.inf
+    try:
+        approach, along = _forecast(fam, q_start, spans_mm, loop, family, setup)
+    except _NoBandError:
+        return -math.inf
+    return math.ceil(approach - 1e-9) + along
 
 
 def band_trace_bound(
@@ -578,64 +870,79 @@ def band_trace_bound(
 ) -> CommandBound | None:
     """The band bound (see the module) of any plan whose passes trace ``spans_mm`` (arc
     lengths, mm) within ``tolerance_mm`` from ``q_start`` (rad); ``loop``: one span round
-    the whole closed curve. None where the spans do not lie on a circle (within
-    :data:`FIT_SHARE` of the tolerance), where the lemma does not apply to it (too tight, or
-    an arm not measured in mm) or where the family has no member on them; and, given the
-    ``family`` bound (:func:`~armpath.planning.bounds.trace_bound`), where this one would not
-    be higher: its along part foretold from the limits at the family bound's own path
-    (:func:`_along_at_most`) or computed from the family's, with the family bound's approach
-    part (the least approach is at most about that), is no more than it."""
-    arm = fam.arm
-    circle, deviation = fitted_circle(fam.curve, spans_mm)
-    if not deviation <= FIT_SHARE * tolerance_mm:
+    the whole closed curve. The spans are bounded against one circle where they lie within
+    :data:`FIT_SHARE` of the tolerance of it; otherwise each layer against the circle fitted
+    to the curve within :data:`WINDOW_HALF_MM` of it (:class:`LocalBand`), which must lie
+    within :data:`WINDOW_FIT_SHARE` of the tolerance of it, and the longest limit plus the
+    widest gap between layers within that half-width (a command's arc then lies within the
+    windows of the layers it lies between: a longer one would hold a shorter part that broke
+    its own layers' limit). None where that fails, where the lemma does not apply (too
+    tight, or an arm not measured in mm) or where the family has no member on the spans;
+    and, given the ``family`` bound (:func:`~armpath.planning.bounds.trace_bound`), where
+    this one would not be higher: foretold (:func:`band_forecast`), or its along part
+    computed with the approach foretold, or both computed."""
+    curve = fam.curve
+    setup = _setup(fam, spans_mm, tolerance_mm)
+    if setup is None:
         return None
-    band = tolerance_mm + deviation
-    tip = tool_point_joints(arm)
-    tb = taylor_bounds(arm, tip)
-    if not lemma_applies(arm, circle, band, tb):
-        return None
-    ends = 4.0 * circle.radius_mm * math.asin(min(band / circle.radius_mm, 1.0))
+    approach_at_most = -math.inf
 
-    def lower(along: float) -> bool:  # whether the band bound would be no higher
-        if family is None:
-            return False
-        approach = math.ceil(family.parts.get("approach", 0.0) - 1e-9)
-        return approach + along <= family.value
+    def lower(along: float, approach: float) -> bool:
+        # whether the band bound would be no higher than the family's
+        return family is not None and math.ceil(approach - 1e-9) + along <= family.value
 
-    guide_s = None if family is None else family.guide_s_mm
-    guide_q = None if family is None else family.guide_q
-    if guide_q is not None and guide_s is not None and 0 < len(guide_q) == len(guide_s):
-        path = np.array([
-            command_arc_limit(arm, q, circle, band, tb, tip, REFINE_NODES, anywhere=True)
-            for q in guide_q
-        ])  # fmt: skip
-        if lower(_along_at_most(path, guide_s, spans_mm, ends / 2.0, loop, fam.curve.length)):
-            return None
-    sampler = FamilySampler(fam, tolerance_mm, LIMIT_DIRECTIONS, q_start)
-    limit = family_arc_limit(
-        sampler, circle, band, _limit_layers(spans_mm, circle, loop), loop, LIMIT_DIRECTIONS,
-        splits=LIMIT_SPLITS,
-    )  # fmt: skip
-    if limit.samples == 0 or not math.isfinite(limit.arc_mm) or not limit.arc_mm > ends:
+    try:
+        if family is not None:
+            approach_at_most, along_at_most = _forecast(fam, q_start, spans_mm, loop, family, setup)
+            if math.isfinite(along_at_most) and lower(along_at_most, approach_at_most):
+                return None
+        sampler = FamilySampler(fam, tolerance_mm, LIMIT_DIRECTIONS, q_start)
+        limit = family_arc_limit(
+            sampler, setup.band_at, _limit_layers(spans_mm, setup.gap_mm, loop), loop,
+            LIMIT_DIRECTIONS, splits=LIMIT_SPLITS,
+        )  # fmt: skip
+    except _NoBandError:
         return None
-    along = along_commands(limit, spans_mm, ends / 2.0, loop, fam.curve.length)
-    if lower(along):
+    if limit.samples == 0 or not math.isfinite(limit.arc_mm):
+        return None
+    ends = _ends(list(limit.layer_bands))
+    widest_gap = _widest_gap(limit, loop, curve.length)
+    windowed = setup.windowed
+    if not limit.arc_mm > ends or (windowed and limit.arc_mm + widest_gap > WINDOW_HALF_MM):
+        return None
+    along = along_commands(limit, spans_mm, ends / 2.0, loop, curve.length)
+    if lower(along, approach_at_most):
         return None
     approach = least_approach(fam, q_start, spans_mm, tolerance_mm)
-    if not math.isfinite(approach):
+    if not math.isfinite(approach) or lower(along, approach):
         return None
     value = math.ceil(approach - 1e-9) + along
     finite = limit.layer_arc_mm[np.isfinite(limit.layer_arc_mm)]
     least = float(finite.min()) if finite.size else limit.arc_mm
+    deviation = max(b.deviation_mm for b in limit.layer_bands)
+    radii = [b.circle.radius_mm for b in limit.layer_bands]
+    inner = [b.inner_mm - b.deviation_mm for b in limit.layer_bands]
+    if windowed:
+        where = (
+            f"each part of the spans lies within {deviation:.2g} mm of the circle fitted to the "
+            f"curve within {WINDOW_HALF_MM:g} mm of it (radii {min(radii):.4g}-{max(radii):.4g} "
+            "mm)"
+        )
+    else:
+        where = f"the spans lie within {deviation:.2g} mm of a circle of radius {radii[0]:.4g} mm"
+    if min(inner) < tolerance_mm:
+        where += (
+            f", and the tool point, kept out of the {fam.surface.name if fam.surface else ''} "
+            f"it lies on, at most {min(inner):.3g}-{max(inner):.3g} mm inside it (the half band)"
+        )
     return CommandBound(
         proven=sampler.covers_family,
         commands=math.ceil(value - 1e-9),
         value=value,
         method=(
             "least approach to the band plus the traced length over the longest arc one command "
-            f"can follow within it: the spans lie within {deviation:.2g} mm of a circle of radius "
-            f"{circle.radius_mm:.4g} mm; a command's middle configuration anywhere in the family "
-            f"follows at most {limit.arc_mm:.3f} mm of it, at some points along it "
+            f"can follow within it: {where}; a command's middle configuration anywhere in the "
+            f"family follows at most {limit.arc_mm:.3f} mm of it, at some points along it "
             f"{least:.3f} mm (Taylor along the joint line and a Lagrangian dual per sampled "
             "member, widened by how far neighbouring members differ), each part of the spans "
             "counted over the largest limit of the members that can cover it; the approach the "
@@ -644,8 +951,10 @@ def band_trace_bound(
         ),
         parts={"approach": float(math.ceil(approach - 1e-9)), "along": along},
         sampling={
-            "circle_radius_mm": circle.radius_mm,
+            "circle_radius_mm": min(radii),
             "circle_deviation_mm": deviation,
+            "band_window_mm": WINDOW_HALF_MM if windowed else math.inf,
+            "band_inner_mm": max(inner),
             "command_arc_limit_mm": limit.arc_mm,
             "command_arc_limit_least_mm": least,
             "least_approach_commands": approach,
