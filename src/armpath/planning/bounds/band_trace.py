@@ -848,7 +848,7 @@ def band_forecast(
     approach part, or the distance to the nearest member of the family sampled coarsely
     along the spans where that is less (:func:`_nearest_member`: the part counts the approach
     to where its pass begins, which may lie farther: round the UR5 cell's seam 75 commands
-    against a least approach of 53), plus the along part foretold from the limits at the
+    against a least approach of 47), plus the along part foretold from the limits at the
     path's members (:func:`_along_at_most`)."""
     setup = _setup(fam, spans_mm, tolerance_mm)
     if setup is None:

@@ -184,9 +184,9 @@ def trace_bound(
     as the sampling gets finer. ``through_openings``: the approach to a point inside a hollow
     obstacle takes at least its way through one of the obstacle's openings
     (:mod:`~armpath.planning.bounds.passage`); False: the direct approach only.
-    ``after_first``: called with the bound after the first round; what it returns (commands,
-    another bound) ends the search once the path through clear samples costs no more (the
-    family's bound cannot then pass it).
+    ``after_first``: called with the bound after the first round; what it returns (commands:
+    another bound, or what one is foretold to come to) ends the search once the path through
+    clear samples costs no more (the family's bound cannot then pass it).
     """
     sampler = FamilySampler(fam, tolerance_mm, directions, q_start)
     rounds = search_rounds(max_samples) if rounds is None else rounds
