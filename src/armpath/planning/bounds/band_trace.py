@@ -30,13 +30,13 @@ a sample's cell.
 A curve that is no circle (an ellipse where a plane cuts a cone) is bounded by windows
 (:class:`LocalBand`): each layer's members against the circle fitted to the curve within
 :data:`WINDOW_HALF_MM` of the layer, the band taken wider by how far the curve strays from
-it there; the arcs the lemma gives between circle points are measured along the curve by its
-sharpest bend there (:func:`_curve_arcs`). A command's arc lies within the windows of the
-layers its middle lies between as long as the largest limit plus the widest gap between
-layers stays within the half-width (a longer arc would hold a part of that length, whose
-command broke its own layers' limit); the bound is given only then. Where the curve lies on
-the face of a solid the tool tip may touch but not enter, the band is also narrower inside
-the circle than out (the half band, :func:`_inner_half`).
+it there; the arcs the lemma gives between circle points are measured along the curve by
+how it runs against the circle there (:func:`_curve_arcs`). A command's arc lies within the
+windows of the layers its middle lies between as long as the largest limit plus the widest
+gap between layers stays within the half-width (a longer arc would hold a part of that
+length, whose command broke its own layers' limit); the bound is given only then. Where the
+curve lies on the face of a solid the tool tip may touch but not enter, the band is also
+narrower inside the circle than out (the half band, :func:`_inner_half`).
 """
 
 from __future__ import annotations
@@ -116,8 +116,9 @@ REFINE_NODES = 200
 #: either side of it, where the curve lies within :data:`WINDOW_FIT_SHARE` of the tolerance of
 #: it; layers at most :data:`WINDOW_GAP_MM` apart. A command's arc must lie within its layers'
 #: windows: the largest limit plus the largest gap must not exceed the half-width (else no
-#: band bound). UR5 cell's seam (an ellipse of radii 88-94 mm): +-30 mm lie within 0.013 mm of
-#: their circle; its limits 12-16 mm.
+#: band bound). UR5 cell's seam (an ellipse of radii 88-94 mm): +-36 mm lie within 0.023 mm
+#: of their circle, its limits 14.3-22.4 mm; +-30 mm within 0.011, but the largest limit,
+#: 21.6 mm, and the widest gap, 11.9, do not fit within 30.
 WINDOW_HALF_MM, WINDOW_GAP_MM, WINDOW_FIT_SHARE = 36.0, 12.0, 0.25
 #: Spacing (mm) of the points of a window where the curve's bend and the surface's normal are
 #: read.
@@ -158,34 +159,55 @@ class LocalBand:
     bounds commands in: the circle fitted there, how far (mm) the curve's points there lie from
     it at most (``deviation_mm``), the band's half-width outside the circle (the tolerance
     plus the deviation) and inside it (``inner_mm``: the same, or less where the tool point
-    must stay out of the solid the curve lies on: :func:`_inner_half`), the least radius of
-    the curve's bend there (mm: its arcs are measured by it) and the half-width of the window
-    (arc length mm; inf: the whole curve)."""
+    must stay out of the solid the curve lies on: :func:`_inner_half`), how the curve's arcs
+    there compare with the circle's (``stretch``, ``slop_mm``: :func:`_curve_arcs`) and the
+    half-width of the window (arc length mm; inf: the whole curve)."""
 
     circle: Circle
     deviation_mm: float
     outer_mm: float
     inner_mm: float
-    bend_radius_mm: float
+    stretch: float
+    slop_mm: float
     window_mm: float
 
     @classmethod
     def of_circle(cls, circle: Circle, tolerance_mm: float) -> LocalBand:
         """The band ``tolerance_mm`` either side of ``circle``, the curve being the circle."""
         tol = float(tolerance_mm)
-        return cls(circle, 0.0, tol, tol, float(circle.radius_mm), math.inf)
+        return cls(circle, 0.0, tol, tol, 1.0, 0.0, math.inf)
 
 
-def _bend_radius(points: FloatArray) -> float:
-    """The least radius (mm) of the circles through each three neighbouring ``points (K,
-    3)`` (inf for a straight run): the sharpest the curve bends along them."""
-    a, b, c = points[:-2], points[1:-1], points[2:]
-    ab, bc, ca = (np.linalg.norm(u, axis=-1) for u in (b - a, c - b, a - c))
-    area2 = np.linalg.norm(np.cross(b - a, c - a), axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        radius = ab * bc * ca / (2.0 * area2)
-    radius = radius[np.isfinite(radius)]
-    return float(radius.min()) if radius.size else math.inf
+def _stretch_and_slop(
+    points: FloatArray, s_mm: FloatArray, circle: Circle, tolerance_mm: float, outer_mm: float
+) -> tuple[float, float]:
+    """How the curve's arcs compare with its fitted circle's, from its ``points (K, 3)`` at
+    arc lengths ``s_mm``: the most arc length it runs per arc of the circle between the
+    angles (about its centre, in its plane) of neighbouring points (inf where it does not
+    wind one way round the centre); and how far (mm of the circle's arc) the curve point
+    nearest a point within ``tolerance_mm`` of it may lie round the centre from that point:
+    ``2 R asin(tol sin(psi) / (R - outer))`` either way, ``psi`` the largest angle between
+    the curve's chords and the circle's tangent (the nearest point lies along the curve's
+    normal: radial where the curve follows the circle, at most ``psi`` off it at a polygon's
+    corner)."""
+    R = float(circle.radius_mm)
+    b = circle.normal / np.linalg.norm(circle.normal)
+    e1 = np.cross(b, [1.0, 0.0, 0.0] if abs(b[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(b, e1)
+    d = points - circle.centre
+    phi = np.unwrap(np.arctan2(d @ e2, d @ e1))
+    turn = np.diff(phi)
+    if not (np.all(turn > 0.0) or np.all(turn < 0.0)):
+        return math.inf, math.inf
+    stretch = float(np.max(np.diff(s_mm) / (R * np.abs(turn))))
+    chord = np.diff(points, axis=0)
+    chord /= np.linalg.norm(chord, axis=1)[:, None]
+    middle = 0.5 * (phi[1:] + phi[:-1])
+    tangent = -np.sin(middle)[:, None] * e1 + np.cos(middle)[:, None] * e2
+    sin_psi = np.sqrt(np.clip(1.0 - np.einsum("ij,ij->i", chord, tangent) ** 2, 0.0, 1.0))
+    x = tolerance_mm * float(sin_psi.max()) / max(R - outer_mm, 1e-300)
+    return stretch, 2.0 * R * math.asin(min(x, 1.0))
 
 
 def _inner_half(fam: CurveFamily, points: FloatArray, circle: Circle, tolerance_mm: float) -> float:
@@ -226,38 +248,29 @@ def _band_over(
     circle, deviation = fitted_circle(fam.curve, spans_mm)
     if not deviation <= fit_share * tolerance_mm:
         return None
-    points = np.vstack([
-        np.asarray(fam.curve.at_arc_length(
-            np.linspace(a, b, max(math.ceil((b - a) / WINDOW_STEP_MM), 2) + 1)
-        ), dtype=np.float64)
-        for a, b in spans_mm
-    ])  # fmt: skip
-    inner = _inner_half(fam, points, circle, tolerance_mm)
-    return LocalBand(
-        circle,
-        deviation,
-        tolerance_mm + deviation,
-        inner + deviation,
-        _bend_radius(points) if points.shape[0] >= 3 else circle.radius_mm,
-        window_mm,
-    )
+    outer = tolerance_mm + deviation
+    stretch, slop, inner = 0.0, 0.0, 0.0
+    for a, b in spans_mm:
+        s = np.linspace(a, b, max(math.ceil((b - a) / WINDOW_STEP_MM), 2) + 1)
+        points = np.asarray(fam.curve.at_arc_length(s), dtype=np.float64)
+        span_stretch, span_slop = _stretch_and_slop(points, s, circle, tolerance_mm, outer)
+        stretch, slop = max(stretch, span_stretch), max(slop, span_slop)
+        inner = max(inner, _inner_half(fam, points, circle, tolerance_mm))
+    if not math.isfinite(stretch):
+        return None
+    return LocalBand(circle, deviation, outer, inner + deviation, stretch, slop, window_mm)
 
 
 def _curve_arcs(arcs_mm: FloatArray, band: LocalBand) -> FloatArray:
     """The lemma's arcs of the band's circle (mm, between the circle points nearest a
-    command's start and end: ``2 R asin(x / 2R)``, ``x`` the chord plus twice the band)
-    measured along the curve instead: the curve points nearest the two lie at most ``x``
-    apart, and along a curve that bends at most to radius ``Rb`` points ``x`` apart are at
-    most ``2 Rb asin(x / 2Rb)`` of it apart (Schur's comparison: inf where that reaches half
-    round)."""
+    command's start and end) measured along the curve, between the curve points nearest
+    them: those lie round the centre at most ``band.slop_mm`` (of the circle's arc) beyond
+    the circle points either way, and the curve runs at most ``band.stretch`` times the
+    circle's arc between them (:func:`_stretch_and_slop`)."""
     arcs = np.asarray(arcs_mm, dtype=np.float64)
-    R, Rb = float(band.circle.radius_mm), float(band.bend_radius_mm)
-    if not math.isfinite(Rb):
+    if band.stretch == 1.0 and band.slop_mm == 0.0:
         return arcs
-    with np.errstate(invalid="ignore"):
-        chord = 2.0 * R * np.sin(np.minimum(arcs, math.pi * R) / (2.0 * R))
-        x = chord / (2.0 * Rb)
-        out = np.where(x < 1.0, 2.0 * Rb * np.arcsin(np.minimum(x, 1.0)), math.inf)
+    out = band.stretch * (arcs + band.slop_mm)
     return np.asarray(np.where(np.isfinite(arcs) & (arcs > 0.0), out, arcs))
 
 
@@ -804,11 +817,16 @@ def _setup(
 
 
 def _ends(bands: list[LocalBand]) -> float:
-    """The arc a tool point within the band covers beyond the curve point nearest it, at
-    either end of a span, twice (mm)."""
-    outer = max(b.outer_mm for b in bands)
-    bend = min(min(b.bend_radius_mm, b.circle.radius_mm) for b in bands)
-    return 4.0 * bend * math.asin(min(outer / bend, 1.0))
+    """The arc of the curve a tool point within the tolerance covers beyond the curve point
+    nearest it, at either end of a span, twice (mm): two points of it within the tolerance of
+    one tool point lie at most ``2 asin(tol / (R - deviation))`` apart round the centre, and
+    the curve runs at most ``stretch`` times the circle's arc between them."""
+    out = 0.0
+    for b in bands:
+        R, tol = float(b.circle.radius_mm), b.outer_mm - b.deviation_mm
+        x = min(tol / max(R - b.deviation_mm, 1e-300), 1.0)
+        out = max(out, 4.0 * b.stretch * R * math.asin(x))
+    return out
 
 
 def _forecast(
