@@ -779,14 +779,12 @@ def _widest_gap(limit: FamilyLimit, cyclic: bool, length_mm: float) -> float:
 class _Setup:
     """What the band bound of some spans is computed with: the Taylor bounds of the joints
     that move the tool point (``tip``), the band at an arc length (``band_at``; raises
-    :class:`_NoBandError` where there is none), the layers' largest gap (mm) and whether the
-    spans are bounded by windows."""
+    :class:`_NoBandError` where there is none) and the layers' largest gap (mm)."""
 
     tb: TaylorBounds
     tip: BoolArray
     band_at: Callable[[float], LocalBand]
     gap_mm: float
-    windowed: bool
 
 
 def _setup(
@@ -802,7 +800,7 @@ def _setup(
         if not lemma_applies(arm, whole.circle, whole.outer_mm, tb):
             return None
         gap = 2.0 * math.pi * whole.circle.radius_mm / LIMIT_LAYERS
-        return _Setup(tb, tip, lambda _s: whole, gap, False)
+        return _Setup(tb, tip, lambda _s: whole, gap)
 
     def band_at(s: float) -> LocalBand:
         a, b = s - WINDOW_HALF_MM, s + WINDOW_HALF_MM
@@ -813,7 +811,7 @@ def _setup(
             raise _NoBandError
         return band
 
-    return _Setup(tb, tip, band_at, WINDOW_GAP_MM, True)
+    return _Setup(tb, tip, band_at, WINDOW_GAP_MM)
 
 
 def _ends(bands: list[LocalBand]) -> float:
@@ -923,10 +921,10 @@ def band_trace_bound(
         return None
     if limit.samples == 0 or not math.isfinite(limit.arc_mm):
         return None
-    ends = _ends(list(limit.layer_bands))
-    widest_gap = _widest_gap(limit, loop, curve.length)
-    windowed = setup.windowed
-    if not limit.arc_mm > ends or (windowed and limit.arc_mm + widest_gap > WINDOW_HALF_MM):
+    bands = list(limit.layer_bands)
+    ends = _ends(bands)
+    window = max(b.window_mm for b in bands)  # inf: one circle for the whole spans
+    if not limit.arc_mm > ends or limit.arc_mm + _widest_gap(limit, loop, curve.length) > window:
         return None
     along = along_commands(limit, spans_mm, ends / 2.0, loop, curve.length)
     if lower(along, approach_at_most):
@@ -937,21 +935,22 @@ def band_trace_bound(
     value = math.ceil(approach - 1e-9) + along
     finite = limit.layer_arc_mm[np.isfinite(limit.layer_arc_mm)]
     least = float(finite.min()) if finite.size else limit.arc_mm
-    deviation = max(b.deviation_mm for b in limit.layer_bands)
-    radii = [b.circle.radius_mm for b in limit.layer_bands]
-    inner = [b.inner_mm - b.deviation_mm for b in limit.layer_bands]
-    if windowed:
+    deviation = max(b.deviation_mm for b in bands)
+    radii = [b.circle.radius_mm for b in bands]
+    inner = [b.inner_mm - b.deviation_mm for b in bands]
+    if math.isfinite(window):
         where = (
             f"each part of the spans lies within {deviation:.2g} mm of the circle fitted to the "
-            f"curve within {WINDOW_HALF_MM:g} mm of it (radii {min(radii):.4g}-{max(radii):.4g} "
-            "mm)"
+            f"curve within {window:g} mm of it (radii {min(radii):.4g}-{max(radii):.4g} mm)"
         )
     else:
         where = f"the spans lie within {deviation:.2g} mm of a circle of radius {radii[0]:.4g} mm"
-    if min(inner) < tolerance_mm:
+    # the half band (a band's inner half narrower than its outer: both are the tolerance plus
+    # the same deviation where the tool point may lie on either side)
+    if fam.surface is not None and any(b.inner_mm < b.outer_mm for b in bands):
         where += (
-            f", and the tool point, kept out of the {fam.surface.name if fam.surface else ''} "
-            f"it lies on, at most {min(inner):.3g}-{max(inner):.3g} mm inside it (the half band)"
+            f", and the tool point, kept out of the {fam.surface.name} it lies on, at most "
+            f"{min(inner):.3g}-{max(inner):.3g} mm inside it (the half band)"
         )
     return CommandBound(
         proven=sampler.covers_family,
@@ -971,7 +970,7 @@ def band_trace_bound(
         sampling={
             "circle_radius_mm": min(radii),
             "circle_deviation_mm": deviation,
-            "band_window_mm": WINDOW_HALF_MM if windowed else math.inf,
+            "band_window_mm": window,
             "band_inner_mm": max(inner),
             "command_arc_limit_mm": limit.arc_mm,
             "command_arc_limit_least_mm": least,
