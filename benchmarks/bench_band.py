@@ -16,9 +16,16 @@ bound, and then:
   of the circle, found by SLSQP from every third of the plan's commands along the circle, the
   same 1.3 times longer, and random ones (the plan's own commands counted too). A search, not
   a proof: an estimate of the most one command can cover;
+* the arc per command of the longest chains of three commands found (continuous, each
+  beginning where the last ended, the first start free; SLSQP from every sixth window of
+  the plan's commands along the curve): whether commands in a row keep to what one can
+  cover, or a lemma over several commands would prove fewer;
 * the same from the plan's own start states (every third of its commands along the curve,
   the start held and the joint change searched, continuous): how much longer a command
-  could be from where the tracer stands, against the plan's own commands there;
+  could be from where the tracer stands, against the plan's own commands there; and the
+  longest lattice command within 3 ticks of that continuous one (or of it shortened to 93,
+  86 or 80 %; 117,649 joint changes each), the plan's own counted too: how much of that
+  the lattice leaves;
 * the product's lower bound (with the tolerance band, ``planning/bounds/band_trace.py``):
   its approach and along parts, the proven limit on the arc one command can follow at the
   layers where the family was sampled (least and largest over the layers, each the largest
@@ -78,6 +85,14 @@ EVERY = 3
 #: SHRINKS times until it lies within.
 SEARCH_SHARE = 0.995
 SHRINK, SHRINKS = 0.995, 20
+#: Ticks either way about a continuous command's joint change (shortened by each share) where
+#: :func:`lattice_near` looks for lattice commands: 7**6 = 117,649 changes at each share.
+LATTICE_BOX, LATTICE_SHRINKS = 3, (1.0, 0.93, 0.86, 0.8)
+#: Commands of the chains :func:`longest_chain` searches, every how many of the plan's
+#: commands along the curve one begins, and the share of the tolerance its search keeps the
+#: tool path within (UR5 cell's 80 mm circle: 12.28 mm a command with 0.995, 12.61 with 0.97;
+#: SLSQP ends outside less often and its chains are shortened less).
+CHAIN, CHAIN_EVERY, CHAIN_SHARE = 3, 6, 0.97
 
 
 def _seed_circle_scene(folder: Path) -> Path:
@@ -174,15 +189,17 @@ def _command_arc(arm, circle: Guide, q0: np.ndarray, dq: np.ndarray) -> tuple[fl
     return float(s[-1] - s[0]), off
 
 
-def _longest_from(arm, circle: Guide, tol: float, q0, dq, fixed_start: bool) -> float:
+def _longest_from(
+    arm, circle: Guide, tol: float, q0, dq, fixed_start: bool
+) -> tuple[float, np.ndarray, np.ndarray]:
     """The longest arc (mm) SLSQP finds for one command searched from ``q0``, ``dq`` (the
     start configuration too unless ``fixed_start``), its tool path at :data:`INSTANTS` within
-    the tolerance and out of what it must stay out of; 0 if none found lies within. The
-    command it starts from counts too."""
+    the tolerance and out of what it must stay out of, with its start and joint change (rad);
+    0 and the command it starts from if none found lies within. That command counts too."""
     n = arm.n_joints
     step = arm.lattice.max_step
     covered, off = _command_arc(arm, circle, q0, dq)
-    best = abs(covered) if off <= tol else 0.0
+    best = (abs(covered) if off <= tol else 0.0, q0, dq)
     sign = 1.0 if covered >= 0.0 else -1.0
 
     def split(x):
@@ -216,9 +233,100 @@ def _longest_from(arm, circle: Guide, tol: float, q0, dq, fixed_start: bool) -> 
     for _ in range(SHRINKS):  # a search that ends just outside: its command a little shorter
         covered, off = _command_arc(arm, circle, q, d)
         if off <= tol:
-            return max(best, abs(covered))
+            return (abs(covered), q, d) if abs(covered) > best[0] else best
         d = SHRINK * d
     return best
+
+
+def _kept(circle: Guide, p: np.ndarray, tol: float) -> np.ndarray:
+    """Which tool points ``p (..., 3)`` lie within the tolerance and out of what they must
+    stay out of."""
+    flat = p.reshape(-1, 3)
+    ok = circle.distance(flat) <= tol
+    out = circle.outside(flat)
+    if out.size:
+        ok &= out >= 0.0
+    return ok.reshape(p.shape[:-1])
+
+
+def lattice_near(arm, circle: Guide, tol: float, q0: np.ndarray, dq: np.ndarray) -> float:
+    """The longest arc (mm) of the lattice commands from the lattice state ``q0`` (rad) whose
+    joint change lies within :data:`LATTICE_BOX` ticks of ``dq`` (rad; a continuous command
+    found from it) shortened by each of :data:`LATTICE_SHRINKS`, their tool path at
+    :data:`INSTANTS` within the tolerance and out of what it must stay out of; 0 if none."""
+    grid = arm.lattice
+    tick = np.asarray(grid.tick, dtype=np.float64)
+    most = np.asarray(grid.max_ticks, dtype=np.int64)
+    start = np.round(q0 / tick).astype(np.int64)
+    offsets = np.stack(
+        np.meshgrid(*[np.arange(-LATTICE_BOX, LATTICE_BOX + 1)] * arm.n_joints, indexing="ij"), -1
+    ).reshape(-1, arm.n_joints)
+    best = 0.0
+    for shrink in LATTICE_SHRINKS:
+        cand = np.round(shrink * dq / tick).astype(np.int64) + offsets
+        cand = cand[np.all(np.abs(cand) <= most, axis=1)]
+        cand = cand[_kept(circle, tool_position(arm, (start + cand) * tick), tol)]
+        if cand.size == 0:
+            continue
+        path = (start * tick)[None, None] + INSTANTS[None, :, None] * (cand * tick)[:, None]
+        p = tool_position(arm, path.reshape(-1, arm.n_joints)).reshape(*path.shape[:2], 3)
+        for i in np.flatnonzero(_kept(circle, p, tol).all(axis=1)):
+            s = circle.arc(p[i])
+            best = max(best, abs(float(s[-1] - s[0])))
+    return best
+
+
+def longest_chain(arm, circle: Guide, tol: float, passes: list[np.ndarray]) -> float:
+    """The mean arc per command (mm) of the longest chains of :data:`CHAIN` consecutive
+    commands SLSQP finds (each joint change continuous and within the largest step, each
+    command beginning where the last ended, the first start free), their tool path at
+    :data:`INSTANTS` of each command within the tolerance; searched from every
+    :data:`CHAIN_EVERY`-th window of the plan's commands along the curve, as they are and 1.2
+    times longer, in command units (the plan's own chain counts too)."""
+    n, step = arm.n_joints, arm.lattice.max_step
+    unit = np.tile(step, CHAIN + 1)
+
+    def points(x):
+        x = x * unit
+        changes = x[n:].reshape(CHAIN, n)
+        starts = x[:n] + np.concatenate([np.zeros((1, n)), np.cumsum(changes, axis=0)[:-1]])
+        q = starts[:, None, :] + INSTANTS[None, :, None] * changes[:, None, :]
+        return tool_position(arm, q.reshape(-1, n))
+
+    def covered(x):
+        s = circle.arc(points(x))
+        return float(s[-1] - s[0])
+
+    def within(x):  # in 0.1 mm, the arc in cm: SLSQP's steps then stay within the band
+        p = points(x)
+        return 10.0 * np.concatenate(
+            [CHAIN_SHARE * tol - circle.distance(p), circle.outside(p) - OUT_MARGIN_MM]
+        )
+
+    found = []
+    for states in passes:
+        for k in range(0, len(states) - CHAIN, CHAIN_EVERY):
+            changes = np.diff(states[k : k + CHAIN + 1], axis=0)
+            own = np.concatenate([states[k], changes.ravel()]) / unit
+            sign = 1.0 if covered(own) >= 0.0 else -1.0
+            best = abs(covered(own))
+            for scale in (1.0, 1.2):
+                x0 = np.concatenate([states[k], np.clip(scale * changes, -step, step).ravel()])
+                x = minimize(
+                    lambda x, sign=sign: -sign * covered(x) / 10.0,
+                    x0 / unit,
+                    method="SLSQP",
+                    bounds=[(None, None)] * n + [(-1.0, 1.0)] * (n * CHAIN),
+                    constraints=[{"type": "ineq", "fun": within}],
+                    options={"maxiter": 500},
+                ).x
+                for _ in range(SHRINKS):  # one that ends just outside: a little shorter
+                    if _kept(circle, points(x), tol).all():
+                        best = max(best, abs(covered(x)))
+                        break
+                    x = np.concatenate([x[:n], SHRINK * x[n:]])
+            found.append(best / CHAIN)
+    return float(np.mean(found))
 
 
 def longest_command(arm, circle: Guide, tol: float, states: np.ndarray, seed: int, tries: int):
@@ -232,26 +340,31 @@ def longest_command(arm, circle: Guide, tol: float, states: np.ndarray, seed: in
         starts += [(a, b - a), (a, np.clip(1.3 * (b - a), -step, step))]
     for _ in range(tries):
         starts.append((states[rng.integers(len(states))], rng.uniform(-1.0, 1.0) * step))
-    best = max(_longest_from(arm, circle, tol, q0, dq, fixed_start=False) for q0, dq in starts)
+    best = max(_longest_from(arm, circle, tol, q0, dq, fixed_start=False)[0] for q0, dq in starts)
     return best, len(starts)
 
 
 def longest_from_own_starts(arm, circle: Guide, tol: float, passes: list[np.ndarray]):
-    """Every :data:`EVERY`-th of the plan's commands along the curve, and the longest arc (mm)
-    a command from its own start state was found to cover (searched from it and from it 1.2
-    times longer, the joint change continuous): the means of the plan's arcs and of those."""
+    """Every :data:`EVERY`-th of the plan's commands along the curve: the longest arc (mm) a
+    command from its own start state was found to cover (searched from it and from it 1.2
+    times longer, the joint change continuous), and the longest of the lattice commands near
+    that one (:func:`lattice_near`; the plan's own among them): the means of the plan's arcs,
+    of those found and of those on the lattice."""
     step = arm.lattice.max_step
-    own, found = [], []
+    own, found, lattice = [], [], []
     for states in passes:
         for a, b in list(itertools.pairwise(states))[::EVERY]:
             own.append(abs(_command_arc(arm, circle, a, b - a)[0]))
-            found.append(
-                max(
+            arc, _, d = max(
+                (
                     _longest_from(arm, circle, tol, a, np.clip(k * (b - a), -step, step), True)
                     for k in (1.0, 1.2)
-                )
+                ),
+                key=lambda f: f[0],
             )
-    return float(np.mean(own)), float(np.mean(found))
+            found.append(arc)
+            lattice.append(max(own[-1], lattice_near(arm, circle, tol, a, d)))
+    return float(np.mean(own)), float(np.mean(found)), float(np.mean(lattice))
 
 
 def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: int) -> list[str]:
@@ -276,7 +389,8 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
     traced = sum(p.covered_mm for p in res.passes)
     tol = res.tolerance_mm
     best, starts = longest_command(arm, circle, tol, np.vstack(states), seed, tries)
-    own_mean, from_own = longest_from_own_starts(arm, circle, tol, states)
+    own_mean, from_own, on_lattice = longest_from_own_starts(arm, circle, tol, states)
+    chain = longest_chain(arm, circle, tol, states)
     bound = res.lower_bound
     approach = bound.parts.get("approach", 0.0) if bound is not None else 0.0
     along_bound = 0.0 if bound is None else bound.value - approach
@@ -307,7 +421,8 @@ def case(label: str, scene_path: Path, circle: Guide | None, seed: int, tries: i
         "-" if family is None else f"{family:.1f}",
         f"{np.mean(arcs):.2f} / {np.max(arcs):.2f}",
         f"{best:.2f} ({starts} starts)",
-        f"{from_own:.2f} against {own_mean:.2f}",
+        f"{chain:.2f}",
+        f"{from_own:.2f} / {on_lattice:.2f} / {own_mean:.2f}",
         "-"
         if limit is None
         else f"{sampling.get('command_arc_limit_least_mm', limit):.2f} - {limit:.2f} "
@@ -353,7 +468,9 @@ def main() -> int:
                 "the family's shortest path alone",
                 "plan's arc per command along [mm] (mean / largest)",
                 "longest arc of one command found [mm]",
-                "from the plan's own start states: longest found against the plan's (mean) [mm]",
+                f"a chain of {CHAIN} commands found: arc per command (mean) [mm]",
+                "from the plan's own start states (mean) [mm]: longest found / the longest "
+                "lattice command near it / the plan's",
                 "proven limit per command, least - largest over the layers [mm]",
                 "straight chord in the band [mm]",
                 "along, estimated",
@@ -380,7 +497,9 @@ def main() -> int:
         "Between the estimate and the plan lies what the tracer leaves: its commands along "
         "the circle cover less than the longest found (the command lattice; where in the band "
         "each begins: the column from the plan's own start states shows how much of it a "
-        "command from where the tracer stands could still gain). The seam is no circle: the "
+        "command from where the tracer stands could still gain, and the longest lattice "
+        "command near that one how much of it the lattice leaves; the chains, whether "
+        "commands in a row keep to what one covers). The seam is no circle: the "
         "band bounds it by windows (each layer against the circle fitted to the curve within "
         "the window either side of it) and by the half band (its commands must also keep the "
         "tool point out of the workpiece, about a convex face, which the search keeps too); "
