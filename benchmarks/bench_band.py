@@ -62,6 +62,7 @@ from scipy.spatial import cKDTree
 
 from armpath.kinematics import tool_position
 from armpath.planning.bounds.band_trace import band_trace_bound
+from armpath.planning.trace.tracer import _offsets as box_offsets
 from armpath.scenes import load_scene
 from armpath.scenes.arm import scene_arm
 from armpath.tasks import trace_task
@@ -189,6 +190,13 @@ def _command_arc(arm, circle: Guide, q0: np.ndarray, dq: np.ndarray) -> tuple[fl
     return float(s[-1] - s[0]), off
 
 
+def _slack(circle: Guide, p: np.ndarray, tol: float, share: float = SEARCH_SHARE) -> np.ndarray:
+    """The searches' constraints on tool points ``p (T, 3)`` (mm, each >= 0 where kept): within
+    ``share`` of the tolerance of the curve, and out of the solid by its signed distance
+    (smooth), :data:`OUT_MARGIN_MM` kept."""
+    return np.concatenate([share * tol - circle.distance(p), circle.outside(p) - OUT_MARGIN_MM])
+
+
 def _longest_from(
     arm, circle: Guide, tol: float, q0, dq, fixed_start: bool
 ) -> tuple[float, np.ndarray, np.ndarray]:
@@ -210,10 +218,7 @@ def _longest_from(
 
     def within(x):
         q, d = split(x)
-        p = tool_position(arm, q[None] + INSTANTS[:, None] * d[None])
-        # out of the solid: its signed distance (smooth), a small margin kept
-        out = circle.outside(p) - OUT_MARGIN_MM
-        return np.concatenate([SEARCH_SHARE * tol - circle.distance(p), out])
+        return _slack(circle, tool_position(arm, q[None] + INSTANTS[:, None] * d[None]), tol)
 
     bounds = [(-s, s) for s in step]
     if not fixed_start:
@@ -258,9 +263,7 @@ def lattice_near(arm, circle: Guide, tol: float, q0: np.ndarray, dq: np.ndarray)
     tick = np.asarray(grid.tick, dtype=np.float64)
     most = np.asarray(grid.max_ticks, dtype=np.int64)
     start = np.round(q0 / tick).astype(np.int64)
-    offsets = np.stack(
-        np.meshgrid(*[np.arange(-LATTICE_BOX, LATTICE_BOX + 1)] * arm.n_joints, indexing="ij"), -1
-    ).reshape(-1, arm.n_joints)
+    offsets = box_offsets(arm.n_joints, LATTICE_BOX)
     best = 0.0
     for shrink in LATTICE_SHRINKS:
         cand = np.round(shrink * dq / tick).astype(np.int64) + offsets
@@ -298,10 +301,7 @@ def longest_chain(arm, circle: Guide, tol: float, passes: list[np.ndarray]) -> f
         return float(s[-1] - s[0])
 
     def within(x):  # in 0.1 mm, the arc in cm: SLSQP's steps then stay within the band
-        p = points(x)
-        return 10.0 * np.concatenate(
-            [CHAIN_SHARE * tol - circle.distance(p), circle.outside(p) - OUT_MARGIN_MM]
-        )
+        return 10.0 * _slack(circle, points(x), tol, CHAIN_SHARE)
 
     found = []
     for states in passes:

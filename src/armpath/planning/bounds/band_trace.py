@@ -51,6 +51,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.geometry.curves import Curve
+from armpath.geometry.primitives import orthonormal_frame
 from armpath.jit import njit
 from armpath.kinematics import tool_point_joints
 from armpath.model.serial_arm import SerialArm
@@ -191,10 +192,7 @@ def _stretch_and_slop(
     normal: radial where the curve follows the circle, at most ``psi`` off it at a polygon's
     corner)."""
     R = float(circle.radius_mm)
-    b = circle.normal / np.linalg.norm(circle.normal)
-    e1 = np.cross(b, [1.0, 0.0, 0.0] if abs(b[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(b, e1)
+    e1, e2 = orthonormal_frame(circle.normal / np.linalg.norm(circle.normal))
     d = points - circle.centre
     phi = np.unwrap(np.arctan2(d @ e2, d @ e1))
     turn = np.diff(phi)
