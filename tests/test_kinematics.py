@@ -177,3 +177,26 @@ def test_one_pose_by_the_compiled_loop_equals_numpy_to_rounding():
             np.testing.assert_allclose(
                 pose_frames(arm, q), forward_frames(arm, q[None])[0], rtol=0, atol=1e-9
             )
+
+
+def test_tool_point_with_jacobian_equals_the_numpy_position_and_jacobian():
+    """kinematics.tool_point_with_jacobian (the reach solvers' single-pose evaluation, by the
+    compiled loop) gives tool_position and position_jacobian's numpy values to rounding, and
+    its Jacobian matches central differences of the tool point, for several arms."""
+    from armpath.kinematics import position_jacobian, tool_point_with_jacobian, tool_position
+    from armpath.model.catalog import resolve_model
+
+    rng = np.random.default_rng(12)
+    h = 1e-6
+    for name in ("seed", "ur5", "puma560", "iiwa14"):
+        arm = resolve_model(name, None)
+        for q in rng.uniform(-3.0, 3.0, (10, arm.n_joints)):
+            tip, J = tool_point_with_jacobian(arm, q)
+            assert tip.shape == (3,) and J.shape == (3, arm.n_joints)
+            np.testing.assert_allclose(tip, tool_position(arm, q), rtol=0, atol=1e-9)
+            np.testing.assert_allclose(J, position_jacobian(arm, q), rtol=0, atol=1e-9)
+            for i in range(arm.n_joints):
+                dq = np.zeros(arm.n_joints)
+                dq[i] = h
+                fd = (tool_position(arm, q + dq) - tool_position(arm, q - dq)) / (2 * h)
+                np.testing.assert_allclose(J[:, i], fd, rtol=0, atol=1e-4)

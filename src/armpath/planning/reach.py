@@ -52,7 +52,7 @@ from armpath.ik.seed_position import (
     solve_with_fixed_pair,
 )
 from armpath.ik.target import Orientation, ToolTarget
-from armpath.kinematics import position_jacobian, tool_pose, tool_position
+from armpath.kinematics import tool_point_with_jacobian, tool_pose, tool_position
 from armpath.model.lattice import unique_states
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
@@ -349,9 +349,9 @@ def _nearest_reachable(p: _Problem, rng: np.random.Generator) -> tuple[float, Fl
     for x0 in starts:
 
         def f(q: FloatArray) -> tuple[float, FloatArray]:
-            e = tool_position(p.arm, p.full(q)) - p.target
-            J = position_jacobian(p.arm, p.full(q))[:, :TIP_JOINTS]
-            return float(e @ e), 2.0 * e @ J
+            tip, J = tool_point_with_jacobian(p.arm, p.full(q))
+            e = tip - p.target
+            return float(e @ e), 2.0 * e @ J[:, :TIP_JOINTS]
 
         from scipy.optimize import minimize  # imported when first needed
 
@@ -373,12 +373,21 @@ def _minimax(p: _Problem, x0: FloatArray, tol: float | None) -> tuple[float, Flo
     ] + [(0.0, None)]
     z0 = np.r_[x0, np.max(np.abs(x0 - s))]
 
+    last: list[tuple[bytes, FloatArray, FloatArray]] = []  # the last point's tip and
+    # Jacobian (SLSQP asks a point's constraints and then their gradients)
+
+    def tip_and_jac(z: FloatArray) -> tuple[FloatArray, FloatArray]:
+        key = np.asarray(z[:TIP_JOINTS], dtype=np.float64).tobytes()
+        if not last or last[0][0] != key:
+            tip, J = tool_point_with_jacobian(p.arm, p.full(z[:TIP_JOINTS]))
+            last[:] = [(key, tip - p.target, np.hstack([J[:, :TIP_JOINTS], np.zeros((3, 1))]))]
+        return last[0][1], last[0][2]
+
     def tip_err(z: FloatArray) -> FloatArray:
-        return tool_position(p.arm, p.full(z[:TIP_JOINTS])) - p.target
+        return tip_and_jac(z)[0]
 
     def tip_jac(z: FloatArray) -> FloatArray:
-        J = position_jacobian(p.arm, p.full(z[:TIP_JOINTS]))[:, :TIP_JOINTS]
-        return np.hstack([J, np.zeros((3, 1))])
+        return tip_and_jac(z)[1]
 
     eye = np.eye(TIP_JOINTS)
     box_jac = np.vstack(
@@ -601,9 +610,9 @@ def _nearest_in_box(p: _Problem, q0: FloatArray, n: int) -> FloatArray:
     hi = np.minimum(s + reach_rad, ticks_to_rad(p.hi_ticks))
 
     def f(q: FloatArray) -> tuple[float, FloatArray]:
-        e = tool_position(p.arm, p.full(q)) - p.target
-        J = position_jacobian(p.arm, p.full(q))[:, :TIP_JOINTS]
-        return float(e @ e), 2.0 * e @ J
+        tip, J = tool_point_with_jacobian(p.arm, p.full(q))
+        e = tip - p.target
+        return float(e @ e), 2.0 * e @ J[:, :TIP_JOINTS]
 
     res = minimize(
         f, np.clip(q0, lo, hi), jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True))

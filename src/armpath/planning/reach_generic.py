@@ -40,6 +40,7 @@ from armpath.kinematics import (
     pose_frames,
     tick_jacobian,
     tool_point_joints,
+    tool_point_with_jacobian,
     tool_pose,
 )
 from armpath.model.lattice import unique_states
@@ -190,9 +191,8 @@ def nearest_reachable(
     bounds = _limit_bounds(arm)
 
     def squared(x: FloatArray) -> tuple[float, FloatArray]:
-        F = pose_frames(arm, x)
-        e = F[-1, :3, 3] - target.position
-        J = jacobian_from_frames(arm, F[None])[0][:3]
+        tip, J = tool_point_with_jacobian(arm, x)
+        e = tip - target.position
         return float(e @ e), np.asarray(2.0 * e @ J, dtype=np.float64)
 
     best_d, best_tip = float(d.min()), tip[int(np.argmin(d))]
