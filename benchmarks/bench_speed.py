@@ -228,35 +228,39 @@ def tests(rows: list[list[str]]) -> None:
     rows.append(["quick test run (`pytest -n 2`)", "≤ 180 s", f"{s:.0f} s", "", "", _met(s <= 180)])
 
 
-#: What the profiles (``python -m cProfile -s cumulative ...`` of each case) show where a goal
-#: is not met; written under the table.
+#: What the profiles (``python -m cProfile -s cumulative ...`` of each case, and the stage times
+#: ``armpath -v trace`` and ``armpath -v spotweld`` print) show where a goal is not met; written
+#: under the table.
 GAPS = """## Where the unmet goals lose their time (profiles)
 
-- **Single IK pose** (about 20 us against EAIK's 7 us): the closed-form kernel itself takes about
-  4 us a pose (see the batched rows); numba's dispatch of its ten arguments about 3.5 us,
-  validating and scaling the pose (`prepare_targets`) 2 us, the padded outputs and the
-  `IKResult` about 8 us. Batches amortise all of it.
+- **Start-up**: `armpath --help` and `fk` import numpy, typer and the package but neither numba
+  nor scipy; `armpath reach` also imports scipy.optimize (about 0.5 s) and loads numba and its
+  cached kernels (about 1.2 s) before it plans.
+- **Seed reach** (about 0.8-1.0 s in-process): the lower bound's 33 SLSQP refinements of the
+  least largest joint change (about half), the lattice candidates about the solution family
+  and the family's samples (about a quarter each).
+- **Task 2** (trace, with its lower bound): the reachability scan (about 5 s) and locating the
+  ends of the unreachable arc by bisection (about 14 s), the tracing and certifying (about 3 s),
+  the lower bound's search (about 18 s, 8 rounds).
+- **Task 3** (spot welds, with the bound over the lattice goal states and the pools): listing
+  the lattice goal states at the four welds (about 32 s), the bound over them (about 7 s),
+  planning the orders through chosen goal states (about 18 s), sampling the pools of goal
+  states (about 10 s) and planning through them (about 28 s).
+- **First run**: compiling every numba kernel once (about 100 s); later runs load them from the
+  disk cache.
+- **Single IK pose** (about 2.5 times EAIK's time): the closed-form kernel itself is a few us a
+  pose (see the batched rows); numba's dispatch, validating and scaling the pose
+  (`prepare_targets`), the padded outputs and the `IKResult` take the rest. Batches amortise
+  it.
 - **IK batches with every core busy**: ours runs on one thread there (numba's threads stall on a
   busy machine), and that thread gets about two thirds of a core beside two spinning processes;
   EAIK's two threads share the same cores.
 - **Planner against OMPL**: both call the same compiled edge test (OMPL through a Python
-  callback); OMPL's RRT-Connect with its default range (137 deg) needs a few hundred checks,
-  ours extends 20 deg at a time and then spends most of its time shortening the path (300
-  shortcut rounds, elastic-band tightening, lattice merge, certification), which is why it
-  ends with fewer commands on 5 of the 6 problems. On the hardest (task3 leg 1) the RRT loop
-  itself (Python per iteration: nearest node, steer, one check) is about 60 %.
-- **Task 2** (trace): the reachability scan and bisection (about 40 %) and the reference
-  path's scoring of 4,000 family members every 5 mm (about 30 %) are dominated by the exact
-  segment distance to the workpiece (`segments_to_revolution`, the tool tip touching its
-  surface takes the slow path of that kernel); the tracer's projections about 25 %.
-- **Seed reach** (about 0.5 s in-process): spread over the lattice candidates around the
-  solution family (0.19 s), the family samples (0.16 s) and the minimax lower bound by SLSQP
-  (0.13 s); `armpath reach` adds the start-up and numba's loading of the kernels it needs.
-- **First run**: compiling every numba kernel once (about 19 s); later runs load them from the
-  disk cache.
-- **IK batches of PUMA 560 when idle** (this row varies between runs): the threads are taken
-  only when no other process is running at that moment; a run that finds one takes the serial
-  kernel (about 9.5 us a pose) instead of the parallel one (about 5 us).
+  callback). Ours ends with fewer commands on every problem, and most of its time goes to
+  getting them: after the RRT and its shortcuts, `planning/tighten.py` places a motion's states
+  anew for fewer commands (L-BFGS-B over the pairs' clearances at 7 instants a command, with
+  finite-difference gradients): about 8 s of the 7-10 s on the wall and task3 leg 4, for 60
+  and 59 commands (before it, the 2026-11-26 run: 61 and 60 in about 0.05 s).
 """
 
 
