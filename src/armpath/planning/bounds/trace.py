@@ -233,9 +233,9 @@ def trace_bound(
         if first is None:
             raise PlanningError("a traced span has no family member within the joint limits")
         started.append((first, search, placed, s_all))
-    # the placement whose first round bounds higher is searched on (the seed crack: 124.4
-    # against 121.9 evenly, 129.3 against 126.1 searched; the UR5 cell's seam, a loop, 68.5
-    # evenly against 62.9, then 93.0)
+    # the placement whose first round bounds higher is searched on (the seed crack: 126.1
+    # against 123.1 evenly, then 133.8; the UR5 cell's seam, a loop: 80.8 evenly against
+    # 56.2, then 103.3)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
     if len(placements) > 1:
         placed += (
