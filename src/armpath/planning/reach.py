@@ -225,6 +225,13 @@ class _Problem:
         j6 = np.broadcast_to(ticks_to_rad(self.start_ticks[TIP_JOINTS:]), (*q.shape[:-1], 1))
         return np.concatenate([q, j6], axis=-1)
 
+    def squared_error(self, q5: FloatArray) -> tuple[float, FloatArray]:
+        """The squared distance (mm^2) of the fingertip from the target at joints 1-5 ``q5``
+        (rad), and its gradient in them: the objective of the nearest-point descents."""
+        tip, J = tool_point_with_jacobian(self.arm, self.full(q5))
+        e = tip - self.target
+        return float(e @ e), 2.0 * e @ J[:, :TIP_JOINTS]
+
     def errors_of_ticks(self, q_ticks: IntArray) -> FloatArray:
         """Fingertip error (mm) of lattice states of joints 1-5, ``(M, 5)`` ticks."""
         tip = fingertip(self.geometry, ticks_to_rad(q_ticks))
@@ -347,15 +354,11 @@ def _nearest_reachable(p: _Problem, rng: np.random.Generator) -> tuple[float, Fl
     starts = rng.uniform(lo, hi, size=(48, TIP_JOINTS))
     best_d, best_q = np.inf, starts[0]
     for x0 in starts:
-
-        def f(q: FloatArray) -> tuple[float, FloatArray]:
-            tip, J = tool_point_with_jacobian(p.arm, p.full(q))
-            e = tip - p.target
-            return float(e @ e), 2.0 * e @ J[:, :TIP_JOINTS]
-
         from scipy.optimize import minimize  # imported when first needed
 
-        res = minimize(f, x0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True)))
+        res = minimize(
+            p.squared_error, x0, jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True))
+        )
         d = float(np.sqrt(max(res.fun, 0.0)))
         if d < best_d:
             best_d, best_q = d, res.x
@@ -609,13 +612,12 @@ def _nearest_in_box(p: _Problem, q0: FloatArray, n: int) -> FloatArray:
     lo = np.maximum(s - reach_rad, ticks_to_rad(p.lo_ticks))
     hi = np.minimum(s + reach_rad, ticks_to_rad(p.hi_ticks))
 
-    def f(q: FloatArray) -> tuple[float, FloatArray]:
-        tip, J = tool_point_with_jacobian(p.arm, p.full(q))
-        e = tip - p.target
-        return float(e @ e), 2.0 * e @ J[:, :TIP_JOINTS]
-
     res = minimize(
-        f, np.clip(q0, lo, hi), jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi, strict=True))
+        p.squared_error,
+        np.clip(q0, lo, hi),
+        jac=True,
+        method="L-BFGS-B",
+        bounds=list(zip(lo, hi, strict=True)),
     )
     return np.asarray(np.clip(res.x, lo, hi), dtype=np.float64)
 
