@@ -146,6 +146,36 @@ def test_segment_distance_bounds_bracket_the_true_minimum():
     assert np.all(value[~outside] <= dense[~outside] + 1e-9)
 
 
+def test_a_big_batch_split_between_threads_equals_one_call(monkeypatch):
+    """A batch of segments past the threads' threshold is measured in slices on threads
+    (forced here, whatever the machine's load): the values are those of one call over the
+    whole batch, in order, and bracket dense sampling as one call's do."""
+    import os
+
+    from armpath import jit
+    from armpath.geometry import kernels
+    from armpath.geometry.primitives import REVOLUTION_THREAD_BATCH
+
+    w = WORKPIECE["normal"]
+    rng = np.random.default_rng(13)
+    n = 2 * REVOLUTION_THREAD_BATCH + 7
+    a = rng.uniform([-50, -250, -10], [450, 250, 300], (n, 3))
+    b = a + rng.normal(0, 150, (n, 3))
+    whole = kernels.segments_to_revolution(a, b, w.origin, w.axis, w.profile, w.boundary_edges)
+    calls = []
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(jit, "threads_pay_off", lambda n_items, t: calls.append(n_items) or True)
+    split = w.segment_distance_exact(a, b)
+    assert calls == [n]
+    np.testing.assert_array_equal(split, whole)
+    few = rng.choice(n, 40, replace=False)
+    dense = _dense_min(w, a[few], b[few])
+    spacing = np.linalg.norm(b[few] - a[few], axis=-1) / 20000
+    assert np.all(split[few] >= dense - spacing / 2 - 1e-9)
+    outside = dense > spacing
+    assert np.all(split[few][outside] <= dense[outside] + 1e-9)
+
+
 def _random_segments(rng, n, center, spread, length):
     a = center + rng.normal(0, spread, (n, 3))
     return a, a + rng.normal(0, length, (n, 3))

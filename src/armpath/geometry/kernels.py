@@ -429,7 +429,7 @@ def segment_revolution(
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def segments_to_revolution(
     p0: np.ndarray,
     p1: np.ndarray,

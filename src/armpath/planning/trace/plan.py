@@ -722,6 +722,7 @@ def _trace_arcs(
     while queue:
         check_time("tracing the curve")
         arc, run_on = queue.pop(0)
+        say(f"choosing the reference path along {_span_text(curve, arc)} of the curve")
         try:
             pieces = reference_pieces(
                 fam,
