@@ -422,8 +422,8 @@ def merged_certified(
     motion's count). Then the fewest commands through the merged states
     (:func:`fewest_through_states`), and last the states themselves moved where fewer
     commands between the same ends are certified (:func:`~armpath.planning.tighten.tightened`,
-    a few seconds at most: the UR5 cell's welds 115 -> 112). ``energy_weights``: what the
-    merged plan's energy is weighted by (as the plan's own)."""
+    a few seconds for each count tried: the UR5 cell's welds without the pools 114 -> 109).
+    ``energy_weights``: what the merged plan's energy is weighted by (as the plan's own)."""
     seq = plan.sequence
     if seq.n_commands < 2:
         return plan

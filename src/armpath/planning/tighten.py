@@ -17,8 +17,9 @@ continuous motion is certified (:func:`~armpath.planning.motion_check.motion_cle
 like every other. The counts tried are ``N - 1`` first, then the direct count, then a
 bisection between the two, at most :data:`MAX_TRIES` counts in all.
 
-On the UR5 cell's spot welds the three searched legs between the welds go from 10, 21 and 9
-commands to 9, 20 and 8.
+The UR5 cell's spot welds without the pools (``armpath spotweld --scene
+examples/ur5_cell.toml --no-pools --no-bound``) come to 109 commands, 114 with the states left
+where the search put them.
 """
 
 from __future__ import annotations
