@@ -10,6 +10,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
 import independent
 from armpath.commands import CommandSequence, deg_to_ticks
@@ -105,6 +106,57 @@ def test_the_work_budget_ends_the_placement(monkeypatch):
 
     world = CollisionWorld(())
     seq = _through([[10, -60, 20, 0, -80, 0], [18, -55, 30, 0, -80, 0], [26, -50, 10, 5, -70, 0]])
-    per_evaluation = (seq.n_commands - 1) * tighten.SAMPLES_PER_COMMAND * (ARM.n_joints + 1)
+    # nothing near: an evaluation measures its instants and no joint's step from them
+    per_evaluation = (seq.n_commands - 1) * tighten.SAMPLES_PER_COMMAND
     monkeypatch.setattr(tighten, "MAX_CONFIGURATIONS", per_evaluation + 1)
     assert tightened(ARM, world, seq) is seq
+
+
+def test_the_gradient_equals_a_forward_difference_at_every_instant(tmp_path):
+    """The placement steps a joint only from the instants its step may bring within the
+    buffer; its gradient must equal the forward difference taken from every instant, here
+    over the post and the ball, on states scattered about the straight motion through the
+    ball, so that some instants are in or near it and most are not."""
+    import armpath.planning.tighten as tighten
+
+    path = tmp_path / "post.yaml"
+    path.write_text(POST_SCENE)
+    world = load_scene(path).world
+    seq = _through([[100, -90, 0, 0, -90, 0], [170, -90, 0, 0, -90, 0]])  # through the ball
+    k = 30
+    states = seq.states().astype(np.float64)
+    work = tighten._Work()
+    problem = tighten._Placement(ARM, world, states[0], states[-1], k, work)
+    rng = np.random.default_rng(7)
+    z = tighten._resampled(states, k)[1:-1].ravel() + rng.normal(0.0, 10.0, (k - 1) * 6)
+    spent = work.left
+    value, grad = problem.value_and_gradient(z, 1.0)
+    spent -= work.left
+    x = problem.states(z)
+    t = problem.t[None, :, None]
+    inst = (x[:-1, None, :] * (1.0 - t) + x[1:, None, :] * t).reshape(-1, 6)
+    # the penalty written out from the world's pair clearances, stepped at every instant
+    required = world.required(ARM)
+
+    def penalty(q_ticks):
+        values, _ = world.pair_clearances(ARM, ARM.lattice.to_joint(q_ticks))
+        return (np.maximum(tighten.BUFFER - (values - required), 0.0) ** 2).sum(axis=-1)
+
+    base = penalty(inst)
+    assert 0 < np.count_nonzero(base) < base.size // 2  # some instants near, most not
+    h = tighten._GRADIENT_TICKS
+    per_inst = np.column_stack(
+        [(penalty(inst + h * np.eye(6)[j]) - base) / h for j in range(6)]
+    ).reshape(k, t.size, 6)
+    full = np.zeros_like(x)
+    full[:-1] += (per_inst * (1.0 - t)).sum(axis=1)
+    full[1:] += (per_inst * t).sum(axis=1)
+    change = np.diff(x, axis=0)
+    beyond = np.maximum(np.abs(change) - problem.limit, 0.0)
+    full[1:] += 2.0 * beyond * np.sign(change)
+    full[:-1] -= 2.0 * beyond * np.sign(change)
+    assert value == pytest.approx(base.sum() + (beyond**2).sum(), rel=1e-12)
+    np.testing.assert_array_equal(grad, full[1:-1].ravel())
+    assert np.any(grad != 0.0)
+    # and it measured fewer configurations than stepping every instant would
+    assert inst.shape[0] < spent < 7 * inst.shape[0]

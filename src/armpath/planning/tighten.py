@@ -31,6 +31,7 @@ from scipy.optimize import minimize
 from armpath.budget import check_time
 from armpath.commands import CommandSequence
 from armpath.geometry.world import CollisionWorld
+from armpath.kinematics import displacement_bounds
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion_check import motion_clearance
 
@@ -55,9 +56,11 @@ MAX_TRIES = 5
 #: Longest motion (commands) whose states are placed: the solve's unknowns grow with it.
 MAX_COMMANDS = 60
 #: Configurations whose pair clearances one call may measure, all tries together (each
-#: evaluation of the objective measures 7 per instant: the instant and one step per joint).
-#: A 60-command motion of a six-joint arm measures about 2,900 an evaluation and some 1,000,000
-#: a try (its three solves take about 110 evaluations each), so this allows it about two tries.
+#: evaluation of the objective measures its instants, and one step of each joint from those
+#: instants the step may bring within :data:`BUFFER`: at most 7 per instant, for a six-joint
+#: arm, about 1.2 on the seed's planning problems). A 60-command motion of a six-joint arm
+#: measures at most about 2,900 an evaluation and some 1,000,000 a try (its three solves take
+#: about 110 evaluations each), so this allows it at least two tries.
 MAX_CONFIGURATIONS = 2_000_000
 #: How far under its largest step (ticks) a joint's change is aimed, so rounding to the lattice
 #: keeps it within the step.
@@ -98,32 +101,55 @@ class _Placement:
         self.grid = arm.lattice
         self.a, self.b, self.k = a, b, k
         self.required = world.required(arm)
+        # how far a pair's slack can fall when one joint moves by the gradient's step: every
+        # point moves at most the step times the joint's displacement bound, a link pair's
+        # distance twice that (both links move)
+        pair_speed = np.where([p.is_self for p in world.pairs(arm)], 2.0, 1.0)
+        step_reach = _GRADIENT_TICKS * self.grid.tick * displacement_bounds(arm)
+        self.fall = step_reach[:, None] * pair_speed[None, :]  # (joints, pairs)
         self.limit = np.maximum(self.grid.max_ticks - _STEP_MARGIN_TICKS, 0.25)
         self.t = np.linspace(0.0, 1.0, SAMPLES_PER_COMMAND)
 
     def states(self, z: FloatArray) -> FloatArray:
         return np.vstack([self.a, z.reshape(self.k - 1, self.a.size), self.b])
 
-    def _penalty(self, q_ticks: FloatArray) -> FloatArray:
+    def _slacks(self, q_ticks: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Per configuration and pair, ``clearance - required`` and a proven lower bound."""
+        values, lowers = self.world.pair_clearances(self.arm, self.grid.to_joint(q_ticks))
+        return values - self.required, lowers - self.required
+
+    @staticmethod
+    def _penalty(slack: FloatArray) -> FloatArray:
         """Per configuration, the sum of squared slack shortfalls below the buffer."""
-        values, _ = self.world.pair_clearances(self.arm, self.grid.to_joint(q_ticks))
-        short = np.maximum(BUFFER - (values - self.required), 0.0)
+        short = np.maximum(BUFFER - slack, 0.0)
         return np.asarray((short**2).sum(axis=-1))
 
     def value_and_gradient(self, z: FloatArray, weight: float) -> tuple[float, FloatArray]:
+        """The penalty of the states ``z`` at ``weight`` and its gradient.
+
+        The slacks' gradient is a forward difference, one joint at a time, taken only from the
+        instants whose step may change the penalty: where every pair's proven slack less the
+        most the step can lower it stays at or above :data:`BUFFER`, the penalty is 0 before
+        and after the step, and so is the difference."""
         check_time("placing a motion's states")
         x = self.states(z)
         n = self.a.size
         t = self.t[None, :, None]
         inst = (x[:-1, None, :] * (1.0 - t) + x[1:, None, :] * t).reshape(-1, n)
-        self.work.spend(inst.shape[0] * (n + 1))
-        base = self._penalty(inst)
+        self.work.spend(inst.shape[0])
+        slack, lower = self._slacks(inst)
+        base = self._penalty(slack)
         value = float(base.sum())
-        grad_inst = np.empty_like(inst)
+        rows = [np.flatnonzero((lower - fall < BUFFER).any(axis=1)) for fall in self.fall]
+        moved = inst[np.concatenate(rows)]
+        at = np.cumsum([0] + [r.size for r in rows])
         for j in range(n):
-            moved = inst.copy()
-            moved[:, j] += _GRADIENT_TICKS
-            grad_inst[:, j] = (self._penalty(moved) - base) / _GRADIENT_TICKS
+            moved[at[j] : at[j + 1], j] += _GRADIENT_TICKS
+        self.work.spend(moved.shape[0])
+        stepped = self._penalty(self._slacks(moved)[0])
+        grad_inst = np.zeros_like(inst)
+        for j, r in enumerate(rows):
+            grad_inst[r, j] = (stepped[at[j] : at[j + 1]] - base[r]) / _GRADIENT_TICKS
         per_command = grad_inst.reshape(self.k, self.t.size, n)
         grad = np.zeros_like(x)
         grad[:-1] += (per_command * (1.0 - t)).sum(axis=1)
