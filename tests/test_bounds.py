@@ -1,8 +1,8 @@
 """Issue 21: lower bounds of traces and tours over the whole solution family, checked against
 independent truth.
 
-* the shortest-path step (a compiled branch and bound) equals a brute-force minimum over every
-  pair of samples, periodic joints and whole commands included;
+* the shortest-path step (a compiled branch and bound over a k-d tree) equals a brute-force
+  minimum over every pair of samples, periodic joints and whole commands included;
 * a tour of one target is a reach: its bound (whole commands) is never above the multi-start
   SLSQP of the largest joint change over the exact family (written in tests/test_any_arm.py on
   the textbook D-H product) rounded up to whole commands, and agrees with it within the
@@ -59,14 +59,50 @@ def test_shortest_path_step_equals_brute_force(whole):
         e = rng.uniform(0, 0.5, u.shape)
         pc = rng.uniform(0, 50, 300)
         pc[rng.uniform(size=300) < 0.1] = np.inf
-        cost, arg = metric._advance_serial(pu, pe, pc, u, e, period, whole, metric.GROUP_CELL)
+        cost, arg = metric.advance(pu, pe, pc, u, e, period, whole, threads=False)
         truth = _brute_advance(pu, pe, pc, u, e, period, whole)
         np.testing.assert_allclose(cost, truth, atol=1e-9)
-        threaded = metric._advance_parallel(pu, pe, pc, u, e, period, whole, metric.GROUP_CELL)
+        threaded = metric.advance(pu, pe, pc, u, e, period, whole, threads=True)
         np.testing.assert_array_equal(threaded[0], cost)
-        # the predecessor given attains the cost
-        again = _brute_advance(pu[arg[:1]], pe[arg[:1]], pc[arg[:1]], u[:1], e[:1], period, whole)
-        assert again[0] == pytest.approx(cost[0], abs=1e-9)
+        _assert_attained(pu, pe, pc, u, e, period, whole, cost, arg)
+
+
+def _assert_attained(pu, pe, pc, u, e, period, whole, cost, arg):
+    """Each target's predecessor attains its cost (none where the cost is infinite)."""
+    reached = np.isfinite(cost)
+    np.testing.assert_array_equal(arg >= 0, reached)
+    for b in np.flatnonzero(reached):
+        i = arg[b : b + 1]
+        again = _brute_advance(pu[i], pe[i], pc[i], u[b : b + 1], e[b : b + 1], period, whole)
+        assert again[0] == pytest.approx(cost[b], abs=1e-9)
+
+
+@pytest.mark.parametrize("whole", [False, True])
+def test_shortest_path_step_on_clustered_layers_equals_brute_force(whole):
+    """Layers like the family's: samples in a few tight clusters (so the step's k-d tree is
+    several levels deep and its leaves are pruned), a periodic joint's samples on both sides
+    of its turn, costs spread less than the distances between layers."""
+    rng = np.random.default_rng(11)
+    period = np.array([180.0, 0.0, 0.0, 180.0, 0.0])
+
+    def layer(count, centres):
+        pick = rng.integers(0, len(centres), count)
+        return np.asarray(centres)[pick] + rng.normal(0.0, 3.0, (count, 5))
+
+    centres = rng.uniform(-100, 100, (6, 5))
+    centres[0, 0] = 89.0  # a cluster astride joint 1's turn (+-90 commands)
+    pu = layer(1500, centres)
+    u = layer(1200, centres + rng.uniform(5, 40, (6, 5)))
+    pe = rng.uniform(0, 0.3, pu.shape)
+    e = rng.uniform(0, 0.3, u.shape)
+    pc = rng.uniform(80, 100, 1500)
+    pc[:40] = np.inf
+    cost, arg = metric.advance(pu, pe, pc, u, e, period, whole, threads=False)
+    np.testing.assert_allclose(cost, _brute_advance(pu, pe, pc, u, e, period, whole), atol=1e-9)
+    _assert_attained(pu, pe, pc, u, e, period, whole, cost, arg)
+    threaded = metric.advance(pu, pe, pc, u, e, period, whole, threads=True)
+    np.testing.assert_array_equal(threaded[0], cost)
+    np.testing.assert_array_equal(threaded[1], arg)
 
 
 def _single_target_bound(arm, world, start_rad, target, rounds=4):

@@ -29,6 +29,7 @@ from armpath.geometry.primitives import HollowFrustum, Opening
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import tool_position
 from armpath.model.serial_arm import SerialArm
+from armpath.planning.bounds.metric import PredecessorTree
 from armpath.planning.bounds.sampling import FamilySampler, Layer
 
 FloatArray = NDArray[np.float64]
@@ -154,6 +155,9 @@ class PassageSamples:
     _memo: dict[tuple[FamilySampler, bool], dict[bytes, float]] = field(
         default_factory=dict, compare=False, repr=False
     )
+    _trees: dict[tuple[FamilySampler, bool], PredecessorTree] = field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     @staticmethod
     def sampled(
@@ -203,7 +207,12 @@ class PassageSamples:
         via = np.array([memo.get(k, np.nan) for k in keys], dtype=np.float64)
         todo = np.flatnonzero(np.isnan(via))
         if todo.size:
-            via[todo] = sampler.advance(through, start, layer.subset(todo))[0]
+            key = (sampler, exact)  # the same samples and costs for every layer: one tree
+            if key not in self._trees:
+                self._trees[key] = sampler.predecessor_tree(through, start)
+            via[todo] = sampler.advance(through, start, layer.subset(todo), tree=self._trees[key])[
+                0
+            ]
             if len(memo) + todo.size > PASSAGE_MEMO_LIMIT:
                 memo.clear()
             memo.update(zip((keys[i] for i in todo), via[todo].tolist(), strict=True))

@@ -25,7 +25,7 @@ from armpath.planning.bounds.chart import (
     snapped,
     to_real,
 )
-from armpath.planning.bounds.metric import _wrapped, advance
+from armpath.planning.bounds.metric import PredecessorTree, _wrapped, advance, predecessor_tree
 from armpath.planning.trace.family import CurveFamily, fibonacci_directions
 
 FloatArray = NDArray[np.float64]
@@ -649,11 +649,21 @@ class FamilySampler:
         return np.asarray(np.ceil(out - 1e-9) if whole else out, dtype=np.float64)
 
     def advance(
-        self, prev: Layer, cost: FloatArray, nxt: Layer, whole: bool = False
+        self,
+        prev: Layer,
+        cost: FloatArray,
+        nxt: Layer,
+        whole: bool = False,
+        tree: PredecessorTree | None = None,
     ) -> tuple[FloatArray, IntArray]:
         """Shortest-path costs at ``nxt`` from ``cost`` at ``prev`` (and the predecessors);
-        ``whole``: each step a whole number of commands (a leg between targets)."""
-        return advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole)
+        ``whole``: each step a whole number of commands (a leg between targets); ``tree``:
+        :meth:`predecessor_tree` of ``prev`` and ``cost``, for several steps from them."""
+        return advance(prev.u, prev.err, cost, nxt.u, nxt.err, self.period, whole, tree)
+
+    def predecessor_tree(self, prev: Layer, cost: FloatArray) -> PredecessorTree:
+        """What :meth:`advance` searches for the steps from ``cost`` at ``prev``."""
+        return predecessor_tree(prev.u, prev.err, cost, self.period)
 
 
 def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:
