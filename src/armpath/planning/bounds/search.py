@@ -84,7 +84,8 @@ SPLITS_PER_ROUND = 2000
 #: sample budget.
 STALL_ROUNDS = 2
 #: Live samples of all sites together past which the search splits no more: each round's
-#: dynamic programmes take time about in proportion to the square of a site's samples. A
+#: dynamic programmes take longer than in proportion to a site's samples (each step searches
+#: the samples before for each sample after: :func:`~.metric.advance`). A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
 #: tighter bound (``benchmarks/results/bounds.md``, a 2-core machine): the seed's Task 3 110 ->
 #: 111 commands with 200,000 (its bound 38 s -> 233 s), the UR5 cell's welds 102 -> 103 (57 s
