@@ -219,9 +219,12 @@ def test_the_way_through_a_passage_is_remembered_exactly():
     asked: list[int] = []
 
     class Sampler:  # the metric of FamilySampler.advance, counting the samples asked about
-        def advance(self, prev, cost, nxt, whole=False):
+        def advance(self, prev, cost, nxt, whole=False, tree=None):
             asked.append(nxt.size)
-            return metric.advance(prev.u, prev.err, cost, nxt.u, nxt.err, period, whole)
+            return metric.advance(prev.u, prev.err, cost, nxt.u, nxt.err, period, whole, tree)
+
+        def predecessor_tree(self, prev, cost):
+            return metric.predecessor_tree(prev.u, prev.err, cost, period)
 
     sampler = Sampler()
     way = PassageSamples(None, through, start, through, start)  # type: ignore[arg-type]

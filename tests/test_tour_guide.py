@@ -202,28 +202,37 @@ def test_the_goal_state_next_to_a_member_is_the_nearest_clear_one():
     fam = tour._targets_family(arm, scene.world, pts)
     q0 = np.radians([0.0, -90.0, 0.0, 0.0, -90.0, 0.0])
     guide = TourGuide.build(fam, pts, 0.05, 0.5, q0)
-    _, members = guide.path(q0, (0, 2, 3, 1), back=False)
-    q = members[0]  # its tool point on the wall at weld 1
     grid = arm.lattice
-    start = grid.nearest_ticks(q)
-    (pick,) = generic_goal_states(
-        arm, scene.world, start, ToolTarget(pts[0], None), 0.05, 1, body_buffer=0.0,
-        samples=q[None], nearest_member=True,
-    )  # fmt: skip
-    # brute force: every lattice state within 6 ticks of the member's nearest (joint 6, which
-    # does not move the tool point, kept), independent kinematics and clearance
-    box = np.stack(np.meshgrid(*[np.arange(-6, 7)] * 5, indexing="ij"), -1).reshape(-1, 5)
-    states = np.repeat(start[None], box.shape[0], axis=0)
-    states[:, :5] += box
-    deg = states / 10.0
-    tips = ir.SeedArm.points(deg)[:, 4]
-    within = np.linalg.norm(tips - pts[0], axis=-1) <= 0.05
     seed_spec = tomllib.loads(
         (Path(__file__).parents[1] / "src/armpath/scenes/seed.toml").read_text()
     )
     world = ir.Scene.from_spec(seed_spec)
-    clear = np.zeros(len(states), dtype=bool)
-    clear[within] = ir.config_slack(ir.SeedArm(), world, deg[within], 0.5) >= 0.0
+    # brute force: every lattice state within 6 ticks of a member's nearest (joint 6, which
+    # does not move the tool point, kept), independent kinematics and clearance. A member is
+    # a clear one of weld 1 (its tool point on the wall there), the nearest to the start
+    # first, whose box holds a clear state within the tolerance (one in a few does: the
+    # lattice is coarse against 0.05 mm), so the brute force has something to compare with
+    box = np.stack(np.meshgrid(*[np.arange(-6, 7)] * 5, indexing="ij"), -1).reshape(-1, 5)
+    layer = guide.layers[0]
+    nearest_first = np.argsort(np.abs(layer.q - q0).max(axis=1), kind="stable")
+    for k in nearest_first[:40]:
+        q = guide.with_start(layer.q[k][None], q0)
+        q = guide.sampler.within_windows(shift_into_limits(arm, q, q0))[0]
+        start = grid.nearest_ticks(q)
+        states = np.repeat(start[None], box.shape[0], axis=0)
+        states[:, :5] += box
+        deg = states / 10.0
+        tips = ir.SeedArm.points(deg)[:, 4]
+        within = np.linalg.norm(tips - pts[0], axis=-1) <= 0.05
+        clear = np.zeros(len(states), dtype=bool)
+        if np.any(within):
+            clear[within] = ir.config_slack(ir.SeedArm(), world, deg[within], 0.5) >= 0.0
+        if np.any(clear):
+            break
+    (pick,) = generic_goal_states(
+        arm, scene.world, start, ToolTarget(pts[0], None), 0.05, 1, body_buffer=0.0,
+        samples=q[None], nearest_member=True,
+    )  # fmt: skip
     away = np.abs(deg - np.degrees(q)).max(axis=1) / 2.0  # commands of 2 deg
     assert np.count_nonzero(clear) >= 1
     pick_deg = pick / 10.0
