@@ -60,6 +60,30 @@ def test_every_state_within_the_tolerance_of_a_box_is_listed(name, deg, radius, 
     assert {tuple(s) for s in found.ticks} == truth
 
 
+def test_a_sliding_joint_and_a_held_joint_between_the_listed_ones_are_carried_exactly():
+    """The kernel multiplies the arm out between the joints it lists, with the others folded
+    in at their values: on the UR5 on its track (a sliding joint first), listing the slide and
+    four of the arm's joints while the second of them is held at 35 deg finds exactly the
+    states of the box, checked one by one with the arm's own forward kinematics."""
+    arm = load_arm(str(Path(__file__).resolve().parents[1] / "examples" / "track_ur5.json"))
+    grid = arm.lattice
+    tip = np.array([True, True, False, True, True, True, False])
+    centre = grid.nearest_ticks(np.array([800.0, *np.radians([20, 35, 80, -100, -80, 0])]))
+    target = tool_position(arm, grid.to_joint(centre)) + np.array([0.03, -0.02, 0.04])
+    tolerance = 0.6
+    radius = 4
+    found = lattice_goal_states(
+        arm, target, tolerance, tip, centre, centre[tip] - radius, centre[tip] + radius
+    )
+    states = _box_states(centre, tip, radius)
+    dist = np.linalg.norm(tool_position(arm, grid.to_joint(states)) - target, axis=1)
+    truth = {tuple(s) for s in states[dist <= tolerance]}
+    assert found.complete
+    assert len(truth) >= 3
+    assert {tuple(s) for s in found.ticks} == truth
+    assert np.all(found.ticks[:, ~tip] == centre[~tip])
+
+
 def _clear_state_near_a_weld() -> tuple:
     """The seed arm, its scene's world, a weld inside the workpiece and the lattice state
     nearest a clear family member there."""
@@ -73,9 +97,10 @@ def _clear_state_near_a_weld() -> tuple:
     return arm, world, weld, arm.lattice.nearest_ticks(clear[0])
 
 
-def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule():
+def test_the_clearance_pruning_drops_no_state_that_keeps_the_rule(monkeypatch):
     """Near a weld inside the seed's workpiece many states collide; those that keep the rule
-    are all listed with the pruning on."""
+    are all listed with the pruning on (at every width, however little a look drops)."""
+    monkeypatch.setattr(lattice_goals, "MIN_DROPPED_SHARE", 0.0)
     arm, world, weld, centre = _clear_state_near_a_weld()
     grid = arm.lattice
     tip = np.array([True] * 5 + [False])

@@ -35,28 +35,26 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.jit import njit
-from armpath.kinematics import (
-    _chain_into,
-    compiled_chain,
-    displacement_bounds,
-    jacobian_column,
-    landmark_scratch,
-)
-from armpath.model.serial_arm import SerialArm
+from armpath.kinematics import displacement_bounds, z_axis_chain
+from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: Boxes one enumeration may look at (about a microsecond each): past it the enumeration gives
-#: up, and a caller falls back on the family's sampled members.
-MAX_GOAL_BOXES = 60_000_000
+#: Boxes one enumeration may look at (about a quarter of a microsecond each, so some 50 s): past
+#: it the enumeration gives up, and a caller falls back on the family's sampled members.
+MAX_GOAL_BOXES = 200_000_000
 #: Lattice states one enumeration may return (48 bytes each for six joints).
 MAX_GOAL_STATES = 2_000_000
-#: Boxes the kernel looks at between two looks at the clock (about a second).
+#: Boxes the kernel looks at between two looks at the clock (about a quarter of a second).
 CHUNK_BOXES = 1_000_000
 #: How a run of the kernel ended: every box looked at; its chunk of boxes spent (the boxes not
 #: looked at yet returned, to resume from); a budget of states or the stack's depth spent.
 _DONE, _CHUNK_SPENT, _GAVE_UP = 0, 1, 2
+#: Widest span of half-ticks (per joint) whose sines and cosines the kernel tabulates; a finer
+#: lattice's joints are turned with ``sin`` and ``cos`` at each box (8 bytes a value, two a
+#: half-tick: 2 MiB a joint at most).
+MAX_TABLE = 1 << 17
 #: Depth of the search's stack: each halving adds one box, and a box of ``2**k`` ticks is halved
 #: at most ``k`` times along that joint.
 _STACK = 4096
@@ -92,6 +90,37 @@ def second_derivative_bounds(arm: SerialArm) -> FloatArray:
     return np.asarray(np.maximum(reach[index], 1.0), dtype=np.float64)
 
 
+def tip_chain(
+    arm: SerialArm, tip_index: IntArray, q_fixed: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The arm as rigid transforms between the joints ``tip_index`` (ascending), the others
+    held at their values in ``q_fixed`` (rad, or model units for a prismatic joint): ``P``
+    ``(m + 1, 3, 4)`` (rotation | translation rows) with the tool pose
+    ``P_0 Z_0 P_1 Z_1 ... Z_(m-1) P_m``, ``Z_k`` a turn about (or a shift along) z by tip joint
+    ``k``'s value, and whether each tip joint is prismatic. Frame ``P_0 Z_0 ... P_k`` has tip
+    joint ``k``'s axis as its z axis, its origin on that axis (:func:`z_axis_chain`)."""
+    C = z_axis_chain(arm)
+    prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
+    tip = set(int(i) for i in tip_index)
+    parts: list[FloatArray] = []
+    current = C[0].copy()
+    for i in range(arm.n_joints):
+        if i in tip:
+            parts.append(current)
+            current = C[i + 1].copy()
+            continue
+        Z = np.eye(4)
+        if prismatic[i]:
+            Z[2, 3] = q_fixed[i]
+        else:
+            c, s = np.cos(q_fixed[i]), np.sin(q_fixed[i])
+            Z[:2, :2] = [[c, -s], [s, c]]
+        current = current @ Z @ C[i + 1]
+    parts.append(current)
+    P = np.ascontiguousarray(np.stack(parts)[:, :3, :], dtype=np.float64)
+    return P, np.ascontiguousarray(prismatic[np.asarray(tip_index, dtype=np.int64)])
+
+
 def lattice_goal_states(
     arm: SerialArm,
     target: FloatArray,
@@ -121,16 +150,15 @@ def lattice_goal_states(
     q_fixed = np.asarray(fixed_ticks, dtype=np.float64) * tick
     M = second_derivative_bounds(arm)[np.ix_(tip_index, tip_index)]
     reach_bound = np.ascontiguousarray(displacement_bounds(arm)[tip_index], dtype=np.float64)
-    chain = compiled_chain(arm)[:5]
+    chain, tip_prismatic = tip_chain(arm, tip_index, q_fixed)
     fixed = (
-        tick,
-        tip_index,
-        q_fixed,
+        np.ascontiguousarray(tick[tip_index]),
         np.asarray(target, dtype=np.float64),
         float(tolerance),
         np.ascontiguousarray(M),
         reach_bound,
-        *chain,
+        chain,
+        tip_prismatic,
     )
 
     def run(
@@ -170,11 +198,8 @@ def lattice_goal_states(
     hi = np.asarray(upper_ticks, dtype=np.int64).reshape(1, -1)
     boxes = 0
     looks = COARSE_TICKS if may_be_clear is not None else ()
-    dropped_share = 1.0
-    for level, coarse in enumerate(looks):
+    for coarse in looks:
         assert may_be_clear is not None
-        if dropped_share < MIN_DROPPED_SHARE and level < len(looks) - 1:
-            continue
         lo, hi, more, complete = run(lo, hi, coarse, max_boxes - boxes)
         boxes += more
         count = lo.shape[0]
@@ -185,7 +210,8 @@ def lattice_goal_states(
             centre[:, tip_index] = 0.5 * (lo + hi) * tick[tip_index]
             keep = may_be_clear(centre, (0.5 * (hi - lo) * tick[tip_index]) @ reach_bound)
             lo, hi = lo[keep], hi[keep]
-            dropped_share = 1.0 - lo.shape[0] / count
+        if lo.shape[0] > (1.0 - MIN_DROPPED_SHARE) * count:
+            break  # the narrower looks would pay less than they cost
     out, _, more, complete = run(lo, hi, 0, max_boxes - boxes)
     ticks = np.broadcast_to(np.asarray(fixed_ticks, dtype=np.int64), (out.shape[0], tip.size))
     ticks = ticks.copy()
@@ -198,17 +224,12 @@ def _enumerate(
     lower: np.ndarray,
     upper: np.ndarray,
     tick: np.ndarray,
-    tip_index: np.ndarray,
-    q_fixed: np.ndarray,
     target: np.ndarray,
     tolerance: float,
     M: np.ndarray,
     reach_bound: np.ndarray,
-    T_world_base: np.ndarray,
-    T_parent_joint: np.ndarray,
-    axes: np.ndarray,
+    chain: np.ndarray,
     prismatic: np.ndarray,
-    T_flange_tool: np.ndarray,
     max_boxes: int,
     max_states: int,
     coarse: int,
@@ -216,24 +237,45 @@ def _enumerate(
     np.ndarray, np.ndarray, int, int, int, np.ndarray, np.ndarray
 ]:  # pragma: no cover - compiled
     """The branch and bound of :func:`lattice_goal_states` (see the module) over the boxes
-    ``lower`` .. ``upper``, at most ``max_boxes`` of them: the states found (``lo`` of
+    ``lower`` .. ``upper`` of the tip joints (``tick`` theirs; ``chain`` and ``prismatic``
+    from :func:`tip_chain`), at most ``max_boxes`` of them: the states found (``lo`` of
     ``(count, m)`` boxes of one state) and, with ``coarse`` > 1, the boxes kept whose widest
     joint spans at most ``coarse`` ticks (their ``lo`` and ``hi``), not split; the boxes looked
     at; how it ended (:data:`_DONE`, :data:`_CHUNK_SPENT`, :data:`_GAVE_UP`); and the boxes not
-    looked at yet, to resume from (none unless the chunk was spent)."""
-    m = tip_index.shape[0]
-    n_j = q_fixed.shape[0]
+    looked at yet, to resume from (none unless the chunk was spent).
+
+    A box's centre lies on whole or half ticks (``lo + hi`` half-ticks): the joints' sines and
+    cosines there are tabulated once over the boxes' span (at most :data:`MAX_TABLE`
+    half-ticks a joint, else taken at each box)."""
+    m = tick.shape[0]
     lo = np.empty((_STACK, m), dtype=np.int64)
     hi = np.empty((_STACK, m), dtype=np.int64)
     out = np.empty((1024, m), dtype=np.int64)
     out_hi = np.empty((1024, m), dtype=np.int64)
     count = 0
     boxes = 0
-    q = q_fixed.copy()
-    scratch = landmark_scratch(n_j)
+    G = np.zeros((3, 4))
+    axis = np.zeros((m, 3))
+    origin = np.zeros((m, 3))
     J = np.zeros((3, m))
     r = np.zeros(m)
     none = np.empty((0, m), dtype=np.int64)
+    first = np.zeros(m, dtype=np.int64)
+    span = 0
+    for k in range(m):
+        for start in range(lower.shape[0]):
+            if start == 0 or lower[start, k] < first[k] // 2:
+                first[k] = 2 * lower[start, k]
+        for start in range(lower.shape[0]):
+            span = max(span, 2 * upper[start, k] - first[k] + 1)
+    tabulated = span <= MAX_TABLE
+    sine = np.zeros((m, span if tabulated else 0))
+    cosine = np.zeros((m, span if tabulated else 0))
+    if tabulated:
+        for k in range(m):
+            for i in range(span):
+                v = 0.5 * (first[k] + i) * tick[k]
+                sine[k, i], cosine[k, i] = np.sin(v), np.cos(v)
     for start in range(lower.shape[0]):
         empty = False
         for k in range(m):
@@ -257,17 +299,39 @@ def _enumerate(
             top -= 1
             boxes += 1
             single = True
+            # the tool point at the centre: the chain's product, each tip joint's axis (its
+            # frame's z) and a point of it (the origin) taken before the joint's own motion
+            for i in range(3):
+                for j in range(4):
+                    G[i, j] = chain[0, i, j]
             for k in range(m):
-                j = tip_index[k]
-                c = 0.5 * (lo[top, k] + hi[top, k])
-                q[j] = c * tick[j]
-                r[k] = 0.5 * (hi[top, k] - lo[top, k]) * tick[j]
+                r[k] = 0.5 * (hi[top, k] - lo[top, k]) * tick[k]
                 if hi[top, k] > lo[top, k]:
                     single = False
-            pos = _chain_into(
-                q, T_world_base, T_parent_joint, axes, prismatic, T_flange_tool, scratch
-            )
-            px, py, pz = pos[n_j + 1, 0, 3], pos[n_j + 1, 1, 3], pos[n_j + 1, 2, 3]
+                for i in range(3):
+                    axis[k, i] = G[i, 2]
+                    origin[k, i] = G[i, 3]
+                half_ticks = lo[top, k] + hi[top, k]
+                v = 0.5 * half_ticks * tick[k]
+                if prismatic[k]:
+                    for i in range(3):
+                        G[i, 3] += v * G[i, 2]
+                else:
+                    if tabulated:
+                        s, c = sine[k, half_ticks - first[k]], cosine[k, half_ticks - first[k]]
+                    else:
+                        s, c = np.sin(v), np.cos(v)
+                    for i in range(3):
+                        g0, g1 = G[i, 0], G[i, 1]
+                        G[i, 0] = c * g0 + s * g1
+                        G[i, 1] = c * g1 - s * g0
+                P = chain[k + 1]
+                for i in range(3):
+                    g0, g1, g2, t = G[i, 0], G[i, 1], G[i, 2], G[i, 3]
+                    for j in range(4):
+                        G[i, j] = g0 * P[0, j] + g1 * P[1, j] + g2 * P[2, j]
+                    G[i, 3] += t
+            px, py, pz = G[0, 3], G[1, 3], G[2, 3]
             vx, vy, vz = target[0] - px, target[1] - py, target[2] - pz
             dist = np.sqrt(vx * vx + vy * vy + vz * vz)
             if single:  # a state: its exact tool point decides
@@ -277,10 +341,14 @@ def _enumerate(
                     out, out_hi, count = _kept(out, out_hi, count, lo[top], hi[top])
                 continue
             for k in range(m):
-                j = tip_index[k]
-                _, _, _, J[0, k], J[1, k], J[2, k] = jacobian_column(
-                    pos[j + 1], axes[j], prismatic[j], px, py, pz
-                )
+                z0, z1, z2 = axis[k, 0], axis[k, 1], axis[k, 2]
+                if prismatic[k]:
+                    J[0, k], J[1, k], J[2, k] = z0, z1, z2
+                else:
+                    r0, r1, r2 = px - origin[k, 0], py - origin[k, 1], pz - origin[k, 2]
+                    J[0, k] = z1 * r2 - z2 * r1
+                    J[1, k] = z2 * r0 - z0 * r2
+                    J[2, k] = z0 * r1 - z1 * r0
             second = 0.0
             lipschitz = 0.0
             for a in range(m):
@@ -308,12 +376,11 @@ def _enumerate(
                     uy = J[2, a] * J[0, b] - J[0, a] * J[2, b]
                     uz = J[0, a] * J[1, b] - J[1, a] * J[0, b]
                     norm = np.sqrt(ux * ux + uy * uy + uz * uz)
-                    if norm > 1e-12:
-                        ux, uy, uz = ux / norm, uy / norm, uz / norm
+                    if norm > 1e-12:  # (the test scaled by the normal's length)
                         reach = 0.0
                         for k in range(m):
                             reach += abs(J[0, k] * ux + J[1, k] * uy + J[2, k] * uz) * r[k]
-                        dropped = abs(ux * vx + uy * vy + uz * vz) > reach + slack
+                        dropped = abs(ux * vx + uy * vy + uz * vz) > reach + slack * norm
                     b += 1
                 a += 1
             if dropped:
