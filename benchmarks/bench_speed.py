@@ -239,14 +239,15 @@ GAPS = """## Where the unmet goals lose their time (profiles)
 - **Seed reach** (about 0.8-1.0 s in-process): the lower bound's 33 SLSQP refinements of the
   least largest joint change (about half), the lattice candidates about the solution family
   and the family's samples (about a quarter each).
-- **Task 2** (trace, with its lower bound): the reachability scan (about 5 s) and locating the
-  ends of the unreachable arc by bisection (about 14 s), the tracing and certifying (about 3 s),
-  the lower bound's search (about 18 s, 8 rounds).
-- **Task 3** (spot welds, with the bound over the lattice goal states and the pools): listing
-  the lattice goal states at the four welds (about 32 s), the bound over them (about 7 s),
-  planning the orders through chosen goal states (about 18 s), sampling the pools of goal
-  states (about 10 s) and planning through them (about 28 s).
-- **First run**: compiling every numba kernel once (about 100 s); later runs load them from the
+- **Task 2** (trace, with its lower bound; the stages' times as `armpath -v run` printed them on
+  2026-12-05): the reachability scan (about 4 s), locating the ends of the unreachable arc
+  (about 2 s), choosing the reference path along the arc (about 12 s), the tracing and
+  certifying (about 3 s), the lower bound's search (about 6 s, 8 rounds).
+- **Task 3** (spot welds, with the bound over the lattice goal states and the pools; the same
+  run): listing the lattice goal states at the four welds (about 11 s), the rest of the bound
+  (about 7 s), planning the orders through chosen goal states (about 15 s), sampling the pools
+  of goal states (about 8 s) and planning through them (about 13 s).
+- **First run**: compiling every numba kernel once (about 70-100 s); later runs load them from the
   disk cache.
 - **Single IK pose** (about 2.5 times EAIK's time): the closed-form kernel itself is a few us a
   pose (see the batched rows); numba's dispatch, validating and scaling the pose
@@ -259,8 +260,9 @@ GAPS = """## Where the unmet goals lose their time (profiles)
   callback). Ours ends with fewer commands on every problem, and most of its time goes to
   getting them: after the RRT and its shortcuts, `planning/tighten.py` places a motion's states
   anew for fewer commands (L-BFGS-B over the pairs' clearances at 7 instants a command, with
-  finite-difference gradients): about 8 s of the 7-10 s on the wall and task3 leg 4, for 60
-  and 59 commands (before it, the 2026-11-26 run: 61 and 60 in about 0.05 s).
+  finite-difference gradients taken only at the instants a step may bring near an obstacle):
+  about 1.1 s of the 1.6 s on the wall and on task3 leg 4, for 60 and 59 commands (profiled
+  with seed 0 on 2026-12-05; 7-10 s before the gradient skipped the other instants).
 """
 
 

@@ -59,12 +59,13 @@ MAX_TABLE = 1 << 17
 #: at most ``k`` times along that joint.
 _STACK = 4096
 #: Widths (ticks), widest first, at which the search stops to look at the clearance of the boxes
-#: it keeps, before it searches on inside those that may hold a state keeping the rule. A width
-#: but the last is skipped when the look before it dropped less than :data:`MIN_DROPPED_SHARE`
-#: of its boxes (a look costs about six times a box). One thread
-#: (``benchmarks/bench_lattice_goals.py``), the UR5 cell's four welds: 137 s at 8 ticks alone,
-#: 76 s at 32, 16 and 8 (32 drops about 70 %, 16 a quarter, 8 a sixth); the seed's Task 3: 39 s
-#: at 8 alone (72 % dropped), 43 s skipping 16 (53 s looking at all three: 32 and 16 drop 7 %).
+#: it keeps, before it searches on inside those that may hold a state keeping the rule. The looks
+#: end after one that dropped less than :data:`MIN_DROPPED_SHARE` of its boxes (a look costs
+#: about twenty of the kernel's boxes). One thread (``benchmarks/bench_lattice_goals.py``,
+#: 2026-12-05), the UR5 cell's four welds: 58 s at 8 ticks alone, 34 s at 32, 16 and 8 (32
+#: drops about 70 %, 16 a fifth, 8 a seventh), 32 s on this schedule; the seed's Task 3: 19 s
+#: at 8 alone, 27 s at all three (32 and 16 drop at most 7 %, 8 half to three quarters), 16.5 s
+#: on this schedule (32 alone).
 COARSE_TICKS = (32, 16, 8)
 MIN_DROPPED_SHARE = 0.25
 
@@ -143,7 +144,8 @@ def lattice_goal_states(
     :meth:`~armpath.geometry.world.CollisionWorld.may_be_clear_within`): the states that break
     the rule are not wanted, so the search keeps boxes :data:`COARSE_TICKS` wide in turn and
     drops those whose centre says no for the farthest any point of the arm moves within the
-    box; every state of such a box breaks the rule."""
+    box; every state of such a box breaks the rule. It stops looking after a width whose look
+    dropped less than :data:`MIN_DROPPED_SHARE` of the boxes."""
     grid = arm.lattice
     tick = np.asarray(grid.tick, dtype=np.float64)
     tip_index = np.flatnonzero(tip).astype(np.int64)
