@@ -84,6 +84,35 @@ def test_a_sliding_joint_and_a_held_joint_between_the_listed_ones_are_carried_ex
     assert np.all(found.ticks[:, ~tip] == centre[~tip])
 
 
+def test_turns_taken_at_each_box_where_the_boxes_span_too_many_to_tabulate():
+    """The kernel tabulates each joint's sine and cosine over the half-ticks its boxes span; a
+    second box far away (a single state 70,000 ticks off, no state near the target) makes the
+    span too wide, and the turns are taken at each box instead: the same states, and the same
+    boxes looked at plus the far one."""
+    arm = load_arm("seed")
+    grid = arm.lattice
+    tip = np.array([True] * 5 + [False])
+    centre = grid.nearest_ticks(np.radians([10, -30, 40, 20, 30, 0]))
+    target = tool_position(arm, grid.to_joint(centre)) + np.array([0.01, 0.02, -0.01])
+    constants = lattice_goals.kernel_constants(arm, target, 0.05, tip, centre)
+    near_lo, near_hi = centre[tip] - 6, centre[tip] + 6
+    far = centre[tip] + 70_000
+    assert 2 * (far.max() - near_lo.min()) + 1 > lattice_goals.MAX_TABLE
+
+    def listed(lo: np.ndarray, hi: np.ndarray) -> tuple[set, int]:
+        out, _, count, boxes, status, _, _ = lattice_goals._enumerate(
+            lo, hi, *constants, 10**9, 10**6, 0
+        )
+        assert status == 0  # every box looked at
+        return {tuple(s) for s in out[:count]}, boxes
+
+    tabulated, boxes = listed(near_lo[None], near_hi[None])
+    turned, more_boxes = listed(np.stack([near_lo, far]), np.stack([near_hi, far]))
+    assert len(tabulated) >= 3
+    assert turned == tabulated
+    assert more_boxes == boxes + 1
+
+
 def _clear_state_near_a_weld() -> tuple:
     """The seed arm, its scene's world, a weld inside the workpiece and the lattice state
     nearest a clear family member there."""

@@ -122,6 +122,34 @@ def tip_chain(
     return P, np.ascontiguousarray(prismatic[np.asarray(tip_index, dtype=np.int64)])
 
 
+def kernel_constants(
+    arm: SerialArm,
+    target: FloatArray,
+    tolerance: float,
+    tip: NDArray[np.bool_],
+    fixed_ticks: IntArray,
+) -> tuple[FloatArray, FloatArray, float, FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+    """The arguments of :func:`_enumerate` between the boxes and the budgets, for the joints
+    ``tip`` listed about ``target`` (model units) within ``tolerance``, the others held at
+    ``fixed_ticks``: the listed joints' ticks, the target, the tolerance, the second-derivative
+    and displacement bounds, and :func:`tip_chain`'s transforms and prismatic flags."""
+    tick = np.asarray(arm.lattice.tick, dtype=np.float64)
+    tip_index = np.flatnonzero(tip).astype(np.int64)
+    q_fixed = np.asarray(fixed_ticks, dtype=np.float64) * tick
+    M = second_derivative_bounds(arm)[np.ix_(tip_index, tip_index)]
+    reach_bound = np.ascontiguousarray(displacement_bounds(arm)[tip_index], dtype=np.float64)
+    chain, tip_prismatic = tip_chain(arm, tip_index, q_fixed)
+    return (
+        np.ascontiguousarray(tick[tip_index]),
+        np.asarray(target, dtype=np.float64),
+        float(tolerance),
+        np.ascontiguousarray(M),
+        reach_bound,
+        chain,
+        tip_prismatic,
+    )
+
+
 def lattice_goal_states(
     arm: SerialArm,
     target: FloatArray,
@@ -150,18 +178,8 @@ def lattice_goal_states(
     tick = np.asarray(grid.tick, dtype=np.float64)
     tip_index = np.flatnonzero(tip).astype(np.int64)
     q_fixed = np.asarray(fixed_ticks, dtype=np.float64) * tick
-    M = second_derivative_bounds(arm)[np.ix_(tip_index, tip_index)]
     reach_bound = np.ascontiguousarray(displacement_bounds(arm)[tip_index], dtype=np.float64)
-    chain, tip_prismatic = tip_chain(arm, tip_index, q_fixed)
-    fixed = (
-        np.ascontiguousarray(tick[tip_index]),
-        np.asarray(target, dtype=np.float64),
-        float(tolerance),
-        np.ascontiguousarray(M),
-        reach_bound,
-        chain,
-        tip_prismatic,
-    )
+    fixed = kernel_constants(arm, target, tolerance, tip, fixed_ticks)
 
     def run(
         lo: IntArray, hi: IntArray, coarse: int, boxes_left: int
