@@ -416,15 +416,21 @@ def test_an_interrupt_while_numba_compiles_waits_until_it_is_done():
     from armpath import cli
 
     before = signal.getsignal(signal.SIGALRM)
+    compiled_through = False
     try:
-        with global_compiler_lock:
-            cli._interrupt_when_safe()  # no KeyboardInterrupt inside the compiler
-            time.sleep(0.3)  # retried meanwhile, and put off again
+        # one scope for the whole: the retry may fire the moment the lock is let go, before a
+        # second ``pytest.raises`` would be entered (it did so once in CI, and the interrupt
+        # escaped the test); reaching the end of the locked block shows it was put off there
         with pytest.raises(KeyboardInterrupt):
+            with global_compiler_lock:
+                cli._interrupt_when_safe()  # no KeyboardInterrupt inside the compiler
+                time.sleep(0.3)  # retried meanwhile, and put off again
+                compiled_through = True
             time.sleep(2.0)  # raised once the lock is free
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, before)
+    assert compiled_through
     with pytest.raises(KeyboardInterrupt):
         cli._interrupt_when_safe()  # nothing compiling: at once
 
