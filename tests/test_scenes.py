@@ -1,5 +1,8 @@
 """Scene files: the built-in seed scene and validation of user files."""
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -199,7 +202,32 @@ def test_a_home_off_the_lattice_or_in_collision_is_named_where_it_is_written(tmp
     r = run_in_process(["trace", "--scene", "down.toml", "--no-bound"], tmp_path)
     assert r.returncode == 1 and "reachability" not in r.stderr
     assert "start state is in collision" in r.stderr and "the arm's home pose" in r.stderr
-    assert "[arm] home_deg" in r.stderr
+    assert "[arm] home_deg" in r.stderr and "random poses" not in r.stderr
+
+
+def test_an_arm_whose_base_stands_too_near_an_obstacle_is_told_to_move_the_base(tmp_path):
+    """The PUMA 560's D-H base frame is its shoulder: set on the UR5 cell's pedestal top (z =
+    250 mm) its upper arm's capsule (radius 80 mm) holds the shoulder, which lies on the
+    pedestal's face, so it reaches 80 mm into the pedestal at every pose. The start was refused
+    with the advice to move the home, which no home can mend; it now says to move the base.
+    The advice mends it: raised by the trunk's height, the arm stands on the pedestal."""
+    from armpath.model.catalog import PUMA560_LINK_RADII_MM, PUMA560_PEDESTAL_MM
+    from cli_in_process import run_in_process
+
+    cell = (Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml").read_text()
+    puma = re.sub(r"\nhome_deg = .*\n", "\n", cell.replace('model = "ur5"', 'model = "puma560"'))
+    (tmp_path / "puma.toml").write_text(puma)
+    r = run_in_process(["spotweld", "--scene", "puma.toml"], tmp_path)
+    assert r.returncode == 1 and r.stderr.count("error:") == 1
+    depth = PUMA560_LINK_RADII_MM[2]  # the shoulder on the face: the capsule's whole radius
+    assert f"L2a is {-depth:.3f} mm from pedestal" in r.stderr
+    assert "every one of 64 random poses" in r.stderr and "[arm] base" in r.stderr
+    assert "home_deg" not in r.stderr
+    # the advice mends it: raised by the trunk's height, the arm stands on the pedestal
+    raised = puma.replace("[-150, 0, 250]", f"[-150, 0, {250 + PUMA560_PEDESTAL_MM}]")
+    (tmp_path / "raised.toml").write_text(raised)
+    r = run_in_process(["reach", "450", "-150", "250", "--scene", "raised.toml"], tmp_path)
+    assert r.returncode == 0, r.stderr
 
 
 def test_a_key_written_twice_true_for_a_number_and_a_device_for_a_mesh_are_refused(tmp_path):

@@ -22,7 +22,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import CollisionError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import displacement_bounds
-from armpath.model.serial_arm import SerialArm
+from armpath.model.serial_arm import JointKind, SerialArm
 
 FloatArray = NDArray[np.float64]
 
@@ -204,27 +204,58 @@ def motion_clearance(
     )
 
 
+#: Random configurations within the joint limits at which :func:`check_state_clear` tries a
+#: pair that breaks the rule, to tell a pose in collision from a base placed too near an
+#: obstacle (the pair then breaks it at every pose tried).
+POSES_TRIED = 64
+
+
+def _poses_within_limits(arm: SerialArm, n: int) -> FloatArray:
+    """``n`` configurations drawn evenly within the joint limits (fixed seed); a revolute joint
+    unlimited on a side spans a turn about its home there, a prismatic one stays at its home."""
+    home = np.asarray(arm.home, dtype=np.float64)
+    revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])
+    reach = np.where(revolute, np.pi, 0.0)
+    lower = np.where(np.isfinite(arm.lower), arm.lower, home - reach)
+    upper = np.where(np.isfinite(arm.upper), arm.upper, home + reach)
+    rng = np.random.default_rng(0)
+    return lower + rng.random((n, home.size)) * (upper - lower)
+
+
 def check_state_clear(
     arm: SerialArm, world: CollisionWorld, q: FloatArray, what: str = "start state"
 ) -> None:
-    """Raise :class:`CollisionError` naming the worst pair when ``q`` breaks the clearance rule."""
+    """Raise :class:`CollisionError` naming the worst pair when ``q`` breaks the clearance rule.
+
+    Where that pair breaks the rule at every one of :data:`POSES_TRIED` random poses within the
+    joint limits too, no pose can help and the message says to move the arm's base or the
+    obstacle; else, where ``q`` is the arm's home, it says how to start elsewhere."""
     values, _ = world.pair_clearances(arm, q)
     pairs = world.pairs(arm)
     if not pairs:
         return
-    slack = values - world.required(arm)
+    required = world.required(arm)
+    slack = values - required
     k = int(np.argmin(slack))
     if slack[k] < 0:
         pair = pairs[k]
         home = what == "start state" and np.allclose(q, arm.home, rtol=0.0, atol=1e-9)
-        raise CollisionError(
-            f"{what} is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
-            f"(needs >= {pair.required:g} mm)"
-            + (
+        elsewhere, _ = world.pair_clearances(arm, _poses_within_limits(arm, POSES_TRIED))
+        if np.all(elsewhere[:, k] < required[k]):
+            hint = (
+                f"; so is every one of {POSES_TRIED} random poses within the joint limits: the "
+                "arm's base stands too near it (move the base, [arm] base in a scene file, or "
+                "the obstacle)"
+            )
+        elif home:
+            hint = (
                 "; it is the arm's home pose: start elsewhere (--from of reach, plan, trace "
                 "and spotweld; start_deg= in Python) or move the home ([arm] home_deg; run "
                 "starts every task there)"
-                if home
-                else ""
             )
+        else:
+            hint = ""
+        raise CollisionError(
+            f"{what} is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
+            f"(needs >= {pair.required:g} mm)" + hint
         )
