@@ -219,7 +219,8 @@ def _poses_within_limits(arm: SerialArm, n: int) -> FloatArray:
     lower = np.where(np.isfinite(arm.lower), arm.lower, home - reach)
     upper = np.where(np.isfinite(arm.upper), arm.upper, home + reach)
     rng = np.random.default_rng(0)
-    return lower + rng.random((n, home.size)) * (upper - lower)
+    poses: FloatArray = lower + rng.random((n, home.size)) * (upper - lower)
+    return poses
 
 
 def check_state_clear(
