@@ -172,6 +172,17 @@ def test_cli_show_gives_home_and_limits_in_display_units(name, tmp_path):
         assert "-125 … 125 deg" in shown and "-138 … 138 deg" in shown
 
 
+def test_cli_show_says_how_high_a_base_column_stands(tmp_path):
+    """The PUMA 560's D-H base frame is its shoulder, 26.45 in (671.83 mm) above its foot:
+    a scene's base placed at a pedestal's top buried the upper arm at every pose. Show says how
+    high the base frame stands; an arm without a column says nothing of it."""
+    from cli_in_process import run_in_process
+
+    shown = " ".join(run_in_process(["model", "show", "puma560"], tmp_path).stdout.split())
+    assert f"the base frame stands {26.45 * 25.4:g} mm above the arm's foot" in shown
+    assert "above the arm's foot" not in run_in_process(["model", "show", "ur5"], tmp_path).stdout
+
+
 def test_an_empty_model_is_a_usage_error_and_a_folder_an_unknown_model(tmp_path):
     """--model "" was read as the robot file '.' that "does not exist": now every option given
     an empty value is a usage error; the folder '.' is no model."""

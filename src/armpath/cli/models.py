@@ -98,6 +98,13 @@ def show(
             f"{' '.join(f'{v:g}' for v in _to_display(arm, arm.home))} ({', '.join(units)})",
             markup=False,
         )
+        below = [-lm.offset[2] for lm in arm.landmarks if lm.frame == 0 and lm.offset[2] < 0]
+        if below:  # a column under the base frame (the PUMA 560's D-H base is its shoulder)
+            out_console.print(
+                f"the base frame stands {max(below):g} {arm.length_unit} above the arm's foot "
+                "(a base column; a scene's [arm] base places the base frame, not the foot)",
+                markup=False,
+            )
 
 
 @model_app.command("convert")
