@@ -32,7 +32,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import check_time, count_text
 from armpath.commands import CommandSequence
-from armpath.errors import ArmpathError, ArmpathWarning, InvalidInputError, PlanningError
+from armpath.errors import (
+    ArmpathError,
+    ArmpathWarning,
+    InvalidInputError,
+    PlanningError,
+    UnreachableError,
+)
 from armpath.geometry.curves import Polyline
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.target import Orientation
@@ -262,9 +268,9 @@ def plan_tour(
     and through the most accurate ones: :data:`GUIDED_NEAREST`) and the shorter plan counts; such
     a plan is given up before a leg once its legs so far plus the fewest direct-motion commands
     through the goal states still to go reach the plan it would have to beat. Raises
-    :class:`PlanningError` when a target cannot be reached clear of the obstacles, and where
-    targets have no goal states (out of reach, say) the error of the first, naming every such
-    target and why.
+    :class:`PlanningError` when a target cannot be reached clear of the obstacles, and
+    :class:`UnreachableError` naming every target out of reach, each with the nearest point
+    the arm reaches.
     ``orders_not_planned`` of the result says, for each ranked order that has no planned command
     count, why. ``orientations``: a tool orientation rule per target (None: the tool point
     only). ``bound``: prove the lower bound over every order and goal configuration
@@ -314,7 +320,7 @@ def plan_tour(
     say = on_progress or (lambda _msg: None)
     opts = options or MotionOptions()
     goals: list[IntArray] = []
-    failed: list[tuple[int, ArmpathError]] = []  # every target without goal states, said at once
+    failed: list[tuple[int, UnreachableError]] = []  # every target out of reach, said at once
     for i, p in enumerate(pts):
         say(f"goal states for target {i + 1} ({', '.join(f'{v:.2f}' for v in p)}) mm")
         try:
@@ -322,13 +328,14 @@ def plan_tour(
             g, _ = goal_states(
                 arm, world, start, p, tolerance_mm, goals_per_target, orientation=rule
             )
-        except ArmpathError as exc:
+        except UnreachableError as exc:  # each its own nearest point: name them all
             failed.append((i, exc))
             continue
+        except ArmpathError as exc:  # what the arm, tool or scene lacks: the first says it
+            raise type(exc)(f"target {i + 1}: {exc}") from None
         goals.append(g)
     if failed:
-        said = "; ".join(f"target {i + 1}: {exc}" for i, exc in failed)
-        raise type(failed[0][1])(said) from None
+        raise UnreachableError("; ".join(f"target {i + 1}: {exc}" for i, exc in failed))
     orders = (
         [tuple(range(len(pts)))]
         if order == "given"
