@@ -48,6 +48,10 @@ from armpath.planning.trace.carriage import CarriageSchedule, carriage_joint, ca
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
+#: Most waves in which a new lineage of an arm's self-motion starts from the member of the
+#: nearest frame solved (:attr:`GenericCurveFamily._anchored`); each must solve a frame more. A
+#: KUKA iiwa at one point, 600 tool directions: 85 solved from its home, 385 after seven waves.
+_MAX_WAVES = 12
 #: A tool point this close to the surface (or inside by at most this much) touches it (mm).
 TOUCH_MM = 1e-6
 #: Tool directions this far past tangent to the surface are still searched (cosine).
@@ -626,8 +630,9 @@ class SeedCurveFamily(CurveFamily):
 class GenericCurveFamily(CurveFamily):
     """Any other arm's family: for each tool direction, the tool frames with that approach axis
     and a few turns about it, each solved by the all-solutions IK (six joints) or by
-    Levenberg-Marquardt from the last solutions found (warm starts) and random ones (the point
-    alone when fewer than five joints move the tool point)."""
+    Levenberg-Marquardt from the last solutions found (warm starts), else from the arm's start
+    (more joints than a frame needs: :attr:`_anchored`) or random ones (the point alone when
+    fewer than five joints move the tool point)."""
 
     rolls: int = 6
     #: the configuration the arm starts from (rad; model units for a prismatic joint), if
@@ -680,6 +685,21 @@ class GenericCurveFamily(CurveFamily):
     def turns_per_direction(self) -> int:
         return int(self._turns)
 
+    @cached_property
+    def _anchored(self) -> bool:
+        """Whether each tool frame's first member is solved from one configuration (the arm's
+        start if known, else its home; a random start where that fails) rather than from a
+        random start of its own: for an arm with more joints than a tool frame needs and no
+        carriage, whose self-motion the frames do not fix. Frames the start does not reach
+        are solved from the member of the nearest frame solved, in waves (:data:`_MAX_WAVES`).
+        Random starts put neighbouring frames' members at unrelated points of the self-motion
+        and missed most frames (a KUKA iiwa at one point: 24 members of 600 tool directions,
+        neighbours' joints a median 193 deg apart; anchored, 375 and 7 deg), and in the UR5
+        cell its seam was traced in four passes, 256 commands, and its four welds in 131, with
+        no member clear of the workpiece at two of them (anchored: 123 and 63)."""
+        redundant = self.arm.n_joints > 6 and not self._point_alone
+        return redundant and self._carriage is None
+
     def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
         return self._solved(E, dirs)[0]
 
@@ -718,7 +738,8 @@ class GenericCurveFamily(CurveFamily):
         of the frame of each): continued from the solution found
         for the same frame at the last point (so that neighbouring points of a curve get
         neighbouring configurations, which the reference path can follow), otherwise from a
-        fixed random start of that frame."""
+        fixed random start of that frame; an arm :attr:`_anchored` tries the arm's start (or
+        home) first, then the member of the nearest frame solved (:data:`_MAX_WAVES`)."""
         arm = self.arm
         fam = GenericFamily(arm, ToolTarget(E))
         keys = [(*np.round(R[:, 2], 6).tolist(), round(float(R[0, 0]), 6)) for R in Rs]
@@ -727,17 +748,45 @@ class GenericCurveFamily(CurveFamily):
         rng = np.random.default_rng(0)
         starts = rng.uniform(lo, hi, (Rs.shape[0], arm.n_joints))
         fresh = starts.copy()
+        continued = np.array([key in self._last for key in keys], dtype=bool)
+        if self._anchored:  # every new lineage from one configuration: see _anchored
+            anchor = arm.home if self.start_q is None else self.start_q
+            starts[:] = np.clip(anchor, lo, hi)
         starts, turn_near = _continued(self._last, keys, starts)
         a = np.asarray(arm.approach_axis)
         wanted = Rs @ a  # (M, 3) the tool direction of each frame
         if not self._point_alone:
-            if arm.n_joints < 6:  # five joints set the tool's direction, not its turn about it
-                q = fam.refine(starts, iterations=40, axes=wanted)
-            else:
-                q = fam.refine(starts, iterations=40, rotations=Rs)
-            # the tool axis exactly (the turn about it is free): keep what reaches the point
-            axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, wanted)
-            good = (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
+
+            def solved(starts: FloatArray, Rs: FloatArray) -> tuple[FloatArray, BoolArray]:
+                if arm.n_joints < 6:  # five joints set the tool's direction, not its turn
+                    q = fam.refine(starts, iterations=40, axes=Rs @ a)
+                else:
+                    q = fam.refine(starts, iterations=40, rotations=Rs)
+                # the tool axis exactly (the turn about it is free): keep what reaches the point
+                axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, Rs @ a)
+                return q, (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
+
+            q, good = solved(starts, Rs)
+            if self._anchored:
+                # a new lineage the anchor did not reach: from the member of the nearest frame
+                # solved, in waves while they reach more, then from a random start
+                from scipy.spatial import cKDTree
+
+                flat = Rs.reshape(-1, 9)
+                for _ in range(_MAX_WAVES):
+                    solved_rows, open_rows = (
+                        np.flatnonzero(good),
+                        np.flatnonzero(~good & ~continued),
+                    )
+                    if solved_rows.size == 0 or open_rows.size == 0:
+                        break
+                    _, nearest = cKDTree(flat[solved_rows]).query(flat[open_rows])
+                    q_w, good_w = solved(q[solved_rows[nearest]], Rs[open_rows])
+                    if not np.any(good_w):
+                        break
+                    q[open_rows[good_w]], good[open_rows[good_w]] = q_w[good_w], True
+                again = np.flatnonzero(~good & ~continued)
+                q[again], good[again] = solved(fresh[again], Rs[again])
             frame = np.arange(Rs.shape[0])
         else:
             # too few joints to set the tool's direction (a SCARA's points down): the point
