@@ -757,16 +757,17 @@ class GenericCurveFamily(CurveFamily):
         wanted = Rs @ a  # (M, 3) the tool direction of each frame
         if not self._point_alone:
 
-            def solved(starts: FloatArray, Rs: FloatArray) -> tuple[FloatArray, BoolArray]:
+            def solved(starts: FloatArray, rows: NDArray[np.intp]) -> tuple[FloatArray, BoolArray]:
+                """The frames ``rows`` solved from ``starts``, and which reach the point."""
                 if arm.n_joints < 6:  # five joints set the tool's direction, not its turn
-                    q = fam.refine(starts, iterations=40, axes=Rs @ a)
+                    q = fam.refine(starts, iterations=40, axes=wanted[rows])
                 else:
-                    q = fam.refine(starts, iterations=40, rotations=Rs)
+                    q = fam.refine(starts, iterations=40, rotations=Rs[rows])
                 # the tool axis exactly (the turn about it is free): keep what reaches the point
-                axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, Rs @ a)
+                axis_ok = np.einsum("mi,mi->m", tool_pose(arm, q)[:, :3, :3] @ a, wanted[rows])
                 return q, (axis_ok > np.cos(np.radians(1.0))) & fam.exact(q)
 
-            q, good = solved(starts, Rs)
+            q, good = solved(starts, np.arange(Rs.shape[0]))
             if self._anchored:
                 # a new lineage the anchor did not reach: from the member of the nearest frame
                 # solved, in waves while they reach more, then from a random start
@@ -774,19 +775,17 @@ class GenericCurveFamily(CurveFamily):
 
                 flat = Rs.reshape(-1, 9)
                 for _ in range(_MAX_WAVES):
-                    solved_rows, open_rows = (
-                        np.flatnonzero(good),
-                        np.flatnonzero(~good & ~continued),
-                    )
+                    solved_rows = np.flatnonzero(good)
+                    open_rows = np.flatnonzero(~good & ~continued)
                     if solved_rows.size == 0 or open_rows.size == 0:
                         break
                     _, nearest = cKDTree(flat[solved_rows]).query(flat[open_rows])
-                    q_w, good_w = solved(q[solved_rows[nearest]], Rs[open_rows])
+                    q_w, good_w = solved(q[solved_rows[nearest]], open_rows)
                     if not np.any(good_w):
                         break
                     q[open_rows[good_w]], good[open_rows[good_w]] = q_w[good_w], True
                 again = np.flatnonzero(~good & ~continued)
-                q[again], good[again] = solved(fresh[again], Rs[again])
+                q[again], good[again] = solved(fresh[again], again)
             frame = np.arange(Rs.shape[0])
         else:
             # too few joints to set the tool's direction (a SCARA's points down): the point
