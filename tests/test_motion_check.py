@@ -5,7 +5,7 @@ import pytest
 
 import independent
 from armpath.commands import CommandSequence, deg_to_ticks
-from armpath.geometry import CollisionWorld
+from armpath.geometry import CollisionWorld, HalfSpace
 from armpath.model import seed_arm
 from armpath.planning import motion_clearance
 from armpath.scenes import seed_scene
@@ -112,3 +112,25 @@ def test_a_motion_is_measured_a_chunk_at_a_time_as_at_once(monkeypatch):
     assert whole.tip_path_mm == pytest.approx(
         np.linalg.norm(np.diff(tips.reshape(-1, 3), axis=0), axis=1).sum(), abs=1e-3
     )
+
+
+def test_a_head_on_approach_ending_a_hair_off_a_surface_is_certified():
+    """A SCARA's quill lowers its tool tip straight onto a table and stops 0.001 mm above it.
+    The bound on each interval was the lower end's value less the most the clearance can fall
+    in half the interval, which stays below 0.001 mm until an interval is narrower than the
+    certificate's precision allows: 'not provable'. Now it is where the slopes from both ends
+    meet, (a + b - c h) / 2, a proof here. Both bound the dense minimum from below (the
+    table's distance is the tool tip's height, written here: 350 mm less the quill)."""
+    from armpath.model.dh import dh_arm
+    from arms import scara_rows
+
+    arm = dh_arm(scara_rows(), name="scara", home=np.zeros(4))
+    start = np.array([300, 400, 1400, 0])  # ticks: 30 deg, 40 deg, 140 mm, 0 deg
+    goal = start + [0, 0, 100, 0]  # the quill 10 mm lower, the tip 200 mm up
+    table = 350.0 - goal[2] * 0.1 - 0.001
+    world = CollisionWorld((HalfSpace("table", np.array([0, 0, table]), np.array([0, 0, 1.0])),))
+    seq = CommandSequence.straight(start, goal, lattice=arm.lattice)
+    mc = motion_clearance(arm, world, seq)
+    dense = 350.0 - seq.sample_motion(400)[:, 2] - table
+    assert mc.certified_ok and mc.min_tip_clearance == pytest.approx(0.001, abs=1e-9)
+    assert 0.0 <= mc.min_clearance_lower_bound <= dense.min() + 1e-9

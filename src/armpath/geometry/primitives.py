@@ -44,6 +44,12 @@ TOUCHING = 1e-9
 #: Allowance (length unit) for floating-point rounding subtracted from exact kernel results to
 #: give proven lower bounds.
 ROUNDING_ALLOWANCE = 1e-7
+#: Least slack (length unit) beyond its requirement a pair must show at a state for the proven
+#: lower bound there to meet the requirement: the rounding allowance, and a mesh's relative one
+#: (1e-8 of distance plus the part's reach) for parts within a metre or so. A goal state whose
+#: tool tip touches a surface exactly (a SCARA's vertical axis lands on it to the tick) is
+#: clear by its value but could never be certified.
+PROVABLE_SLACK = 1e-5
 #: Fewest segments whose distances to a solid of revolution are split between threads, one
 #: slice per core, where a core is free (a segment takes about a microsecond and starting the
 #: threads about two milliseconds).

@@ -122,10 +122,15 @@ def motion_clearance(
     V, L = evaluate(u_nodes)  # values and proven lower bounds, (M, K)
 
     def bounds() -> tuple[FloatArray, FloatArray]:
-        """Lower bound of every pair's clearance on each interval ``(M - 1, K)``."""
+        """Lower bound of every pair's clearance on each interval ``(M - 1, K)``: a clearance
+        that changes at most ``c`` per unit of u and is at least ``a`` and ``b`` at the ends
+        of an interval of width ``h`` is at least ``(a + b - c h) / 2`` inside it (where the
+        two slopes from its ends meet) and never below ``min(a, b) - c h / 2``; a motion
+        that ends touching a surface head-on (0 at its end) is proven clear up to rounding."""
         k = np.minimum(np.floor(u_nodes[:-1]).astype(np.int64), max(n - 1, 0))
         half_delta = 0.5 * rate[k] * np.diff(u_nodes) if n else np.zeros(0)
-        lb = np.minimum(L[:-1], L[1:]) - half_delta[:, None] * speed[None, :]
+        drop = half_delta[:, None] * speed[None, :]
+        lb = np.minimum(np.minimum(L[:-1], L[1:]), 0.5 * (L[:-1] + L[1:]) - drop)
         return lb, half_delta
 
     certified = False

@@ -44,6 +44,7 @@ from armpath.errors import (
     PlanningError,
     UnreachableError,
 )
+from armpath.geometry.primitives import PROVABLE_SLACK
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.seed_position import (
     FIXED_PAIRS,
@@ -1020,8 +1021,8 @@ def _goal_states(
         )
     pairs = world.pairs(arm)
     is_tip = np.array([c.is_tip for c in pairs], dtype=bool)
-    # a lattice state's tool tip only must not penetrate (its pairs require 0)
-    buffer = np.where(is_tip, 0.0, body_buffer_mm)
+    # a lattice state's tool tip only must not penetrate (its pairs require 0), provably
+    buffer = np.where(is_tip, PROVABLE_SLACK, body_buffer_mm)
     # the family samples nearest the start first, whose links keep the margin plus the buffer
     # (the tool tip is not asked here), each at least ``spread`` from those picked before;
     # checked a chunk at a time until enough are picked

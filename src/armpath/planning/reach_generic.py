@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from armpath.budget import MAX_COMMANDS, check_size, check_time
 from armpath.commands import CommandSequence
 from armpath.errors import CollisionError, InvalidInputError, PlanningError, UnreachableError
+from armpath.geometry.primitives import PROVABLE_SLACK
 from armpath.geometry.world import CollisionWorld, into_windows
 from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
 from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
@@ -814,7 +815,7 @@ def generic_goal_states(
         within += cand.shape[0]
         if cand.shape[0] == 0:
             continue
-        ok = goal_clear(grid.to_joint(cand), 0.0)
+        ok = goal_clear(grid.to_joint(cand), -PROVABLE_SLACK)  # the tip provably outside
         if not np.any(ok):
             continue
         idx = np.flatnonzero(ok)

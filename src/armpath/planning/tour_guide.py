@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from armpath.budget import check_time
 from armpath.errors import ArmpathError
+from armpath.geometry.primitives import PROVABLE_SLACK
 from armpath.geometry.world import CollisionWorld
 from armpath.ik.family import shift_into_limits
 from armpath.ik.target import ToolTarget
@@ -236,7 +237,8 @@ class TourGuide:
             )
             states = found.ticks
             if states.shape[0]:
-                states = states[self.world.satisfied(self.arm, grid.to_joint(states))]
+                clear = self.world.satisfied(self.arm, grid.to_joint(states), PROVABLE_SLACK)
+                states = states[clear]
             if states.shape[0] == 0:
                 return None
             away = np.max(np.abs(states[:, tip] - centre) / step, axis=1)
