@@ -7,6 +7,7 @@ commands is bounded by a multi-start SLSQP of the largest joint change written h
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import numpy as np
@@ -1202,3 +1203,87 @@ def test_a_seven_axis_arm_in_the_ur5_cell_welds_in_few_commands(tmp_path):
         T = base @ idh.dh_pose(a, alpha, d, states[visit["after_command"]]) @ tool
         assert np.linalg.norm(T[:3, 3] - np.array(visit["target"])) <= r.doc["tolerance_mm"]
     assert len(r.doc["visits"]) == 4
+
+
+def _scara_plate_cell(tmp_path, spotweld_tolerance=None, reach_tolerance=None):
+    """A SCARA (written here, tests/arms.py's geometry in deg) over a plate whose top, 150 mm
+    up, its quill brings the tool point onto exactly (0.1 mm ticks), welds on the plate and a
+    point above it to reach; the tasks' tolerances as given (None: not written)."""
+    scara = tmp_path / "scara.json"
+    scara.write_text(
+        json.dumps(
+            {
+                "name": "scara", "convention": "standard",
+                "units": {"length": "mm", "angle": "deg"},
+                "links": [
+                    {"a": 300, "alpha": 0, "d": 400, "limits": [-137, 137]},
+                    {"a": 250, "alpha": 180, "d": 0, "limits": [-137, 137]},
+                    {"a": 0, "alpha": 0, "d": 0, "type": "prismatic", "limits": [0, 200]},
+                    {"a": 0, "alpha": 0, "d": 50, "limits": [-170, 170]},
+                ],
+            }
+        )
+    )  # fmt: skip
+    weld = "" if spotweld_tolerance is None else f"tolerance_mm = {spotweld_tolerance}\n"
+    reach = "" if reach_tolerance is None else f"tolerance_mm = {reach_tolerance}\n"
+    cell = tmp_path / "cell.toml"
+    cell.write_text(
+        'name = "scara plate"\n[arm]\nmodel = "scara.json"\n'
+        '[[obstacles]]\ntype = "box"\nname = "plate"\ncenter = [400, 0, 130]\n'
+        "size = [300, 300, 40]\n"
+        f"[tasks.reach]\ntarget_mm = [450, -50, 250]\n{reach}"
+        f"[tasks.spotweld]\npoints_mm = [[350, 0, 150], [450, 50, 150]]\n{weld}"
+    )
+    return cell
+
+
+def _scara_tip(q_deg_mm: np.ndarray) -> np.ndarray:
+    """The SCARA's tool point (mm) at joint values (deg, deg, mm, deg) ``(M, 4)``: the
+    two-link arm in the plane, the quill sliding down from 400 mm, the tool 50 mm below."""
+    q1, q2 = np.radians(q_deg_mm[:, 0]), np.radians(q_deg_mm[:, 1])
+    x = 300.0 * np.cos(q1) + 250.0 * np.cos(q1 + q2)
+    y = 300.0 * np.sin(q1) + 250.0 * np.sin(q1 + q2)
+    return np.column_stack([x, y, 400.0 - q_deg_mm[:, 2] - 50.0])
+
+
+def test_a_scaras_quill_lands_on_its_welds_and_the_scene_sets_the_tolerance(tmp_path):
+    """A SCARA's quill puts its tool point on a plate exactly (to the tick), where the proven
+    lower bound of the clearance (the value less the rounding allowance) lies 1e-7 mm inside:
+    its goal states were clear by their values and every motion onto them 'not provable', so
+    no tour was found. Goal states now keep the tool tip provably out (1e-5 mm). Its lattice
+    does not come within the default 0.05 mm of the welds or the point to reach; the scene's
+    tasks now say how near is near enough (tolerance_mm), which armpath run could not be told.
+    The tour's states, replayed with the two-link closed form written here, put the tool point
+    within the scene's 0.3 mm of each weld, and its continuous motion stays above the plate
+    (1,000 instants a command); the reach lies within the scene's 0.5 mm."""
+    from cli_in_process import run_in_process
+
+    refused = run_in_process(["spotweld", "--scene", str(_scara_plate_cell(tmp_path))], tmp_path)
+    assert refused.returncode == 1
+    assert "allow at least that (--tolerance, a scene task's tolerance_mm" in refused.stderr
+    cell = _scara_plate_cell(tmp_path, spotweld_tolerance=0.3, reach_tolerance=0.5)
+    out = tmp_path / "out"
+    ran = run_in_process(["run", "--scene", str(cell), "--out", str(out), "--no-bound"], tmp_path)
+    assert ran.returncode == 0, ran.stderr
+    tour = json.loads((out / "spotweld.json").read_text())
+    assert tour["tolerance_mm"] == 0.3 and tour["clearance"]["certified"]
+    ticks = np.round(np.array(tour["initial_deg"]) / 0.1).astype(np.int64)  # 0.1 deg, 0.1 mm
+    ticks = np.vstack([ticks, ticks + np.cumsum(tour["commands"], axis=0)])
+    states = ticks * 0.1
+    assert sorted(map(tuple, (v["target"] for v in tour["visits"]))) == [
+        (350.0, 0.0, 150.0),
+        (450.0, 50.0, 150.0),
+    ]
+    for visit in tour["visits"]:
+        reached = _scara_tip(states[visit["after_command"]][None, :])[0]
+        assert np.linalg.norm(reached - visit["target"]) <= 0.3
+        assert reached[2] >= 150.0 + 1e-6  # on the plate's top, provably above it
+    t = np.linspace(0.0, 1.0, 1001)[:, None]
+    moving = np.concatenate([a + t * (b - a) for a, b in itertools.pairwise(states)])
+    tip = _scara_tip(moving)
+    over = (np.abs(tip[:, 0] - 400.0) <= 150.0) & (np.abs(tip[:, 1]) <= 150.0)
+    assert over.any() and tip[over, 2].min() >= 150.0
+    reach = json.loads((out / "reach.json").read_text())
+    assert reach["tolerance_mm"] == 0.5
+    final = _scara_tip(np.array(reach["final_deg"], dtype=np.float64)[None, :])[0]
+    assert np.linalg.norm(final - [450.0, -50.0, 250.0]) <= 0.5

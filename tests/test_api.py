@@ -528,11 +528,11 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.plan("seed", to_deg=["a", 0, 0, 0, 0, 0]), "to_deg must be real numbers"),
         # None for a tolerance failed deep in the planners (a TypeError); text that numpy
         # parses ("1") or a complex number (its imaginary part dropped with a ComplexWarning)
-        # was taken as joint values, while tolerance_mm="0.1" was refused
-        (lambda a: a.reach("seed", [300, 100, 200], tolerance_mm=None), "tolerance_mm must be"),
+        # was taken as joint values, while tolerance_mm="0.1" was refused. (None is the
+        # scene's tolerance for reach, trace and spotweld: their scene tasks may give one.)
         (lambda a: a.plan("seed", to_mm=[300, 100, 200], tolerance_mm=None), "tolerance_mm mus"),
-        (lambda a: a.trace("seed", tolerance_mm=None), "tolerance_mm must be a number, got None"),
-        (lambda a: a.spotweld("seed", tolerance_mm=None), "tolerance_mm must be a number"),
+        (lambda a: a.trace("seed", tolerance_mm="0.1"), "tolerance_mm must be a number, got '0"),
+        (lambda a: a.spotweld("seed", tolerance_mm=True), "tolerance_mm must be a number"),
         (lambda a: a.forward_kinematics("seed", [1j] * 6), r"joints_deg must be real numbers"),
         (lambda a: a.forward_kinematics("seed", ["1"] * 6), r"joints_deg must be real numbers"),
         (lambda a: a.forward_kinematics("seed", [True] * 6), r"joints_deg must be real numbers"),

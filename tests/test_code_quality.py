@@ -13,7 +13,7 @@ SRC = ROOT / "src" / "armpath"
 
 # each module may import only from its own layer and the layers below (DESIGN.md)
 LAYERS = [
-    {"errors", "budget", "jit", "lazy", "angles", "poses", "model", "kinematics"},
+    {"errors", "budget", "tolerances", "jit", "lazy", "angles", "poses", "model", "kinematics"},
     {"geometry"},
     {"ik"},
     {"commands"},

@@ -126,7 +126,7 @@ def test_a_head_on_approach_ending_a_hair_off_a_surface_is_certified():
 
     arm = dh_arm(scara_rows(), name="scara", home=np.zeros(4))
     start = np.array([300, 400, 1400, 0])  # ticks: 30 deg, 40 deg, 140 mm, 0 deg
-    goal = start + [0, 0, 100, 0]  # the quill 10 mm lower, the tip 200 mm up
+    goal = start + np.array([0, 0, 100, 0])  # the quill 10 mm lower, the tip 200 mm up
     table = 350.0 - goal[2] * 0.1 - 0.001
     world = CollisionWorld((HalfSpace("table", np.array([0, 0, table]), np.array([0, 0, 1.0])),))
     seq = CommandSequence.straight(start, goal, lattice=arm.lattice)

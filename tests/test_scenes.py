@@ -69,7 +69,7 @@ def test_user_scene_file(tmp_path):
         ),
         (  # a key written after a table's header belongs to that table
             GOOD + "\nspeed = 3\n",
-            "tasks.reach: unknown key 'speed' \\(tasks.reach takes target_mm\\)$",
+            "tasks.reach: unknown key 'speed' \\(tasks.reach takes target_mm, tolerance_mm\\)$",
         ),
         (  # a misspelt key is named, not the required key it leaves missing
             GOOD.replace("point = ", "point_mm = "),
@@ -79,7 +79,7 @@ def test_user_scene_file(tmp_path):
         (
             GOOD.replace("[tasks.reach]\ntarget_mm", "[tasks.spotweld]\nwelds"),
             "tasks.spotweld: unknown key 'welds' \\(tasks.spotweld takes points_mm, "
-            "points_xy_mm, surface, workpiece\\)$",
+            "points_xy_mm, surface, tolerance_mm, workpiece\\)$",
         ),
         (
             GOOD + '[arm]\nmodel = "ur5"\n[arm.tool]\npositon_mm = [0, 0, 1]\n',

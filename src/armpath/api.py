@@ -32,6 +32,7 @@ from armpath.ik.target import refuse_alone, rule_tolerances
 from armpath.model.serial_arm import SerialArm
 from armpath.results import Result, load_result
 from armpath.scenes import Scene
+from armpath.tolerances import POINT_TOLERANCE_MM
 
 if TYPE_CHECKING:
     from armpath.commands import CommandSequence
@@ -476,7 +477,7 @@ def reach(
     *,
     scene: SceneLike | None = None,
     start_deg: ArrayLike | None = None,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float | None = None,
     pose: Any = None,
     angle_tolerance_deg: float | None = None,
     tool_axis: ArrayLike | None = None,
@@ -490,17 +491,18 @@ def reach(
     ``pose`` asks for the tool frame's rotation too (a 3x3 or 4x4 matrix, a quaternion
     ``("wxyz", q)`` / ``("xyzw", q)``, or a ``scipy.spatial.transform.Rotation``; see
     :mod:`armpath.poses`), within ``angle_tolerance_deg``; ``tool_axis`` keeps only the tool's
-    approach axis within ``axis_tolerance_deg`` of a direction. The result's ``doc`` holds
+    approach axis within ``axis_tolerance_deg`` of a direction. ``tolerance_mm``: the largest
+    tool point error accepted (None: the scene's ``[tasks.reach] tolerance_mm``, else
+    :data:`~armpath.tolerances.POINT_TOLERANCE_MM`). The result's ``doc`` holds
     the lower bound on the commands and why fewer were rejected; ``seed`` seeds the random
     parts of the search (sampling, planning around obstacles)."""
     from armpath.export import reach_result_dict
     from armpath.planning.reach import ReachOptions, plan_reach
 
     _checked(
-        {"angle_tolerance_deg": angle_tolerance_deg,
+        {"tolerance_mm": tolerance_mm, "angle_tolerance_deg": angle_tolerance_deg,
          "axis_tolerance_deg": axis_tolerance_deg, "time_limit_s": time_limit_s},
         {"seed": seed},
-        required={"tolerance_mm": tolerance_mm},
     )  # fmt: skip
     with time_limit(time_limit_s):
         the_arm, the_scene = arm_and_scene(arm, scene)
@@ -514,7 +516,11 @@ def reach(
                 the_scene.world,
                 _start_ticks(the_arm, start_deg),
                 target,
-                ReachOptions(tolerance_mm=tolerance_mm),
+                ReachOptions(
+                    tolerance_mm=the_scene.tolerance_mm("reach")
+                    if tolerance_mm is None
+                    else tolerance_mm
+                ),
                 seed=seed,
                 orientation=rule,
             )
@@ -529,7 +535,7 @@ def plan(
     to_mm: ArrayLike | None = None,
     scene: SceneLike | None = None,
     start_deg: ArrayLike | None = None,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float = POINT_TOLERANCE_MM,
     pose: Any = None,
     angle_tolerance_deg: float | None = None,
     tool_axis: ArrayLike | None = None,
@@ -616,7 +622,7 @@ def trace(
     *,
     scene: SceneLike | None = None,
     start_deg: ArrayLike | None = None,
-    tolerance_mm: float = 0.1,
+    tolerance_mm: float | None = None,
     closed: bool = False,
     tool_axis: str | ArrayLike | None = None,
     axis_tolerance_deg: float | None = None,
@@ -628,7 +634,9 @@ def trace(
 ) -> Result:
     """Go along ``curve`` with the tool (a :class:`~armpath.geometry.curves.Curve`, or points
     ``(M, 3)`` mm joined by straight pieces, ``closed`` back to the first; default: the
-    scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it, every reachable part, in
+    scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it (None: the scene's
+    ``[tasks.trace] tolerance_mm``, else :data:`~armpath.tolerances.TRACE_TOLERANCE_MM`),
+    every reachable part, in
     the fewest passes and commands; the document lists the arcs not traced and why.
     ``tool_axis``: keep the tool's approach axis within ``axis_tolerance_deg`` (default 15)
     of the surface's inward normal at each point (``"normal"``, a torch kept near the normal)
@@ -647,11 +655,11 @@ def trace(
     from armpath.tasks import trace_task
 
     _checked(
-        {"axis_tolerance_deg": axis_tolerance_deg,
+        {"tolerance_mm": tolerance_mm, "axis_tolerance_deg": axis_tolerance_deg,
          "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"closed": closed, "bound": bound},
-        {"tolerance_mm": tolerance_mm, "scan_step_mm": scan_step_mm},
+        {"scan_step_mm": scan_step_mm},
     )  # fmt: skip
     rule = _axis_rule(tool_axis, axis_tolerance_deg)
     with time_limit(time_limit_s):
@@ -668,7 +676,9 @@ def trace(
             else:
                 path = Polyline("curve", _points_mm(curve, "curve", 2), closed=closed)
             options = TraceOptions(
-                tolerance_mm=tolerance_mm,
+                tolerance_mm=the_scene.tolerance_mm("trace")
+                if tolerance_mm is None
+                else tolerance_mm,
                 scan_step_mm=scan_step_mm,
                 motion=MotionOptions(seed=seed),
                 axis_rule=rule,
@@ -694,7 +704,7 @@ def spotweld(
     start_deg: ArrayLike | None = None,
     order: str = "auto",
     return_to_start: bool = False,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float | None = None,
     tool_axis: str | ArrayLike | None = None,
     axis_tolerance_deg: float | None = None,
     objective: str = "commands",
@@ -706,7 +716,9 @@ def spotweld(
 ) -> Result:
     """Visit the spot welds ``welds_mm (K, 3)`` (default: the scene's ``[tasks.spotweld]``)
     in the best order (``order="auto"``: every order ranked by its lower bound, the best
-    planned; ``"given"``: as listed), optionally back to the start. ``tool_axis``: at each
+    planned; ``"given"``: as listed), optionally back to the start, the tool point within
+    ``tolerance_mm`` of each (None: the scene's ``[tasks.spotweld] tolerance_mm``, else
+    :data:`~armpath.tolerances.POINT_TOLERANCE_MM`). ``tool_axis``: at each
     weld, keep the tool's approach axis within ``axis_tolerance_deg`` (default 15) of the
     surface's inward normal there (``"normal"``) or of a world direction (x, y, z).
     ``bound``: also prove a lower bound on the commands of any tour, over every order and goal
@@ -728,11 +740,10 @@ def spotweld(
     from armpath.tasks import spotweld_task
 
     _checked(
-        {"axis_tolerance_deg": axis_tolerance_deg,
+        {"tolerance_mm": tolerance_mm, "axis_tolerance_deg": axis_tolerance_deg,
          "time_limit_s": time_limit_s},
         {"seed": seed} | ({} if bound_samples is None else {"bound_samples": bound_samples}),
         {"return_to_start": return_to_start, "bound": bound, "pools": pools},
-        {"tolerance_mm": tolerance_mm},
     )  # fmt: skip
     rule = _axis_rule(tool_axis, axis_tolerance_deg)
     options = MotionOptions(objective=objective_of(objective), seed=seed)

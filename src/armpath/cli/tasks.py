@@ -64,6 +64,7 @@ from armpath.ik.target import (
 from armpath.planning.choices import Objective, VisitOrder
 from armpath.planning.trace.reachability import MAX_SCAN_POINTS
 from armpath.report import commands_text, coverage_text
+from armpath.tolerances import POINT_TOLERANCE_MM, TRACE_TOLERANCE_MM
 
 if TYPE_CHECKING:
     from armpath.export import OutputFolder
@@ -384,7 +385,14 @@ def reach(
         Path | None,
         typer.Option("--out", help="Write reach.json, reach.csv, reach.xlsx and PNG figures here."),
     ] = None,
-    tolerance: Annotated[float, typer.Option(help="Largest tool point error accepted, mm.")] = 0.05,
+    tolerance: Annotated[
+        float | None,
+        typer.Option(
+            help="Largest tool point error accepted, mm. Default: the scene's [tasks.reach] "
+            f"tolerance_mm, else {POINT_TOLERANCE_MM:g}.",
+            show_default=False,
+        ),
+    ] = None,
     wall: WallOption = None,
     scene_file: SceneOption = None,
     link_radius: LinkRadiusOption = None,
@@ -407,7 +415,9 @@ def reach(
         xyz = _point_mm(target, "target X Y Z (mm)")
         start_ticks = joint_state(arm, start, "--from")
         rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance, arm.approach_axis)
-        options = ReachOptions(tolerance_mm=tolerance)
+        options = ReachOptions(
+            tolerance_mm=scene.tolerance_mm("reach") if tolerance is None else tolerance
+        )
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
@@ -556,7 +566,7 @@ def plan(
     ] = None,
     tolerance: Annotated[
         float, typer.Option(help="Largest tool point error accepted with --to-xyz, mm.")
-    ] = 0.05,
+    ] = POINT_TOLERANCE_MM,
     json_out: JsonOption = False,
     out: Annotated[
         Path | None,
@@ -749,7 +759,14 @@ def spotweld(
         Path | None,
         typer.Option("--out", help="Write spotweld.json, .csv, .xlsx and PNG figures here."),
     ] = None,
-    tolerance: Annotated[float, typer.Option(help="Largest tool point error accepted, mm.")] = 0.05,
+    tolerance: Annotated[
+        float | None,
+        typer.Option(
+            help="Largest tool point error accepted at each weld, mm. Default: the scene's "
+            f"[tasks.spotweld] tolerance_mm, else {POINT_TOLERANCE_MM:g}.",
+            show_default=False,
+        ),
+    ] = None,
     objective: ObjectiveOption = Objective.COMMANDS,
     wall: WallOption = None,
     scene_file: SceneOption = None,
@@ -969,9 +986,13 @@ def _curve_from_points(path: Path, closed: bool) -> Curve:
 @app.command()
 def trace(
     tolerance: Annotated[
-        float,
-        typer.Option(help="Largest distance of the continuous tool path from the curve, mm."),
-    ] = 0.1,
+        float | None,
+        typer.Option(
+            help="Largest distance of the continuous tool path from the curve, mm. Default: the "
+            f"scene's [tasks.trace] tolerance_mm, else {TRACE_TOLERANCE_MM:g}.",
+            show_default=False,
+        ),
+    ] = None,
     json_out: JsonOption = False,
     out: Annotated[
         Path | None,
@@ -1045,7 +1066,7 @@ def trace(
         start_ticks = None if start is None else joint_state(arm, start, "--from")
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
-            tolerance_mm=tolerance,
+            tolerance_mm=scene.tolerance_mm("trace") if tolerance is None else tolerance,
             scan_step_mm=scan_step,
             motion=MotionOptions(seed=seed),
             axis_rule=rule,
@@ -1161,7 +1182,10 @@ def run(
         def do_trace(folder: OutputFolder) -> dict[str, Any]:
             with progress(f"{titles['trace']} ...") as say:
                 options = TraceOptions(
-                    motion=MotionOptions(seed=seed), bound=bound, bound_samples=bound_samples
+                    tolerance_mm=scene.tolerance_mm("trace"),
+                    motion=MotionOptions(seed=seed),
+                    bound=bound,
+                    bound_samples=bound_samples,
                 )
                 traced = trace_task(scene, arm, options, on_progress=say)
             doc = trace_result_dict(traced, arm, scene)

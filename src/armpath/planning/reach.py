@@ -60,6 +60,7 @@ from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.passages import passage_source
+from armpath.tolerances import POINT_TOLERANCE_MM, check_point_tolerance
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -75,9 +76,6 @@ GOAL_BODY_BUFFER_MM = 1.5
 GOAL_SPREAD_DEG = 4.0
 #: Family samples checked for clearance at a time while goal states are picked.
 GOAL_SAMPLE_CHUNK = 8192
-#: Smallest and largest fingertip tolerance a reach accepts (mm).
-MIN_TOLERANCE_MM = 0.001
-MAX_TOLERANCE_MM = 100.0
 
 
 @dataclass(frozen=True)
@@ -106,7 +104,7 @@ class ReachOptions:
         :func:`goal_states`) instead of raising :class:`PlanningError`.
     """
 
-    tolerance_mm: float = 0.05
+    tolerance_mm: float = POINT_TOLERANCE_MM
     extra_commands: int = 3
     sphere_step_deg: float = 1.0
     polish_candidates: int = 64
@@ -115,14 +113,7 @@ class ReachOptions:
     plan_around: bool = True
 
     def __post_init__(self) -> None:
-        if not (
-            np.isfinite(self.tolerance_mm)
-            and MIN_TOLERANCE_MM <= self.tolerance_mm <= MAX_TOLERANCE_MM
-        ):
-            raise InvalidInputError(
-                f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm "
-                f"(the 0.1 deg lattice seldom comes closer than a few um), got {self.tolerance_mm}"
-            )
+        check_point_tolerance(self.tolerance_mm)
         if not 0 <= self.extra_commands <= 20:
             raise InvalidInputError(f"extra_commands must be in [0, 20], got {self.extra_commands}")
         if not (1 <= self.max_motion_checks <= 10_000 and 0 <= self.polish_candidates <= 10_000):
@@ -923,7 +914,7 @@ def goal_states(
     world: CollisionWorld,
     start_ticks: ArrayLike,
     target_mm: ArrayLike,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float = POINT_TOLERANCE_MM,
     count: int = GOAL_COUNT,
     body_buffer_mm: float = GOAL_BODY_BUFFER_MM,
     spread_deg: float = GOAL_SPREAD_DEG,
@@ -965,7 +956,7 @@ def plan_to_point(
     world: CollisionWorld,
     start_ticks: ArrayLike,
     target_mm: ArrayLike,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float = POINT_TOLERANCE_MM,
     options: MotionOptions | None = None,
     orientation: Orientation | None = None,
     on_progress: Callable[[str], None] | None = None,
@@ -979,11 +970,7 @@ def plan_to_point(
     :func:`armpath.plan` do; unlike :func:`plan_reach`, the objective of ``options`` is
     minimised and no bound is proven.
     """
-    if not (np.isfinite(tolerance_mm) and MIN_TOLERANCE_MM <= tolerance_mm <= MAX_TOLERANCE_MM):
-        raise InvalidInputError(
-            f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm, "
-            f"got {tolerance_mm}"
-        )
+    check_point_tolerance(tolerance_mm)
     say = on_progress or (lambda _msg: None)
     say("goal states at the target")
     goals, _ = goal_states(

@@ -883,7 +883,8 @@ def _lattice_too_coarse(
             )
             return (
                 f"{why}; the nearest found is {nearest:.3g} {unit} away: allow at least that "
-                f"(--tolerance; tolerance_mm= in Python){wider}{hint}"
+                "(--tolerance, a scene task's tolerance_mm, or tolerance_mm= in Python)"
+                f"{wider}{hint}"
             )
     return f"{why}; none within {tol:g} {unit} either" + (
         f": try{wider.removeprefix(', or')}" if wider else ""

@@ -60,13 +60,12 @@ from armpath.planning.motion import (
 from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
 from armpath.planning.reach import (
     GOAL_BODY_BUFFER_MM,
-    MAX_TOLERANCE_MM,
-    MIN_TOLERANCE_MM,
     goal_states,
 )
 from armpath.planning.tour_guide import TourGuide
 from armpath.planning.tour_pool import pool_guide, pooled_tour
 from armpath.planning.trace.family import CurveFamily, curve_family
+from armpath.tolerances import POINT_TOLERANCE_MM, check_point_tolerance
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -244,7 +243,7 @@ def plan_tour(
     targets_mm: ArrayLike,
     order: VisitOrder | str = VisitOrder.AUTO,
     return_to_start: bool = False,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float = POINT_TOLERANCE_MM,
     goals_per_target: int = 16,
     orders_to_plan: int = 2,
     options: MotionOptions | None = None,
@@ -306,11 +305,7 @@ def plan_tour(
         raise InvalidInputError(
             f"a tour visits at most {MAX_TOUR_TARGETS} targets, got {pts.shape[0]}"
         )
-    if not (math.isfinite(tolerance_mm) and MIN_TOLERANCE_MM <= tolerance_mm <= MAX_TOLERANCE_MM):
-        raise InvalidInputError(
-            f"tolerance must be between {MIN_TOLERANCE_MM:g} and {MAX_TOLERANCE_MM:g} mm, "
-            f"got {tolerance_mm}"
-        )
+    check_point_tolerance(tolerance_mm)
     check_max_samples(bound_samples)
     if not 1 <= orders_to_plan <= 100:
         raise InvalidInputError(f"orders to plan must be in [1, 100], got {orders_to_plan}")

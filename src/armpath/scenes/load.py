@@ -58,6 +58,7 @@ def scene_from_dict(
         definition,
         spec.arm,
         None if base_dir is None else str(base_dir),
+        spec.tasks.reach.tolerance_mm if spec.tasks.reach else None,
     )
     if spec.arm is not None:
         from armpath.scenes.arm import scene_arm

@@ -21,6 +21,7 @@ from armpath.scenes.schema import (
     SpotweldTaskSpec,
     TraceTaskSpec,
 )
+from armpath.tolerances import POINT_TOLERANCE_MM, TRACE_TOLERANCE_MM
 
 
 @dataclass(frozen=True, repr=False)
@@ -41,6 +42,25 @@ class Scene:
     arm_spec: ArmSpec | None = None
     #: The folder the scene file is in (robot and mesh files are relative to it).
     base_dir: str | None = None
+    #: ``[tasks.reach] tolerance_mm`` (None: the file gives none).
+    reach_tolerance_mm: float | None = None
+
+    def tolerance_mm(self, task: str) -> float:
+        """The largest tool point error of the scene's ``task`` (``"reach"``, ``"spotweld"``:
+        at the goal point; ``"trace"``: of the continuous tool path from the curve), mm: its
+        ``[tasks.<task>] tolerance_mm``, else the task's default
+        (:mod:`armpath.tolerances`)."""
+        if task == "reach":
+            given = self.reach_tolerance_mm
+        elif task == "spotweld":
+            given = None if self.spotweld is None else self.spotweld.tolerance_mm
+        elif task == "trace":
+            given = None if self.trace is None else self.trace.tolerance_mm
+        else:
+            raise ValueError(f"no task {task!r}: reach, trace or spotweld")
+        if given is not None:
+            return given
+        return TRACE_TOLERANCE_MM if task == "trace" else POINT_TOLERANCE_MM
 
     def spotweld_targets_mm(self) -> NDArray[np.float64]:
         """Task 3's points ``(N, 3)`` mm: the 3-D points given, or each xy projection lifted

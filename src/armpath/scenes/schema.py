@@ -4,6 +4,7 @@ and within :data:`~armpath.budget.MAX_COORDINATE_MM`."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Annotated, ClassVar, Literal, get_args
 
 import numpy as np
@@ -17,7 +18,9 @@ from pydantic import (
 )
 
 from armpath.budget import MAX_COORDINATE_MM
+from armpath.errors import InvalidInputError
 from armpath.geometry import WallThickness
+from armpath.tolerances import check_point_tolerance, check_trace_tolerance
 
 Vec3 = tuple[float, float, float]
 
@@ -191,18 +194,47 @@ class ClearanceSpec(_FiniteVec):
     self_margin_mm: float = Field(default=1.0, ge=0)
 
 
+def _checked_tolerance(v: float | None, check: Callable[[float], float]) -> float | None:
+    """A task's tolerance (mm), None or within :mod:`armpath.tolerances`' range."""
+    if v is not None:
+        try:
+            check(v)
+        except InvalidInputError as exc:
+            raise ValueError(str(exc)) from None
+    return v
+
+
+def _point_tolerance(v: float | None) -> float | None:
+    return _checked_tolerance(v, check_point_tolerance)
+
+
+def _trace_tolerance(v: float | None) -> float | None:
+    return _checked_tolerance(v, check_trace_tolerance)
+
+
 class ReachTaskSpec(_FiniteVec):
+    """Task 1: the point the tool reaches and the largest error accepted there (``tolerance_mm``;
+    None: :data:`~armpath.tolerances.POINT_TOLERANCE_MM`)."""
+
     target_mm: Vec3
+    tolerance_mm: float | None = None
+
+    _tolerance = field_validator("tolerance_mm")(_point_tolerance)
 
 
 class SpotweldTaskSpec(_FiniteVec):
     """The welds: points ``points_mm`` (3-D), or projections ``points_xy_mm`` lifted onto the
-    inner (default) or outer face of a hollow_frustum obstacle (``workpiece``)."""
+    inner (default) or outer face of a hollow_frustum obstacle (``workpiece``); the largest tool
+    point error accepted at each (``tolerance_mm``; None:
+    :data:`~armpath.tolerances.POINT_TOLERANCE_MM`)."""
 
     workpiece: str | None = Field(default=None, description="name of the hollow_frustum")
     points_xy_mm: list[tuple[float, float]] | None = None
     points_mm: list[Vec3] | None = None
     surface: Literal["inner", "outer"] = "inner"
+    tolerance_mm: float | None = None
+
+    _tolerance = field_validator("tolerance_mm")(_point_tolerance)
 
     @model_validator(mode="after")
     def _one_kind(self) -> SpotweldTaskSpec:
@@ -252,9 +284,13 @@ CurveSpec = Annotated[
 
 
 class TraceTaskSpec(_Strict):
-    """Task 2: the curve the fingertip follows."""
+    """Task 2: the curve the fingertip follows and the largest distance of the continuous tool
+    path from it (``tolerance_mm``; None: :data:`~armpath.tolerances.TRACE_TOLERANCE_MM`)."""
 
     curve: CurveSpec
+    tolerance_mm: float | None = None
+
+    _tolerance = field_validator("tolerance_mm")(_trace_tolerance)
 
 
 class TasksSpec(_Strict):

@@ -46,11 +46,14 @@ def reach_task(
     seed: int = 0,
 ) -> ReachResult:
     """Task 1: from the arm's initial pose (or ``start_ticks``) to the scene's reach target,
-    fewest commands first (``seed``: of the random parts of the search)."""
+    fewest commands first (``seed``: of the random parts of the search); ``options`` None: the
+    defaults with the scene's tolerance (:meth:`~armpath.scenes.Scene.tolerance_mm`)."""
     if scene.reach_target_mm is None:
         raise SceneError(f"scene {scene.source} defines no [tasks.reach] target_mm")
     model = arm or seed_arm()
     start = _start(model, start_ticks)
+    if options is None:
+        options = ReachOptions(tolerance_mm=scene.tolerance_mm("reach"))
     return plan_reach(model, scene.world, start, scene.reach_target_mm, options, seed=seed)
 
 
@@ -59,7 +62,7 @@ def spotweld_task(
     arm: SerialArm | None = None,
     order: str = "auto",
     return_to_start: bool = False,
-    tolerance_mm: float = 0.05,
+    tolerance_mm: float | None = None,
     options: MotionOptions | None = None,
     on_progress: Callable[[str], None] | None = None,
     tool_axis: AxisRule | None = None,
@@ -70,12 +73,13 @@ def spotweld_task(
     pools: bool = True,
 ) -> TourResult:
     """Task 3: from the arm's initial pose (or ``start_ticks``) through every spot weld of the
-    scene (or the points ``targets_mm (K, 3)``), best order. ``tool_axis``: the torch within a
-    cone about the surface's inward normal at each weld (a rule with ``normal``) or about a
-    fixed direction. ``bound``: prove the tour's lower bound (False: the plan only), its search
-    holding up to ``bound_samples`` live samples. ``pools``: plan the cheapest orders through
-    pools of goal states as well (:mod:`~armpath.planning.tour_pool`; False: the guided
-    orders' goal states only, sooner)."""
+    scene (or the points ``targets_mm (K, 3)``), best order, each within ``tolerance_mm``
+    (None: the scene's, :meth:`~armpath.scenes.Scene.tolerance_mm`). ``tool_axis``: the torch
+    within a cone about the surface's inward normal at each weld (a rule with ``normal``) or
+    about a fixed direction. ``bound``: prove the tour's lower bound (False: the plan only),
+    its search holding up to ``bound_samples`` live samples. ``pools``: plan the cheapest
+    orders through pools of goal states as well (:mod:`~armpath.planning.tour_pool`; False:
+    the guided orders' goal states only, sooner)."""
     model = arm or seed_arm()
     start = _start(model, start_ticks)
     targets = scene.spotweld_targets_mm() if targets_mm is None else targets_mm
@@ -103,7 +107,7 @@ def spotweld_task(
         targets,
         order=order,
         return_to_start=return_to_start,
-        tolerance_mm=tolerance_mm,
+        tolerance_mm=scene.tolerance_mm("spotweld") if tolerance_mm is None else tolerance_mm,
         options=options,
         on_progress=on_progress,
         orientations=rules,
@@ -122,8 +126,11 @@ def trace_task(
     curve: Curve | None = None,
 ) -> TraceResult:
     """Task 2: from the arm's initial pose (or ``start_ticks``), trace every reachable part of
-    the scene's curve (or ``curve``)."""
+    the scene's curve (or ``curve``); ``options`` None: the defaults with the scene's tolerance
+    (:meth:`~armpath.scenes.Scene.tolerance_mm`)."""
     model = arm or seed_arm()
     start = _start(model, start_ticks)
     path = scene.trace_curve() if curve is None else curve
+    if options is None:
+        options = TraceOptions(tolerance_mm=scene.tolerance_mm("trace"))
     return plan_trace(model, scene.world, start, path, options, on_progress)

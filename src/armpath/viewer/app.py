@@ -459,9 +459,8 @@ class ArmViewer:
         self.reach_status.content = f"planning to {np.round(target, 1).tolist()} mm ..."
         self.reach_button.disabled = True
         try:
-            result = plan_reach(
-                self.arm, self.world, self.state.ticks, target, ReachOptions(tolerance_mm=0.05)
-            )
+            options = ReachOptions(tolerance_mm=self.scene.tolerance_mm("reach"))
+            result = plan_reach(self.arm, self.world, self.state.ticks, target, options)
         except ArmpathError as exc:
             self.reach_status.content = f"**not reached**: {exc}"
             return

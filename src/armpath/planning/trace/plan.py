@@ -76,6 +76,7 @@ from armpath.planning.trace.tracer import (
     GOAL_REACHED_MM,
     Tracer,
 )
+from armpath.tolerances import TRACE_TOLERANCE_MM, check_trace_tolerance
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -96,7 +97,7 @@ class TraceOptions:
     :data:`~armpath.planning.bounds.search.MAX_SAMPLES`; more: a tighter bound, later).
     """
 
-    tolerance_mm: float = 0.1
+    tolerance_mm: float = TRACE_TOLERANCE_MM
     layer_step_mm: float = 5.0
     scan_step_mm: float = 4.0
     motion: MotionOptions = field(default_factory=MotionOptions)
@@ -105,10 +106,7 @@ class TraceOptions:
     bound_samples: int | None = None
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.tolerance_mm) and 0.005 <= self.tolerance_mm <= 10.0):
-            raise InvalidInputError(
-                f"tracing tolerance must be between 0.005 and 10 mm, got {self.tolerance_mm}"
-            )
+        check_trace_tolerance(self.tolerance_mm)
         if not self.layer_step_mm > 0:
             raise InvalidInputError("layer step must be > 0 mm")
         check_max_samples(self.bound_samples)

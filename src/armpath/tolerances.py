@@ -1,0 +1,51 @@
+"""The tool point's tolerances (mm): each task's default and the range it accepts, one place for
+each, read by the planners, the scene files (a task's ``tolerance_mm``), the Python API and the
+command line."""
+
+from __future__ import annotations
+
+import math
+
+from armpath.errors import InvalidInputError
+
+#: Largest tool point error accepted at a goal point by default: reaching a point, planning to
+#: one, each spot weld (mm).
+POINT_TOLERANCE_MM = 0.05
+#: Smallest and largest tool point error a goal point accepts (mm): below a micrometre the
+#: command lattice seldom comes closer, above 100 mm it is no target.
+MIN_POINT_TOLERANCE_MM = 0.001
+MAX_POINT_TOLERANCE_MM = 100.0
+#: Largest distance of the continuous tool path from a traced curve by default (mm).
+TRACE_TOLERANCE_MM = 0.1
+#: Smallest and largest tracing tolerance (mm): the tracer's lattice search and the deviation
+#: certificate's precision (a share of the tolerance) are sized for this range.
+MIN_TRACE_TOLERANCE_MM = 0.005
+MAX_TRACE_TOLERANCE_MM = 10.0
+
+
+def check_point_tolerance(tolerance_mm: float) -> float:
+    """``tolerance_mm`` when it is a goal point's tolerance within the accepted range, else
+    :class:`~armpath.errors.InvalidInputError` naming the range."""
+    if not (
+        math.isfinite(tolerance_mm)
+        and MIN_POINT_TOLERANCE_MM <= tolerance_mm <= MAX_POINT_TOLERANCE_MM
+    ):
+        raise InvalidInputError(
+            f"tolerance must be between {MIN_POINT_TOLERANCE_MM:g} and "
+            f"{MAX_POINT_TOLERANCE_MM:g} mm, got {tolerance_mm}"
+        )
+    return float(tolerance_mm)
+
+
+def check_trace_tolerance(tolerance_mm: float) -> float:
+    """``tolerance_mm`` when it is a tracing tolerance within the accepted range, else
+    :class:`~armpath.errors.InvalidInputError` naming the range."""
+    if not (
+        math.isfinite(tolerance_mm)
+        and MIN_TRACE_TOLERANCE_MM <= tolerance_mm <= MAX_TRACE_TOLERANCE_MM
+    ):
+        raise InvalidInputError(
+            f"tracing tolerance must be between {MIN_TRACE_TOLERANCE_MM:g} and "
+            f"{MAX_TRACE_TOLERANCE_MM:g} mm, got {tolerance_mm}"
+        )
+    return float(tolerance_mm)
