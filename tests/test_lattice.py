@@ -20,6 +20,7 @@ from armpath.geometry import CollisionWorld, Sphere
 from armpath.kinematics import landmark_positions, tool_pose
 from armpath.model.catalog import resolve_model
 from armpath.model.dh import DHRow, dh_arm
+from armpath.model.serial_arm import JointKind
 from armpath.model.lattice import Lattice
 from armpath.model.seed_arm import seed_arm
 from armpath.model.serialize import arm_from_dict, arm_to_dict
@@ -270,3 +271,24 @@ def test_joint_limits_in_whole_ticks():
         joints[1] = replace(joints[1], limits=(-(1300 * tick - inside), 1300 * tick - inside))
         low, high = replace(seed, joints=tuple(joints)).limits_in_ticks()
         assert (low[1], high[1]) == (-ticks, ticks)
+
+
+def test_random_configurations_are_drawn_from_one_box_of_the_joint_limits():
+    """The box random starts and samples are drawn from was written in five places, an
+    unlimited side filled four ways (+-pi, +-the arm's size or +-1000 for a prismatic joint, a
+    turn about home): a rail without limits was sampled within +-3.14 mm by the trace's family.
+    Now one: the limits, a turn for a revolute joint's unlimited side, +-the arm's size (its
+    fixed offsets summed: each joint's placement from the last, d then a of the row before:
+    400, 300, then 250 across and 50 down to the quill) for a prismatic one's."""
+    rows = [
+        DHRow(0.0, np.pi / 2, 0.0, kind=JointKind.PRISMATIC),  # a rail, unlimited
+        DHRow(300.0, 0.0, 400.0),  # unlimited
+        DHRow(250.0, 0.0, 0.0, limits=(-2.0, np.inf)),
+        DHRow(0.0, 0.0, 50.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
+    ]
+    arm = dh_arm(rows, name="rail")
+    size = 400.0 + 300.0 + np.hypot(250.0, 50.0)
+    assert arm.size == pytest.approx(size)
+    lower, upper = arm.sampling_box()
+    np.testing.assert_allclose(lower, [-size, -np.pi, -2.0, 0.0])
+    np.testing.assert_allclose(upper, [size, np.pi, np.pi, 200.0])

@@ -51,13 +51,6 @@ STALL_FRACTION = 1e-3
 MAX_SAMPLES = 200_000
 
 
-def arm_size(arm: SerialArm) -> float:
-    """A length of the arm's order (model unit): the sum of its fixed offsets, at least 1."""
-    offsets = [float(np.linalg.norm(j.T_parent_joint[:3, 3])) for j in arm.joints]
-    offsets.append(float(np.linalg.norm(arm.T_flange_tool[:3, 3])))
-    return max(float(sum(offsets)), 1.0)
-
-
 def shift_into_limits(arm: SerialArm, q: FloatArray, near: FloatArray | None = None) -> FloatArray:
     """Revolute joints of ``q`` ``(M, n)`` turned by whole turns: into the joint limits where
     a turn allows, and among those (or for unlimited joints) nearest ``near`` (one state
@@ -100,7 +93,7 @@ class GenericFamily:
 
     @property
     def size(self) -> float:
-        return arm_size(self.arm)
+        return self.arm.size
 
     def residuals(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Position error (length unit) and orientation-rule excess (rad) of each row."""
@@ -160,11 +153,7 @@ class GenericFamily:
 
     def _from_starts(self, count: int, gen: np.random.Generator) -> FloatArray:
         arm = self.arm
-        lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
-        hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
-        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-        lo = np.where(prismatic & ~np.isfinite(arm.lower), -self.size, lo)
-        hi = np.where(prismatic & ~np.isfinite(arm.upper), self.size, hi)
+        lo, hi = arm.sampling_box()
         q = gen.uniform(lo, hi, (count, arm.n_joints))
         if self.target.orientation is not None and arm.n_joints >= 6:
             # full poses drawn from the rule: each start aims at one rotation
@@ -351,4 +340,4 @@ def family_of(arm: SerialArm, target: ToolTarget) -> GenericFamily:
     return GenericFamily(arm, target)
 
 
-__all__ = ["EXACT_FRACTION", "GenericFamily", "arm_size", "family_of", "shift_into_limits"]
+__all__ = ["EXACT_FRACTION", "GenericFamily", "family_of", "shift_into_limits"]

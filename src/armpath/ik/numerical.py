@@ -69,8 +69,8 @@ def solve_numerical(
     """Solutions of one target found by LM from ``seeds`` random starts (plus ``initial``).
 
     ``T_target`` is a 4x4 pose, or a 3-vector position when ``position_only``. Seeds are drawn
-    uniformly inside the joint limits (``[-pi, pi]`` or ``[-1000, 1000]`` model units where
-    unlimited) with ``rng_seed``. A start has converged when the tool is within
+    uniformly inside the joint limits (:meth:`~armpath.model.serial_arm.SerialArm.sampling_box`
+    where unlimited) with ``rng_seed``. A start has converged when the tool is within
     ``position_tolerance_mm`` of the target (in mm whatever the model's length unit) and, for a
     pose, its frame within ``rotation_tolerance_rad``. Steps are projected onto the joint
     limits. When no start converges and ``retry`` is set, the search draws ``RETRY_GROWTH``
@@ -98,11 +98,8 @@ def solve_numerical(
         T = np.asarray(T_target, dtype=np.float64)
         if T.shape != (4, 4) or not np.isfinite(T).all():
             raise InvalidInputError("a pose target must be a finite 4x4 matrix")
-    lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
-    hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    lo, hi = arm.sampling_box()
     prismatic = np.array([j.kind is JointKind.PRISMATIC for j in arm.joints])
-    lo = np.where(prismatic & ~np.isfinite(arm.lower), -1000.0, lo)
-    hi = np.where(prismatic & ~np.isfinite(arm.upper), 1000.0, hi)
     position_tol = position_tolerance_mm / arm.mm_per_unit
     size = 1.0 + float(np.max(np.abs(forward_frames(arm, arm.home)[:, :3, 3])))
     rng = np.random.default_rng(rng_seed)

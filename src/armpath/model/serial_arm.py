@@ -617,6 +617,27 @@ class SerialArm:
         """Upper joint limits (rad / length unit), ``inf`` where unlimited."""
         return np.array([j.limits[1] for j in self.joints])
 
+    @property
+    def size(self) -> float:
+        """A length of the arm's order (length unit): the sum of its fixed offsets (each
+        joint's from the one before, the tool's from the flange), at least 1."""
+        offsets = [float(np.linalg.norm(j.T_parent_joint[:3, 3])) for j in self.joints]
+        offsets.append(float(np.linalg.norm(self.T_flange_tool[:3, 3])))
+        return max(float(sum(offsets)), 1.0)
+
+    def sampling_box(self) -> tuple[FloatArray, FloatArray]:
+        """The box random configurations are drawn from, ``(lower, upper)`` (rad / length
+        unit): each joint's limits, an unlimited side of a revolute joint at -pi or pi (with
+        the other, every pose of the joint), of a prismatic joint at -:attr:`size` or
+        :attr:`size`."""
+        prismatic = np.array([j.kind is JointKind.PRISMATIC for j in self.joints])
+        span = np.where(prismatic, self.size, np.pi)
+        lower, upper = self.lower, self.upper
+        return (
+            np.where(np.isfinite(lower), lower, -span),
+            np.where(np.isfinite(upper), upper, span),
+        )
+
     def limits_in_ticks(self) -> tuple[FloatArray, FloatArray]:
         """Per joint, the lowest and highest lattice value within its limits (ticks, whole
         numbers; ``-inf`` / ``inf`` on an unlimited side). A limit within 1e-9 of a tick is

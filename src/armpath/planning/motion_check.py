@@ -22,7 +22,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import CollisionError
 from armpath.geometry.world import CollisionWorld
 from armpath.kinematics import displacement_bounds
-from armpath.model.serial_arm import JointKind, SerialArm
+from armpath.model.serial_arm import SerialArm
 
 FloatArray = NDArray[np.float64]
 
@@ -216,15 +216,10 @@ POSES_TRIED = 64
 
 
 def _poses_within_limits(arm: SerialArm, n: int) -> FloatArray:
-    """``n`` configurations drawn evenly within the joint limits (fixed seed); a revolute joint
-    unlimited on a side spans a turn about its home there, a prismatic one stays at its home."""
-    home = np.asarray(arm.home, dtype=np.float64)
-    revolute = np.array([j.kind is JointKind.REVOLUTE for j in arm.joints])
-    reach = np.where(revolute, np.pi, 0.0)
-    lower = np.where(np.isfinite(arm.lower), arm.lower, home - reach)
-    upper = np.where(np.isfinite(arm.upper), arm.upper, home + reach)
-    rng = np.random.default_rng(0)
-    poses: FloatArray = lower + rng.random((n, home.size)) * (upper - lower)
+    """``n`` configurations drawn evenly within the joint limits (fixed seed; an unlimited
+    side as :meth:`~armpath.model.serial_arm.SerialArm.sampling_box` has it)."""
+    lower, upper = arm.sampling_box()
+    poses: FloatArray = np.random.default_rng(0).uniform(lower, upper, (n, arm.n_joints))
     return poses
 
 

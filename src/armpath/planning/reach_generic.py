@@ -33,7 +33,7 @@ from armpath.commands import CommandSequence
 from armpath.errors import CollisionError, InvalidInputError, PlanningError, UnreachableError
 from armpath.geometry.primitives import PROVABLE_SLACK
 from armpath.geometry.world import CollisionWorld, into_windows
-from armpath.ik.family import GenericFamily, arm_size, shift_into_limits
+from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
 from armpath.kinematics import (
     forward_frames,
@@ -222,7 +222,7 @@ def _refine_bound(
     joint within ``t`` commands of ``start`` and the limits (SLSQP from ``x0``)."""
     step = arm.lattice.max_step
     n = arm.n_joints
-    size = arm_size(arm)
+    size = arm.size
     bounds = [*_limit_bounds(arm), (0.0, None)]
     o = target.orientation
 

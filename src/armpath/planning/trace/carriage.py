@@ -124,8 +124,7 @@ def carriage_schedule(
     from scipy.spatial import cKDTree
 
     rng = np.random.default_rng(0)
-    lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
-    hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+    lo, hi = arm.sampling_box()
     directed = start_value is not None and not curve.closed
     samples = _DIRECTED_CLOUD_SAMPLES if directed else _CLOUD_SAMPLES
     q = rng.uniform(lo, hi, (samples, arm.n_joints))

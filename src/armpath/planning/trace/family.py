@@ -743,8 +743,7 @@ class GenericCurveFamily(CurveFamily):
         arm = self.arm
         fam = GenericFamily(arm, ToolTarget(E))
         keys = [(*np.round(R[:, 2], 6).tolist(), round(float(R[0, 0]), 6)) for R in Rs]
-        lo = np.where(np.isfinite(arm.lower), arm.lower, -np.pi)
-        hi = np.where(np.isfinite(arm.upper), arm.upper, np.pi)
+        lo, hi = arm.sampling_box()
         rng = np.random.default_rng(0)
         starts = rng.uniform(lo, hi, (Rs.shape[0], arm.n_joints))
         fresh = starts.copy()
