@@ -20,9 +20,9 @@ from armpath.geometry import CollisionWorld, Sphere
 from armpath.kinematics import landmark_positions, tool_pose
 from armpath.model.catalog import resolve_model
 from armpath.model.dh import DHRow, dh_arm
-from armpath.model.serial_arm import JointKind
 from armpath.model.lattice import Lattice
 from armpath.model.seed_arm import seed_arm
+from armpath.model.serial_arm import JointKind
 from armpath.model.serialize import arm_from_dict, arm_to_dict
 from armpath.planning.motion import path_to_sequence, plan_motion
 from armpath.planning.motion_check import motion_clearance
