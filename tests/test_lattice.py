@@ -292,3 +292,23 @@ def test_random_configurations_are_drawn_from_one_box_of_the_joint_limits():
     lower, upper = arm.sampling_box()
     np.testing.assert_allclose(lower, [-size, -np.pi, -2.0, 0.0])
     np.testing.assert_allclose(upper, [size, np.pi, np.pi, 200.0])
+
+
+def test_a_model_without_a_home_starts_on_its_lattice():
+    """A model that gives no home starts at zero moved into its limits; where a limit is off
+    the lattice (10.05 deg, 3.15 mm), the nearest whole tick within it (10.1 deg, 3.2 mm), so
+    that tasks can start there; limits that hold no tick keep the limit nearest zero."""
+    d = np.pi / 180
+    rows = [
+        DHRow(100.0, 0.0, 0.0, limits=(10.05 * d, 50 * d)),
+        DHRow(100.0, 0.0, 0.0, limits=(-50 * d, -10.05 * d)),
+        DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(3.15, 200.0)),
+        DHRow(100.0, 0.0, 0.0, limits=(-30 * d, 30 * d)),
+        DHRow(100.0, 0.0, 0.0, limits=(10.01 * d, 10.09 * d)),  # no whole tick inside
+    ]
+    arm = dh_arm(rows, name="off-lattice limits")
+    shown = arm.lattice.joint_display(arm.home)
+    np.testing.assert_allclose(shown, [10.1, -10.1, 3.2, 0.0, 10.01], atol=1e-9)
+    ticks = np.round(arm.home[:4] / arm.lattice.tick[:4])
+    np.testing.assert_allclose(arm.home[:4], ticks * arm.lattice.tick[:4], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(ticks, [101, -101, 32, 0])

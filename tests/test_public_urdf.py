@@ -150,6 +150,27 @@ def test_reach_with_a_tool_axis_cone_for_the_panda_file(tmp_path):
     assert np.degrees(np.arccos(np.clip(-T[2, 2], -1.0, 1.0))) <= 10.0 + 1e-6
 
 
+def test_the_panda_files_own_home_starts_a_task(tmp_path):
+    """The Panda file limits its fourth joint to -0.0698 rad (-3.99925 deg) at most, so its
+    home (zero moved into the limits) lay off the 0.1 deg lattice and every task stopped at
+    once ('initial pose: joint 4 is not a whole number of its ticks'). The home is now the
+    nearest whole tick within the limits: -4.0 deg, below the file's limit as Pinocchio reads
+    it and -3.9 above it. A reach from there is replayed on Pinocchio's hand frame."""
+    path = robot_file(PANDA)
+    ref = PinocchioArm(path, "panda_hand", [f"panda_joint{k}" for k in range(1, 8)])
+    upper_deg = np.degrees(ref.model.upperPositionLimit[ref.index[3]])
+    assert -4.0 <= upper_deg < -3.9
+    target = np.array([450.0, -100.0, 250.0])
+    out = tmp_path / "reach"
+    args = ["reach", *map(str, target), "--model", path, "--tip-link", "panda_hand"]
+    proc = _armpath(*args, "--out", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "reach.json").read_text())
+    assert doc["initial_deg"] == [0.0, 0.0, 0.0, -4.0, 0.0, 0.0, 0.0]
+    states = _replayed_states(doc)
+    assert np.linalg.norm(ref.pose_mm(states[-1])[:3, 3] - target) <= 0.05
+
+
 @pytest.mark.slow
 def test_trace_with_the_ur5_file_replayed_on_pinocchio(tmp_path):
     """A 60 mm circle above a table, the arm from the UR5 file standing on a base transform:

@@ -34,6 +34,7 @@ from armpath.model.serial_arm import (
     check_length,
     check_rigid,
     check_turns,
+    default_home,
 )
 from armpath.model.skeleton import link_radii, physical_links
 
@@ -137,12 +138,7 @@ def dh_arm(
     if convention == "standard":
         tool = carry @ tool
     n = len(rows)
-    if home is None:
-        lo = np.array([r.limits[0] for r in rows])
-        hi = np.array([r.limits[1] for r in rows])
-        home_q = np.clip(np.zeros(n), lo, hi)
-    else:
-        home_q = np.asarray(home, dtype=np.float64)
+    home_q = default_home(joints) if home is None else np.asarray(home, dtype=np.float64)
     names = ("base", *(f"J{i + 1}" for i in range(n)), "tool")
     radii = link_radii(link_radii_mm, n, "link radii")
     landmarks, links = physical_links(joints, tool, names, radii, pedestal=pedestal_mm)

@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 
 from armpath.errors import InvalidInputError
-from armpath.model.serial_arm import Joint, JointKind, SerialArm, check_length, check_turns
+from armpath.model.serial_arm import (
+    Joint,
+    JointKind,
+    SerialArm,
+    check_length,
+    check_turns,
+    default_home,
+)
 from armpath.model.skeleton import link_radii, physical_links
 
 _M_TO_MM = 1000.0
@@ -215,8 +222,6 @@ def arm_from_urdf(
     names = ("base", *(j.name for j in joints), "tool")
     radii = link_radii(link_radii_mm, n, f"URDF {p.name!r}: link radii")
     landmarks, links = physical_links(joints, carry, names, radii)
-    lo_all = np.array([j.limits[0] for j in joints])
-    hi_all = np.array([j.limits[1] for j in joints])
     robot = urdf.robot.name or p.stem
     return SerialArm(
         name=f"{robot} [{tip_link}]",
@@ -225,6 +230,6 @@ def arm_from_urdf(
         T_joint_flange=carry,
         landmarks=landmarks,
         links=links,
-        home=np.clip(np.zeros(n), lo_all, hi_all),
+        home=default_home(joints),
         length_unit="mm",
     )
