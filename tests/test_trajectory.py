@@ -891,3 +891,38 @@ def test_fixed_point_rotation_bounds_and_a_huge_axis():
     huge = fixed_point_rotation(arm, (900, 0, 0), circle_axis=(1e308, 1e308, 0.0), n_points=8)
     assert np.allclose(huge.wrist_points, small.wrist_points, atol=1e-9)
     assert huge.max_tip_deviation == pytest.approx(small.max_tip_deviation, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("model", "why"),
+    [
+        ("scara", "its 4 joints cannot set the tool's whole pose"),
+        ("iiwa14", "its 7 joints reach each pose in a continuous family of solutions"),
+    ],
+)
+def test_an_arm_without_all_solutions_ik_is_told_why(model, why):
+    """Turning the tool about a point and the dexterous workspace need every IK solution of a
+    pose; a SCARA or a 7-axis arm answered only 'model has no all-solutions IK'. The refusal
+    now says what needs it, which arms have it and why this one has none (its joints counted
+    here)."""
+    from armpath.model.catalog import resolve_model
+    from armpath.model.dh import dh_arm
+    from armpath.trajectory.rcm import fixed_point_rotation
+    from armpath.workspace.dexterous import dexterity, dexterous_workspace
+    from arms import scara_rows
+
+    arm = dh_arm(scara_rows(), name="scara") if model == "scara" else resolve_model(model)
+    assert arm.n_joints == int(why.split()[1])
+    calls = [
+        ("turning the tool about a fixed point", lambda: fixed_point_rotation(arm, [400, 0, 300])),
+        ("dexterity", lambda: dexterity(arm, np.zeros(3), np.eye(3)[None])),
+        (
+            "the dexterous workspace",
+            lambda: dexterous_workspace(arm, 10, np.eye(3)[None], -np.ones(3), np.ones(3)),
+        ),
+    ]
+    for what, call in calls:
+        with pytest.raises(InvalidInputError) as err:
+            call()
+        assert str(err.value).startswith(f"{what} needs every inverse-kinematics solution")
+        assert str(err.value).endswith(f"model {arm.name!r} has none: {why}")

@@ -15,7 +15,14 @@ if TYPE_CHECKING:
         fingertip,
         solve_with_fixed_pair,
     )
-    from armpath.ik.solve import METHODS, complete_solver, into_limits, limits_mask, solve_ik
+    from armpath.ik.solve import (
+        METHODS,
+        complete_solver,
+        into_limits,
+        limits_mask,
+        require_complete_solver,
+        solve_ik,
+    )
     from armpath.ik.spherical_wrist import SphericalWristSolver, wrist_center
     from armpath.ik.three_parallel import ThreeParallelSolver, three_parallel_layout
 
@@ -39,6 +46,7 @@ __getattr__, __dir__ = lazy_exports(
             "complete_solver",
             "into_limits",
             "limits_mask",
+            "require_complete_solver",
             "solve_ik",
         ),
         "spherical_wrist": (
@@ -65,6 +73,7 @@ __all__ = [
     "fingertip",
     "into_limits",
     "limits_mask",
+    "require_complete_solver",
     "solve_ik",
     "solve_numerical",
     "solve_with_fixed_pair",

@@ -66,6 +66,27 @@ def complete_solver(arm: SerialArm, method: str = "auto") -> CompiledSolver | No
     return None
 
 
+def require_complete_solver(arm: SerialArm, what: str) -> CompiledSolver:
+    """The all-solutions solver for ``arm``, or :class:`InvalidInputError` saying that
+    ``what`` needs one, which arms have one and why this arm has none."""
+    solver = complete_solver(arm)
+    if solver is not None:
+        return solver
+    n = arm.n_joints
+    prismatic = sum(j.kind is JointKind.PRISMATIC for j in arm.joints)
+    if n < 6:
+        why = f"its {n} joints cannot set the tool's whole pose"
+    elif n > 6:
+        why = f"its {n} joints reach each pose in a continuous family of solutions"
+    else:
+        why = f"{prismatic} of its joints slide" if prismatic else "its joints do not fit one"
+    raise InvalidInputError(
+        f"{what} needs every inverse-kinematics solution of the tool's pose, which armpath "
+        "finds for six joints (a spherical wrist, three parallel axes, or six revolute joints); "
+        f"model {arm.name!r} has none: {why}"
+    )
+
+
 def into_limits(arm: SerialArm, result: IKResult) -> IKResult:
     """Shift revolute angles by whole turns into the joint limits where possible; mark which
     solutions lie inside them."""

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import MAX_WAYPOINTS, check_size, check_time
 from armpath.errors import InvalidInputError
-from armpath.ik import complete_solver, limits_mask
+from armpath.ik import limits_mask, require_complete_solver
 from armpath.kinematics import tool_pose
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.trajectory.minsnap import ORDERS, PiecewisePolynomial, minimum_snap
@@ -97,9 +97,7 @@ def fixed_point_rotation(
         raise InvalidInputError("the circle's axis must not be zero")
     a = a / np.max(np.abs(a))  # no overflow or underflow in the norm
     a /= np.linalg.norm(a)
-    solver = complete_solver(arm)
-    if solver is None:
-        raise InvalidInputError(f"model {arm.name!r} has no all-solutions IK")
+    solver = require_complete_solver(arm, "turning the tool about a fixed point")
     # the tool length: distance from the wrist centre to the tool point at any pose
     flange_to_tip = float(np.linalg.norm(arm.T_flange_tool[:3, 3]))
     last = arm.joints[-1].T_parent_joint[:3, 3]

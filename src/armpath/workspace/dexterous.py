@@ -27,7 +27,7 @@ from armpath.budget import (
     check_time,
 )
 from armpath.errors import InvalidInputError
-from armpath.ik import complete_solver, limits_mask
+from armpath.ik import limits_mask, require_complete_solver
 from armpath.ik.compiled import CompiledSolver
 from armpath.model.serial_arm import SerialArm
 from armpath.workspace.sampling import check_count, random_generator
@@ -90,12 +90,7 @@ def dexterity(
     """Test the tool at ``point`` in each of ``rotations`` ``(k, 3, 3)``: reached when some
     inverse-kinematics solution lies inside the joint limits. ``solver`` defaults to the arm's
     complete solver (one is required)."""
-    solver = solver or complete_solver(arm)
-    if solver is None:
-        raise InvalidInputError(
-            f"model {arm.name!r} has no all-solutions IK (dexterity needs one: six joints with a "
-            "spherical wrist, three parallel axes, or six revolute joints)"
-        )
+    solver = solver or require_complete_solver(arm, "dexterity")
     p = np.asarray(point, dtype=np.float64).reshape(3)
     R = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
     check_size(R.shape[0], MAX_ORIENTATIONS, "orientations", "the rotations")
@@ -170,9 +165,7 @@ def dexterous_workspace(
         float(n_points) * R.shape[0], MAX_SAMPLES, "poses (points x orientations)", "the points"
     )
     rng = random_generator(seed)
-    solver = complete_solver(arm)
-    if solver is None:
-        raise InvalidInputError(f"model {arm.name!r} has no all-solutions IK")
+    solver = require_complete_solver(arm, "the dexterous workspace")
     chunk_points = max(1, min(chunk_points, POSE_BATCH // max(R.shape[0], 1)))
     pts = rng.uniform(lo, hi, (n_points, 3))
     dexterous = np.zeros(n_points, dtype=bool)
