@@ -312,3 +312,36 @@ def test_a_model_without_a_home_starts_on_its_lattice():
     ticks = np.round(arm.home[:4] / arm.lattice.tick[:4])
     np.testing.assert_allclose(arm.home[:4], ticks * arm.lattice.tick[:4], rtol=0, atol=1e-12)
     np.testing.assert_array_equal(ticks, [101, -101, 32, 0])
+
+
+def test_a_scenes_ticks_take_the_models_home_onto_them(tmp_path):
+    """A scene that sets the ticks (a stepper's 0.0225 deg) left a model's home off them where
+    it was not a whole number of the new ticks, and every task stopped ('the arm's home pose:
+    joint 2 is not a whole number of its ticks'). Without [arm] home_deg the home is now the
+    nearest state on the new ticks within the limits: 10.01 deg is 444.9 ticks, so 445 ticks,
+    10.0125 deg; the default home at a limit of -3.99925 deg, -178 ticks (-4.005 deg), not
+    -177 (-3.9825, beyond the limit). A home_deg off the ticks is still refused."""
+    from armpath.scenes import load_scene
+    from armpath.scenes.arm import scene_arm
+
+    robot = tmp_path / "arm.json"
+    links = [
+        {"a": 0, "alpha": 90, "d": 300, "limits": [-170, 170]},
+        {"a": 400, "alpha": 0, "d": 0, "limits": [-120, 120]},
+        {"a": 300, "alpha": 0, "d": 0, "limits": [-170, -3.99925]},
+    ]
+    doc = {"name": "three", "convention": "standard", "units": {"length": "mm", "angle": "deg"}}
+    robot.write_text(json.dumps(doc | {"links": links}))
+    with_home = tmp_path / "arm_home.json"
+    with_home.write_text(json.dumps(doc | {"links": links, "home": [0, 10.01, -45]}))
+    for model, home in ((robot, [0.0, 0.0, -178 * 0.0225]), (with_home, [0.0, 445 * 0.0225, -45])):
+        cell = tmp_path / f"{model.stem}.toml"
+        cell.write_text(f'name = "stepper"\n[arm]\nmodel = "{model.name}"\ntick = 0.0225\n')
+        arm = scene_arm(load_scene(cell))
+        shown = arm.lattice.joint_display(arm.home)
+        np.testing.assert_allclose(shown, home, atol=1e-9)
+        ticks = shown / STEPPER_TICK_DEG
+        np.testing.assert_allclose(ticks, np.round(ticks), atol=1e-6)
+    cell.write_text(cell.read_text() + "home_deg = [0, 10.01, -45]\n")
+    with pytest.raises(InvalidInputError, match="home_deg"):
+        scene_arm(load_scene(cell))

@@ -279,18 +279,27 @@ def check_turns(
             )
 
 
+def nearest_on_lattice(joints: Sequence[Joint], q: ArrayLike) -> FloatArray:
+    """Joint values ``q`` (rad / length unit, one per joint) moved onto each joint's lattice,
+    the nearest whole tick within its limits; a joint whose limits hold no whole tick keeps
+    the value moved into them."""
+    values = np.asarray(q, dtype=np.float64)
+    out = np.empty(len(joints))
+    for i, joint in enumerate(joints):
+        lo, hi = joint.limits
+        tick = joint._tick_or_default()
+        low, high = np.ceil(lo / tick - 1e-9), np.floor(hi / tick + 1e-9)  # ticks, or +-inf
+        inside = min(max(float(values[i]), lo), hi)
+        out[i] = inside if low > high else float(np.clip(np.round(inside / tick), low, high)) * tick
+    return out
+
+
 def default_home(joints: Sequence[Joint]) -> FloatArray:
     """The home pose of a model that gives none (rad / length unit): zero moved into each
     joint's limits and onto its lattice, the nearest whole tick within them (a URDF's limit
     of -3.99925 deg, Franka's fourth joint, gave a home off the 0.1 deg lattice that no task
     could start from). A joint whose limits hold no whole tick keeps the limit nearest zero."""
-    out = np.zeros(len(joints))
-    for i, joint in enumerate(joints):
-        lo, hi = joint.limits
-        tick = joint._tick_or_default()
-        low, high = np.ceil(lo / tick - 1e-9), np.floor(hi / tick + 1e-9)  # ticks, or +-inf
-        out[i] = min(max(0.0, lo), hi) if low > high else float(np.clip(0.0, low, high)) * tick
-    return out
+    return nearest_on_lattice(joints, np.zeros(len(joints)))
 
 
 @dataclass(frozen=True, eq=False, repr=False)
