@@ -858,3 +858,24 @@ def test_the_scenes_own_model_given_unplaced_is_pointed_out():
     assert "armpath.load_arm(scene=...)" in note
     assert said(armpath.load_arm(scene=cell)) == []
     assert said(armpath.load_arm("puma560")) == []
+
+
+def test_a_scenes_reach_tolerance_is_the_calls_default():
+    """armpath.reach with tolerance_mm=None takes the scene's [tasks.reach] tolerance_mm (the
+    seed scene's box at 20 mm: 61 commands, as `armpath reach 20 -200 120 --tolerance 20`);
+    a tolerance given to the call wins; the fingertip's error, replayed on the independent seed
+    kinematics, is within the one used."""
+    import armpath
+
+    scene = armpath.load_scene(
+        {"name": "box", "tasks": {"reach": {"target_mm": [20, -200, 120], "tolerance_mm": 20}}}
+    )
+    counts = []
+    for given, used in ((None, 20.0), (0.05, 0.05)):
+        doc = armpath.reach("seed", [20, -200, 120], scene=scene, tolerance_mm=given).doc
+        assert doc["tolerance_mm"] == used
+        final = independent.replay(doc["initial_deg"], doc["commands"])[-1]
+        tip = independent.points(final)[-1]  # E, the fingertip
+        assert np.linalg.norm(tip - [20.0, -200.0, 120.0]) <= used
+        counts.append(doc["n_commands"])
+    assert counts == [61, 63]
