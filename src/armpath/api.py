@@ -516,11 +516,7 @@ def reach(
                 the_scene.world,
                 _start_ticks(the_arm, start_deg),
                 target,
-                ReachOptions(
-                    tolerance_mm=the_scene.tolerance_mm("reach")
-                    if tolerance_mm is None
-                    else tolerance_mm
-                ),
+                ReachOptions(tolerance_mm=the_scene.tolerance_mm("reach", tolerance_mm)),
                 seed=seed,
                 orientation=rule,
             )
@@ -676,9 +672,7 @@ def trace(
             else:
                 path = Polyline("curve", _points_mm(curve, "curve", 2), closed=closed)
             options = TraceOptions(
-                tolerance_mm=the_scene.tolerance_mm("trace")
-                if tolerance_mm is None
-                else tolerance_mm,
+                tolerance_mm=the_scene.tolerance_mm("trace", tolerance_mm),
                 scan_step_mm=scan_step_mm,
                 motion=MotionOptions(seed=seed),
                 axis_rule=rule,

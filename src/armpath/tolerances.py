@@ -23,29 +23,25 @@ MIN_TRACE_TOLERANCE_MM = 0.005
 MAX_TRACE_TOLERANCE_MM = 10.0
 
 
+def _within(tolerance_mm: float, lowest: float, highest: float, what: str) -> float:
+    """``tolerance_mm`` when finite and within ``[lowest, highest]``, else
+    :class:`~armpath.errors.InvalidInputError` naming ``what`` and the range."""
+    if not (math.isfinite(tolerance_mm) and lowest <= tolerance_mm <= highest):
+        raise InvalidInputError(
+            f"{what} must be between {lowest:g} and {highest:g} mm, got {tolerance_mm}"
+        )
+    return float(tolerance_mm)
+
+
 def check_point_tolerance(tolerance_mm: float) -> float:
     """``tolerance_mm`` when it is a goal point's tolerance within the accepted range, else
     :class:`~armpath.errors.InvalidInputError` naming the range."""
-    if not (
-        math.isfinite(tolerance_mm)
-        and MIN_POINT_TOLERANCE_MM <= tolerance_mm <= MAX_POINT_TOLERANCE_MM
-    ):
-        raise InvalidInputError(
-            f"tolerance must be between {MIN_POINT_TOLERANCE_MM:g} and "
-            f"{MAX_POINT_TOLERANCE_MM:g} mm, got {tolerance_mm}"
-        )
-    return float(tolerance_mm)
+    return _within(tolerance_mm, MIN_POINT_TOLERANCE_MM, MAX_POINT_TOLERANCE_MM, "tolerance")
 
 
 def check_trace_tolerance(tolerance_mm: float) -> float:
     """``tolerance_mm`` when it is a tracing tolerance within the accepted range, else
     :class:`~armpath.errors.InvalidInputError` naming the range."""
-    if not (
-        math.isfinite(tolerance_mm)
-        and MIN_TRACE_TOLERANCE_MM <= tolerance_mm <= MAX_TRACE_TOLERANCE_MM
-    ):
-        raise InvalidInputError(
-            f"tracing tolerance must be between {MIN_TRACE_TOLERANCE_MM:g} and "
-            f"{MAX_TRACE_TOLERANCE_MM:g} mm, got {tolerance_mm}"
-        )
-    return float(tolerance_mm)
+    return _within(
+        tolerance_mm, MIN_TRACE_TOLERANCE_MM, MAX_TRACE_TOLERANCE_MM, "tracing tolerance"
+    )

@@ -415,9 +415,7 @@ def reach(
         xyz = _point_mm(target, "target X Y Z (mm)")
         start_ticks = joint_state(arm, start, "--from")
         rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance, arm.approach_axis)
-        options = ReachOptions(
-            tolerance_mm=scene.tolerance_mm("reach") if tolerance is None else tolerance
-        )
+        options = ReachOptions(tolerance_mm=scene.tolerance_mm("reach", tolerance))
         _animate_needs_out(animate, out)
         staged = output_folder(out) if out is not None else contextlib.nullcontext()
         with staged as folder:
@@ -1066,7 +1064,7 @@ def trace(
         start_ticks = None if start is None else joint_state(arm, start, "--from")
         rule = axis_rule(tool_axis, axis_tolerance)
         options = TraceOptions(
-            tolerance_mm=scene.tolerance_mm("trace") if tolerance is None else tolerance,
+            tolerance_mm=scene.tolerance_mm("trace", tolerance),
             scan_step_mm=scan_step,
             motion=MotionOptions(seed=seed),
             axis_rule=rule,

@@ -195,6 +195,12 @@ class Lattice:
         """The nearest lattice state of joint values ``(..., n)``."""
         return np.round(self.to_ticks_float(q)).astype(np.int64)
 
+    def off_lattice(self, q: ArrayLike) -> NDArray[np.bool_]:
+        """Per joint value ``(..., n)``, whether it lies farther than
+        :data:`ON_LATTICE_TICKS` from a whole number of its ticks."""
+        t = self.to_ticks_float(q)
+        return np.asarray(np.abs(t - np.round(t)) > ON_LATTICE_TICKS)
+
     def to_ticks(self, q: ArrayLike, what: str = "joint state", off_hint: str = "") -> IntArray:
         """Tick state of joint values that lie on the lattice (within 1e-6 tick); raises
         :class:`InvalidInputError` naming the first joint that does not (``off_hint`` added to
@@ -213,15 +219,14 @@ class Lattice:
                 f"beyond the {MAX_STATE_TICKS * self.tick_display[i]:.3g} {self.units[i]} "
                 f"({MAX_STATE_TICKS:.3g} ticks) a joint value may hold"
             )
-        r = np.round(t)
-        off = np.abs(t - r) > ON_LATTICE_TICKS
+        off = self.off_lattice(values)
         if np.any(off):
             i = int(np.argwhere(off)[0][-1])
             raise InvalidInputError(
                 f"{what}: joint {i + 1} is not a whole number of its ticks of "
                 f"{self.tick_text(i)} (the command lattice){off_hint}"
             )
-        return r.astype(np.int64)
+        return np.round(t).astype(np.int64)
 
     def joint_display(self, q: ArrayLike) -> FloatArray:
         """Joint values ``(..., n)`` (rad / length unit) in display units: deg for revolute

@@ -279,19 +279,28 @@ def check_turns(
             )
 
 
+def _ticks_within(
+    lower: ArrayLike, upper: ArrayLike, tick: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Per joint, the lowest and highest whole number of ``tick`` within ``[lower, upper]``
+    (``-inf`` / ``inf`` on an unlimited side; a limit within 1e-9 of a tick is that tick)."""
+    lo, hi, t = (np.asarray(v, dtype=np.float64) for v in (lower, upper, tick))
+    low = np.where(np.isfinite(lo), np.ceil(lo / t - 1e-9), -np.inf)
+    high = np.where(np.isfinite(hi), np.floor(hi / t + 1e-9), np.inf)
+    return low, high
+
+
 def nearest_on_lattice(joints: Sequence[Joint], q: ArrayLike) -> FloatArray:
     """Joint values ``q`` (rad / length unit, one per joint) moved onto each joint's lattice,
     the nearest whole tick within its limits; a joint whose limits hold no whole tick keeps
     the value moved into them."""
-    values = np.asarray(q, dtype=np.float64)
-    out = np.empty(len(joints))
-    for i, joint in enumerate(joints):
-        lo, hi = joint.limits
-        tick = joint._tick_or_default()
-        low, high = np.ceil(lo / tick - 1e-9), np.floor(hi / tick + 1e-9)  # ticks, or +-inf
-        inside = min(max(float(values[i]), lo), hi)
-        out[i] = inside if low > high else float(np.clip(np.round(inside / tick), low, high)) * tick
-    return out
+    lower = np.array([j.limits[0] for j in joints])
+    upper = np.array([j.limits[1] for j in joints])
+    tick = np.array([j._tick_or_default() for j in joints])
+    low, high = _ticks_within(lower, upper, tick)
+    inside = np.clip(np.asarray(q, dtype=np.float64), lower, upper)
+    on = np.clip(np.round(inside / tick), low, high) * tick
+    return np.asarray(np.where(low > high, inside, on), dtype=np.float64)
 
 
 def default_home(joints: Sequence[Joint]) -> FloatArray:
@@ -665,11 +674,7 @@ class SerialArm:
         """Per joint, the lowest and highest lattice value within its limits (ticks, whole
         numbers; ``-inf`` / ``inf`` on an unlimited side). A limit within 1e-9 of a tick is
         that tick."""
-        tick = np.asarray(self.lattice.tick, dtype=np.float64)
-        lower, upper = self.lower, self.upper
-        low = np.where(np.isfinite(lower), np.ceil(lower / tick - 1e-9), -np.inf)
-        high = np.where(np.isfinite(upper), np.floor(upper / tick + 1e-9), np.inf)
-        return low, high
+        return _ticks_within(self.lower, self.upper, self.lattice.tick)
 
     @property
     def landmark_names(self) -> tuple[str, ...]:

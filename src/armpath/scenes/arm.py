@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError, SceneError
 from armpath.model.catalog import resolve_model
-from armpath.model.lattice import MM_PER_LENGTH_UNIT, ON_LATTICE_TICKS
+from armpath.model.lattice import MM_PER_LENGTH_UNIT
 from armpath.model.serial_arm import SerialArm, nearest_on_lattice
 from armpath.scenes.build import rotation_matrix
 from armpath.scenes.scene import Scene
@@ -60,8 +60,7 @@ def arm_from_spec(spec: ArmSpec, base_dir: str | None = None) -> SerialArm:
             tick = arm.lattice.joint_from_display(shown)  # a tick is a joint value
         most = None if spec.max_ticks is None else _per_joint(spec.max_ticks, n, "arm.max_ticks")
         arm = arm.with_lattice(tick, most)  # the lattice checks them whole and in range
-        t = arm.lattice.to_ticks_float(arm.home)
-        if spec.home_deg is None and np.any(np.abs(t - np.round(t)) > ON_LATTICE_TICKS):
+        if spec.home_deg is None and np.any(arm.lattice.off_lattice(arm.home)):
             # the model's home lies off these ticks: the nearest state on them within limits
             arm = arm.with_home(nearest_on_lattice(arm.joints, arm.home))
     if spec.steps_per_tick is not None or spec.command_period_s is not None:

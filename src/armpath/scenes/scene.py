@@ -45,11 +45,13 @@ class Scene:
     #: ``[tasks.reach] tolerance_mm`` (None: the file gives none).
     reach_tolerance_mm: float | None = None
 
-    def tolerance_mm(self, task: str) -> float:
+    def tolerance_mm(self, task: str, given: float | None = None) -> float:
         """The largest tool point error of the scene's ``task`` (``"reach"``, ``"spotweld"``:
-        at the goal point; ``"trace"``: of the continuous tool path from the curve), mm: its
-        ``[tasks.<task>] tolerance_mm``, else the task's default
-        (:mod:`armpath.tolerances`)."""
+        at the goal point; ``"trace"``: of the continuous tool path from the curve), mm:
+        ``given`` (the caller's), else its ``[tasks.<task>] tolerance_mm``, else the task's
+        default (:mod:`armpath.tolerances`)."""
+        if given is not None:
+            return given
         if task == "reach":
             given = self.reach_tolerance_mm
         elif task == "spotweld":

@@ -107,7 +107,7 @@ def spotweld_task(
         targets,
         order=order,
         return_to_start=return_to_start,
-        tolerance_mm=scene.tolerance_mm("spotweld") if tolerance_mm is None else tolerance_mm,
+        tolerance_mm=scene.tolerance_mm("spotweld", tolerance_mm),
         options=options,
         on_progress=on_progress,
         orientations=rules,
