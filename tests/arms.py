@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 
 from armpath.model.dh import DHRow
@@ -19,6 +22,27 @@ def scara_rows(elbow_limit_rad: float = 2.4) -> list[DHRow]:
         DHRow(0.0, 0.0, 0.0, kind=JointKind.PRISMATIC, limits=(0.0, 200.0)),
         DHRow(0.0, 0.0, 50.0, limits=(-3.0, 3.0)),
     ]
+
+
+def scara_robot_file(path: Path, elbow_limit_deg: float) -> Path:
+    """Write ``scara_rows``' SCARA as a D-H robot file in mm and deg at ``path`` (joints 1
+    and 2 within +-``elbow_limit_deg``, the quill 0..200 mm, joint 4 within +-170 deg)."""
+    limits = [-elbow_limit_deg, elbow_limit_deg]
+    path.write_text(
+        json.dumps(
+            {
+                "name": "scara", "convention": "standard",
+                "units": {"length": "mm", "angle": "deg"},
+                "links": [
+                    {"a": 300, "alpha": 0, "d": 400, "limits": limits},
+                    {"a": 250, "alpha": 180, "d": 0, "limits": limits},
+                    {"a": 0, "alpha": 0, "d": 0, "type": "prismatic", "limits": [0, 200]},
+                    {"a": 0, "alpha": 0, "d": 50, "limits": [-170, 170]},
+                ],
+            }
+        )
+    )  # fmt: skip
+    return path
 
 
 #: The UR5's standard D-H table, from its maker's published parameters: (a mm, alpha rad,

@@ -22,7 +22,7 @@ from armpath.model.catalog import resolve_model
 from armpath.planning.reach import ReachOptions, plan_reach
 from armpath.planning.trace import TraceOptions, plan_trace
 from armpath.scenes import scene_from_dict
-from arms import UR5_DH, scara_rows
+from arms import UR5_DH, scara_robot_file, scara_rows
 
 D = np.pi / 180
 # (a mm, alpha rad, d mm, joint offset rad), standard D-H
@@ -562,21 +562,7 @@ def test_a_prismatic_joints_values_are_shown_in_mm(tmp_path):
 
     from cli_in_process import run_in_process
 
-    scara = tmp_path / "scara.json"
-    scara.write_text(
-        json.dumps(
-            {
-                "name": "scara", "convention": "standard",
-                "units": {"length": "mm", "angle": "deg"},
-                "links": [
-                    {"a": 300, "alpha": 0, "d": 400, "limits": [-140, 140]},
-                    {"a": 250, "alpha": 180, "d": 0, "limits": [-140, 140]},
-                    {"a": 0, "alpha": 0, "d": 0, "type": "prismatic", "limits": [0, 200]},
-                    {"a": 0, "alpha": 0, "d": 50, "limits": [-170, 170]},
-                ],
-            }
-        )
-    )  # fmt: skip
+    scara = scara_robot_file(tmp_path / "scara.json", 140.0)
     args = ["plan", "--model", str(scara), "--to-xyz", "300", "200", "200", "--tolerance", "0.5"]
     table = run_in_process(args, tmp_path)
     doc = json.loads(run_in_process([*args, "--json"], tmp_path).stdout)
@@ -1206,24 +1192,10 @@ def test_a_seven_axis_arm_in_the_ur5_cell_welds_in_few_commands(tmp_path):
 
 
 def _scara_plate_cell(tmp_path, spotweld_tolerance=None, reach_tolerance=None):
-    """A SCARA (written here, tests/arms.py's geometry in deg) over a plate whose top, 150 mm
+    """A SCARA (tests/arms.py's, as a robot file) over a plate whose top, 150 mm
     up, its quill brings the tool point onto exactly (0.1 mm ticks), welds on the plate and a
     point above it to reach; the tasks' tolerances as given (None: not written)."""
-    scara = tmp_path / "scara.json"
-    scara.write_text(
-        json.dumps(
-            {
-                "name": "scara", "convention": "standard",
-                "units": {"length": "mm", "angle": "deg"},
-                "links": [
-                    {"a": 300, "alpha": 0, "d": 400, "limits": [-137, 137]},
-                    {"a": 250, "alpha": 180, "d": 0, "limits": [-137, 137]},
-                    {"a": 0, "alpha": 0, "d": 0, "type": "prismatic", "limits": [0, 200]},
-                    {"a": 0, "alpha": 0, "d": 50, "limits": [-170, 170]},
-                ],
-            }
-        )
-    )  # fmt: skip
+    scara_robot_file(tmp_path / "scara.json", 137.0)
     weld = "" if spotweld_tolerance is None else f"tolerance_mm = {spotweld_tolerance}\n"
     reach = "" if reach_tolerance is None else f"tolerance_mm = {reach_tolerance}\n"
     cell = tmp_path / "cell.toml"
