@@ -71,6 +71,17 @@ def test_every_command_with_randomness_takes_a_seed(command):
     assert r.returncode == 0 and "--seed" in r.stdout
 
 
+@pytest.mark.parametrize(
+    ("command", "default"), [("reach", "0.05"), ("spotweld", "0.05"), ("trace", "0.1")]
+)
+def test_the_tolerance_help_names_the_scene_key(command, default):
+    """--tolerance's help names the scene key it defaults to; written unescaped, the rich
+    help took "[tasks.reach]" for markup and printed "the scene's  tolerance_mm"."""
+    r = _cli(command, "--help", env={"COLUMNS": "200"})
+    text = " ".join(r.stdout.replace("│", " ").split())
+    assert f"Default: the scene's [tasks.{command}] tolerance_mm, else {default}." in text
+
+
 def test_reach_seeds_give_replayable_results():
     """Another seed may take another path through the search; every seed's result replays."""
     for seed in ("0", "7"):

@@ -388,7 +388,7 @@ def reach(
     tolerance: Annotated[
         float | None,
         typer.Option(
-            help="Largest tool point error accepted, mm. Default: the scene's [tasks.reach] "
+            help="Largest tool point error accepted, mm. Default: the scene's \\[tasks.reach] "
             f"tolerance_mm, else {POINT_TOLERANCE_MM:g}.",
             show_default=False,
         ),
@@ -761,7 +761,7 @@ def spotweld(
         float | None,
         typer.Option(
             help="Largest tool point error accepted at each weld, mm. Default: the scene's "
-            f"[tasks.spotweld] tolerance_mm, else {POINT_TOLERANCE_MM:g}.",
+            f"\\[tasks.spotweld] tolerance_mm, else {POINT_TOLERANCE_MM:g}.",
             show_default=False,
         ),
     ] = None,
@@ -987,7 +987,7 @@ def trace(
         float | None,
         typer.Option(
             help="Largest distance of the continuous tool path from the curve, mm. Default: the "
-            f"scene's [tasks.trace] tolerance_mm, else {TRACE_TOLERANCE_MM:g}.",
+            f"scene's \\[tasks.trace] tolerance_mm, else {TRACE_TOLERANCE_MM:g}.",
             show_default=False,
         ),
     ] = None,
