@@ -291,6 +291,29 @@ def test_a_curve_on_a_missing_solid_is_a_clear_error():
         scene_from_dict(spec)
 
 
+def test_welds_lifted_onto_a_box_are_refused_with_what_to_give_instead(tmp_path):
+    """``points_xy_mm`` lift welds onto a hollow_frustum's wall; a user welding a box got
+    "'block' is not a hollow_frustum obstacle" and nothing about what works. The error now
+    names the box's kind and the 3-D points to give, and those points are planned."""
+    cell = tmp_path / "desk.toml"
+    cell.write_text(
+        'name = "desk"\n[[obstacles]]\ntype = "box"\nname = "block"\n'
+        "center = [300, 0, 30]\nsize = [80, 80, 60]\n"
+        '[tasks.spotweld]\nworkpiece = "block"\npoints_xy_mm = [[300, 0]]\n'
+    )
+    r = run("spotweld", "--scene", str(cell), "--no-bound", "--no-pools")
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        f"error: scene {cell}: tasks.spotweld.workpiece 'block' is a box, not a "
+        "hollow_frustum: points_xy_mm are lifted onto a hollow_frustum's wall only; give the "
+        "welds as 3-D points (points_mm)"
+    ]
+    text = cell.read_text().replace('workpiece = "block"\n', "")
+    cell.write_text(text.replace("points_xy_mm = [[300, 0]]", "points_mm = [[300, 0, 60]]"))
+    r = run("spotweld", "--scene", str(cell), "--no-bound", "--no-pools", "--json")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["visits"][0]["error_mm"] <= 0.05
+
+
 def test_plane_sections_of_inner_faces_lie_on_the_inner_wall():
     spec = {
         **SEED,

@@ -50,7 +50,8 @@ def fk(
     """Forward kinematics: the arm's joint points and the tool pose (mm, deg).
 
     For the seed arm the points are A–E and the fingertip; for other models the joint frame
-    origins and the tool frame (4x4 pose, row-major).
+    origins, the corners where a link bends on its way to a frame (that frame's name primed:
+    elbow' lies between shoulder and elbow), and the tool frame (4x4 pose, row-major).
     """
     from armpath.export import fk_document, json_line
     from armpath.model.catalog import resolve_model

@@ -300,7 +300,7 @@ def nearest_on_lattice(joints: Sequence[Joint], q: ArrayLike) -> FloatArray:
     low, high = _ticks_within(lower, upper, tick)
     inside = np.clip(np.asarray(q, dtype=np.float64), lower, upper)
     on = np.clip(np.round(inside / tick), low, high) * tick
-    return np.asarray(np.where(low > high, inside, on), dtype=np.float64)
+    return np.asarray(np.where(low > high, inside, on), dtype=np.float64) + 0.0  # no -0.0
 
 
 def default_home(joints: Sequence[Joint]) -> FloatArray:

@@ -87,8 +87,9 @@ class Scene:
             )
         if not isinstance(found[0], HollowFrustum):
             raise SceneError(
-                f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is not a "
-                "hollow_frustum obstacle"
+                f"scene {self.source}: tasks.spotweld.workpiece {spec.workpiece!r} is a "
+                f"{found[0].describe()['type']}, not a hollow_frustum: points_xy_mm are lifted "
+                "onto a hollow_frustum's wall only; give the welds as 3-D points (points_mm)"
             )
         w = found[0]
         lift = w.outer_wall_point if spec.surface == "outer" else w.inner_wall_point
