@@ -408,6 +408,29 @@ def test_a_proven_bound_the_plan_meets_is_reported_as_the_fewest():
     assert "weak" not in _bound_text(tight, "one pass")
 
 
+def test_a_bound_the_plan_undercuts_is_reported_refuted_with_why():
+    """A sampled bound above the plan's commands is no lower bound (the SO-101's welds: 45
+    "proven" against a tour of 31, printed as "plan -14 above it"). It is kept as an estimate
+    that says it was refuted, with the audit's reason where there was one, and the words say
+    the plan lies below it; a bound the plan does not undercut is returned as it is."""
+    from armpath.cli.tasks import _bound_text
+    from armpath.planning.bounds.value import CommandBound
+    from armpath.report import _bound_words
+
+    proven = CommandBound(45, 44.2, "the family")
+    assert proven.against_plan(45) is proven and proven.against_plan(60) is proven
+    refuted = proven.against_plan(31)
+    assert not refuted.proven and refuted.commands == 45
+    assert refuted.unproven_because.startswith("refuted by a plan of 31 commands")
+    audited = CommandBound(45, 44.2, "the family", proven=False, unproven_because="261 lie out")
+    assert audited.against_plan(31).unproven_because.endswith("; 261 lie out")
+    doc = {**refuted.describe(), "gap_commands": -14, "gap_percent": -31.11}
+    assert doc["proven"] is False and doc["unproven_because"] == refuted.unproven_because
+    for text in (_bound_text(doc, "every order"), _bound_words({"lower_bound": doc})):
+        assert "plan 14 below it: no lower bound" in text and "above it" not in text
+        assert "refuted by a plan of 31 commands" in text and "self-motion" not in text
+
+
 def test_huge_joint_values_print_in_exponent_form_and_a_zero_tool_axis_is_named():
     """``fk 1e300 0 0 0 0 0`` printed the angle's 301 digits in its header; a zero tool axis
     was called a 'cone direction' (from a review of the command line)."""

@@ -224,3 +224,97 @@ t = [0, 6.283185307179586]
         assert P[:, 2].min() > 0.0  # above the table
         swept += np.ptp(np.unwrap(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0])))
     assert swept >= 2 * np.pi - 1e-3
+
+
+SO101 = "so_arm_description/urdf/so101.urdf"
+
+
+def test_a_five_joint_arms_sampled_family_is_audited_and_not_taken_as_proof():
+    """The SO-101's five joints set its tool's direction only along one of its family's two
+    dimensions (the other barely turns it), so the tool directions chart the family far too
+    coarsely: at a weld on a desk its samples came nowhere near the configuration a tour
+    ended at, and its tour bound (45 commands, "proven") lay above the tour's 31. Here a
+    configuration's tool point is taken from Pinocchio; no sample's error box holds that
+    configuration (measured here, the shorter way round no joint of this arm turns), and the
+    sampler's audit finds such members and withdraws its claim. The UR5's family, solved
+    by its all-solutions IK, passes the same audit."""
+    from armpath.geometry.world import CollisionWorld
+    from armpath.planning.bounds.sampling import FamilySampler
+    from armpath.planning.tour import _targets_family
+
+    path = robot_file(SO101)
+    arm = resolve_model(path)
+    ref = PinocchioArm(path, "gripper_frame_link", [j.name for j in arm.joints])
+    q = np.radians([1.4, -21.5, 39.9, 36.9, -46.3])
+    point = ref.pose_mm(q)[:3, 3]
+    fam = _targets_family(arm, CollisionWorld(()), point[None])
+    sampler = FamilySampler(fam, 0.05, q_start=arm.home)
+    assert sampler.covers_family  # five joints: what the dimensions alone would claim
+    layer = sampler.layer(point, sampler.base, levels=1)
+    u = q[sampler.tip] / sampler.step
+    outside = (np.abs(layer.u - u) - layer.err).max(axis=1)
+    assert layer.size > 0 and outside.min() > 5.0  # commands beyond the nearest error box
+    sampler.audit(point, layer, None)
+    drawn, missed = sampler.audits[-1]
+    assert drawn >= 50 and missed >= drawn // 2
+    assert not sampler.covers_family and "outside every sample's error box" in (
+        sampler.unproven_because()
+    )
+
+    ur5 = resolve_model(robot_file(UR5), "tool0")
+    target = tool_pose(ur5, np.radians([20.0, -70.0, 80.0, -60.0, -80.0, 30.0]))[:3, 3]
+    fam = _targets_family(ur5, CollisionWorld(()), target[None])
+    sampler = FamilySampler(fam, 0.05, q_start=ur5.home)
+    sampler.audit(target, sampler.layer(target, sampler.base, levels=1), None)
+    drawn, missed = sampler.audits[-1]
+    assert drawn >= 50 and missed == 0 and sampler.covers_family
+
+
+@pytest.mark.slow  # 60 s
+def test_a_five_joint_arms_welds_are_bounded_over_their_lattice_states():
+    """Three welds on the top of a block on the SO-101's desk: the family's samples miss
+    members (the audit above), so their bound, which had read 45 "proven" against a tour of
+    31, is no proof; the bound is then the relaxation over the welds' lattice goal states,
+    all listed. It is proven and no more than the tour, which replays on Pinocchio's
+    forward kinematics of the file within the tolerance at each weld, its tool point never
+    below the block's top at the command ends."""
+    import armpath
+
+    path = robot_file(SO101)
+    welds = np.array([[230.0, 0.0, 60.0], [270.0, 0.0, 60.0], [250.0, 20.0, 60.0]])
+    scene = {
+        "name": "desk",
+        "arm": {"model": path},
+        "obstacles": [
+            {"type": "half_space", "name": "desk", "point": [0, 0, 0], "normal": [0, 0, 1]},
+            {"type": "box", "name": "block", "center": [250, 0, 30], "size": [80, 80, 60]},
+        ],
+    }
+    r = armpath.spotweld(None, welds, scene=scene)
+    bound = r.doc["lower_bound"]
+    assert bound["proven"] and "lattice" in bound["method"]
+    assert bound["commands"] <= r.n_commands
+    ref = PinocchioArm(path, "gripper_frame_link", [j.name for j in r.arm.joints])
+    ticks = np.asarray(r.sequence.states())
+    states = np.radians(ticks * 0.1)  # the file's lattice: 0.1 deg, 20 ticks a command
+    assert np.all(np.abs(np.diff(ticks, axis=0)) <= 20)
+    for v in r.doc["visits"]:
+        tip = ref.pose_mm(states[v["after_command"]])[:3, 3]
+        assert np.linalg.norm(tip - np.array(v["target"])) <= 0.05
+    tips = np.array([ref.pose_mm(q)[:3, 3] for q in states])
+    on_top = (np.abs(tips[:, 0] - 250.0) <= 40.0) & (np.abs(tips[:, 1]) <= 40.0)
+    assert np.all(tips[on_top, 2] >= 60.0 - 1e-6)
+
+
+def test_a_default_home_at_a_limit_of_zero_shows_no_negative_zero():
+    """Talos's left arm limits its first joint to 0 ... 165 deg; its default home, moved onto
+    the lattice within the limits, came out -0.0 and ``armpath model show`` printed
+    "home -0 0 0 0 0 0"."""
+    path = robot_file("talos_data/robots/talos_left_arm.urdf")
+    arm = resolve_model(path)
+    assert arm.lower[0] == 0.0 and not np.any(np.signbit(arm.home))
+    r = subprocess.run(
+        [sys.executable, "-m", "armpath", "model", "show", path],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert r.returncode == 0 and "home 0 0 0 0 0 0 (deg" in r.stdout

@@ -210,8 +210,13 @@ def bound_scope(bound: dict[str, Any]) -> str:
     return f"{scope}; {BOUND_OPENING}" if opening else scope
 
 
-#: What an unproven bound is called (a redundant arm's: see :class:`CommandBound`).
-UNPROVEN = "estimate, not proven: the arm's self-motion is not sampled"
+def unproven(bound: dict[str, Any]) -> str:
+    """What an unproven bound document is called, with why (see :class:`CommandBound`; a
+    document written before it said why: a redundant arm's)."""
+    why = bound.get("unproven_because") or "the arm's self-motion is not sampled"
+    return f"estimate, not proven: {why}"
+
+
 #: What a bound marked ``~`` in a table is (a reach's sampled bound, a redundant arm's).
 ESTIMATE_NOTE = (
     "the bound is an estimate (the least over sampled configurations), not proven, so the "
@@ -235,6 +240,16 @@ def bound_cell(doc: dict[str, Any]) -> str:
     return str(bound) if proven(doc) else f"~{bound}"
 
 
+def plan_gap(bound: dict[str, Any]) -> str:
+    """The plan against a bound document, in words: how far above it, or that a plan below it
+    refutes it (a sampled value whose samples missed members of the family)."""
+    gap = bound["gap_commands"]
+    if gap is not None and gap < 0:
+        return f"plan {-gap} below it: no lower bound"
+    pct = bound.get("gap_percent")
+    return f"plan {gap} above it" + ("" if pct is None else f" ({pct:.1f} %)")
+
+
 def _bound_words(doc: dict[str, Any]) -> str:
     """A trace's or tour's lower bound and the gap to it, in words."""
     b = doc.get("lower_bound")
@@ -242,9 +257,9 @@ def _bound_words(doc: dict[str, Any]) -> str:
         return "no lower bound computed"
     meets = b["gap_commands"] == 0 and proven(doc)
     words = f"lower bound {b['commands']} commands over {bound_scope(b)} " + (
-        f"({MEETS_BOUND})" if meets else f"(plan {b['gap_commands']} above it)"
+        f"({MEETS_BOUND})" if meets else f"({plan_gap(b)})"
     )
-    return words if proven(doc) else f"{words}; {UNPROVEN}"
+    return words if proven(doc) else f"{words}; {unproven(b)}"
 
 
 def _figures(names: Sequence[str], available: set[str]) -> str:

@@ -647,7 +647,7 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
     """A lower bound of a trace or tour and the plan's gap to it, in one line (``missing``:
     what to say without one)."""
     from armpath.planning.bounds.carriage import estimate_is_named
-    from armpath.report import MEETS_BOUND, UNPROVEN, bound_scope
+    from armpath.report import MEETS_BOUND, bound_scope, plan_gap, unproven
 
     if bound is None:
         return missing
@@ -657,12 +657,8 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
     plan = bound["commands"] + (bound["gap_commands"] or 0)
     if family is not None and estimate_is_named(family, plan):
         estimate = f"; the family's estimate (not proven) ~{math.ceil(family - 1e-9)}"
-    gap = f"{bound['gap_percent']:.1f} %" if bound["gap_percent"] is not None else "-"
     if not bound.get("proven", True):
-        return (
-            f"~{bound['commands']} commands ({UNPROVEN}; {scope}); "
-            f"plan {bound['gap_commands']} above it ({gap})"
-        )
+        return f"~{bound['commands']} commands ({unproven(bound)}; {scope}); {plan_gap(bound)}"
     if bound["gap_commands"] == 0:  # a proven bound the plan meets: no plan has fewer
         return f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}); {MEETS_BOUND}"
     error = sampling.get("largest_error_on_path_commands")
@@ -674,7 +670,7 @@ def _bound_text(bound: dict[str, Any] | None, scope: str, missing: str = "not co
     )
     return (
         f">= {bound['commands']} commands ({scope}, {bound_scope(bound)}){estimate}; "
-        f"plan {bound['gap_commands']} above it ({gap}){weak}"
+        f"{plan_gap(bound)}{weak}"
     )
 
 

@@ -647,6 +647,8 @@ def plan_tour(
             f"tour failed its final clearance check ({clearance.limiting_pair} "
             f"{clearance.limiting_slack:+.3f} mm at command {clearance.limiting_command})"
         )
+    if family_bound is not None:
+        family_bound = family_bound.against_plan(sequence.n_commands)
     reported = family_bound
     if bound:  # an arm on a track: its carriage's travel, proven (and cheap) for any order
         carriage = points_travel_bound(

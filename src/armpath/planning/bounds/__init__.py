@@ -44,6 +44,15 @@ the tests check the bounds against differently computed ones (SLSQP over the exa
 exactly clear members of a fine sampling), the relaxations' programmes against brute force, and
 the plans.
 
+The assumption is also audited where a bound is computed: at up to six of its sites,
+members drawn another way (the tool point alone, solved from random starts) that are clear
+must each lie within some sample's error box (:meth:`FamilySampler.audit`). Where one does
+not, the bound is reported as an estimate that says so: a five-joint SO-101's direction
+barely turns along one of its family's two dimensions, so the directions chart that
+dimension far too coarsely, and its welds' sampled bound, 45 commands, lay above a tour of
+31. A tour then takes the relaxation over its lattice goal states, all listed, with a larger
+budget (27 there, proven), and a bound that a plan undercuts is reported as refuted.
+
 That assumption fails at a singular direction where a whole curve of members shares one tool
 direction (a six-joint arm with its wrist straight): however small, a cell touching it spans
 the curve. The sites' directions are sampled in a chart that blows each such direction up into

@@ -459,6 +459,11 @@ def family_arc_limit(
 
     for k, positions in enumerate(s_layers):
         layers += [sampled(float(s), k) for s in positions]
+    sampler.audit_sites(
+        [fam.frame(lay.s_mm)[0] for lay in layers],
+        [lay.layer for lay in layers],
+        [_allowed_at(fam, lay.s_mm) for lay in layers],
+    )
     fine: dict[bytes, float] = {}
     samples = 0
     for split in range(splits + 1):
@@ -952,6 +957,7 @@ def band_trace_bound(
         )
     return CommandBound(
         proven=sampler.covers_family,
+        unproven_because=sampler.unproven_because(),
         commands=math.ceil(value - 1e-9),
         value=value,
         method=(
@@ -962,7 +968,7 @@ def band_trace_bound(
             "member, widened by how far neighbouring members differ), each part of the spans "
             "counted over the largest limit of the members that can cover it; the approach the "
             "least largest-joint distance from the start to the "
-            "family sampled along the spans, less the sampling errors"
+            "family sampled along the spans, less the sampling errors" + sampler.audit_note()
         ),
         parts={"approach": float(math.ceil(approach - 1e-9)), "along": along},
         sampling={
@@ -993,4 +999,5 @@ def with_band(family: CommandBound | None, band: CommandBound | None) -> Command
         parts=band.parts,
         sampling={**family.sampling, **band.sampling, "family_bound_commands": family.value},
         proven=family.proven and band.proven,
+        unproven_because=family.unproven_because or band.unproven_because,
     )

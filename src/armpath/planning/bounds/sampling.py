@@ -11,8 +11,15 @@ from numpy.typing import NDArray
 from armpath.budget import check_time
 from armpath.geometry.primitives import Obstacle
 from armpath.geometry.world import CollisionWorld, into_windows
+from armpath.ik.family import GenericFamily
+from armpath.ik.target import ToolTarget
 from armpath.jit import njit
-from armpath.kinematics import displacement_bounds, landmark_positions, position_jacobian
+from armpath.kinematics import (
+    displacement_bounds,
+    landmark_positions,
+    position_jacobian,
+    tool_pose,
+)
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.bounds.chart import (
     BlowUp,
@@ -47,6 +54,13 @@ _DETECT_DIRECTIONS = fibonacci_directions(600)
 _DETECT_SPACING = float(np.sqrt(4.0 * np.pi / _DETECT_DIRECTIONS.shape[0]))
 #: Sampling error standing for "no neighbour has a member" (commands).
 _MISSING = 1e6
+#: Random starts from which members are drawn at each audited point (:meth:`FamilySampler.audit`).
+AUDIT_STARTS = 200
+#: Most points of one bound that are audited (evenly spread among its sites).
+AUDIT_SITES = 6
+#: Commands by which a drawn member may lie outside every sample's error box before the audit
+#: counts it missed (rounding of the units).
+AUDIT_SLACK = 1e-6
 #: Smallest singular value, relative to the largest, of the tip joints' Jacobian of the tool
 #: point at which a member of a family of three tip joints or fewer is taken as isolated.
 _ISOLATED_RANK = 1e-9
@@ -414,7 +428,94 @@ class FamilySampler:
         #: whether the samples cover the family: the tip joints beyond the tool point's three
         #: are no more than the sampled tool direction (two) and turn about it (one, where
         #: several turns are sampled); a redundant arm's self-motion is not sampled
-        self.covers_family = int(self.tip.sum()) - 3 <= 2 + (1 if self.turns > 1 else 0)
+        self.sampled_dimensions = int(self.tip.sum()) - 3 <= 2 + (1 if self.turns > 1 else 0)
+        #: per audited point (:meth:`audit`), the clear members drawn there and how many of
+        #: them lie outside every sample's error box
+        self.audits: list[tuple[int, int]] = []
+
+    @property
+    def covers_family(self) -> bool:
+        """Whether the samples cover the family, as the bounds take them to (see
+        :meth:`unproven_because`)."""
+        return not self.unproven_because()
+
+    def unproven_because(self, with_errors: bool = True) -> str:
+        """Why a bound over the samples is not proven, in words ("" where it is): without the
+        sampling errors (``with_errors`` False) it is none; or the samples are not taken to
+        cover the family: the tip joints beyond the tool point's three are more than the
+        sampled tool direction (two) and turn about it (one, where several turns are sampled),
+        as a redundant arm's self-motion; or members drawn by :meth:`audit` lay outside every
+        sample's error box."""
+        if not with_errors:
+            return "the sampling errors are left out"
+        if not self.sampled_dimensions:
+            return "the arm's self-motion is not sampled"
+        missed = sum(m for _, m in self.audits)
+        if not missed:
+            return ""
+        drawn = sum(d for d, _ in self.audits)
+        return (
+            f"of {drawn} clear members drawn from random starts at {len(self.audits)} points, "
+            f"{missed} lie outside every sample's error box (the tool directions chart this "
+            "arm's family too coarsely)"
+        )
+
+    def audit_note(self) -> str:
+        """What the audits found, for a bound's method: empty where no member was missed."""
+        if not self.sampled_dimensions or self.covers_family:
+            return ""
+        return f"; NOT proven: {self.unproven_because()}"
+
+    def audit_sites(
+        self,
+        points: list[FloatArray],
+        layers: list[Layer],
+        allowed: list[Callable[[FloatArray], BoolArray] | None] | None = None,
+    ) -> None:
+        """:meth:`audit` at up to :data:`AUDIT_SITES` of the sites ``points`` (with their
+        ``layers`` and the directions ``allowed`` at each), evenly spread."""
+        if not points:
+            return
+        picked = np.unique(np.linspace(0, len(points) - 1, min(len(points), AUDIT_SITES)).round())
+        for k in picked.astype(int).tolist():
+            check_time("bounding the commands")
+            self.audit(points[k], layers[k], None if allowed is None else allowed[k])
+
+    def audit(
+        self, E: FloatArray, layer: Layer, allowed: Callable[[FloatArray], BoolArray] | None
+    ) -> None:
+        """Check ``layer`` (the samples at tool point ``E``) against members drawn another way:
+        Levenberg-Marquardt on the point alone from :data:`AUDIT_STARTS` random starts, those
+        that reach it within the limits, clear, along a direction ``allowed`` and inside the
+        joints' ranges to keep. Each should lie within some sample's error box (the bounds'
+        assumption); the count of those that do not is recorded (:attr:`audits`), and one
+        makes :attr:`covers_family` False. A test that can fail, not a proof: where the tool
+        directions chart the family badly (a five-joint arm whose direction barely changes
+        along one of its family's dimensions), whole parts of it fall between the samples."""
+        if not self.sampled_dimensions:
+            return  # nothing is claimed
+        arm = self.fam.arm
+        family = GenericFamily(arm, ToolTarget(np.asarray(E, dtype=np.float64)))
+        lo, hi = arm.sampling_box()
+        rng = np.random.default_rng(len(self.audits))
+        q = family.refine(rng.uniform(lo, hi, (AUDIT_STARTS, arm.n_joints)), iterations=80)
+        q = q[family.exact(q)]
+        q = q[self.fam.world.satisfied(arm, q)] if q.shape[0] else q
+        if allowed is not None and q.shape[0]:
+            q = q[allowed(tool_pose(arm, q)[:, :3, :3] @ np.asarray(arm.approach_axis))]
+        u = self.units(q)
+        inside = np.ones(u.shape[0], dtype=bool)
+        for j, w_lo, w_hi in self.windows:
+            inside &= (u[:, j] >= w_lo - AUDIT_SLACK) & (u[:, j] <= w_hi + AUDIT_SLACK)
+        u = u[inside]
+        period = np.where(self.period > 0.0, self.period, np.inf)
+        missed = 0
+        for x in u:
+            w = np.mod(np.abs(layer.u - x), period)  # a whole turn's joint the shorter way
+            d = np.minimum(w, period - w)
+            if layer.size == 0 or float((d - layer.err).max(axis=1).min()) > AUDIT_SLACK:
+                missed += 1
+        self.audits.append((int(u.shape[0]), missed))
 
     def within_windows(self, q: FloatArray) -> FloatArray:
         """Configurations ``(..., n)`` rad with each joint that has a range to keep

@@ -676,6 +676,8 @@ class CellSearch:
         self.q_start = q_start
         self.with_errors = with_errors
         self.sites = [self._site(p, a, levels) for p, a in zip(points, allowed, strict=True)]
+        if with_errors:  # the samples' claim to cover the family, tested (an estimate: none)
+            sampler.audit_sites(points, [s.layer for s in self.sites], allowed)
         #: the passages a leg from the start takes, each with the sites it takes them to
         sites = np.array(points).reshape(-1, 3)
         entered = [p.passage.entered(sites, sampler.tol) for p in passages]

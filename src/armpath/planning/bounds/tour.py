@@ -71,16 +71,23 @@ def tour_bound(
     (:mod:`~armpath.planning.bounds.passage`); False: the direct leg only. ``lattice``: first
     the exact relaxation over the targets' lattice goal states (:func:`lattice_tour_bound`),
     never below the sampled one, for at most :data:`MAX_LATTICE_TARGETS` targets; the family is
-    sampled where there are more or their states cannot be listed."""
+    sampled where there are more or their states cannot be listed or measured, and where its
+    samples then give no proven bound, the lattice states are measured within
+    :data:`MAX_LATTICE_PAIRS_UNPROVEN` pairs after all."""
     say = on_progress or (lambda _m: None)
     say("bounding the tour's commands")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
+    layers = None
     if lattice and with_errors and orders is not None and len(points) <= MAX_LATTICE_TARGETS:
-        exact = lattice_tour_bound(sampler, q_start, points, orders, back, ways, say)
-        if exact is not None:
-            return exact
+        layers = _goal_layers(sampler, q_start, points, say)
+        if layers is not None:
+            exact = lattice_tour_bound(
+                sampler, q_start, points, orders, back, ways, say, layers=layers
+            )
+            if exact is not None:
+                return exact
     search = CellSearch(
         sampler,
         Subsets(back) if orders is None else Orders(orders, back),
@@ -96,7 +103,8 @@ def tour_bound(
     if found is None:
         raise PlanningError("a target has no family member within the joint limits")
     bound = CommandBound(
-        proven=sampler.covers_family and with_errors,
+        proven=not sampler.unproven_because(with_errors),
+        unproven_because=sampler.unproven_because(with_errors),
         commands=int(np.ceil(found.value - 1e-9)),
         value=found.value,
         method=(
@@ -111,6 +119,7 @@ def tour_bound(
             "error or clearance is unsure), each leg rounded up to whole commands"
             + passage_method(ways, "a leg from the start")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
+            + sampler.audit_note()
         ),
         sampling={
             "orders": float(math.factorial(targets.shape[0]) if orders is None else len(orders)),
@@ -126,6 +135,16 @@ def tour_bound(
         clear_path_q=None if found.clear_q is None else found.clear_q[list(found.clear_order)],
         clear_path_order=None if found.clear_q is None else tuple(found.clear_order),
     )
+    if layers is not None and orders is not None and not bound.proven:
+        # the samples do not cover the family: the lattice states, listed above, give a proven
+        # bound if their legs can be measured within a larger budget
+        say(f"the sampled bound is not proven: {bound.unproven_because}")
+        exact = lattice_tour_bound(
+            sampler, q_start, points, orders, back, ways, say, layers=layers,
+            max_pairs=MAX_LATTICE_PAIRS_UNPROVEN,
+        )  # fmt: skip
+        if exact is not None:
+            return exact
     return bound, search.per_order
 
 
@@ -158,6 +177,7 @@ def tour_bound_any_order(
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no family member within the joint limits")
     points = np.asarray(targets, dtype=np.float64)
+    sampler.audit_sites(list(points), layers)
     ways = sampled_passages(sampler, q_start, points, through_openings=through_openings)
     from_start = _from_start(sampler, q_start, points, layers, ways)
     # the way back is a leg between the start and a target too (through an opening if it
@@ -165,6 +185,7 @@ def tour_bound_any_order(
     total = _entered_once(sampler, layers, from_start, from_start if back else None)
     return CommandBound(
         proven=sampler.covers_family,
+        unproven_because=sampler.unproven_because(),
         commands=int(np.ceil(total - 1e-9)),
         value=total,
         method=(
@@ -175,6 +196,7 @@ def tour_bound_any_order(
             "ranges; whole commands, each distance less the samples' sampling errors)"
             + ("; plus the shortest way back" if back else "")
             + passage_method(ways, "a leg from the start")
+            + sampler.audit_note()
         ),
         sampling={
             "targets": float(targets.shape[0]),
@@ -241,6 +263,10 @@ MAX_LATTICE_GOALS = 600_000
 #: orders (about 2.5e9 a second on two cores): past it, the family's sampled members instead.
 #: Seed Task 3: 9.7e9 pairs, 4 s.
 MAX_LATTICE_PAIRS = 40_000_000_000
+#: The same where the family's samples give no proven bound (an audit found members outside
+#: them, :meth:`FamilySampler.audit`): the lattice's is then the only proof. Three welds of a
+#: five-joint SO-101 on a desk: 5.5e10 pairs, about 30 s.
+MAX_LATTICE_PAIRS_UNPROVEN = 200_000_000_000
 #: Most targets whose lattice states are listed for the bound: each takes seconds (some 12 s
 #: a weld of the seed arm in free space), so twelve welds in a given order spent 200 s listing
 #: and 24 over 5 min; more are bounded over the family's sampled members.
@@ -350,22 +376,29 @@ def lattice_tour_bound(
     back: bool,
     ways: list[PassageSamples],
     say: Callable[[str], None],
+    *,
+    layers: list[Layer] | None = None,
+    max_pairs: int | None = None,
 ) -> tuple[CommandBound, dict[tuple[int, ...], int]] | None:
-    """The tour's relaxation over its lattice goal states: a plan ends each visit at a lattice
+    """The tour's relaxation over its lattice goal states (``layers``, one per target, as
+    :func:`_goal_layers` lists them; None: listed now): a plan ends each visit at a lattice
     state within the tolerance of the target that keeps the clearance rule, and each leg
     between two lattice states takes at least their largest joint change in whole commands
     (obstacles ignored between the targets; a leg from the start into a hollow obstacle at
     least its way through an opening, as the sampled bound). The states are listed completely
     (:func:`_goal_layers`), so the least over ``orders`` is exact for this relaxation: no
-    sampling error. None where they cannot be listed; the caller then samples the family."""
-    layers = _goal_layers(sampler, q_start, points, say)
+    sampling error. None where they cannot be listed, or their legs would measure more than
+    ``max_pairs`` pairs of states (None: :data:`MAX_LATTICE_PAIRS`); the caller then samples
+    the family."""
+    if layers is None:
+        layers = _goal_layers(sampler, q_start, points, say)
     if layers is None:
         return None
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no lattice state within the tolerance that is clear")
     prefixes = {order[:n] for order in orders for n in range(2, len(order) + 1)}
     pairs = sum(layers[p[-2]].size * layers[p[-1]].size for p in prefixes)
-    if pairs > MAX_LATTICE_PAIRS:
+    if pairs > (MAX_LATTICE_PAIRS if max_pairs is None else max_pairs):
         say("the legs between the lattice states are too many to measure: sampling instead")
         return None
     say("bounding the tour's commands over its lattice goal states")

@@ -263,7 +263,8 @@ def _bound(
     """The trace bound of a search's result (see :func:`trace_bound`)."""
     sampler = search.sampler
     return CommandBound(
-        proven=sampler.covers_family and with_errors,
+        proven=not sampler.unproven_because(with_errors),
+        unproven_because=sampler.unproven_because(with_errors),
         commands=max(int(np.ceil(found.value - 1e-9)), 0),
         value=found.value,
         method=(
@@ -278,6 +279,7 @@ def _bound(
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
             + passage_method([p for p, _ in search.passages], "the approach")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
+            + sampler.audit_note()
         ),
         parts={"along": found.value - found.approach, "approach": found.approach},
         sampling={

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,13 +34,29 @@ class CommandBound:
     clear_path_q: FloatArray | None = None
     clear_path_order: tuple[int, ...] | None = None
     proven: bool = True
+    #: why the value is not proven, in words ("" where it is)
+    unproven_because: str = ""
 
     def describe(self) -> dict[str, object]:
         return {
             "commands": self.commands,
             "value_commands": round(self.value, 4),
             "proven": self.proven,
+            **({"unproven_because": self.unproven_because} if not self.proven else {}),
             "method": self.method,
             "parts_commands": {k: round(v, 4) for k, v in self.parts.items()},
             "sampling": {k: round(v, 6) for k, v in self.sampling.items()},
         }
+
+    def against_plan(self, commands: int) -> CommandBound:
+        """This bound as a plan of ``commands`` commands leaves it: itself where it is no more;
+        above the plan it is no lower bound (its samples missed members of the family), and is
+        kept as an estimate that says so."""
+        if self.commands <= commands:
+            return self
+        why = f"refuted by a plan of {commands} commands" + (
+            f"; {self.unproven_because}"
+            if self.unproven_because
+            else ": the samples missed members of the family"
+        )
+        return replace(self, proven=False, unproven_because=why, method=f"{self.method}; {why}")

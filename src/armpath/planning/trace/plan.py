@@ -321,6 +321,8 @@ def plan_trace(
         return result
     say("bounding the fewest commands of this trace")
     bound = trace_plan_bound(result, on_progress=say, max_samples=opts.bound_samples)
+    if bound is not None:
+        bound = bound.against_plan(sequence.n_commands)
     return replace(result, lower_bound=bound)
 
 
