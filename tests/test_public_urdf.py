@@ -1,9 +1,10 @@
 """Issue 18: robot files nobody here wrote, from a public robot-description package.
 
 The URDF files come from the ``example-robot-data`` package (ur_description's UR5, Franka's
-Panda, Unitree's Z1) as its users get them; their forward kinematics is Pinocchio's, the
-library that package is made for. armpath reads each file itself, and everything it plans is
-replayed on Pinocchio's forward kinematics of the same file.
+Panda, Unitree's Z1, the SO-101, Kinova's Jaco, PAL's Talos arm) as its users get them; their
+forward kinematics is Pinocchio's, the library that package is made for. armpath reads each
+file itself, and everything it plans is replayed on Pinocchio's forward kinematics of the same
+file.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ from armpath.model.catalog import resolve_model
 UR5 = "ur_description/urdf/ur5_robot.urdf"
 PANDA = "panda_description/urdf/panda.urdf"
 Z1 = "z1_description/urdf/z1.urdf"
+SO101 = "so_arm_description/urdf/so101.urdf"
+KINOVA = "kinova_description/robots/kinova.urdf"
 
 
 def robot_file(tail: str) -> str:
@@ -42,11 +45,18 @@ class PinocchioArm:
         self.data = self.model.createData()
         self.frame = self.model.getFrameId(tip)
         assert self.frame < len(self.model.frames), tip
-        self.index = [self.model.joints[self.model.getJointId(n)].idx_q for n in joint_names]
+        joints = [self.model.joints[self.model.getJointId(n)] for n in joint_names]
+        self.index = [j.idx_q for j in joints]
+        #: which joints Pinocchio holds as (cos, sin): a continuous (unlimited) joint's
+        self.circular = [j.nq == 2 for j in joints]
 
     def pose_mm(self, q: np.ndarray) -> np.ndarray:
         full = pin.neutral(self.model)
-        full[self.index] = q
+        for i, v, circular in zip(self.index, q, self.circular, strict=True):
+            if circular:
+                full[i : i + 2] = np.cos(v), np.sin(v)
+            else:
+                full[i] = v
         pin.framesForwardKinematics(self.model, self.data, full)
         M = self.data.oMf[self.frame]
         T = np.eye(4)
@@ -67,7 +77,13 @@ def _armpath(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
 
 @pytest.mark.parametrize(
     ("tail", "tip", "n_joints"),
-    [(UR5, "tool0", 6), (UR5, "ee_link", 6), (PANDA, "panda_hand", 7), (Z1, "link06", 6)],
+    [
+        (UR5, "tool0", 6),
+        (UR5, "ee_link", 6),
+        (PANDA, "panda_hand", 7),
+        (Z1, "link06", 6),
+        (KINOVA, "j2s6s200_end_effector", 6),  # continuous joints: (cos, sin) in Pinocchio
+    ],
 )
 def test_forward_kinematics_agrees_with_pinocchio(tail, tip, n_joints):
     path = robot_file(tail)
@@ -226,9 +242,6 @@ t = [0, 6.283185307179586]
     assert swept >= 2 * np.pi - 1e-3
 
 
-SO101 = "so_arm_description/urdf/so101.urdf"
-
-
 def test_a_five_joint_arms_sampled_family_is_audited_and_not_taken_as_proof():
     """The SO-101's five joints set its tool's direction only along one of its family's two
     dimensions (the other barely turns it), so the tool directions chart the family far too
@@ -318,3 +331,35 @@ def test_a_default_home_at_a_limit_of_zero_shows_no_negative_zero():
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert r.returncode == 0 and "home 0 0 0 0 0 0 (deg" in r.stdout
+
+
+@pytest.mark.slow  # 2 min
+def test_a_kinova_in_the_ur5_cell_welds_its_four_points():
+    """A Kinova Jaco (six joints, no spherical wrist) put in the UR5 cell in the UR5's place:
+    ``armpath reach`` reached its first weld directly in 45 commands, but the tour refused it
+    ("no configuration ... keeps the links 1 mm clear ..., with 1.5 mm to spare"): every
+    member found passes within 2.5 mm of the workpiece. Goal states now fall back to the
+    margin alone. Its tour then failed its final check after minutes of planning, its tool
+    tip onto four welds taking 20,458 evaluations of the whole motion against a budget of
+    20,000 that each leg had passed alone; a whole plan's check now has
+    WHOLE_PLAN_EVALUATIONS. The tour replays on Pinocchio's kinematics of the file (the
+    cell's base and 120 mm tool applied here) within the tolerance at each weld."""
+    import tomllib
+
+    import armpath
+
+    root = Path(__file__).resolve().parents[1]
+    scene = tomllib.loads((root / "examples" / "ur5_cell.toml").read_text())
+    path = robot_file(KINOVA)
+    scene["arm"] = {**scene["arm"], "model": path, "tip_link": "j2s6s200_end_effector"}
+    del scene["arm"]["home_deg"]
+    r = armpath.spotweld(None, scene=scene, bound=False, pools=False)
+    clearance = r.doc["clearance"]
+    assert clearance["certified"] and clearance["configurations_evaluated"] > 20_000
+    ref = PinocchioArm(path, "j2s6s200_end_effector", [j.name for j in r.arm.joints])
+    states = r.arm.lattice.to_joint(np.asarray(r.sequence.states()))
+    assert np.all(np.abs(np.diff(np.asarray(r.sequence.states()), axis=0)) <= 20)
+    for v in r.doc["visits"]:
+        T = ref.pose_mm(states[v["after_command"]])
+        tip = T[:3, :3] @ np.array([0.0, 0.0, 120.0]) + T[:3, 3] + np.array([-150.0, 0, 250])
+        assert np.linalg.norm(tip - np.array(v["target"])) <= 0.05

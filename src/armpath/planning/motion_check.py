@@ -65,6 +65,12 @@ class MotionClearance:
 _EVALUATION_CHUNK = 50_000
 #: Most instants a motion's first round evaluates (``initial_substeps`` a command, else one).
 _MAX_INITIAL_INSTANTS = 1_000_000
+#: The evaluations a whole plan's final check may take (a trace's passes and transits, a
+#: tour's legs), each part having been certified within the default 20,000: together they
+#: may need more. A Kinova's tour of the UR5 cell's four welds, its tool tip onto each, took
+#: 20,458 and was refused after five minutes of planning. The bisection refines only the
+#: intervals not yet proven, so the cap costs time only where a plan needs it.
+WHOLE_PLAN_EVALUATIONS = 400_000
 
 
 def motion_clearance(

@@ -163,8 +163,8 @@ def no_clear_goal_error(
     return PlanningError(
         f"no configuration reaching ({where}) {unit} keeps the links "
         + (f"{world.margin:g} {unit} clear of the obstacles and " if world.obstacles else "")
-        + f"{world.self_margin:g} {unit} clear of each other, with {body_buffer:g} {unit} "
-        "to spare for the motion onto it"
+        + f"{world.self_margin:g} {unit} clear of each other"
+        + (f", with {body_buffer:g} {unit} to spare for the motion onto it" if body_buffer else "")
     )
 
 
@@ -772,8 +772,9 @@ def generic_goal_states(
     nearest_member: bool = False,
 ) -> IntArray:
     """Lattice states within ``tolerance`` of the target whose links keep the margin plus
-    ``body_buffer`` (the tool tip only must not enter), at most ``count``, spread over the
-    family (members at least ``spread_deg`` apart), nearest the start in commands first.
+    ``body_buffer`` (the tool tip only must not enter; where no state found does, the margin
+    alone), at most ``count``, spread over the family (members at least ``spread_deg``
+    apart), nearest the start in commands first.
 
     Next to each member the clear lattice state with the smallest error is taken, or with
     ``nearest_member`` the one nearest the member in commands (the smallest error among
@@ -798,12 +799,56 @@ def generic_goal_states(
             f"every configuration reaching ({where}) {arm.length_unit} lies beyond a joint's "
             "self-collision range from the start"
         )
+    # the links keep the buffer where any member lets them; where none does (a Kinova's
+    # links within 2.5 mm of the UR5 cell's workpiece at every member reaching its first
+    # weld, which a reach reached directly), the margin alone
+    found = None
+    for buffer in dict.fromkeys((body_buffer, 0.0)):
+        found = _clear_goal_states(
+            arm, world, start, target, tolerance, samples, count, spread_deg, nearest_member,
+            buffer,
+        ) or found  # fmt: skip
+        if found is not None and found[0]:
+            break
+    if found is None:
+        raise no_clear_goal_error(where, arm.length_unit, world, 0.0)
+    states, within, members = found
+    if not states and within == 0:
+        raise PlanningError(_lattice_too_coarse(arm, target, members, tolerance, where))
+    if not states:
+        raise PlanningError(
+            f"no lattice state within {tolerance:g} {arm.length_unit} of ({where}) "
+            f"{arm.length_unit} satisfies the clearance rule"
+        )
+    out = np.array(states, dtype=np.int64)
+    order = np.argsort(grid.commands_needed_many(out - start), kind="stable")
+    return out[order]
+
+
+def _clear_goal_states(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start: IntArray,
+    target: ToolTarget,
+    tolerance: float,
+    samples: FloatArray,
+    count: int,
+    spread_deg: float,
+    nearest_member: bool,
+    body_buffer: float,
+) -> tuple[list[IntArray], int, FloatArray] | None:
+    """What :func:`generic_goal_states` takes with the links keeping ``body_buffer`` beyond
+    the margin: the lattice states (at most ``count``), how many lattice states lay within
+    the tolerance (clear or not), and the members searched about; None where no member of
+    ``samples`` keeps the rule."""
+    grid = arm.lattice
+    s_q = grid.to_joint(start)
     # a member's tool point is on the target, which may lie on a surface: rounding puts it a
     # hair inside; the lattice states near it are held to the rule exactly below
     goal_clear = goal_links_rule(arm, world, target.position, body_buffer)
     body_ok = goal_clear(samples, tolerance)
     if not np.any(body_ok):
-        raise no_clear_goal_error(where, arm.length_unit, world, body_buffer)
+        return None
     samples = samples[body_ok]
     metric = command_metric(arm, samples, s_q)
     members = _diverse(samples, metric, 4 * count, np.full(arm.n_joints, np.radians(spread_deg)))
@@ -829,16 +874,7 @@ def generic_goal_states(
         states.append(cand[k])
         if len(states) >= count:
             break
-    if not states and within == 0:
-        raise PlanningError(_lattice_too_coarse(arm, target, members, tolerance, where))
-    if not states:
-        raise PlanningError(
-            f"no lattice state within {tolerance:g} {arm.length_unit} of ({where}) "
-            f"{arm.length_unit} satisfies the clearance rule"
-        )
-    out = np.array(states, dtype=np.int64)
-    order = np.argsort(grid.commands_needed_many(out - start), kind="stable")
-    return out[order]
+    return states, within, members
 
 
 def _lattice_too_coarse(

@@ -57,7 +57,12 @@ from armpath.planning.motion import (
     plan_metrics,
     plan_motion,
 )
-from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
+from armpath.planning.motion_check import (
+    WHOLE_PLAN_EVALUATIONS,
+    MotionClearance,
+    check_state_clear,
+    motion_clearance,
+)
 from armpath.planning.reach import (
     GOAL_BODY_BUFFER_MM,
     goal_states,
@@ -641,7 +646,7 @@ def plan_tour(
             Visit(t, tuple(float(v) for v in pts[t]), k, float(np.linalg.norm(tip - pts[t])))  # type: ignore[arg-type]
         )
     say("certifying the whole tour's continuous motion")
-    clearance = motion_clearance(arm, world, sequence)
+    clearance = motion_clearance(arm, world, sequence, max_evaluations=WHOLE_PLAN_EVALUATIONS)
     if not clearance.certified_ok:
         raise PlanningError(
             f"tour failed its final clearance check ({clearance.limiting_pair} "

@@ -48,7 +48,12 @@ from armpath.planning.motion import (
     plan_motion,
     search_clearance_extra,
 )
-from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
+from armpath.planning.motion_check import (
+    WHOLE_PLAN_EVALUATIONS,
+    MotionClearance,
+    check_state_clear,
+    motion_clearance,
+)
 from armpath.planning.trace.certificate import (
     certificate_precision,
     certified_axis_angle,
@@ -293,7 +298,7 @@ def plan_trace(
     all_states = np.array(states)
     sequence = CommandSequence.from_states(all_states, arm.lattice)
     say("certifying the clearance of the whole motion")
-    clearance = motion_clearance(arm, world, sequence, max_evaluations=400_000)
+    clearance = motion_clearance(arm, world, sequence, max_evaluations=WHOLE_PLAN_EVALUATIONS)
     if not clearance.certified_ok:  # a plan is delivered only with its motion proven clear
         why = "a sampled instant breaks it" if clearance.violated else "not proven in its budget"
         raise PlanningError(
