@@ -28,6 +28,7 @@ PANDA = "panda_description/urdf/panda.urdf"
 Z1 = "z1_description/urdf/z1.urdf"
 SO101 = "so_arm_description/urdf/so101.urdf"
 KINOVA = "kinova_description/robots/kinova.urdf"
+XARM7 = "xarm_description/urdf/xarm7.urdf"
 
 
 def robot_file(tail: str) -> str:
@@ -268,8 +269,8 @@ def test_a_five_joint_arms_sampled_family_is_audited_and_not_taken_as_proof():
     outside = (np.abs(layer.u - u) - layer.err).max(axis=1)
     assert layer.size > 0 and outside.min() > 5.0  # commands beyond the nearest error box
     sampler.audit(point, layer, None)
-    drawn, missed = sampler.audits[-1]
-    assert drawn >= 50 and missed >= drawn // 2
+    drawn, missed, worst = sampler.audits[-1]
+    assert drawn >= 50 and missed >= drawn // 2 and worst > 5.0
     assert not sampler.covers_family and "outside every sample's error box" in (
         sampler.unproven_because()
     )
@@ -279,8 +280,8 @@ def test_a_five_joint_arms_sampled_family_is_audited_and_not_taken_as_proof():
     fam = _targets_family(ur5, CollisionWorld(()), target[None])
     sampler = FamilySampler(fam, 0.05, q_start=ur5.home)
     sampler.audit(target, sampler.layer(target, sampler.base, levels=1), None)
-    drawn, missed = sampler.audits[-1]
-    assert drawn >= 50 and missed == 0 and sampler.covers_family
+    drawn, missed, worst = sampler.audits[-1]
+    assert drawn >= 50 and missed == 0 and worst == 0.0 and sampler.covers_family
 
 
 @pytest.mark.slow  # 60 s
@@ -363,3 +364,36 @@ def test_a_kinova_in_the_ur5_cell_welds_its_four_points():
         T = ref.pose_mm(states[v["after_command"]])
         tip = T[:3, :3] @ np.array([0.0, 0.0, 120.0]) + T[:3, 3] + np.array([-150.0, 0, 250])
         assert np.linalg.norm(tip - np.array(v["target"])) <= 0.05
+
+
+@pytest.mark.slow  # 20 s
+def test_a_redundant_arms_unreachable_arc_says_its_verdict_is_over_the_members_found():
+    """UFactory's xArm7 in the UR5 cell: the far side of the seam came out "unreachable:
+    collision with workpiece", said as a fact, though the family finds one member of a
+    seven-joint arm's self-motion per tool frame. Where the tool point itself lies outside
+    every obstacle the reason now says it is over the members found; a line through the
+    pedestal, where the tool point would lie inside it, stays a plain "collision with
+    pedestal"."""
+    import tomllib
+
+    from armpath.geometry.curves import Polyline
+    from armpath.planning.trace.reachability import SELF_MOTION_CAVEAT, curve_reachability
+    from armpath.scenes import scene_from_dict
+    from armpath.scenes.arm import scene_arm
+
+    root = Path(__file__).resolve().parents[1]
+    data = tomllib.loads((root / "examples" / "ur5_cell.toml").read_text())
+    data["arm"] = {**data["arm"], "model": robot_file(XARM7)}
+    del data["arm"]["home_deg"]
+    scene = scene_from_dict(data)
+    arm = scene_arm(scene)
+    assert arm.n_joints == 7
+    seam = scene.trace_curve()
+    found = curve_reachability(arm, scene.world, seam, start_q=arm.home)
+    (arc,) = found.unreachable
+    assert arc.reason == "collision with workpiece" + SELF_MOTION_CAVEAT
+    middle = seam.at_arc_length(np.array([(arc.start_mm + arc.end_mm) / 2.0]))[0]
+    assert min(float(o.signed_distance(middle)) for o in scene.world.obstacles) >= -1e-6
+    line = Polyline("through", np.array([[-300.0, 0.0, 200.0], [0.0, 0.0, 200.0]]))
+    (inside,) = curve_reachability(arm, scene.world, line, start_q=arm.home).unreachable
+    assert inside.reason == "collision with pedestal"

@@ -428,10 +428,12 @@ class FamilySampler:
         #: whether the samples cover the family: the tip joints beyond the tool point's three
         #: are no more than the sampled tool direction (two) and turn about it (one, where
         #: several turns are sampled); a redundant arm's self-motion is not sampled
-        self.sampled_dimensions = int(self.tip.sum()) - 3 <= 2 + (1 if self.turns > 1 else 0)
-        #: per audited point (:meth:`audit`), the clear members drawn there and how many of
-        #: them lie outside every sample's error box
-        self.audits: list[tuple[int, int]] = []
+        #: whether the sampled directions and turns span the family (not a redundant arm's
+        #: self-motion: :attr:`CurveFamily.directions_span`)
+        self.sampled_dimensions = fam.directions_span
+        #: per audited point (:meth:`audit`), the clear members drawn there, how many of them
+        #: lie outside every sample's error box, and how far the farthest does (commands)
+        self.audits: list[tuple[int, int, float]] = []
 
     @property
     def covers_family(self) -> bool:
@@ -450,14 +452,15 @@ class FamilySampler:
             return "the sampling errors are left out"
         if not self.sampled_dimensions:
             return "the arm's self-motion is not sampled"
-        missed = sum(m for _, m in self.audits)
+        missed = sum(m for _, m, _ in self.audits)
         if not missed:
             return ""
-        drawn = sum(d for d, _ in self.audits)
+        drawn = sum(d for d, _, _ in self.audits)
+        worst = max(w for _, _, w in self.audits)
         return (
             f"of {drawn} clear members drawn from random starts at {len(self.audits)} points, "
-            f"{missed} lie outside every sample's error box (the tool directions chart this "
-            "arm's family too coarsely)"
+            f"{missed} lie outside every sample's error box, by up to {worst:.3g} commands "
+            "(the family varies faster between the samples than their errors allow)"
         )
 
     def audit_note(self) -> str:
@@ -509,13 +512,14 @@ class FamilySampler:
             inside &= (u[:, j] >= w_lo - AUDIT_SLACK) & (u[:, j] <= w_hi + AUDIT_SLACK)
         u = u[inside]
         period = np.where(self.period > 0.0, self.period, np.inf)
-        missed = 0
+        missed, worst = 0, 0.0
         for x in u:
             w = np.mod(np.abs(layer.u - x), period)  # a whole turn's joint the shorter way
             d = np.minimum(w, period - w)
-            if layer.size == 0 or float((d - layer.err).max(axis=1).min()) > AUDIT_SLACK:
-                missed += 1
-        self.audits.append((int(u.shape[0]), missed))
+            beyond = float((d - layer.err).max(axis=1).min()) if layer.size else np.inf
+            if beyond > AUDIT_SLACK:
+                missed, worst = missed + 1, max(worst, beyond)
+        self.audits.append((int(u.shape[0]), missed, worst))
 
     def within_windows(self, q: FloatArray) -> FloatArray:
         """Configurations ``(..., n)`` rad with each joint that has a range to keep

@@ -246,6 +246,16 @@ class CurveFamily:
         """Tool frames sampled about each tool direction (1: the turn moves no link)."""
         return 1
 
+    @property
+    def directions_span(self) -> bool:
+        """Whether the tool directions (and the turns sampled about each) span the family's
+        dimensions: the joints that move the tool point beyond its three are no more than a
+        direction (two) and a turn about it (one, where several turns are sampled). A
+        redundant arm's self-motion is not spanned: one member of it is found per tool frame,
+        so a point where none found is clear may still have clear members."""
+        extra = int(np.count_nonzero(self.tip_joints)) - 3
+        return extra <= 2 + (1 if self.turns_per_direction > 1 else 0)
+
     def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         """Every family member ``(M, n)`` rad with the tool point at ``E`` and the tool along
         ``dirs``, configurations with the same links included (the seed arm's wrist flip),

@@ -32,6 +32,12 @@ FloatArray = NDArray[np.float64]
 #: Most scan points of one reachability analysis: a 100 m curve at the default 4 mm step,
 #: about 80 s at some 3 ms a point (100,000 let a 398 m line scan for over 5 min).
 MAX_SCAN_POINTS = 25_000
+#: What an unreachable arc's reason adds for an arm whose self-motion the family does not
+#: span (:attr:`CurveFamily.directions_span`): its verdict is over the members found.
+SELF_MOTION_CAVEAT = (
+    " (among the members found: one of this arm's self-motion per tool frame, so clear ones "
+    "may have been missed)"
+)
 #: Scan points between the scan's progress messages.
 SCAN_PROGRESS_EVERY = 1000
 
@@ -312,10 +318,20 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
         tags.append(tag)
     blocked = list(dict.fromkeys(tags))
     if len(blocked) == 1:
-        return blocked[0], tuple(blocked)
-    where = {
-        b: [f"{100 * f:.0f} %" for f, t in zip(fractions, tags, strict=True) if t == b]
-        for b in blocked
-    }
-    reason = "; ".join(f"{b} (at {', '.join(where[b])} of the arc)" for b in blocked)
+        reason = blocked[0]
+    else:
+        where = {
+            b: [f"{100 * f:.0f} %" for f, t in zip(fractions, tags, strict=True) if t == b]
+            for b in blocked
+        }
+        reason = "; ".join(f"{b} (at {', '.join(where[b])} of the arc)" for b in blocked)
+    if not fam.directions_span and blocked != ["out of reach"]:
+        # certain only where the tool point itself would lie inside an obstacle
+        inside = [
+            min((float(o.signed_distance(fam.frame(s)[0])) for o in fam.world.obstacles),
+                default=np.inf) < 0.0
+            for s in s_inside
+        ]  # fmt: skip
+        if not all(inside):
+            reason += SELF_MOTION_CAVEAT
     return reason, tuple(blocked)
