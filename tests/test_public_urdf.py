@@ -282,6 +282,12 @@ def test_a_five_joint_arms_sampled_family_is_audited_and_not_taken_as_proof():
     sampler.audit(target, sampler.layer(target, sampler.base, levels=1), None)
     drawn, missed, worst = sampler.audits[-1]
     assert drawn >= 50 and missed == 0 and worst == 0.0 and sampler.covers_family
+    # a layer with no sample misses every member drawn, and says where
+    empty = sampler.layer(target, sampler.base, levels=0).subset(np.zeros(0, dtype=np.int64))
+    sampler.audit(target, empty, None)
+    drawn, missed, _ = sampler.audits[-1]
+    assert missed == drawn >= 50 and not sampler.covers_family
+    assert "at a point where no sample was kept" in sampler.unproven_because()
 
 
 @pytest.mark.slow  # 60 s

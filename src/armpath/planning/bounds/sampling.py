@@ -425,9 +425,6 @@ class FamilySampler:
         #: how many parts a pair's slack may close by at most: two where the world checks the
         #: arm against itself (both links of a pair move), else one (only the arm's part)
         self.movers = 2.0 if any(p.is_self for p in fam.world.pairs(arm)) else 1.0
-        #: whether the samples cover the family: the tip joints beyond the tool point's three
-        #: are no more than the sampled tool direction (two) and turn about it (one, where
-        #: several turns are sampled); a redundant arm's self-motion is not sampled
         #: whether the sampled directions and turns span the family (not a redundant arm's
         #: self-motion: :attr:`CurveFamily.directions_span`)
         self.sampled_dimensions = fam.directions_span
@@ -457,10 +454,15 @@ class FamilySampler:
             return ""
         drawn = sum(d for d, _, _ in self.audits)
         worst = max(w for _, _, w in self.audits)
+        how_far = (
+            f"by up to {worst:.3g} commands"
+            if np.isfinite(worst)
+            else "at a point where no sample was kept"
+        )
         return (
             f"of {drawn} clear members drawn from random starts at {len(self.audits)} points, "
-            f"{missed} lie outside every sample's error box, by up to {worst:.3g} commands "
-            "(the family varies faster between the samples than their errors allow)"
+            f"{missed} lie outside every sample's error box, {how_far} (the family varies "
+            "faster between the samples than their errors allow)"
         )
 
     def audit_note(self) -> str:
