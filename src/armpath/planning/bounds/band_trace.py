@@ -968,7 +968,7 @@ def band_trace_bound(
             "member, widened by how far neighbouring members differ), each part of the spans "
             "counted over the largest limit of the members that can cover it; the approach the "
             "least largest-joint distance from the start to the "
-            "family sampled along the spans, less the sampling errors" + sampler.audit_note()
+            "family sampled along the spans, less the sampling errors"
         ),
         parts={"approach": float(math.ceil(approach - 1e-9)), "along": along},
         sampling={

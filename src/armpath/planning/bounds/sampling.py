@@ -465,12 +465,6 @@ class FamilySampler:
             "faster between the samples than their errors allow)"
         )
 
-    def audit_note(self) -> str:
-        """What the audits found, for a bound's method: empty where no member was missed."""
-        if not self.sampled_dimensions or self.covers_family:
-            return ""
-        return f"; NOT proven: {self.unproven_because()}"
-
     def audit_sites(
         self,
         points: list[FloatArray],

@@ -119,7 +119,6 @@ def tour_bound(
             "error or clearance is unsure), each leg rounded up to whole commands"
             + passage_method(ways, "a leg from the start")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
-            + sampler.audit_note()
         ),
         sampling={
             "orders": float(math.factorial(targets.shape[0]) if orders is None else len(orders)),
@@ -196,7 +195,6 @@ def tour_bound_any_order(
             "ranges; whole commands, each distance less the samples' sampling errors)"
             + ("; plus the shortest way back" if back else "")
             + passage_method(ways, "a leg from the start")
-            + sampler.audit_note()
         ),
         sampling={
             "targets": float(targets.shape[0]),

@@ -279,7 +279,6 @@ def _bound(
             + ("; the pass may begin anywhere on the closed curve" if loop else "")
             + passage_method([p for p, _ in search.passages], "the approach")
             + ("" if with_errors else "; WITHOUT the sampling errors: an estimate, not a bound")
-            + sampler.audit_note()
         ),
         parts={"along": found.value - found.approach, "approach": found.approach},
         sampling={

@@ -59,4 +59,4 @@ class CommandBound:
             if self.unproven_because
             else ": the samples missed members of the family"
         )
-        return replace(self, proven=False, unproven_because=why, method=f"{self.method}; {why}")
+        return replace(self, proven=False, unproven_because=why)
