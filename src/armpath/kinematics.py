@@ -382,6 +382,23 @@ def tool_point_joints(arm: SerialArm) -> NDArray[np.bool_]:
     return joints_that_move(arm, tool_position, np.clip(q, arm.lower, arm.upper))
 
 
+def self_motion_axis_rates(arm: SerialArm, q: ArrayLike, joints: ArrayLike) -> FloatArray:
+    """How fast the tool's approach axis turns along the tool point's self-motion at each
+    configuration ``q (M, n)``: the singular values ``(M, k - 3)`` (rad of the axis per rad of
+    the joints, largest first) of the axis's derivative over the null space of the tool
+    point's Jacobian, both restricted to ``joints`` (a mask of ``k`` joints, the others held).
+    A small value is a direction of the self-motion that barely turns the tool."""
+    mask = np.asarray(joints, dtype=bool)
+    qq = np.atleast_2d(np.asarray(q, dtype=np.float64))
+    F = forward_frames(arm, qq)
+    J = jacobian_from_frames(arm, F)[:, :, mask]  # (M, 6, k)
+    axis = F[:, -1, :3, :3] @ np.asarray(arm.approach_axis)  # (M, 3)
+    _, _, vt = np.linalg.svd(J[:, :3, :])  # point Jacobian (M, 3, k)
+    null = np.swapaxes(vt[:, 3:, :], 1, 2)  # (M, k, k - 3)
+    turn = np.cross(np.swapaxes(J[:, 3:, :], 1, 2), axis[:, None, :])  # (M, k, 3): w_i x a
+    return np.asarray(np.linalg.svd(np.swapaxes(turn, 1, 2) @ null, compute_uv=False))
+
+
 def tick_jacobian(arm: SerialArm, q: FloatArray) -> FloatArray:
     """How far the tool point moves per tick of each joint at ``q (n,)``, ``(3, n)`` (length
     unit per tick of the arm's lattice, linearised)."""

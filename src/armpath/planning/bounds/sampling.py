@@ -425,9 +425,9 @@ class FamilySampler:
         #: how many parts a pair's slack may close by at most: two where the world checks the
         #: arm against itself (both links of a pair move), else one (only the arm's part)
         self.movers = 2.0 if any(p.is_self for p in fam.world.pairs(arm)) else 1.0
-        #: whether the sampled directions and turns span the family (not a redundant arm's
-        #: self-motion: :attr:`CurveFamily.directions_span`)
-        self.sampled_dimensions = fam.directions_span
+        #: why the sampled directions and turns do not span the family ("" where they do:
+        #: :attr:`CurveFamily.unspanned_because`; a redundant arm's self-motion)
+        self.unspanned_because = fam.unspanned_because
         #: per audited point (:meth:`audit`), the clear members drawn there, how many of them
         #: lie outside every sample's error box, and how far the farthest does (commands)
         self.audits: list[tuple[int, int, float]] = []
@@ -441,14 +441,13 @@ class FamilySampler:
     def unproven_because(self, with_errors: bool = True) -> str:
         """Why a bound over the samples is not proven, in words ("" where it is): without the
         sampling errors (``with_errors`` False) it is none; or the samples are not taken to
-        cover the family: the tip joints beyond the tool point's three are more than the
-        sampled tool direction (two) and turn about it (one, where several turns are sampled),
-        as a redundant arm's self-motion; or members drawn by :meth:`audit` lay outside every
-        sample's error box."""
+        cover the family (:attr:`CurveFamily.unspanned_because`: a redundant arm's
+        self-motion, a five-joint family the tool directions do not chart); or members drawn
+        by :meth:`audit` lay outside every sample's error box."""
         if not with_errors:
             return "the sampling errors are left out"
-        if not self.sampled_dimensions:
-            return "the arm's self-motion is not sampled"
+        if self.unspanned_because:
+            return f"the samples do not cover the arm's family ({self.unspanned_because})"
         missed = sum(m for _, m, _ in self.audits)
         if not missed:
             return ""
@@ -488,10 +487,10 @@ class FamilySampler:
         that reach it within the limits, clear, along a direction ``allowed`` and inside the
         joints' ranges to keep. Each should lie within some sample's error box (the bounds'
         assumption); the count of those that do not is recorded (:attr:`audits`), and one
-        makes :attr:`covers_family` False. A test that can fail, not a proof: where the tool
-        directions chart the family badly (a five-joint arm whose direction barely changes
-        along one of its family's dimensions), whole parts of it fall between the samples."""
-        if not self.sampled_dimensions:
+        makes :attr:`covers_family` False. A test that can fail, not a proof: where the error
+        model fails (near the edge of reach, where the family narrows), members fall between
+        the samples' error boxes."""
+        if self.unspanned_because:
             return  # nothing is claimed
         arm = self.fam.arm
         family = GenericFamily(arm, ToolTarget(np.asarray(E, dtype=np.float64)))

@@ -17,8 +17,9 @@ Levenberg-Marquardt from warm starts (five or seven joints and more; an arm on a
 track also with its carriage where :mod:`armpath.planning.trace.carriage` schedules it along
 the curve), or, where fewer than
 five joints move the tool point (a SCARA, whose tool points down; a five-joint arm whose last
-joint rolls the tool), the point alone, each solution counted for the searched direction
-nearest its own, if one lies within the scan's spacing of it.
+joint rolls the tool) or five whose family the tool directions do not chart (the tool's axis
+barely turns along one of its dimensions), the point alone, each solution counted for the
+searched direction nearest its own, if one lies within the scan's spacing of it.
 
 A family member's *score* is its smallest slack: a pair's clearance less what it needs (mm) or a
 joint's distance to its limit (deg, counted 1:1 with mm -- only the sign decides).
@@ -40,7 +41,12 @@ from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.seed_position import family_from_wrist
 from armpath.ik.solve import complete_solver
 from armpath.ik.target import DEFAULT_AXIS_TOLERANCE_DEG, ToolTarget, unit_vector
-from armpath.kinematics import landmark_positions, tool_point_joints, tool_pose
+from armpath.kinematics import (
+    landmark_positions,
+    self_motion_axis_rates,
+    tool_point_joints,
+    tool_pose,
+)
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.trace.carriage import CarriageSchedule, carriage_joint, carriage_schedule
@@ -73,6 +79,12 @@ _GOLDEN = np.pi * (3.0 - np.sqrt(5.0))
 #: the point alone is solved (:attr:`GenericCurveFamily._point_alone`): the spacing of the
 #: scan's 600 directions (rad, about 8.3 deg).
 _POINT_ALONE_SPACING = float(np.sqrt(4.0 * np.pi / 600))
+#: Slowest turn of the tool's axis along a five-joint family (rad per rad of the joints) for
+#: which the tool directions chart it (:attr:`GenericCurveFamily._directions_chart`): the
+#: scan's directions, about 8 deg apart, then solve members at most about 80 deg apart along
+#: it; and the configurations the rate is judged at.
+_CHART_MIN_TURN_RATE = 0.1
+_CHART_CONFIGS = 64
 #: How many scores of a grid :meth:`CurveFamily.best` needs exactly (the polish's starts), and
 #: how many configurations of most joint-limit slack it scores first to find a floor for them.
 _EXACT_TOP = _POLISH_STARTS
@@ -249,12 +261,21 @@ class CurveFamily:
     @property
     def directions_span(self) -> bool:
         """Whether the tool directions (and the turns sampled about each) span the family's
-        dimensions: the joints that move the tool point beyond its three are no more than a
-        direction (two) and a turn about it (one, where several turns are sampled). A
-        redundant arm's self-motion is not spanned: one member of it is found per tool frame,
-        so a point where none found is clear may still have clear members."""
+        dimensions, so that the members found are taken to cover it (see
+        :attr:`unspanned_because`)."""
+        return not self.unspanned_because
+
+    @property
+    def unspanned_because(self) -> str:
+        """Why the tool directions do not span the family, in words ("" where they do): the
+        joints that move the tool point beyond its three are more than a direction (two) and
+        a turn about it (one, where several turns are sampled). A redundant arm's self-motion
+        is not spanned: one member of it is found per tool frame, so a point where none found
+        is clear may still have clear members."""
         extra = int(np.count_nonzero(self.tip_joints)) - 3
-        return extra <= 2 + (1 if self.turns_per_direction > 1 else 0)
+        if extra <= 2 + (1 if self.turns_per_direction > 1 else 0):
+            return ""
+        return "one member of the arm's self-motion is found per tool frame"
 
     def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         """Every family member ``(M, n)`` rad with the tool point at ``E`` and the tool along
@@ -685,11 +706,40 @@ class GenericCurveFamily(CurveFamily):
 
     @cached_property
     def _point_alone(self) -> bool:
-        """Whether fewer than five joints move the tool point, too few to set its direction
-        as well (a SCARA; a five-joint arm whose last joint turns the tool about the point):
-        the point alone is solved, each solution counted for the searched direction nearest
-        its own."""
-        return int(self.tip_joints.sum()) < 5
+        """Whether the point alone is solved, each solution counted for the searched direction
+        nearest its own: where fewer than five joints move the tool point, too few to set its
+        direction as well (a SCARA; a five-joint arm whose last joint turns the tool about the
+        point), and where five do but the tool directions do not chart their family
+        (:attr:`_directions_chart`)."""
+        tip = int(self.tip_joints.sum())
+        return tip < 5 or (tip == 5 and not self._directions_chart)
+
+    @cached_property
+    def _directions_chart(self) -> bool:
+        """Whether the tool directions chart the two-dimensional family of five joints that
+        move the tool point: the slower of the rates at which the tool's axis turns along
+        the family (:func:`~armpath.kinematics.self_motion_axis_rates`), median over
+        :data:`_CHART_CONFIGS` configurations within the limits, is at least
+        :data:`_CHART_MIN_TURN_RATE`. The SO-101's (its tool point 7 mm off its wrist's roll
+        axis) is 0.015 rad per rad: directions 8 deg apart solved members up to 9 rad apart
+        along the roll, neighbouring tool directions' members had unrelated rolls, and the
+        reference path broke a 60 mm circle into 23 passes (352 commands; the point alone:
+        one pass, 54). A KUKA-like five-axis arm with a 150 mm tool: 0.50."""
+        lo, hi = self.arm.sampling_box()
+        q = np.random.default_rng(0).uniform(lo, hi, (_CHART_CONFIGS, self.arm.n_joints))
+        rates = self_motion_axis_rates(self.arm, q, self.tip_joints)
+        return bool(np.median(rates[:, -1]) >= _CHART_MIN_TURN_RATE)
+
+    @property
+    def unspanned_because(self) -> str:
+        # the point alone solved, one member is found from each start: a family of more than
+        # one dimension beyond the point is not charted by the directions it is counted for
+        if self._point_alone and int(np.count_nonzero(self.tip_joints)) - 3 > 1:
+            return (
+                "one member is found from each random start, the tool directions not "
+                "charting the family (along one of its dimensions the tool's axis barely turns)"
+            )
+        return super().unspanned_because
 
     @property
     def turns_per_direction(self) -> int:

@@ -32,12 +32,10 @@ FloatArray = NDArray[np.float64]
 #: Most scan points of one reachability analysis: a 100 m curve at the default 4 mm step,
 #: about 80 s at some 3 ms a point (100,000 let a 398 m line scan for over 5 min).
 MAX_SCAN_POINTS = 25_000
-#: What an unreachable arc's reason adds for an arm whose self-motion the family does not
-#: span (:attr:`CurveFamily.directions_span`): its verdict is over the members found.
-SELF_MOTION_CAVEAT = (
-    " (among the members found: one of this arm's self-motion per tool frame, so clear ones "
-    "may have been missed)"
-)
+#: What an unreachable arc's reason adds for an arm whose family the tool directions do not
+#: span (:attr:`CurveFamily.unspanned_because` fills it in): its verdict is over the members
+#: found.
+SELF_MOTION_CAVEAT = " (among the members found: {}, so clear ones may have been missed)"
 #: Scan points between the scan's progress messages.
 SCAN_PROGRESS_EVERY = 1000
 
@@ -333,5 +331,5 @@ def _reason(fam: CurveFamily, a: float, b: float) -> tuple[str, tuple[str, ...]]
             for s in s_inside
         ]  # fmt: skip
         if not all(inside):
-            reason += SELF_MOTION_CAVEAT
+            reason += SELF_MOTION_CAVEAT.format(fam.unspanned_because)
     return reason, tuple(blocked)
