@@ -44,7 +44,7 @@ class PinocchioArm:
     def __init__(self, path: str, tip: str, joint_names: list[str]) -> None:
         self.model = pin.buildModelFromUrdf(path)
         self.data = self.model.createData()
-        self.frame = self.model.getFrameId(tip)
+        self.frame = self.model.getFrameId(tip, pin.FrameType.BODY)  # the link, not a joint
         assert self.frame < len(self.model.frames), tip
         joints = [self.model.joints[self.model.getJointId(n)] for n in joint_names]
         self.index = [j.idx_q for j in joints]
@@ -96,6 +96,40 @@ def test_forward_kinematics_agrees_with_pinocchio(tail, tip, n_joints):
     for q in rng.uniform(lo, hi, size=(50, n_joints)):
         T, P = tool_pose(arm, q), ref.pose_mm(q)
         assert np.abs(T[:3, 3] - P[:3, 3]).max() < 1e-9  # mm
+        assert np.abs(T[:3, :3] - P[:3, :3]).max() < 1e-12
+
+
+@pytest.mark.parametrize(
+    ("tail", "tip", "n_joints"),
+    [
+        ("so_arm_description/urdf/so100.urdf", "gripper", 5),  # its deepest leaf: the jaw
+        (SO101, "gripper_frame_link", 5),
+        (Z1, "gripperStator", 6),  # beyond it jointGripper moves the gripperMover jaw
+        (KINOVA, "j2s6s200_end_effector", 6),  # not the fixed finger's tip
+        (PANDA, "panda_hand_tcp", 7),
+        ("baxter_description/urdf/baxter.urdf", "left_gripper", 7),  # not a finger's tip
+        ("talos_data/robots/talos_left_arm.urdf", "gripper_left_base_link", 6),
+        (XARM7, "link_eef", 7),
+    ],
+)
+def test_the_default_tool_link_is_the_arms_not_a_fingers(tail, tip, n_joints):
+    """Without a tip link named, the tool was the file's deepest leaf: the SO-100's moving jaw
+    (its gripper joint taken for a sixth arm joint), the Z1's gripperMover (seven joints),
+    a Baxter finger's tip (eight). The default is now the deepest link no finger joint
+    carries (named finger, jaw or a moving gripper, or mimicking another); the joints are
+    those Pinocchio finds supporting that link's frame, and the tool pose agrees with it."""
+    path = robot_file(tail)
+    arm = resolve_model(path)
+    assert arm.name.endswith(f"[{tip}]") and arm.n_joints == n_joints
+    model = pin.buildModelFromUrdf(path)
+    frame = model.frames[model.getFrameId(tip, pin.FrameType.BODY)]
+    supports = [model.names[i] for i in model.supports[frame.parentJoint]][1:]  # no universe
+    assert [j.name for j in arm.joints] == supports
+    ref = PinocchioArm(path, tip, supports)
+    lo, hi = np.maximum(arm.lower, -np.pi), np.minimum(arm.upper, np.pi)
+    for q in np.random.default_rng(4).uniform(lo, hi, size=(10, n_joints)):
+        T, P = tool_pose(arm, q), ref.pose_mm(q)
+        assert np.abs(T[:3, 3] - P[:3, 3]).max() < 1e-9
         assert np.abs(T[:3, :3] - P[:3, :3]).max() < 1e-12
 
 

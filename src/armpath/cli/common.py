@@ -387,7 +387,8 @@ TipLinkOption = Annotated[
     str | None,
     typer.Option(
         "--tip-link",
-        help="The URDF link that carries the tool (default: the deepest leaf link; outputs name "
+        help="The URDF link that carries the tool (default: the deepest link no gripper finger "
+        "joint carries; outputs name "
         "the link chosen).",
         show_default=False,
     ),

@@ -334,7 +334,7 @@ def robot_from_dict(
 def load_robot_file(path: str | Path, tip_link: str | None = None) -> SerialArm:
     """Load a robot from a JSON file (``.json``: a D-H table, or armpath's model document as
     ``armpath model convert --to json`` writes it) or a URDF (``.urdf``, up to ``tip_link``,
-    default its deepest leaf link); lengths become mm."""
+    default its deepest link no gripper finger carries); lengths become mm."""
     p = Path(path)
     if not p.is_file():
         raise InvalidInputError(f"robot file {str(p)!r} does not exist")

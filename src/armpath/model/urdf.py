@@ -1,8 +1,9 @@
 """Serial arms from URDF files, parsed by ``yourdfpy`` (optional extra ``armpath[urdf]``).
 
-The chain runs from the root link to the deepest leaf; it must not branch on the way. Fixed joints
-fold into the next joint's placement (or the tool), ``continuous`` joints are unlimited revolute
-joints, and URDF metres become mm. Collision links are the chain's physical skeleton
+The chain runs from the root link to the tool link (default: the deepest link that no
+gripper's finger joint carries, see :func:`_default_tip`). Fixed joints fold into the next
+joint's placement (or the tool), ``continuous`` joints are unlimited revolute joints, and
+URDF metres become mm. Collision links are the chain's physical skeleton
 (:func:`~armpath.model.skeleton.physical_links`); the URDF's own collision shapes are not read,
 so their radii are ``link_radii_mm`` (default 0).
 """
@@ -79,13 +80,65 @@ def _check_limit_given(p: Path, uj: Any) -> None:
         )
 
 
+#: Words that mark a joint of a URDF as a gripper's finger rather than the arm's: in any
+#: joint's name (a finger fixed in place counts too: Kinova's Jaco), and ``gripper`` in a
+#: moving joint's (the SO-100's ``gripper``, the Z1's ``jointGripper``; Baxter's fixed
+#: ``left_gripper_base_joint`` carries the hand).
+_FINGER_WORDS = ("finger", "jaw")
+_MOVING_FINGER_WORDS = ("gripper",)
+
+
+def _is_finger_named(joint: Any) -> bool:
+    """Whether a URDF joint is named or tagged as a gripper's finger's (:data:`_FINGER_WORDS`,
+    or mimicking another: a gripper's second finger, as Panda's and Talos's)."""
+    name = str(joint.name).lower()
+    if any(w in name for w in _FINGER_WORDS) or getattr(joint, "mimic", None) is not None:
+        return True
+    return joint.type != "fixed" and any(w in name for w in _MOVING_FINGER_WORDS)
+
+
+def _default_tip(links: list[str], joints_by_child: dict[str, Any], depth: Any) -> str:
+    """The tool link when none is named: the deepest link (the first of the file's order
+    among the deepest) whose chain passes no finger joint, so that a gripper's finger is not
+    taken for the arm's last joint (the SO-100's deepest leaf is its jaw, behind the gripper's
+    joint: its arm is the five joints to the ``gripper`` link); the deepest leaf where every
+    chain passes one. A finger joint is named or tagged as one (:func:`_is_finger_named`) and
+    carries no joint that moves on its own (a mimic joint inside an arm's chain is the arm's,
+    and refused as such)."""
+    children: dict[str, list[Any]] = {}
+    for j in joints_by_child.values():
+        children.setdefault(j.parent, []).append(j)
+
+    # whether a joint that moves on its own lies beyond each link: deepest links first
+    moves_beyond: dict[str, bool] = {}
+    for link in sorted(links, key=depth, reverse=True):
+        moves_beyond[link] = any(
+            (j.type != "fixed" and getattr(j, "mimic", None) is None) or moves_beyond[j.child]
+            for j in children.get(link, [])
+        )
+
+    def through_finger(link: str) -> bool:
+        while link in joints_by_child:
+            joint = joints_by_child[link]
+            if _is_finger_named(joint) and not moves_beyond[joint.child]:
+                return True
+            link = joint.parent
+        return False
+
+    plain = [name for name in links if not through_finger(name)]
+    if len(plain) > 1:  # more than the root
+        return str(max(plain, key=depth))
+    return str(max((name for name in links if name not in children), key=depth))
+
+
 def arm_from_urdf(
     path: str | Path,
     tip_link: str | None = None,
     *,
     link_radii_mm: float | Sequence[float] = 0.0,
 ) -> SerialArm:
-    """Load the serial chain of a URDF (root link to ``tip_link``, default the deepest leaf).
+    """Load the serial chain of a URDF (root link to ``tip_link``, default the deepest link
+    not carried by a gripper's finger joint: :func:`_default_tip`).
 
     The arm is named after the robot and the tip link, ``"ur5 [tool0]"``, so every output says
     which link is the tool.
@@ -128,9 +181,6 @@ def arm_from_urdf(
                     "not a link of the file"
                 )
     joints_by_child = {j.child: j for j in urdf.robot.joints}
-    children: dict[str, list[str]] = {}
-    for j in urdf.robot.joints:
-        children.setdefault(j.parent, []).append(j.child)
     roots = [lk.name for lk in urdf.robot.links if lk.name not in joints_by_child]
     if len(roots) != 1:
         raise InvalidInputError(f"URDF {p.name!r}: expected one root link, found {roots}")
@@ -142,9 +192,8 @@ def arm_from_urdf(
             n += 1
         return n
 
-    leaves = [lk.name for lk in urdf.robot.links if lk.name not in children]
     if tip_link is None:
-        tip_link = max(leaves, key=depth)
+        tip_link = _default_tip([lk.name for lk in urdf.robot.links], joints_by_child, depth)
     elif tip_link not in {lk.name for lk in urdf.robot.links}:
         raise InvalidInputError(f"URDF {p.name!r}: no link named {tip_link!r}")
     path_joints = []
