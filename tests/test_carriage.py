@@ -556,7 +556,7 @@ def test_a_redundant_arms_family_estimate_is_named_only_where_it_is_below_the_pl
     from armpath.planning.bounds.carriage import with_carriage
 
     carriage = CommandBound(240, 239.1, "the carriage's travel", sampling={"boxes": 1.0})
-    estimate = CommandBound(256, 255.45, "the family", proven=False)
+    estimate = CommandBound(256, 255.45, "the family", unproven_because="self-motion")
     below = with_carriage(estimate, carriage, 260.0)
     above = with_carriage(estimate, carriage, 245.0)
     assert below is not None and above is not None

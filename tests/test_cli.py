@@ -422,7 +422,7 @@ def test_a_bound_the_plan_undercuts_is_reported_refuted_with_why():
     refuted = proven.against_plan(31)
     assert not refuted.proven and refuted.commands == 45
     assert refuted.unproven_because.startswith("refuted by a plan of 31 commands")
-    audited = CommandBound(45, 44.2, "the family", proven=False, unproven_because="261 lie out")
+    audited = CommandBound(45, 44.2, "the family", unproven_because="261 lie out")
     assert audited.against_plan(31).unproven_because.endswith("; 261 lie out")
     doc = {**refuted.describe(), "gap_commands": -14, "gap_percent": -31.11}
     assert doc["proven"] is False and doc["unproven_because"] == refuted.unproven_because

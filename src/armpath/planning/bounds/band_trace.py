@@ -956,7 +956,6 @@ def band_trace_bound(
             f"{min(inner):.3g}-{max(inner):.3g} mm inside it (the half band)"
         )
     return CommandBound(
-        proven=sampler.covers_family,
         unproven_because=sampler.unproven_because(),
         commands=math.ceil(value - 1e-9),
         value=value,
@@ -998,6 +997,5 @@ def with_band(family: CommandBound | None, band: CommandBound | None) -> Command
         + family.method,
         parts=band.parts,
         sampling={**family.sampling, **band.sampling, "family_bound_commands": family.value},
-        proven=family.proven and band.proven,
         unproven_because=family.unproven_because or band.unproven_because,
     )

@@ -170,7 +170,6 @@ def points_travel_bound(
                 else {}
             ),
         },
-        proven=True,
     )
 
 

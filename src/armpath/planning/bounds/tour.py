@@ -103,7 +103,6 @@ def tour_bound(
     if found is None:
         raise PlanningError("a target has no family member within the joint limits")
     bound = CommandBound(
-        proven=not sampler.unproven_because(with_errors),
         unproven_because=sampler.unproven_because(with_errors),
         commands=int(np.ceil(found.value - 1e-9)),
         value=found.value,
@@ -183,7 +182,6 @@ def tour_bound_any_order(
     # must be)
     total = _entered_once(sampler, layers, from_start, from_start if back else None)
     return CommandBound(
-        proven=sampler.covers_family,
         unproven_because=sampler.unproven_because(),
         commands=int(np.ceil(total - 1e-9)),
         value=total,
@@ -422,7 +420,6 @@ def lattice_tour_bound(
     best = min(per_order.values())
     return (
         CommandBound(
-            proven=True,
             commands=best,
             value=float(best),
             method=(

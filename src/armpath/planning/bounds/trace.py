@@ -263,7 +263,6 @@ def _bound(
     """The trace bound of a search's result (see :func:`trace_bound`)."""
     sampler = search.sampler
     return CommandBound(
-        proven=not sampler.unproven_because(with_errors),
         unproven_because=sampler.unproven_because(with_errors),
         commands=max(int(np.ceil(found.value - 1e-9)), 0),
         value=found.value,

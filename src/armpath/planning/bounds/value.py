@@ -19,9 +19,10 @@ class CommandBound:
     together, ``guide_order`` the order of its targets). A tour's ``clear_path_q``: the
     cheapest path the search found through members that are clear themselves (configurations
     rad, one per target in its order ``clear_path_order``; None without one), which a plan may
-    follow. ``proven``: False where the samples
-    do not cover the family (an arm with more joints than the tool point and its direction
-    need: one member of its self-motion per tool frame); the value is then an estimate."""
+    follow. ``unproven_because``: why the value is not proven, in words ("" where it is:
+    :attr:`proven`); where the samples do not cover the family (an arm with more joints than
+    the tool point and its direction need: one member of its self-motion per tool frame), or
+    a plan undercut it, the value is an estimate."""
 
     commands: int
     value: float
@@ -33,9 +34,12 @@ class CommandBound:
     guide_order: tuple[int, ...] | None = None
     clear_path_q: FloatArray | None = None
     clear_path_order: tuple[int, ...] | None = None
-    proven: bool = True
-    #: why the value is not proven, in words ("" where it is)
     unproven_because: str = ""
+
+    @property
+    def proven(self) -> bool:
+        """Whether the value is a proven lower bound (no reason it is not)."""
+        return not self.unproven_because
 
     def describe(self) -> dict[str, object]:
         return {
@@ -59,4 +63,4 @@ class CommandBound:
             if self.unproven_because
             else ": the samples missed members of the family"
         )
-        return replace(self, proven=False, unproven_because=why)
+        return replace(self, unproven_because=why)
