@@ -219,6 +219,27 @@ def test_reach_json_on_stdout_from_another_start():
     assert np.linalg.norm(tip - [300, 250, 300]) <= 0.05
 
 
+def test_reach_without_a_point_goes_to_the_scenes_target(tmp_path):
+    """``armpath trace`` and ``spotweld`` take the scene's task by default, but ``reach`` made
+    its X Y Z required ("Missing argument"), though a scene names its ``[tasks.reach]``
+    target. Without X Y Z it is now the scene's target (the seed's Task 1: 63 commands to
+    (20, -200, 120) mm, replayed on the independent kinematics); a scene that names none is
+    refused in one line saying what to give."""
+    from cli_in_process import run_in_process
+
+    r = run_in_process(["reach", "--json"], tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["n_commands"] == 63 and doc["target"] == [20.0, -200.0, 120.0]
+    tip = independent.points(independent.replay(doc["initial_deg"], doc["commands"])[-1])[4]
+    assert np.linalg.norm(tip - [20, -200, 120]) <= 0.05
+    (tmp_path / "bare.toml").write_text('name = "bare"\n', encoding="utf-8")
+    r = run_in_process(["reach", "--scene", "bare.toml"], tmp_path)
+    assert r.returncode == 1 and error_lines(r.stderr) == [
+        "error: give the target X Y Z (mm): scene bare.toml names no [tasks.reach] target_mm"
+    ]
+
+
 def test_reach_above_its_bound_says_why_fewer_were_not_taken(tmp_path):
     """The UR5 cell to a point whose least-change members (54 commands) put the arm into the
     table: the summary's "fewer commands" row says why each count below the plan's was

@@ -370,9 +370,13 @@ def orientation_rule(
 @app.command(context_settings=LOOSE)
 def reach(
     target: Annotated[
-        list[str],
-        typer.Argument(help="X Y Z of the target in mm", show_default=False, metavar="X Y Z"),
-    ],
+        list[str] | None,
+        typer.Argument(
+            help="X Y Z of the target in mm. Default: the scene's \\[tasks.reach] target_mm.",
+            show_default=False,
+            metavar="X Y Z",
+        ),
+    ] = None,
     start: FromOption = None,
     model: TaskModelOption = None,
     tip_link: TipLinkOption = None,
@@ -412,7 +416,14 @@ def reach(
 
     with _cli_errors(time_limit):
         arm, scene = task_setup(model, scene_file, wall, link_radius, tip_link)
-        xyz = _point_mm(target, "target X Y Z (mm)")
+        if target:
+            xyz = _point_mm(target, "target X Y Z (mm)")
+        elif scene.reach_target_mm is not None:
+            xyz = list(scene.reach_target_mm)
+        else:
+            raise InvalidInputError(
+                f"give the target X Y Z (mm): scene {scene.source} names no [tasks.reach] target_mm"
+            )
         start_ticks = joint_state(arm, start, "--from")
         rule = orientation_rule(tool_axis, axis_tolerance, pose, angle_tolerance, arm.approach_axis)
         options = ReachOptions(tolerance_mm=scene.tolerance_mm("reach", tolerance))
