@@ -11,7 +11,7 @@ so their radii are ``link_radii_mm`` (default 0).
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -88,16 +88,23 @@ _FINGER_WORDS = ("finger", "jaw")
 _MOVING_FINGER_WORDS = ("gripper",)
 
 
+def _mimics(joint: Any) -> bool:
+    """Whether a URDF joint mimics another (moves with it, not on its own)."""
+    return getattr(joint, "mimic", None) is not None
+
+
 def _is_finger_named(joint: Any) -> bool:
     """Whether a URDF joint is named or tagged as a gripper's finger's (:data:`_FINGER_WORDS`,
     or mimicking another: a gripper's second finger, as Panda's and Talos's)."""
     name = str(joint.name).lower()
-    if any(w in name for w in _FINGER_WORDS) or getattr(joint, "mimic", None) is not None:
+    if any(w in name for w in _FINGER_WORDS) or _mimics(joint):
         return True
     return joint.type != "fixed" and any(w in name for w in _MOVING_FINGER_WORDS)
 
 
-def _default_tip(links: list[str], joints_by_child: dict[str, Any], depth: Any) -> str:
+def _default_tip(
+    links: list[str], joints_by_child: dict[str, Any], depth: Callable[[str], int]
+) -> str:
     """The tool link when none is named: the deepest link (the first of the file's order
     among the deepest) whose chain passes no finger joint, so that a gripper's finger is not
     taken for the arm's last joint (the SO-100's deepest leaf is its jaw, behind the gripper's
@@ -113,7 +120,7 @@ def _default_tip(links: list[str], joints_by_child: dict[str, Any], depth: Any) 
     moves_beyond: dict[str, bool] = {}
     for link in sorted(links, key=depth, reverse=True):
         moves_beyond[link] = any(
-            (j.type != "fixed" and getattr(j, "mimic", None) is None) or moves_beyond[j.child]
+            (j.type != "fixed" and not _mimics(j)) or moves_beyond[j.child]
             for j in children.get(link, [])
         )
 
@@ -214,7 +221,7 @@ def arm_from_urdf(
         if uj.type == "fixed":
             carry = carry @ origin
             continue
-        if getattr(uj, "mimic", None) is not None:
+        if _mimics(uj):
             raise InvalidInputError(
                 f"URDF {p.name!r}: joint {uj.name!r} mimics joint {uj.mimic.joint!r}; armpath "
                 "commands every joint on its own, so a mimic joint is not supported"
