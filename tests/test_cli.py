@@ -420,6 +420,11 @@ def test_a_proven_bound_the_plan_meets_is_reported_as_the_fewest():
     assert "the fewest commands" in _bound_words({"lower_bound": met})
     assert "plan 5 above it" in _bound_words({"lower_bound": above})
     assert "fewest" not in _bound_words({"lower_bound": guess})
+    # above an estimate the difference is in commands, never a percentage read as a gap
+    # (a Baxter circle printed "plan 43 above it (330.8 %)")
+    rough = {**guess, "gap_commands": 43, "gap_percent": 330.77}
+    for text in (_bound_text(rough, "one pass"), _bound_words({"lower_bound": rough})):
+        assert "plan 43 above the estimate" in text and "%" not in text
     # a bound that is mostly sampling error says so (a reviewer's 6-axis arm: >= 2 against 59)
     sampled = {"commands": 2, "value_commands": 2.0, "gap_commands": 57, "gap_percent": 2850.0,
                "proven": True, "sampling": {"largest_error_on_path_commands": 29.59}}  # fmt: skip

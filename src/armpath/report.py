@@ -242,10 +242,13 @@ def bound_cell(doc: dict[str, Any]) -> str:
 
 def plan_gap(bound: dict[str, Any]) -> str:
     """The plan against a bound document, in words: how far above it, or that a plan below it
-    refutes it (a sampled value whose samples missed members of the family)."""
+    refutes it (a sampled value whose samples missed members of the family). Above an estimate
+    the difference is given in commands only: a percentage would read as a proven gap."""
     gap = bound["gap_commands"]
     if gap is not None and gap < 0:
         return f"plan {-gap} below it: no lower bound"
+    if not bound.get("proven", True):
+        return f"plan {gap} above the estimate"
     pct = bound.get("gap_percent")
     return f"plan {gap} above it" + ("" if pct is None else f" ({pct:.1f} %)")
 
