@@ -50,14 +50,20 @@ class PinocchioArm:
         self.index = [j.idx_q for j in joints]
         #: which joints Pinocchio holds as (cos, sin): a continuous (unlimited) joint's
         self.circular = [j.nq == 2 for j in joints]
+        #: m per armpath unit of each joint: a prismatic joint's mm (Tiago's torso lift)
+        self.scale = [
+            1e-3 if j.shortname() in ("JointModelPX", "JointModelPY", "JointModelPZ")
+            or "Prismatic" in j.shortname() else 1.0
+            for j in joints
+        ]  # fmt: skip
 
     def pose_mm(self, q: np.ndarray) -> np.ndarray:
         full = pin.neutral(self.model)
-        for i, v, circular in zip(self.index, q, self.circular, strict=True):
+        for i, v, circular, scale in zip(self.index, q, self.circular, self.scale, strict=True):
             if circular:
                 full[i : i + 2] = np.cos(v), np.sin(v)
             else:
-                full[i] = v
+                full[i] = scale * v
         pin.framesForwardKinematics(self.model, self.data, full)
         M = self.data.oMf[self.frame]
         T = np.eye(4)
@@ -110,14 +116,19 @@ def test_forward_kinematics_agrees_with_pinocchio(tail, tip, n_joints):
         ("baxter_description/urdf/baxter.urdf", "left_gripper", 7),  # not a finger's tip
         ("talos_data/robots/talos_left_arm.urdf", "gripper_left_base_link", 6),
         (XARM7, "link_eef", 7),
+        # hands known by their shape: fingers leave a palm (thumb, index, ... by name)
+        ("tiago_description/robots/tiago.urdf", "hand_grasping_frame", 8),
+        ("g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf", "left_hand_palm_link", 10),
     ],
 )
 def test_the_default_tool_link_is_the_arms_not_a_fingers(tail, tip, n_joints):
     """Without a tip link named, the tool was the file's deepest leaf: the SO-100's moving jaw
     (its gripper joint taken for a sixth arm joint), the Z1's gripperMover (seven joints),
-    a Baxter finger's tip (eight). The default is now the deepest link no finger joint
-    carries (named finger, jaw or a moving gripper, or mimicking another); the joints are
-    those Pinocchio finds supporting that link's frame, and the tool pose agrees with it."""
+    a Baxter finger's tip (eight), Tiago's index fingertip (fifteen). The default is now the
+    deepest link no finger joint carries (named finger, jaw or a moving gripper, or mimicking
+    another, or leaving a palm: two or more unbranched moving chains, shorter than the arm
+    carrying them); the joints are those Pinocchio finds supporting that link's frame, and the
+    tool pose agrees with it."""
     path = robot_file(tail)
     arm = resolve_model(path)
     assert arm.name.endswith(f"[{tip}]") and arm.n_joints == n_joints
@@ -131,6 +142,48 @@ def test_the_default_tool_link_is_the_arms_not_a_fingers(tail, tip, n_joints):
         T, P = tool_pose(arm, q), ref.pose_mm(q)
         assert np.abs(T[:3, 3] - P[:3, 3]).max() < 1e-9
         assert np.abs(T[:3, :3] - P[:3, :3]).max() < 1e-12
+
+
+def _tree_urdf(edges: list[tuple[str, str, str]]) -> str:
+    """A URDF of (parent, child, joint type) edges, each joint 0.1 m along x, turning about z."""
+    links = dict.fromkeys(name for edge in edges for name in edge[:2])
+    joints = "".join(
+        f'<joint name="{child}_joint" type="{kind}"><parent link="{parent}"/>'
+        f'<child link="{child}"/><origin xyz="0.1 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        for parent, child, kind in edges
+    )
+    return f'<robot name="tree">{"".join(f"<link name={n!r}/>" for n in links)}{joints}</robot>'
+
+
+@pytest.mark.parametrize(
+    ("edges", "tip", "n_joints"),
+    [
+        # three unnamed fingers leave the palm of a three-joint arm: the tool is on the palm
+        ([("base", "a1", "revolute"), ("a1", "a2", "revolute"), ("a2", "a3", "revolute"),
+          ("a3", "palm", "fixed"), ("palm", "tcp", "fixed"),
+          ("palm", "f1a", "revolute"), ("f1a", "f1b", "revolute"),
+          ("palm", "f2a", "revolute"), ("f2a", "f2b", "revolute"), ("palm", "f3a", "revolute")],
+         "tcp", 3),
+        # a torso turning on one joint carries two three-joint arms: no palm, an arm's end
+        ([("base", "torso", "revolute"), ("torso", "l1", "revolute"), ("l1", "l2", "revolute"),
+          ("l2", "l3", "revolute"), ("torso", "r1", "revolute"), ("r1", "r2", "revolute"),
+          ("r2", "r3", "revolute")],
+         "l3", 4),
+        # a hand alone (nothing carries its palm): the deepest fingertip, as before
+        ([("palm", "f1a", "revolute"), ("f1a", "f1b", "revolute"),
+          ("palm", "f2a", "revolute"), ("f2a", "f2b", "revolute")],
+         "f1b", 2),
+    ],
+)  # fmt: skip
+def test_a_palm_is_known_by_the_trees_shape(edges, tip, n_joints, tmp_path):
+    """Fingers not named as such (Tiago's thumb, index, ...) are known by the tree: two or
+    more unbranched moving chains leaving a link carried by more moving joints than they have.
+    A dual-arm torso and a hand alone are not palms."""
+    path = tmp_path / "tree.urdf"
+    path.write_text(_tree_urdf(edges), encoding="utf-8")
+    arm = resolve_model(str(path))
+    assert arm.name == f"tree [{tip}]" and arm.n_joints == n_joints
 
 
 def test_z1_inverse_kinematics_checked_by_pinocchio():

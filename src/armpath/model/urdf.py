@@ -102,6 +102,42 @@ def _is_finger_named(joint: Any) -> bool:
     return joint.type != "fixed" and any(w in name for w in _MOVING_FINGER_WORDS)
 
 
+def _moves(joint: Any) -> bool:
+    """Whether a URDF joint moves on its own (not fixed, not mimicking another)."""
+    return bool(joint.type != "fixed" and not _mimics(joint))
+
+
+def _hands(
+    links: list[str],
+    children: dict[str, list[Any]],
+    joints_by_child: dict[str, Any],
+    depth: Callable[[str], int],
+    moves_beyond: dict[str, bool],
+) -> set[str]:
+    """The links that are a hand's palm by the tree's shape, whatever the joints are named
+    (Tiago's hand: thumb, index, middle, ...): two or more chains that move leave the link,
+    none of them branches again, and the link is carried by more moving joints than the
+    longest of them has (an arm then its fingers; not a dual-arm torso, nor a hand alone)."""
+    carried: dict[str, int] = {}
+    for link in sorted(links, key=depth):
+        joint = joints_by_child.get(link)
+        carried[link] = 0 if joint is None else carried[joint.parent] + _moves(joint)
+    longest: dict[str, int] = {}  # the most moving joints on a path below each link
+    forks: dict[str, bool] = {}  # whether the moving tree below each link branches
+    hands: set[str] = set()
+    for link in sorted(links, key=depth, reverse=True):
+        chains = [j for j in children.get(link, []) if _moves(j) or moves_beyond[j.child]]
+        longest[link] = max((_moves(j) + longest[j.child] for j in chains), default=0)
+        forks[link] = len(chains) >= 2 or any(forks[j.child] for j in chains)
+        if (
+            len(chains) >= 2
+            and not any(forks[j.child] for j in chains)
+            and carried[link] > longest[link]
+        ):
+            hands.add(link)
+    return hands
+
+
 def _default_tip(
     links: list[str], joints_by_child: dict[str, Any], depth: Callable[[str], int]
 ) -> str:
@@ -111,7 +147,9 @@ def _default_tip(
     joint: its arm is the five joints to the ``gripper`` link); the deepest leaf where every
     chain passes one. A finger joint is named or tagged as one (:func:`_is_finger_named`) and
     carries no joint that moves on its own (a mimic joint inside an arm's chain is the arm's,
-    and refused as such)."""
+    and refused as such), or leaves a palm towards a joint that moves (:func:`_hands`: Tiago's
+    hand, whose fingers are named thumb, index, middle, ...; its tool is the palm's
+    ``hand_grasping_frame``)."""
     children: dict[str, list[Any]] = {}
     for j in joints_by_child.values():
         children.setdefault(j.parent, []).append(j)
@@ -119,15 +157,16 @@ def _default_tip(
     # whether a joint that moves on its own lies beyond each link: deepest links first
     moves_beyond: dict[str, bool] = {}
     for link in sorted(links, key=depth, reverse=True):
-        moves_beyond[link] = any(
-            (j.type != "fixed" and not _mimics(j)) or moves_beyond[j.child]
-            for j in children.get(link, [])
-        )
+        moves_beyond[link] = any(_moves(j) or moves_beyond[j.child] for j in children.get(link, []))
+
+    hands = _hands(links, children, joints_by_child, depth, moves_beyond)
 
     def through_finger(link: str) -> bool:
         while link in joints_by_child:
             joint = joints_by_child[link]
             if _is_finger_named(joint) and not moves_beyond[joint.child]:
+                return True
+            if joint.parent in hands and (_moves(joint) or moves_beyond[joint.child]):
                 return True
             link = joint.parent
         return False
