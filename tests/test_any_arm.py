@@ -189,6 +189,8 @@ def test_reach_of_any_arm_within_one_command_of_the_independent_bound(
         assert r.n_commands <= int(np.ceil(bound - 1e-9)) + 1
         # the bound the planner reports is never above what the independent search attains
         assert r.lower_bound.commands <= int(np.ceil(bound - 1e-9))
+        # and it is proven: no lattice state within the tolerance needs fewer commands
+        assert r.lower_bound.proven and r.lower_bound.commands <= r.n_commands
 
 
 @pytest.mark.parametrize("beyond_mm", [0.01, 0.03])
@@ -609,6 +611,54 @@ def test_a_fine_lattices_reach_estimate_stays_at_or_below_its_plan():
     assert fine.n_commands <= np.ceil(change_deg[0] / 0.002) + 3
     q_end = fine_arm.lattice.to_joint(fine.sequence.final_ticks)
     assert np.linalg.norm(pose("ur5", q_end)[:3, 3] - [400.0, 100.0, 300.0]) <= 0.05
+
+
+def test_a_reachs_lattice_bound_equals_brute_force_over_every_state():
+    """The reach bound of any arm is proven by listing every lattice state within the
+    tolerance that needs fewer commands than the plan (it was the least a multi-start search
+    over the continuous family found). A SCARA on a coarse lattice (1 deg and 1 mm ticks, two a
+    command), every state of joints 1-3 within the limits (281 x 281 x 201) through its
+    closed-form tool point: the fewest commands of any state within 3 mm is the bound, given a
+    plan of that many or more, and the reach meets it."""
+    from armpath.ik.target import ToolTarget
+    from armpath.model.dh import dh_arm
+    from armpath.planning.reach_generic import lattice_bound
+
+    arm = dh_arm(scara_rows(np.radians(140.0)), name="scara").with_lattice(
+        tick=[np.radians(1.0), np.radians(1.0), 1.0, np.radians(1.0)], max_ticks=2
+    )
+    start = np.array([10, 40, 20, -5])  # ticks
+
+    def tool(q1: np.ndarray, q2: np.ndarray, q3: np.ndarray) -> np.ndarray:
+        """The closed form: arms of 300 and 250 mm at 400 mm, the quill and tool 50 mm down."""
+        x = 300 * np.cos(q1) + 250 * np.cos(q1 + q2)
+        y = 300 * np.sin(q1) + 250 * np.sin(q1 + q2)
+        return np.stack([x, y, 400.0 - q3 - 50.0], axis=-1)
+
+    q = np.random.default_rng(2).uniform(arm.lower, arm.upper, (20, 4))
+    assert np.abs(tool(q[:, 0], q[:, 1], q[:, 2]) - tool_position(arm, q)).max() < 1e-9
+    target, tolerance = np.array([-180.0, 330.0, 170.0]), 3.0
+    i1, i2, i3 = np.arange(-140, 141), np.arange(-140, 141), np.arange(0, 201)
+    fewest = np.inf
+    for a in i1:  # joint 1 one tick at a time: 281 x 201 states each
+        Q2, Q3 = np.meshgrid(i2, i3, indexing="ij")
+        P = tool(np.radians(float(a)), np.radians(Q2), Q3.astype(float))
+        near = np.linalg.norm(P - target, axis=-1) <= tolerance
+        if near.any():
+            steps = np.maximum.reduce(
+                [np.full(near.sum(), abs(a - start[0])), np.abs(Q2[near] - start[1]),
+                 np.abs(Q3[near] - start[2])]
+            )  # fmt: skip
+            fewest = min(fewest, int(np.ceil(steps.min() / 2)))
+    assert 20 <= fewest < 200
+    tip_target = ToolTarget(target)
+    for plan in (fewest, fewest + 4):
+        found = lattice_bound(arm, tip_target, tolerance, start, plan)
+        assert found is not None and found.commands == fewest
+        assert (found.states == 0) == (plan == fewest)
+    r = plan_reach(arm, CollisionWorld(()), start, target, ReachOptions(tolerance_mm=tolerance))
+    assert r.lower_bound.proven and r.lower_bound.commands == fewest == r.n_commands
+    assert r.is_provably_fewest
 
 
 def test_a_sixteen_joint_arm_reaches_and_a_reach_too_long_is_refused():

@@ -138,7 +138,9 @@ class LowerBound:
     configuration_deg: tuple[float, ...]
     method: str
     #: Whether the bound is a proof (the seed arm's closed-form family searched on a grid
-    #: and refined) or the best a multi-start search over the family found (any other arm).
+    #: and refined; any other arm's lattice states listed,
+    #: :func:`~armpath.planning.reach_generic.lattice_bound`) or the best
+    #: a multi-start search over the family found (where the listing's budget ran out).
     proven: bool = True
 
 
@@ -861,7 +863,7 @@ def _plan_reach_generic(
     orientation: Orientation | None,
 ) -> ReachResult:
     """:func:`plan_reach` for any arm (:mod:`armpath.planning.reach_generic`)."""
-    from armpath.planning.reach_generic import reach_any_arm
+    from armpath.planning.reach_generic import lattice_bound, reach_any_arm
 
     target = ToolTarget(np.asarray(target_mm, dtype=np.float64), orientation)
     start = np.asarray(start_ticks)
@@ -882,15 +884,35 @@ def _plan_reach_generic(
     tip = T[:3, 3]
     b = out.bound
     span = np.abs(grid.to_ticks_float(b.configuration) - seq.start_ticks) * grid.tick_display
+    commands, method, proven = b.commands, b.method, False
+    check_time("proving the reach's bound on the lattice")
+    listed = lattice_bound(arm, target, opts.tolerance_mm, seq.start_ticks, seq.n_commands)
+    if listed is not None and (target.orientation is None or listed.commands >= b.commands):
+        # a proof: every lattice state within the tolerance that needs fewer commands than
+        # the plan listed (for the point alone, so with an orientation rule only where it is
+        # no weaker than the family's estimate)
+        commands, proven = listed.commands, True
+        fewer = (
+            f"the fewest any of them needs, {listed.commands}"
+            if listed.states
+            else f"none, so at least {listed.commands}"
+        )
+        rule = "" if target.orientation is None else " (the orientation rule left out)"
+        method = (
+            f"every lattice state within the tolerance of the target{rule} that "
+            f"{listed.box_commands} commands may reach listed by branch and bound over boxes of "
+            f"ticks ({listed.boxes} boxes, {listed.states} states): {fewer}; the family's "
+            f"estimate: {b.commands}"
+        )
     lb = LowerBound(
-        commands=b.commands,
+        commands=commands,
         max_joint_change_deg=float(span.max(initial=0.0)),
         exact_max_joint_change_deg=float(span.max(initial=0.0)),
         configuration_deg=tuple(
             float(v) for v in grid.display(grid.to_ticks_float(b.configuration))
         ),
-        method=b.method,
-        proven=False,
+        method=method,
+        proven=proven,
     )
     return ReachResult(
         sequence=seq,
