@@ -181,6 +181,9 @@ def test_reach_of_any_arm_within_one_command_of_the_independent_bound(
         T = pose(name, q_end)
         angle = np.degrees(np.arccos(np.clip(T[:3, 2] @ [0, 0, -1], -1, 1)))
         assert angle <= 20.0 + 1e-6
+        # proven with the axis rule kept: the joints turning the axis listed, the cone checked
+        assert r.lower_bound.proven and "keeping the tool axis" in r.lower_bound.method
+        assert r.lower_bound.commands <= r.n_commands
     else:
         bound = independent_bound(
             name, grid.to_joint(start), np.array(target), 0.05, arm.lower, arm.upper

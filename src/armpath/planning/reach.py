@@ -887,17 +887,23 @@ def _plan_reach_generic(
     commands, method, proven = b.commands, b.method, False
     check_time("proving the reach's bound on the lattice")
     listed = lattice_bound(arm, target, opts.tolerance_mm, seq.start_ticks, seq.n_commands)
-    if listed is not None and (target.orientation is None or listed.commands >= b.commands):
+    if listed is not None and (listed.rule_kept or listed.commands >= b.commands):
         # a proof: every lattice state within the tolerance that needs fewer commands than
-        # the plan listed (for the point alone, so with an orientation rule only where it is
-        # no weaker than the family's estimate)
+        # the plan listed (a whole pose's rule left out: taken where it is no weaker than the
+        # family's estimate)
         commands, proven = listed.commands, True
         fewer = (
             f"the fewest any of them needs, {listed.commands}"
             if listed.states
             else f"none, so at least {listed.commands}"
         )
-        rule = "" if target.orientation is None else " (the orientation rule left out)"
+        rule = (
+            ""
+            if target.orientation is None
+            else f" keeping the {target.orientation.words()}"
+            if listed.rule_kept
+            else " (the orientation rule left out)"
+        )
         method = (
             f"every lattice state within the tolerance of the target{rule} that "
             f"{listed.box_commands} commands may reach listed by branch and bound over boxes of "

@@ -41,6 +41,7 @@ from armpath.ik.target import AxisCone, PoseOrientation, ToolTarget
 from armpath.kinematics import (
     forward_frames,
     jacobian_from_frames,
+    joints_that_move,
     pose_frames,
     tick_jacobian,
     tool_point_joints,
@@ -376,13 +377,15 @@ LATTICE_BOUND_STATES = 200_000
 @dataclass(frozen=True)
 class LatticeBound:
     """A proven reach bound: no lattice state within ``commands - 1`` commands of the start puts
-    the tool point within the tolerance of the target; ``states`` were listed in the box of
-    ``box_commands`` commands about the start, ``boxes`` looked at."""
+    the tool point within the tolerance of the target (and keeps its orientation rule where
+    ``rule_kept``; otherwise the bound is the point's alone); ``states`` were listed in the box
+    of ``box_commands`` commands about the start, ``boxes`` looked at."""
 
     commands: int
     states: int
     box_commands: int
     boxes: int
+    rule_kept: bool = True
 
 
 def lattice_bound(
@@ -400,17 +403,28 @@ def lattice_bound(
     (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`, a complete branch and
     bound): ``N`` commands move joint ``i`` at most ``N`` times its most ticks, so those states
     lie in that box about the start. The bound is the fewest the listed states need, or
-    ``plan_commands`` where there are none. Obstacles and an orientation rule are left out
-    (the bound holds for the point alone), and the joints that do not move the tool point
-    are held where they start (moving them adds to no state's count). None where a budget
-    ran out."""
+    ``plan_commands`` where there are none. Obstacles are left out, and the joints that move
+    neither the tool point nor the rule's axis are held where they start (moving them adds to
+    no state's count). An axis rule (:class:`~armpath.ik.target.AxisCone`) is kept: the states
+    listed for the point are taken where their axis keeps it; a whole pose's rule is left out
+    (``rule_kept`` False: a bound for the point alone). None where a budget ran out."""
     from armpath.planning.bounds.lattice_goals import lattice_goal_states
 
     grid = arm.lattice
     start = np.asarray(start_ticks, dtype=np.int64)
+    rule = target.orientation
     if plan_commands <= 0:
         return LatticeBound(0, 0, 0, 0)
     tip = tool_point_joints(arm)
+    if isinstance(rule, AxisCone):
+        # the joints that turn the rule's axis are listed too (the others turn the tool
+        # about it)
+        q = np.random.default_rng(0).uniform(-np.pi, np.pi, (8, arm.n_joints))
+        tip |= joints_that_move(
+            arm,
+            lambda a, x: tool_pose(a, x)[..., :3, :3] @ rule.axis_tool,
+            np.clip(q, arm.lower, arm.upper),
+        )
     reach = (plan_commands - 1) * np.asarray(grid.max_ticks, dtype=np.int64)
     tick = np.asarray(grid.tick, dtype=np.float64)
     with np.errstate(invalid="ignore"):
@@ -434,14 +448,20 @@ def lattice_bound(
     if not found.complete:
         return None
     ticks = found.ticks
+    rule_kept = rule is None or isinstance(rule, AxisCone)
     if ticks.shape[0]:
         q = grid.to_joint(ticks)
-        pos, _ = _pose_residuals(arm, replace(target, orientation=None), q)
-        ticks = ticks[(pos <= tolerance) & arm.within_limits(q)]
+        pos, angle = _pose_residuals(
+            arm, target if rule_kept else replace(target, orientation=None), q
+        )
+        ok = (pos <= tolerance) & arm.within_limits(q)
+        if isinstance(rule, AxisCone):
+            ok &= angle <= rule.tolerance_rad  # as a plan's goal state is taken
+        ticks = ticks[ok]
     fewest = plan_commands
     if ticks.shape[0]:
         fewest = min(fewest, int(grid.commands_needed_many(ticks - start).min()))
-    return LatticeBound(fewest, int(ticks.shape[0]), plan_commands - 1, found.boxes)
+    return LatticeBound(fewest, int(ticks.shape[0]), plan_commands - 1, found.boxes, rule_kept)
 
 
 def _count(radius: IntArray) -> float:
