@@ -17,7 +17,7 @@ from scipy.optimize import minimize
 import independent_dh as idh
 from armpath.geometry import CollisionWorld
 from armpath.ik.target import AxisCone
-from armpath.kinematics import tool_position
+from armpath.kinematics import tool_pose, tool_position
 from armpath.model.catalog import resolve_model
 from armpath.planning.reach import ReachOptions, plan_reach
 from armpath.planning.trace import TraceOptions, plan_trace
@@ -662,6 +662,42 @@ def test_a_reachs_lattice_bound_equals_brute_force_over_every_state():
     r = plan_reach(arm, CollisionWorld(()), start, target, ReachOptions(tolerance_mm=tolerance))
     assert r.lower_bound.proven and r.lower_bound.commands == fewest == r.n_commands
     assert r.is_provably_fewest
+
+
+def test_the_turn_keeping_a_pose_equals_every_tick_tried():
+    """A whole pose asked of a UR5's tool (its point on the last axis, so the last joint moves
+    only the tool's rotation): each listed state's last joint is turned, in closed form, to
+    the tick nearest its start's that keeps the pose within 10 deg. Against every tick of a box
+    of 3,601 about the start, each angle taken exactly: the same states keep it and at the
+    same commands; and a reach asking for a pose is proven."""
+    from armpath.ik.target import PoseOrientation, ToolTarget
+    from armpath.planning.reach_generic import _turn_keeping_pose
+
+    arm = resolve_model("ur5")
+    grid = arm.lattice
+    rng = np.random.default_rng(5)
+    centre = grid.nearest_ticks(np.radians([20, -70, 80, -100, -80, 30]))
+    rule = PoseOrientation(tool_pose(arm, grid.to_joint(centre))[:3, :3], np.radians(10.0))
+    ticks = centre + rng.integers(-120, 121, size=(40, 6))  # the last joint's value is ignored
+    start_tick, low, high = int(centre[5]) + 700, int(centre[5]) - 1100, int(centre[5]) + 2500
+    keeps, turn = _turn_keeping_pose(arm, rule, ticks, 5, start_tick, low, high)
+    target = ToolTarget(np.zeros(3), rule)
+    every = np.arange(low, high + 1)
+    for k, state in enumerate(ticks):
+        tried = np.repeat(state[None], every.size, axis=0)
+        tried[:, 5] = every
+        angle = target.angles(tool_pose(arm, grid.to_joint(tried))[:, :3, :3])
+        good = every[angle <= rule.tolerance_rad]
+        assert keeps[k] == (good.size > 0)
+        if good.size:
+            assert turn[k] == int(np.ceil(np.abs(good - start_tick).min() / 20))
+    assert 5 <= keeps.sum() < 40
+    r = plan_reach(
+        arm, CollisionWorld(()), grid.to_ticks(arm.home), [400.0, 100.0, 300.0],
+        ReachOptions(), orientation=PoseOrientation(np.diag([1.0, -1.0, -1.0]), np.radians(5)),
+    )  # fmt: skip
+    assert r.lower_bound.proven and r.lower_bound.commands <= r.n_commands
+    assert "keeping the tool frame within 5 deg" in r.lower_bound.method
 
 
 def test_a_sixteen_joint_arm_reaches_and_a_reach_too_long_is_refused():

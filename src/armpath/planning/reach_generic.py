@@ -25,7 +25,9 @@ tolerance of the target (and its orientation rule) has ``max_i |q_i - s_i| / ste
 
 from __future__ import annotations
 
+import contextvars
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -49,7 +51,7 @@ from armpath.kinematics import (
     tool_pose,
 )
 from armpath.model.lattice import unique_states
-from armpath.model.serial_arm import SerialArm
+from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
 from armpath.planning.motion_check import check_state_clear, motion_clearance
 
@@ -366,10 +368,11 @@ def generic_bound(
     )
 
 
-#: Boxes :func:`lattice_bound` may look at (about a quarter of a microsecond each, some 5 s):
-#: past it the bound stays the family's estimate. The reaches tried (UR5, iiwa14, Z1, SO-101,
-#: 23 to 53 commands) looked at 2,500 to 540,000.
-LATTICE_BOUND_BOXES = 20_000_000
+#: Boxes :func:`lattice_bound` may look at (about a quarter of a microsecond each, some 5 s on
+#: two threads): past it the bound stays the family's estimate. The reaches tried (UR5,
+#: iiwa14, Z1, SO-101, 23 to 53 commands) looked at 2,500 to 540,000; the UR5 cell's reach
+#: with a whole pose asked (plan 77) 20.4 million.
+LATTICE_BOUND_BOXES = 40_000_000
 #: Lattice states :func:`lattice_bound` may list.
 LATTICE_BOUND_STATES = 200_000
 
@@ -394,8 +397,8 @@ def lattice_bound(
     tolerance: float,
     start_ticks: IntArray,
     plan_commands: int,
-    max_boxes: int = LATTICE_BOUND_BOXES,
-    max_states: int = LATTICE_BOUND_STATES,
+    max_boxes: int | None = None,
+    max_states: int | None = None,
 ) -> LatticeBound | None:
     """The fewest commands any plan from ``start_ticks`` needs to put the tool point within
     ``tolerance`` of ``target.position``, proven by listing every lattice state that needs
@@ -403,14 +406,22 @@ def lattice_bound(
     (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`, a complete branch and
     bound): ``N`` commands move joint ``i`` at most ``N`` times its most ticks, so those states
     lie in that box about the start. The bound is the fewest the listed states need, or
-    ``plan_commands`` where there are none. Obstacles are left out, and the joints that move
-    neither the tool point nor the rule's axis are held where they start (moving them adds to
-    no state's count). An axis rule (:class:`~armpath.ik.target.AxisCone`) is kept: the states
-    listed for the point are taken where their axis keeps it; a whole pose's rule is left out
-    (``rule_kept`` False: a bound for the point alone). None where a budget ran out."""
-    from armpath.planning.bounds.lattice_goals import lattice_goal_states
+    ``plan_commands`` where there are none (``max_boxes``, ``max_states``: the budgets, by
+    default :data:`LATTICE_BOUND_BOXES` and :data:`LATTICE_BOUND_STATES`). Obstacles are left
+    out, and the joints that move neither the tool point nor the rule's axis are held where
+    they start (moving them adds to no state's count). An axis rule
+    (:class:`~armpath.ik.target.AxisCone`) is kept: the states listed for the point are taken
+    where their axis keeps it. So is a whole pose's
+    (:class:`~armpath.ik.target.PoseOrientation`) where every joint moves the tool point, or
+    one revolute joint alone does not (a tool on the last axis): that joint is then turned,
+    for each listed state, to the tick nearest its start's that keeps the pose
+    (:func:`_turn_keeping_pose`). Otherwise the pose is left out (``rule_kept`` False: a bound
+    for the point alone). None where a budget ran out."""
+    from armpath.planning.bounds.lattice_goals import GoalStates, lattice_goal_states
 
     grid = arm.lattice
+    max_boxes = LATTICE_BOUND_BOXES if max_boxes is None else max_boxes
+    max_states = LATTICE_BOUND_STATES if max_states is None else max_states
     start = np.asarray(start_ticks, dtype=np.int64)
     rule = target.orientation
     if plan_commands <= 0:
@@ -434,34 +445,134 @@ def lattice_bound(
     upper = np.minimum(start + reach, highest).astype(np.int64)[tip]
     if np.any(lower > upper):  # the start lies outside a limit (a state is checked before)
         return None
-    found = lattice_goal_states(
-        arm,
-        target.position,
-        tolerance * (1.0 + 1e-9) + 1e-12,  # a superset of the exact test's states
-        tip,
-        start,
-        lower,
-        upper,
-        max_boxes=max_boxes,
-        max_states=max_states,
-    )
-    if not found.complete:
+    # the box halved along its widest joint, the halves listed at once (the listing's kernel
+    # releases the GIL; each in a copy of this context, so that it hears the caller's time
+    # limit)
+    widest = int(np.argmax(upper - lower))
+    middle = int(lower[widest] + (upper[widest] - lower[widest]) // 2)
+    halves = [(lower, upper.copy()), (lower.copy(), upper)]
+    halves[0][1][widest], halves[1][0][widest] = middle, middle + 1
+    halves = [(lo, hi) for lo, hi in halves if lo[widest] <= hi[widest]]
+
+    def listed(lo: IntArray, hi: IntArray) -> GoalStates:
+        return lattice_goal_states(
+            arm,
+            target.position,
+            tolerance * (1.0 + 1e-9) + 1e-12,  # a superset of the exact test's states
+            tip,
+            start,
+            lo,
+            hi,
+            max_boxes=max_boxes // len(halves),
+            max_states=max_states // len(halves),
+        )
+
+    with ThreadPoolExecutor(max_workers=len(halves)) as pool:
+        tasks = [pool.submit(contextvars.copy_context().run, listed, *h) for h in halves]
+        parts = [task.result() for task in tasks]
+    if not all(part.complete for part in parts):
         return None
-    ticks = found.ticks
-    rule_kept = rule is None or isinstance(rule, AxisCone)
+    ticks = np.vstack([part.ticks for part in parts])
+    boxes = sum(part.boxes for part in parts)
+    idle = np.flatnonzero(~tip)
+    turned = (
+        isinstance(rule, PoseOrientation)
+        and idle.size == 1
+        and arm.joints[int(idle[0])].kind is JointKind.REVOLUTE
+    )
+    rule_kept = rule is None or isinstance(rule, AxisCone) or idle.size == 0 or turned
+    needed = np.zeros(0, dtype=np.int64)
     if ticks.shape[0]:
         q = grid.to_joint(ticks)
         pos, angle = _pose_residuals(
             arm, target if rule_kept else replace(target, orientation=None), q
         )
         ok = (pos <= tolerance) & arm.within_limits(q)
-        if isinstance(rule, AxisCone):
+        if rule is not None and rule_kept and not turned:
             ok &= angle <= rule.tolerance_rad  # as a plan's goal state is taken
         ticks = ticks[ok]
+        needed = grid.commands_needed_many(ticks - start)
+        if turned and ticks.shape[0]:
+            assert isinstance(rule, PoseOrientation)
+            i = int(idle[0])
+            keeps, turn = _turn_keeping_pose(
+                arm,
+                rule,
+                ticks,
+                i,
+                int(start[i]),
+                int(start[i] - reach[i]),
+                int(start[i] + reach[i]),
+            )
+            ticks, needed = ticks[keeps], np.maximum(needed, turn)[keeps]
     fewest = plan_commands
     if ticks.shape[0]:
-        fewest = min(fewest, int(grid.commands_needed_many(ticks - start).min()))
-    return LatticeBound(fewest, int(ticks.shape[0]), plan_commands - 1, found.boxes, rule_kept)
+        fewest = min(fewest, int(needed.min()))
+    return LatticeBound(fewest, int(ticks.shape[0]), plan_commands - 1, boxes, rule_kept)
+
+
+def _turn_keeping_pose(
+    arm: SerialArm,
+    rule: PoseOrientation,
+    ticks: IntArray,
+    joint: int,
+    start_tick: int,
+    low_tick: int,
+    high_tick: int,
+) -> tuple[BoolArray, IntArray]:
+    """For each state ``ticks (K, n)`` (``joint`` at any value), whether a tick of ``joint``
+    within ``low_tick`` .. ``high_tick`` and its limits puts the tool frame within the rule's
+    tolerance, and the commands the nearest such tick to ``start_tick`` takes it from there.
+
+    The tool's rotation is ``P Rz(theta) Q`` in the joint's value ``theta`` (the others held),
+    so ``trace(R_target^T R) = a cos(theta) + b sin(theta) + c``, read off at 0, pi/2 and pi;
+    the rule asks for at least ``1 + 2 cos(tolerance)``: an arc of ``theta`` about
+    ``atan2(b, a)`` (or all, or none). Its ends are widened by 1e-9, so no tick keeping the
+    rule is missed."""
+    grid = arm.lattice
+    tick = float(grid.tick[joint])
+    q = grid.to_joint(ticks)
+    f = []
+    for theta in (0.0, 0.5 * np.pi, np.pi):
+        q[:, joint] = theta
+        R = tool_pose(arm, q)[:, :3, :3]
+        f.append(np.einsum("kij,ij->k", R, rule.R_world_tool))
+    c = 0.5 * (f[0] + f[2])
+    a, b = 0.5 * (f[0] - f[2]), f[1] - c
+    need = 1.0 + 2.0 * np.cos(rule.tolerance_rad) - 1e-9
+    r = np.hypot(a, b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where(r > 1e-12, (need - c) / r, np.where(c >= need, -np.inf, np.inf))
+    everywhere = x <= -1.0
+    half = np.arccos(np.clip(x, -1.0, 1.0)) + 1e-9
+    centre = np.arctan2(b, a)
+    lo = max(
+        low_tick,
+        int(np.ceil(arm.lower[joint] / tick - 1e-9)) if np.isfinite(arm.lower[joint]) else low_tick,
+    )
+    hi = min(
+        high_tick,
+        int(np.floor(arm.upper[joint] / tick + 1e-9))
+        if np.isfinite(arm.upper[joint])
+        else high_tick,
+    )
+    best = np.full(ticks.shape[0], np.inf)  # ticks from the start to the nearest keeping it
+    if lo <= hi:
+        best[everywhere] = abs(int(np.clip(start_tick, lo, hi)) - start_tick)
+        some = (x < 1.0) & ~everywhere
+        turns = np.arange(
+            int(np.floor((lo * tick - np.pi) / (2 * np.pi))) - 1,
+            int(np.ceil((hi * tick + np.pi) / (2 * np.pi))) + 2,
+        )
+        for k in turns:
+            first = np.maximum(np.ceil((centre - half + 2 * np.pi * k) / tick), lo)
+            last = np.minimum(np.floor((centre + half + 2 * np.pi * k) / tick), hi)
+            there = some & (first <= last)
+            gap = np.abs(np.clip(start_tick, first, np.maximum(first, last)) - start_tick)
+            best = np.minimum(best, np.where(there, gap, np.inf))
+    keeps = np.isfinite(best)
+    turn = np.ceil(np.where(keeps, best, 0.0) / int(grid.max_ticks[joint]))
+    return keeps, turn.astype(np.int64)
 
 
 def _count(radius: IntArray) -> float:
