@@ -129,7 +129,9 @@ class LowerBound:
     ``commands = ceil(max_joint_change_deg / 2)``: no sequence of fewer commands can bring the
     fingertip within the tolerance. ``exact_max_joint_change_deg`` is the same minimum for
     reaching the target exactly, attained at ``configuration_deg`` (every joint, deg or mm;
-    joints that do not move the tool point as they start).
+    joints that do not move the tool point as they start). For any other arm the change and
+    configuration are the family's least found, and ``commands`` the count the lattice
+    states prove (``method`` says which), which may lie above it: lattice states are fewer.
     """
 
     commands: int
