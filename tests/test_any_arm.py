@@ -664,6 +664,23 @@ def test_a_reachs_lattice_bound_equals_brute_force_over_every_state():
     assert r.is_provably_fewest
 
 
+def test_a_reach_whose_lattice_listing_runs_out_of_time_keeps_its_plan(monkeypatch):
+    """The time limit running out while the lattice states are listed (Tiago's eight joints
+    with --time-limit 6: "error: the time limit of 6 s ran out while listing the lattice goal
+    states", the plan lost) leaves the plan and its family's estimate, which says why."""
+    from armpath.errors import TimeLimitError
+    from armpath.planning import reach_generic
+
+    def out_of_time(*_args, **_kwargs):
+        raise TimeLimitError("the time limit of 6 s ran out while listing")
+
+    monkeypatch.setattr(reach_generic, "lattice_bound", out_of_time)
+    arm = resolve_model("ur5")
+    r = plan_reach(arm, CollisionWorld(()), arm.lattice.to_ticks(arm.home), [400.0, 100.0, 300.0])
+    assert r.n_commands >= r.lower_bound.commands > 0 and not r.lower_bound.proven
+    assert r.lower_bound.method.endswith("the time limit ran out while listing lattice states")
+
+
 def test_the_turn_keeping_a_pose_equals_every_tick_tried():
     """A whole pose asked of a UR5's tool (its point on the last axis, so the last joint moves
     only the tool's rotation): each listed state's last joint is turned, in closed form, to
