@@ -441,8 +441,9 @@ def lattice_bound(
     with np.errstate(invalid="ignore"):
         lowest = np.where(np.isfinite(arm.lower), np.ceil(arm.lower / tick - 1e-9), -np.inf)
         highest = np.where(np.isfinite(arm.upper), np.floor(arm.upper / tick + 1e-9), np.inf)
-    lower = np.maximum(start - reach, lowest).astype(np.int64)[tip]
-    upper = np.minimum(start + reach, highest).astype(np.int64)[tip]
+    box_lower = np.maximum(start - reach, lowest).astype(np.int64)  # ticks, every joint
+    box_upper = np.minimum(start + reach, highest).astype(np.int64)
+    lower, upper = box_lower[tip], box_upper[tip]
     if np.any(lower > upper):  # the start lies outside a limit (a state is checked before)
         return None
     # the box halved along its widest joint, the halves listed at once (the listing's kernel
@@ -501,8 +502,8 @@ def lattice_bound(
                 ticks,
                 i,
                 int(start[i]),
-                int(start[i] - reach[i]),
-                int(start[i] + reach[i]),
+                int(box_lower[i]),
+                int(box_upper[i]),
             )
             ticks, needed = ticks[keeps], np.maximum(needed, turn)[keeps]
     fewest = plan_commands
@@ -521,8 +522,9 @@ def _turn_keeping_pose(
     high_tick: int,
 ) -> tuple[BoolArray, IntArray]:
     """For each state ``ticks (K, n)`` (``joint`` at any value), whether a tick of ``joint``
-    within ``low_tick`` .. ``high_tick`` and its limits puts the tool frame within the rule's
-    tolerance, and the commands the nearest such tick to ``start_tick`` takes it from there.
+    within ``low_tick`` .. ``high_tick`` (inside its limits) puts the tool frame within the
+    rule's tolerance, and the commands the nearest such tick to ``start_tick`` takes it from
+    there.
 
     The tool's rotation is ``P Rz(theta) Q`` in the joint's value ``theta`` (the others held),
     so ``trace(R_target^T R) = a cos(theta) + b sin(theta) + c``, read off at 0, pi/2 and pi;
@@ -546,16 +548,7 @@ def _turn_keeping_pose(
     everywhere = x <= -1.0
     half = np.arccos(np.clip(x, -1.0, 1.0)) + 1e-9
     centre = np.arctan2(b, a)
-    lo = max(
-        low_tick,
-        int(np.ceil(arm.lower[joint] / tick - 1e-9)) if np.isfinite(arm.lower[joint]) else low_tick,
-    )
-    hi = min(
-        high_tick,
-        int(np.floor(arm.upper[joint] / tick + 1e-9))
-        if np.isfinite(arm.upper[joint])
-        else high_tick,
-    )
+    lo, hi = low_tick, high_tick
     best = np.full(ticks.shape[0], np.inf)  # ticks from the start to the nearest keeping it
     if lo <= hi:
         best[everywhere] = abs(int(np.clip(start_tick, lo, hi)) - start_tick)
