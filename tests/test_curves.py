@@ -153,6 +153,24 @@ def test_a_closed_polyline_may_repeat_its_first_vertex_and_says_which_vertices_c
         Polyline("d", [[0, 0, 0], [1, 0, 0]], closed=True)
 
 
+def test_points_whose_last_is_their_first_are_a_closed_curve():
+    """A points table that writes its first point again at its end (a circle exported point by
+    point) was an open curve from that point round to itself: a pass could begin only at that
+    end, and the SO-100 tracing such a circle at 0.3 mm left its first 0.05 mm untraced. It is
+    closed now, as a parametric curve whose ends meet is: the same vertices and length as
+    when closed is asked, and a closest point just before the end is found just before the
+    start. Three points there and back stay open (a closed curve needs three vertices)."""
+    square = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]
+    asked = Polyline("asked", square, closed=True)
+    for end in ([0.0, 0.0, 0.0], [0.0, 0.0, 4e-7]):  # exactly, or within rounding
+        written = Polyline("written", [*square, end])
+        assert written.closed and abs(written.length - 40.0) < 1e-6
+        np.testing.assert_array_equal(written.vertices, asked.vertices)
+        assert abs(float(written.wrap(41.0)) - 1.0) < 1e-9
+    assert not Polyline("near", [*square, [0.0, 0.0, 0.01]]).closed  # 10 um apart: open
+    assert not Polyline("back", [[0, 0, 0], [10, 0, 0], [0, 0, 0]]).closed
+
+
 def test_the_table_follows_a_curve_that_turns_fast_or_refuses_it():
     """The arc-length table doubles its points until the curve measured through the midpoints
     of its intervals is no longer (to 1e-4): a helix of 1,000 turns gets its length to 1e-4 of

@@ -629,11 +629,11 @@ def trace(
     time_limit_s: float | None = None,
 ) -> Result:
     """Go along ``curve`` with the tool (a :class:`~armpath.geometry.curves.Curve`, or points
-    ``(M, 3)`` mm joined by straight pieces, ``closed`` back to the first; default: the
-    scene's ``[tasks.trace]`` curve) within ``tolerance_mm`` of it (None: the scene's
-    ``[tasks.trace] tolerance_mm``, else :data:`~armpath.tolerances.TRACE_TOLERANCE_MM`),
-    every reachable part, in the fewest passes and commands; the document lists the arcs not
-    traced and why.
+    ``(M, 3)`` mm joined by straight pieces, ``closed`` back to the first, as are points whose
+    last repeats the first; default: the scene's ``[tasks.trace]`` curve) within
+    ``tolerance_mm`` of it (None: the scene's ``[tasks.trace] tolerance_mm``, else
+    :data:`~armpath.tolerances.TRACE_TOLERANCE_MM`), every reachable part, in the fewest
+    passes and commands; the document lists the arcs not traced and why.
     ``tool_axis``: keep the tool's approach axis within ``axis_tolerance_deg`` (default 15)
     of the surface's inward normal at each point (``"normal"``, a torch kept near the normal)
     or of a world direction (x, y, z), along the whole continuous motion of every pass.

@@ -1044,7 +1044,8 @@ def trace(
         typer.Option(
             "--closed/--open",
             help="With --curve: a closed curve (a piece from the last point back to the "
-            "first) or an open one.",
+            "first) or an open one; points whose last repeats the first are closed either "
+            "way.",
         ),
     ] = False,
     animate: AnimateOption = False,

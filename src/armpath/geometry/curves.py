@@ -45,6 +45,9 @@ TABLE_LENGTH_SHARE = 1e-4
 #: Shortest curve (mm): a shorter one is a point to the tracer (0.01 mm found no lattice state
 #: near it where 0.1 mm is traced).
 MIN_CURVE_LENGTH_MM = 0.1
+#: A curve whose end lies this near its start (mm) is closed: a points table's first row
+#: written again at its end, or a parametric curve's ends meeting, up to rounding.
+CLOSING_GAP_MM = 1e-6
 
 
 class Curve(ABC):
@@ -223,7 +226,7 @@ class ParametricCurve(Curve):
         object.__setattr__(self, "_exprs", exprs)
         with np.errstate(all="ignore"):
             ends = self.points(np.array([0.0, 1.0]))
-            closed = bool(np.linalg.norm(ends[1] - ends[0]) < 1e-9)
+            closed = bool(np.linalg.norm(ends[1] - ends[0]) < CLOSING_GAP_MM)
         object.__setattr__(self, "closed", closed)
 
     def points(self, u: ArrayLike) -> FloatArray:
@@ -246,7 +249,10 @@ class ParametricCurve(Curve):
 
 @dataclass(frozen=True, eq=False)
 class Polyline(Curve):
-    """Straight pieces through ``vertices`` ``(V, 3)``; ``closed`` adds the piece back."""
+    """Straight pieces through ``vertices`` ``(V, 3)``; ``closed`` adds the piece back. Vertices
+    whose last is their first (within :data:`CLOSING_GAP_MM`, four or more of them) are closed
+    either way, as a parametric curve whose ends meet is: a pass may then begin anywhere on it
+    and come round, rather than only at its ends."""
 
     name: str
     vertices: FloatArray
@@ -257,6 +263,9 @@ class Polyline(Curve):
         if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < 2 or not np.all(np.isfinite(v)):
             raise InvalidInputError(f"polyline {self.name!r}: need (V >= 2, 3) finite vertices")
         check_size(v.shape[0], MAX_CURVE_POINTS, f"vertices of polyline {self.name!r}", "the curve")
+        if v.shape[0] >= 4 and np.linalg.norm(v[-1] - v[0]) < CLOSING_GAP_MM:
+            v[-1] = v[0]
+            object.__setattr__(self, "closed", True)
         if self.closed:
             if v.shape[0] > 2 and np.array_equal(v[-1], v[0]):
                 v = v[:-1]  # closed already by its last vertex: the piece back is that one
