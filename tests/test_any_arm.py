@@ -664,6 +664,51 @@ def test_a_reachs_lattice_bound_equals_brute_force_over_every_state():
     assert r.is_provably_fewest
 
 
+def test_where_no_lattice_state_lies_near_a_curve_equals_brute_force():
+    """A stretch no pass crossed was only said to be where "the tracer found no lattice
+    command"; where no lattice state at all lies within the tolerance of the curve (the SO-100
+    tracing a 30 mm circle at 0.1 mm, its pan joint 0.32 mm a tick across the curve where the
+    circle turns back), no command can end there, and the listing over the joints' whole ranges
+    now proves it. The coarse SCARA (1 deg, 1 mm ticks; its closed-form tool point over all
+    281 x 281 x 201 states): whether a state lies within 1.6 mm of each of 14 points of a
+    line equals brute force, and the untraced stretch's reason names exactly those points."""
+    from armpath.geometry.curves import Polyline
+    from armpath.model.dh import dh_arm
+    from armpath.planning.bounds.lattice_goals import lattice_state_exists
+    from armpath.planning.trace.family import curve_family
+    from armpath.planning.trace.plan import HOLE_PROBES, _with_lattice_hint
+    from armpath.planning.trace.reachability import CurveArc
+
+    arm = dh_arm(scara_rows(np.radians(140.0)), name="scara").with_lattice(
+        tick=[np.radians(1.0), np.radians(1.0), 1.0, np.radians(1.0)], max_ticks=2
+    )
+    tolerance = 1.6
+    line = Polyline("line", [[-180.0, 330.0, 170.0], [-160.0, 340.0, 170.6]])
+    arc = CurveArc(0.0, line.length)
+    count = int(min(HOLE_PROBES, np.ceil(arc.length_mm / tolerance)))
+    s = (np.arange(count) + 0.5) * arc.length_mm / count
+    points = line.at_arc_length(s)
+    # every state of joints 1 and 2; joint 3 puts the tool at 350 - q3 mm, so the nearest of its
+    # 201 states to a point lies a fractional millimetre off in z
+    Q1, Q2 = np.meshgrid(np.radians(np.arange(-140, 141)), np.radians(np.arange(-140, 141)))
+    x = (300 * np.cos(Q1) + 250 * np.cos(Q1 + Q2)).reshape(-1, 1)
+    y = (300 * np.sin(Q1) + 250 * np.sin(Q1 + Q2)).reshape(-1, 1)
+    dz = np.abs(points[:, 2] - np.round(points[:, 2]))
+    nearest = np.sqrt(((x - points[:, 0]) ** 2 + (y - points[:, 1]) ** 2).min(axis=0) + dz**2)
+    truth = nearest <= tolerance
+    assert count == 14 and 4 <= truth.sum() <= 10  # some points with a state near, some without
+    tip = np.array([True, True, True, False])
+    found = [lattice_state_exists(arm, p, tolerance, tip) for p in points]
+    assert found == truth.tolist()
+    fam = curve_family(arm, CollisionWorld(()), line)
+    ((_, why),) = _with_lattice_hint(fam, tolerance, [(arc, "not crossed")])
+    holes = s[~truth]
+    assert why.startswith(
+        f"not crossed; no lattice state at all puts the tool point within 1.6 mm of the curve "
+        f"at {holes.size} points from {holes[0]:.2f} to {holes[-1]:.2f} mm"
+    )
+
+
 def test_a_reach_whose_lattice_listing_runs_out_of_time_keeps_its_plan(monkeypatch):
     """The time limit running out while the lattice states are listed (Tiago's eight joints
     with --time-limit 6: "error: the time limit of 6 s ran out while listing the lattice goal

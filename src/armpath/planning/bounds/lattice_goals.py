@@ -239,6 +239,77 @@ def lattice_goal_states(
     return GoalStates(ticks, int(boxes + more), bool(complete))
 
 
+#: Boxes :func:`lattice_state_exists` may look at for one point (about half a second): a point
+#: near which no state lies is only known so once every box is dropped.
+EXISTS_BOXES = 2_000_000
+
+
+def whole_range_ticks(arm: SerialArm, tip: NDArray[np.bool_]) -> tuple[IntArray, IntArray] | None:
+    """The lowest and highest ticks of each joint in ``tip`` over which every tool point the
+    lattice can reach is reached: each joint's limits, a revolute joint without limits or
+    with more than a turn between them over one turn (its states repeat every turn when a turn
+    is a whole number of ticks); None where that cannot be said (such a joint whose turn is
+    not, or a sliding joint without limits)."""
+    grid = arm.lattice
+    index = np.flatnonzero(tip)
+    tick = np.asarray(grid.tick, dtype=np.float64)[index]
+    revolute = np.array([arm.joints[int(i)].kind is JointKind.REVOLUTE for i in index])
+    lower_limit, upper_limit = arm.lower[index], arm.upper[index]
+    bounded = np.isfinite(lower_limit) & np.isfinite(upper_limit)
+    turn = 2.0 * np.pi / tick
+    whole = np.abs(turn - np.round(turn)) <= 1e-6
+    if np.any(~bounded & ~(revolute & whole)):
+        return None
+    with np.errstate(invalid="ignore"):
+        lower = np.ceil(np.where(bounded, lower_limit, -np.pi) / tick - 1e-9).astype(np.int64)
+        upper = np.floor(np.where(bounded, upper_limit, np.pi) / tick + 1e-9).astype(np.int64)
+    turns = revolute & whole
+    upper = np.where(
+        turns, np.minimum(upper, lower + np.round(turn).astype(np.int64) - 1), upper
+    ).astype(np.int64)
+    return lower, upper
+
+
+def lattice_state_exists(
+    arm: SerialArm,
+    target: FloatArray,
+    tolerance: float,
+    tip: NDArray[np.bool_],
+    max_boxes: int = EXISTS_BOXES,
+) -> bool | None:
+    """Whether any lattice state within the joint limits puts the tool point within
+    ``tolerance`` (model units) of ``target`` (model units), obstacles left out: the listing of
+    :func:`lattice_goal_states` over :func:`whole_range_ticks`, stopped at the first state
+    (the joints outside ``tip``, which move no tool point, held at a tick within their limits).
+    False is a proof that none does; None where it cannot be said (a budget of ``max_boxes``
+    spent, or a joint's range that cannot be listed)."""
+    ranges = whole_range_ticks(arm, tip)
+    if ranges is None:
+        return None
+    tick = np.asarray(arm.lattice.tick, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        held = np.clip(
+            0.0,
+            np.nan_to_num(arm.lower / tick, neginf=-1e18),
+            np.nan_to_num(arm.upper / tick, posinf=1e18),
+        )
+    fixed = np.ceil(held - 1e-9).astype(np.int64)
+    found = lattice_goal_states(
+        arm,
+        np.asarray(target, dtype=np.float64),
+        tolerance * (1.0 + 1e-9) + 1e-12,  # a superset of the exact test's states
+        np.asarray(tip, dtype=bool),
+        fixed,
+        ranges[0],
+        ranges[1],
+        max_boxes=max_boxes,
+        max_states=1,
+    )
+    if found.ticks.shape[0]:
+        return True
+    return False if found.complete else None
+
+
 @njit(cache=True, nogil=True)
 def _enumerate(
     lower: np.ndarray,

@@ -36,6 +36,7 @@ from armpath.model.serial_arm import SerialArm
 from armpath.planning.bounds import CommandBound, trace_bound
 from armpath.planning.bounds.band_trace import band_forecast, band_trace_bound, with_band
 from armpath.planning.bounds.carriage import carriage_travel_bound, with_carriage
+from armpath.planning.bounds.lattice_goals import lattice_state_exists
 from armpath.planning.bounds.search import check_max_samples
 from armpath.planning.bounds.trace import LAYER_INSET_MM
 from armpath.planning.motion import (
@@ -478,18 +479,67 @@ GAP_REPORTED_MM = 0.05
 LOOP_OVERLAP_MM = 0.2
 
 
+#: Points of an untraced stretch at which the lattice is searched for a state within the
+#: tolerance (at most; a tolerance apart on shorter stretches).
+HOLE_PROBES = 48
+
+
+def _lattice_holes(fam: CurveFamily, tolerance_mm: float, arc: CurveArc) -> FloatArray:
+    """Arc lengths (mm) of points evenly inside ``arc`` near which no lattice state puts the
+    tool point within ``tolerance_mm``, each proven by listing every state of the joints that
+    move it over their ranges (:func:`~armpath.planning.bounds.lattice_goals.lattice_state_exists`,
+    obstacles left out). Up to :data:`HOLE_PROBES` points, a tolerance apart where the arc is
+    shorter; the search stops at the first point it cannot decide (its budget spent)."""
+    count = int(min(HOLE_PROBES, max(1.0, np.ceil(arc.length_mm / tolerance_mm))))
+    s = arc.start_mm + (np.arange(count) + 0.5) * arc.length_mm / count
+    points = fam.curve.at_arc_length(fam.curve.wrap(s)) / fam.arm.mm_per_unit
+    holes = []
+    for s_mm, point in zip(s, points, strict=True):
+        check_time("describing the untraced arcs")
+        exists = lattice_state_exists(
+            fam.arm, point, tolerance_mm / fam.arm.mm_per_unit, fam.tip_joints
+        )
+        if exists is None:
+            break
+        if not exists:
+            holes.append(s_mm)
+    return np.asarray(fam.curve.wrap(np.array(holes)), dtype=np.float64)
+
+
 def _with_lattice_hint(
     fam: CurveFamily, tolerance_mm: float, gaps: list[tuple[CurveArc, str]]
 ) -> list[tuple[CurveArc, str]]:
-    """The gaps between passes, each with how far one tick moves the tool point there when
-    three joints or fewer move it (a SCARA's two arm joints and its quill): with no joint left
-    to take up the error, few lattice states lie within the tolerance of the curve."""
+    """The gaps between passes, each with what the lattice says of it: the points of it near
+    which no lattice state puts the tool point within the tolerance (:func:`_lattice_holes`,
+    a proof), where no command of a pass can end; else, where three joints or fewer move the
+    tool point (a SCARA's two arm joints and its quill), how far one tick moves it there: with
+    no joint left to take up the error, few lattice states lie within the tolerance of the
+    curve."""
     tip = fam.tip_joints
-    if int(tip.sum()) > 3 or not gaps:
-        return gaps
     out = []
     for arc, why in gaps:
         check_time("describing the untraced arcs")
+        holes = _lattice_holes(fam, tolerance_mm, arc)
+        if holes.size:
+            where = (
+                f"at {holes[0]:.2f} mm"
+                if holes.size == 1
+                else f"at {holes.size} points from {holes[0]:.2f} to {holes[-1]:.2f} mm"
+            )
+            out.append(
+                (
+                    arc,
+                    f"{why}; no lattice state at all puts the tool point within "
+                    f"{tolerance_mm:g} mm of the curve {where} (every state of the "
+                    f"{int(tip.sum())} joints that move it listed over their ranges, "
+                    "obstacles left out), so no command can end near them: the lattice is "
+                    "coarse for this tolerance there",
+                )
+            )
+            continue
+        if int(tip.sum()) > 3:
+            out.append((arc, why))
+            continue
         v = fam.best(float(fam.curve.wrap(0.5 * (arc.start_mm + arc.end_mm))))
         if v.out_of_reach:
             out.append((arc, why))
