@@ -475,14 +475,18 @@ def test_a_scaras_trace_bound_agrees_with_its_two_link_closed_form():
     assert bound.commands == 60 and 49.0 < bound.parts["approach"] <= 50.0
 
 
-def test_an_untraced_arc_of_a_scara_says_how_far_a_tick_moves_its_tool():
+def test_an_untraced_arc_of_a_scara_names_where_no_lattice_state_lies_near():
     """With 0.1 mm a SCARA leaves arcs of a circle untraced: three joints move its tool point
-    and none is left to take up the error. The reason says how far a tick moves the tool
-    there: joint 1's, the point's distance from the base axis times 0.1 deg (written here)."""
+    and none is left to take up the error (0.1 deg of joint 1 moves it 0.7 mm there). The
+    reason said so as a hint; it now names the points of the arc near which no lattice state
+    lies within 0.1 mm at all, as a brute force finds them: every state within 6 ticks of
+    joints 1 and 2 and 2 of the quill about both closed-form solutions of each point (the
+    elbow never straight here, so a state within 0.1 mm lies within a tick of one). With
+    1 mm a state lies near every point, and the reason stays as it was."""
     from armpath.geometry.curves import ParametricCurve
     from armpath.model.dh import dh_arm
     from armpath.planning.trace.family import curve_family
-    from armpath.planning.trace.plan import _with_lattice_hint
+    from armpath.planning.trace.plan import HOLE_PROBES, _with_lattice_reason
     from armpath.planning.trace.reachability import CurveArc
 
     rows = scara_rows()
@@ -491,14 +495,37 @@ def test_an_untraced_arc_of_a_scara_says_how_far_a_tick_moves_its_tool():
     circle = ParametricCurve("circle", "350 + 60*cos(t)", "100 + 60*sin(t)", "250", 0.0, 2 * np.pi)
     fam = curve_family(arm, world, circle)
     gap = CurveArc(69.8, 79.4)
-    (hinted,) = _with_lattice_hint(fam, 0.1, [(gap, "no command")])
-    p = circle.at_arc_length(np.array([0.5 * (gap.start_mm + gap.end_mm)]))[0]
-    lever = np.hypot(p[0], p[1]) * np.radians(0.1)  # joint 1 moves it farthest
-    assert hinted[1] == (
-        f"no command (only 3 joints move the tool point, up to {lever:.2g} mm a tick here: "
-        "few lattice states lie within 0.1 mm of the curve)"
+    (named,) = _with_lattice_reason(fam, 0.1, [(gap, "no command")])
+    s = gap.start_mm + (np.arange(HOLE_PROBES) + 0.5) * gap.length_mm / HOLE_PROBES
+    points = circle.at_arc_length(s)
+    tick = np.radians(0.1)
+    near = np.zeros(s.size, dtype=bool)
+    for k, (x, y, z) in enumerate(points):
+        c2 = (x * x + y * y - 300.0**2 - 250.0**2) / (2 * 300.0 * 250.0)
+        for q2 in (np.arccos(c2), -np.arccos(c2)):  # the two elbows
+            q1 = np.arctan2(y, x) - np.arctan2(250 * np.sin(q2), 300 + 250 * np.cos(q2))
+            n1, n2, n3 = np.meshgrid(
+                np.round(q1 / tick) + np.arange(-6, 7),
+                np.round(q2 / tick) + np.arange(-6, 7),
+                np.round((350.0 - z) / 0.1) + np.arange(-2, 3),
+                indexing="ij",
+            )
+            a, b = n1 * tick, n2 * tick
+            P = np.stack(
+                [300 * np.cos(a) + 250 * np.cos(a + b), 300 * np.sin(a) + 250 * np.sin(a + b),
+                 350.0 - 0.1 * n3], axis=-1,
+            )  # fmt: skip
+            inside = (np.abs(a) <= 2.4) & (np.abs(b) <= 2.4)
+            near[k] |= bool(np.any(inside & (np.linalg.norm(P - [x, y, z], axis=-1) <= 0.1)))
+    holes = s[~near]
+    assert 20 <= holes.size < HOLE_PROBES
+    assert named[1] == (
+        f"no command; no lattice state at all puts the tool point within 0.1 mm of the curve "
+        f"at {holes.size} points from {holes[0]:.2f} to {holes[-1]:.2f} mm (every state of the "
+        "3 joints that move it listed over their ranges, obstacles left out), so no command can "
+        "end near them: the lattice is coarse for this tolerance there"
     )
-    assert _with_lattice_hint(fam, 1.0, [(gap, "no command")]) == [(gap, "no command")]
+    assert _with_lattice_reason(fam, 1.0, [(gap, "no command")]) == [(gap, "no command")]
 
 
 def test_an_arm_that_cannot_set_its_tools_direction_traces_the_point_alone():
@@ -676,7 +703,7 @@ def test_where_no_lattice_state_lies_near_a_curve_equals_brute_force():
     from armpath.model.dh import dh_arm
     from armpath.planning.bounds.lattice_goals import lattice_state_exists
     from armpath.planning.trace.family import curve_family
-    from armpath.planning.trace.plan import HOLE_PROBES, _with_lattice_hint
+    from armpath.planning.trace.plan import HOLE_PROBES, _with_lattice_reason
     from armpath.planning.trace.reachability import CurveArc
 
     arm = dh_arm(scara_rows(np.radians(140.0)), name="scara").with_lattice(
@@ -701,7 +728,7 @@ def test_where_no_lattice_state_lies_near_a_curve_equals_brute_force():
     found = [lattice_state_exists(arm, p, tolerance, tip) for p in points]
     assert found == truth.tolist()
     fam = curve_family(arm, CollisionWorld(()), line)
-    ((_, why),) = _with_lattice_hint(fam, tolerance, [(arc, "not crossed")])
+    ((_, why),) = _with_lattice_reason(fam, tolerance, [(arc, "not crossed")])
     holes = s[~truth]
     assert why.startswith(
         f"not crossed; no lattice state at all puts the tool point within 1.6 mm of the curve "

@@ -259,7 +259,8 @@ def plan_trace(
     fam = reach.family
     arcs = list(reach.reachable)
     overlap = 0.0
-    if _all_round(curve, arcs):
+    all_round = _all_round(curve, arcs)
+    if all_round:
         # all around: begun where the family comes nearest the arm, run on a little past the
         # start so that the covered ends meet
         a0 = _nearest_loop_start(fam, arm.lattice.to_joint(start), curve.length, arcs[0].start_mm)
@@ -279,11 +280,35 @@ def plan_trace(
             fixed = _trace_arcs(arm, world, reach, start, arcs, overlap, opts, say)
         except TimeLimitError:  # the first plan stands (its certificate still to come)
             fixed = run
-        if not run.better_than(fixed, opts.tolerance_mm):
+        if not run.better_than(fixed, opts.tolerance_mm, curve):
             run = fixed
+    breaks = [p for p in run.passes[1:] if not p.backward]
+    if all_round and breaks and not any(p.backward for p in run.passes[:1]):
+        # the pass once round broke off and the next began past the break; begun where that
+        # one began, the last pass runs on to the break instead of a pass of its own covering
+        # what lay before the first one's beginning
+        deadline = current_deadline()
+        if deadline is None or deadline.remaining > _RETRACE_TIME_SHARE * (
+            time.monotonic() - began
+        ):
+            a1 = float(curve.wrap(breaks[0].start_mm))
+            say(f"tracing again once round from {a1:.1f} mm, where a pass began past a break")
+            try:
+                again = _trace_arcs(
+                    arm, world, reach, start, [CurveArc(a1, a1 + curve.length)], overlap, opts, say
+                ).without_idle_last_pass(curve)
+            except (TimeLimitError, PlanningError):
+                again = run
+            say(
+                f"traced from there: {len(again.states) - 1} commands in {len(again.passes)} "
+                f"passes over {again.covered_mm(curve):.2f} mm, against "
+                f"{len(run.states) - 1} in {len(run.passes)} over {run.covered_mm(curve):.2f} mm"
+            )
+            if again.better_than(run, opts.tolerance_mm, curve):
+                run = again
     states, passes, transits, not_traced = run.states, run.passes, run.transits, run.not_traced
     prof_s, prof_d = run.profile_s, run.profile_d
-    not_traced += _with_lattice_hint(
+    not_traced += _with_lattice_reason(
         reach.family,
         opts.tolerance_mm,
         _gaps_between_passes(arcs, passes, not_traced, curve.length if curve.closed else None),
@@ -506,7 +531,7 @@ def _lattice_holes(fam: CurveFamily, tolerance_mm: float, arc: CurveArc) -> Floa
     return np.asarray(fam.curve.wrap(np.array(holes)), dtype=np.float64)
 
 
-def _with_lattice_hint(
+def _with_lattice_reason(
     fam: CurveFamily, tolerance_mm: float, gaps: list[tuple[CurveArc, str]]
 ) -> list[tuple[CurveArc, str]]:
     """The gaps between passes, each with what the lattice says of it: the points of it near
@@ -715,17 +740,54 @@ class _Tracing:
     profile_d: list[FloatArray]
     approach_charged: bool = False
 
-    @property
-    def covered_mm(self) -> float:
-        """The arc length its passes cover (mm; an overlap counted twice)."""
-        return float(sum(abs(p.end_mm - p.start_mm) for p in self.passes))
+    def covered_mm(self, curve: Curve) -> float:
+        """How much of ``curve`` its passes cover (mm; an overlap counted once: a pass that
+        ran over another's end made a tracing look as if it covered more)."""
+        return _covered_mm(curve, [CurveArc(p.start_mm, p.end_mm) for p in self.passes])
 
-    def better_than(self, other: _Tracing, slack_mm: float) -> bool:
-        """Whether this tracing of the same arcs is the one to keep: fewer commands where it
-        covers no less than ``other`` less ``slack_mm``, else more covered."""
-        if abs(self.covered_mm - other.covered_mm) > slack_mm:
-            return self.covered_mm > other.covered_mm
+    def without_idle_last_pass(self, curve: Curve) -> _Tracing:
+        """This tracing without its last pass (and the transit onto it) where that pass covers
+        less than :data:`GAP_REPORTED_MM` of the curve that the others leave (a pass begun just
+        short of where the first one began, in a stretch a break left before it)."""
+        if len(self.passes) < 2 or len(self.transits) < len(self.passes):
+            return self
+        last = self.passes[-1]
+        if _new_coverage_mm(curve, self.passes[:-1], last.start_mm, last.end_mm) >= (
+            GAP_REPORTED_MM
+        ):
+            return self
+        onto = self.transits[-1]
+        return replace(
+            self,
+            states=self.states[: onto.first + 1],
+            passes=self.passes[:-1],
+            transits=self.transits[:-1],
+            profile_s=self.profile_s[:-1],
+            profile_d=self.profile_d[:-1],
+        )
+
+    def better_than(self, other: _Tracing, slack_mm: float, curve: Curve) -> bool:
+        """Whether this tracing of the same arcs of ``curve`` is the one to keep: fewer
+        commands where it covers no less than ``other`` less ``slack_mm``, else more
+        covered."""
+        mine, theirs = self.covered_mm(curve), other.covered_mm(curve)
+        if abs(mine - theirs) > slack_mm:
+            return mine > theirs
         return len(self.states) < len(other.states)
+
+
+def _new_coverage_mm(
+    curve: Curve, passes: list[TracePass], start_mm: float, end_mm: float
+) -> float:
+    """How much of ``curve`` (mm) the arc ``start_mm`` .. ``end_mm`` covers that ``passes``
+    do not."""
+    before = [CurveArc(p.start_mm, p.end_mm) for p in passes]
+    return _covered_mm(curve, [*before, CurveArc(start_mm, end_mm)]) - _covered_mm(curve, before)
+
+
+def _covered_mm(curve: Curve, arcs: list[CurveArc]) -> float:
+    """The length of ``curve`` the union of ``arcs`` covers (mm)."""
+    return float(sum(b - a for a, b in merged_arcs(arcs, curve.length, curve.closed)))
 
 
 #: Points along a closed curve where :func:`_nearest_loop_start` looks for the member nearest
@@ -850,8 +912,15 @@ def _trace_arcs(
                 )
                 if dev_bound <= opts.tolerance_mm:
                     break
-            if len(pass_states) == 1:  # entered but no command along the curve: not a pass
-                # nor is the way there kept: the next try starts from where this one did
+            if len(pass_states) == 1 or (
+                _new_coverage_mm(curve, passes, float(ps.min()), float(ps.max())) < GAP_REPORTED_MM
+                and abs(finish - begin) > GAP_REPORTED_MM
+            ):
+                # entered but no command along the curve, or commands that add less to what
+                # the passes cover than a stretch left untraced is reported for (the SO-100's
+                # circle: entered where a break lay ahead, 0.06 mm in two commands, all but
+                # 0.01 mm covered already): not a pass, nor is the way there kept: the next
+                # try starts from where this one did
                 del states[here + 1 :]
                 transits.pop()
                 rest = _rest_of_arc(arc, piece, s_reached, made_pass=False)
