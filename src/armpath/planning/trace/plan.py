@@ -282,17 +282,18 @@ def plan_trace(
             fixed = run
         if not run.better_than(fixed, opts.tolerance_mm, curve):
             run = fixed
-    breaks = [p for p in run.passes[1:] if not p.backward]
-    if all_round and breaks and not any(p.backward for p in run.passes[:1]):
-        # the pass once round broke off and the next began past the break; begun where that
-        # one began, the last pass runs on to the break instead of a pass of its own covering
-        # what lay before the first one's beginning
+    left = _gaps_between_passes(arcs, run.passes, run.not_traced, curve.length)
+    if all_round and len(run.passes) > 1 and left and not any(p.backward for p in run.passes):
+        # the pass once round broke off and the next began past the break; begun where the
+        # longest stretch left ends, the last pass runs on to that stretch instead of a pass
+        # of its own covering what lay before the first one's beginning
         deadline = current_deadline()
         if deadline is None or deadline.remaining > _RETRACE_TIME_SHARE * (
             time.monotonic() - began
         ):
-            a1 = float(curve.wrap(breaks[0].start_mm))
-            say(f"tracing again once round from {a1:.1f} mm, where a pass began past a break")
+            longest = max(left, key=lambda gap: gap[0].length_mm)[0]
+            a1 = float(curve.wrap(longest.end_mm))
+            say(f"tracing again once round from {a1:.1f} mm, where the longest stretch left ends")
             try:
                 again = _trace_arcs(
                     arm, world, reach, start, [CurveArc(a1, a1 + curve.length)], overlap, opts, say
@@ -768,12 +769,12 @@ class _Tracing:
 
     def better_than(self, other: _Tracing, slack_mm: float, curve: Curve) -> bool:
         """Whether this tracing of the same arcs of ``curve`` is the one to keep: fewer
-        commands where it covers no less than ``other`` less ``slack_mm``, else more
-        covered."""
+        commands (then fewer passes) where it covers no less than ``other`` less ``slack_mm``,
+        else more covered."""
         mine, theirs = self.covered_mm(curve), other.covered_mm(curve)
         if abs(mine - theirs) > slack_mm:
             return mine > theirs
-        return len(self.states) < len(other.states)
+        return (len(self.states), len(self.passes)) < (len(other.states), len(other.passes))
 
 
 def _new_coverage_mm(

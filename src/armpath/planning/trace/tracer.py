@@ -39,6 +39,7 @@ from armpath.kinematics import (
     tool_position,
 )
 from armpath.model.lattice import unique_states
+from armpath.planning.bounds.lattice_goals import lattice_goal_states
 from armpath.planning.trace.family import CurveFamily
 from armpath.planning.trace.reference import Piece
 
@@ -122,6 +123,13 @@ _LOOKAHEAD = 6
 #: back and turns toward the most slack instead, at most :data:`_MAX_BACKTRACKS` times a pass.
 _BACKTRACK_WITHIN_MM = 5.0
 _MAX_BACKTRACKS = 3
+#: Where no command near the reference continues a pass (:meth:`Tracer._bridge`): the curve
+#: points ahead, up to this far (mm) and at least this far apart (mm; twice the tolerance
+#: where that is more), near which every lattice state one command away is listed, and the
+#: most states listed near one point.
+_BRIDGE_REACH_MM = 12.0
+_BRIDGE_SPACING_MM = 0.2
+_BRIDGE_STATES = 20_000
 #: Share of a pass that is also traced from its goal back toward where it begins (its *end
 #: chain*, :meth:`Tracer.end_chain`): the pass then follows the chain's joint path and finishes
 #: along it, reversed, from where a command reaches it. Traced into the tight end of its
@@ -423,6 +431,55 @@ class Tracer:
             if value > best_value + 1e-9:
                 best, best_value = (q1, s1), value
         return best
+
+    def _bridge(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
+        """Where no command near the reference continues the pass: of every lattice state one
+        command from ``qk`` that puts the tool point within the band of a curve point ahead
+        (listed completely by :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`
+        about points :data:`_BRIDGE_SPACING_MM` apart up to :data:`_BRIDGE_REACH_MM` ahead,
+        farthest first), the one whose command is valid (:meth:`valid_ends`) and gets
+        farthest; None where none is. A coarse lattice leaves stretches of the curve with no
+        state near (the SO-100's pan joint, 0.32 mm a tick across a circle where it turns
+        back), which the reference's neighbourhood may not cross and one command can."""
+        sign = 1.0 if goal >= sk else -1.0
+        span = min(_BRIDGE_REACH_MM, abs(goal - sk))
+        spacing = max(_BRIDGE_SPACING_MM, 2.0 * self.tol)
+        if span <= _MIN_ADVANCE_MM:
+            return None
+        most = np.asarray(self.grid.max_ticks, dtype=np.int64)
+        tick = np.asarray(self.grid.tick, dtype=np.float64)
+        with np.errstate(invalid="ignore"):
+            lowest = np.where(
+                np.isfinite(self.arm.lower), np.ceil(self.arm.lower / tick - 1e-9), -1e15
+            )
+            highest = np.where(
+                np.isfinite(self.arm.upper), np.floor(self.arm.upper / tick + 1e-9), 1e15
+            )
+        lower = np.maximum(qk - most, lowest).astype(np.int64)[self.tip]
+        upper = np.minimum(qk + most, highest).astype(np.int64)[self.tip]
+        if np.any(lower > upper):
+            return None
+        unit = self.arm.mm_per_unit
+        for advance in np.arange(span, _MIN_ADVANCE_MM, -spacing):
+            check_time("tracing the curve")
+            s1 = sk + sign * float(advance)
+            found = lattice_goal_states(
+                self.arm,
+                self.target(s1)[0] / unit,
+                self.band_share * self.tol / unit,
+                self.tip,
+                np.asarray(qk, dtype=np.int64),
+                lower,
+                upper,
+                max_states=_BRIDGE_STATES,
+            )
+            if found.ticks.shape[0] == 0:
+                continue
+            cand, s_end = self.valid_ends(qk, sk, found.ticks, goal)
+            if cand.shape[0]:
+                k = int(np.argmax(sign * s_end))
+                return _frozen(cand[k]), float(s_end[k])
+        return None
 
     def _options(self, qk: IntArray, sk: float, goal: float) -> list[tuple[IntArray, float]]:
         """:meth:`_find_options`, once per state and arc lengths."""
@@ -738,6 +795,8 @@ class Tracer:
                 joins.append((len(states) + i, list(states)))
             check_time(f"tracing {self.arc.start_mm:.1f}..{self.arc.end_mm:.1f} mm of the curve")
             nxt = self.step(qk, sk, goal)
+            if nxt is None:
+                nxt = self._bridge(qk, sk, goal)
             if nxt is None:
                 if (
                     backtracks == _MAX_BACKTRACKS
