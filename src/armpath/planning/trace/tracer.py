@@ -126,10 +126,12 @@ _MAX_BACKTRACKS = 3
 #: Where no command near the reference continues a pass (:meth:`Tracer._bridge`): the curve
 #: points ahead, up to this far (mm) and at least this far apart (mm; twice the tolerance
 #: where that is more), near which every lattice state one command away is listed, and the
-#: most states listed near one point.
+#: most states and boxes of the listing near one point (about a tenth of a second; past it
+#: the states found so far are the candidates).
 _BRIDGE_REACH_MM = 12.0
 _BRIDGE_SPACING_MM = 0.2
 _BRIDGE_STATES = 20_000
+_BRIDGE_BOXES = 500_000
 #: Share of a pass that is also traced from its goal back toward where it begins (its *end
 #: chain*, :meth:`Tracer.end_chain`): the pass then follows the chain's joint path and finishes
 #: along it, reversed, from where a command reaches it. Traced into the tight end of its
@@ -435,12 +437,13 @@ class Tracer:
     def _bridge(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """Where no command near the reference continues the pass: of every lattice state one
         command from ``qk`` that puts the tool point within the band of a curve point ahead
-        (listed completely by :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`
-        about points :data:`_BRIDGE_SPACING_MM` apart up to :data:`_BRIDGE_REACH_MM` ahead,
-        farthest first), the one whose command is valid (:meth:`valid_ends`) and gets
-        farthest; None where none is. A coarse lattice leaves stretches of the curve with no
-        state near (the SO-100's pan joint, 0.32 mm a tick across a circle where it turns
-        back), which the reference's neighbourhood may not cross and one command can."""
+        (listed by :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states` about
+        points :data:`_BRIDGE_SPACING_MM` apart up to :data:`_BRIDGE_REACH_MM` ahead, farthest
+        first; completely unless :data:`_BRIDGE_BOXES` are spent), the one whose command is
+        valid (:meth:`valid_ends`) and gets farthest; None where none is. A coarse lattice
+        leaves stretches of the curve with no state near (the SO-100's pan joint, 0.32 mm a
+        tick across a circle where it turns back), which the reference's neighbourhood may
+        not cross and one command can."""
         sign = 1.0 if goal >= sk else -1.0
         span = min(_BRIDGE_REACH_MM, abs(goal - sk))
         spacing = max(_BRIDGE_SPACING_MM, 2.0 * self.tol)
@@ -471,6 +474,7 @@ class Tracer:
                 np.asarray(qk, dtype=np.int64),
                 lower,
                 upper,
+                max_boxes=_BRIDGE_BOXES,
                 max_states=_BRIDGE_STATES,
             )
             if found.ticks.shape[0] == 0:
