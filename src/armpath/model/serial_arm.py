@@ -650,6 +650,16 @@ class SerialArm:
         return np.array([j.limits[1] for j in self.joints])
 
     @property
+    def tick_limits(self) -> tuple[FloatArray, FloatArray]:
+        """The lowest and highest lattice tick of each joint within its limits (whole numbers
+        as floats; ``-inf`` / ``inf`` where unlimited)."""
+        tick = np.asarray(self.lattice.tick, dtype=np.float64)
+        with np.errstate(invalid="ignore"):
+            lowest = np.where(np.isfinite(self.lower), np.ceil(self.lower / tick - 1e-9), -np.inf)
+            highest = np.where(np.isfinite(self.upper), np.floor(self.upper / tick + 1e-9), np.inf)
+        return lowest, highest
+
+    @property
     def size(self) -> float:
         """A length of the arm's order (length unit): the sum of its fixed offsets (each
         joint's from the one before, the tool's from the flange), at least 1."""

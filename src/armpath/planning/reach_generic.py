@@ -437,10 +437,7 @@ def lattice_bound(
             np.clip(q, arm.lower, arm.upper),
         )
     reach = (plan_commands - 1) * np.asarray(grid.max_ticks, dtype=np.int64)
-    tick = np.asarray(grid.tick, dtype=np.float64)
-    with np.errstate(invalid="ignore"):
-        lowest = np.where(np.isfinite(arm.lower), np.ceil(arm.lower / tick - 1e-9), -np.inf)
-        highest = np.where(np.isfinite(arm.upper), np.floor(arm.upper / tick + 1e-9), np.inf)
+    lowest, highest = arm.tick_limits
     box_lower = np.maximum(start - reach, lowest).astype(np.int64)  # ticks, every joint
     box_upper = np.minimum(start + reach, highest).astype(np.int64)
     lower, upper = box_lower[tip], box_upper[tip]

@@ -260,9 +260,9 @@ def whole_range_ticks(arm: SerialArm, tip: NDArray[np.bool_]) -> tuple[IntArray,
     whole = np.abs(turn - np.round(turn)) <= 1e-6
     if np.any(~bounded & ~(revolute & whole)):
         return None
-    with np.errstate(invalid="ignore"):
-        lower = np.ceil(np.where(bounded, lower_limit, -np.pi) / tick - 1e-9).astype(np.int64)
-        upper = np.floor(np.where(bounded, upper_limit, np.pi) / tick + 1e-9).astype(np.int64)
+    lowest, highest = (ticks[index] for ticks in arm.tick_limits)
+    lower = np.where(bounded, lowest, np.ceil(-np.pi / tick - 1e-9)).astype(np.int64)
+    upper = np.where(bounded, highest, np.floor(np.pi / tick + 1e-9)).astype(np.int64)
     turns = revolute & whole
     upper = np.where(
         turns, np.minimum(upper, lower + np.round(turn).astype(np.int64) - 1), upper
@@ -286,14 +286,7 @@ def lattice_state_exists(
     ranges = whole_range_ticks(arm, tip)
     if ranges is None:
         return None
-    tick = np.asarray(arm.lattice.tick, dtype=np.float64)
-    with np.errstate(invalid="ignore"):
-        held = np.clip(
-            0.0,
-            np.nan_to_num(arm.lower / tick, neginf=-1e18),
-            np.nan_to_num(arm.upper / tick, posinf=1e18),
-        )
-    fixed = np.ceil(held - 1e-9).astype(np.int64)
+    fixed = np.clip(0.0, *arm.tick_limits).astype(np.int64)  # the tick nearest 0 within them
     found = lattice_goal_states(
         arm,
         np.asarray(target, dtype=np.float64),

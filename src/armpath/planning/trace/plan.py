@@ -282,8 +282,9 @@ def plan_trace(
             fixed = run
         if not run.better_than(fixed, opts.tolerance_mm, curve):
             run = fixed
-    left = _gaps_between_passes(arcs, run.passes, run.not_traced, curve.length)
-    if all_round and len(run.passes) > 1 and left and not any(p.backward for p in run.passes):
+    broken = all_round and len(run.passes) > 1 and not any(p.backward for p in run.passes)
+    left = _gaps_between_passes(arcs, run.passes, run.not_traced, curve.length) if broken else []
+    if left:
         # the pass once round broke off and the next began past the break; begun where the
         # longest stretch left ends, the last pass runs on to that stretch instead of a pass
         # of its own covering what lay before the first one's beginning

@@ -450,14 +450,7 @@ class Tracer:
         if span <= _MIN_ADVANCE_MM:
             return None
         most = np.asarray(self.grid.max_ticks, dtype=np.int64)
-        tick = np.asarray(self.grid.tick, dtype=np.float64)
-        with np.errstate(invalid="ignore"):
-            lowest = np.where(
-                np.isfinite(self.arm.lower), np.ceil(self.arm.lower / tick - 1e-9), -1e15
-            )
-            highest = np.where(
-                np.isfinite(self.arm.upper), np.floor(self.arm.upper / tick + 1e-9), 1e15
-            )
+        lowest, highest = self.arm.tick_limits
         lower = np.maximum(qk - most, lowest).astype(np.int64)[self.tip]
         upper = np.minimum(qk + most, highest).astype(np.int64)[self.tip]
         if np.any(lower > upper):
