@@ -5,7 +5,7 @@ import pytest
 
 import independent
 from armpath.errors import InvalidInputError
-from armpath.geometry.curves import ParametricCurve, Polyline, seed_crack
+from armpath.geometry.curves import CircularArc, ParametricCurve, Polyline, seed_crack
 from armpath.geometry.expressions import parse_expression
 from armpath.scenes import seed_scene
 
@@ -216,3 +216,43 @@ def test_too_deeply_nested_parentheses_are_one_short_error():
     said = str(err.value)
     assert "at most 200 levels of parentheses" in said and len(said) < 200
     assert float(parse_expression("(" * 150 + "t" + ")" * 150)(np.array([2.0]))[0]) == 2.0
+
+
+def test_a_circle_and_its_arcs_lie_where_a_rotation_about_the_normal_puts_them():
+    """A circle given by centre, radius and normal (a tilted one, from a start direction not in
+    its plane): every point lies at the radius in the plane, the length is 2 pi r, and the point
+    a quarter of the way round is the start rotated 90 deg about the normal (scipy's rotation);
+    an arc of 90 deg is open, pi r / 2 long, and ends there."""
+    from scipy.spatial.transform import Rotation
+
+    c, n = np.array([400.0, -50.0, 250.0]), np.array([1.0, 2.0, 2.0]) / 3.0
+    circle = CircularArc("ring", c, 30.0, 3.0 * n, start_direction=np.array([0.0, 0.0, 1.0]))
+    p = circle.sample(721)
+    np.testing.assert_allclose(np.linalg.norm(p - c, axis=1), 30.0, atol=1e-9)
+    np.testing.assert_allclose((p - c) @ n, 0.0, atol=1e-9)
+    assert circle.closed and circle.length == pytest.approx(2 * np.pi * 30.0, rel=1e-6)
+    z = np.array([0.0, 0.0, 1.0])
+    start = c + 30.0 * (z - (z @ n) * n) / np.linalg.norm(z - (z @ n) * n)
+    quarter = c + Rotation.from_rotvec(np.pi / 2 * n).apply(start - c)
+    np.testing.assert_allclose(circle.points(np.array([0.0, 0.25])), [start, quarter], atol=1e-9)
+    arc = CircularArc("arc", c, 30.0, n, start_direction=np.array([0.0, 0.0, 1.0]), sweep_deg=90)
+    assert not arc.closed and arc.length == pytest.approx(np.pi * 30.0 / 2, rel=1e-6)
+    np.testing.assert_allclose(arc.at_arc_length(np.array([arc.length])), [quarter], atol=1e-6)
+    d, s = arc.closest(np.array([quarter + 0.1 * n]))
+    assert d[0] == pytest.approx(0.1, abs=1e-6) and s[0] == pytest.approx(arc.length, abs=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"radius": 0.0}, "the radius must be above 0"),
+        ({"radius": float("nan")}, "the radius must be above 0"),
+        ({"normal": np.zeros(3)}, "the normal has no direction"),
+        ({"sweep_deg": 400.0}, "the sweep must be above 0 and at most 360 deg, got 400"),
+        ({"start_direction": np.array([0.0, 0.0, -2.0])}, "the start direction lies along"),
+    ],
+)
+def test_a_circle_that_is_no_circle_is_refused(kwargs, message):
+    given = {"radius": 10.0, "normal": np.array([0.0, 0.0, 1.0]), **kwargs}
+    with pytest.raises(InvalidInputError, match=message):
+        CircularArc("c", np.zeros(3), **given)

@@ -283,3 +283,32 @@ def test_a_key_written_twice_true_for_a_number_and_a_device_for_a_mesh_are_refus
     device.write_text('name = "d"\n[[obstacles]]\ntype = "mesh"\nname = "z"\nfile = "/dev/null"\n')
     with pytest.raises((SceneError, InvalidInputError), match=r"'/dev/null' is not a regular file"):
         load_scene(device)
+
+
+def test_a_scene_circle_is_the_parametric_circle_written_out(tmp_path):
+    """``type = "circle"`` in a scene: the same points as the parametric circle a user would
+    otherwise write (x = cx + r cos t, y = cy + r sin t), closed, its definition in the result;
+    an arc of it (``sweep_deg``) is open and ends where the parametric one does."""
+    from armpath.geometry.curves import ParametricCurve
+
+    f = tmp_path / "c.toml"
+    for sweep, t1 in ((None, "6.283185307179586"), (120, "2.0943951023931953")):
+        extra = "" if sweep is None else f", sweep_deg = {sweep}"
+        f.write_text(
+            GOOD + '[tasks.trace]\ncurve = { type = "circle", name = "ring", '
+            f"center_mm = [330, 60, 260], radius_mm = 25{extra} }}\n"
+        )
+        curve = load_scene(f).trace_curve()
+        written = ParametricCurve("p", "330 + 25*cos(t)", "60 + 25*sin(t)", "260", 0.0, float(t1))
+        u = np.linspace(0.0, 1.0, 97)
+        np.testing.assert_allclose(curve.points(u), written.points(u), atol=1e-9)
+        assert curve.closed == (sweep is None) == written.closed
+        assert curve.length == pytest.approx(written.length, rel=1e-9)
+        assert curve.describe()["radius_mm"] == 25.0 and curve.describe()["type"] == "circle"
+
+
+def test_a_scene_circle_with_no_radius_names_it(tmp_path):
+    f = tmp_path / "c.toml"
+    f.write_text(GOOD + '[tasks.trace]\ncurve = { type = "circle", center_mm = [0, 0, 0] }\n')
+    with pytest.raises(SceneError, match=r"tasks\.trace\.curve\.circle\.radius_mm: Field required"):
+        load_scene(f)

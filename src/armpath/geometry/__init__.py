@@ -6,7 +6,14 @@ from typing import TYPE_CHECKING, TypeGuard
 from armpath.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from armpath.geometry.curves import ConeSection, Curve, ParametricCurve, Polyline, seed_crack
+    from armpath.geometry.curves import (
+        CircularArc,
+        ConeSection,
+        Curve,
+        ParametricCurve,
+        Polyline,
+        seed_crack,
+    )
     from armpath.geometry.expressions import parse_expression
     from armpath.geometry.mesh import MeshObstacle
     from armpath.geometry.primitives import (
@@ -28,6 +35,7 @@ __getattr__, __dir__ = lazy_exports(
     __name__,
     {
         "curves": (
+            "CircularArc",
             "ConeSection",
             "Curve",
             "ParametricCurve",
@@ -69,6 +77,7 @@ def is_mesh_obstacle(obstacle: object) -> TypeGuard["MeshObstacle"]:
 __all__ = [
     "Box",
     "Capsule",
+    "CircularArc",
     "ClearancePair",
     "CollisionWorld",
     "ConeSection",

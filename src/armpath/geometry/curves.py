@@ -8,6 +8,8 @@ scene). :class:`Curve` adds, for all of them, arc-length parametrization (``leng
 * :class:`ParametricCurve` — ``x(t), y(t), z(t)`` given as safe expressions
   (:mod:`armpath.geometry.expressions`) over ``[t0, t1]``.
 * :class:`Polyline` — straight pieces through vertices, open or closed.
+* :class:`CircularArc` — a circle, or an arc of one, about a centre in the plane normal to a
+  given direction.
 * :class:`ConeSection` — the intersection of one conical (or cylindrical) face of a solid of
   revolution with a plane, in closed form: around the axis at angle ``phi`` the face has radius
   ``R0 + R1 z``, so the plane fixes ``z(phi)`` by a linear equation. The seed crack is the
@@ -304,6 +306,85 @@ class Polyline(Curve):
             "name": self.name,
             "vertices": self.vertices[:-1].tolist() if self.closed else self.vertices.tolist(),
             "closed": self.closed,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class CircularArc(Curve):
+    """A circle of ``radius`` (mm) about ``center`` in the plane normal to ``normal``, or an arc
+    of it: from ``start_direction`` (projected onto the plane; None: the world x axis, else y,
+    whichever lies farther from the normal) round ``sweep_deg`` right-handed about ``normal``.
+    A sweep of 360 deg is a closed circle: a pass may begin anywhere on it."""
+
+    name: str
+    center: FloatArray
+    radius: float
+    normal: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    start_direction: FloatArray | None = None
+    sweep_deg: float = 360.0
+    closed: bool = field(init=False, default=True)
+    _axes: tuple[FloatArray, FloatArray] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        c = np.array(self.center, dtype=np.float64)
+        n = np.array(self.normal, dtype=np.float64)
+        if c.shape != (3,) or n.shape != (3,) or not np.all(np.isfinite(np.r_[c, n])):
+            raise InvalidInputError(
+                f"circle {self.name!r}: need a finite centre and normal (x, y, z)"
+            )
+        if not np.linalg.norm(n) > 1e-12:
+            raise InvalidInputError(f"circle {self.name!r}: the normal has no direction")
+        n /= np.linalg.norm(n)
+        r = float(self.radius)
+        if not (np.isfinite(r) and 0.0 < r <= MAX_COORDINATE_MM):
+            raise InvalidInputError(
+                f"circle {self.name!r}: the radius must be above 0 and at most "
+                f"{MAX_COORDINATE_MM:g} mm, got {r:g}"
+            )
+        sweep = float(self.sweep_deg)
+        if not (np.isfinite(sweep) and 0.0 < sweep <= 360.0):
+            raise InvalidInputError(
+                f"circle {self.name!r}: the sweep must be above 0 and at most 360 deg, "
+                f"got {sweep:g}"
+            )
+        if self.start_direction is None:
+            helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        else:
+            helper = np.array(self.start_direction, dtype=np.float64)
+            if helper.shape != (3,) or not np.all(np.isfinite(helper)):
+                raise InvalidInputError(
+                    f"circle {self.name!r}: the start direction must be a finite (x, y, z)"
+                )
+        e1 = helper - (helper @ n) * n
+        if not np.linalg.norm(e1) > 1e-9 * max(float(np.linalg.norm(helper)), 1e-300):
+            raise InvalidInputError(
+                f"circle {self.name!r}: the start direction lies along the normal; give one "
+                "in the circle's plane"
+            )
+        e1 /= np.linalg.norm(e1)
+        for name, value in (("center", c), ("normal", n), ("radius", r), ("sweep_deg", sweep)):
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "_axes", (e1, np.cross(n, e1)))
+        object.__setattr__(self, "closed", sweep == 360.0)
+
+    def points(self, u: ArrayLike) -> FloatArray:
+        phi = np.radians(self.sweep_deg) * np.asarray(u, dtype=np.float64)
+        e1, e2 = self._axes
+        ring = np.cos(phi)[..., None] * e1 + np.sin(phi)[..., None] * e2
+        return np.asarray(self.center + self.radius * ring)
+
+    def parameter_text(self, u: float) -> str:
+        return f"{u * self.sweep_deg:.1f} deg round from its start"
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "type": "circle",
+            "name": self.name,
+            "center_mm": self.center.tolist(),
+            "radius_mm": self.radius,
+            "normal": self.normal.tolist(),
+            "start_direction": self._axes[0].tolist(),
+            "sweep_deg": self.sweep_deg,
         }
 
 

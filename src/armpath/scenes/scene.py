@@ -12,10 +12,11 @@ from numpy.typing import NDArray
 
 from armpath.errors import InvalidInputError, SceneError
 from armpath.geometry import CollisionWorld, HollowFrustum, SolidOfRevolution, WallThickness
-from armpath.geometry.curves import Curve, ParametricCurve, Polyline, plane_section
+from armpath.geometry.curves import CircularArc, Curve, ParametricCurve, Polyline, plane_section
 from armpath.scenes.build import rebuild_frustum
 from armpath.scenes.schema import (
     ArmSpec,
+    CircleCurveSpec,
     ParametricCurveSpec,
     PlaneSectionCurveSpec,
     SpotweldTaskSpec,
@@ -126,6 +127,12 @@ class Scene:
                 )
             if isinstance(spec, ParametricCurveSpec):
                 return ParametricCurve(spec.name, spec.x, spec.y, spec.z, spec.t[0], spec.t[1])
+            if isinstance(spec, CircleCurveSpec):
+                return CircularArc(
+                    spec.name, np.array(spec.center_mm), spec.radius_mm, np.array(spec.normal),
+                    None if spec.start_direction is None else np.array(spec.start_direction),
+                    spec.sweep_deg,
+                )  # fmt: skip
             return Polyline(spec.name, np.array(spec.points_mm), spec.closed)
         except SceneError:
             raise

@@ -271,6 +271,20 @@ class ParametricCurveSpec(_FiniteVec):
     t: tuple[float, float] = (0.0, 1.0)
 
 
+class CircleCurveSpec(_FiniteVec):
+    """A circle of ``radius_mm`` about ``center_mm`` in the plane normal to ``normal``, or an
+    arc of it: from ``start_direction`` (None: the world x axis, or y where x lies near the
+    normal) round ``sweep_deg`` right-handed about ``normal``."""
+
+    type: Literal["circle"]
+    name: str = "curve"
+    center_mm: Vec3
+    radius_mm: float = Field(gt=0)
+    normal: Vec3 = (0.0, 0.0, 1.0)
+    start_direction: Vec3 | None = None
+    sweep_deg: float = Field(default=360.0, gt=0, le=360)
+
+
 class PolylineCurveSpec(_FiniteVec):
     type: Literal["polyline"]
     name: str = "curve"
@@ -279,7 +293,8 @@ class PolylineCurveSpec(_FiniteVec):
 
 
 CurveSpec = Annotated[
-    PlaneSectionCurveSpec | ParametricCurveSpec | PolylineCurveSpec, Field(discriminator="type")
+    PlaneSectionCurveSpec | ParametricCurveSpec | CircleCurveSpec | PolylineCurveSpec,
+    Field(discriminator="type"),
 ]
 
 
