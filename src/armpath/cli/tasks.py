@@ -181,7 +181,8 @@ def _reach_summary(result: ReachResult, arm: SerialArm, scene: Scene) -> Table:
     span = np.abs(seq.final_ticks - seq.start_ticks) * grid.tick_display
     if grid.is_default:
         change = (
-            f"{span.max(initial=0.0):.1f} {units} (least possible {lb.max_joint_change_deg:.3f})"
+            f"{span.max(initial=0.0):.1f} {units} (least possible off the lattice "
+            f"{lb.max_joint_change_deg:.2f} {units})"
         )
     else:  # the largest of each unit's joints (a SCARA's turns in deg, its quill in mm)
         parts = []
