@@ -651,3 +651,20 @@ def test_a_tip_frame_across_the_flange_is_charted_along_the_flange():
     rule = AxisRule.of((0.0, 0.0, -1.0), 20.0)
     ruled = curve_family(ee, CollisionWorld(()), fams[0].curve, rule)
     assert ruled.arm.approach_axis == ee.approach_axis and ruled.turns_per_direction > 1
+
+
+def test_model_show_says_where_the_last_joint_turns_a_tool_frame_across_it():
+    """The UR5 file's ee_link: its z (the approach axis by default) lies across the flange,
+    which the last joint turns about the tip frame's x (as Pinocchio's kinematics of the file
+    find in the test above); ``model show`` says so, and says nothing of it for tool0."""
+    path = robot_file(UR5)
+    said = {}
+    for tip in ("ee_link", "tool0"):
+        r = subprocess.run(
+            [sys.executable, "-m", "armpath", "model", "show", path, "--tip-link", tip],
+            capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert r.returncode == 0, r.stderr
+        said[tip] = " ".join(r.stdout.split())
+    assert "the last joint turns about 1 0 0 of it" in said["ee_link"]
+    assert "turns about" not in said["tool0"] and "approach axis 0 0 1" in said["tool0"]

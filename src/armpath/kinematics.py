@@ -382,6 +382,20 @@ def tool_point_joints(arm: SerialArm) -> NDArray[np.bool_]:
     return joints_that_move(arm, tool_position, np.clip(q, arm.lower, arm.upper))
 
 
+def last_axis_in_tool(arm: SerialArm) -> FloatArray | None:
+    """The last joint's axis in the tool frame (a unit vector, fixed: the tool rides on the last
+    link), pointing from the joint to the tool point where that lies along it, or None for a
+    prismatic last joint."""
+    if arm.joints[-1].kind is not JointKind.REVOLUTE:
+        return None
+    F = forward_frames(arm, arm.home)
+    n = arm.n_joints
+    axis = F[n, :3, :3] @ np.asarray(arm.joints[-1].axis, dtype=np.float64)
+    along = float((F[n + 1, :3, 3] - F[n, :3, 3]) @ axis)
+    c = F[n + 1, :3, :3].T @ axis
+    return np.asarray((-c if along < 0.0 else c) / np.linalg.norm(c), dtype=np.float64)
+
+
 def self_motion_axis_rates(arm: SerialArm, q: ArrayLike, joints: ArrayLike) -> FloatArray:
     """How fast the tool's approach axis turns along the tool point's self-motion at each
     configuration ``q (M, n)``: the singular values ``(M, k - 3)`` (rad of the axis per rad of

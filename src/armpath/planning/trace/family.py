@@ -42,8 +42,8 @@ from armpath.ik.seed_position import family_from_wrist
 from armpath.ik.solve import complete_solver
 from armpath.ik.target import DEFAULT_AXIS_TOLERANCE_DEG, ToolTarget, unit_vector
 from armpath.kinematics import (
-    forward_frames,
     landmark_positions,
+    last_axis_in_tool,
     self_motion_axis_rates,
     tool_point_joints,
     tool_pose,
@@ -936,20 +936,6 @@ def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = No
 #: How near 1 the cosine between the tool's approach axis and the last joint's axis must be for
 #: the two to count as one.
 _ALONG_AXIS = 1.0 - 1e-9
-
-
-def last_axis_in_tool(arm: SerialArm) -> FloatArray | None:
-    """The last joint's axis in the tool frame (a unit vector, fixed: the tool rides on the last
-    link), pointing from the joint to the tool point where that lies along it, or None for a
-    prismatic last joint."""
-    if arm.joints[-1].kind is not JointKind.REVOLUTE:
-        return None
-    F = forward_frames(arm, arm.home)
-    n = arm.n_joints
-    axis = F[n, :3, :3] @ np.asarray(arm.joints[-1].axis, dtype=np.float64)
-    along = float((F[n + 1, :3, 3] - F[n, :3, 3]) @ axis)
-    c = F[n + 1, :3, :3].T @ axis
-    return np.asarray((-c if along < 0.0 else c) / np.linalg.norm(c), dtype=np.float64)
 
 
 def charting_arm(arm: SerialArm) -> SerialArm:
