@@ -465,8 +465,8 @@ def _plan_summary(doc: dict[str, Any], title: str) -> Table:
     else:
         count = (
             f"{doc['n_commands']}  (a direct motion to its goal state needs "
-            f"{doc['direct_commands']}; armpath reach bounds the commands to the point: "
-            "proven for the seed arm, the best found for others)"
+            f"{doc['direct_commands']}; armpath reach finds the fewest to the point and "
+            "proves it where its listing of the lattice states near the point completes)"
         )
     table.add_row("commands", count)
     if "error_mm" in doc:
