@@ -204,6 +204,14 @@ def trace_bound(
         path_u = np.asarray(path_q, dtype=np.float64)[:, sampler.tip] / sampler.step
         turning = turning_layers(spans_mm, np.asarray(path_mm, dtype=np.float64), path_u)
         placements.append(("where the plan's joint path turns", turning))
+    def said(placed: str) -> Callable[[str], None] | None:
+        """Progress of the search of one placement, named where there are two."""
+        if on_progress is None or len(placements) == 1:
+            return on_progress
+        report = on_progress
+        head = "bounding the commands:"
+        return lambda msg: report(msg.replace(head, f"{head[:-1]}, layers {placed}:", 1))
+
     started = []
     for placed, s_layers in placements:
         relaxation: Chain | Loop
@@ -229,7 +237,7 @@ def trace_bound(
             max_samples=max_samples,
             passages=ways,
         )
-        first = search.run(1, on_progress, upper=upper_commands)
+        first = search.run(1, said(placed), upper=upper_commands)
         if first is None:
             raise PlanningError("a traced span has no family member within the joint limits")
         started.append((first, search, placed, s_all))
@@ -237,6 +245,7 @@ def trace_bound(
     # against 123.1 evenly, then 133.8; the UR5 cell's seam, a loop: 80.8 evenly against
     # 56.2, then 103.3)
     found, search, placed, s_all = max(started, key=lambda x: x[0].value)
+    say = said(placed)
     if len(placements) > 1:
         placed += (
             ": of the points evenly spaced and where the plan's joint path turns, those whose "
@@ -248,7 +257,7 @@ def trace_bound(
     if rounds > 1 and found.clear_path > enough:
         # on from the first round's cells (pruned and split, not solved again); its result is
         # the best of every round, the first's included
-        found = search.run(rounds - 1, on_progress, upper=upper_commands, enough=enough) or found
+        found = search.run(rounds - 1, say, upper=upper_commands, enough=enough) or found
     return _bound(found, search, placed, s_all, with_errors, loop)
 
 
