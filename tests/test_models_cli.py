@@ -183,6 +183,41 @@ def test_cli_show_says_how_high_a_base_column_stands(tmp_path):
     assert "above the arm's foot" not in run_in_process(["model", "show", "ur5"], tmp_path).stdout
 
 
+def test_cli_show_of_a_scene_shows_its_arm_as_the_tasks_take_it(tmp_path):
+    """``model show --scene`` shows the scene's [arm] as built: the UR5 cell's pedestal base and
+    120 mm torch, in the model document whose tool pose equals the cell's arm's (the base and
+    tool applied by hand to the bare UR5 here); with a model, that model on the cell's base;
+    neither a model nor a scene is one error line."""
+    from pathlib import Path
+
+    from cli_in_process import run_in_process
+
+    cell = Path(__file__).resolve().parents[1] / "examples" / "ur5_cell.toml"
+    shown = " ".join(
+        run_in_process(["model", "show", "--scene", str(cell)], tmp_path).stdout.split()
+    )
+    assert "tool: 0 0 120 mm from the flange" in shown and "base at -150 0 250 mm" in shown
+    doc = json.loads(
+        run_in_process(["model", "show", "--scene", str(cell), "--json"], tmp_path).stdout
+    )
+    from armpath.model.catalog import resolve_model
+    from armpath.model.serialize import arm_from_dict
+
+    q = _random_q(resolve_model("ur5"), 5, 3)
+    bare = tool_pose(resolve_model("ur5"), q)
+    by_hand = bare.copy()
+    by_hand[:, :3, 3] += bare[:, :3, :3] @ np.array([0.0, 0.0, 120.0]) + [-150.0, 0.0, 250.0]
+    np.testing.assert_allclose(tool_pose(arm_from_dict(doc), q), by_hand, atol=1e-9)
+    puma = " ".join(
+        run_in_process(["model", "show", "puma560", "--scene", str(cell)], tmp_path).stdout.split()
+    )
+    assert "puma560" in puma and "base at -150 0 250 mm" in puma
+    r = run_in_process(["model", "show"], tmp_path)
+    assert r.returncode == 1 and r.stderr == (
+        "error: give a model (a built-in name or a robot file) or --scene\n"
+    )
+
+
 def test_an_empty_model_is_a_usage_error_and_a_folder_an_unknown_model(tmp_path):
     """--model "" was read as the robot file '.' that "does not exist": now every option given
     an empty value is a usage error; the folder '.' is no model."""

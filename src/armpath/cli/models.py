@@ -46,17 +46,41 @@ CONVENTION_OF = {"dh": "standard", "mdh": "modified"}
 
 @model_app.command("show")
 def show(
-    model: ModelArgument,
+    model: Annotated[
+        str | None,
+        typer.Argument(
+            help=f"A built-in model ({', '.join(BUILTIN_MODELS)}) or a robot file (.json, "
+            ".urdf). Default: the arm of --scene.",
+            show_default=False,
+        ),
+    ] = None,
     tip_link: TipLinkOption = None,
+    scene_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--scene",
+            help="Show the arm as this scene file's [arm] builds it (its base, tool, home and "
+            "lattice); with MODEL, that model on the scene's base, as the tasks take it.",
+        ),
+    ] = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print the model document.")] = False,
 ) -> None:
     """The model's joints (placement, axis, limits, command lattice), tool and base."""
+    from armpath.errors import InvalidInputError
     from armpath.export import json_text
     from armpath.model.catalog import resolve_model
     from armpath.model.serialize import arm_to_dict
 
     with _cli_errors():
-        arm = resolve_model(model, tip_link)
+        if scene_file is not None:
+            from armpath.scenes import load_scene
+            from armpath.scenes.arm import scene_arm
+
+            arm = scene_arm(load_scene(scene_file), model, tip_link)
+        elif model is None:
+            raise InvalidInputError("give a model (a built-in name or a robot file) or --scene")
+        else:
+            arm = resolve_model(model, tip_link)
         if json_out:
             typer.echo(json_text(arm_to_dict(arm)), nl=False)
             return
