@@ -396,6 +396,21 @@ def last_axis_in_tool(arm: SerialArm) -> FloatArray | None:
     return np.asarray((-c if along < 0.0 else c) / np.linalg.norm(c), dtype=np.float64)
 
 
+#: How near 1 the cosine between the tool's approach axis and the last joint's axis must be for
+#: the two to count as one.
+ALONG_AXIS_COS = 1.0 - 1e-9
+
+
+def last_axis_across_approach(arm: SerialArm) -> FloatArray | None:
+    """The last joint's axis in the tool frame (:func:`last_axis_in_tool`) where the tool's
+    approach axis lies across it (a URDF tip frame whose x is the flange's normal, z across
+    it), else None (the two are one axis, or the last joint is prismatic)."""
+    c = last_axis_in_tool(arm)
+    if c is None or abs(float(c @ np.asarray(arm.approach_axis))) > ALONG_AXIS_COS:
+        return None
+    return c
+
+
 def self_motion_axis_rates(arm: SerialArm, q: ArrayLike, joints: ArrayLike) -> FloatArray:
     """How fast the tool's approach axis turns along the tool point's self-motion at each
     configuration ``q (M, n)``: the singular values ``(M, k - 3)`` (rad of the axis per rad of

@@ -13,7 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from armpath.cli.common import TipLinkOption, _cli_errors, _to_display, app, out_console
-from armpath.kinematics import last_axis_in_tool
+from armpath.kinematics import last_axis_across_approach
 from armpath.model.catalog import BUILTIN_MODELS
 
 model_app = typer.Typer(
@@ -112,9 +112,9 @@ def show(
                 f" ({' '.join(f'{v + 0.0:.6g}' for v in tool[:3, 3])} {arm.length_unit} from "
                 "the last joint's frame; a scene's [arm] tool is given from the flange)"
             )
-        turn = last_axis_in_tool(arm)
+        turn = last_axis_across_approach(arm)
         across = ""
-        if turn is not None and abs(float(turn @ np.asarray(arm.approach_axis))) < 1.0 - 1e-9:
+        if turn is not None:
             # a URDF tip frame whose x is the flange's normal: a tool along its z sits across
             about = " ".join(f"{v + 0.0:.6g}" for v in np.round(turn, 9))
             across = (

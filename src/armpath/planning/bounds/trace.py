@@ -204,6 +204,7 @@ def trace_bound(
         path_u = np.asarray(path_q, dtype=np.float64)[:, sampler.tip] / sampler.step
         turning = turning_layers(spans_mm, np.asarray(path_mm, dtype=np.float64), path_u)
         placements.append(("where the plan's joint path turns", turning))
+
     def said(placed: str) -> Callable[[str], None] | None:
         """Progress of the search of one placement, named where there are two."""
         if on_progress is None or len(placements) == 1:

@@ -43,7 +43,7 @@ from armpath.ik.solve import complete_solver
 from armpath.ik.target import DEFAULT_AXIS_TOLERANCE_DEG, ToolTarget, unit_vector
 from armpath.kinematics import (
     landmark_positions,
-    last_axis_in_tool,
+    last_axis_across_approach,
     self_motion_axis_rates,
     tool_point_joints,
     tool_pose,
@@ -705,10 +705,7 @@ class GenericCurveFamily(CurveFamily):
         # and the tool axis is that axis (a tool axis across it, as a URDF's tip frame whose x
         # is the flange's normal may have, turns with the last joint: its turn is sampled);
         # there is none to sample when the point alone is solved
-        idle = not self.tip_joints[-1]
-        c = last_axis_in_tool(self.arm)
-        if idle and c is not None:
-            idle = abs(float(c @ np.asarray(self.arm.approach_axis))) > _ALONG_AXIS
+        idle = not self.tip_joints[-1] and last_axis_across_approach(self.arm) is None
         return 1 if idle or self._point_alone else self.rolls
 
     @cached_property
@@ -933,23 +930,19 @@ def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = No
     return np.stack([x, np.cross(dd, x), dd], axis=-1).reshape(-1, 3, 3)
 
 
-#: How near 1 the cosine between the tool's approach axis and the last joint's axis must be for
-#: the two to count as one.
-_ALONG_AXIS = 1.0 - 1e-9
-
-
 def charting_arm(arm: SerialArm) -> SerialArm:
-    """``arm`` with its approach axis along its last joint's axis (:func:`last_axis_in_tool`)
-    where that joint only turns the tool about the tool point but the approach axis lies
-    across it, else ``arm`` itself: for a family without an axis rule, whose tool directions
-    then chart the members of the joints that move the tool point one to one. A UR5's URDF
-    (its tip frame's x the flange's normal, z across it) charted by z: a tour's bound over
-    five welds was an estimate (41 of 88 members drawn at random lay outside every sample's
-    error box, by up to 21 commands); by the flange's normal it is proven. The approach
-    axis's only other use in a family without a rule is which way the tool may point at a
-    surface (into it): the last link lies along that axis behind the tool point."""
-    c, tip = last_axis_in_tool(arm), tool_point_joints(arm)
-    if c is None or tip[-1] or tip.sum() < 5 or abs(float(c @ arm.approach_axis)) > _ALONG_AXIS:
+    """``arm`` with its approach axis along its last joint's axis where that joint only turns
+    the tool about the tool point but the approach axis lies across it
+    (:func:`~armpath.kinematics.last_axis_across_approach`), else ``arm`` itself: for a family
+    without an axis rule, whose tool directions then chart the members of the joints that
+    move the tool point one to one. A UR5's URDF (its tip frame's x the flange's normal, z
+    across it) charted by z: a tour's bound over five welds was an estimate (41 of 88
+    members drawn at random lay outside every sample's error box, by up to 21 commands); by
+    the flange's normal it is proven. The approach axis's only other use in a family
+    without a rule is which way the tool may point at a surface (into it): the last link
+    lies along that axis behind the tool point."""
+    c, tip = last_axis_across_approach(arm), tool_point_joints(arm)
+    if c is None or tip[-1] or tip.sum() < 5:
         return arm  # (fewer than five joints: the point alone is solved, no direction charted)
     return replace(arm, approach_axis=(float(c[0]), float(c[1]), float(c[2])))
 
