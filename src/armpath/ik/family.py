@@ -104,10 +104,13 @@ class GenericFamily:
     def exact(self, q: FloatArray) -> BoolArray:
         """Rows that reach the target (to :data:`EXACT_FRACTION` of the arm's size) and keep the
         orientation rule (to 1e-9 rad) and the joint limits."""
+        return np.asarray(self.reaches(q) & self.arm.within_limits(q))
+
+    def reaches(self, q: FloatArray) -> BoolArray:
+        """Rows that reach the target (to :data:`EXACT_FRACTION` of the arm's size) and keep the
+        orientation rule (to 1e-9 rad), wherever the joint limits are."""
         pos, ang = self.residuals(q)
-        return np.asarray(
-            (pos <= EXACT_FRACTION * self.size) & (ang <= 1e-9) & self.arm.within_limits(q)
-        )
+        return np.asarray((pos <= EXACT_FRACTION * self.size) & (ang <= 1e-9))
 
     def samples(
         self,

@@ -23,7 +23,10 @@ The family is sampled over tool directions (:mod:`~armpath.planning.bounds.sampl
 sample stands for the members of the directions around it and carries a per-joint *sampling
 error*: the largest difference to the nearest member of each neighbouring direction (Delaunay
 neighbours on the sphere of directions), plus the joint change that moves the tool point by the
-tolerance (pseudo-inverse of the position Jacobian). Distances between samples are taken less
+tolerance (pseudo-inverse of the position Jacobian); a sample by a fold, where a neighbouring
+direction has fewer real solutions than its own and no member near it (two branches meet and
+end there, parting as the square root of the distance), adds half its difference to the
+sibling it meets. Distances between samples are taken less
 both samples' errors (:mod:`~armpath.planning.bounds.metric`), so the shortest path through the
 samples is, up to that error estimate, no longer than any path through the family. A sample is
 dropped only when no member of its cell can be clear: a link's slack to an obstacle is worse
@@ -45,8 +48,9 @@ exactly clear members of a fine sampling), the relaxations' programmes against b
 the plans.
 
 The assumption is also audited where a bound is computed: at up to six of its sites,
-members drawn another way (the tool point alone, solved from random starts) that are clear
-must each lie within some sample's error box (:meth:`FamilySampler.audit`). Where one does
+members drawn another way that are clear must each lie within some sample's error box
+(:meth:`FamilySampler.audit`): every solution of the arm's all-solutions IK at random tool
+frames, or where it has none, the tool point alone solved from random starts. Where one does
 not, the bound is reported as an estimate that says so: a five-joint SO-101's direction
 barely turns along one of its family's two dimensions, so the directions chart that
 dimension far too coarsely, and its welds' sampled bound, 45 commands, lay above a tour of

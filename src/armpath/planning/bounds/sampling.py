@@ -9,9 +9,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.geometry.primitives import Obstacle
+from armpath.geometry.primitives import Obstacle, orthonormal_frame
 from armpath.geometry.world import CollisionWorld, into_windows
-from armpath.ik.family import GenericFamily
+from armpath.ik.family import GenericFamily, shift_into_limits
+from armpath.ik.solve import complete_solver
 from armpath.ik.target import ToolTarget
 from armpath.jit import njit
 from armpath.kinematics import (
@@ -54,10 +55,19 @@ _DETECT_DIRECTIONS = fibonacci_directions(600)
 _DETECT_SPACING = float(np.sqrt(4.0 * np.pi / _DETECT_DIRECTIONS.shape[0]))
 #: Sampling error standing for "no neighbour has a member" (commands).
 _MISSING = 1e6
-#: Random starts from which members are drawn at each audited point (:meth:`FamilySampler.audit`).
+#: Random starts from which members are drawn at each audited point of an arm with no
+#: all-solutions IK (:meth:`FamilySampler.audit`).
 AUDIT_STARTS = 200
+#: Random tool frames at whose every IK solution members are drawn at each audited point of an
+#: arm with an all-solutions IK (:meth:`FamilySampler.audit`).
+AUDIT_FRAMES = 3000
+#: Rounds of random approach directions drawn to find :data:`AUDIT_FRAMES` ones the rule at a
+#: point allows (fewer frames are audited where it allows less than 1 / 50 of the sphere).
+_FRAME_ROUNDS = 50
 #: Most points of one bound that are audited (evenly spread among its sites).
 AUDIT_SITES = 6
+#: Most array elements of one chunk of :meth:`FamilySampler.beyond_boxes` (bounds its memory).
+_CHUNK_ELEMENTS = 2_000_000
 #: Commands by which a drawn member may lie outside every sample's error box before the audit
 #: counts it missed (rounding of the units).
 AUDIT_SLACK = 1e-6
@@ -160,6 +170,12 @@ class _Samples:
     tol_err: FloatArray
     slack: FloatArray
     isolated: BoolArray
+    #: per member, whether it lies within the joint limits (those outside are kept for their
+    #: neighbours' errors: the family goes on past the limits)
+    inside: BoolArray
+    #: per direction, the family's real solutions there, the joint limits ignored (-1: not
+    #: known; see :meth:`CurveFamily.solutions`)
+    solution_counts: IntArray
     caps: tuple[BlowUp, ...] = ()
 
     @staticmethod
@@ -174,6 +190,8 @@ class _Samples:
             tol_err=np.zeros((0, n_tip)),
             slack=np.zeros(0),
             isolated=np.zeros(0, dtype=bool),
+            inside=np.zeros(0, dtype=bool),
+            solution_counts=np.zeros(0, dtype=np.int64),
             caps=caps,
         )
 
@@ -269,16 +287,40 @@ def _sampling_errors(
     missing: float,
     branch_gap: float,
     own: bool,
+    solution_counts: IntArray,
 ) -> tuple[FloatArray, FloatArray]:  # pragma: no cover - compiled
     """Per sample and joint, the largest difference to its neighbours
     (:func:`_direction_neighbours`: the nearest sample of each neighbouring direction within
     ``branch_gap`` commands; ``missing`` where it has none); and per sample how far each of
-    the arm's ``points`` ``(M, P, 3)`` moves to them at most, ``(M, P)`` (inf where none)."""
+    the arm's ``points`` ``(M, P, 3)`` moves to them at most, ``(M, P)`` (inf where none).
+
+    A sample lies by a fold when a neighbouring direction has fewer real solutions than its
+    own (``solution_counts`` per direction, the joint limits ignored; -1: not known) and no
+    member near it: two branches meet between them and end. The nearest other sample of its
+    own direction that ends there too is taken for the branch it meets, to first order
+    midway between them (they part as the square root of the distance to the fold), and half
+    its difference to that sibling, in each joint and each point, is added to the sample's
+    error and its points' motion: the members between it and the fold. Only where one
+    sample is drawn per direction (not ``own``: several turns about each direction have no
+    such pairs)."""
     m, j = u.shape
     near = _direction_neighbours(u, node_dir, dir_ptr, nb_ptr, nb, period, branch_gap, own)
     err = np.zeros((m, j))
     moved = np.zeros((m, points.shape[1]))
+    ends = np.zeros(m, dtype=np.bool_)
     for i in range(m):
+        d = node_dir[i]
+        for p in range(nb_ptr[d], nb_ptr[d + 1]):
+            e = nb[p]
+            if not 0 <= solution_counts[e] < solution_counts[d]:
+                continue
+            found = False
+            for w in range(near.shape[1]):
+                if near[i, w] < 0:
+                    break
+                if node_dir[near[i, w]] == e:
+                    found = True
+            ends[i] = ends[i] or not found
         if near[i, 0] < 0:
             err[i, :] = missing
             moved[i, :] = np.inf
@@ -296,6 +338,30 @@ def _sampling_errors(
                 for c in range(3):
                     x += (points[arg, t, c] - points[i, t, c]) ** 2
                 moved[i, t] = max(moved[i, t], np.sqrt(x))
+    if own:
+        return err, moved
+    for i in range(m):
+        if not ends[i] or err[i, 0] >= missing:
+            continue
+        d = node_dir[i]
+        sib, gap = -1, np.inf
+        for k in range(dir_ptr[d], dir_ptr[d + 1]):
+            if k == i or not ends[k]:
+                continue
+            x = 0.0
+            for c in range(j):
+                x = max(x, _wrapped(u[k, c] - u[i, c], period[c]))
+            if x < gap:
+                sib, gap = k, x
+        if sib < 0:
+            continue
+        for c in range(j):
+            err[i, c] += 0.5 * _wrapped(u[sib, c] - u[i, c], period[c])
+        for t in range(points.shape[1]):
+            x = 0.0
+            for c in range(3):
+                x += (points[sib, t, c] - points[i, t, c]) ** 2
+            moved[i, t] += 0.5 * np.sqrt(x)
     return err, moved
 
 
@@ -431,6 +497,8 @@ class FamilySampler:
         #: per audited point (:meth:`audit`), the clear members drawn there, how many of them
         #: lie outside every sample's error box, and how far the farthest does (commands)
         self.audits: list[tuple[int, int, float]] = []
+        #: the all-solutions IK the audit draws members with (None: from random starts)
+        self.audit_solver = complete_solver(arm)
 
     @property
     def covers_family(self) -> bool:
@@ -458,8 +526,13 @@ class FamilySampler:
             if np.isfinite(worst)
             else "at a point where no sample was kept"
         )
+        how_drawn = (
+            f"every IK solution at {AUDIT_FRAMES} random tool frames"
+            if self.audit_solver is not None
+            else "random starts"
+        )
         return (
-            f"of {drawn} clear members drawn from random starts at {len(self.audits)} points, "
+            f"of {drawn} clear members drawn from {how_drawn} at {len(self.audits)} points, "
             f"{missed} lie outside every sample's error box, {how_far} (the family varies "
             "faster between the samples than their errors allow)"
         )
@@ -483,22 +556,38 @@ class FamilySampler:
         self, E: FloatArray, layer: Layer, allowed: Callable[[FloatArray], BoolArray] | None
     ) -> None:
         """Check ``layer`` (the samples at tool point ``E``) against members drawn another way:
-        Levenberg-Marquardt on the point alone from :data:`AUDIT_STARTS` random starts, those
-        that reach it within the limits, clear, along a direction ``allowed`` and inside the
-        joints' ranges to keep. Each should lie within some sample's error box (the bounds'
+        for an arm with an all-solutions IK (:func:`complete_solver`), every solution at
+        :data:`AUDIT_FRAMES` random tool frames at ``E`` whose approach axis points along a
+        direction ``allowed``; otherwise Levenberg-Marquardt on the point alone from
+        :data:`AUDIT_STARTS` random starts. Those within the limits, clear and inside the
+        joints' ranges to keep should each lie within some sample's error box (the bounds'
         assumption); the count of those that do not is recorded (:attr:`audits`), and one
         makes :attr:`covers_family` False. A test that can fail, not a proof: where the error
-        model fails (near the edge of reach, where the family narrows), members fall between
-        the samples' error boxes."""
+        model fails (near the edge of reach, where the family folds or narrows), members fall
+        between the samples' error boxes."""
         if self.unspanned_because:
             return  # nothing is claimed
         arm = self.fam.arm
-        family = GenericFamily(arm, ToolTarget(np.asarray(E, dtype=np.float64)))
-        lo, hi = arm.sampling_box()
+        E = np.asarray(E, dtype=np.float64)
         rng = np.random.default_rng(len(self.audits))
-        q = family.refine(rng.uniform(lo, hi, (AUDIT_STARTS, arm.n_joints)), iterations=80)
-        q = q[family.exact(q)]
-        q = q[self.fam.world.satisfied(arm, q)] if q.shape[0] else q
+        if self.audit_solver is not None:
+            R = _random_frames(np.asarray(arm.approach_axis), allowed, AUDIT_FRAMES, rng)
+            T = np.zeros((R.shape[0], 4, 4))
+            T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = R, E, 1.0
+            solutions = (
+                self.audit_solver.solve_batch(T).solutions.reshape(-1, arm.n_joints)
+                if T.shape[0]
+                else np.zeros((0, arm.n_joints))
+            )
+            q = shift_into_limits(arm, solutions[np.all(np.isfinite(solutions), axis=1)])
+            q = q[arm.within_limits(q)] if q.shape[0] else q
+        else:
+            family = GenericFamily(arm, ToolTarget(E))
+            lo, hi = arm.sampling_box()
+            q = family.refine(rng.uniform(lo, hi, (AUDIT_STARTS, arm.n_joints)), iterations=80)
+            q = q[family.exact(q)]
+        if q.shape[0]:  # clear to rounding: a tool tip on a surface is at 0 +- 1e-13
+            q = q[self.fam.world.satisfied(arm, q, extra=-CLEAR_MARGIN)]
         if allowed is not None and q.shape[0]:
             q = q[allowed(tool_pose(arm, q)[:, :3, :3] @ np.asarray(arm.approach_axis))]
         u = self.units(q)
@@ -506,15 +595,26 @@ class FamilySampler:
         for j, w_lo, w_hi in self.windows:
             inside &= (u[:, j] >= w_lo - AUDIT_SLACK) & (u[:, j] <= w_hi + AUDIT_SLACK)
         u = u[inside]
+        beyond = self.beyond_boxes(layer, u)
+        missed = beyond > AUDIT_SLACK
+        worst = float(beyond[missed].max()) if missed.any() else 0.0
+        self.audits.append((int(u.shape[0]), int(missed.sum()), worst))
+
+    def beyond_boxes(self, layer: Layer, u: FloatArray) -> FloatArray:
+        """How far each point ``u`` (command units ``(K, J)`` of the tip joints) lies outside
+        the nearest of ``layer``'s error boxes (commands, in the largest joint; at most 0
+        inside one; inf where the layer is empty), a whole turn's joint the shorter way."""
+        out = np.full(u.shape[0], np.inf)
+        if not layer.size:
+            return out
         period = np.where(self.period > 0.0, self.period, np.inf)
-        missed, worst = 0, 0.0
-        for x in u:
-            w = np.mod(np.abs(layer.u - x), period)  # a whole turn's joint the shorter way
+        chunk = max(1, _CHUNK_ELEMENTS // (layer.size * max(u.shape[1], 1)))
+        for k in range(0, u.shape[0], chunk):
+            check_time("bounding the commands")
+            w = np.mod(np.abs(layer.u[None] - u[k : k + chunk, None]), period)
             d = np.minimum(w, period - w)
-            beyond = float((d - layer.err).max(axis=1).min()) if layer.size else np.inf
-            if beyond > AUDIT_SLACK:
-                missed, worst = missed + 1, max(worst, beyond)
-        self.audits.append((int(u.shape[0]), missed, worst))
+            out[k : k + chunk] = (d - layer.err).max(axis=2).min(axis=1)
+        return out
 
     def within_windows(self, q: FloatArray) -> FloatArray:
         """Configurations ``(..., n)`` rad with each joint that has a range to keep
@@ -539,6 +639,18 @@ class FamilySampler:
             gap = np.maximum(np.maximum(lo - u[:, j], u[:, j] - hi), 0.0)
             out |= gap > err[:, j] + 1e-9
         return out
+
+    def outside_limits(self, u: FloatArray, err: FloatArray) -> BoolArray:
+        """Samples (command units ``(M, J)`` of the tip joints, errors ``(M, J)``) whose every
+        nearby member lies past a tip joint's limit: farther than the sample's error (a joint
+        that turns whole turns has none)."""
+        arm = self.fam.arm
+        lo = arm.lower[self.tip] / self.step
+        hi = arm.upper[self.tip] / self.step
+        with np.errstate(invalid="ignore"):
+            gap = np.maximum(np.maximum(lo - u, u - hi), 0.0)
+        gap = np.where(self.whole_turns, 0.0, np.nan_to_num(gap, nan=0.0))
+        return np.asarray(np.any(gap > err + 1e-9, axis=1))
 
     def layer(
         self,
@@ -639,7 +751,11 @@ class FamilySampler:
         arm's points, the tolerance's joint change, the slack)."""
         real = to_real(dirs, acc.caps)
         pick = np.flatnonzero(allowed(real)) if allowed is not None else np.arange(dirs.shape[0])
-        q, index = self.fam.members(E, real[pick])
+        q, index = self.fam.solutions(E, real[pick])
+        counts = np.full(dirs.shape[0], -1, dtype=np.int64)
+        if self.fam.solves_completely:
+            counts[pick] = np.bincount(index, minlength=pick.shape[0])
+        inside = self.fam.arm.within_limits(q) if q.shape[0] else np.zeros(0, dtype=bool)
         index = pick[index] + acc.dirs.shape[0]
         tol_err = np.zeros((q.shape[0], acc.u.shape[1]))
         slack = np.zeros(q.shape[0])
@@ -665,6 +781,8 @@ class FamilySampler:
             tol_err=np.vstack([acc.tol_err, tol_err]),
             slack=np.concatenate([acc.slack, slack]),
             isolated=np.concatenate([acc.isolated, isolated]),
+            inside=np.concatenate([acc.inside, inside]),
+            solution_counts=np.concatenate([acc.solution_counts, counts]),
             caps=acc.caps,
         )
 
@@ -691,7 +809,7 @@ class FamilySampler:
         dir_ptr = np.searchsorted(index, np.arange(n_dirs + 1)).astype(np.int64)
         err, moved = _sampling_errors(
             u, acc.points[order], index, dir_ptr, nb_ptr, nb, self.period, _MISSING,
-            BRANCH_GAP, self.turns > 1,
+            BRANCH_GAP, self.turns > 1, acc.solution_counts,
         )  # fmt: skip
         # an isolated member (see _Samples) is the only one near it, wherever the others lie
         isolated = acc.isolated[order]
@@ -708,6 +826,11 @@ class FamilySampler:
         # (the tolerance's joint change), each landmark's own way and any point at most
         extra = (tol_err * self.step) @ self.reach + CLEAR_MARGIN
         keep = self.may_be_clear(q, slack, moved + extra[:, None]) & ~self.outside_windows(u, err)
+        # a member past the joint limits stands for the members of its cell inside them, where
+        # its error reaches them (the family goes on past a limit: its neighbours' errors
+        # count it); it is never clear itself, and its cells are split like unsure ones
+        inside = acc.inside[order]
+        keep &= inside | ~self.outside_limits(u, err)
         if self.body is not None:
             # a sample not clear itself whose cell the body cannot keep clear anywhere
             # (:class:`ToolBody`), where the chart is the identity out to its spacing
@@ -719,8 +842,8 @@ class FamilySampler:
             keep[at] &= ~self.body.blocked(
                 self.fam.world, self.fam.arm, q[at], real, angle[at], self.tol
             )
-        unsure = np.unique(index[keep & (slack < 0.0)])
-        clear = (slack >= 0.0) & ~self.outside_windows(u, np.zeros_like(err))
+        unsure = np.unique(index[keep & ((slack < 0.0) | ~inside)])
+        clear = (slack >= 0.0) & inside & ~self.outside_windows(u, np.zeros_like(err))
         real = to_real(acc.dirs[index[keep]], acc.caps)
         layer = Layer(u[keep], err[keep], q[keep], real, index[keep], clear[keep])
         return layer, unsure, spacing, triangles
@@ -764,6 +887,38 @@ class FamilySampler:
     def predecessor_tree(self, prev: Layer, cost: FloatArray) -> PredecessorTree:
         """What :meth:`advance` searches for the steps from ``cost`` at ``prev``."""
         return predecessor_tree(prev.u, prev.err, cost, self.period)
+
+
+def _random_frames(
+    approach_tool: FloatArray,
+    allowed: Callable[[FloatArray], BoolArray] | None,
+    count: int,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """Up to ``count`` random tool rotations ``(K, 3, 3)``: the approach axis
+    ``approach_tool`` (tool frame) taken to a random direction ``allowed`` (uniform over them;
+    every one when None), turned about it by a uniform angle. Fewer where the directions
+    allowed are too rare to find ``count`` of in :data:`_FRAME_ROUNDS` rounds of ``count``."""
+    found: list[FloatArray] = []
+    kept = 0
+    for _ in range(_FRAME_ROUNDS):
+        d = rng.normal(size=(count, 3))
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        if allowed is not None:
+            d = d[allowed(d)]
+        found.append(d)
+        kept += d.shape[0]
+        if kept >= count:
+            break
+    dirs = np.concatenate(found)[:count]
+    a = approach_tool / np.linalg.norm(approach_tool)
+    frame_a = np.stack([*orthonormal_frame(a), a], axis=-1)
+    frame_d = np.stack([*orthonormal_frame(dirs), dirs], axis=-1)
+    angle = rng.uniform(0.0, 2.0 * np.pi, dirs.shape[0])
+    c, s = np.cos(angle), np.sin(angle)
+    turn = np.zeros((dirs.shape[0], 3, 3))
+    turn[:, 0, 0], turn[:, 0, 1], turn[:, 1, 0], turn[:, 1, 1], turn[:, 2, 2] = c, -s, s, c, 1.0
+    return np.asarray(frame_d @ turn @ frame_a.T)
 
 
 def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:

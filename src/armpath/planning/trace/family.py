@@ -283,7 +283,22 @@ class CurveFamily:
         ``dirs``, configurations with the same links included (the seed arm's wrist flip),
         within the joint limits, with the index into ``dirs`` of each: what the lower bounds
         (:mod:`armpath.planning.bounds`) sample the family by."""
+        q, index = self.solutions(E, dirs)
+        ok = self.arm.within_limits(q) if q.shape[0] else np.zeros(0, dtype=bool)
+        return q[ok], index[ok]
+
+    def solutions(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        """What :meth:`members` finds before the joint limits drop any (revolute joints turned
+        into them where a whole turn allows): where :attr:`solves_completely`, every real
+        solution, so a direction with fewer than its neighbour's lies past a fold where two
+        branches meet and end."""
         raise NotImplementedError
+
+    @property
+    def solves_completely(self) -> bool:
+        """Whether :meth:`solutions` finds every real solution (closed forms), not those some
+        starts lead to."""
+        return True
 
     def same_links(self, q: FloatArray, half_turn: float) -> FloatArray:
         """Configurations ``(..., n)`` and the others with the same links, stacked
@@ -543,13 +558,12 @@ class SeedCurveFamily(CurveFamily):
         q = np.concatenate([sol, np.zeros((*sol.shape[:-1], 1))], axis=-1).reshape(-1, 6)
         return q[np.all(np.isfinite(q), axis=-1)]
 
-    def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+    def solutions(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         wrist = E - self.geometry.de_mm * dirs
         sol = family_from_wrist(self.geometry, E, wrist)  # (D, 8, 5): every branch and flip
         q = np.concatenate([sol, np.zeros((*sol.shape[:-1], 1))], axis=-1).reshape(-1, 6)
         index = np.repeat(np.arange(dirs.shape[0]), sol.shape[1])
         ok = np.all(np.isfinite(q), axis=-1)
-        ok[ok] = self.arm.within_limits(q[ok])
         return q[ok], index[ok]
 
     def same_links(self, q: FloatArray, half_turn: float) -> FloatArray:
@@ -765,15 +779,18 @@ class GenericCurveFamily(CurveFamily):
         return redundant and self._carriage is None
 
     def configs_at(self, E: FloatArray, dirs: FloatArray) -> FloatArray:
-        return self._solved(E, dirs)[0]
+        return self.members(E, dirs)[0]
 
-    def members(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
-        q, index = self._solved(E, dirs)
-        ok = self.arm.within_limits(q)
-        return q[ok], index[ok]
+    def solutions(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+        return self._solved(E, dirs)
+
+    @property
+    def solves_completely(self) -> bool:
+        return self._solver is not None
 
     def _solved(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
-        """Exact members and the index into ``dirs`` of each (see :meth:`configs_at`)."""
+        """The configurations that reach ``E`` along ``dirs`` (the joint limits unchecked:
+        :meth:`members` drops those past them) and the index into ``dirs`` of each."""
         n = self.arm.n_joints
         if dirs.shape[0] == 0:
             return np.zeros((0, n)), np.zeros(0, dtype=np.int64)
@@ -794,7 +811,7 @@ class GenericCurveFamily(CurveFamily):
             return q, index
         if self._solver is not None:  # Levenberg-Marquardt's are turned as they are found
             q = shift_into_limits(self.arm, q)
-        ok = GenericFamily(self.arm, ToolTarget(E)).exact(q)
+        ok = GenericFamily(self.arm, ToolTarget(E)).reaches(q)
         return np.asarray(q[ok], dtype=np.float64), np.asarray(index[ok], dtype=np.int64)
 
     def _numerical(self, E: FloatArray, Rs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
