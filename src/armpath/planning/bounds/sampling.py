@@ -66,8 +66,6 @@ AUDIT_FRAMES = 3000
 _FRAME_ROUNDS = 50
 #: Most points of one bound that are audited (evenly spread among its sites).
 AUDIT_SITES = 6
-#: Most array elements of one chunk of :meth:`FamilySampler.beyond_boxes` (bounds its memory).
-_CHUNK_ELEMENTS = 2_000_000
 #: Commands by which a drawn member may lie outside every sample's error box before the audit
 #: counts it missed (rounding of the units).
 AUDIT_SLACK = 1e-6
@@ -365,6 +363,31 @@ def _sampling_errors(
     return err, moved
 
 
+@njit(cache=True)
+def _beyond_boxes(
+    x: FloatArray, u: FloatArray, err: FloatArray, period: FloatArray
+) -> FloatArray:  # pragma: no cover - compiled
+    """Per row of ``x``, the least over the samples ``u`` of how far it lies outside the
+    sample's box ``err`` in the largest joint (see :meth:`FamilySampler.beyond_boxes`)."""
+    out = np.full(x.shape[0], np.inf)
+    for i in range(x.shape[0]):
+        best = np.inf
+        for k in range(u.shape[0]):
+            worst = -np.inf
+            for c in range(x.shape[1]):
+                d = _wrapped(u[k, c] - x[i, c], period[c]) - err[k, c]
+                if d > worst:
+                    worst = d
+                    if worst >= best:
+                        break
+            if worst < best:
+                best = worst
+                if best <= 0.0:
+                    break
+        out[i] = best
+    return out
+
+
 @dataclass(frozen=True)
 class ToolBody:
     """Where the body of the arm's last link ends and its bare tip begins (the *cut*, the
@@ -603,18 +626,15 @@ class FamilySampler:
     def beyond_boxes(self, layer: Layer, u: FloatArray) -> FloatArray:
         """How far each point ``u`` (command units ``(K, J)`` of the tip joints) lies outside
         the nearest of ``layer``'s error boxes (commands, in the largest joint; at most 0
-        inside one; inf where the layer is empty), a whole turn's joint the shorter way."""
-        out = np.full(u.shape[0], np.inf)
-        if not layer.size:
-            return out
-        period = np.where(self.period > 0.0, self.period, np.inf)
-        chunk = max(1, _CHUNK_ELEMENTS // (layer.size * max(u.shape[1], 1)))
-        for k in range(0, u.shape[0], chunk):
-            check_time("bounding the commands")
-            w = np.mod(np.abs(layer.u[None] - u[k : k + chunk, None]), period)
-            d = np.minimum(w, period - w)
-            out[k : k + chunk] = (d - layer.err).max(axis=2).min(axis=1)
-        return out
+        inside one, where the search stops; inf where the layer is empty), a whole turn's
+        joint the shorter way."""
+        check_time("bounding the commands")
+        return _beyond_boxes(
+            np.ascontiguousarray(u, dtype=np.float64),
+            np.ascontiguousarray(layer.u, dtype=np.float64),
+            np.ascontiguousarray(layer.err, dtype=np.float64),
+            self.period,
+        )
 
     def within_windows(self, q: FloatArray) -> FloatArray:
         """Configurations ``(..., n)`` rad with each joint that has a range to keep
