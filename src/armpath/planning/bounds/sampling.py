@@ -846,11 +846,12 @@ class FamilySampler:
         # (the tolerance's joint change), each landmark's own way and any point at most
         extra = (tol_err * self.step) @ self.reach + CLEAR_MARGIN
         keep = self.may_be_clear(q, slack, moved + extra[:, None]) & ~self.outside_windows(u, err)
-        # a member past the joint limits stands for the members of its cell inside them, where
-        # its error reaches them (the family goes on past a limit: its neighbours' errors
-        # count it); it is never clear itself, and its cells are split like unsure ones
+        # a member past the joint limits counts in its neighbours' errors (the family goes on
+        # past a limit) and is then dropped: the layer's samples are configurations plans and
+        # guides may take; its cells are split like unsure ones
         inside = acc.inside[order]
-        keep &= inside | ~self.outside_limits(u, err)
+        edge = ~inside & ~self.outside_limits(u, err)
+        keep &= inside
         if self.body is not None:
             # a sample not clear itself whose cell the body cannot keep clear anywhere
             # (:class:`ToolBody`), where the chart is the identity out to its spacing
@@ -862,7 +863,7 @@ class FamilySampler:
             keep[at] &= ~self.body.blocked(
                 self.fam.world, self.fam.arm, q[at], real, angle[at], self.tol
             )
-        unsure = np.unique(index[keep & ((slack < 0.0) | ~inside)])
+        unsure = np.unique(np.concatenate([index[keep & (slack < 0.0)], index[edge]]))
         clear = (slack >= 0.0) & inside & ~self.outside_windows(u, np.zeros_like(err))
         real = to_real(acc.dirs[index[keep]], acc.caps)
         layer = Layer(u[keep], err[keep], q[keep], real, index[keep], clear[keep])
