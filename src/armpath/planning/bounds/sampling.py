@@ -9,9 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armpath.budget import check_time
-from armpath.geometry.primitives import Obstacle, orthonormal_frame
+from armpath.geometry.primitives import Obstacle
 from armpath.geometry.world import CollisionWorld, into_windows
-from armpath.ik.family import GenericFamily, shift_into_limits
+from armpath.ik.family import GenericFamily
 from armpath.ik.solve import complete_solver
 from armpath.ik.target import ToolTarget
 from armpath.jit import njit
@@ -34,7 +34,12 @@ from armpath.planning.bounds.chart import (
     to_real,
 )
 from armpath.planning.bounds.metric import PredecessorTree, _wrapped, advance, predecessor_tree
-from armpath.planning.trace.family import CurveFamily, fibonacci_directions
+from armpath.planning.trace.family import (
+    CurveFamily,
+    fibonacci_directions,
+    solve_frames,
+    tool_frames,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -308,7 +313,7 @@ def _sampling_errors(
     ends = np.zeros(m, dtype=np.bool_)
     for i in range(m):
         d = node_dir[i]
-        for p in range(nb_ptr[d], nb_ptr[d + 1]):
+        for p in range(nb_ptr[d], nb_ptr[d + 1] if not own else nb_ptr[d]):
             e = nb[p]
             if not 0 <= solution_counts[e] < solution_counts[d]:
                 continue
@@ -595,14 +600,7 @@ class FamilySampler:
         rng = np.random.default_rng(len(self.audits))
         if self.audit_solver is not None:
             R = _random_frames(np.asarray(arm.approach_axis), allowed, AUDIT_FRAMES, rng)
-            T = np.zeros((R.shape[0], 4, 4))
-            T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = R, E, 1.0
-            solutions = (
-                self.audit_solver.solve_batch(T).solutions.reshape(-1, arm.n_joints)
-                if T.shape[0]
-                else np.zeros((0, arm.n_joints))
-            )
-            q = shift_into_limits(arm, solutions[np.all(np.isfinite(solutions), axis=1)])
+            q, _ = solve_frames(arm, self.audit_solver, E, R)
             q = q[arm.within_limits(q)] if q.shape[0] else q
         else:
             family = GenericFamily(arm, ToolTarget(E))
@@ -790,8 +788,10 @@ class FamilySampler:
                 sv = np.linalg.svd(J, compute_uv=False)
                 isolated = sv[:, -1] > _ISOLATED_RANK * np.maximum(sv[:, 0], 1e-300)
             # only a negative slack matters (see _filtered): the broad phase skips the pairs
-            # that cannot be below zero, and every sample at or above it reads 0
-            slack = self.fam.world.slack(self.fam.arm, q, ceiling=0.0)
+            # that cannot be below zero, and every sample at or above it reads 0; a member
+            # past the limits is dropped whatever its slack
+            if inside.any():
+                slack[inside] = self.fam.world.slack(self.fam.arm, q[inside], ceiling=0.0)
         return _Samples(
             dirs=np.vstack([acc.dirs, dirs]),
             q=np.vstack([acc.q, q]),
@@ -932,14 +932,7 @@ def _random_frames(
         if kept >= count:
             break
     dirs = np.concatenate(found)[:count]
-    a = approach_tool / np.linalg.norm(approach_tool)
-    frame_a = np.stack([*orthonormal_frame(a), a], axis=-1)
-    frame_d = np.stack([*orthonormal_frame(dirs), dirs], axis=-1)
-    angle = rng.uniform(0.0, 2.0 * np.pi, dirs.shape[0])
-    c, s = np.cos(angle), np.sin(angle)
-    turn = np.zeros((dirs.shape[0], 3, 3))
-    turn[:, 0, 0], turn[:, 0, 1], turn[:, 1, 0], turn[:, 1, 1], turn[:, 2, 2] = c, -s, s, c, 1.0
-    return np.asarray(frame_d @ turn @ frame_a.T)
+    return tool_frames(dirs, rng.uniform(0.0, 2.0 * np.pi, (dirs.shape[0], 1)), approach_tool)
 
 
 def _allowed_at(fam: CurveFamily, s: float) -> Callable[[FloatArray], BoolArray]:

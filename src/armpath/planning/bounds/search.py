@@ -88,8 +88,8 @@ STALL_ROUNDS = 2
 #: the samples before for each sample after: :func:`~.metric.advance`). A
 #: caller may give more (:func:`check_max_samples`: up to :data:`MAX_SAMPLES_LIMIT`) for a
 #: tighter bound (``benchmarks/results/bounds.md``, a 2-core machine, 2026-12-06): the seed's
-#: Task 3 109 -> 111 commands with 200,000 (its sampled bound 31 s -> 54 s), the UR5 cell's
-#: welds 103 either way (34 s -> 44 s) and its seam 102.9 -> 104.9 (33 s -> 89 s, 20 rounds;
+#: Task 3 109 -> 111 commands with 200,000 (its sampled bound 29 s -> 52 s), the UR5 cell's
+#: welds 103 either way (34 s -> 43 s) and its seam 102.9 -> 104.9 (34 s -> 91 s, 20 rounds;
 #: while 16 rounds ended every search, the seam stayed where 16 rounds took it whatever the
 #: budget: :func:`search_rounds`).
 #: What counts is what a round leaves alive: a round over the budget goes on if the samples of

@@ -37,6 +37,7 @@ from armpath.errors import InvalidInputError
 from armpath.geometry.curves import Curve
 from armpath.geometry.primitives import Obstacle, orthonormal_frame
 from armpath.geometry.world import CollisionWorld, SlackGroup
+from armpath.ik.compiled import CompiledSolver
 from armpath.ik.family import GenericFamily, shift_into_limits
 from armpath.ik.seed_position import family_from_wrist
 from armpath.ik.solve import complete_solver
@@ -791,26 +792,18 @@ class GenericCurveFamily(CurveFamily):
     def _solved(self, E: FloatArray, dirs: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         """The configurations that reach ``E`` along ``dirs`` (the joint limits unchecked:
         :meth:`members` drops those past them) and the index into ``dirs`` of each."""
-        n = self.arm.n_joints
         if dirs.shape[0] == 0:
-            return np.zeros((0, n)), np.zeros(0, dtype=np.int64)
+            return np.zeros((0, self.arm.n_joints)), np.zeros(0, dtype=np.int64)
         Rs = _frames_along(dirs, self._turns, np.asarray(self.arm.approach_axis))
         if self._solver is not None:
-            T = np.broadcast_to(np.eye(4), (Rs.shape[0], 4, 4)).copy()
-            T[:, :3, :3] = Rs
-            T[:, :3, 3] = E
-            sol = self._solver.solve_batch(T).solutions  # (D * turns, S, n)
-            q = sol.reshape(-1, n)
-            index = np.repeat(np.arange(Rs.shape[0]) // self._turns, sol.shape[1])
-        else:
+            q, frame = solve_frames(self.arm, self._solver, E, Rs)
+        else:  # Levenberg-Marquardt's are turned as they are found
             q, frame = self._numerical(E, Rs)
-            index = frame // self._turns
-        ok = np.all(np.isfinite(q), axis=1)
-        q, index = q[ok], index[ok]
+            ok = np.all(np.isfinite(q), axis=1)
+            q, frame = q[ok], frame[ok]
+        index = frame // self._turns
         if q.shape[0] == 0:
             return q, index
-        if self._solver is not None:  # Levenberg-Marquardt's are turned as they are found
-            q = shift_into_limits(self.arm, q)
         ok = GenericFamily(self.arm, ToolTarget(E)).reaches(q)
         return np.asarray(q[ok], dtype=np.float64), np.asarray(index[ok], dtype=np.int64)
 
@@ -935,16 +928,56 @@ def _continued(
 
 def _frames_along(dirs: FloatArray, turns: int, approach: FloatArray | None = None) -> FloatArray:
     """Tool rotations ``(D * turns, 3, 3)`` that turn the tool's ``approach`` axis (tool
-    frame, default z) onto each direction, ``turns`` turns about it each."""
-    if approach is not None and not np.allclose(approach, [0.0, 0.0, 1.0]):
-        to_z = _frames_along(np.asarray(approach)[None], 1)[0].T  # takes the axis onto z
-        return np.asarray(_frames_along(dirs, turns) @ to_z)
+    frame, default z) onto each direction, ``turns`` turns about it each, evenly spaced."""
+    return tool_frames(dirs, 2 * np.pi * np.arange(turns) / turns, approach)
+
+
+def tool_frames(
+    dirs: ArrayLike, angles: ArrayLike, approach: ArrayLike | None = None
+) -> FloatArray:
+    """Tool rotations ``(D * T, 3, 3)`` that take the tool's ``approach`` axis (tool frame,
+    default z) onto each unit direction of ``dirs`` ``(D, 3)`` and turn the tool about it by
+    each of ``angles`` rad (``(D, T)``, or ``(T,)`` the same for every direction), measured
+    from :func:`~armpath.geometry.primitives.orthonormal_frame`'s first vector of the
+    direction (where the approach axis's own first vector goes)."""
     d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
+    angle = np.atleast_2d(np.asarray(angles, dtype=np.float64))
+    angle = np.broadcast_to(angle, (d.shape[0], angle.shape[1]))
     e1, e2 = orthonormal_frame(d)
-    a = 2 * np.pi * np.arange(turns) / turns
-    x = np.cos(a)[None, :, None] * e1[:, None, :] + np.sin(a)[None, :, None] * e2[:, None, :]
+    x = np.cos(angle)[..., None] * e1[:, None, :] + np.sin(angle)[..., None] * e2[:, None, :]
     dd = np.broadcast_to(d[:, None, :], x.shape)
-    return np.stack([x, np.cross(dd, x), dd], axis=-1).reshape(-1, 3, 3)
+    R = np.stack([x, np.cross(dd, x), dd], axis=-1).reshape(-1, 3, 3)
+    if approach is None:
+        return R
+    a = np.asarray(approach, dtype=np.float64)
+    a = a / np.linalg.norm(a)
+    if np.allclose(a, [0.0, 0.0, 1.0]):
+        return R
+    a1, a2 = orthonormal_frame(a)
+    return np.asarray(R @ np.stack([a1, a2, a], axis=-1).T)  # the approach axis onto z first
+
+
+def solve_frames(
+    arm: SerialArm, solver: CompiledSolver, E: FloatArray, Rs: FloatArray
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Every real solution the all-solutions IK ``solver`` finds for the tool point ``E``
+    (mm) with each tool rotation of ``Rs`` ``(M, 3, 3)``: the configurations (rad, each joint
+    turned by whole turns into its limits where it can be; the limits not checked) and the
+    index into ``Rs`` of each."""
+    n = arm.n_joints
+    if Rs.shape[0] == 0:
+        return np.zeros((0, n)), np.zeros(0, dtype=np.int64)
+    T = np.broadcast_to(np.eye(4), (Rs.shape[0], 4, 4)).copy()
+    T[:, :3, :3] = Rs
+    T[:, :3, 3] = E
+    sol = solver.solve_batch(T).solutions  # (M, S, n)
+    q = sol.reshape(-1, n)
+    frame = np.repeat(np.arange(Rs.shape[0]), sol.shape[1])
+    ok = np.all(np.isfinite(q), axis=1)
+    q, frame = q[ok], frame[ok]
+    if q.shape[0]:
+        q = shift_into_limits(arm, q)
+    return np.asarray(q, dtype=np.float64), np.asarray(frame, dtype=np.int64)
 
 
 def charting_arm(arm: SerialArm) -> SerialArm:
