@@ -368,11 +368,16 @@ def generic_bound(
     )
 
 
-#: Boxes :func:`lattice_bound` may look at (about a quarter of a microsecond each, some 5 s on
-#: two threads): past it the bound stays the family's estimate. The reaches tried (UR5,
-#: iiwa14, Z1, SO-101, 23 to 53 commands) looked at 2,500 to 540,000; the UR5 cell's reach
-#: with a whole pose asked (plan 77) 20.4 million.
+#: Boxes :func:`lattice_bound` may look at where it lists six joints (about a quarter of a
+#: microsecond each, some 5 s on two threads): past it the bound stays the family's estimate.
+#: The reaches tried (UR5, iiwa14, Z1, SO-101, 23 to 53 commands) looked at 2,500 to 540,000;
+#: the UR5 cell's reach with a whole pose asked (plan 77) 20.4 million. A box of more joints
+#: costs about the square of their number: :data:`BOUND_BOX_JOINTS`.
 LATTICE_BOUND_BOXES = 40_000_000
+#: Joints listed up to which a box counts as one against :data:`LATTICE_BOUND_BOXES`; with
+#: ``n`` more, as ``(n / BOUND_BOX_JOINTS)**2``. A chain of 16 joints spent 30 s on the whole
+#: budget (its reach, 13 commands, stayed an estimate), one of 33 spent 182 s.
+BOUND_BOX_JOINTS = 7
 #: Lattice states :func:`lattice_bound` may list.
 LATTICE_BOUND_STATES = 200_000
 
@@ -407,7 +412,8 @@ def lattice_bound(
     bound): ``N`` commands move joint ``i`` at most ``N`` times its most ticks, so those states
     lie in that box about the start. The bound is the fewest the listed states need, or
     ``plan_commands`` where there are none (``max_boxes``, ``max_states``: the budgets, by
-    default :data:`LATTICE_BOUND_BOXES` and :data:`LATTICE_BOUND_STATES`). Obstacles are left
+    default :data:`LATTICE_BOUND_BOXES` and :data:`LATTICE_BOUND_STATES`; the boxes' for up
+    to :data:`BOUND_BOX_JOINTS` joints listed, fewer for more). Obstacles are left
     out, and the joints that move neither the tool point nor the rule's axis are held where
     they start (moving them adds to no state's count). An axis rule
     (:class:`~armpath.ik.target.AxisCone`) is kept: the states listed for the point are taken
@@ -443,6 +449,7 @@ def lattice_bound(
     lower, upper = box_lower[tip], box_upper[tip]
     if np.any(lower > upper):  # the start lies outside a limit (a state is checked before)
         return None
+    max_boxes = int(max_boxes * min(1.0, (BOUND_BOX_JOINTS / int(tip.sum())) ** 2))
     # the box halved along its widest joint, the halves listed at once (the listing's kernel
     # releases the GIL; each in a copy of this context, so that it hears the caller's time
     # limit)
