@@ -292,13 +292,19 @@ def _chebyshev_commands(a: np.ndarray, b: np.ndarray, period: np.ndarray) -> int
     return int(np.ceil(max(gaps) - 1e-9))
 
 
-def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
+def _three_seed_welds() -> tuple:
+    """The seed arm, its scene, three of its welds (two inside the workpiece), a start and a
+    sampler of the welds' family."""
     arm = load_arm("seed")
     world = load_scene(None).world
     welds = np.array([[120.0, 106.0, 50.82], [255.0, 88.0, 151.36], [190.0, -125.0, 81.98]])
-    fam = _targets_family(arm, world, welds)
     start = np.radians([0.0, -90.0, 90.0, 0.0, 45.0, 0.0])
-    sampler = FamilySampler(fam, 0.05, q_start=start)
+    sampler = FamilySampler(_targets_family(arm, world, welds), 0.05, q_start=start)
+    return arm, world, welds, start, sampler
+
+
+def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
+    arm, _, welds, start, sampler = _three_seed_welds()
     rng = np.random.default_rng(5)
     layers = []
     for w in welds:
@@ -326,13 +332,78 @@ def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
                 best = min(best, cost)
             assert per_order[order] == best
         assert found.commands == min(per_order.values())
+        # every order at once (Held and Karp's programme over the sets visited): the same
+        # least, and its path, through the listed states, costs that much
+        every, none = tour_bounds.lattice_tour_bound(
+            sampler, start, welds, None, back, [], lambda _m: None
+        )
+        assert none == {}
+        assert every.commands == found.commands
+        assert every.guide_order in per_order and per_order[every.guide_order] == every.commands
+        assert every.clear_path_order == every.guide_order
+        assert every.sampling["clear_path_commands"] == every.commands
+        path = [u0]
+        for t, q in zip(every.guide_order, every.guide_q, strict=True):
+            assert np.any(np.all(layers[t].q == q, axis=1))
+            path.append(sampler.units(q))
+        if back:
+            path.append(u0)
+        legs = [_chebyshev_commands(a, b, sampler.period) for a, b in itertools.pairwise(path)]
+        assert sum(legs) == every.commands
     # more pairs of states than the legs may measure (12 prefixes of two or three targets, each
-    # 6 x 6 pairs): the caller samples the family instead
-    monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36 - 1)
-    args = (sampler, start, welds, orders, False, [], lambda _m: None)
-    assert tour_bounds.lattice_tour_bound(*args) is None
-    monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36)
-    assert tour_bounds.lattice_tour_bound(*args) is not None
+    # 6 x 6 pairs; every order at once, each ordered pair of targets from the two sets of the
+    # others that may come before it: 12 too): the caller samples the family instead
+    for which in (orders, None):
+        args = (sampler, start, welds, which, False, [], lambda _m: None)
+        monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36 - 1)
+        assert tour_bounds.lattice_tour_bound(*args) is None
+        monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36)
+        assert tour_bounds.lattice_tour_bound(*args) is not None
+
+
+def test_the_lattice_listing_stops_once_the_legs_are_too_many(monkeypatch):
+    """The tour bound lists each target's lattice states before it knows whether the legs
+    between them can be measured: it stops listing as soon as the targets listed already
+    have more pairs of states than the budget, by :func:`leg_multiplicity` (checked here
+    against a count of the prefixes of every order), and samples the family instead."""
+    for n in (2, 3, 4, 5):
+        orders = list(itertools.permutations(range(n)))
+        counted = np.zeros((n, n), dtype=np.int64)
+        for prefix in {o[:k] for o in orders for k in range(2, n + 1)}:
+            counted[prefix[-2], prefix[-1]] += 1
+        assert np.array_equal(tour_bounds.leg_multiplicity(n, orders), counted)
+        # every order at once: each ordered pair after any set of the other n - 2 targets
+        every = tour_bounds.leg_multiplicity(n, None)
+        assert np.array_equal(every, (2 ** (n - 2)) * (1 - np.eye(n, dtype=np.int64)))
+    assert np.array_equal(
+        tour_bounds.leg_multiplicity(3, [(0, 1, 2), (0, 2, 1)]),
+        [[0, 1, 1], [0, 0, 1], [0, 1, 0]],
+    )
+    arm, world, welds, start, sampler = _three_seed_welds()
+    listed = []
+
+    class Found:
+        complete = True
+
+        def __init__(self, k: int) -> None:
+            self.ticks = np.tile(arm.lattice.nearest_ticks(start), (10 * (k + 1), 1))
+
+    def fake_listing(_arm, point, *_a, **_k):
+        k = int(np.flatnonzero(np.all(welds == point, axis=1))[0])
+        listed.append(k)
+        return Found(k)
+
+    monkeypatch.setattr(tour_bounds, "lattice_goal_states", fake_listing)
+    monkeypatch.setattr(tour_bounds, "GOAL_THREADS", 1)  # in the targets' order
+    assert world.satisfied(arm, start[None])[0]  # every listed state is the start's, clear
+    every = tour_bounds.leg_multiplicity(3, None)
+    say = lambda _m: None  # noqa: E731
+    # 10 and 20 states: 2 * (10 * 20) * 2 = 800 pairs after two targets
+    assert tour_bounds._goal_layers(sampler, start, welds, say, every, 799) is None
+    assert listed == [0, 1]
+    listed.clear()
+    layers = tour_bounds._goal_layers(sampler, start, welds, say, every, 10**9)
+    assert listed == [0, 1, 2] and [lay.size for lay in layers] == [10, 20, 30]
 
 
 @pytest.mark.slow

@@ -831,8 +831,9 @@ def _family_bounds(
             )
         elif pts.shape[0] <= SUBSET_TARGETS:
             found, per_order = tour_bound(
-                fam, q0, pts, tolerance_mm, None, back, on_progress=say, max_samples=max_samples
-            )
+                fam, q0, pts, tolerance_mm, None, back, on_progress=say, max_samples=max_samples,
+                lattice=True,
+            )  # fmt: skip
         else:
             found = tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say)
             per_order = {}

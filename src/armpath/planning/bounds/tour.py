@@ -80,8 +80,11 @@ def tour_bound(
     points = np.asarray(targets, dtype=np.float64)
     ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
     layers = None
-    if lattice and with_errors and orders is not None and len(points) <= MAX_LATTICE_TARGETS:
-        layers = _goal_layers(sampler, q_start, points, say)
+    if lattice and with_errors and len(points) <= MAX_LATTICE_TARGETS:
+        multiplicity = leg_multiplicity(len(points), orders)
+        layers = _goal_layers(
+            sampler, q_start, points, say, multiplicity, MAX_LATTICE_PAIRS_UNPROVEN
+        )
         if layers is not None:
             exact = lattice_tour_bound(
                 sampler, q_start, points, orders, back, ways, say, layers=layers
@@ -133,7 +136,7 @@ def tour_bound(
         clear_path_q=None if found.clear_q is None else found.clear_q[list(found.clear_order)],
         clear_path_order=None if found.clear_q is None else tuple(found.clear_order),
     )
-    if layers is not None and orders is not None and not bound.proven:
+    if layers is not None and not bound.proven:
         # the samples do not cover the family: the lattice states, listed above, give a proven
         # bound if their legs can be measured within a larger budget
         say(f"the sampled bound is not proven: {bound.unproven_because}")
@@ -310,12 +313,36 @@ def listing_ranges(
     return grid.nearest_ticks(q_start), lower, upper
 
 
+def leg_multiplicity(n: int, orders: list[tuple[int, ...]] | None) -> IntArray:
+    """``(n, n)``: how many times the legs from each of ``n`` targets to each other are
+    measured by :func:`lattice_tour_bound` over ``orders`` (once per distinct prefix of the
+    orders ending in that pair; None, every order at once: ``2**(n - 2)``, the sets of the
+    other targets that may come before, :class:`~armpath.planning.bounds.search.Subsets`).
+    The pairs of states measured: ``sizes @ multiplicity @ sizes``."""
+    if orders is None:
+        out = np.full((n, n), 2 ** max(n - 2, 0), dtype=np.int64)
+        np.fill_diagonal(out, 0)
+        return out
+    out = np.zeros((n, n), dtype=np.int64)
+    for prefix in {order[:k] for order in orders for k in range(2, len(order) + 1)}:
+        out[prefix[-2], prefix[-1]] += 1
+    return out
+
+
 def _goal_layers(
-    sampler: FamilySampler, q_start: FloatArray, points: FloatArray, say: Callable[[str], None]
+    sampler: FamilySampler,
+    q_start: FloatArray,
+    points: FloatArray,
+    say: Callable[[str], None],
+    multiplicity: IntArray | None = None,
+    max_pairs: int | None = None,
 ) -> list[Layer] | None:
     """Per target, the lattice goal states that keep the clearance rule, as a layer taken
     exact (:func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`); None where
-    they cannot be listed completely (:func:`listing_ranges`) or a budget is spent."""
+    they cannot be listed completely (:func:`listing_ranges`) or a budget is spent: the
+    listing stops as soon as the targets listed already have more than
+    :data:`MAX_LATTICE_GOALS` states, or with ``multiplicity`` (:func:`leg_multiplicity`)
+    more than ``max_pairs`` pairs of states to measure between them."""
     ranges = listing_ranges(sampler, q_start)
     if ranges is None:
         return None
@@ -325,9 +352,17 @@ def _goal_layers(
     tip = sampler.tip
 
     failed: list[int] = []
+    sizes = np.zeros(points.shape[0], dtype=np.int64)
+
+    def too_many() -> bool:
+        if sizes.sum() > MAX_LATTICE_GOALS:
+            return True
+        if multiplicity is None or max_pairs is None:
+            return False
+        return int(sizes @ multiplicity @ sizes) > max_pairs
 
     def listed(k: int) -> Layer | None:
-        if failed:  # one target's states could not all be listed: the bound samples instead
+        if failed or too_many():  # the bound samples instead
             return None
         say(f"listing the lattice states within the tolerance of target {k + 1}")
         found = lattice_goal_states(
@@ -346,6 +381,11 @@ def _goal_layers(
             return None
         q = grid.to_joint(found.ticks)
         q = q[world.satisfied(arm, q)] if q.shape[0] else q
+        sizes[k] = q.shape[0]
+        if too_many():
+            failed.append(k)
+            say("the lattice states or the legs between them are too many: sampling instead")
+            return None
         u = sampler.units(q)
         clear = np.ones(q.shape[0], dtype=bool)
         return Layer(u, np.zeros_like(u), q, np.zeros((q.shape[0], 3)), clear=clear)
@@ -368,7 +408,7 @@ def lattice_tour_bound(
     sampler: FamilySampler,
     q_start: FloatArray,
     points: FloatArray,
-    orders: list[tuple[int, ...]],
+    orders: list[tuple[int, ...]] | None,
     back: bool,
     ways: list[PassageSamples],
     say: Callable[[str], None],
@@ -380,60 +420,84 @@ def lattice_tour_bound(
     :func:`_goal_layers` lists them; None: listed now): a plan ends each visit at a lattice
     state within the tolerance of the target that keeps the clearance rule, and each leg
     between two lattice states takes at least their largest joint change in whole commands
-    (obstacles ignored between the targets; a leg from the start into a hollow obstacle at
-    least its way through an opening, as the sampled bound). The states are listed completely
-    (:func:`_goal_layers`), so the least over ``orders`` is exact for this relaxation: no
-    sampling error. None where they cannot be listed, or their legs would measure more than
-    ``max_pairs`` pairs of states (None: :data:`MAX_LATTICE_PAIRS`); the caller then samples
-    the family."""
+    (obstacles ignored between the targets; a leg from the start into a hollow obstacle, or
+    with ``back`` the way back, at least its way through an opening, as the sampled bound).
+    The states are listed completely (:func:`_goal_layers`), so the least over ``orders`` is
+    exact for this relaxation: no sampling error. ``orders`` None: every order at once (Held
+    and Karp's programme, :class:`~armpath.planning.bounds.search.Subsets`; no order's own
+    bound then), and the optimal path's states are the bound's guide and its path through
+    clear members (they are lattice states that keep the clearance rule). None where the
+    states cannot be listed, or their legs would measure more than ``max_pairs`` pairs of
+    states (None: :data:`MAX_LATTICE_PAIRS`; :func:`leg_multiplicity`); the caller then
+    samples the family."""
     if layers is None:
         layers = _goal_layers(sampler, q_start, points, say)
     if layers is None:
         return None
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no lattice state within the tolerance that is clear")
-    prefixes = {order[:n] for order in orders for n in range(2, len(order) + 1)}
-    pairs = sum(layers[p[-2]].size * layers[p[-1]].size for p in prefixes)
+    sizes = np.array([lay.size for lay in layers], dtype=np.int64)
+    pairs = int(sizes @ leg_multiplicity(len(layers), orders) @ sizes)
     if pairs > (MAX_LATTICE_PAIRS if max_pairs is None else max_pairs):
         say("the legs between the lattice states are too many to measure: sampling instead")
         return None
     say("bounding the tour's commands over its lattice goal states")
     from_start = _from_start(sampler, q_start, points, layers, ways)
     per_order: dict[tuple[int, ...], int] = {}
-    done: dict[tuple[int, ...], FloatArray] = {}
-    for order in orders:
+    states, order_found = None, None
+    if orders is None:
         check_time("bounding the tour's commands")
-        for n in range(1, len(order) + 1):  # each prefix once, shared between the orders
-            prefix = order[:n]
-            if prefix not in done:
-                done[prefix] = (
-                    from_start[prefix[0]]
-                    if n == 1
-                    else sampler.advance(
-                        layers[prefix[-2]], done[prefix[:-1]], layers[prefix[-1]], whole=True
-                    )[0]
-                )
-        cost = done[order]
-        if back:
-            cost = cost + sampler.distance_from(q_start, layers[order[-1]], whole=True)
-        per_order[order] = int(np.ceil(float(cost.min()) - 1e-9))
-    best = min(per_order.values())
+        found = Subsets(back).solve(sampler, layers, from_start, find_through=False)
+        best = int(np.ceil(found.total - 1e-9))
+        order_found = found.order
+        states = np.array([layers[t].q[found.samples[t]] for t in order_found])
+    else:
+        done: dict[tuple[int, ...], FloatArray] = {}
+        for order in orders:
+            check_time("bounding the tour's commands")
+            for n in range(1, len(order) + 1):  # each prefix once, shared between the orders
+                prefix = order[:n]
+                if prefix not in done:
+                    done[prefix] = (
+                        from_start[prefix[0]]
+                        if n == 1
+                        else sampler.advance(
+                            layers[prefix[-2]], done[prefix[:-1]], layers[prefix[-1]], whole=True
+                        )[0]
+                    )
+            cost = done[order]
+            if back:
+                cost = cost + from_start[order[-1]]
+            per_order[order] = int(np.ceil(float(cost.min()) - 1e-9))
+        best = min(per_order.values())
+    n_orders = math.factorial(len(layers)) if orders is None else len(orders)
     return (
         CommandBound(
             commands=best,
             value=float(best),
             method=(
-                "least over every visiting order of a shortest path from the start through "
+                "least over every visiting order"
+                + (
+                    " (a dynamic programme over the sets of targets visited)"
+                    if orders is None
+                    else ""
+                )
+                + " of a shortest path from the start through "
                 "the lattice states within the tolerance of each target that keep the "
                 "clearance rule (all of them, listed by branch and bound over boxes of ticks; "
                 "obstacles ignored between the targets), each leg at least its largest joint "
                 "change in whole commands" + passage_method(ways, "a leg from the start")
             ),
             sampling={
-                "orders": float(len(orders)),
-                "lattice_goal_states": float(sum(lay.size for lay in layers)),
+                "orders": float(n_orders),
+                "lattice_goal_states": float(sizes.sum()),
             }
+            | ({"clear_path_commands": float(best)} if orders is None else {})
             | passage_sampling(ways),
+            guide_q=states,
+            guide_order=order_found,
+            clear_path_q=states,
+            clear_path_order=order_found,
         ),
         per_order,
     )
