@@ -353,11 +353,11 @@ def test_the_lattice_tour_relaxation_equals_brute_force(monkeypatch):
     # more pairs of states than the legs may measure (12 prefixes of two or three targets, each
     # 6 x 6 pairs; every order at once, each ordered pair of targets from the two sets of the
     # others that may come before it: 12 too): the caller samples the family instead
-    for which in (orders, None):
+    for which, budget in ((orders, "MAX_LATTICE_PAIRS"), (None, "MAX_LATTICE_PAIRS_EVERY_ORDER")):
         args = (sampler, start, welds, which, False, [], lambda _m: None)
-        monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36 - 1)
+        monkeypatch.setattr(tour_bounds, budget, 12 * 36 - 1)
         assert tour_bounds.lattice_tour_bound(*args) is None
-        monkeypatch.setattr(tour_bounds, "MAX_LATTICE_PAIRS", 12 * 36)
+        monkeypatch.setattr(tour_bounds, budget, 12 * 36)
         assert tour_bounds.lattice_tour_bound(*args) is not None
 
 

@@ -83,7 +83,7 @@ def tour_bound(
     if lattice and with_errors and len(points) <= MAX_LATTICE_TARGETS:
         multiplicity = leg_multiplicity(len(points), orders)
         layers = _goal_layers(
-            sampler, q_start, points, say, multiplicity, MAX_LATTICE_PAIRS_UNPROVEN
+            sampler, q_start, points, say, multiplicity, _pair_budget(orders, True)
         )
         if layers is not None:
             exact = lattice_tour_bound(
@@ -142,7 +142,7 @@ def tour_bound(
         say(f"the sampled bound is not proven: {bound.unproven_because}")
         exact = lattice_tour_bound(
             sampler, q_start, points, orders, back, ways, say, layers=layers,
-            max_pairs=MAX_LATTICE_PAIRS_UNPROVEN,
+            max_pairs=_pair_budget(orders, True),
         )  # fmt: skip
         if exact is not None:
             return exact
@@ -254,10 +254,11 @@ def _from_start(
 
 
 #: Lattice states of all the targets together past which :func:`lattice_tour_bound` gives way
-#: to the family's sampled members (about 150 bytes each; the pairs of states its legs measure
-#: are capped apart). Two welds of the seed arm in free space: 257,052 states, listed in 17 s,
-#: 1.6e10 pairs.
-MAX_LATTICE_GOALS = 600_000
+#: to the family's sampled members (about 150 bytes each, and every order at once keeps a cost
+#: and where it came from, 24 bytes, per state for each set of the other targets before it;
+#: the pairs of states its legs measure are capped apart). Two welds of the seed arm in free
+#: space: 257,052 states, listed in 17 s, 1.6e10 pairs; five: 640,796.
+MAX_LATTICE_GOALS = 1_000_000
 #: Pairs of states the legs of :func:`lattice_tour_bound` may measure, over every prefix of the
 #: orders (about 2.5e9 a second on two cores): past it, the family's sampled members instead.
 #: Seed Task 3: 9.7e9 pairs, 4 s.
@@ -266,6 +267,22 @@ MAX_LATTICE_PAIRS = 40_000_000_000
 #: them, :meth:`FamilySampler.audit`): the lattice's is then the only proof. Three welds of a
 #: five-joint SO-101 on a desk: 5.5e10 pairs, about 30 s.
 MAX_LATTICE_PAIRS_UNPROVEN = 200_000_000_000
+#: Pairs of states every order at once (:func:`lattice_tour_bound` with no orders) may measure,
+#: as :func:`leg_multiplicity` counts them. Its programme leaves out the partial paths dearer
+#: than one greedy order's total, so it measures far fewer than it counts: five welds of the
+#: seed arm in free space, 640,796 states, 2.6e12 pairs counted, 37 s on two cores (the tour's
+#: 69 commands then proven the fewest; the sampled bound said 65); six, 7.2e12, 92 s.
+MAX_LATTICE_PAIRS_EVERY_ORDER = 3_000_000_000_000
+
+
+def _pair_budget(orders: list[tuple[int, ...]] | None, unproven: bool) -> int:
+    """The pairs of states :func:`lattice_tour_bound` may measure over ``orders`` (None: every
+    order at once), ``unproven``: where the family's samples give no proven bound."""
+    if orders is None:
+        return MAX_LATTICE_PAIRS_EVERY_ORDER
+    return MAX_LATTICE_PAIRS_UNPROVEN if unproven else MAX_LATTICE_PAIRS
+
+
 #: Most targets whose lattice states are listed for the bound: each takes seconds (some 12 s
 #: a weld of the seed arm in free space), so twelve welds in a given order spent 200 s listing
 #: and 24 over 5 min; more are bounded over the family's sampled members.
@@ -428,7 +445,8 @@ def lattice_tour_bound(
     bound then), and the optimal path's states are the bound's guide and its path through
     clear members (they are lattice states that keep the clearance rule). None where the
     states cannot be listed, or their legs would measure more than ``max_pairs`` pairs of
-    states (None: :data:`MAX_LATTICE_PAIRS`; :func:`leg_multiplicity`); the caller then
+    states (None: :data:`MAX_LATTICE_PAIRS`, every order at once
+    :data:`MAX_LATTICE_PAIRS_EVERY_ORDER`; :func:`leg_multiplicity`); the caller then
     samples the family."""
     if layers is None:
         layers = _goal_layers(sampler, q_start, points, say)
@@ -438,7 +456,7 @@ def lattice_tour_bound(
         raise PlanningError("a target has no lattice state within the tolerance that is clear")
     sizes = np.array([lay.size for lay in layers], dtype=np.int64)
     pairs = int(sizes @ leg_multiplicity(len(layers), orders) @ sizes)
-    if pairs > (MAX_LATTICE_PAIRS if max_pairs is None else max_pairs):
+    if pairs > (_pair_budget(orders, False) if max_pairs is None else max_pairs):
         say("the legs between the lattice states are too many to measure: sampling instead")
         return None
     say("bounding the tour's commands over its lattice goal states")
