@@ -142,11 +142,11 @@ BoundSamplesOption = Annotated[
         "configurations stops splitting (1,000 to 2,000,000; default 50,000; its first round "
         "may hold more, and the result reports what it held; its rounds grow in proportion, "
         "16 at the default): more give a tighter bound, later (with 200,000 the UR5 cell's "
-        "seam: 104.9 rather than 103.3, its bound 411.4 s rather than 27.2 s; "
-        "benchmarks/results/bounds.md). Every trace's bound samples; a tour of at most 4 "
+        "seam: 104.9 rather than 102.9, its bound 91.2 s rather than 33.9 s; "
+        "benchmarks/results/bounds.md). Every trace's bound samples; a tour of at most 7 "
         "welds (at most 8 with --order given) is bounded over its lattice goal states "
-        "instead when they can all be listed, and then N is not read (the seed's Task 3: "
-        "117 either way).",
+        "instead when they can all be listed and their legs measured, and then N is not read "
+        "(the seed's Task 3: 117 either way).",
         show_default=False,
     ),
 ]

@@ -684,8 +684,10 @@ def plan_tour(
 #: Most targets whose every order gets its own bound over the whole family (4! = 24 orders).
 EXACT_ORDER_TARGETS = 4
 #: Targets up to which the bound searches every order at once (a programme over the sets of
-#: targets visited, :class:`~armpath.planning.bounds.search.Subsets`, no order's own bound);
-#: more take the cheaper bound of :func:`~armpath.planning.bounds.tour_bound_any_order`. Six
+#: targets visited, :class:`~armpath.planning.bounds.search.Subsets`, no order's own bound:
+#: over the lattice goal states where they can be listed and measured, else over the family's
+#: samples); more take the cheaper bound of
+#: :func:`~armpath.planning.bounds.tour_bound_any_order`. Six
 #: welds of the seed arm in free space: 68 commands after three rounds of the search, where
 #: the cheaper bound says 17 (the tour, planned and bounded, 43 s); seven: 68 (64 s); eight
 #: would take 162 s and 0.75 GB for 74 (plan 88), where the cheaper bound says 57 in 38 s (plan
