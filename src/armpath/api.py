@@ -720,10 +720,11 @@ def spotweld(
     time); False: ``None`` there. ``bound_samples``: the live samples past which the bound's
     search stops splitting (1,000 to 2,000,000; None: 50,000; its first round may hold more;
     the search's rounds grow in proportion): more give a tighter bound, later. It is read only
-    where the bound samples: a tour of at most 4 welds (8 in the order given) whose lattice
-    goal states can all be listed is bounded over those states instead (Task 3: 117 with any
-    ``bound_samples``). ``pools``: plan the cheapest orders once more through pools of goal
-    states (Task 3: 121 commands rather than 126, in about twice the time without the bound);
+    where the bound samples: a tour of at most 7 welds (8 in the order given) whose lattice
+    goal states can all be listed, and their legs measured, is bounded over those states
+    instead (Task 3: 117 with any ``bound_samples``). ``pools``: plan the cheapest orders
+    once more through pools of goal states (Task 3: 121 commands rather than 126, in about
+    twice the time without the bound);
     False: the guided orders' goal states only. ``objective``: ``"commands"``, or ``"path"``
     (the tool point's path, mm) or ``"energy"`` (weighted joint travel): each leg is planned
     for it and, of the tours planned, the one least in it is kept (the orders planned are
