@@ -310,20 +310,7 @@ def _sampling_errors(
     near = _direction_neighbours(u, node_dir, dir_ptr, nb_ptr, nb, period, branch_gap, own)
     err = np.zeros((m, j))
     moved = np.zeros((m, points.shape[1]))
-    ends = np.zeros(m, dtype=np.bool_)
     for i in range(m):
-        d = node_dir[i]
-        for p in range(nb_ptr[d], nb_ptr[d + 1] if not own else nb_ptr[d]):
-            e = nb[p]
-            if not 0 <= solution_counts[e] < solution_counts[d]:
-                continue
-            found = False
-            for w in range(near.shape[1]):
-                if near[i, w] < 0:
-                    break
-                if node_dir[near[i, w]] == e:
-                    found = True
-            ends[i] = ends[i] or not found
         if near[i, 0] < 0:
             err[i, :] = missing
             moved[i, :] = np.inf
@@ -343,6 +330,21 @@ def _sampling_errors(
                 moved[i, t] = max(moved[i, t], np.sqrt(x))
     if own:
         return err, moved
+    # the samples by a fold: a neighbouring direction with fewer real solutions, none near
+    ends = np.zeros(m, dtype=np.bool_)
+    for i in range(m):
+        d = node_dir[i]
+        for p in range(nb_ptr[d], nb_ptr[d + 1]):
+            e = nb[p]
+            if not 0 <= solution_counts[e] < solution_counts[d]:
+                continue
+            found = False
+            for w in range(near.shape[1]):
+                if near[i, w] < 0:
+                    break
+                if node_dir[near[i, w]] == e:
+                    found = True
+            ends[i] = ends[i] or not found
     for i in range(m):
         if not ends[i] or err[i, 0] >= missing:
             continue
