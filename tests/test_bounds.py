@@ -474,6 +474,7 @@ class _Metric:
     what the relaxations call."""
 
     advance = bounds.FamilySampler.advance
+    predecessor_tree = bounds.FamilySampler.predecessor_tree
 
     def __init__(self, period):
         self.period = period
@@ -625,6 +626,33 @@ def _brute_tours(layers, app, back, period):
     return best, per_order, through
 
 
+def _brute_to_go(layers, ends, j, left, period):
+    """Per sample of site ``j``, the least cost of a path from it through every site of
+    ``left`` in any order and any choice of samples, plus the ends at the last sample."""
+    import itertools
+
+    if not left:
+        return np.array(ends[j], dtype=float)
+    out = np.full(layers[j].size, np.inf)
+    for o in itertools.permutations(left):
+        for pick in itertools.product(*[range(layers[t].size) for t in o]):
+            rest = sum(
+                np.ceil(
+                    _box_distance(layers[s].u[i], layers[s].err[i], layers[t].u[k],
+                                  layers[t].err[k], period) - 1e-9
+                )
+                for (s, i), (t, k) in itertools.pairwise(zip(o, pick, strict=True))
+            ) + ends[o[-1]][pick[-1]]  # fmt: skip
+            a = layers[j]
+            for x in range(a.size):
+                b = layers[o[0]]
+                first = np.ceil(
+                    _box_distance(a.u[x], a.err[x], b.u[pick[0]], b.err[pick[0]], period) - 1e-9
+                )
+                out[x] = min(out[x], first + rest)
+    return out
+
+
 def test_the_orders_relaxation_equals_brute_force():
     """The tour bound's programme over orders (legs whole commands, back to the start or not)
     against every order and every choice of samples."""
@@ -662,7 +690,7 @@ def test_the_subsets_relaxation_equals_brute_force(back):
     same cost through each sample that a path within the incumbent reaches."""
     import itertools
 
-    from armpath.planning.bounds.search import Subsets
+    from armpath.planning.bounds.search import NearestToGo, OutOfPairsError, Subsets
 
     rng = np.random.default_rng(23 + back)
     period = np.array([90.0, 0.0, 0.0, 0.0])
@@ -692,14 +720,36 @@ def test_the_subsets_relaxation_equals_brute_force(back):
         for got, want in zip(pruned.through, through, strict=True):
             np.testing.assert_allclose(got[want <= upper], want[want <= upper])
             assert np.all((got == want) | (want > upper))
-        # the clear path's programme alone (no cost through the samples), cut by the total of
-        # one greedy order: an order's total, so never below the least
+        # the total alone (no cost through the samples), its programme capped by the costs
+        # still to go from the nearest samples: never above brute force's from each sample
         ends = app if back else [np.zeros(lay.size) for lay in layers]
-        greedy = Subsets(back)._greedy(metric, layers, app, ends)
-        assert greedy in {v for v in per_order.values()} and greedy >= best
+        nearest = NearestToGo(metric, layers, ends, True)
+        assert len(nearest) == len(list(nearest)) == len(layers) * 2 ** (len(layers) - 1)
+        for (mask, j), h in nearest.items():
+            left = [r for r in range(len(layers)) if mask >> r & 1 and r != j]
+            want = _brute_to_go(layers, ends, j, left, period)
+            assert np.all(h <= want + 1e-9)
+            if not left or (len(left) == 1 and not back):  # the ends; the nearest sample
+                np.testing.assert_allclose(h, want)
         alone = Subsets(back).solve(metric, layers, app, find_through=False)
         assert alone.total == pytest.approx(best)
         assert all(np.all(np.isinf(t)) for t in alone.through)
+        o, pick = alone.order, [alone.samples[t] for t in alone.order]
+        assert per_order[o] == best and alone.approach == app[o[0]][pick[0]]
+        # a budget of pairs offered: the programme with no incumbent offers each step every
+        # sample of the sites before it, forward and backward alike
+        if len(layers) > 1:
+            offered = 2 * sum(
+                sum(layers[i].size for i in combo if i != j) * layers[j].size
+                for size in range(2, len(layers) + 1)
+                for combo in itertools.combinations(range(len(layers)), size)
+                for j in combo
+            )
+            assert Subsets(back, max_pairs=offered).solve(metric, layers, app).total == best
+            with pytest.raises(OutOfPairsError):
+                Subsets(back, max_pairs=offered - 1).solve(metric, layers, app)
+            with pytest.raises(OutOfPairsError):
+                Subsets(back, max_pairs=0).solve(metric, layers, app, find_through=False)
         # the clear path's programme on some of the samples (or all) taken exact, pruned by the
         # costs still to go of the solution on all of them (the search's order; with their
         # errors, and without, where on all samples a clear path's costs still to go are

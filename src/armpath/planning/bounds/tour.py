@@ -21,7 +21,7 @@ from armpath.planning.bounds.passage import (
     sampled_passages,
 )
 from armpath.planning.bounds.sampling import FamilySampler, Layer
-from armpath.planning.bounds.search import CellSearch, Orders, Subsets
+from armpath.planning.bounds.search import CellSearch, Orders, OutOfPairsError, Subsets
 from armpath.planning.bounds.value import CommandBound
 from armpath.planning.trace.family import CurveFamily
 
@@ -81,7 +81,7 @@ def tour_bound(
     ways = sampled_passages(sampler, q_start, points, with_errors, through_openings, say)
     layers = None
     if lattice and with_errors and len(points) <= MAX_LATTICE_TARGETS:
-        multiplicity = leg_multiplicity(len(points), orders)
+        multiplicity = None if orders is None else leg_multiplicity(len(points), orders)
         layers = _goal_layers(
             sampler, q_start, points, say, multiplicity, _pair_budget(orders, True)
         )
@@ -254,10 +254,11 @@ def _from_start(
 
 
 #: Lattice states of all the targets together past which :func:`lattice_tour_bound` gives way
-#: to the family's sampled members (about 150 bytes each, and every order at once keeps a cost
-#: and where it came from, 24 bytes, per state for each set of the other targets before it;
-#: the pairs of states its legs measure are capped apart). Two welds of the seed arm in free
-#: space: 257,052 states, listed in 17 s, 1.6e10 pairs; five: 640,796.
+#: to the family's sampled members (about 150 bytes each, and every order at once keeps a cost,
+#: 8 bytes, per state for each set of the other targets before it, and where it came from, 5
+#: bytes, where any is finite; the pairs of states its legs measure are capped apart). Two
+#: welds of the seed arm in free space: 257,052 states, listed in 17 s, 1.6e10 pairs; five:
+#: 640,796; seven, 880,568, 1.8 GB at most in all.
 MAX_LATTICE_GOALS = 1_000_000
 #: Pairs of states the legs of :func:`lattice_tour_bound` may measure, over every prefix of the
 #: orders (about 2.5e9 a second on two cores): past it, the family's sampled members instead.
@@ -267,12 +268,14 @@ MAX_LATTICE_PAIRS = 40_000_000_000
 #: them, :meth:`FamilySampler.audit`): the lattice's is then the only proof. Three welds of a
 #: five-joint SO-101 on a desk: 5.5e10 pairs, about 30 s.
 MAX_LATTICE_PAIRS_UNPROVEN = 200_000_000_000
-#: Pairs of states every order at once (:func:`lattice_tour_bound` with no orders) may measure,
-#: as :func:`leg_multiplicity` counts them. Its programme leaves out the partial paths dearer
-#: than one greedy order's total, so it measures far fewer than it counts: five welds of the
-#: seed arm in free space, 640,796 states, 2.6e12 pairs counted, 37 s on two cores (the tour's
-#: 69 commands then proven the fewest; the sampled bound said 65); six, 7.2e12, 92 s.
-MAX_LATTICE_PAIRS_EVERY_ORDER = 3_000_000_000_000
+#: Pairs of states every order at once (:func:`lattice_tour_bound` with no orders) may offer
+#: its legs' steps, as it goes (:class:`~armpath.planning.bounds.search.Subsets`' ``max_pairs``):
+#: its programme leaves out the partial paths that the costs still to go, from each state's
+#: nearest states of the other targets, take above a rising cap, so it offers few. The seed arm
+#: in free space (two cores): five welds, 640,796 states, 1.2e8 pairs, 1.3 s (69 commands, the
+#: fewest; the whole bound 15 s); six, 7.1e8; seven, 880,568 states, 5.0e10 over four caps,
+#: 30 s (79, the fewest).
+MAX_LATTICE_PAIRS_EVERY_ORDER = 100_000_000_000
 
 
 def _pair_budget(orders: list[tuple[int, ...]] | None, unproven: bool) -> int:
@@ -330,16 +333,11 @@ def listing_ranges(
     return grid.nearest_ticks(q_start), lower, upper
 
 
-def leg_multiplicity(n: int, orders: list[tuple[int, ...]] | None) -> IntArray:
+def leg_multiplicity(n: int, orders: list[tuple[int, ...]]) -> IntArray:
     """``(n, n)``: how many times the legs from each of ``n`` targets to each other are
     measured by :func:`lattice_tour_bound` over ``orders`` (once per distinct prefix of the
-    orders ending in that pair; None, every order at once: ``2**(n - 2)``, the sets of the
-    other targets that may come before, :class:`~armpath.planning.bounds.search.Subsets`).
-    The pairs of states measured: ``sizes @ multiplicity @ sizes``."""
-    if orders is None:
-        out = np.full((n, n), 2 ** max(n - 2, 0), dtype=np.int64)
-        np.fill_diagonal(out, 0)
-        return out
+    orders ending in that pair). The pairs of states measured: ``sizes @ multiplicity @
+    sizes``."""
     out = np.zeros((n, n), dtype=np.int64)
     for prefix in {order[:k] for order in orders for k in range(2, len(order) + 1)}:
         out[prefix[-2], prefix[-1]] += 1
@@ -445,9 +443,9 @@ def lattice_tour_bound(
     bound then), and the optimal path's states are the bound's guide and its path through
     clear members (they are lattice states that keep the clearance rule). None where the
     states cannot be listed, or their legs would measure more than ``max_pairs`` pairs of
-    states (None: :data:`MAX_LATTICE_PAIRS`, every order at once
-    :data:`MAX_LATTICE_PAIRS_EVERY_ORDER`; :func:`leg_multiplicity`); the caller then
-    samples the family."""
+    states (None: :data:`MAX_LATTICE_PAIRS`, counted before by :func:`leg_multiplicity`;
+    every order at once :data:`MAX_LATTICE_PAIRS_EVERY_ORDER`, counted as its programme
+    offers them); the caller then samples the family."""
     if layers is None:
         layers = _goal_layers(sampler, q_start, points, say)
     if layers is None:
@@ -455,8 +453,8 @@ def lattice_tour_bound(
     if any(lay.size == 0 for lay in layers):
         raise PlanningError("a target has no lattice state within the tolerance that is clear")
     sizes = np.array([lay.size for lay in layers], dtype=np.int64)
-    pairs = int(sizes @ leg_multiplicity(len(layers), orders) @ sizes)
-    if pairs > (_pair_budget(orders, False) if max_pairs is None else max_pairs):
+    budget = _pair_budget(orders, False) if max_pairs is None else max_pairs
+    if orders is not None and int(sizes @ leg_multiplicity(len(layers), orders) @ sizes) > budget:
         say("the legs between the lattice states are too many to measure: sampling instead")
         return None
     say("bounding the tour's commands over its lattice goal states")
@@ -465,7 +463,13 @@ def lattice_tour_bound(
     states, order_found = None, None
     if orders is None:
         check_time("bounding the tour's commands")
-        found = Subsets(back).solve(sampler, layers, from_start, find_through=False)
+        try:
+            found = Subsets(back, max_pairs=budget).solve(
+                sampler, layers, from_start, find_through=False
+            )
+        except OutOfPairsError:
+            say("the legs between the lattice states are too many to measure: sampling instead")
+            return None
         best = int(np.ceil(found.total - 1e-9))
         order_found = found.order
         states = np.array([layers[t].q[found.samples[t]] for t in order_found])
