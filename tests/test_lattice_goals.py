@@ -436,3 +436,49 @@ def test_a_tour_of_more_welds_than_are_listed_is_bounded_over_the_sampled_family
     assert "lattice_goal_states" not in sampled["lower_bound"]["sampling"]
     assert 0 < sampled["lower_bound_commands"] <= listed["lower_bound_commands"]
     assert sampled["lower_bound_commands"] <= sampled["n_commands"]
+
+
+def test_more_welds_than_every_order_samples_are_bounded_over_their_lattice_states(monkeypatch):
+    """A tour of more welds than every order at once takes over the family's samples
+    (:data:`SUBSET_TARGETS`), up to :data:`MAX_LATTICE_TARGETS`, is bounded every order at once
+    over its lattice goal states alone (eight welds of the seed arm in free space: 86, which
+    their plan meets, where the cheaper bound said 57), and takes the cheaper bound where they
+    cannot be listed. Three seed welds with the limits lowered: the same bound as every order
+    at once over the lattice states gives by way of the five-to-seven route, and where the
+    states are too many, the cheaper bound (every weld entered once), no higher; all equal to the
+    bound order by order."""
+    import armpath.planning.tour as tour
+
+    arm, world, welds, start, _ = _three_seed_welds()
+    fam = _targets_family(arm, world, welds)
+    ticks = arm.lattice.nearest_ticks(start)
+    orders = list(itertools.permutations(range(3)))
+    say = lambda _m: None  # noqa: E731
+    listed = []  # the welds' states listed once (the listing is tested above)
+    listing = tour_bounds._goal_layers
+
+    def once(*args, **kwargs):
+        if not listed:
+            listed.append(listing(*args, **kwargs))
+        return listed[0]
+
+    monkeypatch.setattr(tour_bounds, "_goal_layers", once)
+    # every leg direct, none through the workpiece's opening (the same for every route)
+    monkeypatch.setattr(tour_bounds, "sampled_passages", lambda *_a, **_k: [])
+    by_order, _, why = tour._family_bounds(fam, ticks, welds, orders, False, 0.05, say)
+    assert why is None and "lattice states" in by_order.method
+    monkeypatch.setattr(tour, "EXACT_ORDER_TARGETS", 1)
+    every, _, _ = tour._family_bounds(fam, ticks, welds, orders, False, 0.05, say)
+    assert "sets of targets visited" in every.method and "lattice states" in every.method
+    assert every.commands == by_order.commands
+    monkeypatch.setattr(tour, "SUBSET_TARGETS", 2)
+    over, per_order, _ = tour._family_bounds(fam, ticks, welds, orders, False, 0.05, say)
+    assert per_order == {} and over.method == every.method and over.commands == every.commands
+    assert over.guide_order is not None and sorted(over.guide_order) == [0, 1, 2]
+    monkeypatch.setattr(tour, "MAX_LATTICE_TARGETS", 2)
+    cheap, _, _ = tour._family_bounds(fam, ticks, welds, orders, False, 0.05, say)
+    assert "entered once" in cheap.method and cheap.commands <= every.commands
+    monkeypatch.setattr(tour, "MAX_LATTICE_TARGETS", 8)
+    monkeypatch.setattr(tour_bounds, "_goal_layers", lambda *_a, **_k: None)  # not listed
+    cheap, _, _ = tour._family_bounds(fam, ticks, welds, orders, False, 0.05, say)
+    assert "entered once" in cheap.method and cheap.commands <= every.commands

@@ -720,7 +720,7 @@ def spotweld(
     time); False: ``None`` there. ``bound_samples``: the live samples past which the bound's
     search stops splitting (1,000 to 2,000,000; None: 50,000; its first round may hold more;
     the search's rounds grow in proportion): more give a tighter bound, later. It is read only
-    where the bound samples: a tour of at most 7 welds (8 in the order given) whose lattice
+    where the bound samples: a tour of at most 8 welds whose lattice
     goal states can all be listed, and their legs measured, is bounded over those states
     instead (Task 3: 117 with any ``bound_samples``). ``pools``: plan the cheapest orders
     once more through pools of goal states (Task 3: 121 commands rather than 126, in about

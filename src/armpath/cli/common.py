@@ -143,8 +143,8 @@ BoundSamplesOption = Annotated[
         "may hold more, and the result reports what it held; its rounds grow in proportion, "
         "16 at the default): more give a tighter bound, later (with 200,000 the UR5 cell's "
         "seam: 104.9 rather than 102.9, its bound 91.2 s rather than 33.9 s; "
-        "benchmarks/results/bounds.md). Every trace's bound samples; a tour of at most 7 "
-        "welds (at most 8 with --order given) is bounded over its lattice goal states "
+        "benchmarks/results/bounds.md). Every trace's bound samples; a tour of at most 8 "
+        "welds is bounded over its lattice goal states "
         "instead when they can all be listed and their legs measured, and then N is not read "
         "(the seed's Task 3: 117 either way).",
         show_default=False,

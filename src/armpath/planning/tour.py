@@ -45,9 +45,15 @@ from armpath.ik.target import Orientation
 from armpath.kinematics import tool_position
 from armpath.model.lattice import Lattice
 from armpath.model.serial_arm import SerialArm
-from armpath.planning.bounds import CommandBound, tour_bound, tour_bound_any_order
+from armpath.planning.bounds import (
+    CommandBound,
+    tour_bound,
+    tour_bound_any_order,
+    tour_bound_over_lattice,
+)
 from armpath.planning.bounds.carriage import points_travel_bound, with_carriage
 from armpath.planning.bounds.search import check_max_samples
+from armpath.planning.bounds.tour import MAX_LATTICE_TARGETS
 from armpath.planning.choices import Objective, VisitOrder
 from armpath.planning.motion import (
     MotionOptions,
@@ -686,12 +692,14 @@ EXACT_ORDER_TARGETS = 4
 #: Targets up to which the bound searches every order at once (a programme over the sets of
 #: targets visited, :class:`~armpath.planning.bounds.search.Subsets`, no order's own bound:
 #: over the lattice goal states where they can be listed and measured, else over the family's
-#: samples); more take the cheaper bound of
-#: :func:`~armpath.planning.bounds.tour_bound_any_order`. Six
-#: welds of the seed arm in free space: 68 commands after three rounds of the search, where
-#: the cheaper bound says 17 (the tour, planned and bounded, 43 s); seven: 68 (64 s); eight
-#: would take 162 s and 0.75 GB for 74 (plan 88), where the cheaper bound says 57 in 38 s (plan
-#: 92, the guide and pools then comparing the 24 best ranked orders).
+#: samples); more, up to :data:`~armpath.planning.bounds.tour.MAX_LATTICE_TARGETS`, over the
+#: lattice goal states alone where they can be
+#: (:func:`~armpath.planning.bounds.tour_bound_over_lattice`), else the cheaper bound of
+#: :func:`~armpath.planning.bounds.tour_bound_any_order`. Welds of the seed arm in free space:
+#: six and seven proven at their plans' 73 and 79 commands over their lattice goal states (68
+#: after three rounds of the family's samples); eight at 86, which their plan then meets (92
+#: against the cheaper bound's 57 in 38 s), where the family's samples would take 162 s and
+#: 0.75 GB for 74.
 SUBSET_TARGETS = 7
 #: Most targets of a tour whose bound over the family is computed.
 MAX_BOUND_TARGETS = 24
@@ -805,8 +813,10 @@ def _family_bounds(
     max_samples: int | None = None,
 ) -> tuple[CommandBound | None, dict[tuple[int, ...], int], str | None]:
     """The bound over every goal configuration: per order for a given order or up to
-    :data:`EXACT_ORDER_TARGETS` targets, every order at once up to :data:`SUBSET_TARGETS`,
-    else the cheaper bound; each order's bound where computed; and why there is none: without
+    :data:`EXACT_ORDER_TARGETS` targets, every order at once up to :data:`SUBSET_TARGETS`
+    (and up to :data:`~armpath.planning.bounds.tour.MAX_LATTICE_TARGETS` over the lattice
+    goal states where they can be listed and measured), else the cheaper bound; each order's
+    bound where computed; and why there is none: without
     a family (beyond :data:`MAX_BOUND_TARGETS` targets) or where a target has no member within
     the limits."""
     if fam is None:
@@ -837,7 +847,11 @@ def _family_bounds(
                 lattice=True,
             )  # fmt: skip
         else:
-            found = tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say)
+            found = None
+            if pts.shape[0] <= MAX_LATTICE_TARGETS:
+                found = tour_bound_over_lattice(fam, q0, pts, tolerance_mm, back, on_progress=say)
+            if found is None:
+                found = tour_bound_any_order(fam, q0, pts, tolerance_mm, back, on_progress=say)
             per_order = {}
     except PlanningError as exc:
         return None, {}, str(exc)

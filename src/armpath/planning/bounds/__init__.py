@@ -83,7 +83,7 @@ could lie between. The higher of the two bounds is reported.
 """
 
 from armpath.planning.bounds.sampling import FamilySampler, Layer
-from armpath.planning.bounds.tour import tour_bound, tour_bound_any_order
+from armpath.planning.bounds.tour import tour_bound, tour_bound_any_order, tour_bound_over_lattice
 from armpath.planning.bounds.trace import trace_bound
 from armpath.planning.bounds.value import CommandBound
 
@@ -93,5 +93,6 @@ __all__ = [
     "Layer",
     "tour_bound",
     "tour_bound_any_order",
+    "tour_bound_over_lattice",
     "trace_bound",
 ]

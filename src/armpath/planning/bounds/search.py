@@ -394,6 +394,26 @@ class OutOfPairsError(Exception):
     (``max_pairs``)."""
 
 
+class _Costs(dict[tuple[int, int], FloatArray]):
+    """:class:`Subsets`' costs by set of sites visited (a bit mask) and the last one, kept only
+    where one is finite (most sets have none under a tight cap); a key left out reads as its
+    site's samples all infinite (one shared array per site, never written to)."""
+
+    def __init__(self, sizes: list[int]) -> None:
+        super().__init__()
+        self.none = [np.full(m, np.inf) for m in sizes]
+
+    def __missing__(self, key: tuple[int, int]) -> FloatArray:
+        return self.none[key[1]]
+
+    def keep(self, key: tuple[int, int], c: FloatArray) -> bool:
+        """Keeps ``c`` at ``key`` where any of it is finite; whether it did."""
+        if not np.any(np.isfinite(c)):
+            return False
+        self[key] = c
+        return True
+
+
 class NearestToGo(Mapping[tuple[int, int], FloatArray]):
     """Costs still to go of :class:`Subsets`' programme that no path beats, from the nearest
     samples of the other sites: at each sample ``x`` of site ``j``, with the sites ``R`` still
@@ -493,7 +513,7 @@ class Subsets:
         upper: float = np.inf,
         to_go: Mapping[tuple[int, int], FloatArray] | None = None,
         spent: list[float] | None = None,
-    ) -> tuple[dict[tuple[int, int], FloatArray], _Came, bool]:
+    ) -> tuple[_Costs, _Came, bool]:
         """For each set of sites (a bit mask) and its last one: the least cost at each sample
         of the last one's layer of a path through every site of the set, beginning with
         ``first`` at its first site, and where each came from (site, sample); and whether a
@@ -514,9 +534,14 @@ class Subsets:
             return np.where(over, np.inf, c)
 
         def still_to_go(mask: int, j: int) -> FloatArray | None:
-            return None if to_go is None else to_go[(full & ~mask) | (1 << j), j]
+            if to_go is None:
+                return None
+            h = to_go.get(((full & ~mask) | (1 << j), j))
+            return cost.none[j] if h is None else h  # no key: nothing within reach
 
-        cost = {(1 << j, j): kept(first[j], still_to_go(1 << j, j)) for j in range(n)}
+        cost = _Costs([lay.size for lay in layers])
+        for j in range(n):
+            cost.keep((1 << j, j), kept(first[j], still_to_go(1 << j, j)))
         came: _Came = {}
         for size in range(2, n + 1):
             for combo in itertools.combinations(range(n), size):
@@ -524,26 +549,28 @@ class Subsets:
                 for j in combo:
                     check_time("bounding the tour's commands")
                     rest = mask & ~(1 << j)
-                    live = {i: np.flatnonzero(np.isfinite(cost[rest, i])) for i in combo if i != j}
-                    before = [i for i in live if live[i].size]
+                    before = [i for i in combo if i != j and (rest, i) in cost]
+                    if not before:
+                        continue  # no path through the set ends at j within the cap
+                    live = {i: np.flatnonzero(np.isfinite(cost[rest, i])) for i in before}
                     # only the samples of j that the cost still to go leaves within reach
                     h = still_to_go(mask, j)
                     to = np.arange(layers[j].size) if h is None else np.flatnonzero(h <= upper)
-                    cut = cut or (bool(before) and to.size < layers[j].size)
+                    cut = cut or to.size < layers[j].size
+                    if not to.size:
+                        continue
+                    spent[0] += float(sum(live[i].size for i in before)) * to.size
+                    if spent[0] > self.max_pairs:
+                        raise OutOfPairsError
                     c = np.full(layers[j].size, np.inf)
                     arg = np.full(layers[j].size, -1, dtype=np.int64)
-                    if before and to.size:
-                        spent[0] += float(sum(live[i].size for i in before)) * to.size
-                        if spent[0] > self.max_pairs:
-                            raise OutOfPairsError
-                        c[to], arg[to] = sampler.advance(
-                            Layer.joined([layers[i].subset(live[i]) for i in before]),
-                            np.concatenate([cost[rest, i][live[i]] for i in before]),
-                            layers[j].subset(to),
-                            self.whole,
-                        )
-                    cost[mask, j] = kept(c, h)
-                    if np.any(np.isfinite(cost[mask, j])):
+                    c[to], arg[to] = sampler.advance(
+                        Layer.joined([layers[i].subset(live[i]) for i in before]),
+                        np.concatenate([cost[rest, i][live[i]] for i in before]),
+                        layers[j].subset(to),
+                        self.whole,
+                    )
+                    if cost.keep((mask, j), kept(c, h)):
                         # (site, sample) compactly: a path is traced back through finite costs
                         # only (arg is -1 where c is inf)
                         owner = np.repeat(before, [live[i].size for i in before]).astype(np.int8)
@@ -559,7 +586,7 @@ class Subsets:
         ends: list[FloatArray],
         upper: float,
         to_go: Mapping[tuple[int, int], FloatArray] | None,
-    ) -> tuple[dict[tuple[int, int], FloatArray], _Came]:
+    ) -> tuple[_Costs, _Came]:
         """The forward programme for the least total alone, run with a rising cap on the
         costs kept: from the least the costs still to go allow (``to_go``; None: from the
         other sites' nearest samples, :class:`NearestToGo`), 1, 3, 7, ... commands above it,
@@ -572,7 +599,14 @@ class Subsets:
         full = (1 << n) - 1
         if to_go is None:
             to_go = NearestToGo(sampler, layers, ends, self.whole)
-        least = min(float(np.min(app[j] + to_go[full, j], initial=np.inf)) for j in range(n))
+        least = min(
+            (
+                float(np.min(app[j] + h, initial=np.inf))
+                for j in range(n)
+                if (h := to_go.get((full, j))) is not None
+            ),  # no key: nothing within reach
+            default=np.inf,
+        )
         spent = [0.0]
         above = 0.0
         while True:
