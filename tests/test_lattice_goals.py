@@ -438,6 +438,7 @@ def test_a_tour_of_more_welds_than_are_listed_is_bounded_over_the_sampled_family
     assert sampled["lower_bound_commands"] <= sampled["n_commands"]
 
 
+@pytest.mark.slow  # 11-16 s
 def test_more_welds_than_every_order_samples_are_bounded_over_their_lattice_states(monkeypatch):
     """A tour of more welds than every order at once takes over the family's samples
     (:data:`SUBSET_TARGETS`), up to :data:`MAX_LATTICE_TARGETS`, is bounded every order at once
