@@ -626,6 +626,26 @@ def _brute_tours(layers, app, back, period):
     return best, per_order, through
 
 
+def test_the_costs_still_to_go_keep_below_a_path_through_a_wide_box():
+    """Between error boxes the distances break the triangle inequality: a box wide enough to
+    touch two others joins them cheaply, so the nearest distance to the farthest site still to
+    visit can exceed a path through the wide box. The costs still to go then count the nearest
+    site and the spanning tree only; without errors, also the farthest."""
+    from armpath.planning.bounds.search import NearestToGo
+
+    metric = _Metric(np.zeros(1))
+    u, err = [0.0, 10.0, 20.0], [0.0, 5.0, 0.0]
+    layers = [
+        bounds.Layer(np.array([[x]]), np.array([[e]]), np.zeros((1, 6)), np.zeros((1, 3)))
+        for x, e in zip(u, err, strict=True)
+    ]
+    ends = [np.zeros(1)] * 3
+    # from site 0 through 1 and 2: 5 + 5 (each leg to the wide box's edge), though 2 is 20 away
+    assert NearestToGo(metric, layers, ends, True)[0b111, 0][0] == 10.0
+    exact = [lay.without_errors() for lay in layers]
+    assert NearestToGo(metric, exact, ends, True)[0b111, 0][0] == 20.0
+
+
 def _brute_to_go(layers, ends, j, left, period):
     """Per sample of site ``j``, the least cost of a path from it through every site of
     ``left`` in any order and any choice of samples, plus the ends at the last sample."""
@@ -633,23 +653,26 @@ def _brute_to_go(layers, ends, j, left, period):
 
     if not left:
         return np.array(ends[j], dtype=float)
+
+    def leg(s, i, t, k):
+        a, b = layers[s], layers[t]
+        return np.ceil(_box_distance(a.u[i], a.err[i], b.u[k], b.err[k], period) - 1e-9)
+
+    legs = {
+        (s, i, t, k): leg(s, i, t, k)
+        for s in [j, *left]
+        for t in left
+        for i in range(layers[s].size)
+        for k in range(layers[t].size)
+    }
     out = np.full(layers[j].size, np.inf)
     for o in itertools.permutations(left):
         for pick in itertools.product(*[range(layers[t].size) for t in o]):
-            rest = sum(
-                np.ceil(
-                    _box_distance(layers[s].u[i], layers[s].err[i], layers[t].u[k],
-                                  layers[t].err[k], period) - 1e-9
-                )
-                for (s, i), (t, k) in itertools.pairwise(zip(o, pick, strict=True))
-            ) + ends[o[-1]][pick[-1]]  # fmt: skip
-            a = layers[j]
-            for x in range(a.size):
-                b = layers[o[0]]
-                first = np.ceil(
-                    _box_distance(a.u[x], a.err[x], b.u[pick[0]], b.err[pick[0]], period) - 1e-9
-                )
-                out[x] = min(out[x], first + rest)
+            rest = ends[o[-1]][pick[-1]] + sum(
+                legs[s, i, t, k] for (s, i), (t, k) in itertools.pairwise(zip(o, pick, strict=True))
+            )
+            for x in range(layers[j].size):
+                out[x] = min(out[x], legs[j, x, o[0], pick[0]] + rest)
     return out
 
 
@@ -731,6 +754,10 @@ def test_the_subsets_relaxation_equals_brute_force(back):
             assert np.all(h <= want + 1e-9)
             if not left or (len(left) == 1 and not back):  # the ends; the nearest sample
                 np.testing.assert_allclose(h, want)
+        exact = [lay.without_errors() for lay in layers]  # the farthest site counts too
+        for (mask, j), h in NearestToGo(metric, exact, ends, True).items():
+            left = [r for r in range(len(layers)) if mask >> r & 1 and r != j]
+            assert np.all(h <= _brute_to_go(exact, ends, j, left, period) + 1e-9)
         alone = Subsets(back).solve(metric, layers, app, find_through=False)
         assert alone.total == pytest.approx(best)
         assert all(np.all(np.isinf(t)) for t in alone.through)

@@ -420,17 +420,20 @@ class NearestToGo(Mapping[tuple[int, int], FloatArray]):
     to visit after it (the key is ``(R | {j}`` as a bit mask``, j)``, as :attr:`Solution.to_go`'s),
     a path on through every site of ``R`` (and back with the tour's ``ends``) takes at least
 
-    * ``max over r in R of d(x, r)``: it reaches every site of ``R`` from ``x``, and
     * ``min over r in R of d(x, r)`` plus the least spanning tree of ``R`` (each edge the
       least distance between two sites' samples): its first leg reaches one site of ``R``,
-      the legs after it join every site of ``R``, a tree through them,
+      the legs after it join every site of ``R``, a tree through them, and
+    * where every sample is exact (no sampling error), ``max over r in R of d(x, r)``: the
+      distances then obey the triangle inequality, so the legs from ``x`` to any site of
+      ``R`` are no shorter than the direct one (between error boxes they need not be: a wide
+      box touching two others joins them at no cost),
 
     the larger, plus the least of the ``ends`` at the sites of ``R`` (the path ends at one of
     them); with ``R`` empty the ends at ``x`` themselves. ``d(x, r)`` is the distance from
     ``x`` to the nearest sample of ``r``, a whole number of commands with ``whole`` (every leg
-    is), each distance less the samples' errors; the legs' distances obey the triangle
-    inequality, so these hold whichever samples the path takes. Each key's costs are computed
-    when asked (``n 2**(n-1)`` keys; the nearest distances, ``n (n - 1)`` of them, once)."""
+    is), less the samples' errors. These hold whichever samples the path takes. Each key's
+    costs are computed when asked (``n 2**(n-1)`` keys; the nearest distances, ``n (n - 1)``
+    of them, once)."""
 
     def __init__(
         self, sampler: FamilySampler, layers: list[Layer], ends: list[FloatArray], whole: bool
@@ -455,6 +458,7 @@ class NearestToGo(Mapping[tuple[int, int], FloatArray]):
             self._between[j, r] = float(np.min(d, initial=np.inf))
         self._between = np.minimum(self._between, self._between.T)
         self._home = [float(np.min(e, initial=np.inf)) for e in ends]
+        self._exact = not any(np.any(lay.err) for lay in layers)
         self._trees: dict[int, float] = {}
 
     def _tree(self, left: int) -> float:
@@ -472,9 +476,9 @@ class NearestToGo(Mapping[tuple[int, int], FloatArray]):
         if left == 0:
             return self._ends[j]
         sites = [r for r in range(self._n) if left >> r & 1]
-        near = np.min([self._nearest[j, r] for r in sites], axis=0)
-        far = np.max([self._nearest[j, r] for r in sites], axis=0)
-        out: FloatArray = np.maximum(far, near + self._tree(left))
+        out: FloatArray = np.min([self._nearest[j, r] for r in sites], axis=0) + self._tree(left)
+        if self._exact:
+            out = np.maximum(out, np.max([self._nearest[j, r] for r in sites], axis=0))
         return out + min(self._home[r] for r in sites)
 
     def __iter__(self) -> Iterator[tuple[int, int]]:
