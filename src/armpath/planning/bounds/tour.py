@@ -168,8 +168,11 @@ def tour_bound_over_lattice(
     say("bounding the tour's commands over its lattice goal states")
     sampler = FamilySampler(fam, tolerance_mm, q_start=q_start)
     points = np.asarray(targets, dtype=np.float64)
+    layers = _goal_layers(sampler, q_start, points, say)
+    if layers is None:  # not listed: the openings' ways would be of no use
+        return None
     ways = sampled_passages(sampler, q_start, points, True, through_openings, say)
-    found = lattice_tour_bound(sampler, q_start, points, None, back, ways, say)
+    found = lattice_tour_bound(sampler, q_start, points, None, back, ways, say, layers=layers)
     return None if found is None else found[0]
 
 
