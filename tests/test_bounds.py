@@ -715,6 +715,14 @@ def test_the_subsets_relaxation_equals_brute_force(back):
 
     from armpath.planning.bounds.search import NearestToGo, OutOfPairsError, Subsets
 
+    runs: list[tuple[float, float]] = []  # each deepening run's cap, least left out
+
+    class Recorded(Subsets):
+        def _programme(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+            out = super()._programme(*args, **kwargs)
+            runs.append((args[3], out[2]))
+            return out
+
     rng = np.random.default_rng(23 + back)
     period = np.array([90.0, 0.0, 0.0, 0.0])
     metric = _Metric(period)
@@ -758,8 +766,15 @@ def test_the_subsets_relaxation_equals_brute_force(back):
         for (mask, j), h in NearestToGo(metric, exact, ends, True).items():
             left = [r for r in range(len(layers)) if mask >> r & 1 and r != j]
             assert np.all(h <= _brute_to_go(exact, ends, j, left, period) + 1e-9)
-        alone = Subsets(back).solve(metric, layers, app, find_through=False)
+        runs.clear()
+        alone = Recorded(back).solve(metric, layers, app, find_through=False)
         assert alone.total == pytest.approx(best)
+        # the caps rise a command or more a run, each to the least total a path the run before
+        # left out could come to, which is never above the least total: so the last is it
+        assert runs[-1][0] == best and runs[-1][1] > best
+        for (cap, beyond), (cap_next, _) in itertools.pairwise(runs):
+            assert cap < beyond <= best
+            assert cap_next == max(np.ceil(beyond - 1e-9), cap + 1)
         assert all(np.all(np.isinf(t)) for t in alone.through)
         o, pick = alone.order, [alone.samples[t] for t in alone.order]
         assert per_order[o] == best and alone.approach == app[o[0]][pick[0]]

@@ -517,24 +517,28 @@ class Subsets:
         upper: float = np.inf,
         to_go: Mapping[tuple[int, int], FloatArray] | None = None,
         spent: list[float] | None = None,
-    ) -> tuple[_Costs, _Came, bool]:
+    ) -> tuple[_Costs, _Came, float]:
         """For each set of sites (a bit mask) and its last one: the least cost at each sample
         of the last one's layer of a path through every site of the set, beginning with
-        ``first`` at its first site, and where each came from (site, sample); and whether a
-        finite cost was left out. Costs above ``upper`` are left infinite (a path that dear is
-        no better than one known), and so are those whose least cost still to go (``to_go``,
-        by the set of sites not yet visited and the last one) takes them above it; the
-        samples so left are not measured from. ``spent``: the pairs offered so far (one
-        number, added to; :attr:`max_pairs`)."""
+        ``first`` at its first site, and where each came from (site, sample); and the least
+        total that a path left out could come to (inf where none was). Costs above ``upper``
+        are left infinite (a path that dear is no better than one known), and so are those
+        whose least cost still to go (``to_go``, by the set of sites not yet visited and the
+        last one) takes them above it; the samples so left are not measured from. A path left
+        out was left at its first sample whose cost, or least cost before it, plus its cost
+        still to go passed ``upper``: that sum, no more than the path's total, is what the
+        least left out is taken over. ``spent``: the pairs offered so far (one number, added
+        to; :attr:`max_pairs`)."""
         n = len(layers)
         full = (1 << n) - 1
         spent = [0.0] if spent is None else spent
-        cut = False
+        beyond = np.inf  # the least total a path left out could come to
 
         def kept(c: FloatArray, h: FloatArray | None) -> FloatArray:
-            nonlocal cut
-            over = (c if h is None else c + h) > upper
-            cut = cut or bool(np.any(over & np.isfinite(c)))
+            nonlocal beyond
+            f = c if h is None else c + h
+            over = f > upper
+            beyond = min(beyond, float(np.min(f[over], initial=np.inf)))
             return np.where(over, np.inf, c)
 
         def still_to_go(mask: int, j: int) -> FloatArray | None:
@@ -557,10 +561,13 @@ class Subsets:
                     if not before:
                         continue  # no path through the set ends at j within the cap
                     live = {i: np.flatnonzero(np.isfinite(cost[rest, i])) for i in before}
-                    # only the samples of j that the cost still to go leaves within reach
+                    # only the samples of j that the cost still to go leaves within reach; a
+                    # path to another costs at least the least cost before it
                     h = still_to_go(mask, j)
                     to = np.arange(layers[j].size) if h is None else np.flatnonzero(h <= upper)
-                    cut = cut or to.size < layers[j].size
+                    if h is not None and to.size < layers[j].size:
+                        low = min(float(np.min(cost[rest, i][live[i]])) for i in before)
+                        beyond = min(beyond, low + float(np.min(h[h > upper])))
                     if not to.size:
                         continue
                     spent[0] += float(sum(live[i].size for i in before)) * to.size
@@ -580,7 +587,7 @@ class Subsets:
                         owner = np.repeat(before, [live[i].size for i in before]).astype(np.int8)
                         local = np.concatenate([live[i] for i in before]).astype(np.int32)
                         came[mask, j] = (owner[arg], local[arg])
-        return cost, came, cut
+        return cost, came, beyond
 
     def _deepened(
         self,
@@ -592,10 +599,12 @@ class Subsets:
         to_go: Mapping[tuple[int, int], FloatArray] | None,
     ) -> tuple[_Costs, _Came]:
         """The forward programme for the least total alone, run with a rising cap on the
-        costs kept: from the least the costs still to go allow (``to_go``; None: from the
-        other sites' nearest samples, :class:`NearestToGo`), 1, 3, 7, ... commands above it,
-        until a path within the cap is found (no path within it was left out, so its total is
-        the least), none was left out, or the cap reaches ``upper``. A cap far below the
+        costs kept (iterative deepening): from the least the costs still to go allow
+        (``to_go``; None: from the other sites' nearest samples, :class:`NearestToGo`), each
+        run's cap the least total a path the run before left out could come to (at least one
+        command more), until a path within the cap is found (no path within it was left out,
+        so its total is the least), none was left out, or the cap reaches ``upper``. Every
+        run raises the cap by a command or more, up to the least total. A cap far below the
         least total leaves out nearly every partial path, so the runs below it cost little:
         five welds of the seed arm in free space over their 640,796 lattice goal states, 38 s
         for one run capped by a greedy order's total, 1.3 s for the one run it takes."""
@@ -612,14 +621,14 @@ class Subsets:
             default=np.inf,
         )
         spent = [0.0]
-        above = 0.0
+        floor = -np.inf  # the cap of the run before
         while True:
-            cap = min(upper, (np.ceil(least - 1e-9) if self.whole else least) + above)
-            forward, came, cut = self._programme(sampler, layers, app, cap, to_go, spent)
+            cap = min(upper, max(np.ceil(least - 1e-9) if self.whole else least, floor + 1.0))
+            forward, came, beyond = self._programme(sampler, layers, app, cap, to_go, spent)
             found = any(np.any(np.isfinite(forward[full, j] + ends[j])) for j in range(n))
-            if found or not cut or cap >= upper or not np.isfinite(least):
+            if found or not np.isfinite(beyond) or cap >= upper:
                 return forward, came
-            above = 2.0 * above + 1.0
+            least, floor = beyond, cap
 
     def solve(
         self,

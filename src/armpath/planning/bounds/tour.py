@@ -300,8 +300,8 @@ MAX_LATTICE_PAIRS_UNPROVEN = 200_000_000_000
 #: its programme leaves out the partial paths that the costs still to go, from each state's
 #: nearest states of the other targets, take above a rising cap, so it offers few. The seed arm
 #: in free space (two cores): five welds, 640,796 states, 1.2e8 pairs, 1.3 s (69 commands, the
-#: fewest; the whole bound 15 s); six, 7.1e8; seven, 880,568 states, 5.0e10 over four caps,
-#: 30 s (79, the fewest).
+#: fewest; the whole bound 15 s); six, 7.1e8; seven, 880,568 states, 3.2e10 over six caps,
+#: 24 s (79, the fewest); eight, 4.7e10 over six caps, 37 s (86, the fewest).
 MAX_LATTICE_PAIRS_EVERY_ORDER = 100_000_000_000
 
 
