@@ -769,12 +769,13 @@ def test_the_subsets_relaxation_equals_brute_force(back):
         runs.clear()
         alone = Recorded(back).solve(metric, layers, app, find_through=False)
         assert alone.total == pytest.approx(best)
-        # the caps rise a command or more a run, each to the least total a path the run before
-        # left out could come to, which is never above the least total: so the last is it
-        assert runs[-1][0] == best and runs[-1][1] > best
+        # the caps rise a command or more a run, each at least to the least total a path the
+        # run before left out could come to, which is never above the least total; the last
+        # run's cap is the first to reach it
+        assert runs[-1][0] >= best
         for (cap, beyond), (cap_next, _) in itertools.pairwise(runs):
-            assert cap < beyond <= best
-            assert cap_next == max(np.ceil(beyond - 1e-9), cap + 1)
+            assert cap < beyond <= best and cap < best
+            assert cap_next >= max(np.ceil(beyond - 1e-9), cap + 1)
         assert all(np.all(np.isinf(t)) for t in alone.through)
         o, pick = alone.order, [alone.samples[t] for t in alone.order]
         assert per_order[o] == best and alone.approach == app[o[0]][pick[0]]
@@ -816,6 +817,21 @@ def test_the_subsets_relaxation_equals_brute_force(back):
                     )
                     want = clear_best if clear_best <= incumbent else np.inf
                     assert clear.total == pytest.approx(want)
+
+
+def test_the_deepenings_next_cap_doubles_the_work_as_it_grew():
+    """The cap rises to the least total left out at least, a command at least; past that by
+    as many commands as double the work at the growth a command measured, at most twice the
+    step before."""
+    from armpath.planning.bounds.search import next_cap
+
+    assert next_cap(80.0, 81.0, 1.0, 0.0) == (81.0, 1.0)  # no growth measured yet
+    assert next_cap(80.0, 84.5, 1.0, 0.0) == (85.0, 5.0)  # the least left out
+    assert next_cap(80.0, 81.0, 1.0, 3.0) == (81.0, 1.0)  # triples a command
+    assert next_cap(80.0, 81.0, 4.0, 1.1) == (87.0, 7.0)  # 1.1 ** 7 < 2 < 1.1 ** 8
+    assert next_cap(80.0, 81.0, 2.0, 1.1) == (84.0, 4.0)  # at most twice the step before
+    assert next_cap(80.0, 81.0, 2.0, 0.5) == (84.0, 4.0)  # no more work: as far again
+    assert next_cap(80.0, 90.0, 2.0, 1.1) == (90.0, 10.0)
 
 
 def test_the_every_target_entered_once_bound_is_never_above_the_best_order():

@@ -490,6 +490,24 @@ class NearestToGo(Mapping[tuple[int, int], FloatArray]):
         return self._n << (self._n - 1)
 
 
+def next_cap(cap: float, least: float, step: float, growth: float) -> tuple[float, float]:
+    """The cap of :class:`Subsets`' next deepening run, and its step above ``cap`` (that of
+    the run before was ``step``): at least the least total a path left out could come to
+    (``least``) and a command more; beyond that, steps that double the work a run does, as
+    far as the work grew by ``growth`` times a command from one run to the next (the pairs
+    offered; 0 where unknown), at most twice the step before. Eight welds of the seed arm in
+    free space do two to six times the work a command, and rise a command a run; eight of
+    its scene, four inside the workpiece, a tenth to a half, and rise by up to six."""
+    rise = 1.0
+    if growth > 1.0:
+        rise = max(1.0, float(np.floor(np.log(2.0) / np.log(growth) + 1e-9)))
+    elif growth > 0.0:
+        rise = 2.0 * step  # no more work a command: as far again
+    rise = min(rise, 2.0 * step)
+    cap_next = max(cap + rise, float(np.ceil(least - 1e-9)))
+    return cap_next, cap_next - cap
+
+
 @dataclass(frozen=True)
 class Subsets:
     """A tour's relaxation over every visiting order at once: Held and Karp's dynamic
@@ -521,14 +539,14 @@ class Subsets:
         """For each set of sites (a bit mask) and its last one: the least cost at each sample
         of the last one's layer of a path through every site of the set, beginning with
         ``first`` at its first site, and where each came from (site, sample); and the least
-        total that a path left out could come to (inf where none was). Costs above ``upper``
-        are left infinite (a path that dear is no better than one known), and so are those
-        whose least cost still to go (``to_go``, by the set of sites not yet visited and the
-        last one) takes them above it; the samples so left are not measured from. A path left
-        out was left at its first sample whose cost, or least cost before it, plus its cost
-        still to go passed ``upper``: that sum, no more than the path's total, is what the
-        least left out is taken over. ``spent``: the pairs offered so far (one number, added
-        to; :attr:`max_pairs`)."""
+        total a path left out could come to (inf where none was). Costs above ``upper`` are
+        left infinite (a path that dear is no better than one known), and so are those whose
+        least cost still to go (``to_go``, by the set of sites not yet visited and the last
+        one) takes them above it; the samples so left are not measured from. A path left out
+        was left at its first sample whose cost, or least cost before it, plus its cost still
+        to go passed ``upper``: that sum, no more than the path's total, is what the least
+        left out is taken over. ``spent``: the pairs offered so far (one number, added to;
+        :attr:`max_pairs`)."""
         n = len(layers)
         full = (1 << n) - 1
         spent = [0.0] if spent is None else spent
@@ -601,13 +619,16 @@ class Subsets:
         """The forward programme for the least total alone, run with a rising cap on the
         costs kept (iterative deepening): from the least the costs still to go allow
         (``to_go``; None: from the other sites' nearest samples, :class:`NearestToGo`), each
-        run's cap the least total a path the run before left out could come to (at least one
-        command more), until a path within the cap is found (no path within it was left out,
-        so its total is the least), none was left out, or the cap reaches ``upper``. Every
-        run raises the cap by a command or more, up to the least total. A cap far below the
-        least total leaves out nearly every partial path, so the runs below it cost little:
-        five welds of the seed arm in free space over their 640,796 lattice goal states, 38 s
-        for one run capped by a greedy order's total, 1.3 s for the one run it takes."""
+        run's cap raised by :func:`next_cap` (at least to the least total the run before left
+        out; further where the work grows slowly with the cap), until a path within the cap is
+        found (no path within it was left out, so its total is the least), none was left out,
+        or the cap reaches ``upper``. Every run raises the cap by a command or more. A cap far
+        below the least total leaves out nearly every partial path, so the runs below it cost
+        little: five welds of the seed arm in free space over their 640,796 lattice goal
+        states, 38 s for one run capped by a greedy order's total, 1.3 s for the one run it
+        takes. Raised a command at a time, eight welds of the seed scene, four inside its
+        workpiece, ran 26 times from 112 to 137 commands before the pairs' budget ran out,
+        each run a tenth dearer than the one before."""
         n = len(layers)
         full = (1 << n) - 1
         if to_go is None:
@@ -621,14 +642,18 @@ class Subsets:
             default=np.inf,
         )
         spent = [0.0]
-        floor = -np.inf  # the cap of the run before
+        cap = min(upper, np.ceil(least - 1e-9) if self.whole else least)
+        step, work = 1.0, 0.0  # the last rise of the cap, the pairs the run before offered
         while True:
-            cap = min(upper, max(np.ceil(least - 1e-9) if self.whole else least, floor + 1.0))
+            before = spent[0]
             forward, came, beyond = self._programme(sampler, layers, app, cap, to_go, spent)
             found = any(np.any(np.isfinite(forward[full, j] + ends[j])) for j in range(n))
             if found or not np.isfinite(beyond) or cap >= upper:
                 return forward, came
-            least, floor = beyond, cap
+            growth = ((spent[0] - before) / work) ** (1.0 / step) if work > 0 else 0.0
+            work = spent[0] - before
+            cap, step = next_cap(cap, beyond, step, growth)
+            cap = min(upper, cap)
 
     def solve(
         self,
