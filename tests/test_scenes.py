@@ -312,3 +312,21 @@ def test_a_scene_circle_with_no_radius_names_it(tmp_path):
     f.write_text(GOOD + '[tasks.trace]\ncurve = { type = "circle", center_mm = [0, 0, 0] }\n')
     with pytest.raises(SceneError, match=r"tasks\.trace\.curve\.circle\.radius_mm: Field required"):
         load_scene(f)
+
+
+def test_the_eight_weld_example_is_the_seed_scene_with_four_more_welds_on_its_inner_wall():
+    """``examples/seed_eight_welds.toml`` (the README's eight-weld tour): the seed scene's
+    obstacles and clearance, Task 3's four welds first, and four more, each on the workpiece's
+    surface (its signed distance 0 at the weld) inside its inner radius at that height."""
+    folder = Path(__file__).resolve().parents[1] / "examples"
+    example = load_scene(folder / "seed_eight_welds.toml")
+    seed = seed_scene()
+    welds = example.spotweld_targets_mm()
+    assert welds.shape == (8, 3)
+    np.testing.assert_allclose(welds[:4], seed.spotweld_targets_mm())
+    assert example.definition["obstacles"] == seed.definition["obstacles"]
+    assert example.definition["clearance"] == seed.definition["clearance"]
+    piece = next(o for o in example.world.obstacles if o.name == "workpiece")
+    np.testing.assert_allclose(piece.signed_distance(welds), 0.0, atol=1e-9)
+    radius = np.hypot(welds[:, 0] - 210.0, welds[:, 1])
+    np.testing.assert_allclose(radius, piece.inner_radius(welds[:, 2]), atol=1e-9)
