@@ -77,6 +77,7 @@ def free_circle():
     return arm, curve_family(arm, CollisionWorld(()), _seed_circle())
 
 
+@pytest.mark.slow  # 34 s, the quick run's longest (CI runs it)
 def test_family_limit_covers_the_longest_commands_found(free_circle):
     """The seed arm in free space on the README's 25 mm circle: no command SLSQP finds
     through members at six points of the circle (two configurations each, from different
