@@ -66,6 +66,7 @@ from armpath.planning.bounds.band import (
 from armpath.planning.bounds.chart import BlowUp
 from armpath.planning.bounds.sampling import (
     BRANCH_GAP,
+    MIN_SPACING,
     FamilySampler,
     Layer,
     _allowed_at,
@@ -105,6 +106,24 @@ LIMIT_SPLITS, SPLIT_GOAL = 6, 0.02
 #: nearest ones at the next (UR5 cell's 80 mm circle, points 5 mm apart, 300 then 2,000: 50.0
 #: commands in 79 s; 300, 800 and 2,000 95 s; 8 mm apart 46.3 in 36 s).
 APPROACH_LEVELS: tuple[int, ...] = (300,)
+#: At the finest sampling of a point of the least approach, the cells of directions whose
+#: samples lie within :data:`APPROACH_SPLIT_WINDOW` commands of the point's nearest are split
+#: in four, up to :data:`APPROACH_SPLIT_ROUNDS` times, while the point's bound rises by at
+#: least :data:`APPROACH_SPLIT_STALL` commands in two rounds and it keeps at most
+#: :data:`APPROACH_SPLIT_DIRECTIONS` directions: the nearest samples are those whose errors
+#: (their neighbours' members lying far apart: the UR5 cell's 80 mm circle near the wrist's
+#: straight pose, 17 commands at 300 directions, 10 at 2,000, 8 at 8,000 evenly) hold the bound
+#: down. The samples but the nearest are kept unchecked for clearance (a relaxation).
+APPROACH_SPLIT_ROUNDS, APPROACH_SPLIT_WINDOW = 12, 1.0
+APPROACH_SPLIT_STALL, APPROACH_SPLIT_DIRECTIONS = 0.05, 12_000
+#: Where the point of the least approach nearest the start is at its finest sampling, its
+#: cell of the curve is split in two (each half's tolerance raised by half as much: near the
+#: wrist's straight pose the tolerance's joint change sets the sampling errors), at most this
+#: many times in all and down to cells this long (mm). UR5 cell's 80 mm circle from its home:
+#: 48.0 commands (50 s) without splits, 54.0 (115 s) with both, the nearest clear sample
+#: 54.27 (so at least 55 whole commands); the seed 25 mm circle 34.2 either way (its
+#: nearest clear sample lies within 35).
+APPROACH_SPLIT_POINTS, APPROACH_MIN_GAP_MM = 40, 1.0
 #: Spacing (mm) of the points where the family is sampled to foretell the least approach
 #: (:func:`_nearest_member`).
 FORECAST_GAP_MM = 12.0
@@ -696,6 +715,64 @@ def _nearest_member(
     return nearest
 
 
+def _split_nearest(
+    sampler: FamilySampler,
+    q_start: FloatArray,
+    E: FloatArray,
+    dirs: FloatArray,
+    allowed: Callable[[FloatArray], BoolArray],
+    enough: float = math.inf,
+) -> tuple[float, float]:
+    """The least commands from ``q_start`` to the family at tool point ``E`` sampled along
+    ``dirs`` (those ``allowed``), less the sampling errors, with the cells of directions
+    nearest the start split (see :data:`APPROACH_SPLIT_ROUNDS`): each sampling's least
+    distance is a bound, the highest is returned (inf where no sample is kept; the splits
+    stop once it reaches ``enough``); and the distance to the nearest sample that is clear
+    itself (:func:`_nearest_clear`)."""
+    acc, filtered = sampler.sampled(E, dirs, allowed, levels=0)
+    first = acc.dirs.shape[0]
+    best, history, clear = -math.inf, [], math.inf
+
+    def distance(u: FloatArray, err: FloatArray) -> FloatArray:
+        return sampler.box_distance(q_start, u, err)
+
+    for _ in range(APPROACH_SPLIT_ROUNDS + 1):
+        layer, _, spacing, triangles = filtered
+        if not layer.size:
+            return math.inf, clear
+        assert layer.direction is not None
+        clear = min(clear, _nearest_clear(sampler, q_start, layer))
+        d = sampler.distance_from(q_start, layer)
+        least = float(d.min())
+        best = max(best, least)
+        history.append(best)
+        if best >= enough or (
+            len(history) > 2 and history[-1] < history[-3] + APPROACH_SPLIT_STALL
+        ):
+            break
+        refine = np.zeros(acc.dirs.shape[0], dtype=bool)
+        refine[layer.direction[d <= least + APPROACH_SPLIT_WINDOW]] = True
+        refine &= spacing / 2.0 >= MIN_SPACING
+        if not np.any(refine) or acc.dirs.shape[0] - first >= APPROACH_SPLIT_DIRECTIONS:
+            break
+        check_time("bounding the approach to the band")
+        acc = sampler.split(acc, E, refine, triangles, allowed)
+        # only the nearest samples' clearance is checked (the others lie farther)
+        filtered = sampler._filtered(acc, (distance, APPROACH_SPLIT_WINDOW))
+    return best, clear
+
+
+def _nearest_clear(sampler: FamilySampler, q_start: FloatArray, layer: Layer) -> float:
+    """The largest-joint distance (commands) from ``q_start`` to the nearest of ``layer``'s
+    samples that keep the clearance rule themselves (inf where none does): a member the
+    least approach cannot lie beyond."""
+    assert layer.clear is not None
+    if not np.any(layer.clear):
+        return math.inf
+    exact = layer.subset(layer.clear).without_errors()
+    return float(sampler.distance_from(q_start, exact).min())
+
+
 def least_approach(
     fam: CurveFamily,
     q_start: FloatArray,
@@ -712,36 +789,71 @@ def least_approach(
     the way (a relaxation); the members kept are those that may be clear. Each point is
     first sampled along the first of :data:`APPROACH_LEVELS` directions (wider cells: a lower
     distance), then the nearest point (by its latest bound) along more, up to ``directions``,
-    until the nearest has been sampled along ``directions`` (each sampling's distance is a
-    bound for its point: the higher is taken)."""
+    where the cells of directions nearest the start are split (:func:`_split_nearest`); a
+    point the nearest at that is split in two along the curve, each half sampled with the
+    tolerance raised by half as much (:data:`APPROACH_SPLIT_POINTS`); until the nearest point
+    can be split no more (each sampling's distance is a bound for its points: the higher is
+    taken), or its bound, in whole commands, reaches the distance to the nearest sample
+    that is clear itself (a member: no bound can lie beyond it). The value returned is a
+    bound; the fewest whole commands, its ceiling."""
     s_all, spacing = _points_along(spans_mm, gap_mm)
-    tol = tolerance_mm + spacing / 2.0
-
-    def nearest(count: int, s: float) -> float:
-        check_time("bounding the approach to the band")
-        sampler = samplers[count]
-        layer = sampler.layer(
-            fam.frame(float(s))[0], fibonacci_directions(count), _allowed_at(fam, float(s)),
-            levels=0,
-        )  # fmt: skip
-        return float(sampler.distance_from(q_start, layer).min()) if layer.size else math.inf
-
     levels = sorted({min(c, directions) for c in APPROACH_LEVELS} | {directions})
     found: dict[bytes, tuple[BlowUp, ...]] = {}  # the blow-ups at each point, found once
     # (each point's directions allowed are _allowed_at's there, at every sampling)
-    samplers = {c: FamilySampler(fam, tol, c, q_start, blow_up_cache=found) for c in levels}
+    samplers: dict[tuple[int, float], FamilySampler] = {}
+    clear = math.inf  # the distance to the nearest sample clear itself so far (commands)
+
+    def nearest(level: int, s: float, gap: float) -> float:
+        """The bound of the curve's points within ``gap / 2`` of ``s`` at ``level``."""
+        nonlocal clear
+        check_time("bounding the approach to the band")
+        count = levels[level]
+        if (count, gap) not in samplers:  # the tolerance raised by half the point's cell
+            samplers[count, gap] = FamilySampler(
+                fam, tolerance_mm + gap / 2.0, count, q_start, blow_up_cache=found
+            )
+        sampler = samplers[count, gap]
+        E, allowed = fam.frame(float(s))[0], _allowed_at(fam, float(s))
+        dirs = fibonacci_directions(count)
+        if level == finest:
+            # split no further than the bound's whole commands need to reach the nearest
+            # clear sample's (see below)
+            enough = math.ceil(clear - 1e-9) - 1.0 + 1e-6
+            value, its_clear = _split_nearest(sampler, q_start, E, dirs, allowed, enough)
+            clear = min(clear, its_clear)
+            return value
+        layer = sampler.layer(E, dirs, allowed, levels=0)
+        if not layer.size:
+            return math.inf
+        clear = min(clear, _nearest_clear(sampler, q_start, layer))
+        return float(sampler.distance_from(q_start, layer).min())
+
     # each point's distance at its coarsest sampling first; the nearest point so far sampled
     # again more finely (each sampling's distance is a bound for its point: the higher kept)
-    # until the nearest is at the finest: every other point's bound is then no lower
-    heap = [(nearest(levels[0], float(s)), 0, k) for k, s in enumerate(s_all)]
+    # until the nearest is at the finest, its nearest cells of directions split; then its
+    # cell of the curve split in two, each half a point sampled at the finest with the
+    # tolerance raised by half as much (the parent's bound holds for both halves), at most
+    # APPROACH_SPLIT_POINTS times: every other point's bound is then no lower than the
+    # nearest's. It stops early where the bound, in whole commands, reaches the nearest
+    # clear sample's distance (no member can lie farther)
+    finest = len(levels) - 1
+    heap = [(nearest(0, float(s), spacing), 0, float(s), spacing) for s in s_all]
     heapq.heapify(heap)
+    halvings = APPROACH_SPLIT_POINTS
     while heap:
-        value, level, k = heapq.heappop(heap)
-        if level == len(levels) - 1 or not math.isfinite(value):
+        value, level, s, gap = heapq.heappop(heap)
+        if not math.isfinite(value) or math.ceil(value - 1e-9) >= math.ceil(clear - 1e-9):
             return value
-        heapq.heappush(
-            heap, (max(value, nearest(levels[level + 1], float(s_all[k]))), level + 1, k)
-        )
+        if level < finest:
+            heapq.heappush(heap, (max(value, nearest(level + 1, s, gap)), level + 1, s, gap))
+        elif halvings > 0 and gap / 2.0 >= APPROACH_MIN_GAP_MM:
+            halvings -= 1
+            for half in (s - gap / 4.0, s + gap / 4.0):
+                # the finest sampling only: the parent's bound is above a coarser one's
+                halved = max(value, nearest(finest, half, gap / 2.0))
+                heapq.heappush(heap, (halved, finest, half, gap / 2.0))
+        else:
+            return value
     return math.inf
 
 

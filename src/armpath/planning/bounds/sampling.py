@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -52,6 +53,9 @@ BRANCH_GAP = 30.0
 CLEAR_MARGIN = 1e-6
 #: Finest direction spacing of a refinement (rad, about 0.05 deg).
 MIN_SPACING = float(np.radians(0.05))
+#: Samples :meth:`FamilySampler._filtered` checks for clearance at first when it checks them
+#: by rank (each batch after twice the one before).
+_RANKED_BATCH = 64
 #: Most directions of one layer (refinement stops before it would pass this).
 MAX_LAYER_DIRECTIONS = 200_000
 #: Directions a layer's singular directions are searched from (about 8 deg apart), whatever
@@ -808,10 +812,19 @@ class FamilySampler:
             caps=acc.caps,
         )
 
-    def _filtered(self, acc: _Samples) -> tuple[Layer, IntArray, FloatArray, IntArray]:
+    def _filtered(
+        self,
+        acc: _Samples,
+        ranked: tuple[Callable[[FloatArray, FloatArray], FloatArray], float] | None = None,
+    ) -> tuple[Layer, IntArray, FloatArray, IntArray]:
         """The layer of the samples in ``acc`` with their errors; the samples kept only for
         what their neighbours allow (indices into ``acc.dirs``); each direction's spacing (the
-        widest angle to its Delaunay neighbours, rad); the Delaunay triangles.
+        widest angle to its Delaunay neighbours, rad); the Delaunay triangles. ``ranked``:
+        for a caller to whom only the samples of least rank matter (the rank of each given its
+        command units and errors, and a margin), the samples are checked for clearance in
+        order of rank until the next lies more than the margin above the least kept; the
+        others are kept as if a member near them may be clear (a relaxation); None: all are
+        checked.
 
         A sample is kept when each link's slack is no worse than the farther of the link's ends
         moves to its neighbours' members (and within the tolerance; a link pair's, both links'
@@ -847,13 +860,27 @@ class FamilySampler:
         # how far the arm's points may move within the cell beyond the neighbours' members
         # (the tolerance's joint change), each landmark's own way and any point at most
         extra = (tol_err * self.step) @ self.reach + CLEAR_MARGIN
-        keep = self.may_be_clear(q, slack, moved + extra[:, None]) & ~self.outside_windows(u, err)
         # a member past the joint limits counts in its neighbours' errors (the family goes on
         # past a limit) and is then dropped: the layer's samples are configurations plans and
         # guides may take; its cells are split like unsure ones
         inside = acc.inside[order]
         edge = ~inside & ~self.outside_limits(u, err)
-        keep &= inside
+        keep = inside & ~self.outside_windows(u, err)
+        at = np.flatnonzero(keep)
+        moved = moved + extra[:, None]
+        if ranked is None:
+            keep[at] &= self.may_be_clear(q[at], slack[at], moved[at])
+        else:  # nearest first, until the next lies beyond the nearest kept by the margin
+            key, margin = ranked
+            rank = key(u[at], err[at])
+            at, rank = at[np.argsort(rank, kind="stable")], np.sort(rank, kind="stable")
+            done, batch, best = 0, _RANKED_BATCH, math.inf
+            while done < at.shape[0] and not rank[done] > best + margin:
+                take = at[done : done + batch]
+                ok = self.may_be_clear(q[take], slack[take], moved[take])
+                keep[take] = ok
+                best = min(best, float(rank[done : done + batch][ok].min(initial=math.inf)))
+                done, batch = done + batch, 2 * batch
         if self.body is not None:
             # a sample not clear itself whose cell the body cannot keep clear anywhere
             # (:class:`ToolBody`), where the chart is the identity out to its spacing
@@ -888,10 +915,18 @@ class FamilySampler:
     def distance_from(self, q_start: FloatArray, layer: Layer, whole: bool = False) -> FloatArray:
         """Least commands from ``q_start`` (rad) to each sample's error box (rounded up to
         whole commands when ``whole``)."""
-        d = self.units(q_start)[None, :] - layer.u
+        return self.box_distance(q_start, layer.u, layer.err, whole)
+
+    def box_distance(
+        self, q_start: FloatArray, u: FloatArray, err: FloatArray, whole: bool = False
+    ) -> FloatArray:
+        """Least commands from ``q_start`` (rad) to each box about ``u (M, J)`` (command units
+        of the tip joints) reaching ``err (M, J)`` either way (rounded up to whole commands
+        when ``whole``), a whole turn's joint the shorter way."""
+        d = self.units(q_start)[None, :] - u
         period = np.where(self.period > 0, self.period, 1.0)
         d = np.where(self.period > 0, d - period * np.floor(d / period + 0.5), d)
-        out = np.maximum(np.abs(d) - layer.err, 0.0).max(axis=-1, initial=0.0)
+        out = np.maximum(np.abs(d) - err, 0.0).max(axis=-1, initial=0.0)
         return np.asarray(np.ceil(out - 1e-9) if whole else out, dtype=np.float64)
 
     def advance(
