@@ -25,7 +25,9 @@ neighbouring points along the curve): the same assumption the family's sampling 
 (:mod:`~armpath.planning.bounds`), that the family varies no faster within a sample's cell
 than between neighbouring samples. The least approach samples the family with the tolerance
 raised by half the spacing of its points, so every member at a point between them lies within
-a sample's cell.
+a sample's cell; where the nearest lies, it splits the cells of tool directions and of the
+curve (:func:`_split_nearest`), until its whole commands reach those of the nearest sample
+that is clear itself.
 
 A curve that is no circle (an ellipse where a plane cuts a cone) is bounded by windows
 (:class:`LocalBand`): each layer's members against the circle fitted to the curve within
