@@ -402,6 +402,40 @@ def test_the_cells_the_tool_body_drops_hold_no_clear_member():
             assert it._coll_margin(family, rows, cols, "normal").max() < 0.0
 
 
+def test_clearance_checked_nearest_first_keeps_the_nearest_distance():
+    """The UR5 cell's 80 mm circle at 32.3 and 420.5 mm of it, from home: members near the
+    nearest samples cannot clear the table, so the clearance check raises the least distance
+    to the layer's error boxes by two commands or more. Checking the samples nearest first,
+    until the next lies a margin beyond the nearest kept, and keeping the rest unchecked
+    (:meth:`FamilySampler._filtered` by rank), gives the same least distance, and keeps every
+    sample the full check keeps."""
+    from armpath.geometry.curves import ParametricCurve
+    from armpath.scenes.arm import scene_arm
+
+    scene = load_scene(Path(__file__).parents[1] / "examples" / "ur5_cell.toml")
+    arm = scene_arm(scene)
+    curve = ParametricCurve("circle", "330 + 80*cos(t)", "-200 + 80*sin(t)", "150", 0.0, 2 * np.pi)
+    home = np.asarray(arm.home, dtype=np.float64)
+    fam = curve_family(arm, scene.world, curve, None, home)
+    sampler = sampling.FamilySampler(fam, 0.1, directions=2000, q_start=home)
+    for s in (32.3, 420.5):
+        acc, (full, *_) = sampler.sampled(
+            fam.frame(s)[0], sampler.base, sampling._allowed_at(fam, s), levels=0
+        )
+        with pytest.MonkeyPatch.context() as mp:  # every sample taken as may be clear
+            mp.setattr(sampler, "may_be_clear", lambda q, slack, moved: np.ones(len(q), bool))
+            unchecked = sampler._filtered(acc)[0]
+        least = sampler.distance_from(home, full).min()
+        assert least >= sampler.distance_from(home, unchecked).min() + 2.0
+        for margin in (0.0, 1.0):
+            rank = (lambda u, err: sampler.box_distance(home, u, err), margin)
+            ranked = sampler._filtered(acc, rank)[0]
+            assert sampler.distance_from(home, ranked).min() == pytest.approx(least, abs=1e-12)
+            assert {(d, *u) for d, u in zip(full.direction, full.u.tolist(), strict=True)} <= {
+                (d, *u) for d, u in zip(ranked.direction, ranked.u.tolist(), strict=True)
+            }
+
+
 def test_a_ur5_weld_bound_keeps_the_elbow_on_its_side_of_the_fold(monkeypatch):
     """The UR5 cell's first weld from home: the nearest clear goal configuration the bound may
     use without the elbow's self-collision ranges is a whole turn of the elbow away from one the
