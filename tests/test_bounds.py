@@ -25,7 +25,7 @@ from scipy.optimize import minimize
 
 import independent
 from armpath.geometry import CollisionWorld
-from armpath.geometry.curves import Polyline
+from armpath.geometry.curves import ParametricCurve, Polyline
 from armpath.model.catalog import resolve_model
 from armpath.model.seed_arm import seed_arm
 from armpath.planning import bounds
@@ -409,7 +409,6 @@ def test_clearance_checked_nearest_first_keeps_the_nearest_distance():
     until the next lies a margin beyond the nearest kept, and keeping the rest unchecked
     (:meth:`FamilySampler._filtered` by rank), gives the same least distance, and keeps every
     sample the full check keeps."""
-    from armpath.geometry.curves import ParametricCurve
     from armpath.scenes.arm import scene_arm
 
     scene = load_scene(Path(__file__).parents[1] / "examples" / "ur5_cell.toml")

@@ -792,7 +792,7 @@ def least_approach(
     first sampled along the first of :data:`APPROACH_LEVELS` directions (wider cells: a lower
     distance), then the nearest point (by its latest bound) along more, up to ``directions``,
     where the cells of directions nearest the start are split (:func:`_split_nearest`); a
-    point the nearest at that is split in two along the curve, each half sampled with the
+    point still the nearest after that is split in two along the curve, each half sampled with the
     tolerance raised by half as much (:data:`APPROACH_SPLIT_POINTS`); until the nearest point
     can be split no more (each sampling's distance is a bound for its points: the higher is
     taken), or its bound, in whole commands, reaches the distance to the nearest sample
