@@ -1322,3 +1322,19 @@ def test_the_audits_random_frames_point_the_approach_axis_where_the_rule_allows(
     octants = np.bincount((d > 0) @ np.array([1, 2, 4]), minlength=8) / 3000
     assert np.all(np.abs(octants - 1 / 8) < 0.03)
     assert sampling._random_frames(axis, lambda d: np.zeros(len(d), bool), 100, rng).shape[0] == 0
+
+
+def test_the_pseudo_inverse_equals_numpys_on_wide_tall_and_singular_jacobians():
+    """The samplers' pseudo-inverse of each matrix (through the Gram matrix where it is well
+    conditioned) equals numpy's singular-value one with rcond 1e-9, on random 3 x k matrices
+    (k = 2..7) among which some have a zero column, two nearly equal rows or are all zero."""
+    rng = np.random.default_rng(3)
+    for k in range(2, 8):
+        J = rng.normal(size=(300, 3, k))
+        J[:40, :, 0] = 0.0
+        J[40:80, 2] = J[40:80, 1] * (1.0 + 1e-8)
+        J[80:90] = 0.0
+        expected = np.linalg.pinv(J, rcond=1e-9)
+        got = sampling.pseudo_inverse(J)
+        assert got.shape == (300, k, 3)
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.abs(expected).max())

@@ -140,6 +140,35 @@ def test_seed_geometry_round_trip_and_variants():
         SeedArmGeometry(ab_mm=-1)
 
 
+def test_a_big_batch_of_frames_split_between_threads_equals_the_numpy_chain(monkeypatch):
+    """Where threads pay, a batch of at least FRAMES_THREAD_BATCH poses is split into one
+    slice per core; the frames and tool poses are the numpy chain's to rounding, in order."""
+    import os
+
+    from armpath import jit, kinematics
+    from armpath.kinematics import _forward_frames_numpy, tool_pose
+    from armpath.model.catalog import ur5
+
+    arm = ur5()
+    q = np.random.default_rng(7).uniform(-3.0, 3.0, (kinematics.FRAMES_THREAD_BATCH + 5, 6))
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(jit, "threads_pay_off", lambda n, threshold: n >= threshold)
+    slices = []
+    real = jit.in_slices
+
+    def spy(run, n, threshold):
+        out = real(run, n, threshold)
+        slices.append(len(out))
+        return out
+
+    monkeypatch.setattr(kinematics, "in_slices", spy)
+    frames, T = forward_frames(arm, q), tool_pose(arm, q)
+    assert slices == [3, 3]
+    np.testing.assert_allclose(frames, _forward_frames_numpy(arm, q), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(T, frames[:, -1], rtol=0, atol=1e-12)
+    assert tool_pose(arm, q[:100]).shape == (100, 4, 4) and slices == [3, 3, 1]
+
+
 @pytest.mark.parametrize("name", ["seed", "ur5", "iiwa14"])
 def test_compiled_frames_and_jacobian_match_numpy_and_finite_differences(name):
     """Batches of more than a few poses take the compiled frames: they equal the numpy chain

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armpath import jit
 from armpath.errors import InvalidInputError
-from armpath.jit import njit
+from armpath.jit import in_slices, njit
 from armpath.model.serial_arm import JointKind, SerialArm, check_arm
 
 FloatArray = NDArray[np.float64]
@@ -96,8 +96,24 @@ def tool_point_with_jacobian(arm: SerialArm, q: FloatArray) -> tuple[FloatArray,
 
 def _compiled_frames(arm: SerialArm, q: FloatArray) -> FloatArray:
     """Every frame ``(N, n + 2, 4, 4)`` of configurations ``q (N, n)`` by the compiled loop."""
+    return _frames_in_slices(arm, q, True)
+
+
+#: Fewest configurations whose frames (:func:`forward_frames`, :func:`tool_pose`, compiled)
+#: are split between threads, one slice per core, where a core is free.
+FRAMES_THREAD_BATCH = 4_096
+
+
+def _frames_in_slices(arm: SerialArm, q: FloatArray, every: bool) -> FloatArray:
+    """:func:`_frames_kernel` of configurations ``q (N, n)``: every frame or the tool's, a
+    large batch in slices on threads (:func:`~armpath.jit.in_slices`)."""
     flat = np.ascontiguousarray(q, dtype=np.float64)
-    return np.asarray(_frames_kernel(flat, *compiled_chain(arm)[:5], True))
+    chain = compiled_chain(arm)[:5]
+
+    def part(a: int, b: int) -> FloatArray:
+        return np.asarray(_frames_kernel(flat[a:b], *chain, every))
+
+    return np.concatenate(in_slices(part, flat.shape[0], FRAMES_THREAD_BATCH))
 
 
 def _compiled_pays(qa: FloatArray) -> bool:
@@ -312,7 +328,7 @@ def copy_into(src: np.ndarray, dst: np.ndarray) -> None:  # pragma: no cover - c
             dst[i, j] = src[i, j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _frames_kernel(
     q: np.ndarray,
     T_world_base: np.ndarray,
@@ -346,8 +362,7 @@ def tool_pose(arm: SerialArm, q: ArrayLike) -> FloatArray:
     """
     qa = _as_joint_array(arm, q)
     if _compiled_pays(qa):
-        flat = np.ascontiguousarray(qa.reshape(-1, arm.n_joints))
-        out = _frames_kernel(flat, *compiled_chain(arm)[:5], False)
+        out = _frames_in_slices(arm, qa.reshape(-1, arm.n_joints), False)
         return np.asarray(out.reshape(*qa.shape[:-1], 4, 4))
     T = np.broadcast_to(arm.T_world_base, (*qa.shape[:-1], 4, 4))
     for i, joint in enumerate(arm.joints):

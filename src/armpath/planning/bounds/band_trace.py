@@ -782,6 +782,7 @@ def least_approach(
     tolerance_mm: float,
     gap_mm: float = APPROACH_GAP_MM,
     directions: int = APPROACH_DIRECTIONS,
+    on_progress: Callable[[str], None] | None = None,
 ) -> float:
     """The fewest commands (fractional: the largest-joint distance) from ``q_start`` to any
     member of the family at any point of the spans, less the sampling errors: the family is
@@ -789,31 +790,38 @@ def least_approach(
     ``gap_mm`` or more) with the tolerance raised by half the spacing, so that a member at any
     point of the spans is a member there, within a sample's cell. Obstacles are ignored on
     the way (a relaxation); the members kept are those that may be clear. Each point is
-    first sampled along the first of :data:`APPROACH_LEVELS` directions (wider cells: a lower
-    distance), then the nearest point (by its latest bound) along more, up to ``directions``,
-    where the cells of directions nearest the start are split (:func:`_split_nearest`); a
-    point still the nearest after that is split in two along the curve, each half sampled with the
-    tolerance raised by half as much (:data:`APPROACH_SPLIT_POINTS`); until the nearest point
-    can be split no more (each sampling's distance is a bound for its points: the higher is
-    taken), or its bound, in whole commands, reaches the distance to the nearest sample
-    that is clear itself (a member: no bound can lie beyond it). The value returned is a
-    bound; the fewest whole commands, its ceiling."""
+    first sampled along the first of :data:`APPROACH_LEVELS` directions (wider cells, the
+    singular directions not blown up: a lower distance, found fast), then the nearest point
+    (by its latest bound) along more, up to ``directions``, where the cells of directions
+    nearest the start are split (:func:`_split_nearest`); a point still the nearest after
+    that is split in two along the curve, each half sampled with the tolerance raised by half
+    as much (:data:`APPROACH_SPLIT_POINTS`); until the nearest point can be split no more
+    (each sampling's distance is a bound for its points: the higher is taken), or its bound,
+    in whole commands, reaches the distance to the nearest sample that is clear itself (a
+    member: no bound can lie beyond it). The value returned is a bound; the fewest whole
+    commands, its ceiling. ``on_progress`` is told each whole command the bound passes."""
     s_all, spacing = _points_along(spans_mm, gap_mm)
     levels = sorted({min(c, directions) for c in APPROACH_LEVELS} | {directions})
     found: dict[bytes, tuple[BlowUp, ...]] = {}  # the blow-ups at each point, found once
     # (each point's directions allowed are _allowed_at's there, at every sampling)
     samplers: dict[tuple[int, float], FamilySampler] = {}
     clear = math.inf  # the distance to the nearest sample clear itself so far (commands)
+    fine = 0  # the points (not halves) sampled at the finest so far
 
     def nearest(level: int, s: float, gap: float) -> float:
         """The bound of the curve's points within ``gap / 2`` of ``s`` at ``level``."""
-        nonlocal clear
+        nonlocal clear, fine
         check_time("bounding the approach to the band")
         count = levels[level]
-        if (count, gap) not in samplers:  # the tolerance raised by half the point's cell
+        fine += level == finest and gap == spacing
+        if (count, gap) not in samplers:  # the tolerance raised by half the point's cell;
+            # the coarser samplings without blow-ups (finding them took 0.38 s a point on the
+            # UR5 cell's circle, sampling it along 300 directions 0.05 s; most points never
+            # reach the finest)
             samplers[count, gap] = FamilySampler(
-                fam, tolerance_mm + gap / 2.0, count, q_start, blow_up_cache=found
-            )
+                fam, tolerance_mm + gap / 2.0, count, q_start,
+                blow_ups=level == finest, blow_up_cache=found,
+            )  # fmt: skip
         sampler = samplers[count, gap]
         E, allowed = fam.frame(float(s))[0], _allowed_at(fam, float(s))
         dirs = fibonacci_directions(count)
@@ -842,8 +850,17 @@ def least_approach(
     heap = [(nearest(0, float(s), spacing), 0, float(s), spacing) for s in s_all]
     heapq.heapify(heap)
     halvings = APPROACH_SPLIT_POINTS
+    told = -math.inf  # the whole commands last told
     while heap:
         value, level, s, gap = heapq.heappop(heap)
+        if on_progress is not None and math.isfinite(value) and math.floor(value) > told:
+            told = math.floor(value)
+            member = f" (a member within {clear:.2f})" if math.isfinite(clear) else ""
+            on_progress(
+                f"bounding the approach to the band: at least {value:.2f} commands{member}, "
+                f"{fine} of {len(s_all)} points sampled finely, "
+                f"{APPROACH_SPLIT_POINTS - halvings} halved"
+            )
         if not math.isfinite(value) or math.ceil(value - 1e-9) >= math.ceil(clear - 1e-9):
             return value
         if level < finest:
@@ -1000,6 +1017,7 @@ def band_trace_bound(
     tolerance_mm: float,
     loop: bool = False,
     family: CommandBound | None = None,
+    on_progress: Callable[[str], None] | None = None,
 ) -> CommandBound | None:
     """The band bound (see the module) of any plan whose passes trace ``spans_mm`` (arc
     lengths, mm) within ``tolerance_mm`` from ``q_start`` (rad); ``loop``: one span round
@@ -1013,11 +1031,14 @@ def band_trace_bound(
     tight, or an arm not measured in mm) or where the family has no member on the spans;
     and, given the ``family`` bound (:func:`~armpath.planning.bounds.trace_bound`), where
     this one would not be higher: foretold (:func:`band_forecast`), or its along part
-    computed with the approach foretold, or both computed."""
+    computed with the approach foretold, or both computed. ``on_progress`` is told what it
+    computes."""
     curve = fam.curve
     setup = _setup(fam, spans_mm, tolerance_mm)
     if setup is None:
         return None
+    if on_progress is not None:
+        on_progress("bounding the commands along the band")
     approach_at_most = -math.inf
 
     def lower(along: float, approach: float) -> bool:
@@ -1030,8 +1051,14 @@ def band_trace_bound(
             if math.isfinite(along_at_most) and lower(along_at_most, approach_at_most):
                 return None
         sampler = FamilySampler(fam, tolerance_mm, LIMIT_DIRECTIONS, q_start)
+        layers = _limit_layers(spans_mm, setup.gap_mm, loop)
+        if on_progress is not None:
+            on_progress(
+                "bounding the commands along the band: the longest arc one command can "
+                f"follow, at {sum(a.size for a in layers)} layers"
+            )
         limit = family_arc_limit(
-            sampler, setup.band_at, _limit_layers(spans_mm, setup.gap_mm, loop), loop,
+            sampler, setup.band_at, layers, loop,
             LIMIT_DIRECTIONS, splits=LIMIT_SPLITS,
         )  # fmt: skip
     except _NoBandError:
@@ -1046,7 +1073,7 @@ def band_trace_bound(
     along = along_commands(limit, spans_mm, ends / 2.0, loop, curve.length)
     if lower(along, approach_at_most):
         return None
-    approach = least_approach(fam, q_start, spans_mm, tolerance_mm)
+    approach = least_approach(fam, q_start, spans_mm, tolerance_mm, on_progress=on_progress)
     if not math.isfinite(approach) or lower(along, approach):
         return None
     value = math.ceil(approach - 1e-9) + along

@@ -460,9 +460,9 @@ def trace_plan_bound(
     if not with_errors:
         return found
     if found is not None and forecast[0] > found.value:
-        if on_progress is not None:
-            on_progress("bounding the commands along the band")
-        band = band_trace_bound(fam, start, these, result.tolerance_mm, loop, found)
+        band = band_trace_bound(
+            fam, start, these, result.tolerance_mm, loop, found, on_progress=on_progress
+        )
         found = with_band(found, band)
     carriage = carriage_travel_bound(
         fam.arm,
