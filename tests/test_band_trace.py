@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 
 import numpy as np
 import pytest
@@ -175,7 +176,8 @@ def test_splitting_the_nearest_cells_raises_the_least_approach_below_brute_force
     raises the least approach by more than a command and a half over the even sampling
     alone, and it stays at or below, and within a command of, the least largest-joint
     distance (the tool point's joints, each the shorter way round) to any solution of the
-    arm's closed-form IK at 20,000 random tool rotations at each of nine points of the arc."""
+    arm's closed-form IK at 20,000 random tool rotations at each of nine points of the arc.
+    Its progress tells each whole command the bound passes, once."""
     arm = ur5()
     centre, radius = np.array([330.0, -200.0, 150.0]), 80.0
     curve = ParametricCurve(
@@ -185,7 +187,12 @@ def test_splitting_the_nearest_cells_raises_the_least_approach_below_brute_force
     fam = curve_family(arm, CollisionWorld(()), curve)
     start = np.asarray(arm.home, dtype=np.float64)
     span = (400.0, 440.0)
-    split = least_approach(fam, start, [span], TOL)
+    told: list[str] = []
+    split = least_approach(fam, start, [span], TOL, on_progress=told.append)
+    # each whole command the bound passes is told once, the last at or below the bound
+    said = [float(re.search(r"at least ([0-9.]+) commands", t)[1]) for t in told]
+    assert said and all(math.floor(a) < math.floor(b) for a, b in itertools.pairwise(said))
+    assert said[-1] <= split + 0.005 and math.floor(said[-1]) == math.floor(split)
     monkeypatch.setattr(band_trace, "APPROACH_SPLIT_ROUNDS", 0)
     monkeypatch.setattr(band_trace, "APPROACH_SPLIT_POINTS", 0)
     even = least_approach(fam, start, [span], TOL)
