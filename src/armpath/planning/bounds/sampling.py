@@ -229,9 +229,9 @@ def _distinct(new: FloatArray, old: FloatArray) -> FloatArray:
 def pseudo_inverse(J: FloatArray) -> FloatArray:
     """The Moore-Penrose pseudo-inverse ``(M, k, r)`` of each matrix of ``J (M, r, k)``, singular
     values below 1e-9 of the largest cut (as ``np.linalg.pinv(J, rcond=1e-9)``): through the
-    smaller Gram matrix's inverse where it is well conditioned (its eigenvalues within 1e-12 of
-    each other: the singular values within 1e-6), which is about three times faster than the
-    singular value decomposition, which the others take."""
+    smaller Gram matrix's inverse where it is well conditioned (its least eigenvalue above
+    1e-12 of its largest: the singular values' above 1e-6), about three times faster than
+    the singular value decomposition, which the others take."""
     Jt = np.swapaxes(J, -1, -2)
     wide = J.shape[-2] <= J.shape[-1]
     gram = J @ Jt if wide else Jt @ J
