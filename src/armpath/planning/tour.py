@@ -555,10 +555,16 @@ def plan_tour(
                         f"planning order {name} through goal states keeping {buffer:g} mm "
                         f"more ({kind})"
                     )
+                    best_so_far = None if best is None else best[0]
                     try:
-                        legs = legs_of(o, name, guided, ceiling=None if best is None else best[0])
+                        legs = legs_of(o, name, guided, ceiling=best_so_far)
                     except _AbandonedError as exc:
-                        say(f"abandoned order {name}: it needs at least {exc.commands} commands")
+                        # a bound through these goal states alone, not the order's
+                        say(
+                            f"gave up order {name} through these goal states: at least "
+                            f"{exc.commands} commands through them, the best plan so far "
+                            f"{best_so_far}"
+                        )
                         continue
                     except PlanningError:
                         continue
