@@ -75,6 +75,9 @@ AUDIT_FRAMES = 3000
 _FRAME_ROUNDS = 50
 #: Most points of one bound that are audited (evenly spread among its sites).
 AUDIT_SITES = 6
+#: Times an audited site whose drawn members lie outside every sample's error box is refined
+#: about them and audited again (:meth:`FamilySampler.audit_sites`).
+AUDIT_REFINES = 3
 #: Commands by which a drawn member may lie outside every sample's error box before the audit
 #: counts it missed (rounding of the units).
 AUDIT_SLACK = 1e-6
@@ -397,10 +400,12 @@ def _sampling_errors(
 @njit(cache=True)
 def _beyond_boxes(
     x: FloatArray, u: FloatArray, err: FloatArray, period: FloatArray
-) -> FloatArray:  # pragma: no cover - compiled
+) -> tuple[FloatArray, IntArray]:  # pragma: no cover - compiled
     """Per row of ``x``, the least over the samples ``u`` of how far it lies outside the
-    sample's box ``err`` in the largest joint (see :meth:`FamilySampler.beyond_boxes`)."""
+    sample's box ``err`` in the largest joint, and the sample attaining it (-1 where there is
+    none; see :meth:`FamilySampler.beyond_boxes`)."""
     out = np.full(x.shape[0], np.inf)
+    nearest = np.full(x.shape[0], -1, dtype=np.int64)
     for i in range(x.shape[0]):
         best = np.inf
         for k in range(u.shape[0]):
@@ -413,10 +418,11 @@ def _beyond_boxes(
                         break
             if worst < best:
                 best = worst
+                nearest[i] = k
                 if best <= 0.0:
                     break
         out[i] = best
-    return out
+    return out, nearest
 
 
 @dataclass(frozen=True)
@@ -553,6 +559,8 @@ class FamilySampler:
         self.audits: list[tuple[int, int, float]] = []
         #: the all-solutions IK the audit draws members with (None: from random starts)
         self.audit_solver = complete_solver(arm)
+        #: audits drawn again after a layer was refined (:meth:`audit`'s ``again``)
+        self._redraws = 0
 
     @property
     def covers_family(self) -> bool:
@@ -596,19 +604,36 @@ class FamilySampler:
         points: list[FloatArray],
         layers: list[Layer],
         allowed: list[Callable[[FloatArray], BoolArray] | None] | None = None,
+        refine: Callable[[int, FloatArray], Layer | None] | None = None,
     ) -> None:
         """:meth:`audit` at up to :data:`AUDIT_SITES` of the sites ``points`` (with their
-        ``layers`` and the directions ``allowed`` at each), evenly spread."""
+        ``layers`` and the directions ``allowed`` at each), evenly spread. ``refine(k,
+        missed)``: site ``k``'s layer refined about the members an audit found outside every
+        box (command units), or None where it cannot be; the site is then audited again, the
+        missed members and a new draw (:meth:`audit`'s ``again``), at most
+        :data:`AUDIT_REFINES` times (a site at the edge of the reach, where the family narrows
+        faster than its coarse sampling shows, is sampled finely where the audit looks)."""
         if not points:
             return
         picked = np.unique(np.linspace(0, len(points) - 1, min(len(points), AUDIT_SITES)).round())
         for k in picked.astype(int).tolist():
             check_time("bounding the commands")
-            self.audit(points[k], layers[k], None if allowed is None else allowed[k])
+            rule = None if allowed is None else allowed[k]
+            missed = self.audit(points[k], layers[k], rule)
+            for _ in range(AUDIT_REFINES if refine is not None else 0):
+                assert refine is not None
+                layer = refine(k, missed) if missed.shape[0] else None
+                if layer is None:
+                    break
+                missed = self.audit(points[k], layer, rule, again=missed)
 
     def audit(
-        self, E: FloatArray, layer: Layer, allowed: Callable[[FloatArray], BoolArray] | None
-    ) -> None:
+        self,
+        E: FloatArray,
+        layer: Layer,
+        allowed: Callable[[FloatArray], BoolArray] | None,
+        again: FloatArray | None = None,
+    ) -> FloatArray:
         """Check ``layer`` (the samples at tool point ``E``) against members drawn another way:
         for an arm with an all-solutions IK (:func:`complete_solver`), every solution at
         :data:`AUDIT_FRAMES` random tool frames at ``E`` whose approach axis points along a
@@ -616,14 +641,23 @@ class FamilySampler:
         :data:`AUDIT_STARTS` random starts. Those within the limits, clear and inside the
         joints' ranges to keep should each lie within some sample's error box (the bounds'
         assumption); the count of those that do not is recorded (:attr:`audits`), and one
-        makes :attr:`covers_family` False. A test that can fail, not a proof: where the error
-        model fails (near the edge of reach, where the family folds or narrows), members fall
-        between the samples' error boxes."""
+        makes :attr:`covers_family` False; they are returned (command units of the tip joints,
+        ``(M, J)``). A test that can fail, not a proof: where the error model fails (near the
+        edge of reach, where the family folds or narrows), members fall between the samples'
+        error boxes.
+
+        ``again``: the members the last audit (of this point) returned, its layer since
+        refined about them: they are checked again with a new draw, and the record replaces
+        the last one, counting the members of both draws."""
         if self.unspanned_because:
-            return  # nothing is claimed
+            return np.zeros((0, self.step.size))  # nothing is claimed
         arm = self.fam.arm
         E = np.asarray(E, dtype=np.float64)
-        rng = np.random.default_rng(len(self.audits))
+        if again is None:
+            rng = np.random.default_rng(len(self.audits))
+        else:
+            self._redraws += 1
+            rng = np.random.default_rng([len(self.audits), self._redraws])
         if self.audit_solver is not None:
             R = _random_frames(np.asarray(arm.approach_axis), allowed, AUDIT_FRAMES, rng)
             q, _ = solve_frames(arm, self.audit_solver, E, R)
@@ -642,16 +676,26 @@ class FamilySampler:
         for j, w_lo, w_hi in self.windows:
             inside &= (u[:, j] >= w_lo - AUDIT_SLACK) & (u[:, j] <= w_hi + AUDIT_SLACK)
         u = u[inside]
+        drawn = int(u.shape[0])
+        if again is not None:
+            drawn += self.audits.pop()[0]
+            u = np.vstack([u, again])
         beyond = self.beyond_boxes(layer, u)
         missed = beyond > AUDIT_SLACK
         worst = float(beyond[missed].max()) if missed.any() else 0.0
-        self.audits.append((int(u.shape[0]), int(missed.sum()), worst))
+        self.audits.append((drawn, int(missed.sum()), worst))
+        return np.asarray(u[missed])
 
     def beyond_boxes(self, layer: Layer, u: FloatArray) -> FloatArray:
         """How far each point ``u`` (command units ``(K, J)`` of the tip joints) lies outside
         the nearest of ``layer``'s error boxes (commands, in the largest joint; at most 0
         inside one, where the search stops; inf where the layer is empty), a whole turn's
         joint the shorter way."""
+        return self.nearest_boxes(layer, u)[0]
+
+    def nearest_boxes(self, layer: Layer, u: FloatArray) -> tuple[FloatArray, IntArray]:
+        """:meth:`beyond_boxes`, and per point the sample of ``layer`` whose box it lies
+        nearest (-1 where the layer is empty)."""
         check_time("bounding the commands")
         return _beyond_boxes(
             np.ascontiguousarray(u, dtype=np.float64),

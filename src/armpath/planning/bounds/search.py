@@ -853,7 +853,7 @@ class CellSearch:
         self.with_errors = with_errors
         self.sites = [self._site(p, a, levels) for p, a in zip(points, allowed, strict=True)]
         if with_errors:  # the samples' claim to cover the family, tested (an estimate: none)
-            sampler.audit_sites(points, [s.layer for s in self.sites], allowed)
+            sampler.audit_sites(points, [s.layer for s in self.sites], allowed, self._refined)
         #: the passages a leg from the start takes, each with the sites it takes them to
         sites = np.array(points).reshape(-1, 3)
         entered = [p.passage.entered(sites, sampler.tol) for p in passages]
@@ -881,6 +881,20 @@ class CellSearch:
         site.spacing, site.triangles = spacing, triangles
         site.unsure = np.zeros(site.acc.dirs.shape[0], dtype=bool)
         site.unsure[unsure] = True
+
+    def _refined(self, k: int, missed: FloatArray) -> Layer | None:
+        """Site ``k``'s layer with the cells split whose samples' boxes lie nearest the
+        members ``missed`` (command units) that an audit found outside every box; None where
+        none could be split (see :meth:`FamilySampler.audit_sites`)."""
+        site = self.sites[k]
+        assert site.layer.direction is not None
+        _, nearest = self.sampler.nearest_boxes(site.layer, missed)
+        nearest = nearest[nearest >= 0]
+        if nearest.size == 0:
+            return None
+        refine = np.zeros(site.acc.dirs.shape[0], dtype=bool)
+        refine[site.layer.direction[nearest]] = True
+        return site.layer if self._split(site, refine) else None
 
     def _split(self, site: _Site, refine: BoolArray) -> int:
         """Split the triangles of directions about ``refine``; the count of new directions."""
