@@ -1248,6 +1248,24 @@ def test_samples_by_a_fold_are_widened_by_half_the_branch_they_meet(count_there,
     assert np.allclose(err, by_hand) and np.allclose(moved[:, 0], reach)
 
 
+def _ik_members_at(arm, E, frames: int, seed: int) -> np.ndarray:
+    """Every solution of ``arm``'s all-solutions IK at ``frames`` random tool frames (scipy's
+    rotations, not the audit's draw) at tool point ``E`` (the arm's units), within its limits
+    (rad)."""
+    from scipy.spatial.transform import Rotation
+
+    from armpath.ik.family import shift_into_limits
+    from armpath.ik.solve import complete_solver
+
+    T = np.tile(np.eye(4), (frames, 1, 1))
+    T[:, :3, :3], T[:, :3, 3] = Rotation.random(frames, random_state=seed).as_matrix(), E
+    solver = complete_solver(arm)
+    assert solver is not None
+    q = solver.solve_batch(T).solutions.reshape(-1, arm.n_joints)
+    q = shift_into_limits(arm, q[np.all(np.isfinite(q), axis=1)])
+    return q[arm.within_limits(q)]
+
+
 def test_members_by_the_ur5_elbows_fold_lie_within_the_error_boxes():
     """At the UR5 cell's third weld, (540, 0, 120) mm, the elbow nearly straightens for some
     tool directions: its two branches meet in a fold, and near it the family varies as the
@@ -1257,10 +1275,7 @@ def test_members_by_the_ur5_elbows_fold_lie_within_the_error_boxes():
     without the fold's widening 3 of these 602 lay outside, by up to 0.51 commands, where the
     random-start audit had drawn one clear member and missed them. The audit now draws such
     members itself and, with the errors left out, finds them outside."""
-    from scipy.spatial.transform import Rotation
 
-    from armpath.ik.family import shift_into_limits
-    from armpath.ik.solve import complete_solver
     from armpath.kinematics import tool_pose
     from armpath.planning.tour import _targets_family
     from armpath.scenes.arm import scene_arm
@@ -1271,13 +1286,7 @@ def test_members_by_the_ur5_elbows_fold_lie_within_the_error_boxes():
     sampler = sampling.FamilySampler(_targets_family(arm, world, welds), 0.05, q_start=arm.home)
     E = welds[2] / arm.mm_per_unit
     layer = sampler.layer(E, sampler.base, levels=1)
-    T = np.tile(np.eye(4), (2000, 1, 1))
-    T[:, :3, :3], T[:, :3, 3] = Rotation.random(2000, random_state=5).as_matrix(), E
-    solver = complete_solver(arm)
-    assert solver is not None
-    q = solver.solve_batch(T).solutions.reshape(-1, arm.n_joints)
-    q = shift_into_limits(arm, q[np.all(np.isfinite(q), axis=1)])
-    q = q[arm.within_limits(q)]
+    q = _ik_members_at(arm, E, 2000, seed=5)
     q = q[world.satisfied(arm, q, extra=-1e-6)]
     assert np.abs(tool_pose(arm, q)[:, :3, 3] - E).max() < 1e-6
     u = sampler.units(q)
@@ -1305,10 +1314,7 @@ def test_an_audit_that_finds_members_between_the_boxes_refines_the_site_until_no
     search now splits the cells nearest the members its audit finds outside and audits again:
     the refined site holds every member of the independent draw, and its audit's record counts
     both of its draws with none outside."""
-    from scipy.spatial.transform import Rotation
 
-    from armpath.ik.family import shift_into_limits
-    from armpath.ik.solve import complete_solver
     from armpath.planning.bounds.sampling import _allowed_at
     from armpath.planning.bounds.search import CellSearch, Chain
 
@@ -1323,13 +1329,7 @@ def test_an_audit_that_finds_members_between_the_boxes_refines_the_site_until_no
     refined = search.sites[0].layer
     assert refined.size > first.size
 
-    T = np.tile(np.eye(4), (40000, 1, 1))
-    T[:, :3, :3], T[:, :3, 3] = Rotation.random(40000, random_state=11).as_matrix(), E
-    solver = complete_solver(arm)
-    assert solver is not None
-    q = solver.solve_batch(T).solutions.reshape(-1, arm.n_joints)
-    q = shift_into_limits(arm, q[np.all(np.isfinite(q), axis=1)])
-    q = q[arm.within_limits(q)]
+    q = _ik_members_at(arm, E, 40000, seed=11)
     assert q.shape[0] >= 500
     tip = independent.points(np.degrees(q[:, :5]))[:, 4]  # the SPEC chain, not armpath's
     assert np.abs(tip - E * arm.mm_per_unit).max() < 1e-6
