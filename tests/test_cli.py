@@ -5,6 +5,7 @@ import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -635,3 +636,23 @@ def test_a_weld_listed_twice_is_one_warning_line(tmp_path):
     assert "ArmpathWarning" not in r.stderr
     doc = json.loads(r.stdout)
     assert len(doc["visits"]) == 3
+
+
+def test_a_weld_the_axis_rule_keeps_out_of_clearance_names_the_rule(tmp_path):
+    """The UR5 cell's fourth weld, (450, 95, 100) mm, beside the clamp: the arm reaches it
+    clear (an 80-command plan), but with the torch within 10 deg of the surface normal its
+    120 mm torch runs into the clamp. The error named the clearance alone, as if the weld
+    could not be reached clear at all; it now names the rule too."""
+    cell = str(Path(__file__).parents[1] / "examples" / "ur5_cell.toml")
+    free = run("reach", "450", "95", "100", "--scene", cell, "--out", str(tmp_path / "free"))
+    assert free.returncode == 0, free.stderr
+    ruled = run(
+        "reach", "450", "95", "100", "--scene", cell, "--out", str(tmp_path / "ruled"),
+        "--tool-axis", "0", "-0.9701", "-0.2425", "--axis-tolerance", "10",
+    )  # fmt: skip
+    assert ruled.returncode == 1 and not (tmp_path / "ruled").exists()
+    (line,) = [x for x in ruled.stderr.splitlines() if x.startswith("error:")]
+    assert line.startswith(
+        "error: no configuration reaching (450, 95, 100) mm with its tool axis within 10 deg "
+        "of (0, -0.9701, -0.2425) keeps the links 1 mm clear of the obstacles"
+    )

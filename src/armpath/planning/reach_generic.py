@@ -161,13 +161,16 @@ def _no_member(
 
 
 def no_clear_goal_error(
-    where: str, unit: str, world: CollisionWorld, body_buffer: float
+    where: str, unit: str, world: CollisionWorld, body_buffer: float, held: str = ""
 ) -> PlanningError:
     """The error of a target (at ``where``, in ``unit``) none of whose sampled configurations
     keeps the goal states' clearance: the margin from the obstacles (where there are any) and
-    between the links, with ``body_buffer`` to spare."""
+    between the links, with ``body_buffer`` to spare; ``held``: the tool orientation rule the
+    configurations keep, in words (:meth:`ToolOrientation.words`), where there is one."""
     return PlanningError(
-        f"no configuration reaching ({where}) {unit} keeps the links "
+        f"no configuration reaching ({where}) {unit}"
+        + (f" with its {held}" if held else "")
+        + " keeps the links "
         + (f"{world.margin:g} {unit} clear of the obstacles and " if world.obstacles else "")
         + f"{world.self_margin:g} {unit} clear of each other"
         + (f", with {body_buffer:g} {unit} to spare for the motion onto it" if body_buffer else "")
@@ -1021,7 +1024,8 @@ def generic_goal_states(
         if found is not None and found[0]:
             break
     if found is None:
-        raise no_clear_goal_error(where, arm.length_unit, world, 0.0)
+        held = "" if target.orientation is None else target.orientation.words()
+        raise no_clear_goal_error(where, arm.length_unit, world, 0.0, held)
     states, within, members = found
     if not states and within == 0:
         raise PlanningError(_lattice_too_coarse(arm, target, members, tolerance, where))
