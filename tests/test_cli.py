@@ -656,3 +656,24 @@ def test_a_weld_the_axis_rule_keeps_out_of_clearance_names_the_rule(tmp_path):
         "error: no configuration reaching (450, 95, 100) mm with its tool axis within 10 deg "
         "of (0, -0.9701, -0.2425) keeps the links 1 mm clear of the obstacles"
     )
+
+
+def test_spotweld_along_the_normal_refuses_a_weld_on_no_surface(tmp_path):
+    """``--tool-axis normal`` took the normal of the nearest obstacle however far the weld lay
+    from it (a weld 100 mm above a table in free space was planned with the table's normal,
+    exit 0); trace refuses a curve on no surface, and spotweld now refuses such a weld the
+    same way, naming how far it lies from the nearest surface."""
+    scene = tmp_path / "one_weld.toml"
+    scene.write_text(
+        'name = "one weld"\n[[obstacles]]\ntype = "half_space"\nname = "table"\n'
+        "point = [0, 0, 0]\nnormal = [0, 0, 1]\n[tasks.spotweld]\npoints_mm = [[300, 0, 100]]\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    r = run("spotweld", "--scene", str(scene), "--tool-axis", "normal", "--no-bound",
+            "--out", str(out))  # fmt: skip
+    assert r.returncode == 1 and not out.exists()
+    assert r.stderr.strip().splitlines()[-1] == (
+        "error: a tool axis along the surface normal needs each weld on an obstacle's surface "
+        "(within 5 mm); the weld at (300, 0, 100) mm lies 100.0 mm from the nearest, table"
+    )

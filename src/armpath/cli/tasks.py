@@ -267,7 +267,8 @@ WeldToolAxisOption = Annotated[
         "--tool-axis",
         metavar="normal|X Y Z",
         help="At each weld, keep the tool's approach axis within --axis-tolerance of the "
-        "surface's inward normal there ('normal') or of a fixed world direction.",
+        "nearest surface's inward normal there ('normal': each weld within 5 mm of an "
+        "obstacle's surface) or of a fixed world direction.",
         show_default=False,
     ),
 ]

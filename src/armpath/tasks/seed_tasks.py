@@ -9,7 +9,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from armpath.errors import SceneError
+from armpath.errors import InvalidInputError, SceneError
 from armpath.geometry.curves import Curve
 from armpath.ik.target import AxisCone, Orientation
 from armpath.model.seed_arm import seed_arm
@@ -22,6 +22,11 @@ from armpath.scenes import Scene
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
+
+#: Farthest a weld may lie from an obstacle's surface for the tool axis to follow the surface's
+#: normal there (mm): a weld a torch's standoff off the face (the track cell's lie 1 mm off it)
+#: takes the nearest face's normal; one in free space has no surface to follow.
+WELD_SURFACE_MM = 5.0
 
 #: The seed tasks implemented so far, in SPEC order: (key, title).
 SEED_TASKS: tuple[tuple[str, str], ...] = (
@@ -75,11 +80,12 @@ def spotweld_task(
     """Task 3: from the arm's initial pose (or ``start_ticks``) through every spot weld of the
     scene (or the points ``targets_mm (K, 3)``), best order, each within ``tolerance_mm``
     (None: the scene's, :meth:`~armpath.scenes.Scene.tolerance_mm`). ``tool_axis``: the torch
-    within a cone about the surface's inward normal at each weld (a rule with ``normal``) or
-    about a fixed direction. ``bound``: prove the tour's lower bound (False: the plan only),
-    its search holding up to ``bound_samples`` live samples. ``pools``: plan the cheapest
-    orders through pools of goal states as well (:mod:`~armpath.planning.tour_pool`; False:
-    the guided orders' goal states only, sooner)."""
+    within a cone about the nearest surface's inward normal at each weld (a rule with
+    ``normal``; each weld within :data:`WELD_SURFACE_MM` of an obstacle's surface, else
+    :class:`InvalidInputError`) or about a fixed direction. ``bound``: prove the tour's lower
+    bound (False: the plan only), its search holding up to ``bound_samples`` live samples.
+    ``pools``: plan the cheapest orders through pools of goal states as well
+    (:mod:`~armpath.planning.tour_pool`; False: the guided orders' goal states only, sooner)."""
     model = arm or seed_arm()
     start = _start(model, start_ticks)
     targets = scene.spotweld_targets_mm() if targets_mm is None else targets_mm
@@ -94,6 +100,14 @@ def spotweld_task(
                         f"scene {scene.source} has no obstacles"
                     )
                 surface = min(scene.world.obstacles, key=lambda o: abs(float(o.signed_distance(p))))
+                off = abs(float(surface.signed_distance(p)))
+                if off > WELD_SURFACE_MM:
+                    where = ", ".join(f"{v:g}" for v in p)
+                    raise InvalidInputError(
+                        "a tool axis along the surface normal needs each weld on an obstacle's "
+                        f"surface (within {WELD_SURFACE_MM:g} mm); the weld at ({where}) mm lies "
+                        f"{off:.1f} mm from the nearest, {surface.name}"
+                    )
                 direction = -surface.outward_normal(p)
             else:
                 direction = np.asarray(tool_axis.direction, dtype=np.float64)
