@@ -200,6 +200,25 @@ def test_coverage_past_the_reachable_ends_is_said_as_all_of_it():
     )
 
 
+def test_a_gap_in_the_coverage_never_reads_as_100_percent():
+    """painter004 round a 100 mm circle left 0.015 mm of its 628 mm between two passes, and the
+    table read "628.30 of 628.32 mm reachable covered (100.00 %)"; the share is now rounded
+    down, 100.00 % only where all of it is covered."""
+    from armpath.report import coverage_percent_text, coverage_text
+
+    def cov(within, reachable):
+        return {"covered_mm": within, "reachable_mm": reachable, "of_reachable": within / reachable}
+
+    gap = cov(628.3035, 628.3185)
+    assert coverage_text(gap) == "628.30 of 628.32 mm reachable covered"
+    assert coverage_percent_text(gap) == "99.99 %"
+    assert coverage_percent_text(cov(572.18, 572.18)) == "100.00 %"
+    assert coverage_percent_text(cov(572.177, 572.18)) == "100.00 %"  # all, as coverage_text says
+    assert coverage_percent_text(cov(286.09, 572.18)) == "50.00 %"
+    assert coverage_percent_text(cov(0.0, 572.18)) == "0.00 %"
+    assert coverage_percent_text(cov(29.0, 100.0)) == "29.00 %"  # 10,000 x 0.29 is 2899.99...
+
+
 def test_the_tables_name_the_tool_tips_own_clearance_not_the_least_of_all():
     """``run``'s table and the summary put the least clearance of all under "(tool tip)": a
     link 30 mm from a ball was reported as the tool tip's though the tip stayed 75 mm above

@@ -63,7 +63,7 @@ from armpath.ik.target import (
 )
 from armpath.planning.choices import Objective, VisitOrder
 from armpath.planning.trace.reachability import MAX_SCAN_POINTS
-from armpath.report import commands_text, coverage_text
+from armpath.report import commands_text, coverage_percent_text, coverage_text
 from armpath.tolerances import POINT_TOLERANCE_MM, TRACE_TOLERANCE_MM
 
 if TYPE_CHECKING:
@@ -883,7 +883,7 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     cov = doc["coverage"]
     table.add_row(
         "covered",
-        f"{coverage_text(cov)} ({100 * cov['of_reachable']:.2f} %); curve {cov['curve_mm']:.2f} mm",
+        f"{coverage_text(cov)} ({coverage_percent_text(cov)}); curve {cov['curve_mm']:.2f} mm",
     )
     for u in doc.get("not_traced", []):
         table.add_row(
