@@ -677,3 +677,36 @@ def test_spotweld_along_the_normal_refuses_a_weld_on_no_surface(tmp_path):
         "error: a tool axis along the surface normal needs each weld on an obstacle's surface "
         "(within 5 mm); the weld at (300, 0, 100) mm lies 100.0 mm from the nearest, table"
     )
+
+
+def test_a_tour_back_to_the_start_in_the_order_given_says_both(tmp_path):
+    """``spotweld --order given --return`` bounds the given order alone, back to the start, but
+    its table said "every order" and had no row for the way back (the seed's Task 3: 282
+    commands, its last weld after command 214). Two welds: the bound row names the order
+    given and the way back, a row gives the way back's commands, and the independent replay
+    of the commands visits each weld where the table says and ends where it began."""
+    scene = tmp_path / "two.toml"
+    scene.write_text(
+        'name = "two welds"\n[[obstacles]]\ntype = "half_space"\nname = "floor"\n'
+        "point = [0, 0, -50]\nnormal = [0, 0, 1]\n[tasks.spotweld]\n"
+        "points_mm = [[300, 0, 200], [250, 150, 250]]\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    r = run("spotweld", "--scene", str(scene), "--order", "given", "--return", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    rows = [line.split("│") for line in r.stdout.splitlines() if line.count("│") == 3]
+    values = " ".join(" ".join(cells[2].split()) for cells in rows if cells[2].strip())
+    assert "(the order given, back to the start, every lattice goal state" in values
+    doc = json.loads((out / "spotweld.json").read_text(encoding="utf-8"))
+    states = independent.replay(doc["initial_deg"], doc["commands"])
+    for v in doc["visits"]:
+        tip = independent.points(states[v["after_command"]])[4]
+        assert np.linalg.norm(tip - v["target"]) <= doc["tolerance_mm"]
+    np.testing.assert_allclose(states[-1], doc["initial_deg"], atol=1e-9)
+    last = doc["visits"][-1]["after_command"]
+    assert doc["n_commands"] > last
+    assert re.search(
+        rf"back to the start\s*│\s*commands {last + 1}-{doc['n_commands']}\b", r.stdout
+    )
+    assert doc["lower_bound"]["commands"] <= doc["n_commands"]

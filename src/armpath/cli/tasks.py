@@ -700,12 +700,25 @@ def _tour_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
         missing = "not computed (--no-bound)"
     else:
         missing = f"not computed: {doc['no_bound_because']}"
-    table.add_row("lower bound", _bound_text(doc["lower_bound"], "every order", missing))
+    # --order given bounds that order alone (one ranked); a single weld has only one
+    scope = "every order" if doc["orders_ranked"] > 1 or len(doc["targets"]) == 1 else ""
+    scope = scope or "the order given"
+    if doc["returns_to_start"]:
+        scope += ", back to the start"
+    table.add_row("lower bound", _bound_text(doc["lower_bound"], scope, missing))
     table.add_row("order", " → ".join(str(i) for i in doc["order"]))
     for v in doc["visits"]:
         table.add_row(
             f"  weld {_fmt(v['target'], 2)} mm",
             f"after command {v['after_command']}, error {v['error_mm']:.4f} mm",
+        )
+    if doc["returns_to_start"]:
+        last = doc["visits"][-1]["after_command"] if doc["visits"] else 0
+        table.add_row(
+            "  back to the start",
+            f"commands {last + 1}-{doc['n_commands']}"
+            if doc["n_commands"] > last
+            else "already there",
         )
     table.add_row(
         "largest error", f"{doc['error_mm']:.4f} mm  (tolerance {doc['tolerance_mm']} mm)"

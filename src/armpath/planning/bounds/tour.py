@@ -110,8 +110,7 @@ def tour_bound(
         commands=int(np.ceil(found.value - 1e-9)),
         value=found.value,
         method=(
-            "least over every visiting order"
-            + (" (a dynamic programme over the sets of targets visited)" if orders is None else "")
+            _over_orders(orders, targets.shape[0], back)
             + " of a shortest path from the start through the "
             "solution family at each target (every goal configuration within the tolerance "
             "that may be clear; obstacles ignored between the targets, but not a joint's own "
@@ -147,6 +146,21 @@ def tour_bound(
         if exact is not None:
             return exact
     return bound, search.per_order
+
+
+def _over_orders(orders: list[tuple[int, ...]] | None, targets: int, back: bool) -> str:
+    """How a tour bound's method names the orders it is over (None: every order at once;
+    one: the order given, which ``--order given`` bounds alone) and the way back."""
+    if orders is None:
+        words = "least over every visiting order (a dynamic programme over the sets of targets "
+        words += "visited)"
+    elif len(orders) == 1:
+        words = "the visiting order " + "-".join(str(k + 1) for k in orders[0]) + " alone"
+    elif len(orders) == math.factorial(targets):
+        words = "least over every visiting order"
+    else:
+        words = f"least over {len(orders)} of the {math.factorial(targets):,} visiting orders"
+    return words + (", back to the start," if back else "")
 
 
 def tour_bound_over_lattice(
@@ -525,12 +539,7 @@ def lattice_tour_bound(
             commands=best,
             value=float(best),
             method=(
-                "least over every visiting order"
-                + (
-                    " (a dynamic programme over the sets of targets visited)"
-                    if orders is None
-                    else ""
-                )
+                _over_orders(orders, len(layers), back)
                 + " of a shortest path from the start through "
                 "the lattice states within the tolerance of each target that keep the "
                 "clearance rule (all of them, listed by branch and bound over boxes of ticks; "
