@@ -230,6 +230,21 @@ def test_an_arm_whose_base_stands_too_near_an_obstacle_is_told_to_move_the_base(
     assert r.returncode == 0, r.stderr
 
 
+def test_links_too_thick_for_any_pose_are_named_not_the_base(tmp_path):
+    """``--link-radius 1e6`` put every link into the seed scene's table at every pose, and the
+    refusal told the user to move the arm's base. Where the link's radius is more than its
+    capsule lacks at the best of the random poses (a bare segment would clear), the refusal
+    names the radius; the PUMA on the pedestal above still hears of its base."""
+    from cli_in_process import run_in_process
+
+    r = run_in_process(["reach", "300", "100", "200", "--link-radius", "1e6"], tmp_path)
+    assert r.returncode == 1 and r.stderr.count("error:") == 1
+    assert "every one of 64 random poses" in r.stderr and "DE is 1e+06 mm thick" in r.stderr
+    assert "--link-radius" in r.stderr and "move the base" not in r.stderr
+    r = run_in_process(["reach", "300", "100", "200", "--link-radius", "2"], tmp_path)
+    assert r.returncode == 0, r.stderr
+
+
 def test_a_key_written_twice_true_for_a_number_and_a_device_for_a_mesh_are_refused(tmp_path):
     """YAML kept the last of a key written twice (TOML refuses it), ``radius = true`` was a
     sphere of 1 mm, and a mesh file that is a device was said not to exist. Each is refused by

@@ -249,10 +249,22 @@ def check_state_clear(
         home = what == "start state" and np.allclose(q, arm.home, rtol=0.0, atol=1e-9)
         elsewhere, _ = world.pair_clearances(arm, _poses_within_limits(arm, POSES_TRIED))
         if np.all(elsewhere[:, k] < required[k]):
+            # a capsule thicker than the distance it lacks at the best pose: its radius is
+            # what no pose helps (a --link-radius of 1e6 mm blamed the base)
+            radius = max(
+                (lk.radius for lk in arm.links if lk.name in (pair.part, pair.other)), default=0.0
+            )
+            lacking = float(required[k] - elsewhere[:, k].max())
+            cause = (
+                f"none can be while {pair.part} is {radius:g} {arm.length_unit} thick in "
+                "radius, more than it lacks at the best of them (thinner links: "
+                "--link-radius, or the radius in the robot file)"
+                if radius > 0.0 and lacking < radius
+                else "the arm's base stands too near it (move the base, [arm] base in a scene "
+                "file, or the obstacle)"
+            )
             hint = (
-                f"; so is every one of {POSES_TRIED} random poses within the joint limits: the "
-                "arm's base stands too near it (move the base, [arm] base in a scene file, or "
-                "the obstacle)"
+                f"; so is every one of {POSES_TRIED} random poses within the joint limits: " + cause
             )
         elif home:
             hint = (
