@@ -109,6 +109,13 @@ def test_polyline():
     )
     with pytest.raises(InvalidInputError, match="are the same point"):
         Polyline("bad", [[0, 0, 0], [0, 0, 0], [1, 0, 0]])
+    # each refusal says what is wrong ("need (V >= 2, 3) finite vertices" for all three)
+    with pytest.raises(InvalidInputError, match="a curve needs at least 2 points, got 1"):
+        Polyline("one", [[330, 60, 260]])
+    with pytest.raises(InvalidInputError, match=r"3 coordinates \(x, y, z\), got .* \(2, 2\)"):
+        Polyline("flat", [[0, 0], [1, 0]])
+    with pytest.raises(InvalidInputError, match="a coordinate is not a finite number"):
+        Polyline("nan", [[0, 0, 0], [1, np.nan, 0]])
 
 
 def test_a_curve_shorter_than_the_least_length_is_refused():

@@ -262,8 +262,17 @@ class Polyline(Curve):
 
     def __post_init__(self) -> None:
         v = np.array(self.vertices, dtype=np.float64)
-        if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] < 2 or not np.all(np.isfinite(v)):
-            raise InvalidInputError(f"polyline {self.name!r}: need (V >= 2, 3) finite vertices")
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise InvalidInputError(
+                f"polyline {self.name!r}: each point needs 3 coordinates (x, y, z), got an array "
+                f"of shape {v.shape}"
+            )
+        if v.shape[0] < 2:
+            raise InvalidInputError(
+                f"polyline {self.name!r}: a curve needs at least 2 points, got {v.shape[0]}"
+            )
+        if not np.all(np.isfinite(v)):
+            raise InvalidInputError(f"polyline {self.name!r}: a coordinate is not a finite number")
         check_size(v.shape[0], MAX_CURVE_POINTS, f"vertices of polyline {self.name!r}", "the curve")
         if v.shape[0] >= 4 and np.linalg.norm(v[-1] - v[0]) < CLOSING_GAP_MM:
             v[-1] = v[0]
