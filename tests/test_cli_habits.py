@@ -131,6 +131,17 @@ def test_the_reports_files_list_only_what_was_written():
     text = summary_markdown([], files=["trace.json", "trace_3d.png", "summary.md", "summary.html"])
     files = text.split("## Files", 1)[1]
     assert "- `*.png`: figures" in files and "- `summary.html`: this report as a web page" in files
+    # the figures named are the kinds written: a run of the reach alone listed the trace's
+    # deviation and the blind-zone maps too
+    reach = ["reach.json", "reach_motion.png", "reach_joints.png", "summary.md"]
+    files = summary_markdown([], files=reach).split("## Files", 1)[1]
+    assert "- `*.png`: figures: each motion in 3-D, the joint angles\n" in files
+    everything = [*reach, "trace_3d.png", "trace_deviation.png", "blind_maps.png"]
+    files = summary_markdown([], files=everything).split("## Files", 1)[1]
+    assert (
+        "- `*.png`: figures: each motion in 3-D, the joint angles, the trace's deviation, "
+        "blind-zone maps\n" in files
+    )
 
 
 def test_a_reach_bound_that_is_an_estimate_is_marked_so_in_the_summary_table(monkeypatch):

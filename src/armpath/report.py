@@ -35,6 +35,24 @@ def _listed(entry: str, available: set[str]) -> bool:
     return first in available
 
 
+#: The kinds of figure :data:`FILES` lists under ``*.png``, each with the file names that hold it.
+_PNG_KINDS = (
+    ("each motion in 3-D", ("_motion.png", "_3d.png")),
+    ("the joint angles", ("_joints.png",)),
+    ("the trace's deviation", ("trace_deviation.png",)),
+    ("blind-zone maps", ("blind_maps.png", "face_blindness.png")),
+)
+
+
+def _png_kinds(available: set[str]) -> str:
+    """What ``*.png`` stands for among the ``available`` files: the kinds of figure written
+    (a run without the trace listed "the trace's deviation" all the same)."""
+    kinds = [
+        kind for kind, ends in _PNG_KINDS if any(n.endswith(e) for n in available for e in ends)
+    ]
+    return "figures: " + (", ".join(kinds) if kinds else "the motions")
+
+
 def _mm(value: float | None) -> str:
     """A length in mm to 3 decimals, or a dash when there was nothing to measure."""
     return "-" if value is None else f"{value:.3f}"
@@ -374,7 +392,11 @@ def summary_markdown(
         if shown:
             out += ["", shown]
     out += ["", "## Files", ""]
-    out += [f"- `{name}`: {what}" for name, what in FILES.items() if _listed(name, available)]
+    out += [
+        f"- `{name}`: {_png_kinds(available) if name == '*.png' and available else what}"
+        for name, what in FILES.items()
+        if _listed(name, available)
+    ]
     return "\n".join(out) + "\n"
 
 
