@@ -134,3 +134,23 @@ def test_a_head_on_approach_ending_a_hair_off_a_surface_is_certified():
     dense = 350.0 - seq.sample_motion(400)[:, 2] - table
     assert mc.certified_ok and mc.min_tip_clearance == pytest.approx(0.001, abs=1e-9)
     assert 0.0 <= mc.min_clearance_lower_bound <= dense.min() + 1e-9
+
+
+def test_a_tip_within_a_few_microns_of_a_surface_is_proven_clear_at_a_finer_resolution():
+    """A trace at a tolerance of 0.005 mm keeps the tool tip as near a surface it follows (the
+    seed crack: 0.0005 mm at a sampled instant), and its final check, resolving clearances to
+    0.01 mm, could not prove it (-0.0044 mm) and refused the plan. Here the tip rises to within
+    0.002 mm of a plate above the arm (the independent model, 2,000 instants a command): at
+    0.01 mm the bound stays below zero, at 0.0002 mm it is proven, below the brute force's."""
+    start_deg = [0, -30, 0, 0, 0, 0]
+    seq = CommandSequence.straight(deg_to_ticks(start_deg), deg_to_ticks([-10, -32, 4, 0, 0, 0]))
+    z = independent.motion_points(start_deg, seq.commands, 2000)[..., 2]
+    assert z[..., 4].max() > z[..., :4].max() + 50.0  # the tip alone comes near the plate
+    top = z[..., 4].max() + 0.002
+    world = CollisionWorld((HalfSpace("plate", np.array([0.0, 0.0, top]), -np.eye(3)[2]),), 1.0)
+    coarse = motion_clearance(ARM, world, seq)
+    assert not coarse.certified_ok and not coarse.violated
+    fine = motion_clearance(ARM, world, seq, tolerance=0.0002)
+    assert fine.certified_ok and fine.worst_part == "DE tip"
+    assert 0.0 <= fine.min_clearance_lower_bound <= 0.002 + 1e-9
+    assert fine.min_clearance_lower_bound <= fine.min_clearance <= 0.002 + 1e-6

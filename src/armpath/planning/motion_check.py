@@ -73,11 +73,16 @@ _MAX_INITIAL_INSTANTS = 1_000_000
 WHOLE_PLAN_EVALUATIONS = 400_000
 
 
+#: How finely :func:`motion_clearance` resolves a clearance by default (length unit): an
+#: interval over which no point moves more than this is not split further.
+CERTIFY_RESOLUTION_MM = 0.01
+
+
 def motion_clearance(
     arm: SerialArm,
     world: CollisionWorld,
     sequence: CommandSequence,
-    tolerance: float = 0.01,
+    tolerance: float = CERTIFY_RESOLUTION_MM,
     initial_substeps: int = 4,
     max_evaluations: int = 20_000,
     precision_evaluations: int = 1_000,
@@ -85,10 +90,12 @@ def motion_clearance(
     """Smallest clearances over the continuous motion of ``sequence`` (start state included).
 
     Intervals whose bound does not yet prove the clearance rule are bisected, lowest bound
-    first, until the rule is certified, a sampled instant violates it, or ``max_evaluations``
-    configurations have been evaluated. Then up to ``precision_evaluations`` more narrow the gap
-    between the smallest obstacle clearance found and its proven lower bound toward
-    ``tolerance``. A violated motion is not refined further.
+    first, until the rule is certified, a sampled instant violates it, ``max_evaluations``
+    configurations have been evaluated, or no point moves more than ``tolerance`` (length
+    unit) over an interval left unproven (a clearance nearer the rule than that is not
+    proven). Then up to ``precision_evaluations`` more narrow the gap between the smallest
+    obstacle clearance found and its proven lower bound toward ``tolerance``. A violated
+    motion is not refined further.
     """
     pairs = world.pairs(arm)
     required = np.array([p.required for p in pairs])
