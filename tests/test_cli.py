@@ -710,3 +710,21 @@ def test_a_tour_back_to_the_start_in_the_order_given_says_both(tmp_path):
         rf"back to the start\s*│\s*commands {last + 1}-{doc['n_commands']}\b", r.stdout
     )
     assert doc["lower_bound"]["commands"] <= doc["n_commands"]
+
+
+def test_a_seed_reach_too_tight_for_the_lattice_names_the_nearest_error_found(tmp_path):
+    """The seed arm's reach at 0.001 mm said only "a wider tolerance finds one"; the refusal
+    now names the smallest error of the lattice states it looked at, as other arms' refusals
+    do, and that tolerance plans the reach: its independent replay ends within it."""
+    r = run("reach", "300", "100", "200", "--tolerance", "0.001", "--out", str(tmp_path / "a"))
+    assert r.returncode == 1 and r.stderr.count("error:") == 1
+    found = re.search(r"the nearest found is ([0-9.e-]+) mm away: allow at least that", r.stderr)
+    assert found is not None, r.stderr
+    nearest = float(found.group(1))
+    assert 0.001 < nearest < 0.05
+    out = tmp_path / "b"
+    r = run("reach", "300", "100", "200", "--tolerance", f"{nearest:.4g}", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((out / "reach.json").read_text(encoding="utf-8"))
+    tip = independent.points(independent.replay(doc["initial_deg"], doc["commands"])[-1])[4]
+    assert np.linalg.norm(tip - [300.0, 100.0, 200.0]) <= nearest + 1e-9

@@ -1076,6 +1076,7 @@ def _goal_states(
     offsets = np.stack(np.meshgrid(np.arange(-2, 3), np.arange(-2, 3), indexing="ij"), -1)
     offsets = offsets.reshape(-1, 2)
     corners = np.array([[(c >> b) & 1 for b in range(3)] for c in range(8)])
+    nearest = np.inf  # the smallest error of any lattice state looked at (mm)
     for q_star in picks:
         check_time("finding goal states")
         t_star = q_star / TICK_RAD
@@ -1106,6 +1107,7 @@ def _goal_states(
         c5 = unique_states((c5[:, None, :] + steps[None]).reshape(-1, TIP_JOINTS))
         c5 = c5[np.all((c5 >= p.lo_ticks) & (c5 <= p.hi_ticks), axis=-1)]
         errs = p.errors_of_ticks(c5)
+        nearest = min(nearest, float(errs.min())) if errs.size else nearest
         within = errs <= tolerance_mm
         if not np.any(within):
             continue
@@ -1132,10 +1134,16 @@ def _goal_states(
     if not states:
         where = ", ".join(f"{v:g}" for v in p.target)
         if not any_within:
+            found = (
+                f"; the nearest found is {nearest:.3g} mm away: allow at least that "
+                "(--tolerance, a scene task's tolerance_mm, or tolerance_mm= in Python)"
+                if np.isfinite(nearest)
+                else "; a wider tolerance finds one"
+            )
             raise PlanningError(
                 f"no lattice state found within {tolerance_mm} mm of ({where}) mm: the "
                 f"{len(picks)} configurations of the family searched about have none on the "
-                f"{TICK_DEG:g} deg lattice; a wider tolerance finds one"
+                f"{TICK_DEG:g} deg lattice" + found
             )
         raise PlanningError(
             f"no lattice state within {tolerance_mm} mm of ({where}) mm satisfies the "
