@@ -135,6 +135,9 @@ def test_unwritable_output_folder(tmp_path):
     assert r.stderr.startswith("error: ") and "not a folder" in r.stderr
     r = run("run", "--out", "/proc/armpath-out")
     assert r.returncode == 1 and "not writable" in r.stderr
+    # it says where no folder can be made (it read "not writable: No such file or directory"
+    # of /proc, which exists)
+    assert "not writable: no folder can be made in /proc (" in r.stderr
 
 
 def test_reach_writes_json_csv_xlsx_and_figures(tmp_path):

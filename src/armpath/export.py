@@ -657,7 +657,8 @@ class OutputFolder:
             self._staging = Path(tempfile.mkdtemp(prefix=".armpath-", dir=anchor))
         except OSError as exc:
             raise OutputError(
-                f"output folder {self.path} is not writable: {exc.strerror}"
+                f"output folder {self.path} is not writable: no folder can be made in "
+                f"{anchor} ({exc.strerror})"
             ) from None
         self.written: list[Path] = []
         #: files of an earlier run the commit removed (see :meth:`commit`)
