@@ -48,6 +48,7 @@ _BINARY: dict[type, Callable[[FloatArray, FloatArray], FloatArray]] = {
     ast.Div: np.divide,
     ast.Pow: np.power,
 }
+#: Longest expression accepted (characters; the README lists it among the limits).
 _MAX_LENGTH = 2000
 #: Deepest nesting of operations and calls (``-(-(-t))`` is 3 deep; a sum of n terms n - 1):
 #: checking and evaluating recurse once per level, within Python's recursion limit.
