@@ -413,6 +413,12 @@ def test_a_clamp_on_the_crack_forces_a_second_pass_with_a_planned_lift_off():
     covered = sorted((p.start_mm, p.end_mm) for p in r.passes)
     assert covered[0][0] <= 0.05 and covered[-1][1] >= piece.length - 0.05
     assert covered[1][0] <= covered[0][1]
+    # each pass says why it ends short (the table and the JSON had no word of it): the first
+    # where its reference path lifts off, the last at the end of the piece
+    first, last = r.passes
+    assert first.ends_because.startswith("its reference path lifts off here") and not (
+        last.ends_because
+    )
 
 
 def test_a_polyline_folding_back_is_followed_into_its_apex():

@@ -379,6 +379,7 @@ def trace_result_dict(result: TraceResult, arm: SerialArm, scene: Scene) -> dict
                 "direction": "backward" if p.backward else "forward",
                 "max_deviation_mm": p.max_deviation_mm,
                 "max_deviation_bound_mm": p.max_deviation_bound_mm,
+                "ends_because": p.ends_because,
             }
             for p in result.passes
         ],

@@ -245,6 +245,10 @@ _KINDS: dict[str, tuple[str, dict[str, Any], tuple[str, ...]]] = {
                         "direction": {"enum": ["forward", "backward"], "description": "its way"},
                         "max_deviation_mm": _num("its largest deviation (mm)"),
                         "max_deviation_bound_mm": _num("proven upper bound of it (mm)"),
+                        "ends_because": _str(
+                            "why it ends short of the end of the arc it was traced toward "
+                            "(empty where it reaches it)"
+                        ),
                     },
                     ("states", "commands", "start_mm", "end_mm", "direction"),
                 ),

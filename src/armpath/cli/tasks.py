@@ -891,7 +891,8 @@ def _trace_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
             f"  states {p['states'][0]}-{p['states'][1]}",
             f"{arc_text(p, doc)} ({p['length_mm']:.2f} mm"
             + (", traced from its end" if p.get("direction") == "backward" else "")
-            + f"), largest deviation {p['max_deviation_mm']:.4f} mm",
+            + f"), largest deviation {p['max_deviation_mm']:.4f} mm"
+            + (f"; ends short: {p['ends_because']}" if p.get("ends_because") else ""),
         )
     cov = doc["coverage"]
     table.add_row(

@@ -137,6 +137,9 @@ class TracePass:
     max_axis_angle_rad: float | None = None
     max_axis_angle_bound_rad: float | None = None
     backward: bool = False
+    #: Why the pass ends short of the end of the arc it was traced toward, in words ("" where
+    #: it reaches it): the tracer found no command on, or the reference path lifts off there.
+    ends_because: str = ""
 
     @property
     def covered_mm(self) -> float:
@@ -947,6 +950,21 @@ def _trace_arcs(
                 angle, angle_bound = certified_axis_angle(
                     arm, fam.axis_angles, np.array(pass_states), not opts.axis_rule.normal
                 )
+            stuck = sign * (finish - s_reached) > 0.5
+            if stuck:
+                ends = (
+                    "no lattice command went on from its last state within the tolerance and "
+                    "clear "
+                    f"(at {curve.wrap(s_reached):.1f} mm)"
+                )
+            elif not last_piece:
+                ends = (
+                    "its reference path lifts off here: the solution family cannot be "
+                    "followed on continuously (the members ahead lie a lift-off away: "
+                    "a joint limit, a change of branch or an obstacle)"
+                )
+            else:
+                ends = ""
             passes.append(
                 TracePass(
                     first,
@@ -958,9 +976,10 @@ def _trace_arcs(
                     angle,
                     angle_bound,
                     piece.backward,
+                    ends,
                 )
             )
-            if sign * (finish - s_reached) > 0.5:
+            if stuck:
                 # stuck: the rest of the arc gets new passes (see _rest_of_arc)
                 rest = _rest_of_arc(arc, piece, s_reached, made_pass=True)
                 if rest is not None:
