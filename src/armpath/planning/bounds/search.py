@@ -53,6 +53,7 @@ from armpath.budget import check_time
 from armpath.errors import InvalidInputError
 from armpath.planning.bounds.passage import PassageSamples
 from armpath.planning.bounds.sampling import (
+    AUDIT_REFINE_CELLS,
     MAX_LAYER_DIRECTIONS,
     MIN_SPACING,
     FamilySampler,
@@ -884,16 +885,20 @@ class CellSearch:
 
     def _refined(self, k: int, missed: FloatArray) -> Layer | None:
         """Site ``k``'s layer with the cells split whose samples' boxes lie nearest the
-        members ``missed`` (command units) that an audit found outside every box; None where
-        none could be split (see :meth:`FamilySampler.audit_sites`)."""
+        members ``missed`` (command units) that an audit found outside every box (those of the
+        farthest out first, at most :data:`AUDIT_REFINE_CELLS`); None where none could be
+        split (see :meth:`FamilySampler.audit_sites`)."""
         site = self.sites[k]
         assert site.layer.direction is not None
-        _, nearest = self.sampler.nearest_boxes(site.layer, missed)
+        beyond, nearest = self.sampler.nearest_boxes(site.layer, missed)
+        nearest = nearest[np.argsort(-beyond, kind="stable")]  # the farthest out first
         nearest = nearest[nearest >= 0]
         if nearest.size == 0:
             return None
+        cells = site.layer.direction[nearest]
+        _, first = np.unique(cells, return_index=True)
         refine = np.zeros(site.acc.dirs.shape[0], dtype=bool)
-        refine[site.layer.direction[nearest]] = True
+        refine[cells[np.sort(first)][:AUDIT_REFINE_CELLS]] = True
         return site.layer if self._split(site, refine) else None
 
     def _split(self, site: _Site, refine: BoolArray) -> int:
