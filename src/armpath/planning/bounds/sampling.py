@@ -568,8 +568,10 @@ class FamilySampler:
         self.audits: list[tuple[int, int, float]] = []
         #: the all-solutions IK the audit draws members with (None: from random starts)
         self.audit_solver = complete_solver(arm)
-        #: audits drawn again after a layer was refined (:meth:`audit`'s ``again``)
+        #: audits drawn again after a layer was refined (:meth:`audit`'s ``again``), and the
+        #: members the last audit drew (command units)
         self._redraws = 0
+        self._drawn = np.zeros((0, self.step.size))
 
     @property
     def covers_family(self) -> bool:
@@ -619,7 +621,7 @@ class FamilySampler:
         ``layers`` and the directions ``allowed`` at each), evenly spread. ``refine(k,
         missed)``: site ``k``'s layer refined about the members an audit found outside every
         box (command units), or None where it cannot be; the site is then audited again, the
-        missed members and a new draw (:meth:`audit`'s ``again``), at most
+        members drawn before and a new draw (:meth:`audit`'s ``again``), at most
         :data:`AUDIT_REFINES` times and while none lies farther out than
         :data:`AUDIT_REFINE_WORST` (a site at the edge of the reach, where the family narrows
         faster than its coarse sampling shows, is sampled finely where the audit looks; one
@@ -637,14 +639,14 @@ class FamilySampler:
                 layer = refine(k, missed) if near else None
                 if layer is None:
                     break
-                missed = self.audit(points[k], layer, rule, again=missed)
+                missed = self.audit(points[k], layer, rule, again=True)
 
     def audit(
         self,
         E: FloatArray,
         layer: Layer,
         allowed: Callable[[FloatArray], BoolArray] | None,
-        again: FloatArray | None = None,
+        again: bool = False,
     ) -> FloatArray:
         """Check ``layer`` (the samples at tool point ``E``) against members drawn another way:
         for an arm with an all-solutions IK (:func:`complete_solver`), every solution at
@@ -658,18 +660,18 @@ class FamilySampler:
         edge of reach, where the family folds or narrows), members fall between the samples'
         error boxes.
 
-        ``again``: the members the last audit (of this point) returned, its layer since
-        refined about them: they are checked again with a new draw, and the record replaces
-        the last one, counting the members of both draws."""
+        ``again``: the last audit was of this point, its layer since refined: the members
+        drawn then are checked again with a new draw (the refined samples' errors may be
+        smaller), and the record replaces the last one, counting the members of both draws."""
         if self.unspanned_because:
             return np.zeros((0, self.step.size))  # nothing is claimed
         arm = self.fam.arm
         E = np.asarray(E, dtype=np.float64)
-        if again is None:
-            rng = np.random.default_rng(len(self.audits))
-        else:
+        if again:
             self._redraws += 1
             rng = np.random.default_rng([len(self.audits), self._redraws])
+        else:
+            rng = np.random.default_rng(len(self.audits))
         if self.audit_solver is not None:
             R = _random_frames(np.asarray(arm.approach_axis), allowed, AUDIT_FRAMES, rng)
             q, _ = solve_frames(arm, self.audit_solver, E, R)
@@ -688,14 +690,14 @@ class FamilySampler:
         for j, w_lo, w_hi in self.windows:
             inside &= (u[:, j] >= w_lo - AUDIT_SLACK) & (u[:, j] <= w_hi + AUDIT_SLACK)
         u = u[inside]
-        drawn = int(u.shape[0])
-        if again is not None:
-            drawn += self.audits.pop()[0]
-            u = np.vstack([u, again])
+        if again:
+            self.audits.pop()
+            u = np.vstack([u, self._drawn])
+        self._drawn = u
         beyond = self.beyond_boxes(layer, u)
         missed = beyond > AUDIT_SLACK
         worst = float(beyond[missed].max()) if missed.any() else 0.0
-        self.audits.append((drawn, int(missed.sum()), worst))
+        self.audits.append((int(u.shape[0]), int(missed.sum()), worst))
         return np.asarray(u[missed])
 
     def beyond_boxes(self, layer: Layer, u: FloatArray) -> FloatArray:
