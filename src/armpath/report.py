@@ -11,13 +11,21 @@ from typing import Any
 
 from armpath import __version__
 
+#: The kinds of figure :data:`FILES` lists under ``*.png``, each with the file names that hold it.
+_PNG_KINDS = (
+    ("each motion in 3-D", ("_motion.png", "_3d.png")),
+    ("the joint angles", ("_joints.png",)),
+    ("the trace's deviation", ("trace_deviation.png",)),
+    ("blind-zone maps", ("blind_maps.png", "face_blindness.png")),
+)
+
+
 FILES = {
     "reach.json": "Task 1 result (commands, lower bound, clearance)",
     "trace.json": "Task 2 result (passes, coverage, unreachable arcs and why)",
     "spotweld.json": "Task 3 result (order, visits, per-weld error)",
     "*.csv / *.xlsx": "the commands (ticks of the lattice), joint values and tool point after each",
-    "*.png": "figures: each motion in 3-D, the joint angles, the trace's deviation, blind-zone "
-    "maps",
+    "*.png": "figures: " + ", ".join(kind for kind, _ in _PNG_KINDS),
     "*.gif": "animations of the motions",
     "blindzones.csv / .npz": "blind parts of the workpiece faces; the arm-plane and meridian maps",
     "summary.html": "this report as a web page",
@@ -33,15 +41,6 @@ def _listed(entry: str, available: set[str]) -> bool:
     if first.startswith("*."):
         return any(name.endswith(first[1:]) for name in available)
     return first in available
-
-
-#: The kinds of figure :data:`FILES` lists under ``*.png``, each with the file names that hold it.
-_PNG_KINDS = (
-    ("each motion in 3-D", ("_motion.png", "_3d.png")),
-    ("the joint angles", ("_joints.png",)),
-    ("the trace's deviation", ("trace_deviation.png",)),
-    ("blind-zone maps", ("blind_maps.png", "face_blindness.png")),
-)
 
 
 def _png_kinds(available: set[str]) -> str:

@@ -701,8 +701,8 @@ def _tour_summary(doc: dict[str, Any], bound_skipped: bool = False) -> Table:
     else:
         missing = f"not computed: {doc['no_bound_because']}"
     # --order given bounds that order alone (one ranked); a single weld has only one
-    scope = "every order" if doc["orders_ranked"] > 1 or len(doc["targets"]) == 1 else ""
-    scope = scope or "the order given"
+    given = doc["orders_ranked"] == 1 and len(doc["targets"]) > 1
+    scope = "the order given" if given else "every order"
     if doc["returns_to_start"]:
         scope += ", back to the start"
     table.add_row("lower bound", _bound_text(doc["lower_bound"], scope, missing))

@@ -99,8 +99,9 @@ def spotweld_task(
                         "a tool axis along the surface normal needs the welds on a surface; "
                         f"scene {scene.source} has no obstacles"
                     )
-                surface = min(scene.world.obstacles, key=lambda o: abs(float(o.signed_distance(p))))
-                off = abs(float(surface.signed_distance(p)))
+                away = [abs(float(o.signed_distance(p))) for o in scene.world.obstacles]
+                surface = scene.world.obstacles[int(np.argmin(away))]
+                off = min(away)
                 if off > WELD_SURFACE_MM:
                     where = ", ".join(f"{v:g}" for v in p)
                     raise InvalidInputError(

@@ -635,7 +635,7 @@ class FamilySampler:
             missed = self.audit(points[k], layers[k], rule)
             for _ in range(AUDIT_REFINES if refine is not None else 0):
                 assert refine is not None
-                near = missed.shape[0] and self.audits[-1][2] <= AUDIT_REFINE_WORST
+                near = missed.shape[0] > 0 and self.audits[-1][2] <= AUDIT_REFINE_WORST
                 layer = refine(k, missed) if near else None
                 if layer is None:
                     break
