@@ -174,6 +174,35 @@ def test_a_pass_whose_certificate_exceeds_the_tolerance_is_traced_again_nearer(m
     assert r.covered_mm >= r.curve.length - 1e-3
 
 
+def test_commands_to_any_lattice_state_the_band_holds_go_round_the_circle_in_fewer(monkeypatch):
+    """Mid-pass the tracer also lists every lattice state one command on within the band a
+    little past the farthest state near the reference's projection (issue 21: the commands
+    along the circles began near the band's middle, so covered less than a chord across it).
+    Round the free circle its pass takes fewer commands than with that listing turned off
+    (28 against 29), and the plan, replayed by the independent FK at 200 instants a command,
+    stays within the tolerance (closed-form distance) and goes once round; so does the plan
+    without the listing."""
+    from armpath.planning.trace import tracer
+
+    plans = [trace_the_circle(bound=False)]
+    monkeypatch.setattr(tracer, "_LISTED_REACH_MM", 0.0)
+    plans.append(trace_the_circle(bound=False))
+    along = []
+    for r in plans:
+        (p,) = r.passes
+        states = r.sequence.states()
+        t = np.linspace(0.0, 1.0, 201)
+        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 6) / 10.0
+        tips = independent.points(q)[:, -1, :]
+        assert circle_distance(tips).max() <= 0.1
+        ang = np.unwrap(np.arctan2(tips[:, 1] - CENTER[1], tips[:, 0] - CENTER[0]))
+        assert abs(ang[-1] - ang[0]) >= 2 * np.pi - 1e-3
+        along.append(p.last - p.first)
+    assert along[0] < along[1]
+    assert plans[0].n_commands < plans[1].n_commands
+
+
 def test_the_reachable_part_of_a_line_ends_at_full_stretch():
     scene = scene_from_dict(TABLE_ONLY)
     line = Polyline("line", np.array([[300.0, 0.0, 300.0], [800.0, 0.0, 300.0]]))
@@ -873,7 +902,7 @@ def test_a_trace_whose_motion_is_not_certified_clear_is_refused(monkeypatch, eva
     """A plan is delivered only with its continuous motion proven clear: where the final
     certificate fails, the trace is refused, naming the pair, the command and both numbers, and
     whether its budget ran out or the clearance lay nearer the rule than the check resolves
-    (a tenth of the tolerance at most, 0.01 mm: at 0.005 mm the seed crack's tip stayed 0.0005
+    (a fiftieth of the tolerance at most, 0.01 mm: at 0.005 mm the seed crack's tip stayed 0.0005
     mm off the workpiece and was refused 'in its budget' after 9,769 evaluations of 400,000)."""
     import dataclasses
 

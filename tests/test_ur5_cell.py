@@ -195,8 +195,10 @@ def test_seam_around_the_workpiece(tmp_path):
     assert traced >= 0.8 * length  # most of the seam is welded
     assert traced + skipped == pytest.approx(length, abs=1.0)
     # one pass; 177 commands before a stalled command along the reference (4 of them crept
-    # 0.2-1 mm where joint 1 turns back) was compared with commands turned along the family
-    assert len(doc["passes"]) == 1 and doc["n_commands"] <= 175
+    # 0.2-1 mm where joint 1 turns back) was compared with commands turned along the family,
+    # 174 before the tracer listed every lattice state the band holds a little farther on
+    # (its motion then came 0.005 mm near the workpiece, proven clear at 0.002 mm)
+    assert len(doc["passes"]) == 1 and doc["n_commands"] <= 171
 
 
 def _cell_with_circle(

@@ -132,6 +132,18 @@ _BRIDGE_REACH_MM = 12.0
 _BRIDGE_SPACING_MM = 0.2
 _BRIDGE_STATES = 20_000
 _BRIDGE_BOXES = 500_000
+#: Mid-pass, past the farthest command found near the reference's projection, every lattice
+#: state one command on within the band of the curve up to this far ahead (mm) is listed, about
+#: points this far apart (mm; the tolerance where that is more), of states within this far of
+#: the reference (largest joint, deg equivalents), at most :data:`_MAX_CANDIDATES` about a
+#: point (a 10 mm tolerance's band holds 20,000 one command on: the seed arm took 76 s rather
+#: than 4 s round a 25 mm circle, in as many commands). The seed arm's 25 mm circle in the seed
+#: scene: 65 -> 64 commands; the UR5 cell's 80 mm circle 108 -> 106, its seam 174 -> 171 (2 deg
+#: did as well, 6 and 8 deg worse on the seam, up to 180: states farther from the reference
+#: went farther, and the commands after them less far).
+_LISTED_REACH_MM = 3.0
+_LISTED_SPACING_MM = 0.1
+_LISTED_GAP_DEG = 4.0
 #: Share of a pass that is also traced from its goal back toward where it begins (its *end
 #: chain*, :meth:`Tracer.end_chain`): the pass then follows the chain's joint path and finishes
 #: along it, reversed, from where a command reaches it. Traced into the tight end of its
@@ -244,6 +256,12 @@ class Tracer:
         #: (the endgame's lookahead asks again for the state it then moves to, and a take-back
         #: again for the state before); emptied when the reference turns (:meth:`align`)
         self._found: dict[tuple[str, bytes, float, float], Any] = {}
+        #: whether mid-pass commands are also sought among every lattice state the band
+        #: holds a little past the farthest near the reference (:meth:`_find_options`)
+        self.listed = True
+        #: how many commands :meth:`_listed` found mid-pass (none: a pass traced so is the
+        #: same as one traced without)
+        self.listed_taken = 0
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
         s_arr = np.asarray(s, dtype=np.float64)
@@ -354,7 +372,8 @@ class Tracer:
     ) -> tuple[IntArray, FloatArray]:
         """Candidates whose command from ``qk`` keeps the tip in the band and the arm clear while
         it moves toward arc length ``goal``; returned with the arc length their end state
-        reaches."""
+        reaches. On a surface, the tip keeps a tenth of the tolerance outside it at the end and
+        a twentieth at the checked instants of the motion."""
         sign = 1.0 if goal >= sk else -1.0
         if cand.shape[0] == 0:
             return cand, np.zeros(0)
@@ -380,7 +399,8 @@ class Tracer:
         Q_rad = self.grid.to_joint(Q)
         E = tool_position(self.arm, Q_rad)
         d2, s2, sd2 = self.tip_checks(E, sk)
-        ok = np.all(self.in_band(d2, sd2, 0.05) & self.fam.axis_ok(Q_rad, _AXIS_MARGIN_RAD), axis=1)
+        in_band = self.in_band(d2, sd2, 0.05)
+        ok = np.all(in_band & self.fam.axis_ok(Q_rad, _AXIS_MARGIN_RAD), axis=1)
         ok &= self._follows(qk, sk, E, s2, E_end, s)
         cand, s, Q = cand[ok], s[ok], Q[ok]
         if cand.shape[0] == 0:
@@ -418,7 +438,7 @@ class Tracer:
         length ``goal``; within :data:`_ENDGAME_MM` of it, of the :data:`_LOOKAHEAD` best, the
         one after which the next command gets farthest (where the family narrows, the farthest
         command can end where the next ones creep)."""
-        options = self._options(qk, sk, goal)
+        options = self._options(qk, sk, goal, self.listed)
         if not options:
             return None
         if len(options) == 1 or abs(goal - sk) > _ENDGAME_MM:
@@ -428,7 +448,7 @@ class Tracer:
         for q1, s1 in options:
             if sign * (goal - s1) <= GOAL_REACHED_MM:
                 return q1, s1
-            after = self._options(q1, s1, goal)
+            after = self._options(q1, s1, goal, self.listed)
             value = sign * (after[0][1] if after else s1 - sign * _ENDGAME_MM)
             if value > best_value + 1e-9:
                 best, best_value = (q1, s1), value
@@ -437,18 +457,34 @@ class Tracer:
     def _bridge(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """Where no command near the reference continues the pass: of every lattice state one
         command from ``qk`` that puts the tool point within the band of a curve point ahead
-        (listed by :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states` about
-        points :data:`_BRIDGE_SPACING_MM` apart up to :data:`_BRIDGE_REACH_MM` ahead, farthest
-        first; completely unless :data:`_BRIDGE_BOXES` are spent), the one whose command is
-        valid (:meth:`valid_ends`) and gets farthest; None where none is. A coarse lattice
-        leaves stretches of the curve with no state near (the SO-100's pan joint, 0.32 mm a
-        tick across a circle where it turns back), which the reference's neighbourhood may
-        not cross and one command can."""
-        sign = 1.0 if goal >= sk else -1.0
+        (:meth:`_listed`, points :data:`_BRIDGE_SPACING_MM` apart up to
+        :data:`_BRIDGE_REACH_MM` ahead, farthest first), the one whose command is valid
+        (:meth:`valid_ends`) and gets farthest; None where none is. A coarse lattice leaves
+        stretches of the curve with no state near (the SO-100's pan joint, 0.32 mm a tick
+        across a circle where it turns back), which the reference's neighbourhood may not
+        cross and one command can."""
         span = min(_BRIDGE_REACH_MM, abs(goal - sk))
         spacing = max(_BRIDGE_SPACING_MM, 2.0 * self.tol)
-        if span <= _MIN_ADVANCE_MM:
-            return None
+        return self._listed(qk, sk, goal, np.arange(span, _MIN_ADVANCE_MM, -spacing))
+
+    def _listed(
+        self,
+        qk: IntArray,
+        sk: float,
+        goal: float,
+        advances_mm: FloatArray,
+        reference_gap_deg: float = np.inf,
+        max_states: int = _BRIDGE_STATES,
+    ) -> tuple[IntArray, float] | None:
+        """The valid command (:meth:`valid_ends`) from ``qk`` that gets farthest toward
+        ``goal``, of those ending at any lattice state one command away whose tool point lies
+        within the band of the curve point ``advances_mm`` ahead (tried in the order given,
+        the first that holds a valid one kept; listed by
+        :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`, completely
+        unless :data:`_BRIDGE_BOXES` boxes or ``max_states`` states are spent); of
+        ends within ``reference_gap_deg`` of the reference (largest joint, deg equivalents).
+        None where none is."""
+        sign = 1.0 if goal >= sk else -1.0
         most = np.asarray(self.grid.max_ticks, dtype=np.int64)
         lowest, highest = self.arm.tick_limits
         lower = np.maximum(qk - most, lowest).astype(np.int64)[self.tip]
@@ -456,7 +492,7 @@ class Tracer:
         if np.any(lower > upper):
             return None
         unit = self.arm.mm_per_unit
-        for advance in np.arange(span, _MIN_ADVANCE_MM, -spacing):
+        for advance in advances_mm:
             check_time("tracing the curve")
             s1 = sk + sign * float(advance)
             found = lattice_goal_states(
@@ -468,31 +504,63 @@ class Tracer:
                 lower,
                 upper,
                 max_boxes=_BRIDGE_BOXES,
-                max_states=_BRIDGE_STATES,
+                max_states=max_states,
             )
             if found.ticks.shape[0] == 0:
                 continue
             cand, s_end = self.valid_ends(qk, sk, found.ticks, goal)
+            if np.isfinite(reference_gap_deg) and cand.shape[0]:
+                near = self._reference_gap_deg(cand, s_end) <= reference_gap_deg
+                cand, s_end = cand[near], s_end[near]
             if cand.shape[0]:
                 k = int(np.argmax(sign * s_end))
                 return _frozen(cand[k]), float(s_end[k])
         return None
 
-    def _options(self, qk: IntArray, sk: float, goal: float) -> list[tuple[IntArray, float]]:
+    def _reference_gap_deg(self, cand: IntArray, s: FloatArray) -> FloatArray:
+        """How far each lattice state lies from the reference at the arc length it reaches:
+        its largest joint gap in degree equivalents (:attr:`deg_eq`)."""
+        gap = np.abs(self.grid.to_joint(cand) - self.q_ref(s))[:, self.tip]
+        return np.asarray((gap * self.deg_eq[self.tip]).max(axis=1), dtype=np.float64)
+
+    def _options(
+        self, qk: IntArray, sk: float, goal: float, listed: bool = True
+    ) -> list[tuple[IntArray, float]]:
         """:meth:`_find_options`, once per state and arc lengths."""
-        key = ("options", np.asarray(qk, np.int64).tobytes(), sk, goal)
+        key = ("options" if listed else "near", np.asarray(qk, np.int64).tobytes(), sk, goal)
         if key not in self._found:
-            self._found[key] = [(_frozen(q), s) for q, s in self._find_options(qk, sk, goal)]
+            found = self._find_options(qk, sk, goal, listed)
+            self._found[key] = [(_frozen(q), s) for q, s in found]
         return list(self._found[key])
 
-    def _find_options(self, qk: IntArray, sk: float, goal: float) -> list[tuple[IntArray, float]]:
+    def _find_options(
+        self, qk: IntArray, sk: float, goal: float, listed: bool = True
+    ) -> list[tuple[IntArray, float]]:
         """The best commands from ``qk`` toward ``goal``, best first: the one that carries the
         tip farthest (near the reference), and within :data:`_ENDGAME_MM` of the goal the next
         ones of that advance (at most :data:`_LOOKAHEAD`) and a command onto the goal along the
-        family where the best creeps; empty when none is valid."""
-        qk_rad = self.grid.to_joint(qk)
+        family where the best creeps; empty when none is valid. Mid-pass and ``listed``, a
+        command to any lattice state the band holds up to :data:`_LISTED_REACH_MM` farther,
+        within :data:`_LISTED_GAP_DEG` of the reference, replaces the best where it gets
+        farther (:meth:`_listed`)."""
         sign = 1.0 if goal >= sk else -1.0
         endgame = abs(goal - sk) <= _ENDGAME_MM
+        if listed and not endgame:
+            near = self._options(qk, sk, goal, listed=False)
+            if not near:
+                return near
+            # the states near the reference's projection hold few of those the band holds
+            # one command on: all of them, a little farther on, near the reference
+            got = abs(near[0][1] - sk)
+            reach = min(got + _LISTED_REACH_MM, abs(goal - sk))
+            spacing = max(_LISTED_SPACING_MM, self.tol)
+            advances = np.arange(reach, got, -spacing)
+            farther = self._listed(qk, sk, goal, advances, _LISTED_GAP_DEG, _MAX_CANDIDATES)
+            if farther is not None and sign * (farther[1] - near[0][1]) > 0:
+                self.listed_taken += 1
+                return [farther]
+            return near
+        qk_rad = self.grid.to_joint(qk)
         last = None
         for adv in _ADVANCES_MM:
             s1 = sk + sign * min(adv, abs(goal - sk))
@@ -504,8 +572,7 @@ class Tracer:
             pull = np.clip(0.3 * (self.q_ref(sk) - qk_rad), -half, half)
             cand, s = self._commands_toward(qk, sk, s1, goal, [drift + pull, drift])
             if cand.shape[0]:
-                gap = np.abs(self.grid.to_joint(cand) - self.q_ref(s))[:, self.tip]
-                ref_gap = (gap * self.deg_eq[self.tip]).max(axis=1)
+                ref_gap = self._reference_gap_deg(cand, s)
                 order = np.argsort(-(sign * s - 0.05 * ref_gap), kind="stable")
                 order = order[: _LOOKAHEAD if endgame else 1]
                 out = [(cand[k], float(s[k])) for k in order]
@@ -756,8 +823,11 @@ class Tracer:
         s_start: float,
         goal: float,
         chain: list[IntArray] | None = None,
+        listed: bool = True,
     ) -> tuple[list[IntArray], float]:
-        """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes).
+        """Trace from ``q_start`` toward arc length ``goal`` (as far as it goes); ``listed``:
+        whether mid-pass commands are also sought among every lattice state the band holds
+        a little past the farthest near the reference (:meth:`_find_options`).
 
         With an end ``chain`` (:meth:`end_chain`: states from the goal back toward the pass;
         once round a closed curve, the state the pass began from), the pass may finish with a
@@ -776,6 +846,8 @@ class Tracer:
         commands tried are at most ``(backtracks + 1) * (|goal - s_start| + tolerance) /
         _MIN_ADVANCE_MM``.
         """
+        self.listed = listed
+        self.listed_taken = 0
         direction = 1.0 if goal >= s_start else -1.0
         states, reached = [q_start], [s_start]
         budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
