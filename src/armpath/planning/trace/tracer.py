@@ -144,6 +144,15 @@ _BRIDGE_BOXES = 500_000
 _LISTED_REACH_MM = 3.0
 _LISTED_SPACING_MM = 0.1
 _LISTED_GAP_DEG = 4.0
+#: Most boxes the listing for one command looks at (the seed arm's and the UR5's take at most
+#: 64,000 and 119,000 round their circles; a UR5 on a track, seven joints moving the tool
+#: point, spent 1.9 s a command listing 30 points to their budgets, and found nothing farther:
+#: its 1.7 m seam took 462 s rather than 38 s), and the boxes of listings in a row that find
+#: nothing farther after which a pass lists no more (eight such commands on the track; the UR5
+#: cell's seam, where listings in a row found nothing for stretches but each looked at few
+#: boxes, took 174 commands rather than 171 when eight listings in a row ended it).
+_LISTED_BOXES = 200_000
+_LISTED_FRUITLESS_BOXES = 8 * _LISTED_BOXES
 #: Share of a pass that is also traced from its goal back toward where it begins (its *end
 #: chain*, :meth:`Tracer.end_chain`): the pass then follows the chain's joint path and finishes
 #: along it, reversed, from where a command reaches it. Traced into the tight end of its
@@ -262,6 +271,9 @@ class Tracer:
         #: how many commands :meth:`_listed` found mid-pass (none: a pass traced so is the
         #: same as one traced without)
         self.listed_taken = 0
+        #: boxes :meth:`_listed` looked at, and of them those of the listings in a row that
+        #: found nothing farther (past :data:`_LISTED_FRUITLESS_BOXES`, the pass lists no more)
+        self._boxes_listed = self._fruitless_boxes = 0
 
     def q_ref(self, s: float | FloatArray) -> FloatArray:
         s_arr = np.asarray(s, dtype=np.float64)
@@ -475,13 +487,15 @@ class Tracer:
         advances_mm: FloatArray,
         reference_gap_deg: float = np.inf,
         max_states: int = _BRIDGE_STATES,
+        max_boxes: float = np.inf,
     ) -> tuple[IntArray, float] | None:
         """The valid command (:meth:`valid_ends`) from ``qk`` that gets farthest toward
         ``goal``, of those ending at any lattice state one command away whose tool point lies
         within the band of the curve point ``advances_mm`` ahead (tried in the order given,
         the first that holds a valid one kept; listed by
         :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`, completely
-        unless :data:`_BRIDGE_BOXES` boxes or ``max_states`` states are spent); of
+        unless :data:`_BRIDGE_BOXES` boxes or ``max_states`` states are spent about a point,
+        or ``max_boxes`` over all of them); of
         ends within ``reference_gap_deg`` of the reference (largest joint, deg equivalents).
         None where none is."""
         sign = 1.0 if goal >= sk else -1.0
@@ -492,8 +506,11 @@ class Tracer:
         if np.any(lower > upper):
             return None
         unit = self.arm.mm_per_unit
+        boxes_left = max_boxes
         for advance in advances_mm:
             check_time("tracing the curve")
+            if boxes_left <= 0:
+                break
             s1 = sk + sign * float(advance)
             found = lattice_goal_states(
                 self.arm,
@@ -503,9 +520,11 @@ class Tracer:
                 np.asarray(qk, dtype=np.int64),
                 lower,
                 upper,
-                max_boxes=_BRIDGE_BOXES,
+                max_boxes=int(min(_BRIDGE_BOXES, boxes_left)),
                 max_states=max_states,
             )
+            boxes_left -= found.boxes
+            self._boxes_listed += found.boxes
             if found.ticks.shape[0] == 0:
                 continue
             cand, s_end = self.valid_ends(qk, sk, found.ticks, goal)
@@ -555,10 +574,17 @@ class Tracer:
             reach = min(got + _LISTED_REACH_MM, abs(goal - sk))
             spacing = max(_LISTED_SPACING_MM, self.tol)
             advances = np.arange(reach, got, -spacing)
-            farther = self._listed(qk, sk, goal, advances, _LISTED_GAP_DEG, _MAX_CANDIDATES)
+            if self._fruitless_boxes >= _LISTED_FRUITLESS_BOXES:
+                return near
+            spent = self._boxes_listed
+            farther = self._listed(
+                qk, sk, goal, advances, _LISTED_GAP_DEG, _MAX_CANDIDATES, _LISTED_BOXES
+            )
             if farther is not None and sign * (farther[1] - near[0][1]) > 0:
                 self.listed_taken += 1
+                self._fruitless_boxes = 0
                 return [farther]
+            self._fruitless_boxes += self._boxes_listed - spent
             return near
         qk_rad = self.grid.to_joint(qk)
         last = None
@@ -847,7 +873,7 @@ class Tracer:
         _MIN_ADVANCE_MM``.
         """
         self.listed = listed
-        self.listed_taken = 0
+        self.listed_taken = self._fruitless_boxes = 0
         direction = 1.0 if goal >= s_start else -1.0
         states, reached = [q_start], [s_start]
         budget = int(np.ceil((abs(goal - s_start) + self.tol) / _MIN_ADVANCE_MM)) + 1
