@@ -176,12 +176,12 @@ def test_a_pass_whose_certificate_exceeds_the_tolerance_is_traced_again_nearer(m
 
 def test_commands_to_any_lattice_state_the_band_holds_go_round_the_circle_in_fewer(monkeypatch):
     """Mid-pass the tracer also lists every lattice state one command on within the band a
-    little past the farthest state near the reference's projection (issue 21: the commands
-    along the circles began near the band's middle, so covered less than a chord across it).
-    Round the free circle its pass takes fewer commands than with that listing turned off
-    (28 against 29), and the plan, replayed by the independent FK at 200 instants a command,
-    stays within the tolerance (closed-form distance) and goes once round; so does the plan
-    without the listing."""
+    little past the farthest state near the reference's projection (issue 21: the box searched
+    about the projection holds the states near one member of the family only; from others
+    near it a command can follow the curve farther). Round the free circle its pass takes
+    fewer commands than with that listing turned off (28 against 29), and the plan, replayed
+    by the independent FK at 200 instants a command, stays within the tolerance (closed-form
+    distance) and goes once round; so does the plan without the listing."""
     from armpath.planning.trace import tracer
 
     plans = [trace_the_circle(bound=False)]

@@ -922,11 +922,13 @@ def _trace_arcs(
                     # (where it began, it is within the tolerance and clear)
                     chain = [pass_states[-1]]
                 # traced with the lattice states the band holds listed past the farthest near
-                # the reference and, where that took any, without: the farthest commands can
-                # leave the tip where the next ones get less far (the seed crack: 141 commands
-                # with, 139 without)
+                # the reference and, onto an arc's end where that took any, without: the
+                # farthest commands can leave the tip where the next ones get less far (the
+                # seed crack: 141 commands with, 139 without). A loop is traced once, with
+                # them: none took more (the seed's and the UR5 cell's circles, the cell's
+                # seam), and tracing the UR5's circle twice took 32 s rather than 15 s
                 runs = [tracer.run(pass_states[-1], s_at, goal, chain)]
-                if tracer.listed_taken:
+                if tracer.listed_taken and goal == finish:
                     runs.append(tracer.run(pass_states[-1], s_at, goal, chain, listed=False))
                 at_goal = sign * goal - GOAL_REACHED_MM
                 ahead, s_reached = min(runs, key=lambda r: (-min(sign * r[1], at_goal), len(r[0])))
