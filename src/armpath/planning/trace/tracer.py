@@ -495,9 +495,8 @@ class Tracer:
         the first that holds a valid one kept; listed by
         :func:`~armpath.planning.bounds.lattice_goals.lattice_goal_states`, completely
         unless :data:`_BRIDGE_BOXES` boxes or ``max_states`` states are spent about a point,
-        or ``max_boxes`` over all of them); of
-        ends within ``reference_gap_deg`` of the reference (largest joint, deg equivalents).
-        None where none is."""
+        or ``max_boxes`` over all of them); of ends within ``reference_gap_deg`` of the
+        reference (largest joint, deg equivalents). None where none is."""
         sign = 1.0 if goal >= sk else -1.0
         most = np.asarray(self.grid.max_ticks, dtype=np.int64)
         lowest, highest = self.arm.tick_limits
@@ -566,7 +565,7 @@ class Tracer:
         endgame = abs(goal - sk) <= _ENDGAME_MM
         if listed and not endgame:
             near = self._options(qk, sk, goal, listed=False)
-            if not near:
+            if not near or self._fruitless_boxes >= _LISTED_FRUITLESS_BOXES:
                 return near
             # the states near the reference's projection hold few of those the band holds
             # one command on: all of them, a little farther on, near the reference
@@ -574,8 +573,6 @@ class Tracer:
             reach = min(got + _LISTED_REACH_MM, abs(goal - sk))
             spacing = max(_LISTED_SPACING_MM, self.tol)
             advances = np.arange(reach, got, -spacing)
-            if self._fruitless_boxes >= _LISTED_FRUITLESS_BOXES:
-                return near
             spent = self._boxes_listed
             farther = self._listed(
                 qk, sk, goal, advances, _LISTED_GAP_DEG, _MAX_CANDIDATES, _LISTED_BOXES
