@@ -1240,14 +1240,16 @@ def test_a_closed_curve_s_reasons_name_points_on_it(tmp_path, monkeypatch):
     the arc beside it could not be entered the reasons named points past the curve's end
     (594.4 mm on a 377 mm circle: the arc length run on across the start), and said straight
     motions were blocked where no lattice state lay near the curve. Every point a reason names
-    now lies on the curve, and each reason comes once. (The tracer's bridging commands get on
-    past where those reasons arose; they are switched off here to keep the reasons.)"""
+    now lies on the curve, and each reason comes once. (The tracer's bridging commands, and
+    those to the lattice states it lists past its farthest, get on past where those reasons
+    arose; they are switched off here to keep the reasons.)"""
     import re
 
     import armpath
     from armpath.planning.trace import tracer
 
     monkeypatch.setattr(tracer.Tracer, "_bridge", lambda *_args: None)
+    monkeypatch.setattr(tracer, "_LISTED_REACH_MM", 0.0)
 
     scene = tmp_path / "dip.toml"
     scene.write_text(

@@ -438,7 +438,7 @@ def test_a_five_joint_arm_whose_directions_do_not_chart_its_family_traces_in_one
     assert swept >= 2 * np.pi - 1e-3
 
 
-@pytest.mark.slow  # 2 min
+@pytest.mark.slow  # 3 min
 def test_a_closed_curve_the_lattice_breaks_is_bridged_and_traced_from_a_break(monkeypatch):
     """The SO-100 round a 30 mm circle given point by point, its first point written again at
     the end, at 0.1 mm: where the circle turns back across its pan joint (0.32 mm a tick
@@ -448,9 +448,12 @@ def test_a_closed_curve_the_lattice_breaks_is_bridged_and_traced_from_a_break(mo
     mm covered). Now a pass stuck there takes the farthest valid command onto every lattice
     state one command away near the curve ahead (listed completely): the break through 0 mm
     is crossed, 183.8 mm covered (97.5 %). Without that, traced again from where the longest
-    stretch left ends, each pass runs from one break to the next: 2 passes, 59 commands. The
-    reasons name the points with no lattice state near, and the passes replay on Pinocchio's
-    kinematics of the file within the tolerance of the polyline."""
+    stretch left ends, each pass runs from one break to the next: 2 passes, 59 commands. Since
+    the tracer also lists, mid-pass, every lattice state the band holds a little past its
+    farthest command, both breaks are crossed: all 188.4 mm covered in 2 passes and 57
+    commands (with the listing turned off, the bridged trace above). The reasons name the
+    points with no lattice state near, and the passes replay on Pinocchio's kinematics of the
+    file within the tolerance of the polyline."""
     import armpath
     from armpath.planning.trace import tracer
 
@@ -480,6 +483,10 @@ def test_a_closed_curve_the_lattice_breaks_is_bridged_and_traced_from_a_break(mo
             assert np.linalg.norm(P - a - u[..., None] * d, axis=-1).min(axis=1).max() <= 0.1
         return r
 
+    listed = traced()
+    assert not listed.doc["not_traced"] and listed.doc["coverage"]["of_curve"] == 1.0
+    assert listed.n_commands <= 57
+    monkeypatch.setattr(tracer, "_LISTED_REACH_MM", 0.0)
     bridged = traced()
     assert bridged.doc["coverage"]["of_curve"] >= 0.97
     assert len(bridged.doc["not_traced"]) == 1 and bridged.n_commands <= 66
