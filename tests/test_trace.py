@@ -56,6 +56,17 @@ def trace_the_circle(bound: bool = True, tolerance_mm: float = 0.1):
     return plan_trace(seed_arm(), scene.world, start, circle, options)
 
 
+def one_pass_tips(r, instants: int) -> np.ndarray:
+    """The tool points of the one pass of the seed arm's trace ``r``, replayed by the
+    independent FK at ``instants`` instants a command (ends included), ``(M, 3)`` mm."""
+    (p,) = r.passes
+    states = r.sequence.states()
+    t = np.linspace(0.0, 1.0, instants)
+    s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
+    q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 6) / 10.0
+    return independent.points(q)[:, -1, :]
+
+
 @pytest.fixture(scope="module")
 def circle_trace():
     return trace_the_circle()
@@ -129,12 +140,7 @@ def test_a_wider_tolerance_never_takes_more_commands_round_a_circle():
     counts = []
     for tol in (0.5, 3.0, 10.0):
         r = trace_the_circle(bound=False, tolerance_mm=tol)
-        (p,) = r.passes
-        states = r.sequence.states()
-        t = np.linspace(0.0, 1.0, 41)
-        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
-        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 6) / 10.0
-        tips = independent.points(q)[:, -1, :]
+        tips = one_pass_tips(r, 41)
         assert circle_distance(tips).max() <= tol
         ang = np.unwrap(np.arctan2(tips[:, 1] - CENTER[1], tips[:, 0] - CENTER[0]))
         assert abs(ang[-1] - ang[0]) >= 2 * np.pi - 1e-3
@@ -190,11 +196,7 @@ def test_commands_to_any_lattice_state_the_band_holds_go_round_the_circle_in_few
     along = []
     for r in plans:
         (p,) = r.passes
-        states = r.sequence.states()
-        t = np.linspace(0.0, 1.0, 201)
-        s0, s1 = states[p.first : p.last], states[p.first + 1 : p.last + 1]
-        q = (s0[:, None] + t[None, :, None] * (s1 - s0)[:, None]).reshape(-1, 6) / 10.0
-        tips = independent.points(q)[:, -1, :]
+        tips = one_pass_tips(r, 201)
         assert circle_distance(tips).max() <= 0.1
         ang = np.unwrap(np.arctan2(tips[:, 1] - CENTER[1], tips[:, 0] - CENTER[0]))
         assert abs(ang[-1] - ang[0]) >= 2 * np.pi - 1e-3
