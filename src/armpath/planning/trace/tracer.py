@@ -808,7 +808,11 @@ class Tracer:
             if sign * (goal - s) > GOAL_REACHED_MM:
                 return []
             q = onto[-1]
-        chain, _ = back.run(q, s, goal - self.piece.sign * length_mm)
+        # near the reference only: the chain becomes the pass's reference where it runs
+        # (:meth:`follow`), and one traced with the listing's farther commands strays from the
+        # family's middle (a 600 mm line before the UR5: 62 commands along with either pass
+        # rather than 56)
+        chain, _ = back.run(q, s, goal - self.piece.sign * length_mm, listed=False)
         return chain
 
     def follow(self, chain: list[IntArray]) -> None:
