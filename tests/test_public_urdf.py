@@ -685,7 +685,7 @@ def test_five_welds_on_a_plate_are_bounded_over_every_orders_lattice_goal_states
     lattice goal states, every order at once (the programme over the sets of welds visited,
     checked against brute force in tests/test_lattice_goals.py): 71, which the plan meets.
     The plan replays on Pinocchio's kinematics of the file within the tolerance at each weld,
-    and stays above the plate."""
+    and its tool point never enters the plate."""
     import armpath
 
     path = robot_file(UR5)
@@ -713,4 +713,7 @@ def test_five_welds_on_a_plate_are_bounded_over_every_orders_lattice_goal_states
         tip = ref.pose_mm(states[v["after_command"]])[:3, 3]
         assert np.linalg.norm(tip - np.array(v["target"])) <= 0.05
     tips = np.array([ref.pose_mm(q)[:3, 3] for q in states])
-    assert tips[:, 2].min() >= -50.0 - 0.05  # on the plate's top at most, never through it
+    # over the plate, on its top at most, never through it; beside it the tip may dip lower
+    # (54.7 mm below the top at x = 689 mm on its way in)
+    over = (np.abs(tips[:, 0] - 400.0) <= 100.0) & (np.abs(tips[:, 1]) <= 150.0)
+    assert over.sum() >= 5 and tips[over, 2].min() >= -50.0 - 0.05

@@ -833,6 +833,16 @@ def _span_text(curve: Curve, arc: CurveArc) -> str:
     return f"{start:.1f}..{end:.1f} mm{' (through 0)' if through else ''}"
 
 
+def _followed_end_chain(
+    tracer: Tracer, goal: float, left_mm: float, hold: IntArray, listed: bool = True
+) -> list[IntArray]:
+    """The end chain (:meth:`Tracer.end_chain`) over :data:`END_CHAIN_SHARE` of the
+    ``left_mm`` from where the pass stands to ``goal``, now followed by ``tracer``."""
+    chain = tracer.end_chain(goal, END_CHAIN_SHARE * left_mm, hold=hold, listed=listed)
+    tracer.follow(chain)
+    return chain
+
+
 def _trace_arcs(
     arm: SerialArm,
     world: CollisionWorld,
@@ -912,23 +922,31 @@ def _trace_arcs(
                 # onto an arc's end (not a loop's run on past where it began): also traced
                 # from there back, followed and finished along where that takes fewer commands
                 chain = None
+                unchained = tracer.reference
                 if goal == finish:
-                    chain = tracer.end_chain(
-                        goal, END_CHAIN_SHARE * abs(finish - s_at), hold=pass_states[-1]
-                    )
-                    tracer.follow(chain)
+                    chain = _followed_end_chain(tracer, goal, abs(finish - s_at), pass_states[-1])
                 elif curve.closed and abs(finish - begin) >= curve.length - 1e-6:
                     # once round a closed curve: the pass may end on the state it begins from
                     # (where it began, it is within the tolerance and clear)
                     chain = [pass_states[-1]]
                 # traced with the lattice states the band holds listed past the farthest near
-                # the reference and, onto an arc's end where that took any, without: the
+                # the reference and, onto an arc's end where that took any, without, along
+                # that end chain and along one traced without (the pass follows its chain;
+                # where only the chain's listing took any, along the latter alone): the
                 # farthest commands can leave the tip where the next ones get less far (the
-                # seed crack: 141 commands with, 139 without). A loop is traced once, with
-                # them: none took more (the seed's and the UR5 cell's circles, the cell's
-                # seam), and tracing the UR5's circle twice took 32 s rather than 15 s
+                # seed crack: 141 commands with, 139 without; a 600 mm line before the UR5: 62
+                # along with, 62 without along the chain traced with, 56 along the chain
+                # traced without; the SO-100's circle the other way round). A loop is traced
+                # once, with them: none took more (the seed's and the UR5 cell's circles, the
+                # cell's seam), and tracing the UR5's circle twice took 32 s rather than 15 s
                 runs = [tracer.run(pass_states[-1], s_at, goal, chain)]
-                if tracer.listed_taken and goal == finish:
+                if goal == finish and tracer.listed_taken:
+                    runs.append(tracer.run(pass_states[-1], s_at, goal, chain, listed=False))
+                if goal == finish and (tracer.listed_taken or tracer.chain_listed_taken):
+                    tracer.reference = unchained
+                    chain = _followed_end_chain(
+                        tracer, goal, abs(finish - s_at), pass_states[-1], listed=False
+                    )
                     runs.append(tracer.run(pass_states[-1], s_at, goal, chain, listed=False))
                 at_goal = sign * goal - GOAL_REACHED_MM
                 ahead, s_reached = min(runs, key=lambda r: (-min(sign * r[1], at_goal), len(r[0])))

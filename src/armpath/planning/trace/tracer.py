@@ -117,6 +117,13 @@ _STALL_MM = 2.0
 #: with turns up to 1 deg and took a second pass (116 commands); turned up to 2 deg it goes on
 #: in one (108; 105 once the pass may end on its own first state, see :meth:`Tracer.run`).
 _TURNS_DEG = (0.25, 0.5, 1.0, 1.5, 2.0)
+#: Commands near the reference that end about as far along are ranked by how far along (mm)
+#: less this much per degree (equivalent) their end lies from the reference: one ending 2 deg
+#: nearer it ranks with one a tenth of a millimetre farther, and the next commands have room
+#: about the family's middle. The listing's states (:meth:`Tracer._listed`) are not: ranked so,
+#: the UR5 cell's 80 mm circle took 105 commands rather than 106, but the SO-100 round a 30 mm
+#: circle was left 2.2 mm short of covered (186.2 of 188.4 mm).
+_GAP_WEIGHT_MM_PER_DEG = 0.05
 #: Commands compared there by how far the command after each gets.
 _LOOKAHEAD = 6
 #: Within this distance of a pass's goal (mm), a pass that finds no command takes its last one
@@ -271,6 +278,8 @@ class Tracer:
         #: how many commands :meth:`_listed` found mid-pass (none: a pass traced so is the
         #: same as one traced without)
         self.listed_taken = 0
+        #: how many the last :meth:`end_chain` took so
+        self.chain_listed_taken = 0
         #: boxes :meth:`_listed` looked at, and of them those of the listings in a row that
         #: found nothing farther (past :data:`_LISTED_FRUITLESS_BOXES`, the pass lists no more)
         self._boxes_listed = self._fruitless_boxes = 0
@@ -596,7 +605,7 @@ class Tracer:
             cand, s = self._commands_toward(qk, sk, s1, goal, [drift + pull, drift])
             if cand.shape[0]:
                 ref_gap = self._reference_gap_deg(cand, s)
-                order = np.argsort(-(sign * s - 0.05 * ref_gap), kind="stable")
+                order = np.argsort(-(sign * s - _GAP_WEIGHT_MM_PER_DEG * ref_gap), kind="stable")
                 order = order[: _LOOKAHEAD if endgame else 1]
                 out = [(cand[k], float(s[k])) for k in order]
                 if abs(s[order[0]] - sk) < _STALL_MM and not endgame:
@@ -781,7 +790,7 @@ class Tracer:
         )
 
     def end_chain(
-        self, goal: float, length_mm: float, hold: IntArray | None = None
+        self, goal: float, length_mm: float, hold: IntArray | None = None, listed: bool = True
     ) -> list[IntArray]:
         """Lattice states traced from arc length ``goal`` back along the piece for
         ``length_mm``: first a state that reaches the goal as a pass does (within
@@ -790,7 +799,8 @@ class Tracer:
         goal. A pass that closes in on the tight end of an arc creeps (the family narrows, and
         the farthest command can end where the next ones cannot go on), one that leaves it goes
         on at full stride; :meth:`run` finishes along this chain, reversed, where that takes
-        fewer commands."""
+        fewer commands. ``listed``: traced as :meth:`run` with ``listed`` (how many commands
+        the listing took: :attr:`chain_listed_taken`)."""
         back = Tracer(
             self.fam,
             replace(self.piece, backward=not self.piece.backward),
@@ -798,21 +808,20 @@ class Tracer:
             self.band_share,
         )
         back.layers, back.ref = self.layers, self.ref
+        self.chain_listed_taken = 0
         try:
             q, s = back.start_state(goal, hold=hold)
         except PlanningError:
             return []
         sign = self.piece.sign
         if sign * (goal - s) > GOAL_REACHED_MM:  # found a little inside: on onto the goal
-            onto, s = back.run(q, s, goal)
+            onto, s = back.run(q, s, goal, listed=listed)
+            self.chain_listed_taken += back.listed_taken
             if sign * (goal - s) > GOAL_REACHED_MM:
                 return []
             q = onto[-1]
-        # near the reference only: the chain becomes the pass's reference where it runs
-        # (:meth:`follow`), and one traced with the listing's farther commands strays from the
-        # family's middle (a 600 mm line before the UR5: 62 commands along with either pass
-        # rather than 56)
-        chain, _ = back.run(q, s, goal - self.piece.sign * length_mm, listed=False)
+        chain, _ = back.run(q, s, goal - self.piece.sign * length_mm, listed=listed)
+        self.chain_listed_taken += back.listed_taken
         return chain
 
     def follow(self, chain: list[IntArray]) -> None:
@@ -825,8 +834,20 @@ class Tracer:
         order = np.argsort(s, kind="stable")
         s, q = s[order], q[order]
         before, after = self.layers < s[0], self.layers > s[-1]
-        self.layers = np.concatenate([self.layers[before], s, self.layers[after]])
-        self.ref = np.vstack([self.ref[before], q, self.ref[after]])
+        self.reference = (
+            np.concatenate([self.layers[before], s, self.layers[after]]),
+            np.vstack([self.ref[before], q, self.ref[after]]),
+        )
+
+    @property
+    def reference(self) -> tuple[FloatArray, FloatArray]:
+        """The reference path: its layers' arc lengths (mm) and the joints there (rad, as
+        :meth:`q_ref` reads them)."""
+        return self.layers, self.ref
+
+    @reference.setter
+    def reference(self, path: tuple[FloatArray, FloatArray]) -> None:
+        self.layers, self.ref = path
         self._found.clear()
 
     def _joined(self, qk: IntArray, sk: float, goal: float, chain: list[IntArray]) -> int | None:
