@@ -930,19 +930,20 @@ def _trace_arcs(
                     # (where it began, it is within the tolerance and clear)
                     chain = [pass_states[-1]]
                 # traced with the lattice states the band holds listed past the farthest near
-                # the reference and, onto an arc's end where that took any, without, along
-                # that end chain and along one traced without (the pass follows its chain;
-                # where only the chain's listing took any, along the latter alone): the
-                # farthest commands can leave the tip where the next ones get less far (the
-                # seed crack: 141 commands with, 139 without; a 600 mm line before the UR5: 62
-                # along with, 62 without along the chain traced with, 56 along the chain
-                # traced without; the SO-100's circle the other way round). A loop is traced
-                # once, with them: none took more (the seed's and the UR5 cell's circles, the
-                # cell's seam), and tracing the UR5's circle twice took 32 s rather than 15 s
+                # the reference and, onto an arc's end where that took any, without; where the
+                # end chain's listing took any, also without along a chain traced without (the
+                # pass follows its chain). The farthest commands can leave the tip where the
+                # next ones get less far (the seed crack: 141 commands with, 139 without; a
+                # 600 mm line before the UR5: 62 along with, 62 without along the chain traced
+                # with, 56 along the chain traced without; the SO-100's circle the other way
+                # round). A loop is traced once, with them: none took more (the seed's and the
+                # UR5 cell's circles, the cell's seam), and tracing the UR5's circle twice
+                # took 32 s rather than 15 s
                 runs = [tracer.run(pass_states[-1], s_at, goal, chain)]
                 if goal == finish and tracer.listed_taken:
                     runs.append(tracer.run(pass_states[-1], s_at, goal, chain, listed=False))
-                if goal == finish and (tracer.listed_taken or tracer.chain_listed_taken):
+                if goal == finish and tracer.chain_listed_taken:
+                    # (a chain whose listing took none is the one traced without it)
                     tracer.reference = unchained
                     chain = _followed_end_chain(
                         tracer, goal, abs(finish - s_at), pass_states[-1], listed=False
