@@ -807,7 +807,7 @@ class Tracer:
             self.tol,
             self.band_share,
         )
-        back.layers, back.ref = self.layers, self.ref
+        back.reference = self.reference
         self.chain_listed_taken = 0
         try:
             q, s = back.start_state(goal, hold=hold)
