@@ -1005,6 +1005,58 @@ def test_arms_the_complete_solver_does_not_suit_and_arms_of_few_joints_reach(tmp
         armpath.reach(cases[0][0], [301.0, 0.0, 0.0], scene="none")
 
 
+def test_a_two_link_arm_in_no_scene_lifts_off_between_passes(tmp_path):
+    """A planar two-link arm (300 and 200 mm, 0.1 deg ticks) along a 223.6 mm line with
+    nothing to collide with: a tick moves its tip up to 0.87 mm, so stretches of the line
+    have no lattice state within 0.1 mm and the trace takes two passes. The lift-off between
+    them measured its slack as the least over no pair at all and crashed; with no pair the
+    state has all the room. Each pass's states replay on the two-link closed form within the
+    tolerance of the line; the stretch between the passes has no state near it (every one of
+    the 3601 x 3601 lattice states tried); the passes and the stretches not traced make up
+    the whole line; and the proven bound lies at or below the plan."""
+    import armpath
+
+    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": [-180, 180]} for a in (300, 200)]
+    model = tmp_path / "planar2.json"
+    units = {"length": "mm", "angle": "deg"}
+    model.write_text(
+        json.dumps({"name": "planar2", "convention": "standard", "units": units, "links": links})
+    )
+    a, b = np.array([400.0, 0.0, 0.0]), np.array([300.0, 200.0, 0.0])
+    length = float(np.linalg.norm(b - a))
+    doc = armpath.trace(str(model), [a, b], scene="none").doc
+
+    def tips(q_deg):
+        q = np.radians(np.asarray(q_deg, dtype=np.float64))
+        x = 300 * np.cos(q[..., 0]) + 200 * np.cos(q[..., 0] + q[..., 1])
+        y = 300 * np.sin(q[..., 0]) + 200 * np.sin(q[..., 0] + q[..., 1])
+        return np.stack([x, y, np.zeros_like(x)], axis=-1)
+
+    ticks = np.vstack([np.zeros((1, 2)), np.asarray(doc["commands"], dtype=np.float64)])
+    states = np.asarray(doc["initial_deg"]) + 0.1 * np.cumsum(ticks, axis=0)  # 0.1 deg ticks
+    assert np.allclose(states[-1], doc["final_deg"])
+    assert len(doc["passes"]) == 2
+    unit = (b - a) / length
+    for first, last in doc["passes"]:
+        p = tips(states[first : last + 1]) - a
+        along = np.clip(p @ unit, 0.0, length)
+        off = np.linalg.norm(p - along[:, None] * unit, axis=-1)
+        assert off.max() <= doc["tolerance_mm"] + 1e-6
+    spans = [(d["start_mm"], d["end_mm"]) for d in doc["pass_details"]]
+    holes = [(h["start_mm"], h["end_mm"]) for h in doc["not_traced"]]
+    assert sum(e - s for s, e in spans + holes) == pytest.approx(length, abs=0.01)
+    (start, end) = max(holes, key=lambda h: h[1] - h[0])
+    assert end - start > 5.0  # the stretch between the passes
+    point = a + 0.5 * (start + end) * unit
+    q1 = np.radians(np.arange(-1800, 1801) / 10.0)
+    nearest = np.inf
+    for k in range(0, q1.size, 400):  # every lattice state, 400 rows of joint 1 at a time
+        grid = np.stack(np.meshgrid(q1[k : k + 400], q1, indexing="ij"), axis=-1)
+        nearest = min(nearest, float(np.linalg.norm(tips(np.degrees(grid)) - point, axis=-1).min()))
+    assert nearest > doc["tolerance_mm"]
+    assert doc["lower_bound_commands"] <= doc["n_commands"]
+
+
 def test_a_reach_taken_at_the_nearest_point_is_taken_there_once(tmp_path, monkeypatch):
     """Where no member reaches the target, the reach is planned at the nearest point the arm
     reaches; should no member be found there either (a sampler that finds none), it says so

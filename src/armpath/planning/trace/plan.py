@@ -674,9 +674,10 @@ def _search_slack(
     arm: SerialArm, world: CollisionWorld, q_ticks: IntArray, need: FloatArray
 ) -> FloatArray:
     """Of lattice states ``q_ticks`` ``(..., n)``, the smallest slack over the pairs against
-    ``need`` (:func:`_search_need`; mm): the state has the search's room where it is >= 0."""
+    ``need`` (:func:`_search_need`; mm): the state has the search's room where it is >= 0
+    (infinite where no pair is checked: an arm with no obstacle and no link pair apart)."""
     values, _ = world.pair_clearances(arm, arm.lattice.to_joint(q_ticks))
-    return np.asarray((values - need).min(axis=-1), dtype=np.float64)
+    return np.asarray(np.min(values - need, axis=-1, initial=np.inf), dtype=np.float64)
 
 
 def _lift_off(
