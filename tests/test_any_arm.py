@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import re
 
 import numpy as np
 import pytest
@@ -1005,6 +1006,17 @@ def test_arms_the_complete_solver_does_not_suit_and_arms_of_few_joints_reach(tmp
         armpath.reach(cases[0][0], [301.0, 0.0, 0.0], scene="none")
 
 
+def _planar_two_link(tmp_path):
+    """A robot file: two revolute joints about parallel z axes, links 300 and 200 mm."""
+    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": [-180, 180]} for a in (300, 200)]
+    model = tmp_path / "planar2.json"
+    units = {"length": "mm", "angle": "deg"}
+    model.write_text(
+        json.dumps({"name": "planar2", "convention": "standard", "units": units, "links": links})
+    )
+    return model
+
+
 def test_a_two_link_arm_in_no_scene_lifts_off_between_passes(tmp_path):
     """A planar two-link arm (300 and 200 mm, 0.1 deg ticks) along a 223.6 mm line with
     nothing to collide with: a tick moves its tip up to 0.87 mm, so stretches of the line
@@ -1016,12 +1028,7 @@ def test_a_two_link_arm_in_no_scene_lifts_off_between_passes(tmp_path):
     the whole line; and the proven bound lies at or below the plan."""
     import armpath
 
-    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": [-180, 180]} for a in (300, 200)]
-    model = tmp_path / "planar2.json"
-    units = {"length": "mm", "angle": "deg"}
-    model.write_text(
-        json.dumps({"name": "planar2", "convention": "standard", "units": units, "links": links})
-    )
+    model = _planar_two_link(tmp_path)
     a, b = np.array([400.0, 0.0, 0.0]), np.array([300.0, 200.0, 0.0])
     length = float(np.linalg.norm(b - a))
     doc = armpath.trace(str(model), [a, b], scene="none").doc
@@ -1055,6 +1062,26 @@ def test_a_two_link_arm_in_no_scene_lifts_off_between_passes(tmp_path):
         nearest = min(nearest, float(np.linalg.norm(tips(np.degrees(grid)) - point, axis=-1).min()))
     assert nearest > doc["tolerance_mm"]
     assert doc["lower_bound_commands"] <= doc["n_commands"]
+
+
+def test_a_curve_beside_a_planar_arms_plane_names_how_near_the_tool_comes(tmp_path):
+    """The two-link arm moves its tool point in the plane z = 0 only: a line 0.05 mm above
+    it has no configuration putting the tool point on it, so nothing is traced, though every
+    point of it lies within the 0.1 mm tolerance of a reachable one. The refusal says how
+    near the tool point comes (0.05 mm, the line's height); a line 50 mm above the plane,
+    beyond the tolerance, is refused as out of reach alone."""
+    import armpath
+    from armpath.errors import PlanningError
+
+    model = str(_planar_two_link(tmp_path))
+    with pytest.raises(PlanningError) as near:
+        armpath.trace(model, [[400.0, 0.0, 0.05], [300.0, 200.0, 0.05]], scene="none")
+    (within,) = re.findall(r"comes within ([\d.e-]+) mm of it", str(near.value))
+    assert float(within) == pytest.approx(0.05, abs=1e-6)
+    assert "inside the 0.1 mm tolerance" in str(near.value)
+    with pytest.raises(PlanningError) as far:
+        armpath.trace(model, [[400.0, 0.0, 50.0], [300.0, 200.0, 50.0]], scene="none")
+    assert str(far.value).endswith("is reachable: out of reach")
 
 
 def test_a_reach_taken_at_the_nearest_point_is_taken_there_once(tmp_path, monkeypatch):

@@ -65,6 +65,7 @@ from armpath.planning.trace.family import AxisRule, CurveFamily
 from armpath.planning.trace.reachability import (
     CurveArc,
     CurveReachability,
+    UnreachableArc,
     common_mm,
     curve_reachability,
     merged_arcs,
@@ -231,6 +232,44 @@ class TraceResult:
 _RETRACE_TIME_SHARE = 2.0
 
 
+#: Points along a curve no part of which is reachable where :func:`_near_miss` looks for the
+#: nearest tool point.
+_NEAR_MISS_POINTS = 9
+
+
+def _near_miss(
+    arm: SerialArm, curve: Curve, unreachable: Sequence[UnreachableArc], tolerance_mm: float
+) -> str:
+    """Where every arc of ``curve`` is out of reach: a clause naming how near the tool point
+    comes to it (at :data:`_NEAR_MISS_POINTS` points along it, the orientation rule ignored)
+    when that lies within ``tolerance_mm``; else empty. A trace follows members that put the
+    tool point on the curve, so an arm whose tool point moves in fewer than three directions
+    (one joint; two in a plane) or a curve just beyond full stretch has none, although states
+    within the tolerance exist."""
+    from armpath.ik.family import EXACT_FRACTION
+    from armpath.ik.target import ToolTarget
+    from armpath.planning.reach_generic import nearest_reachable
+
+    if any(a.blocked_by != ("out of reach",) for a in unreachable):
+        return ""
+    rng = np.random.default_rng(0)
+    s = np.linspace(0.0, curve.length, _NEAR_MISS_POINTS)
+    points = curve.at_arc_length(s)
+    near = [nearest_reachable(arm, ToolTarget(p), rng)[0] for p in points]
+    k = int(np.argmin(near))
+    if near[k] > tolerance_mm:
+        return ""
+    exact = EXACT_FRACTION * arm.size * arm.mm_per_unit
+    return (
+        f"; the tool point comes within {near[k]:.3g} mm of it ({s[k]:.1f} mm along it), "
+        f"inside the {tolerance_mm:g} mm tolerance, but a trace follows configurations that "
+        f"put the tool point on the curve (to {exact:.1g} mm) and none does: an arm whose tool "
+        "point moves in fewer than three directions (one joint; joints that all move it in "
+        "a plane) reaches only the circle or the surface it sweeps, and a curve beside it "
+        "is traced by none (armpath reach takes the nearest point reached, one point at a time)"
+    )
+
+
 def plan_trace(
     arm: SerialArm,
     world: CollisionWorld,
@@ -264,6 +303,7 @@ def plan_trace(
         raise PlanningError(
             f"no part of curve {curve.name!r} is reachable: "
             + "; ".join(a.reason for a in reach.unreachable)
+            + _near_miss(arm, curve, reach.unreachable, opts.tolerance_mm)
         )
     fam = reach.family
     arcs = list(reach.reachable)
