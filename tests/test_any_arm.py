@@ -790,6 +790,7 @@ def test_the_turn_keeping_a_pose_equals_every_tick_tried():
     assert "keeping the tool frame within 5 deg" in r.lower_bound.method
 
 
+@pytest.mark.slow  # 30 s: the two reaches with many joints
 def test_a_sixteen_joint_arm_reaches_and_a_reach_too_long_is_refused():
     """The lattice box around a family member is sized by a product of radii that overflowed
     the integers for sixteen joints (25^16), and its offsets were a numpy meshgrid, which
