@@ -616,6 +616,9 @@ def test_a_prismatic_joints_values_are_shown_in_mm(tmp_path):
     k = int(np.argmax(moved[:2]))
     text = " ".join(run_in_process(args, tmp_path).stdout.replace("│", " ").split())
     assert f"largest joint change {moved[k]:.2f} deg (q{k + 1}), {moved[2]:.2f} mm (q3)" in text
+    # the IK table's title named the joints "angles deg" whatever they were
+    ik = run_in_process(["ik", "--model", str(scara), "--xyz", "300", "200", "200"], tmp_path)
+    assert "joint values (deg, deg, mm, deg)" in " ".join(ik.stdout.split())
 
 
 def test_a_fine_lattices_reach_estimate_stays_at_or_below_its_plan():

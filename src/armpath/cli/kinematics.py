@@ -182,7 +182,6 @@ def ik(
         if json_out:
             typer.echo(json.dumps(doc))
         elif result.count:  # no solution: the error line alone
-            unit_note = ", ".join(f"q{i + 1} {u}" for i, u in enumerate(units) if u != "deg")
             if result.family_dimension:
                 found = (
                     f"{result.count} sample(s) of a {result.family_dimension}-dimensional family "
@@ -192,8 +191,7 @@ def ik(
                 found = f"{result.count} solution(s)"
             table = Table(
                 title=escape(
-                    f"{arm.name}: {found}, {result.method}; angles deg"
-                    + (f", {unit_note}" if unit_note else "")
+                    f"{arm.name}: {found}, {result.method}; joint values {_units_text(units)}"
                 ),
                 box=box.SIMPLE_HEAD,
             )
