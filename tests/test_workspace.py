@@ -351,3 +351,34 @@ def test_workspace_obstacles_of_another_arm_are_its_own_links_without_a_scene(tm
         assert r.returncode == 0, r.stderr
         (row,) = [ln.split() for ln in r.stdout.splitlines() if "kept (clearance rule)" in ln]
         assert row[3] == str(in_cell.kept) and in_cell.kept > 0
+
+
+def test_a_planar_arms_workspace_is_one_voxel_thick_and_says_so(tmp_path):
+    """A planar two-link arm (300 and 200 mm) reaches an annulus in the plane z = 0, which has
+    no volume; the table gave 0.0158 m^3 (its voxels') without a word. Now a note says the
+    occupied voxels are one layer thick in z, and their count times a voxel's face is the
+    annulus' area, pi (500^2 - 100^2) mm^2, within the voxels along its two edges."""
+    import json
+
+    from cli_in_process import run_in_process
+
+    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": None} for a in (300, 200)]
+    model = tmp_path / "planar2.json"
+    units = {"length": "mm", "angle": "deg"}
+    model.write_text(
+        json.dumps({"name": "planar2", "convention": "standard", "units": units, "links": links})
+    )
+    out = tmp_path / "ws"
+    args = ["workspace", "--model", str(model), "--voxel", "10", "--out", str(out)]
+    proc = run_in_process(args, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    rows = dict(line.split(",")[:2] for line in (out / "workspace.csv").read_text().splitlines())
+    assert rows["note"].startswith("one voxel thick in z:")
+    occupied = np.load(out / "workspace.npz")["occupied"]
+    assert np.count_nonzero(occupied.any(axis=(0, 1))) == 1
+    area = np.pi * (500.0**2 - 100.0**2)
+    edges = 2.0 * np.pi * (500.0 + 100.0) * 10.0 * np.sqrt(2.0)  # a voxel's diagonal each side
+    assert abs(occupied.sum() * 10.0**2 - area) <= edges
+    # an arm that fills space gets no such note
+    ur5 = run_in_process(["workspace", "--model", "ur5", "--samples", "20000"], tmp_path)
+    assert "one voxel thick" not in ur5.stdout

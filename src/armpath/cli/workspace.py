@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import typer
+from numpy.typing import NDArray
 from rich import box
 from rich.markup import escape
 from rich.table import Table
@@ -180,6 +181,7 @@ def workspace(
                 ("x range", f"{lo[0]:.0f} .. {hi[0]:.0f}", "mm"),
                 ("y range", f"{lo[1]:.0f} .. {hi[1]:.0f}", "mm"),
                 ("z range", f"{lo[2]:.0f} .. {hi[2]:.0f}", "mm"),
+                *_one_voxel_thick(lo, hi, grid.voxel),
                 ("time", f"{seconds:.1f}", "s"),
                 ("rate", f"{grid.samples / seconds / 1e6:.2f}", "million samples/s"),
             ]
@@ -217,6 +219,24 @@ def workspace(
                 )
         if out is not None and folder is not None:
             print_written(folder)
+
+
+def _one_voxel_thick(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], voxel_mm: float
+) -> list[tuple[str, str, str]]:
+    """A table row where the occupied voxels span one layer along an axis (a planar arm's
+    workspace): the volume counts whole voxels there, the points themselves may have none."""
+    flat = [axis for axis, span in zip("xyz", hi - lo, strict=True) if span <= voxel_mm * 1.000001]
+    if not flat:
+        return []
+    return [
+        (
+            "note",
+            f"one voxel thick in {' and '.join(flat)}: the volume counts whole {voxel_mm:g} mm "
+            "voxels; the points reached may lie in a plane, with no volume",
+            "",
+        )
+    ]
 
 
 def _only_workpiece(scene: Scene) -> SolidOfRevolution:
