@@ -641,6 +641,7 @@ def test_a_weld_listed_twice_is_one_warning_line(tmp_path):
     assert len(doc["visits"]) == 3
 
 
+@pytest.mark.slow  # 16 s: the UR5 cell's tour with the axis rule, through the CLI
 def test_a_weld_the_axis_rule_keeps_out_of_clearance_names_the_rule(tmp_path):
     """The UR5 cell's fourth weld, (450, 95, 100) mm, beside the clamp: the arm reaches it
     clear (an 80-command plan), but with the torch within 10 deg of the surface normal its
@@ -682,6 +683,7 @@ def test_spotweld_along_the_normal_refuses_a_weld_on_no_surface(tmp_path):
     )
 
 
+@pytest.mark.slow  # 15 s: a tour of two welds and back, bounded and replayed, through the CLI
 def test_a_tour_back_to_the_start_in_the_order_given_says_both(tmp_path):
     """``spotweld --order given --return`` bounds the given order alone, back to the start, but
     its table said "every order" and had no row for the way back (the seed's Task 3: 282

@@ -309,6 +309,7 @@ def test_trace_cli_rejects_a_bad_tolerance(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow  # 20 s: a trace of a line leaving the seed arm's reach, through the CLI
 def test_trace_cli_takes_a_curve_as_points_partly_out_of_reach(tmp_path):
     # A measured seam given as points (tab separated, a header line): a straight line leaving
     # the seed arm's reach, traced in the seed scene.
