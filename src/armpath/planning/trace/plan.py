@@ -263,10 +263,11 @@ def _near_miss(
     return (
         f"; the tool point comes within {near[k]:.3g} mm of it ({s[k]:.1f} mm along it), "
         f"inside the {tolerance_mm:g} mm tolerance, but a trace follows configurations that "
-        f"put the tool point on the curve (to {exact:.1g} mm) and none does: an arm whose tool "
-        "point moves in fewer than three directions (one joint; joints that all move it in "
-        "a plane) reaches only the circle or the surface it sweeps, and a curve beside it "
-        "is traced by none (armpath reach takes the nearest point reached, one point at a time)"
+        f"put the tool point on the curve (to {exact:.1g} mm) and none does: the curve lies "
+        "beside what the tool point sweeps (an arm moving it in fewer than three directions, "
+        "one joint or joints that all move it in a plane, sweeps only a circle or a surface; "
+        "or the curve lies just beyond full stretch); armpath reach takes the nearest point "
+        "reached, one point at a time"
     )
 
 
