@@ -45,6 +45,17 @@ def scara_robot_file(path: Path, elbow_limit_deg: float) -> Path:
     return path
 
 
+def planar_two_link_file(path: Path) -> Path:
+    """Write a planar two-link arm as a D-H robot file in mm and deg at ``path``: two
+    revolute joints about parallel z axes (within +-180 deg), links 300 and 200 mm, the tool
+    point in the plane z = 0."""
+    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": [-180, 180]} for a in (300, 200)]
+    units = {"length": "mm", "angle": "deg"}
+    doc = {"name": "planar2", "convention": "standard", "units": units, "links": links}
+    path.write_text(json.dumps(doc))
+    return path
+
+
 #: The UR5's standard D-H table, from its maker's published parameters: (a mm, alpha rad,
 #: d mm) of each joint.
 UR5_DH = (

@@ -23,7 +23,7 @@ from armpath.model.catalog import resolve_model
 from armpath.planning.reach import ReachOptions, plan_reach
 from armpath.planning.trace import TraceOptions, plan_trace
 from armpath.scenes import scene_from_dict
-from arms import UR5_DH, scara_robot_file, scara_rows
+from arms import UR5_DH, planar_two_link_file, scara_robot_file, scara_rows
 
 D = np.pi / 180
 # (a mm, alpha rad, d mm, joint offset rad), standard D-H
@@ -1010,17 +1010,6 @@ def test_arms_the_complete_solver_does_not_suit_and_arms_of_few_joints_reach(tmp
         armpath.reach(cases[0][0], [301.0, 0.0, 0.0], scene="none")
 
 
-def _planar_two_link(tmp_path):
-    """A robot file: two revolute joints about parallel z axes, links 300 and 200 mm."""
-    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": [-180, 180]} for a in (300, 200)]
-    model = tmp_path / "planar2.json"
-    units = {"length": "mm", "angle": "deg"}
-    model.write_text(
-        json.dumps({"name": "planar2", "convention": "standard", "units": units, "links": links})
-    )
-    return model
-
-
 def test_a_two_link_arm_in_no_scene_lifts_off_between_passes(tmp_path):
     """A planar two-link arm (300 and 200 mm, 0.1 deg ticks) along a 223.6 mm line with
     nothing to collide with: a tick moves its tip up to 0.87 mm, so stretches of the line
@@ -1032,7 +1021,7 @@ def test_a_two_link_arm_in_no_scene_lifts_off_between_passes(tmp_path):
     the whole line; and the proven bound lies at or below the plan."""
     import armpath
 
-    model = _planar_two_link(tmp_path)
+    model = planar_two_link_file(tmp_path / "planar2.json")
     a, b = np.array([400.0, 0.0, 0.0]), np.array([300.0, 200.0, 0.0])
     length = float(np.linalg.norm(b - a))
     doc = armpath.trace(str(model), [a, b], scene="none").doc
@@ -1077,7 +1066,7 @@ def test_a_curve_beside_a_planar_arms_plane_names_how_near_the_tool_comes(tmp_pa
     import armpath
     from armpath.errors import PlanningError
 
-    model = str(_planar_two_link(tmp_path))
+    model = str(planar_two_link_file(tmp_path / "planar2.json"))
     with pytest.raises(PlanningError) as near:
         armpath.trace(model, [[400.0, 0.0, 0.05], [300.0, 200.0, 0.05]], scene="none")
     (within,) = re.findall(r"comes within ([\d.e-]+) mm of it", str(near.value))

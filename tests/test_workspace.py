@@ -358,16 +358,10 @@ def test_a_planar_arms_workspace_is_one_voxel_thick_and_says_so(tmp_path):
     no volume; the table gave 0.0158 m^3 (its voxels') without a word. Now a note says the
     occupied voxels are one layer thick in z, and their count times a voxel's face is the
     annulus' area, pi (500^2 - 100^2) mm^2, within the voxels along its two edges."""
-    import json
-
+    from arms import planar_two_link_file
     from cli_in_process import run_in_process
 
-    links = [{"a": a, "alpha": 0, "d": 0, "offset": 0, "limits": None} for a in (300, 200)]
-    model = tmp_path / "planar2.json"
-    units = {"length": "mm", "angle": "deg"}
-    model.write_text(
-        json.dumps({"name": "planar2", "convention": "standard", "units": units, "links": links})
-    )
+    model = planar_two_link_file(tmp_path / "planar2.json")
     out = tmp_path / "ws"
     args = ["workspace", "--model", str(model), "--voxel", "10", "--out", str(out)]
     proc = run_in_process(args, tmp_path)
