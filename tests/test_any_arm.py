@@ -1515,3 +1515,22 @@ def test_a_scaras_quill_lands_on_its_welds_and_the_scene_sets_the_tolerance(tmp_
     assert reach["tolerance_mm"] == 0.5
     final = _scara_tip(np.array(reach["final_deg"], dtype=np.float64)[None, :])[0]
     assert np.linalg.norm(final - [450.0, -50.0, 250.0]) <= 0.5
+
+
+def test_a_target_by_the_ur5_base_is_refused_naming_the_links_radii():
+    """The generic search gets the same up-front refusal as the seed arm: 60 mm from the UR5's
+    base axis, 50 mm up, its tool's link (L5, radius 45 mm in the model) would come within
+    60.05 mm of the base capsule L0 (radius 75 mm) where the two keep 75 + 45 + 1 = 121 mm;
+    150 mm out no such reason holds (the refusal, if any, is another)."""
+    from armpath.errors import CollisionError
+
+    arm = resolve_model("ur5")
+    radius = {lk.name: lk.radius for lk in arm.links}
+    need = radius["L0"] + radius["L5"] + 1.0
+    world = CollisionWorld(())
+    home = arm.lattice.to_ticks(arm.home)
+    with pytest.raises(CollisionError) as err:
+        plan_reach(arm, world, home, [60.0, 0.0, 50.0])
+    assert "lies 60 mm from link L0, which no joint moves" in str(err.value)
+    assert "within 60.05 mm of it" in str(err.value) and f"keep {need:g} mm apart" in str(err.value)
+    assert world.fixed_link_blocker(arm, [150.0, 0.0, 50.0], 0.05) is None

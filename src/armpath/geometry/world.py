@@ -466,6 +466,42 @@ class CollisionWorld:
             f"make that longer than {need:g} {unit} (radius plus margin) or the tool thinner"
         )
 
+    def fixed_link_blocker(self, arm: SerialArm, point: ArrayLike, tolerance: float) -> str | None:
+        """Why no configuration putting ``arm``'s tool point within ``tolerance`` of ``point``
+        keeps the rule between the links, or None where this test finds no reason: a link no
+        joint moves (the base column) pairs with a link ending at the tool point, and
+        ``point`` lies so near the fixed one that the other, ending within ``tolerance`` of
+        it, comes nearer than their radii plus ``self_margin``. A proof, so a target inside
+        the base is refused at once rather than after a search."""
+        p = np.asarray(point, dtype=np.float64).reshape(3)
+        configurations = _analysis_configurations(arm)
+        pts = landmark_positions(arm, configurations)  # (K, L, 3)
+        scale = max(1.0, float(np.abs(pts).max()))
+        tol = 1e-9 * scale
+        fixed = np.ptp(pts, axis=0).max(axis=-1) <= tol  # landmarks no joint moves
+        tool = forward_frames(arm, configurations)[..., -1, :3, 3]  # (K, 3)
+        at_tool = np.linalg.norm(pts - tool[:, None, :], axis=-1).max(axis=0) <= tol
+        links = arm.links
+        for i, j in self.self_pairs(arm):
+            for still, moving in ((links[i], links[j]), (links[j], links[i])):
+                if not (fixed[still.start] and fixed[still.end]):
+                    continue
+                if not (at_tool[moving.start] or at_tool[moving.end]):
+                    continue
+                a, b = pts[0, still.start], pts[0, still.end]
+                d = round(float(segments_to_point(a[None], b[None], p[None])[0]), 6)
+                need = still.radius + moving.radius + self.self_margin
+                if d + tolerance < need - tol:
+                    unit = arm.length_unit
+                    return (
+                        f"the point lies {d:.4g} {unit} from link {still.name}, which no joint "
+                        f"moves, so link {moving.name}, which ends at the tool point, would come "
+                        f"within {d + tolerance:.4g} {unit} of it (with the {tolerance:g} {unit} "
+                        f"tolerance), where the two must keep {need:g} {unit} apart (their radii "
+                        f"and the {self.self_margin:g} {unit} between links)"
+                    )
+        return None
+
     def self_pairs(self, arm: SerialArm) -> tuple[tuple[int, int], ...]:
         """Indices into ``arm.links`` of link pairs checked for self-collision.
 

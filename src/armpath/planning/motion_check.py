@@ -285,3 +285,18 @@ def check_state_clear(
             f"{what} is in collision: {pair.part} is {values[k]:.3f} mm from {pair.other} "
             f"(needs >= {pair.required:g} mm)" + hint
         )
+
+
+def check_target_clear_of_fixed_links(
+    arm: SerialArm, world: CollisionWorld, target: NDArray[np.float64], tolerance: float
+) -> None:
+    """Raise :class:`CollisionError` where no configuration putting the tool point within
+    ``tolerance`` of ``target`` can keep the links apart because ``target`` lies in or by a
+    link no joint moves (:meth:`CollisionWorld.fixed_link_blocker`): a target inside the
+    base column is refused at once, with the reason, rather than after a search."""
+    why = world.fixed_link_blocker(arm, target, tolerance)
+    if why is not None:
+        where = ", ".join(f"{v:g}" for v in target)
+        raise CollisionError(
+            f"no configuration reaching ({where}) {arm.length_unit} keeps the links apart: {why}"
+        )

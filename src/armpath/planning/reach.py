@@ -59,7 +59,12 @@ from armpath.model.lattice import unique_states
 from armpath.model.seed_arm import SeedArmGeometry, seed_geometry_of
 from armpath.model.serial_arm import SerialArm
 from armpath.planning.motion import MotionOptions, MotionPlan, plan_motion
-from armpath.planning.motion_check import MotionClearance, check_state_clear, motion_clearance
+from armpath.planning.motion_check import (
+    MotionClearance,
+    check_state_clear,
+    check_target_clear_of_fixed_links,
+    motion_clearance,
+)
 from armpath.planning.passages import passage_source
 from armpath.tolerances import POINT_TOLERANCE_MM, check_point_tolerance
 
@@ -759,6 +764,7 @@ def plan_reach(
     if orientation is not None or not _seed_fast_path(arm):
         return _plan_reach_generic(arm, world, start_ticks, target_mm, opts, seed, orientation)
     p = _validated_problem(arm, world, start_ticks, target_mm)
+    check_target_clear_of_fixed_links(arm, world, p.target, opts.tolerance_mm)
     fam = _reachable_family(p, opts.sphere_step_deg, opts.tolerance_mm, seed)
     bound, q_within = _lower_bound(p, fam, opts.tolerance_mm)
     # fewer commands than reaching the target itself takes: only states off the target (within

@@ -53,7 +53,11 @@ from armpath.kinematics import (
 from armpath.model.lattice import unique_states
 from armpath.model.serial_arm import JointKind, SerialArm
 from armpath.planning.motion import MotionOptions, plan_motion
-from armpath.planning.motion_check import check_state_clear, motion_clearance
+from armpath.planning.motion_check import (
+    check_state_clear,
+    check_target_clear_of_fixed_links,
+    motion_clearance,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -780,6 +784,7 @@ def reach_any_arm(
     the limits reaches the target."""
     grid = arm.lattice
     start = validated_start(arm, world, start_ticks, target)
+    check_target_clear_of_fixed_links(arm, world, target.position, tolerance)
     s_q = grid.to_joint(start)
     rng = np.random.default_rng(seed)
     fam = GenericFamily(arm, target)
