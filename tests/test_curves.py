@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import independent
-from armpath.errors import InvalidInputError
+from armpath.errors import ArmpathWarning, InvalidInputError
 from armpath.geometry.curves import CircularArc, ParametricCurve, Polyline, seed_crack
 from armpath.geometry.expressions import parse_expression
 from armpath.scenes import seed_scene
@@ -107,8 +107,8 @@ def test_polyline():
     np.testing.assert_allclose(
         square.at_arc_length([0, 25, 40]), [[0, 0, 0], [5, 10, 0], [0, 0, 0]], atol=1e-9
     )
-    with pytest.raises(InvalidInputError, match="are the same point"):
-        Polyline("bad", [[0, 0, 0], [0, 0, 0], [1, 0, 0]])
+    with pytest.raises(InvalidInputError, match="all its 3 points are the same point"):
+        Polyline("bad", [[1, 0, 0], [1, 0, 0], [1, 0, 0]])
     # each refusal says what is wrong ("need (V >= 2, 3) finite vertices" for all three)
     with pytest.raises(InvalidInputError, match="a curve needs at least 2 points, got 1"):
         Polyline("one", [[330, 60, 260]])
@@ -145,19 +145,25 @@ def test_the_tangent_of_a_curve_that_barely_moves_is_still_a_unit_vector():
             np.testing.assert_allclose(t, [1.0, 0.0, 0.0], atol=1e-9)
 
 
-def test_a_closed_polyline_may_repeat_its_first_vertex_and_says_which_vertices_coincide():
+def test_a_closed_polyline_may_repeat_its_first_vertex_and_repeated_points_are_dropped():
     """Closed by its own last vertex (as a drawing program writes it), a closed polyline is the
-    same curve (the square's 40 mm); vertices that coincide are named; a closed polyline of two
-    vertices (there and back) is refused."""
+    same curve (the square's 40 mm); a point written twice in a row (a measured seam's log) is
+    dropped with a warning naming it, where it was refused: the curve is the same set of
+    points; a closed polyline of two vertices (there and back) is refused."""
     square = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]
     a = Polyline("a", square, closed=True)
     b = Polyline("b", [*square, square[0]], closed=True)
     np.testing.assert_array_equal(a.vertices, b.vertices)
     assert abs(b.length - 40.0) < 1e-9
-    with pytest.raises(InvalidInputError, match=r"vertices 1 and 2 \(from 0\) are the same point"):
-        Polyline("c", [[0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 0]])
+    with pytest.warns(ArmpathWarning, match=r"2 point\(s\) the same as the one before dropped "):
+        c = Polyline("c", [[0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0, 0]])
+    np.testing.assert_array_equal(c.vertices, [[0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    assert abs(c.length - 2.0) < 1e-12
+    with pytest.warns(ArmpathWarning, match=r"\(points 4, from 0\)"):
+        d = Polyline("d", [*square, square[-1], square[0]])
+    assert d.closed and abs(d.length - 40.0) < 1e-9  # the repeat, then the closing point
     with pytest.raises(InvalidInputError, match="3 or more vertices"):
-        Polyline("d", [[0, 0, 0], [1, 0, 0]], closed=True)
+        Polyline("e", [[0, 0, 0], [1, 0, 0]], closed=True)
 
 
 def test_points_whose_last_is_their_first_are_a_closed_curve():

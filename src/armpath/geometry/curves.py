@@ -19,6 +19,7 @@ scene). :class:`Curve` adds, for all of them, arc-length parametrization (``leng
 from __future__ import annotations
 
 import math
+import warnings
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -28,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armpath.budget import MAX_COORDINATE_MM, MAX_CURVE_POINTS, check_size
-from armpath.errors import InvalidInputError
+from armpath.errors import ArmpathWarning, InvalidInputError
 from armpath.geometry.expressions import Expression, parse_expression
 from armpath.geometry.primitives import SolidOfRevolution
 
@@ -274,6 +275,22 @@ class Polyline(Curve):
         if not np.all(np.isfinite(v)):
             raise InvalidInputError(f"polyline {self.name!r}: a coordinate is not a finite number")
         check_size(v.shape[0], MAX_CURVE_POINTS, f"vertices of polyline {self.name!r}", "the curve")
+        repeats = np.flatnonzero(np.all(v[1:] == v[:-1], axis=-1)) + 1
+        if repeats.size:  # a point written twice in a row (a measured seam's log) adds no piece
+            if repeats.size == v.shape[0] - 1:
+                raise InvalidInputError(
+                    f"polyline {self.name!r}: all its {v.shape[0]} points are the same point; "
+                    "a curve needs two"
+                )
+            shown = ", ".join(str(int(k)) for k in repeats[:5])
+            more = f" and {repeats.size - 5} more" if repeats.size > 5 else ""
+            warnings.warn(
+                f"polyline {self.name!r}: {repeats.size} point(s) the same as the one before "
+                f"dropped (points {shown}{more}, from 0)",
+                ArmpathWarning,
+                stacklevel=3,
+            )
+            v = np.delete(v, repeats, axis=0)
         if v.shape[0] >= 4 and np.linalg.norm(v[-1] - v[0]) < CLOSING_GAP_MM:
             v[-1] = v[0]
             object.__setattr__(self, "closed", True)
