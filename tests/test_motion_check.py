@@ -154,3 +154,43 @@ def test_a_tip_within_a_few_microns_of_a_surface_is_proven_clear_at_a_finer_reso
     assert fine.certified_ok and fine.worst_part == "DE tip"
     assert 0.0 <= fine.min_clearance_lower_bound <= 0.002 + 1e-9
     assert fine.min_clearance_lower_bound <= fine.min_clearance <= 0.002 + 1e-6
+
+
+def _ball_under_the_tip(name, joint1_deg, gap_mm):
+    """A 2 mm ball straight below the seed arm's fingertip (home pose, joint 1 at
+    ``joint1_deg``), ``gap_mm`` below it: the fingertip, swinging with joint 1 at 75 mm height
+    on a 510 mm circle, passes it at exactly that clearance there."""
+    from armpath.geometry.primitives import Sphere
+
+    t = np.radians(joint1_deg)
+    return Sphere(name, [-510 * np.sin(t), 510 * np.cos(t), 75.0 - 2.0 - gap_mm], 2.0)
+
+
+def test_a_plan_whose_check_runs_out_of_budget_is_checked_again_in_stretches(monkeypatch):
+    """A trace keeping its tip ten-thousandths of a millimetre off a surface along hundreds of
+    commands (0.01 mm tolerance on the seed crack) was refused after 12 minutes of planning:
+    its final check ran out of its budget. The check now goes on half by half, each with the
+    budget again. Here two balls lie 0.003 and 0.004 mm below the fingertip's path at joint 1
+    = -5.2 and 4.8 deg (commands 3 and 8 of ten 2-deg turns from -10 deg): with a budget of
+    150 evaluations the whole motion is not proven, its halves are, and the result names the
+    nearer ball, 0.003 mm (the closed form) at command 3, with a proven lower bound between 0
+    and that. With 100 a single command needs more than the budget: refused, not violated."""
+    import armpath.planning.motion_check as mc
+
+    world = CollisionWorld(
+        (_ball_under_the_tip("a", -5.2, 0.003), _ball_under_the_tip("b", 4.8, 0.004))
+    )
+    cmds = np.zeros((10, 6), dtype=np.int64)
+    cmds[:, 0] = 20
+    seq = CommandSequence(deg_to_ticks([-10, -90, 0, 0, -90, 0]), cmds)
+    monkeypatch.setattr(mc, "WHOLE_PLAN_EVALUATIONS", 150)
+    whole = motion_clearance(ARM, world, seq, tolerance=0.0005, max_evaluations=150)
+    assert not whole.certified_ok and not whole.violated and whole.evaluations >= 150
+    found = mc.plan_clearance(ARM, world, seq, tolerance=0.0005)
+    assert found.certified_ok and found.evaluations > 150
+    assert (found.worst_obstacle, found.worst_command, found.limiting_command) == ("a", 3, 3)
+    assert found.min_tip_clearance == pytest.approx(0.003, abs=2e-5)
+    assert 0.0 <= found.min_clearance_lower_bound <= 0.003
+    monkeypatch.setattr(mc, "WHOLE_PLAN_EVALUATIONS", 100)
+    short = mc.plan_clearance(ARM, world, seq, tolerance=0.0005)
+    assert not short.certified_ok and not short.violated and short.limiting_command == 3

@@ -912,7 +912,7 @@ def test_a_trace_whose_motion_is_not_certified_clear_is_refused(monkeypatch, eva
     from armpath.errors import PlanningError
     from armpath.planning.trace import plan as trace_plan
 
-    real = trace_plan.motion_clearance
+    real = trace_plan.plan_clearance
 
     def failing(*args, **kwargs):
         mc = real(*args, **kwargs)
@@ -925,7 +925,7 @@ def test_a_trace_whose_motion_is_not_certified_clear_is_refused(monkeypatch, eva
             evaluations=evaluations,
         )
 
-    monkeypatch.setattr(trace_plan, "motion_clearance", failing)
+    monkeypatch.setattr(trace_plan, "plan_clearance", failing)
     expected = (
         rf"final clearance check, {why} .* -0\.0002 mm .* command 7; "
         r"proven no less than -1\.6000 mm\): it is not written"

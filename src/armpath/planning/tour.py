@@ -64,10 +64,9 @@ from armpath.planning.motion import (
     plan_motion,
 )
 from armpath.planning.motion_check import (
-    WHOLE_PLAN_EVALUATIONS,
     MotionClearance,
     check_state_clear,
-    motion_clearance,
+    plan_clearance,
 )
 from armpath.planning.reach import (
     GOAL_BODY_BUFFER_MM,
@@ -658,7 +657,7 @@ def plan_tour(
             Visit(t, tuple(float(v) for v in pts[t]), k, float(np.linalg.norm(tip - pts[t])))  # type: ignore[arg-type]
         )
     say("certifying the whole tour's continuous motion")
-    clearance = motion_clearance(arm, world, sequence, max_evaluations=WHOLE_PLAN_EVALUATIONS)
+    clearance = plan_clearance(arm, world, sequence)
     if not clearance.certified_ok:
         raise PlanningError(
             f"tour failed its final clearance check ({clearance.limiting_pair} "

@@ -55,6 +55,7 @@ from armpath.planning.motion_check import (
     MotionClearance,
     check_state_clear,
     motion_clearance,
+    plan_clearance,
 )
 from armpath.planning.trace.certificate import (
     certificate_precision,
@@ -381,9 +382,7 @@ def plan_trace(
     # where the default 0.01 mm left it unproven; the UR5 cell's seam at 0.1 mm came 0.005 mm
     # near between them, unproven at a tenth of the tolerance)
     resolution = min(CERTIFY_RESOLUTION_MM, _CERTIFY_SHARE * opts.tolerance_mm)
-    clearance = motion_clearance(
-        arm, world, sequence, tolerance=resolution, max_evaluations=WHOLE_PLAN_EVALUATIONS
-    )
+    clearance = plan_clearance(arm, world, sequence, tolerance=resolution)
     if not clearance.certified_ok:  # a plan is delivered only with its motion proven clear
         if clearance.violated:
             why = "a sampled instant breaks it"
