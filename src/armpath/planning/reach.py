@@ -729,10 +729,11 @@ def plan_reach(
     """Plan the fewest commands that bring the fingertip to ``target_mm``, then the least error.
 
     The seed arm (at the origin, fingertip tool, seed lattice, no orientation rule) takes the
-    closed form of its solution family, whose bound is a proof; every other arm, tool, lattice
-    or orientation rule (``orientation``: an :class:`~armpath.ik.target.AxisCone` or
-    :class:`~armpath.ik.target.PoseOrientation`) takes the generic search
-    (:mod:`armpath.planning.reach_generic`).
+    closed form of its solution family, whose bound is a proof; where its plan needs more
+    commands than that bound, the generic search's direct motions are tried too and the fewer
+    commands kept. Every other arm, tool, lattice or orientation rule (``orientation``: an
+    :class:`~armpath.ik.target.AxisCone` or :class:`~armpath.ik.target.PoseOrientation`)
+    takes the generic search (:mod:`armpath.planning.reach_generic`).
 
     Parameters
     ----------
@@ -763,6 +764,32 @@ def plan_reach(
     opts = options or ReachOptions()
     if orientation is not None or not _seed_fast_path(arm):
         return _plan_reach_generic(arm, world, start_ticks, target_mm, opts, seed, orientation)
+    found = _plan_reach_seed(arm, world, start_ticks, target_mm, opts, seed)
+    if found.n_commands <= found.lower_bound.commands:
+        return found
+    # above the bound: the closed form's search looks about the target's own family and on
+    # the way to the nearest fingertip the box allows, which a wide tolerance outgrows (50 mm:
+    # 38 commands where 37 reach within it); the generic search lists every lattice state
+    # within the tolerance that fewer commands reach, and its direct motion is taken where
+    # it needs fewer
+    try:
+        generic = _plan_reach_generic(
+            arm, world, start_ticks, target_mm, replace(opts, plan_around=False), seed, None
+        )
+    except (PlanningError, UnreachableError):
+        return found
+    return generic if generic.n_commands < found.n_commands else found
+
+
+def _plan_reach_seed(
+    arm: SerialArm,
+    world: CollisionWorld,
+    start_ticks: ArrayLike,
+    target_mm: ArrayLike,
+    opts: ReachOptions,
+    seed: int,
+) -> ReachResult:
+    """:func:`plan_reach` for the seed arm through its closed-form solution family."""
     p = _validated_problem(arm, world, start_ticks, target_mm)
     check_target_clear_of_fixed_links(arm, world, p.target, opts.tolerance_mm)
     fam = _reachable_family(p, opts.sphere_step_deg, opts.tolerance_mm, seed)
