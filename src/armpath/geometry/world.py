@@ -489,10 +489,11 @@ class CollisionWorld:
                 if not (at_tool[moving.start] or at_tool[moving.end]):
                     continue
                 a, b = pts[0, still.start], pts[0, still.end]
-                d = round(float(segments_to_point(a[None], b[None], p[None])[0]), 6)
+                d_exact = float(segments_to_point(a[None], b[None], p[None])[0])
                 need = still.radius + moving.radius + self.self_margin
-                if d + tolerance < need - tol:
+                if d_exact + tolerance < need - tol:
                     unit = arm.length_unit
+                    d = round(d_exact, 6)  # 0, not 7e-15, on the link's axis
                     return (
                         f"the point lies {d:.4g} {unit} from link {still.name}, which no joint "
                         f"moves, so link {moving.name}, which ends at the tool point, would come "
