@@ -790,17 +790,22 @@ def test_a_scene_is_given_as_a_dict_of_a_scene_files_contents(tmp_path):
 def test_a_target_only_self_collision_forbids_says_so_not_obstacles():
     """In an empty cell a target at the seed arm's base (one given in metres, say) was refused
     because "no configuration ... keeps the links 1 mm clear of the obstacles": there are none.
-    The refusal now names what it asks: the links clear of each other, with the room the
-    planner keeps."""
+    The refusal then named what it asks: the links clear of each other, with the room the
+    planner keeps; now, before any search, why: the point lies by the base column AB
+    (sqrt(0.5^2 + 0.2^2) = 0.5385 mm from its axis), which the link DE ending at the tool point
+    cannot come within 1 mm of."""
     import armpath
-    from armpath.errors import PlanningError
+    from armpath.errors import CollisionError
 
-    with pytest.raises(PlanningError) as caught:
+    with pytest.raises(CollisionError) as caught:
         armpath.reach("seed", [0.5, 0.2, 0.6], scene="none")
     assert str(caught.value) == (
-        "no configuration reaching (0.5, 0.2, 0.6) mm keeps the links 1 mm clear of each other, "
-        "with 1.5 mm to spare for the motion onto it"
+        "no configuration reaching (0.5, 0.2, 0.6) mm keeps the links apart: the point lies "
+        "0.5385 mm from link AB, which no joint moves, so link DE, which ends at the tool "
+        "point, would come within 0.5885 mm of it (with the 0.05 mm tolerance), where the two "
+        "must keep 1 mm apart (their radii and the 1 mm between links)"
     )
+    assert "obstacles" not in str(caught.value)
 
 
 def test_an_arm_is_loaded_as_a_scene_places_it():
