@@ -154,6 +154,9 @@ class LinkAnalysis:
     marks link pairs in one rigid body. ``slide_chain`` is the shortest chain with each leg a
     prismatic joint slides at its shortest, and ``rigid_but_slides`` marks link pairs in one
     rigid body while the prismatic joints hold still (only a slide moves them apart).
+    ``fixed`` marks landmarks no joint moves and ``fixed_at`` gives their positions (every
+    landmark's at the first analysis configuration); ``at_tool`` marks landmarks at the tool
+    point at every configuration.
     """
 
     point_of: NDArray[np.int64]
@@ -163,6 +166,9 @@ class LinkAnalysis:
     rigid: NDArray[np.bool_]
     slide_chain: FloatArray
     rigid_but_slides: NDArray[np.bool_]
+    fixed: NDArray[np.bool_]
+    fixed_at: FloatArray
+    at_tool: NDArray[np.bool_]
 
     def ends(self, link: Link) -> tuple[int, int]:
         return int(self.point_of[link.start]), int(self.point_of[link.end])
@@ -287,7 +293,21 @@ def link_analysis(arm: SerialArm) -> LinkAnalysis:
         rigid_but_slides = _rigid_pairs(links, held_gap, tol)
     else:  # no slide: the chains and rigid bodies are the ones above
         slide_chain, rigid_but_slides = chain, rigid
-    out = LinkAnalysis(point_of, degenerate, length, chain, rigid, slide_chain, rigid_but_slides)
+    fixed = np.ptp(pts, axis=0).max(axis=-1) <= tol
+    tool = forward_frames(arm, configurations)[..., -1, :3, 3]  # (K, 3)
+    at_tool = np.linalg.norm(pts - tool[:, None, :], axis=-1).max(axis=0) <= tol
+    out = LinkAnalysis(
+        point_of,
+        degenerate,
+        length,
+        chain,
+        rigid,
+        slide_chain,
+        rigid_but_slides,
+        fixed,
+        pts[0],
+        at_tool,
+    )
     arm.__dict__["_link_analysis"] = out
     return out
 
@@ -474,13 +494,9 @@ class CollisionWorld:
         it, comes nearer than their radii plus ``self_margin``. A proof, so a target inside
         the base is refused at once rather than after a search."""
         p = np.asarray(point, dtype=np.float64).reshape(3)
-        configurations = _analysis_configurations(arm)
-        pts = landmark_positions(arm, configurations)  # (K, L, 3)
-        scale = max(1.0, float(np.abs(pts).max()))
-        tol = 1e-9 * scale
-        fixed = np.ptp(pts, axis=0).max(axis=-1) <= tol  # landmarks no joint moves
-        tool = forward_frames(arm, configurations)[..., -1, :3, 3]  # (K, 3)
-        at_tool = np.linalg.norm(pts - tool[:, None, :], axis=-1).max(axis=0) <= tol
+        info = link_analysis(arm)
+        fixed, at_tool, pts = info.fixed, info.at_tool, info.fixed_at
+        tol = 1e-9 * max(1.0, float(np.abs(pts).max()))
         links = arm.links
         for i, j in self.self_pairs(arm):
             for still, moving in ((links[i], links[j]), (links[j], links[i])):
@@ -488,7 +504,7 @@ class CollisionWorld:
                     continue
                 if not (at_tool[moving.start] or at_tool[moving.end]):
                     continue
-                a, b = pts[0, still.start], pts[0, still.end]
+                a, b = pts[still.start], pts[still.end]
                 d_exact = float(segments_to_point(a[None], b[None], p[None])[0])
                 need = still.radius + moving.radius + self.self_margin
                 if d_exact + tolerance < need - tol:
