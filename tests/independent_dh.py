@@ -73,3 +73,20 @@ def brute_force_ik(a, alpha, d, target, *, starts=400, seed=0):
         if not any(np.all(np.abs((q - f + np.pi) % (2 * np.pi) - np.pi) < 1e-5) for f in found):
             found.append(q)
     return found
+
+
+def dh_positions(a, alpha, d, Q):
+    """Tool positions ``(N, 3)`` of a revolute standard D-H table at joint values ``Q (N, n)``
+    rad: the product of ``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` for many configurations at once."""
+    Q = np.atleast_2d(np.asarray(Q, dtype=float))
+    T = np.broadcast_to(np.eye(4), (Q.shape[0], 4, 4)).copy()
+    for i in range(len(a)):
+        ct, st = np.cos(Q[:, i]), np.sin(Q[:, i])
+        ca, sa = np.cos(alpha[i]), np.sin(alpha[i])
+        A = np.zeros((Q.shape[0], 4, 4))
+        A[:, 0, 0], A[:, 0, 1], A[:, 0, 2], A[:, 0, 3] = ct, -st * ca, st * sa, a[i] * ct
+        A[:, 1, 0], A[:, 1, 1], A[:, 1, 2], A[:, 1, 3] = st, ct * ca, -ct * sa, a[i] * st
+        A[:, 2, 1], A[:, 2, 2], A[:, 2, 3] = sa, ca, d[i]
+        A[:, 3, 3] = 1.0
+        T = T @ A
+    return T[:, :3, 3]

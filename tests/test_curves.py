@@ -269,3 +269,18 @@ def test_a_circle_that_is_no_circle_is_refused(kwargs, message):
     given = {"radius": 10.0, "normal": np.array([0.0, 0.0, 1.0]), **kwargs}
     with pytest.raises(InvalidInputError, match=message):
         CircularArc("c", np.zeros(3), **given)
+
+
+def test_a_polylines_corners_are_its_turning_vertices():
+    """``corners_mm``: the arc lengths of the vertices where a polyline turns (on a closed one
+    also its first, at 0 mm); a vertex on a straight run is none, nor is an open one's end;
+    smooth curves have none."""
+    square = Polyline(
+        "sq", np.array([[0.0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]), closed=True
+    )
+    np.testing.assert_allclose(square.corners_mm, [0.0, 10.0, 20.0, 30.0])
+    bent = Polyline("bent", np.array([[0.0, 0, 0], [3, 0, 0], [5, 0, 0], [5, 4, 0]]))
+    np.testing.assert_allclose(bent.corners_mm, [5.0])
+    straight = Polyline("line", np.array([[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]))
+    assert straight.corners_mm.size == 0
+    assert CircularArc("c", [0.0, 0, 0], 5.0).corners_mm.size == 0

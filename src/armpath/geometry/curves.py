@@ -76,6 +76,15 @@ class Curve(ABC):
         polyline adds its vertices, so its table has every corner)."""
         return np.linspace(0.0, 1.0, count)
 
+    @property
+    def corners_mm(self) -> FloatArray:
+        """Arc lengths (ascending, in ``[0, length)``) where the curve turns by an angle rather
+        than smoothly (a polyline's vertices; none for a smooth curve). Beside a corner the
+        distance from a moving point to the curve peaks sharply where its nearest point
+        passes from one side of the corner to the other, so a check of a motion at a few
+        instants looks there too."""
+        return np.zeros(0)
+
     @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         u = self.table_parameters(TABLE_SAMPLES)
@@ -321,6 +330,18 @@ class Polyline(Curve):
     def points(self, u: ArrayLike) -> FloatArray:
         uu = np.clip(np.asarray(u, dtype=np.float64), 0.0, 1.0)
         return np.stack([np.interp(uu, self._knots, self.vertices[:, k]) for k in range(3)], -1)
+
+    @cached_property
+    def corners_mm(self) -> FloatArray:
+        """The vertices where the polyline turns (on a closed one also its first, at 0 mm)."""
+        piece = np.diff(self.vertices, axis=0)
+        piece /= np.linalg.norm(piece, axis=-1, keepdims=True)
+        inner = np.arange(1, piece.shape[0])
+        turns = np.einsum("ij,ij->i", piece[:-1], piece[1:]) < 1.0 - 1e-12
+        at = list(inner[turns])
+        if self.closed and float(piece[-1] @ piece[0]) < 1.0 - 1e-12:
+            at.insert(0, 0)
+        return np.asarray(self._knots[np.array(at, dtype=np.int64)] * self.length)
 
     def table_parameters(self, count: int) -> FloatArray:
         """Evenly over ``[0, 1]`` and every vertex: the table's length is the polyline's."""

@@ -24,6 +24,11 @@ PRECISION_MM = 0.002
 _PRECISION_SHARE = 0.02
 
 
+#: Profile samples per command of :func:`certified_deviation` (the profile's sample
+#: ``PROFILE_PER_COMMAND * k`` is the ``k``-th state).
+PROFILE_PER_COMMAND = 32
+
+
 def certificate_precision(tolerance_mm: float) -> float:
     """The precision (mm) a pass traced within ``tolerance_mm`` is certified to."""
     return min(PRECISION_MM, _PRECISION_SHARE * tolerance_mm)
@@ -34,8 +39,8 @@ def certified_deviation(
 ) -> tuple[float, float, FloatArray, FloatArray]:
     """Largest distance (mm) of the continuous tip path through lattice ``states`` (ticks) from
     ``curve``, a proven upper bound (branch and bound: the tip moves at most ``rate * dt`` between
-    instants, distance is 1-Lipschitz), and a profile ``(s, deviation)`` sampled 32 times per
-    command."""
+    instants, distance is 1-Lipschitz), and a profile ``(s, deviation)`` sampled
+    :data:`PROFILE_PER_COMMAND` times per command."""
     states = np.asarray(states, dtype=np.int64)
     if states.shape[0] < 2:
         P = tool_position(arm, arm.lattice.to_joint(states))
@@ -50,7 +55,7 @@ def certified_deviation(
         k = np.clip(np.floor(u).astype(np.int64), 0, n - 1)
         return tool_position(arm, grid.to_joint(states[k] + (u - k)[:, None] * steps[k]))
 
-    u = np.linspace(0.0, n, 32 * n + 1)
+    u = np.linspace(0.0, n, PROFILE_PER_COMMAND * n + 1)
     d, s = curve.closest(tip(u))
     profile_s = s.copy()
     if curve.closed:
@@ -88,8 +93,8 @@ def certified_axis_angle(
     direction (the tool frame turns at most ``sum_i |dq_i|`` over its revolute joints between
     two instants, and the angle to a fixed direction is 1-Lipschitz in the turn); for a rule
     that follows the surface normal the normal's own turning is not bounded, so the largest
-    angle is found by sampling every 1/32 of a command and bisecting around the worst
-    instants (bound None)."""
+    angle is found by sampling :data:`PROFILE_PER_COMMAND` times a command and bisecting
+    around the worst instants (bound None)."""
     states = np.asarray(states, dtype=np.int64)
     grid = arm.lattice
     if states.shape[0] < 2:
@@ -103,7 +108,7 @@ def certified_axis_angle(
         k = np.clip(np.floor(u).astype(np.int64), 0, n - 1)
         return angle_of(grid.to_joint(states[k] + (u - k)[:, None] * steps[k]))
 
-    u = np.linspace(0.0, n, 32 * n + 1)
+    u = np.linspace(0.0, n, PROFILE_PER_COMMAND * n + 1)
     a = angle(u)
     for _ in range(40):
         k = np.minimum(np.floor(u[:-1]).astype(np.int64), n - 1)

@@ -58,6 +58,7 @@ from armpath.planning.motion_check import (
     plan_clearance,
 )
 from armpath.planning.trace.certificate import (
+    PROFILE_PER_COMMAND,
     certificate_precision,
     certified_axis_angle,
     certified_deviation,
@@ -1005,6 +1006,23 @@ def _trace_arcs(
                 )
                 if dev_bound <= opts.tolerance_mm:
                     break
+            cut = False
+            if len(pass_states) > 1 and dev_bound > opts.tolerance_mm:
+                # traced again, still not proven within the tolerance: the pass ends before
+                # its first command that is not, and the rest of the arc gets new passes
+                kept = _commands_within(arm, curve, pass_states, begin, opts.tolerance_mm)
+                del states[first + kept + 1 :]
+                s_reached = float(ps[PROFILE_PER_COMMAND * kept])
+                pass_states = pass_states[: kept + 1]
+                cut = True
+                if kept:
+                    dev, dev_bound, ps, pd = certified_deviation(
+                        arm,
+                        curve,
+                        np.array(pass_states),
+                        begin,
+                        certificate_precision(opts.tolerance_mm),
+                    )
             if len(pass_states) == 1 or (
                 _new_coverage_mm(curve, passes, float(ps.min()), float(ps.max())) < GAP_REPORTED_MM
                 and abs(finish - begin) > GAP_REPORTED_MM
@@ -1027,8 +1045,13 @@ def _trace_arcs(
                 angle, angle_bound = certified_axis_angle(
                     arm, fam.axis_angles, np.array(pass_states), not opts.axis_rule.normal
                 )
-            stuck = sign * (finish - s_reached) > 0.5
-            if stuck:
+            stuck = cut or sign * (finish - s_reached) > 0.5
+            if cut:
+                ends = (
+                    "the next command's continuous path was not proven within the tolerance "
+                    f"(at {curve.wrap(s_reached):.1f} mm)"
+                )
+            elif stuck:
                 ends = (
                     "no lattice command went on from its last state within the tolerance and "
                     "clear "
@@ -1064,6 +1087,19 @@ def _trace_arcs(
                 break
     charged = any(pieces_charged)
     return _Tracing(states, passes, transits, not_traced, prof_s, prof_d, charged)
+
+
+def _commands_within(
+    arm: SerialArm, curve: Curve, pass_states: list[IntArray], begin: float, tolerance_mm: float
+) -> int:
+    """How many of a pass's first commands are each proven to keep the tool point within
+    ``tolerance_mm`` of ``curve`` (:func:`certified_deviation` of each alone)."""
+    precision = certificate_precision(tolerance_mm)
+    for k in range(len(pass_states) - 1):
+        pair = np.array(pass_states[k : k + 2])
+        if certified_deviation(arm, curve, pair, begin, precision)[1] > tolerance_mm:
+            return k
+    return len(pass_states) - 1
 
 
 def _entry_merged(

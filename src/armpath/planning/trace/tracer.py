@@ -73,6 +73,10 @@ _MAX_BOX_OFFSETS = 600_000
 MAX_SURFACE_OFFSET_MM = 0.5
 #: Instants per command at which a candidate's continuous motion is checked while searching.
 _PATH_SAMPLES = 16
+#: Golden-section steps of the search for the peak distance where a command passes a corner
+#: of the curve (each narrows the interval to 0.618 of itself: 24 steps to 1e-5 of the 1/16
+#: of a command between two checked instants).
+_CORNER_SEARCH_STEPS = 24
 #: Share of the tolerance within which the tracer keeps the tool point at a command's end and
 #: at the checked instants of its motion; the rest is for the deviation certificate's precision
 #: (:func:`~armpath.planning.trace.certificate.certificate_precision`: 2 % of the tolerance at
@@ -423,6 +427,7 @@ class Tracer:
         in_band = self.in_band(d2, sd2, 0.05)
         ok = np.all(in_band & self.fam.axis_ok(Q_rad, _AXIS_MARGIN_RAD), axis=1)
         ok &= self._follows(qk, sk, E, s2, E_end, s)
+        ok[ok] = self._within_at_corners(qk, sk, cand[ok], s2[ok], s[ok])
         cand, s, Q = cand[ok], s[ok], Q[ok]
         if cand.shape[0] == 0:
             return cand, s
@@ -453,6 +458,61 @@ class Tracer:
             np.all(np.abs(np.diff(arc, axis=1)) <= 1.02 * moved + 2.0 * self.tol, axis=1),
             dtype=bool,
         )
+
+    def _within_at_corners(
+        self, qk: IntArray, sk: float, cand: IntArray, s_mid: FloatArray, s_end: FloatArray
+    ) -> NDArray[np.bool_]:
+        """Per candidate, whether its tip stays within the band where its motion passes a
+        corner of the curve (:attr:`~armpath.geometry.curves.Curve.corners_mm`): there the
+        distance to the curve peaks sharply between the checked instants (the nearest point
+        passes from one side of the corner to the other; a UR5's 12-sided polygon went
+        0.0055 mm past its 0.1 mm tolerance between two of them), so the largest distance
+        between the instants on either side of the corner (``s_mid (M, S)``, ``s_end (M,)``:
+        arc lengths there, unwrapped near ``sk``, and a tolerance's margin) is found by
+        golden-section search."""
+        corners = self.fam.curve.corners_mm
+        ok = np.ones(cand.shape[0], dtype=bool)
+        if corners.size == 0 or cand.shape[0] == 0:
+            return ok
+        if self.fam.curve.closed:  # the corners about sk, a turn either way
+            L = self.fam.curve.length
+            turn = np.round((sk - corners) / L)
+            corners = np.concatenate([corners + L * (turn + k) for k in (-1.0, 0.0, 1.0)])
+        arc = np.concatenate([np.full((cand.shape[0], 1), sk), s_mid, s_end[:, None]], axis=1)
+        lo = np.minimum(arc[:, :-1], arc[:, 1:]) - self.tol
+        hi = np.maximum(arc[:, :-1], arc[:, 1:]) + self.tol
+        passes = np.any(
+            (lo[..., None] <= corners) & (corners <= hi[..., None]), axis=-1
+        )  # (M, S + 1): the corner lies between instants i and i + 1
+        which, interval = np.nonzero(passes)
+        if which.size == 0:
+            return ok
+        t = np.linspace(0.0, 1.0, _PATH_SAMPLES + 1)
+        a, b = t[interval], t[interval + 1]
+        start = np.asarray(qk, dtype=np.float64)[None, :]
+        step = (cand[which] - qk).astype(np.float64)
+
+        def distance(x: FloatArray) -> FloatArray:
+            q = self.grid.to_joint(start + x[:, None] * step)
+            return np.asarray(self.fam.curve.closest(tool_position(self.arm, q))[0])
+
+        golden = 0.5 * (np.sqrt(5.0) - 1.0)
+        x1, x2 = b - golden * (b - a), a + golden * (b - a)
+        d1, d2 = distance(x1), distance(x2)
+        for _ in range(_CORNER_SEARCH_STEPS):
+            left = d1 >= d2  # the peak lies in [a, x2]
+            b = np.where(left, x2, b)
+            a = np.where(left, a, x1)
+            x2_new = np.where(left, x1, a + golden * (b - a))
+            x1_new = np.where(left, b - golden * (b - a), x2)
+            moved = np.where(left, x1_new, x2_new)
+            d_new = distance(moved)
+            d1, d2 = np.where(left, d_new, d2), np.where(left, d1, d_new)
+            x1, x2 = x1_new, x2_new
+        peak = np.maximum(d1, d2)
+        within = peak <= self.band_share * self.tol
+        np.logical_and.at(ok, which, within)
+        return ok
 
     def step(self, qk: IntArray, sk: float, goal: float) -> tuple[IntArray, float] | None:
         """The command from ``qk`` that carries the tip farthest along the curve toward arc
