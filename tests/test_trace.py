@@ -1073,3 +1073,31 @@ def test_lattice_states_near_a_point_are_those_of_the_whole_box():
         assert np.array_equal(_within_disc(joints, radius, A, shift, radius2), want)
         kept += int(want.sum())
     assert kept > 10_000  # the discs do hold offsets (not a comparison of empty masks)
+
+
+def test_the_gaps_left_on_a_closed_curve_are_found_whatever_turn_the_passes_are_counted_in():
+    """A closed curve 186.35 mm long traced again once round from 126.33 mm: the later passes'
+    arc lengths run on past the curve's length (186.74..232.82 is 0.39..46.47). The stretches
+    no pass covers are only the small ones between them (1.94 mm in all, what the coverage
+    says), not the 80 mm of the curve those passes cover again (46.47..126.33 was reported
+    not traced while covered)."""
+    from armpath.planning.trace.plan import TracePass, _gaps_between_passes
+    from armpath.planning.trace.reachability import CurveArc
+
+    L = 186.349712474
+    spans = [
+        (126.33, 170.76),
+        (171.23, 185.72),
+        (186.74, 232.82),
+        (233.03, 278.81),
+        (278.80, 294.99),
+        (295.10, 312.51),
+    ]
+    passes = [TracePass(0, 1, a, b, 0.0, 0.0) for a, b in spans]
+    gaps = _gaps_between_passes([CurveArc(0.0, L)], passes, [], L)
+    found = sorted((round(g.start_mm % L, 2), round(g.length_mm, 2)) for g, _ in gaps)
+    assert found == [(46.47, 0.21), (108.64, 0.11), (126.16, 0.17), (170.76, 0.47), (185.72, 1.02)]
+    # the same passes counted a turn back, and the arc all round begun where the re-trace did
+    back = [TracePass(0, 1, a - L, b - L, 0.0, 0.0) for a, b in spans]
+    again = _gaps_between_passes([CurveArc(126.33, 126.33 + L)], back, [], L)
+    assert sorted((round(g.start_mm % L, 2), round(g.length_mm, 2)) for g, _ in again) == found

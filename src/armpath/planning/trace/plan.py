@@ -665,16 +665,8 @@ def _gaps_between_passes(
     )
     out: list[tuple[CurveArc, str]] = []
     for arc in arcs:
-        spans = sorted(
-            (p.start_mm, p.end_mm)
-            for p in passes
-            if p.end_mm > arc.start_mm - 1e-9 and p.start_mm < arc.end_mm + 1e-9
-        )
-        spans += sorted(
-            (a.start_mm, a.end_mm)
-            for a, _ in already
-            if a.end_mm > arc.start_mm and a.start_mm < arc.end_mm
-        )
+        spans = _spans_on(arc, [(p.start_mm, p.end_mm) for p in passes], closed_mm, 1e-9)
+        spans += _spans_on(arc, [(a.start_mm, a.end_mm) for a, _ in already], closed_mm, 0.0)
         spans.sort()
         if not spans:
             continue
@@ -699,6 +691,26 @@ def _gaps_between_passes(
                     "the tolerance to the end of the reachable arc",
                 )
             )
+    return out
+
+
+def _spans_on(
+    arc: CurveArc, spans: list[tuple[float, float]], closed_mm: float | None, slack: float
+) -> list[tuple[float, float]]:
+    """The parts of ``spans`` (arc lengths, mm) that lie on ``arc``, in its terms: on a closed
+    curve of length ``closed_mm`` a span is taken a whole number of turns on or back too (a
+    pass once round from where a re-trace began runs past the curve's length, and an arc
+    round it may begin anywhere), each part clipped to the arc; ``slack`` (mm): how near its
+    ends a span may end and still count."""
+    turns = [0.0]
+    if closed_mm is not None:
+        turns = [k * closed_mm for k in range(-2, 3)]
+    out = []
+    for a, b in spans:
+        for shift in turns:
+            lo, hi = a + shift, b + shift
+            if hi > arc.start_mm - slack and lo < arc.end_mm + slack:
+                out.append((max(lo, arc.start_mm), min(hi, arc.end_mm)))
     return out
 
 
