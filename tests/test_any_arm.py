@@ -1488,7 +1488,7 @@ def test_a_scaras_quill_lands_on_its_welds_and_the_scene_sets_the_tolerance(tmp_
 
     refused = run_in_process(["spotweld", "--scene", str(_scara_plate_cell(tmp_path))], tmp_path)
     assert refused.returncode == 1
-    assert "allow at least that (--tolerance, a scene task's tolerance_mm" in refused.stderr
+    assert "admits it (--tolerance, a scene task's tolerance_mm" in refused.stderr
     cell = _scara_plate_cell(tmp_path, spotweld_tolerance=0.3, reach_tolerance=0.5)
     out = tmp_path / "out"
     ran = run_in_process(["run", "--scene", str(cell), "--out", str(out), "--no-bound"], tmp_path)

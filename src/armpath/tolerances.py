@@ -45,3 +45,16 @@ def check_trace_tolerance(tolerance_mm: float) -> float:
     return _within(
         tolerance_mm, MIN_TRACE_TOLERANCE_MM, MAX_TRACE_TOLERANCE_MM, "tracing tolerance"
     )
+
+
+def nearest_found_advice(nearest: float, unit: str = "mm") -> str:
+    """What a refusal says of the nearest lattice state its search found, ``nearest`` (the
+    tool point's error, in ``unit``) away: a tolerance that admits it, rounded up to three
+    significant digits so that giving the figure as printed finds that state again. A search
+    that found none nearer does not prove there is none, so no least tolerance is claimed."""
+    digits = 2 - math.floor(math.log10(nearest)) if nearest > 0 else 0
+    allow = math.ceil(nearest * 10**digits - 1e-9) / 10**digits
+    return (
+        f"the nearest found is {nearest:.4g} {unit} away: a tolerance of {allow:g} {unit} "
+        "admits it (--tolerance, a scene task's tolerance_mm, or tolerance_mm= in Python)"
+    )

@@ -66,7 +66,7 @@ from armpath.planning.motion_check import (
     motion_clearance,
 )
 from armpath.planning.passages import passage_source
-from armpath.tolerances import POINT_TOLERANCE_MM, check_point_tolerance
+from armpath.tolerances import POINT_TOLERANCE_MM, check_point_tolerance, nearest_found_advice
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -819,6 +819,7 @@ def _plan_reach_seed(
         )
 
     failures: list[str] = []
+    least_error = np.inf  # of the lattice states the search at each count looked at (mm)
     for n in range(bound.commands, bound.commands + opts.extra_commands + 1):
         check_time(f"searching the lattice for {n} commands")
         cands, errs = _lattice_candidates(p, fam, n, opts.tolerance_mm, opts.polish_candidates)
@@ -827,6 +828,7 @@ def _plan_reach_seed(
             cands, errs = _with_ball_candidates(p, q_within, n, opts, cands, errs)
             within = errs <= opts.tolerance_mm
         examined += cands.shape[0]
+        least_error = min(least_error, float(errs.min(initial=np.inf)))
         if not np.any(within):
             if errs.size:
                 why = f"smallest fingertip error on the lattice is {errs[0]:.4f} mm >"
@@ -860,7 +862,13 @@ def _plan_reach_seed(
         failures.append(f"{n} commands: every direct motion is blocked (e.g. {blocked})")
     if opts.plan_around:
         goals, _ = _goal_states(
-            p, fam, opts.tolerance_mm, GOAL_COUNT, GOAL_BODY_BUFFER_MM, GOAL_SPREAD_DEG
+            p,
+            fam,
+            opts.tolerance_mm,
+            GOAL_COUNT,
+            GOAL_BODY_BUFFER_MM,
+            GOAL_SPREAD_DEG,
+            least_error,
         )
         plan = plan_motion(
             arm,
@@ -1061,8 +1069,11 @@ def _goal_states(
     count: int,
     body_buffer_mm: float,
     spread_deg: float,
+    nearest_mm: float = np.inf,
 ) -> tuple[IntArray, FloatArray]:
-    """:func:`goal_states` for a validated problem and its sampled solution family."""
+    """:func:`goal_states` for a validated problem and its sampled solution family
+    (``nearest_mm``: the least tool point error of a lattice state an earlier search found,
+    which a refusal for want of any within the tolerance names where it is the nearest)."""
     arm, world = p.arm, p.world
     q, change = fam.points()
     finite = np.isfinite(change)
@@ -1109,7 +1120,7 @@ def _goal_states(
     offsets = np.stack(np.meshgrid(np.arange(-2, 3), np.arange(-2, 3), indexing="ij"), -1)
     offsets = offsets.reshape(-1, 2)
     corners = np.array([[(c >> b) & 1 for b in range(3)] for c in range(8)])
-    nearest = np.inf  # the smallest error of any lattice state looked at (mm)
+    nearest = nearest_mm  # the smallest error of any lattice state looked at (mm)
     for q_star in picks:
         check_time("finding goal states")
         t_star = q_star / TICK_RAD
@@ -1168,8 +1179,7 @@ def _goal_states(
         where = ", ".join(f"{v:g}" for v in p.target)
         if not any_within:
             found = (
-                f"; the nearest found is {nearest:.3g} mm away: allow at least that "
-                "(--tolerance, a scene task's tolerance_mm, or tolerance_mm= in Python)"
+                f"; {nearest_found_advice(nearest)}"
                 if np.isfinite(nearest)
                 else "; a wider tolerance finds one"
             )

@@ -58,6 +58,7 @@ from armpath.planning.motion_check import (
     check_target_clear_of_fixed_links,
     motion_clearance,
 )
+from armpath.tolerances import nearest_found_advice
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -1136,11 +1137,7 @@ def _lattice_too_coarse(
                 if moving.size <= 3 < arm.n_joints
                 else ""
             )
-            return (
-                f"{why}; the nearest found is {nearest:.3g} {unit} away: allow at least that "
-                "(--tolerance, a scene task's tolerance_mm, or tolerance_mm= in Python)"
-                f"{wider}{hint}"
-            )
+            return f"{why}; {nearest_found_advice(nearest, unit)}{wider}{hint}"
     return f"{why}; none within {tol:g} {unit} either" + (
         f": try{wider.removeprefix(', or')}" if wider else ""
     )
