@@ -926,3 +926,41 @@ def test_an_arm_without_all_solutions_ik_is_told_why(model, why):
             call()
         assert str(err.value).startswith(f"{what} needs every inverse-kinematics solution")
         assert str(err.value).endswith(f"model {arm.name!r} has none: {why}")
+
+
+def test_cli_trajectory_drops_an_untimed_waypoint_repeated_with_a_warning(tmp_path):
+    """A waypoint written twice in a row, without times: its repeat got a millisecond in the
+    timing, so the free solve crossed it in one (the speed peaking at 61.6 deg/s against 43.75
+    without it) and --bounded stopped without a solution. It is dropped with one warning line
+    naming it, and both solves run: the replayed commands pass every waypoint given, keep the
+    speed limit when bounded, and each solve is the one without the repeat."""
+    rows = [[0, -90, 0, 0, -90, 0], [30, -60, 20, 10, -80, 5], [60, -45, 30, 0, -70, 0]]
+    once, twice = tmp_path / "once.csv", tmp_path / "twice.csv"
+    once.write_text("\n".join(",".join(map(str, r)) for r in rows) + "\n")
+    twice.write_text("\n".join(",".join(map(str, r)) for r in [rows[0], *rows[1:2] * 2, rows[2]]))
+    for flag in ([], ["--bounded"]):
+        outs = []
+        for wp in (twice, once):
+            out = tmp_path / f"{wp.stem}{len(flag)}"
+            proc = _run_trajectory("--waypoints", wp, "--out", out, *flag)
+            assert proc.returncode == 0, proc.stderr
+            outs.append(out)
+            warned = [ln for ln in proc.stderr.splitlines() if ln.startswith("warning:")]
+            if wp is twice:
+                assert len(warned) == 1 and "(waypoints 3, counted from 1)" in warned[0]
+            else:
+                assert not warned
+        a, b = (np.loadtxt(o / "trajectory.csv", delimiter=",", skiprows=1) for o in outs)
+        np.testing.assert_allclose(a, b, atol=1e-9)
+        cmds = np.loadtxt(outs[0] / "commands.csv", delimiter=",", skiprows=1, dtype=int)[:, 1:]
+        states = (
+            np.vstack([np.zeros((1, 6), int), np.cumsum(cmds, axis=0)]) + np.array(rows[0]) * 10
+        )
+        # the commands within half a tick of the samples (one a period), which pass every
+        # waypoint given within one period's move (under 0.5 deg at these speeds)
+        assert np.abs(states / 10.0 - a[: states.shape[0], 1:]).max() <= 0.05 + 1e-6
+        for r in rows:
+            assert np.abs(a[:, 1:] - np.array(r)).max(axis=1).min() <= 0.5
+        if flag:  # the speed limit kept (30 deg/s, the default), sampled
+            speed = np.abs(np.diff(a[:, 1:], axis=0) / np.diff(a[:, :1], axis=0)).max()
+            assert speed <= 30.0 * (1 + 1e-3)

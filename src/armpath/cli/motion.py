@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -55,7 +56,7 @@ from armpath.cli.common import (
     progress,
 )
 from armpath.cli.tables import read_number_table
-from armpath.errors import InvalidInputError
+from armpath.errors import ArmpathWarning, InvalidInputError
 
 if TYPE_CHECKING:
     from armpath.export import OutputFolder
@@ -110,6 +111,26 @@ def _read_waypoints(path: Path) -> tuple[np.ndarray, np.ndarray | None]:
             )
         return data[:, 1:], t
     return data, None
+
+
+def _without_repeats(
+    shown: np.ndarray, joint: np.ndarray, name: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """Untimed waypoints (as given, and in joint units) without the rows the same as the one
+    before, each dropped with a warning: a motion from a point to itself takes no time in the
+    timing, so it would be crossed in a millisecond (the speed peaking there) or not solved
+    with limits; a time column holds the arm still there instead."""
+    same = np.flatnonzero(np.all(shown[1:] == shown[:-1], axis=1)) + 1
+    if same.size:
+        rows = ", ".join(str(int(k) + 1) for k in same[:5]) + (" ..." if same.size > 5 else "")
+        warnings.warn(
+            f"{name}: {same.size} waypoint(s) the same as the one before dropped (waypoints "
+            f"{rows}, counted from 1); give a first column t of times to hold the arm there",
+            ArmpathWarning,
+            stacklevel=2,
+        )
+    keep = np.setdiff1d(np.arange(shown.shape[0]), same)
+    return shown[keep], joint[keep]
 
 
 def _check_choice(value: str, choices: Any, option: str) -> None:
@@ -467,6 +488,7 @@ def trajectory(
                     f"--waypoints {waypoints}: every row is the same, so there is no motion to "
                     "time (give a first column t of times to hold the arm still that long)"
                 )
+            W_shown, W = _without_repeats(W_shown, W, f"--waypoints {waypoints}")
             times = allocate_times(W, rate(max_velocity), rate(max_acceleration))
             options = "--period (or --max-velocity, --max-acceleration)"
         else:
