@@ -159,7 +159,7 @@ def test_a_closed_polyline_may_repeat_its_first_vertex_and_repeated_points_are_d
         c = Polyline("c", [[0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0, 0]])
     np.testing.assert_array_equal(c.vertices, [[0, 0, 0], [1, 0, 0], [2, 0, 0]])
     assert abs(c.length - 2.0) < 1e-12
-    with pytest.warns(ArmpathWarning, match=r"\(points 4, from 0\)"):
+    with pytest.warns(ArmpathWarning, match=r"\(points 5, counted from 1\)"):
         d = Polyline("d", [*square, square[-1], square[0]])
     assert d.closed and abs(d.length - 40.0) < 1e-9  # the repeat, then the closing point
     with pytest.raises(InvalidInputError, match="3 or more vertices"):

@@ -157,7 +157,7 @@ def test_trajectory_tiny_velocity_limit_names_the_limits(tmp_path):
         (b"t,q1\n0,1\n0,2\n", "must increase strictly"),
         (b"t\n0\n1\n", "no joint column"),
         (b"1," * 40_000 + b"\n", "longer than 65,536 bytes"),
-        (b",".join([b"1"] * 70) + b"\n", "columns of line 1"),
+        (b",".join([b"1"] * 70) + b"\n", "line 1 has 70 values; a row holds at most 65"),
     ],
 )
 def test_trajectory_malformed_waypoint_files(tmp_path, content, needle):

@@ -347,6 +347,8 @@ def test_trace_cli_takes_a_curve_as_points_partly_out_of_reach(tmp_path):
     ("content", "extra", "needle"),
     [
         ("1,2\n3,4\n", [], "each row needs 3 values"),
+        ("1,2,3,4\n5,6,7,8\n", [], "line 1 has 4 values; a row holds at most 3 (x, y, z"),
+        ("300,0,300\n350,0,300\n300,0,300\n", [], "turns back along itself at 50.000 mm"),
         ("300,0,250\n300,0,250\n", [], "are the same point"),
         ("300,0,250\n1e12,0,250\n", [], "beyond the largest coordinate"),
         ("300,0,250\n300,10,250\n", ["--closed"], "3 or more vertices"),

@@ -17,7 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from armpath.budget import check_size
 from armpath.cli.common import is_number
 from armpath.errors import InvalidInputError
 
@@ -43,9 +42,11 @@ def read_number_table(
                 if not line:
                     continue
                 cells = [c.strip() for c in line.split(",")] if "," in line else line.split()
-                check_size(
-                    len(cells), max_columns, f"{name}: columns of line {number} ({columns})", option
-                )
+                if len(cells) > max_columns:
+                    raise InvalidInputError(
+                        f"{name}: line {number} has {len(cells):,} values; a row holds at most "
+                        f"{max_columns:,} ({columns})"
+                    )
                 if ";" in line and all(is_number(c) for c in line.split(";") if c.strip()):
                     raise InvalidInputError(
                         f"{name}: line {number} has values separated by ';'; separate them by "

@@ -291,11 +291,11 @@ class Polyline(Curve):
                     f"polyline {self.name!r}: all its {v.shape[0]} points are the same point; "
                     "a curve needs two"
                 )
-            shown = ", ".join(str(int(k)) for k in repeats[:5])
+            shown = ", ".join(str(int(k) + 1) for k in repeats[:5])
             more = f" and {repeats.size - 5} more" if repeats.size > 5 else ""
             warnings.warn(
                 f"polyline {self.name!r}: {repeats.size} point(s) the same as the one before "
-                f"dropped (points {shown}{more}, from 0)",
+                f"dropped (points {shown}{more}, counted from 1)",
                 ArmpathWarning,
                 stacklevel=3,
             )
@@ -316,8 +316,8 @@ class Polyline(Curve):
             k = int(same[0])
             nxt = 0 if self.closed and k + 1 == v.shape[0] - 1 else k + 1  # the piece back
             raise InvalidInputError(
-                f"polyline {self.name!r}: vertices {k} and {nxt} (from 0) are the same point; "
-                "a piece needs two"
+                f"polyline {self.name!r}: vertices {k + 1} and {nxt + 1} (counted from 1) are "
+                "the same point; a piece needs two"
             )
         v.setflags(write=False)
         object.__setattr__(self, "vertices", v)

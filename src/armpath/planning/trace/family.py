@@ -337,6 +337,13 @@ class CurveFamily:
                 break
             h *= 10.0
         if not norm > 0:
+            c, after = self.curve.at_arc_length(np.array([s, s + 1e-3]))
+            if np.linalg.norm(after - c) > 0:  # it moves on, the way it came
+                raise InvalidInputError(
+                    f"curve {self.curve.name!r} turns back along itself at {s:.3f} mm (the "
+                    "stretches before and after that point lie on one another), so its "
+                    "direction there is none; give each stretch once, or as separate curves"
+                )
             raise InvalidInputError(f"curve {self.curve.name!r} has no direction at {s:.3f} mm")
         t = t / norm
         if self.surface is None:
