@@ -474,16 +474,15 @@ class Tracer:
         ok = np.ones(cand.shape[0], dtype=bool)
         if corners.size == 0 or cand.shape[0] == 0:
             return ok
-        if self.fam.curve.closed:  # the corners about sk, a turn either way
+        if self.fam.curve.closed:  # the corners a turn either side of sk's, ascending
             L = self.fam.curve.length
-            turn = np.round((sk - corners) / L)
+            turn = np.floor(sk / L)
             corners = np.concatenate([corners + L * (turn + k) for k in (-1.0, 0.0, 1.0)])
         arc = np.concatenate([np.full((cand.shape[0], 1), sk), s_mid, s_end[:, None]], axis=1)
         lo = np.minimum(arc[:, :-1], arc[:, 1:]) - self.tol
         hi = np.maximum(arc[:, :-1], arc[:, 1:]) + self.tol
-        passes = np.any(
-            (lo[..., None] <= corners) & (corners <= hi[..., None]), axis=-1
-        )  # (M, S + 1): the corner lies between instants i and i + 1
+        # (M, S + 1): a corner lies between instants i and i + 1 (the corners ascending)
+        passes = np.searchsorted(corners, lo, "left") < np.searchsorted(corners, hi, "right")
         which, interval = np.nonzero(passes)
         if which.size == 0:
             return ok
