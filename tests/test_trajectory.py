@@ -964,3 +964,30 @@ def test_cli_trajectory_drops_an_untimed_waypoint_repeated_with_a_warning(tmp_pa
         if flag:  # the speed limit kept (30 deg/s, the default), sampled
             speed = np.abs(np.diff(a[:, 1:], axis=0) / np.diff(a[:, :1], axis=0)).max()
             assert speed <= 30.0 * (1 + 1e-3)
+
+
+def test_cli_trajectory_whose_retiming_fails_prints_no_table_and_writes_nothing(
+    tmp_path, monkeypatch
+):
+    """--retime computed the retimings after printing the trajectory's table, so one that
+    failed left that table on stdout above its error line, the run half done. Now it fails
+    first: one error line, nothing on stdout, no folder written; without --retime the same
+    waypoints succeed."""
+    import armpath.trajectory
+    from cli_in_process import run_in_process
+
+    wp = tmp_path / "wp.csv"
+    wp.write_text("0,-90,0,0,-90,0\n30,-60,20,10,-80,5\n60,-45,30,0,-70,0\n")
+
+    def fails(*args, **kwargs):
+        raise InvalidInputError("the retiming failed here")
+
+    monkeypatch.setattr(armpath.trajectory, "compare_retimings", fails)
+    proc = run_in_process(
+        ["trajectory", "--waypoints", str(wp), "--retime", "--out", "tr"], tmp_path
+    )
+    assert proc.returncode == 1 and proc.stdout == "", proc.stdout
+    assert proc.stderr.strip() == "error: the retiming failed here"
+    assert not (tmp_path / "tr").exists()
+    ok = run_in_process(["trajectory", "--waypoints", str(wp), "--out", "tr"], tmp_path)
+    assert ok.returncode == 0 and (tmp_path / "tr" / "commands.csv").is_file()

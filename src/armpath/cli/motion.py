@@ -540,6 +540,18 @@ def trajectory(
                 say("converting to commands ...")
                 quantized = quantize(traj, period, lattice, option=options)
                 peaks = [lattice.joint_display(traj.peak(d)) for d in (1, 2, 3)]
+            retimed = []
+            if retime:  # before anything is printed: a retiming that fails prints no table
+                from armpath.trajectory import compare_retimings
+
+                if max_jerk is None:
+                    limits = MotionLimits(
+                        velocity=limits.velocity,
+                        acceleration=limits.acceleration,
+                        jerk=rate(10.0 * max_acceleration),
+                    )
+                with progress("retiming ..."):
+                    retimed = compare_retimings(W, times, limits, kind=kind)
             how = "limits imposed" if bounded else "no limits imposed"
             on = f"{arm.name}, " if arm is not None else ""
             table = Table(
@@ -576,18 +588,7 @@ def trajectory(
             ):
                 if warning:
                     err_console.print(warning, markup=False)
-            retimed = []
             if retime:
-                from armpath.trajectory import compare_retimings
-
-                if max_jerk is None:
-                    limits = MotionLimits(
-                        velocity=limits.velocity,
-                        acceleration=limits.acceleration,
-                        jerk=rate(10.0 * max_acceleration),
-                    )
-                with progress("retiming ..."):
-                    retimed = compare_retimings(W, times, limits, kind=kind)
                 out_console.print(_retiming_table(retimed, limits, lattice))
             if folder is not None:
                 from armpath.viz.figures import plot_trajectory

@@ -923,6 +923,15 @@ def _trace_arcs(
     queue: list[tuple[CurveArc, float]] = [(arc, 0.0) for arc in arcs]
     pieces_charged: list[bool] = []
     queue[-1] = (queue[-1][0], overlap)
+
+    def certify(
+        pass_states: list[IntArray], begin: float
+    ) -> tuple[float, float, FloatArray, FloatArray]:
+        """The pass's certified deviation (:func:`certified_deviation`) at the precision its
+        tolerance asks."""
+        precision = certificate_precision(opts.tolerance_mm)
+        return certified_deviation(arm, curve, np.array(pass_states), begin, precision)
+
     while queue:
         check_time("tracing the curve")
         arc, run_on = queue.pop(0)
@@ -1009,13 +1018,7 @@ def _trace_arcs(
                 states.extend(pass_states[1:])
                 if len(pass_states) == 1:
                     break
-                dev, dev_bound, ps, pd = certified_deviation(
-                    arm,
-                    curve,
-                    np.array(pass_states),
-                    begin,
-                    certificate_precision(opts.tolerance_mm),
-                )
+                dev, dev_bound, ps, pd = certify(pass_states, begin)
                 if dev_bound <= opts.tolerance_mm:
                     break
             cut = False
@@ -1028,13 +1031,7 @@ def _trace_arcs(
                 pass_states = pass_states[: kept + 1]
                 cut = True
                 if kept:
-                    dev, dev_bound, ps, pd = certified_deviation(
-                        arm,
-                        curve,
-                        np.array(pass_states),
-                        begin,
-                        certificate_precision(opts.tolerance_mm),
-                    )
+                    dev, dev_bound, ps, pd = certify(pass_states, begin)
             if len(pass_states) == 1 or (
                 _new_coverage_mm(curve, passes, float(ps.min()), float(ps.max())) < GAP_REPORTED_MM
                 and abs(finish - begin) > GAP_REPORTED_MM
