@@ -164,6 +164,13 @@ def test_a_closed_polyline_may_repeat_its_first_vertex_and_repeated_points_are_d
     assert d.closed and abs(d.length - 40.0) < 1e-9  # the repeat, then the closing point
     with pytest.raises(InvalidInputError, match="3 or more vertices"):
         Polyline("e", [[0, 0, 0], [1, 0, 0]], closed=True)
+    # coinciding points named by their places among the points given (a repeat dropped
+    # before them, the last within rounding of the first closing the curve onto it)
+    with (
+        pytest.warns(ArmpathWarning),
+        pytest.raises(InvalidInputError, match=r"points 5 and 1 \(counted from 1\) are the same"),
+    ):
+        Polyline("f", [[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 0, 0], [0, 0, 4e-7]])
 
 
 def test_points_whose_last_is_their_first_are_a_closed_curve():

@@ -284,6 +284,7 @@ class Polyline(Curve):
         if not np.all(np.isfinite(v)):
             raise InvalidInputError(f"polyline {self.name!r}: a coordinate is not a finite number")
         check_size(v.shape[0], MAX_CURVE_POINTS, f"vertices of polyline {self.name!r}", "the curve")
+        given = np.arange(v.shape[0])  # each vertex's place among the points given
         repeats = np.flatnonzero(np.all(v[1:] == v[:-1], axis=-1)) + 1
         if repeats.size:  # a point written twice in a row (a measured seam's log) adds no piece
             if repeats.size == v.shape[0] - 1:
@@ -300,24 +301,27 @@ class Polyline(Curve):
                 stacklevel=3,
             )
             v = np.delete(v, repeats, axis=0)
+            given = np.delete(given, repeats)
         if v.shape[0] >= 4 and np.linalg.norm(v[-1] - v[0]) < CLOSING_GAP_MM:
             v[-1] = v[0]
             object.__setattr__(self, "closed", True)
         if self.closed:
             if v.shape[0] > 2 and np.array_equal(v[-1], v[0]):
                 v = v[:-1]  # closed already by its last vertex: the piece back is that one
+                given = given[:-1]
             if v.shape[0] < 3:
                 raise InvalidInputError(
                     f"polyline {self.name!r}: a closed polyline needs 3 or more vertices"
                 )
             v = np.vstack([v, v[:1]])
+            given = np.r_[given, given[0]]
         same = np.flatnonzero(np.linalg.norm(np.diff(v, axis=0), axis=-1) == 0)
         if same.size:
             k = int(same[0])
             nxt = 0 if self.closed and k + 1 == v.shape[0] - 1 else k + 1  # the piece back
             raise InvalidInputError(
-                f"polyline {self.name!r}: vertices {k + 1} and {nxt + 1} (counted from 1) are "
-                "the same point; a piece needs two"
+                f"polyline {self.name!r}: points {given[k] + 1} and {given[nxt] + 1} (counted "
+                "from 1) are the same point; a piece needs two"
             )
         v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
