@@ -451,7 +451,9 @@ def test_a_closed_curve_the_lattice_breaks_is_bridged_and_traced_from_a_break(mo
     stretch left ends, each pass runs from one break to the next: 2 passes, 59 commands. Since
     the tracer also lists, mid-pass, every lattice state the band holds a little past its
     farthest command, both breaks are crossed: all 188.4 mm covered in 2 passes and 57
-    commands (with the listing turned off, the bridged trace above). The reasons name the
+    commands (with the listing turned off, the bridged trace above; since the tracer also
+    checks where a command passes a corner of the polyline, that one goes round whole, in one
+    pass of 60 commands). The reasons name the
     points with no lattice state near, and the passes replay on Pinocchio's kinematics of the
     file within the tolerance of the polyline."""
     import armpath
@@ -489,7 +491,7 @@ def test_a_closed_curve_the_lattice_breaks_is_bridged_and_traced_from_a_break(mo
     monkeypatch.setattr(tracer, "_LISTED_REACH_MM", 0.0)
     bridged = traced()
     assert bridged.doc["coverage"]["of_curve"] >= 0.97
-    assert len(bridged.doc["not_traced"]) == 1 and bridged.n_commands <= 66
+    assert len(bridged.doc["not_traced"]) <= 1 and bridged.n_commands <= 66
     monkeypatch.setattr(tracer.Tracer, "_bridge", lambda *_args: None)
     unbridged = traced()
     assert len(unbridged.doc["passes"]) == len(unbridged.doc["not_traced"]) == 2
