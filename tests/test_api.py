@@ -565,6 +565,15 @@ _SHIFTED[:3, 3] = [400.0, 100.0, 250.0]
         (lambda a: a.reach("seed", [300, 100, 200], angle_tolerance_deg=5), "give pose too"),
         (lambda a: a.trace("seed", axis_tolerance_deg=5), "qualifies tool_axis"),
         (lambda a: a.spotweld("seed", tool_axis="norml"), "tool_axis must be 'normal' or a"),
+        # a reach's tool axis is a direction: 'normal' was refused as "numbers (mm)"
+        (
+            lambda a: a.reach("seed", [300, 100, 200], tool_axis="normal"),
+            r"tool_axis of a reach or a plan is a direction \(x, y, z\), got 'normal'",
+        ),
+        (
+            lambda a: a.plan("seed", to_mm=[300, 100, 200], tool_axis=[1, "a", 0]),
+            r"tool_axis must be three finite numbers \(a direction x, y, z\)",
+        ),
         (lambda a: a.trace("seed", tool_axis=[0, 0, 1], axis_tolerance_deg=0), "in \\(0, 180\\]"),
         (lambda a: a.reach("ur5", [400, 100, 300], pose="down"), "a pose must be a 3x3 rotation"),
         (lambda a: a.forward_kinematics("ur5", [1, 2]), "joints_deg must be one joint state: 6"),

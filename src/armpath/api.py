@@ -278,8 +278,8 @@ def _joint_values(arm: SerialArm, values: ArrayLike, what: str) -> NDArray[np.fl
     return v
 
 
-def _point(values: ArrayLike, what: str) -> NDArray[np.float64]:
-    wrong = InvalidInputError(f"{what} must be three finite numbers (mm), got {values!r}")
+def _point(values: ArrayLike, what: str, unit: str = "mm") -> NDArray[np.float64]:
+    wrong = InvalidInputError(f"{what} must be three finite numbers ({unit}), got {values!r}")
     try:
         p = np.asarray(_reals(values, what), dtype=np.float64)
     except InvalidInputError:
@@ -358,9 +358,14 @@ def _orientation(
     if pose is not None:
         m = _pose_at(pose, target_mm)
         return PoseOrientation(m[:3, :3], math.radians(angle_tolerance_deg))
+    if isinstance(tool_axis, str):
+        raise InvalidInputError(
+            f"tool_axis of a reach or a plan is a direction (x, y, z), got {tool_axis!r}: the "
+            "surface's normal ('normal') is a rule for trace and spotweld, along a surface"
+        )
     if tool_axis is not None:
         return AxisCone(
-            _point(tool_axis, "tool_axis"),
+            _point(tool_axis, "tool_axis", "a direction x, y, z"),
             math.radians(axis_tolerance_deg),
             np.asarray(arm.approach_axis),
         )
