@@ -1025,7 +1025,7 @@ def _trace_arcs(
             if len(pass_states) > 1 and dev_bound > opts.tolerance_mm:
                 # traced again, still not proven within the tolerance: the pass ends before
                 # its first command that is not, and the rest of the arc gets new passes
-                kept = _commands_within(arm, curve, pass_states, begin, opts.tolerance_mm)
+                kept = _commands_within(certify, pass_states, begin, opts.tolerance_mm)
                 del states[first + kept + 1 :]
                 s_reached = float(ps[PROFILE_PER_COMMAND * kept])
                 pass_states = pass_states[: kept + 1]
@@ -1099,14 +1099,15 @@ def _trace_arcs(
 
 
 def _commands_within(
-    arm: SerialArm, curve: Curve, pass_states: list[IntArray], begin: float, tolerance_mm: float
+    certify: Callable[[list[IntArray], float], tuple[float, float, FloatArray, FloatArray]],
+    pass_states: list[IntArray],
+    begin: float,
+    tolerance_mm: float,
 ) -> int:
     """How many of a pass's first commands are each proven to keep the tool point within
-    ``tolerance_mm`` of ``curve`` (:func:`certified_deviation` of each alone)."""
-    precision = certificate_precision(tolerance_mm)
+    ``tolerance_mm`` of the curve (``certify``, the pass's certificate, of each alone)."""
     for k in range(len(pass_states) - 1):
-        pair = np.array(pass_states[k : k + 2])
-        if certified_deviation(arm, curve, pair, begin, precision)[1] > tolerance_mm:
+        if certify(pass_states[k : k + 2], begin)[1] > tolerance_mm:
             return k
     return len(pass_states) - 1
 
