@@ -53,7 +53,9 @@ def nearest_found_advice(nearest: float, unit: str = "mm") -> str:
     significant digits so that giving the figure as printed finds that state again. A search
     that found none nearer does not prove there is none, so no least tolerance is claimed."""
     digits = 2 - math.floor(math.log10(nearest)) if nearest > 0 else 0
-    allow = math.ceil(nearest * 10**digits - 1e-9) / 10**digits
+    allow = math.ceil(nearest * 10**digits) / 10**digits
+    if allow < nearest:  # the division's rounding: one more in the last digit
+        allow = (math.ceil(nearest * 10**digits) + 1) / 10**digits
     return (
         f"the nearest found is {nearest:.4g} {unit} away: a tolerance of {allow:g} {unit} "
         "admits it (--tolerance, a scene task's tolerance_mm, or tolerance_mm= in Python)"

@@ -466,7 +466,7 @@ class Tracer:
         corner of the curve (:attr:`~armpath.geometry.curves.Curve.corners_mm`): there the
         distance to the curve peaks sharply between the checked instants (the nearest point
         passes from one side of the corner to the other; a UR5's 12-sided polygon went
-        0.0055 mm past its 0.1 mm tolerance between two of them), so the largest distance
+        0.0062 mm past its 0.1 mm tolerance between two of them), so the largest distance
         between the instants on either side of the corner (``s_mid (M, S)``, ``s_end (M,)``:
         arc lengths there, unwrapped near ``sk``, and a tolerance's margin) is found by
         golden-section search."""
